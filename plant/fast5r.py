@@ -1,0 +1,263 @@
+"""Compiled 5R kernel: the chapter 4-5 algorithm specialised to planar RR chains.
+
+The general algorithm (:mod:`plant.serial`, :mod:`plant.parallel`) builds
+3-D Jacobians, 7x7 matrices and a least-squares solve at every evaluation;
+numpy spends microseconds per call on such small arrays.  This module
+evaluates the same equations for the thesis' 5R (Table 2 DH tables,
+architecture 7.8-7.11) with scalars, compiled by numba:
+
+* per chain, in its own base frame N_k (E_k = diag(s_k, 1, s_k), s = +1, -1):
+  tip, J_v and the velocity-quadratic tip term (4.13, 4.57-4.58), and
+  M, v, g of (4.85-4.87) with the rotor inertia (4.139-4.140) — for planar
+  revolute joints these recursions reduce to the classic RR expressions;
+* the z rows of (7.7) decouple (z'' = -2 lambda z' - lambda^2 z, z = 0 from a
+  consistent start), leaving A Q° = blockdiag(-E_k J_v,k), invertible away
+  from serial singularities, so C = [1; (E_1 J_1)^-1; (E_2 J_2)^-1] (5.56);
+* (5.66) is solved by eliminating the constraint rows: the Baumgarte rows
+  give theta'' = C x'' + e, and the projected dynamics a 2x2 system
+  C^T M' C x'' = C^T (u' - v' - g' - M' e).
+
+``tests/test_fast5r.py`` checks every output against the general algorithm
+to round-off at random states of both presets.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .presets import FiveBarParams
+
+# Layout of the parameter vector.
+_L0, _M0, _GX, _GY = 0, 1, 2, 3
+_CHAIN = 4          # first chain offset; each chain has 9 entries
+_L1, _L2, _LG1, _LG2, _M1, _M2, _JZ1, _JZ2, _JR = range(9)
+_SIGN = (1.0, -1.0)  # s_k of E_k (7.3-7.4)
+
+
+def pack_params(params: FiveBarParams) -> np.ndarray:
+    """The parameter vector the compiled functions read."""
+    p = [params.l0, params.m0, params.gravity[0], params.gravity[1]]
+    for c in (params.chain1, params.chain2):
+        p += [c.l1, c.l2, c.lg1, c.lg2, c.m1, c.m2, c.Jz1, c.Jz2, c.J_rotor]
+    return np.array(p, dtype=np.float64)
+
+
+@njit(cache=True, fastmath=False)
+def _chain_terms(p, k, a, b, da, db, out):
+    """Tip, J_v, tip bias, M, v, g of chain k in world-aligned form (E_k applied).
+
+    out[0:2] = E_k tip, out[2:6] = E_k J_v (row-major 2x2), out[6:8] = E_k a_bias,
+    out[8:12] = M (2x2), out[12:14] = v, out[14:16] = g.
+    """
+    o = _CHAIN + 9 * k
+    s = 1.0 if k == 0 else -1.0
+    l1, l2 = p[o + _L1], p[o + _L2]
+    lg1, lg2 = p[o + _LG1], p[o + _LG2]
+    m1, m2 = p[o + _M1], p[o + _M2]
+    c1, s1 = math.cos(a), math.sin(a)
+    c12, s12 = math.cos(a + b), math.sin(a + b)
+    cb, sb = math.cos(b), math.sin(b)
+    w1 = da
+    w12 = da + db
+    # Tip (4.4) and J_v (4.13) in the chain frame; only x, y rows are non-zero.
+    tx = l1 * c1 + l2 * c12
+    ty = l1 * s1 + l2 * s12
+    j11 = -l1 * s1 - l2 * s12
+    j12 = -l2 * s12
+    j21 = l1 * c1 + l2 * c12
+    j22 = l2 * c12
+    # Velocity-quadratic tip acceleration (4.57-4.58): centripetal terms.
+    ax = -l1 * c1 * w1 * w1 - l2 * c12 * w12 * w12
+    ay = -l1 * s1 * w1 * w1 - l2 * s12 * w12 * w12
+    out[0] = s * tx
+    out[1] = ty
+    out[2] = s * j11
+    out[3] = s * j12
+    out[4] = j21
+    out[5] = j22
+    out[6] = s * ax
+    out[7] = ay
+    # (4.85) with the rotor of (4.139) on joint 1.
+    h = m2 * l1 * lg2
+    m22 = m2 * lg2 * lg2 + p[o + _JZ2]
+    out[8] = m1 * lg1 * lg1 + p[o + _JZ1] + m2 * l1 * l1 + m22 + 2.0 * h * cb + p[o + _JR]
+    out[9] = m22 + h * cb
+    out[10] = out[9]
+    out[11] = m22
+    # (4.86): Coriolis and centripetal efforts.
+    out[12] = -h * sb * (2.0 * da * db + db * db)
+    out[13] = h * sb * da * da
+    # (4.87) with gravity written in the chain frame, E_k^T g.
+    gx = s * p[_GX]
+    gy = p[_GY]
+    gc1x = lg1 * -s1
+    gc1y = lg1 * c1
+    g2ax = -l1 * s1 - lg2 * s12
+    g2ay = l1 * c1 + lg2 * c12
+    g2bx = -lg2 * s12
+    g2by = lg2 * c12
+    out[14] = -(m1 * (gc1x * gx + gc1y * gy) + m2 * (g2ax * gx + g2ay * gy))
+    out[15] = -(m2 * (g2bx * gx + g2by * gy))
+
+
+@njit(cache=True)
+def _inv2(m00, m01, m10, m11):
+    det = m00 * m11 - m01 * m10
+    return m11 / det, -m01 / det, -m10 / det, m00 / det
+
+
+@njit(cache=True)
+def derivative(p, y, u1, u2, lam, out):
+    """out = dy/dt for y = [q(7), dq(7)] with u* = (u1, u2) on theta11, theta21 (5.66)."""
+    terms = np.empty((2, 16))
+    for k in range(2):
+        _chain_terms(p, k, y[3 + 2 * k], y[4 + 2 * k], y[10 + 2 * k], y[11 + 2 * k], terms[k])
+    x, yy = y[0], y[1]
+    dx, dy = y[7], y[8]
+    l0 = p[_L0]
+    m0 = p[_M0]
+    # Per chain: theta'' = Cinv_k (x'' - w_k), w_k from the Baumgarte rows.
+    cinv = np.empty((2, 4))
+    e = np.empty((2, 2))
+    for k in range(2):
+        t = terms[k]
+        base = l0 if k == 0 else -l0
+        rx = x - base - t[0]                     # residual (5.18)
+        ry = yy - t[1]
+        dth1 = y[10 + 2 * k]
+        dth2 = y[11 + 2 * k]
+        vrx = dx - (t[2] * dth1 + t[3] * dth2)   # A dq
+        vry = dy - (t[4] * dth1 + t[5] * dth2)
+        # A q'' + b + 2 lam A dq + lam^2 res = 0, A = [1, -E J], b = -E a_bias:
+        # E J theta'' = x'' - E a_bias + 2 lam (A dq) + lam^2 res.
+        wx = -t[6] + 2.0 * lam * vrx + lam * lam * rx
+        wy = -t[7] + 2.0 * lam * vry + lam * lam * ry
+        i00, i01, i10, i11 = _inv2(t[2], t[3], t[4], t[5])
+        cinv[k, 0], cinv[k, 1], cinv[k, 2], cinv[k, 3] = i00, i01, i10, i11
+        e[k, 0] = i00 * wx + i01 * wy
+        e[k, 1] = i10 * wx + i11 * wy
+    # Projected dynamics: (C^T M' C) x'' = C^T (u' - v' - g' - M' e).
+    a00 = m0
+    a01 = 0.0
+    a11 = m0
+    r0 = m0 * p[_GX]      # -g' of the platform (5.9)
+    r1 = m0 * p[_GY]
+    for k in range(2):
+        t = terms[k]
+        c = cinv[k]
+        u = u1 if k == 0 else u2
+        f0 = u - t[12] - t[14] - (t[8] * e[k, 0] + t[9] * e[k, 1])
+        f1 = -t[13] - t[15] - (t[10] * e[k, 0] + t[11] * e[k, 1])
+        # M C (2x2) then C^T M C
+        mc00 = t[8] * c[0] + t[9] * c[2]
+        mc01 = t[8] * c[1] + t[9] * c[3]
+        mc10 = t[10] * c[0] + t[11] * c[2]
+        mc11 = t[10] * c[1] + t[11] * c[3]
+        a00 += c[0] * mc00 + c[2] * mc10
+        a01 += c[0] * mc01 + c[2] * mc11
+        a11 += c[1] * mc01 + c[3] * mc11
+        r0 += c[0] * f0 + c[2] * f1
+        r1 += c[1] * f0 + c[3] * f1
+    det = a00 * a11 - a01 * a01
+    ddx = (a11 * r0 - a01 * r1) / det
+    ddy = (a00 * r1 - a01 * r0) / det
+    for i in range(7):
+        out[i] = y[7 + i]
+    out[7] = ddx
+    out[8] = ddy
+    out[9] = -2.0 * lam * y[9] - lam * lam * y[2]
+    for k in range(2):
+        c = cinv[k]
+        out[10 + 2 * k] = c[0] * ddx + c[1] * ddy + e[k, 0]
+        out[11 + 2 * k] = c[2] * ddx + c[3] * ddy + e[k, 1]
+
+
+@njit(cache=True)
+def rk4(p, y, u1, u2, lam, dt, substeps):
+    """Classical RK4, ``substeps`` steps over dt (same scheme as plant.integrators.rk4)."""
+    h = dt / substeps
+    n = y.size
+    k1 = np.empty(n)
+    k2 = np.empty(n)
+    k3 = np.empty(n)
+    k4 = np.empty(n)
+    tmp = np.empty(n)
+    y = y.copy()
+    for _ in range(substeps):
+        derivative(p, y, u1, u2, lam, k1)
+        for i in range(n):
+            tmp[i] = y[i] + 0.5 * h * k1[i]
+        derivative(p, tmp, u1, u2, lam, k2)
+        for i in range(n):
+            tmp[i] = y[i] + 0.5 * h * k2[i]
+        derivative(p, tmp, u1, u2, lam, k3)
+        for i in range(n):
+            tmp[i] = y[i] + h * k3[i]
+        derivative(p, tmp, u1, u2, lam, k4)
+        for i in range(n):
+            y[i] += (h / 6.0) * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+    return y
+
+
+@njit(cache=True)
+def project(p, y, iterations):
+    """Newton on the residual with x, y fixed; then dq = C dq# (as PlantSimulator.project)."""
+    y = y.copy()
+    t = np.empty(16)
+    l0 = p[_L0]
+    for k in range(2):
+        base = l0 if k == 0 else -l0
+        for _ in range(iterations):
+            _chain_terms(p, k, y[3 + 2 * k], y[4 + 2 * k], 0.0, 0.0, t)
+            rx = y[0] - base - t[0]
+            ry = y[1] - t[1]
+            i00, i01, i10, i11 = _inv2(t[2], t[3], t[4], t[5])
+            y[3 + 2 * k] += i00 * rx + i01 * ry
+            y[4 + 2 * k] += i10 * rx + i11 * ry
+        _chain_terms(p, k, y[3 + 2 * k], y[4 + 2 * k], 0.0, 0.0, t)
+        i00, i01, i10, i11 = _inv2(t[2], t[3], t[4], t[5])
+        y[10 + 2 * k] = i00 * y[7] + i01 * y[8]
+        y[11 + 2 * k] = i10 * y[7] + i11 * y[8]
+    y[2] = 0.0
+    y[9] = 0.0
+    return y
+
+
+@njit(cache=True)
+def residual(p, y, out):
+    """The position constraint residual q̄ (5.18, 7.7), 6 entries."""
+    t = np.empty(16)
+    l0 = p[_L0]
+    for k in range(2):
+        base = l0 if k == 0 else -l0
+        _chain_terms(p, k, y[3 + 2 * k], y[4 + 2 * k], 0.0, 0.0, t)
+        out[3 * k] = y[0] - base - t[0]
+        out[3 * k + 1] = y[1] - t[1]
+        out[3 * k + 2] = y[2]
+
+
+class FastKernel:
+    """The compiled functions bound to one parameter set."""
+
+    def __init__(self, params: FiveBarParams):
+        self.p = pack_params(params)
+        self._out = np.empty(14)
+        self._res = np.empty(6)
+
+    def derivative(self, y, u_star, baumgarte):
+        out = np.empty(14)
+        derivative(self.p, np.ascontiguousarray(y, dtype=np.float64), float(u_star[0]), float(u_star[1]),
+                   float(baumgarte), out)
+        return out
+
+    def rk4(self, y, u_star, baumgarte, dt, substeps):
+        return rk4(self.p, y, float(u_star[0]), float(u_star[1]), float(baumgarte), float(dt), int(substeps))
+
+    def project(self, y, iterations=3):
+        return project(self.p, y, iterations)
+
+    def residual(self, y):
+        residual(self.p, y, self._res)
+        return self._res.copy()

@@ -1,0 +1,111 @@
+"""Parameters of the 5R mechanism: the single source of truth.
+
+``thesis_sim`` is Table 3 of the thesis (both chains equal, no rotors);
+``bench`` is Tables 4-5 with the rotor inertias of Tables 16 and 18 (the
+motor presets ``motor1``/``motor2``) on the actuated joints.
+
+Link inertias ``Jz`` are about each link's centre of mass, which sits at
+``lg`` from the link's proximal joint.  Chain 1 is the chain whose base is at
+(+l0, 0), chain 2 at (-l0, 0).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields, replace
+
+
+@dataclass(frozen=True)
+class ChainParams:
+    """One RR chain: proximal link 1 (actuated) and distal link 2."""
+
+    l1: float
+    l2: float
+    lg1: float
+    lg2: float
+    m1: float
+    m2: float
+    Jz1: float
+    Jz2: float
+    J_rotor: float = 0.0
+
+
+@dataclass(frozen=True)
+class FiveBarParams:
+    """The whole 5R: base half-distance, two chains, end-effector mass, gravity."""
+
+    l0: float
+    chain1: ChainParams
+    chain2: ChainParams
+    m0: float = 0.0
+    gravity: tuple = field(default=(0.0, 0.0, 0.0))
+
+    def validate(self) -> "FiveBarParams":
+        """Raise ValueError naming the first non-physical parameter."""
+        _check("l0", self.l0, positive=True)
+        _check("m0", self.m0)
+        if len(self.gravity) != 3 or not all(math.isfinite(g) for g in self.gravity):
+            raise ValueError(f"gravity must be 3 finite numbers, got {self.gravity!r}")
+        for k, chain in ((1, self.chain1), (2, self.chain2)):
+            for f in fields(chain):
+                value = getattr(chain, f.name)
+                positive = f.name in ("l1", "l2")
+                _check(f"chain{k}.{f.name}", value, positive=positive)
+        if 2.0 * self.l0 >= self.chain1.l1 + self.chain1.l2 + self.chain2.l1 + self.chain2.l2:
+            raise ValueError(
+                f"links cannot close the loop: base distance 2*l0 = {2 * self.l0:g} m "
+                f"exceeds the reach of both chains together"
+            )
+        return self
+
+    def with_rotors(self, J_rotor1: float, J_rotor2: float) -> "FiveBarParams":
+        return replace(
+            self,
+            chain1=replace(self.chain1, J_rotor=float(J_rotor1)),
+            chain2=replace(self.chain2, J_rotor=float(J_rotor2)),
+        )
+
+
+def _check(name: str, value: float, positive: bool = False) -> None:
+    if not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ValueError(f"{name} must be a finite number, got {value!r}")
+    if positive and value <= 0.0:
+        raise ValueError(f"{name} must be > 0, got {value!r}")
+    if value < 0.0:
+        raise ValueError(f"{name} must be >= 0, got {value!r}")
+
+
+def _table3_chain() -> ChainParams:
+    """Table 3 (both chains)."""
+    return ChainParams(l1=0.120, l2=0.150, lg1=0.060, lg2=0.075, m1=0.143, m2=0.171,
+                       Jz1=1.716e-4, Jz2=3.206e-4)
+
+
+def _bench() -> FiveBarParams:
+    """Tables 4 (chain 1) and 5 (chain 2), rotors of Tables 16 and 18."""
+    from motor.presets import get_motor_preset
+
+    chain1 = ChainParams(l1=0.120, l2=0.160, lg1=0.060, lg2=0.078, m1=0.062, m2=0.124,
+                         Jz1=1.073e-4, Jz2=4.380e-4)
+    chain2 = ChainParams(l1=0.120, l2=0.160, lg1=0.060, lg2=0.058, m1=0.062, m2=0.097,
+                         Jz1=2.960e-4, Jz2=9.800e-4)
+    return FiveBarParams(l0=0.050, chain1=chain1, chain2=chain2, m0=0.0).with_rotors(
+        get_motor_preset("motor1").J_rotor, get_motor_preset("motor2").J_rotor
+    )
+
+
+PRESET_NAMES = ("thesis_sim", "bench")
+
+
+def get_preset(name: str) -> FiveBarParams:
+    """The named preset.
+
+    Raises
+    ------
+    ValueError
+        For an unknown name, listing the valid ones.
+    """
+    if name == "thesis_sim":
+        return FiveBarParams(l0=0.050, chain1=_table3_chain(), chain2=_table3_chain(), m0=0.0)
+    if name == "bench":
+        return _bench()
+    raise ValueError(f"preset: unknown preset {name!r}; valid: {', '.join(PRESET_NAMES)}")

@@ -1,0 +1,228 @@
+"""Time stepping of the 5R plant over communication steps.
+
+:class:`PlantSimulator` holds the mutable state (the thesis' q and dq,
+7.12) of an immutable mechanism and advances it over a communication step
+with the actuator torques held.  The FMU slave, the in-process master and
+the benchmarks all step the plant through this class.
+
+Two evaluation kernels compute the same forward dynamics (5.66):
+
+``general``
+    :func:`plant.parallel.forward_dynamics`, the thesis' algorithm for any
+    DH chains and architecture matrices, in numpy.  The source of truth.
+``fast``
+    :mod:`plant.fast5r`, the same equations specialised to planar RR chains
+    and compiled with numba; tested against ``general`` to round-off.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import fivebar
+from .integrators import IntegrationError, dopri5, rk4
+from .parallel import left_inverse_solve, mechanism_state, forward_dynamics
+from .presets import FiveBarParams
+
+METHODS = ("rk4", "dopri5")
+KERNELS = ("fast", "general")
+
+
+@dataclass(frozen=True)
+class IntegratorSettings:
+    """How the plant is integrated over one communication step.
+
+    Parameters
+    ----------
+    method : {"rk4", "dopri5"}
+        Fixed-step RK4 with ``substeps`` steps, or adaptive Dormand-Prince
+        5(4) with tolerances ``rtol``/``atol``.
+    substeps : int
+        RK4 steps per communication step.
+    rtol, atol : float
+        Tolerances of ``dopri5``.
+    baumgarte : float
+        Baumgarte lambda [1/s] of (5.66).  The default 10/s is far below the
+        thesis' upper bound 1/h and, with projection, only damps round-off.
+    project : bool
+        After each communication step, put q and dq back on the constraint
+        manifold by Newton steps on q̄(q) = 0 and dq = C(q) dq#, keeping the
+        independent coordinates q# = (x, y).
+    kernel : {"fast", "general"}
+        Which implementation of (5.66) evaluates the accelerations.
+    """
+
+    method: str = "rk4"
+    substeps: int = 1
+    rtol: float = 1e-10
+    atol: float = 1e-13
+    baumgarte: float = 10.0
+    project: bool = True
+    kernel: str = "fast"
+
+    def validate(self) -> "IntegratorSettings":
+        if self.method not in METHODS:
+            raise ValueError(f"method: unknown integrator {self.method!r}; valid: {', '.join(METHODS)}")
+        if self.kernel not in KERNELS:
+            raise ValueError(f"kernel: unknown kernel {self.kernel!r}; valid: {', '.join(KERNELS)}")
+        if not (isinstance(self.substeps, int) and self.substeps >= 1):
+            raise ValueError(f"substeps must be an integer >= 1, got {self.substeps!r}")
+        for name in ("rtol", "atol"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise ValueError(f"{name} must be > 0, got {value!r}")
+        if not (math.isfinite(self.baumgarte) and self.baumgarte >= 0.0):
+            raise ValueError(f"baumgarte must be >= 0, got {self.baumgarte!r}")
+        return self
+
+
+#: Settings that reach ~1e-9 m against an independent reference (see docs/plant.md).
+ACCURATE = IntegratorSettings(method="dopri5", rtol=1e-12, atol=1e-15)
+
+
+class PlantError(RuntimeError):
+    """The plant cannot go on: singular pose, non-finite input or state."""
+
+
+#: Below this singularity margin the step is refused: the mechanism is at a
+#: singular pose where its dynamics (5.66) lose rank.
+SINGULAR_STOP = 1e-3
+
+
+class PlantSimulator:
+    """The 5R plant: immutable model, mutable state.
+
+    Parameters
+    ----------
+    params : FiveBarParams
+    x0, y0 : float
+        Start at rest with the end effector there (working mode).
+    settings : IntegratorSettings
+    encoder_counts : int
+        Counts per revolution of the encoders (quadrature: 4x the pulses).
+    """
+
+    def __init__(self, params: FiveBarParams, x0: float, y0: float,
+                 settings: IntegratorSettings = IntegratorSettings(), encoder_counts: int = 20000):
+        self.params = params.validate()
+        self.settings = settings.validate()
+        if not (isinstance(encoder_counts, int) and encoder_counts > 0):
+            raise ValueError(f"encoder_counts must be a positive integer, got {encoder_counts!r}")
+        self.encoder_counts = encoder_counts
+        self.mechanism = fivebar.build_mechanism(params)
+        self.time = 0.0
+        try:
+            q = fivebar.thesis_coordinates(params, x0, y0)
+        except fivebar.KinematicsError as exc:
+            raise ValueError(f"start point x0={x0!r}, y0={y0!r}: {exc}") from None
+        margin = fivebar.singularity(params, x0, y0).margin
+        if margin < SINGULAR_STOP:
+            raise ValueError(f"start point x0={x0!r}, y0={y0!r} is singular (margin {margin:.3g})")
+        self.y = np.concatenate([q, np.zeros(7)])
+        self._h_next = None
+        self._fast = None
+        if self.settings.kernel == "fast":
+            from .fast5r import FastKernel
+            self._fast = FastKernel(params)
+
+    # --- derivatives -----------------------------------------------------------
+    def derivative(self, y, u_star):
+        """dy/dt for y = [q, dq] with actuator efforts u* on (theta11, theta21)."""
+        if self._fast is not None:
+            return self._fast.derivative(y, u_star, self.settings.baumgarte)
+        q, dq = y[:7], y[7:]
+        ddq = forward_dynamics(self.mechanism, q, dq, u_star, self.settings.baumgarte)
+        return np.concatenate([dq, ddq])
+
+    # --- stepping ----------------------------------------------------------------
+    def step(self, tau1: float, tau2: float, dt: float) -> None:
+        """Advance by dt with the world torques held; the state is kept on error."""
+        for name, value in (("tau1", tau1), ("tau2", tau2)):
+            if not math.isfinite(value):
+                raise PlantError(f"input {name} = {value!r} at t = {self.time:.6g} s is not finite")
+        if not (math.isfinite(dt) and dt > 0.0):
+            raise PlantError(f"step size {dt!r} at t = {self.time:.6g} s must be > 0")
+        u_star = fivebar.thesis_torques(tau1, tau2)
+        s = self.settings
+        try:
+            if s.method == "rk4" and self._fast is not None:
+                y = self._fast.rk4(self.y, u_star, s.baumgarte, dt, s.substeps)
+            elif s.method == "rk4":
+                y = rk4(lambda z: self.derivative(z, u_star), self.y, dt, s.substeps)
+            else:
+                y, self._h_next, _ = dopri5(lambda z: self.derivative(z, u_star), self.y, dt,
+                                            s.rtol, s.atol, self._h_next)
+        except (IntegrationError, np.linalg.LinAlgError) as exc:
+            raise PlantError(f"integration failed in the step from t = {self.time:.6g} s: {exc}") from None
+        if not np.all(np.isfinite(y)):
+            raise PlantError(f"state became non-finite in the step from t = {self.time:.6g} s")
+        if s.project:
+            y = self.project(y)
+        self._check_pose(y, self.time + dt)
+        self.y = y
+        self.time += dt
+
+    def project(self, y, iterations: int = 3):
+        """Newton projection on q̄(q) = 0 and dq = C dq#, keeping q# fixed."""
+        if self._fast is not None:
+            return self._fast.project(y, iterations)
+        mech = self.mechanism
+        Qo, Qs = mech.Q_redundant, mech.Q_independent
+        q, dq = y[:7].copy(), y[7:]
+        for _ in range(iterations):
+            st = mechanism_state(mech, q, dq)
+            q -= Qo @ left_inverse_solve(st.A @ Qo, st.residual)
+        C = mechanism_state(mech, q, dq).C
+        return np.concatenate([q, C @ (Qs.T @ dq)])
+
+    def _check_pose(self, y, t):
+        q = y[:7]
+        phi12 = q[fivebar.TH11] + q[fivebar.TH12]
+        phi22 = math.pi - (q[fivebar.TH21] + q[fivebar.TH22])
+        measures = {
+            "chain 1 elbow (serial)": math.sin(q[fivebar.TH12]),
+            "chain 2 elbow (serial)": math.sin(q[fivebar.TH22]),
+            "distal links (parallel)": math.sin(phi12 - phi22),
+        }
+        for name, value in measures.items():
+            if abs(value) < SINGULAR_STOP:
+                raise PlantError(
+                    f"singular pose reached at t = {t:.6g} s: {name} measure {value:.3g} "
+                    f"at x = {q[0]:.6g} m, y = {q[1]:.6g} m"
+                )
+
+    # --- outputs --------------------------------------------------------------
+    @property
+    def q(self):
+        return self.y[:7]
+
+    @property
+    def dq(self):
+        return self.y[7:]
+
+    def outputs(self) -> dict:
+        """The FiveBarPlant outputs of the component contract."""
+        q, dq = self.q, self.dq
+        q1, q2 = fivebar.world_angles(q)
+        dq1, dq2 = fivebar.world_rates(dq)
+        count = 2.0 * math.pi / self.encoder_counts
+        return {
+            "q1": q1, "q2": q2, "dq1": dq1, "dq2": dq2,
+            "x": q[0], "y": q[1], "dx": dq[0], "dy": dq[1],
+            "q1_enc": count * round(q1 / count),
+            "q2_enc": count * round(q2 / count),
+            "residual": self.residual_norm(),
+        }
+
+    def residual_norm(self) -> float:
+        """Euclidean norm of the position constraint residual q̄(q) [m] (5.18)."""
+        if self._fast is not None:
+            return float(np.linalg.norm(self._fast.residual(self.y)))
+        return float(np.linalg.norm(mechanism_state(self.mechanism, self.q, self.dq).residual))
+
+    def kinetic_energy(self) -> float:
+        """1/2 dq^T M'(q) dq, from the general model."""
+        st = mechanism_state(self.mechanism, self.q, self.dq)
+        return 0.5 * float(self.dq @ st.M @ self.dq)
