@@ -1,0 +1,132 @@
+"""DC motor drive: electrical model, shaft torque and current controller.
+
+One :class:`Drive` per motor, stepped by the co-simulation master with
+inputs held over each step (zero-order hold).
+"""
+
+from motor import _checks
+from motor.current_controller import THESIS_POLES, THESIS_T, CurrentController, design_current_controller
+from motor.electrics import ELECTRICAL_METHODS, advance_current, electrical_step_coefficients, shaft_torque
+
+#: Names accepted for ``Drive(mode=...)``.
+DRIVE_MODES = ("current", "voltage")
+
+# Relative tolerance used to decide that h divides T.
+_PHASE_TOL = 1e-6
+
+
+class Drive:
+    """DC motor drive in current or voltage mode.
+
+    Parameters
+    ----------
+    params : motor.presets.MotorParams
+        Motor and driver parameters.
+    mode : {"current", "voltage"}
+        ``"current"``: the discrete controller K(z) (appendix C) samples
+        ``i_ref`` and ``i_hat`` at the start of each controller period T and
+        holds its saturated voltage over the period. ``"voltage"``: the
+        commanded ``v_ref``, saturated at +-v_max, is applied over the step in
+        which it is given (for voltage-driven plants).
+    method : {"exact", "euler", "quasi_static"}
+        Integration of the electrical state over a step,
+        see :func:`motor.electrics.electrical_step_coefficients`.
+    T : float
+        Controller sample time [s] (current mode).
+    poles : sequence of 3 float
+        Requested closed-loop current poles (current mode).
+
+    Raises
+    ------
+    ValueError
+        Unknown mode or method, bad T or poles, or current mode with L = 0.
+    """
+
+    def __init__(self, params, mode="current", method="exact", T=THESIS_T, poles=THESIS_POLES):
+        params.validate()
+        self.params = params
+        self.mode = _checks.choice("mode", mode, DRIVE_MODES)
+        self.method = _checks.choice("method", method, ELECTRICAL_METHODS)
+        self.T = _checks.positive("T", T)
+        self.controller = (CurrentController(design_current_controller(params, T, poles), params.v_max)
+                           if mode == "current" else None)
+        self._h = None
+        self._coefficients = None
+        self.reset()
+
+    def reset(self, i0=0.0, v0=0.0):
+        """Set the armature current ``i0`` [A] and the last applied voltage ``v0`` [V].
+
+        In current mode the controller restarts holding ``v0`` with zero error
+        (use v0 = R i0 + ke omega0 to start in electrical steady state).
+        """
+        self.i = _checks.finite("i0", i0)
+        self.v = _checks.finite("v0", v0)
+        self._phase = 0.0
+        if self.controller is not None:
+            self.controller.reset(self.v)
+
+    def torque(self, omega):
+        """Shaft torque [N m] for the present current at speed ``omega`` (B.2)."""
+        return shaft_torque(self.i, _checks.finite("omega", omega), self.params)
+
+    def _step_coefficients(self, h):
+        if h != self._h:
+            self._coefficients = electrical_step_coefficients(self.params.R, self.params.L, h, self.method)
+            self._h = h
+        return self._coefficients
+
+    def _controller_voltage(self, i_ref, i_hat, h):
+        """Controller output for this step: a new sample at period starts, else the held one."""
+        n = self.T / h
+        if n < 1.0 - _PHASE_TOL or abs(n - round(n)) > _PHASE_TOL * n:
+            raise ValueError(f"in current mode the step h must divide the controller period "
+                             f"T={self.T!r}; got h={h!r}")
+        v = self.controller.update(i_ref, i_hat) if self._phase == 0.0 else self.v
+        self._phase += h / self.T
+        if self._phase > 1.0 - _PHASE_TOL:
+            self._phase = 0.0
+        return v
+
+    def step(self, i_ref, v_ref, omega, i_hat, h):
+        """Advance the drive by one step with inputs held over it.
+
+        Parameters
+        ----------
+        i_ref : float
+            Current reference [A] (current mode).
+        v_ref : float
+            Commanded voltage [V] (voltage mode).
+        omega : float
+            Shaft speed [rad/s], held over the step.
+        i_hat : float
+            Observed (or measured) current at the step start [A] (current mode).
+        h : float
+            Step length [s]; in current mode it must divide T.
+
+        Returns
+        -------
+        tau : float
+            Shaft torque at the end of the step [N m] (B.2).
+        v : float
+            Voltage applied over the step [V].
+        i : float
+            Armature current at the end of the step [A] (4.162).
+
+        Raises
+        ------
+        ValueError
+            Naming the input, for a NaN/inf input or a bad step length.
+        """
+        i_ref = _checks.finite("i_ref", i_ref)
+        v_ref = _checks.finite("v_ref", v_ref)
+        omega = _checks.finite("omega", omega)
+        i_hat = _checks.finite("i_hat", i_hat)
+        h = _checks.positive("h", h)
+        if self.mode == "current":
+            v = self._controller_voltage(i_ref, i_hat, h)
+        else:
+            v = min(max(v_ref, -self.params.v_max), self.params.v_max)
+        self.i = advance_current(self.i, v, omega, self.params.ke, self._step_coefficients(h))
+        self.v = v
+        return shaft_torque(self.i, omega, self.params), v, self.i

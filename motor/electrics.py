@@ -1,0 +1,152 @@
+"""Electrical model of the DC motor and the torque it delivers to the shaft.
+
+Armature circuit (4.162, B.1)::
+
+    L di/dt + R i + ke omega = v
+
+Shaft torque delivered to the mechanism (B.2 with B.3; the rotor inertia
+J_rotor is integrated by the plant, 4.139)::
+
+    tau = kt i - b omega - mu sign(omega)
+
+Over one step of length h the voltage v and the speed omega are held
+(zero-order hold), so (4.162) is a linear scalar ODE with constant input.
+Every integration method is then one affine map::
+
+    i(t + h) = a i(t) + g (v - ke omega)
+
+and only the pair (a, g) differs between methods
+(:func:`electrical_step_coefficients`). This is the single discretisation of
+the electrical model, used by the drive and by the dynamic current observer.
+"""
+
+import math
+
+from motor import _checks
+
+#: Names accepted by :func:`electrical_step_coefficients`.
+ELECTRICAL_METHODS = ("exact", "euler", "quasi_static")
+
+
+def electrical_step_coefficients(R, L, h, method="exact"):
+    """Coefficients (a, g) of ``i(t+h) = a i(t) + g (v - ke omega)`` for held v, omega.
+
+    Parameters
+    ----------
+    R : float
+        Armature resistance [ohm], > 0.
+    L : float
+        Armature inductance [H], >= 0.
+    h : float
+        Step length [s], > 0.
+    method : {"exact", "euler", "quasi_static"}
+        ``"exact"``: analytic solution of (4.162) for held input,
+        a = exp(-R h / L), g = (1 - a) / R (computed with ``expm1``, exact to
+        rounding for any h/(L/R); with L = 0 it is the quasi-static limit).
+        ``"euler"``: explicit Euler, a = 1 - h R / L, g = h / L. Unstable
+        (|a| > 1) when h > 2 L / R, e.g. with the thesis motors' L/R ~ 0.6 ms
+        it is stable at h = 1 ms (a ~ -0.65, oscillating) but not when L/R is
+        100x shorter than the step.
+        ``"quasi_static"``: L di/dt neglected (L = 0), a = 0, g = 1 / R, i.e.
+        i = (v - ke omega) / R, the same expression as the static observer (7.20).
+
+    Returns
+    -------
+    tuple of float
+        (a, g).
+
+    Raises
+    ------
+    ValueError
+        Non-physical R, L or h, unknown method, or Euler with L = 0.
+    """
+    R = _checks.positive("R", R)
+    L = _checks.non_negative("L", L)
+    h = _checks.positive("h", h)
+    _checks.choice("method", method, ELECTRICAL_METHODS)
+    if method == "quasi_static" or (method == "exact" and L == 0.0):
+        return 0.0, 1.0 / R
+    if method == "exact":
+        x = R * h / L
+        return math.exp(-x), -math.expm1(-x) / R
+    if L == 0.0:
+        raise ValueError("method 'euler' needs L > 0, got L=0.0; use 'quasi_static'")
+    return 1.0 - h * R / L, h / L
+
+
+def advance_current(i, v, omega, ke, coefficients):
+    """Current at the end of a step with held voltage and speed (4.162).
+
+    Parameters
+    ----------
+    i : float
+        Current at the start of the step [A].
+    v : float
+        Voltage held over the step [V].
+    omega : float
+        Speed held over the step [rad/s].
+    ke : float
+        Back-emf constant [V s/rad].
+    coefficients : tuple of float
+        (a, g) from :func:`electrical_step_coefficients`.
+
+    Returns
+    -------
+    float
+        Current at the end of the step [A].
+    """
+    a, g = coefficients
+    return a * i + g * (v - ke * omega)
+
+
+def coulomb_friction(omega, mu, omega_eps):
+    """Coulomb friction torque mu sign(omega) of (B.2), regularised.
+
+    Returns ``mu * tanh(omega / omega_eps)``. The drive cannot use a stick
+    model: sticking needs the net torque on the rotor and its acceleration,
+    which only the plant (that integrates J_rotor) knows, while the drive sees
+    omega held over a step. A regularised sign is smooth and odd, gives
+    exactly zero torque at rest and +-mu (to 0.1 %) for |omega| > 4 omega_eps.
+    Its slope at rest, mu / omega_eps, acts as a viscous damper that the
+    co-simulation applies explicitly (torque computed from the omega held at
+    the step start); that is stable and non-oscillating when
+    h mu / (omega_eps J) < 1, J the inertia seen at the joint. The default
+    omega_eps = 0.5 rad/s satisfies this at h = 1 ms for J >= J_rotor of
+    both thesis motors (h mu / J_rotor <= 0.30 rad/s).
+
+    Parameters
+    ----------
+    omega : float
+        Shaft speed [rad/s].
+    mu : float
+        Coulomb friction torque [N m].
+    omega_eps : float
+        Regularisation width [rad/s], > 0.
+
+    Returns
+    -------
+    float
+        Friction torque [N m] (sign of omega).
+    """
+    return mu * math.tanh(omega / omega_eps)
+
+
+def shaft_torque(i, omega, params):
+    """Torque delivered to the mechanism, kt i - b omega - mu sign(omega) (B.2, B.3).
+
+    Parameters
+    ----------
+    i : float
+        Armature current [A].
+    omega : float
+        Shaft speed [rad/s].
+    params : motor.presets.MotorParams
+        Motor parameters (kt, b, mu, omega_eps).
+
+    Returns
+    -------
+    float
+        Torque [N m]; the sign convention is that of the current and speed.
+    """
+    return (params.kt * i - params.b * omega
+            - coulomb_friction(omega, params.mu, params.omega_eps))

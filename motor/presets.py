@@ -1,0 +1,116 @@
+"""DC motor parameters: the single source of truth (thesis Tables 16 and 18).
+
+The thesis tables print the viscous coefficient ``b`` in "Ns"; the model
+(B.2) needs N m s/rad, which is what is stored here. All values are SI.
+"""
+
+from dataclasses import dataclass, fields, replace
+
+from motor import _checks
+
+
+@dataclass(frozen=True)
+class MotorParams:
+    """Parameters of one brushed DC motor and its driver.
+
+    Parameters
+    ----------
+    R : float
+        Armature resistance [ohm], > 0.
+    L : float
+        Armature inductance [H], >= 0 (0 means the quasi-static model).
+    kt : float
+        Torque constant [N m/A], > 0 (B.3: T = kt i).
+    ke : float
+        Back-emf constant [V s/rad], > 0 (4.162, B.1).
+    b : float
+        Viscous friction [N m s/rad], >= 0 (B.2).
+    mu : float
+        Coulomb (dry) friction torque [N m], >= 0 (B.2).
+    J_rotor : float
+        Rotor inertia [kg m^2], > 0. Integrated by the plant (4.139), used here
+        only for the current-controller design model G_I(s) (B.10).
+    v_max : float
+        Supply voltage [V]: the driver saturates at +-v_max. Default 24.
+    omega_eps : float
+        Width [rad/s] of the regularised sign in the Coulomb friction,
+        mu*tanh(omega/omega_eps); see :func:`motor.electrics.coulomb_friction`.
+
+    Raises
+    ------
+    ValueError
+        On construction, naming the first non-physical parameter and its value.
+    """
+
+    R: float
+    L: float
+    kt: float
+    ke: float
+    b: float
+    mu: float
+    J_rotor: float
+    v_max: float = 24.0
+    omega_eps: float = 0.5
+
+    def __post_init__(self):
+        self.validate()
+
+    def validate(self):
+        """Raise ValueError naming the first non-physical parameter and its value.
+
+        NaN/inf are rejected everywhere; R, kt, ke, J_rotor, v_max, omega_eps
+        must be > 0; L, b, mu must be >= 0.
+        """
+        strict = ("R", "kt", "ke", "J_rotor", "v_max", "omega_eps")
+        for f in fields(self):
+            check = _checks.positive if f.name in strict else _checks.non_negative
+            check(f.name, getattr(self, f.name))
+
+    def with_(self, **changes):
+        """Return a validated copy with some parameters replaced.
+
+        Raises
+        ------
+        ValueError
+            For an unknown parameter name or a non-physical value.
+        """
+        names = {f.name for f in fields(self)}
+        unknown = sorted(set(changes) - names)
+        if unknown:
+            raise ValueError(f"unknown motor parameter(s) {unknown}; valid: {sorted(names)}")
+        return replace(self, **changes)
+
+
+#: Motor 1, thesis Table 16 (from appendix D, data of Table 15).
+motor1 = MotorParams(R=1.101, L=0.667e-3, kt=5.598e-2, ke=5.138e-2,
+                     b=1.226e-4, mu=4.357e-2, J_rotor=1.469e-4)
+
+#: Motor 2, thesis Table 18 (from appendix D, data of Table 17).
+motor2 = MotorParams(R=0.829, L=0.667e-3, kt=5.666e-2, ke=5.200e-2,
+                     b=2.039e-4, mu=4.992e-2, J_rotor=1.887e-4)
+
+MOTOR_PRESETS = {"motor1": motor1, "motor2": motor2}
+
+
+def get_motor_preset(name):
+    """Return the preset called ``name``.
+
+    Parameters
+    ----------
+    name : str
+        ``"motor1"`` or ``"motor2"``.
+
+    Returns
+    -------
+    MotorParams
+
+    Raises
+    ------
+    ValueError
+        For an unknown name, listing the valid ones.
+    """
+    try:
+        return MOTOR_PRESETS[name]
+    except (KeyError, TypeError):
+        raise ValueError(f"unknown motor preset {name!r}; valid presets: "
+                         f"{', '.join(sorted(MOTOR_PRESETS))}") from None
