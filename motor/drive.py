@@ -66,6 +66,19 @@ class Drive:
         if self.controller is not None:
             self.controller.reset(self.v)
 
+    def start(self, omega0, i0=0.0):
+        """Reset in electrical steady state: current ``i0`` at speed ``omega0``.
+
+        The last applied voltage is v0 = R i0 + ke omega0 (4.162 with
+        di/dt = 0), so the state is consistent and, in current mode, the
+        controller starts holding v0 (and a static observer fed v0 and
+        omega0 returns i0). Starting a spinning motor with v0 = 0 instead
+        means a short-circuited, braking motor at t = 0.
+        """
+        omega0 = _checks.finite("omega0", omega0)
+        i0 = _checks.finite("i0", i0)
+        self.reset(i0, self.params.R * i0 + self.params.ke * omega0)
+
     def torque(self, omega):
         """Shaft torque [N m] for the present current at speed ``omega`` (B.2)."""
         return shaft_torque(self.i, _checks.finite("omega", omega), self.params)

@@ -48,7 +48,7 @@ def _as_data(u, i, omega):
             raise ValueError(f"{name} must be one-dimensional, got shape {a.shape}")
         bad = np.flatnonzero(~np.isfinite(a))
         if bad.size:
-            raise ValueError(f"{name}[{bad[0]}] must be a finite number, got {a[bad[0]]!r}")
+            raise ValueError(f"{name}[{bad[0]}] must be a finite number, got {float(a[bad[0]])!r}")
         cols[name] = a
     n = {k: len(v) for k, v in cols.items()}
     if len(set(n.values())) != 1:
@@ -58,7 +58,7 @@ def _as_data(u, i, omega):
     nonpositive = np.flatnonzero(cols["omega"] <= 0)
     if nonpositive.size:
         k = nonpositive[0]
-        raise ValueError(f"omega[{k}] must be > 0 (D.10 holds for omega > 0), got {cols['omega'][k]!r}")
+        raise ValueError(f"omega[{k}] must be > 0 (D.10 holds for omega > 0), got {float(cols['omega'][k])!r}")
     return cols["u"], cols["i"], cols["omega"]
 
 
