@@ -1,0 +1,66 @@
+"""Build the parcosim FMUs with pythonfmu and fix their model descriptions.
+
+Each FMU bundles the pure model packages (``plant``, ``motor``,
+``controller``) and the slave base (``fmus.guarded``) in its resources, so
+an importer needs only a Python 3.11 with numpy, scipy, numba and control.
+"""
+from __future__ import annotations
+
+import importlib
+import shutil
+import tempfile
+from pathlib import Path
+
+from pythonfmu import FmuBuilder
+
+from .modeldescription import fix_model_structure
+
+ROOT = Path(__file__).resolve().parent.parent
+DEFAULT_OUT = ROOT / "fmus" / "build"
+BUNDLED_PACKAGES = ("plant", "motor", "controller")
+
+#: Model name -> slave module (unique module names: one interpreter per process).
+SLAVES = {
+    "FiveBarPlant": "parcosim_fivebarplant",
+}
+
+
+def _stage(tmp: Path) -> list[Path]:
+    """Copy the bundled sources (no caches) into tmp; return the project files."""
+    ignore = shutil.ignore_patterns("__pycache__", "*.pyc", "build")
+    staged = []
+    for package in BUNDLED_PACKAGES:
+        if (ROOT / package).is_dir():
+            shutil.copytree(ROOT / package, tmp / package, ignore=ignore)
+            staged.append(tmp / package)
+    fmus_pkg = tmp / "fmus"
+    fmus_pkg.mkdir()
+    (fmus_pkg / "__init__.py").write_text('"""The slave base bundled into each parcosim FMU."""\n')
+    shutil.copy2(ROOT / "fmus" / "guarded.py", fmus_pkg / "guarded.py")
+    staged.append(fmus_pkg)
+    return staged
+
+
+def build_fmu(model: str, out_dir: Path = DEFAULT_OUT) -> Path:
+    """Build one FMU into out_dir and return its path."""
+    if model not in SLAVES:
+        raise ValueError(f"unknown FMU {model!r}; valid: {', '.join(SLAVES)}")
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    module_name = SLAVES[model]
+    script = ROOT / "fmus" / "slaves" / f"{module_name}.py"
+    slave_class = getattr(importlib.import_module(f"fmus.slaves.{module_name}"), model)
+    with tempfile.TemporaryDirectory(prefix="parcosim_build_") as tmp:
+        tmp = Path(tmp)
+        project_files = _stage(tmp)
+        staged_script = tmp / script.name
+        shutil.copy2(script, staged_script)
+        fmu = FmuBuilder.build_FMU(staged_script, dest=out_dir, project_files=project_files,
+                                   canHandleVariableCommunicationStepSize="true")
+    fix_model_structure(fmu, getattr(slave_class, "feedthrough", {}))
+    return Path(fmu)
+
+
+def build_all(out_dir: Path = DEFAULT_OUT) -> list[Path]:
+    """Build every parcosim FMU into out_dir."""
+    return [build_fmu(model, out_dir) for model in SLAVES]

@@ -1,0 +1,106 @@
+"""A pythonfmu slave base that never lets an exception escape.
+
+pythonfmu 0.7 turns an exception raised in any callback into fmi2Fatal and
+the importer may go on calling a freed object; a ``do_step`` that returns
+False becomes fmi2Discard, the only non-fatal failure status pythonfmu can
+return.  So:
+
+* parameters are validated in ``exit_initialization_mode``; a problem is
+  logged (category ``logStatusError``) and remembered, and every later
+  ``do_step`` refuses with that message instead of stepping;
+* ``do_step`` catches everything, logs "<instance>: <what> at t = <time>",
+  keeps the outputs of the last good step and returns False (fmi2Discard);
+* log messages reach the importer only if it turned logging on, so the same
+  message also goes to stderr and to the String output ``error``.
+"""
+from __future__ import annotations
+
+import math
+import sys
+
+from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, Real, String, Boolean
+from pythonfmu.enums import Fmi2Initial, Fmi2Status
+
+_CAUSALITY = {
+    "input": Fmi2Causality.input,
+    "output": Fmi2Causality.output,
+    "parameter": Fmi2Causality.parameter,
+}
+_KIND = {float: Real, int: Integer, str: String, bool: Boolean}
+
+
+class GuardedSlave(Fmi2Slave):
+    """Base of all parcosim slaves.
+
+    Subclasses declare variables with :meth:`declare`, build their model in
+    :meth:`setup` (called once parameters are final) and advance it in
+    :meth:`step`; both may raise, the base turns that into a logged refusal.
+    """
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.error = ""
+        self.register_variable(String("error", causality=Fmi2Causality.output,
+                                      variability=Fmi2Variability.discrete,
+                                      description="Why the last step was refused ('' when all is well)"))
+        self._ready = False
+
+    # --- declaration -----------------------------------------------------------------
+    def declare(self, name: str, causality: str, start, description: str = "", variability=None):
+        """Register one variable with its start value; the Python type picks the FMI type."""
+        setattr(self, name, start)
+        kind = _KIND[type(start)]
+        kwargs = {"causality": _CAUSALITY[causality], "description": description}
+        if causality == "parameter":
+            kwargs["variability"] = Fmi2Variability.fixed
+        elif kind is not Real:
+            kwargs["variability"] = Fmi2Variability.discrete
+        if variability is not None:
+            kwargs["variability"] = variability
+        if causality == "output":
+            kwargs["initial"] = Fmi2Initial.calculated
+        self.register_variable(kind(name, **kwargs))
+
+    # --- hooks for subclasses ------------------------------------------------------------
+    def setup(self) -> None:
+        """Build the model from the parameters; raise ValueError on bad ones."""
+
+    def step(self, current_time: float, step_size: float) -> None:
+        """Advance the model; raise on failure (state and outputs must stay valid)."""
+        raise NotImplementedError
+
+    # --- FMI callbacks -------------------------------------------------------------------
+    def exit_initialization_mode(self):
+        try:
+            self.setup()
+            self._ready = True
+        except Exception as exc:  # noqa: BLE001 - nothing may escape to pythonfmu
+            self._refuse(f"initialisation refused: {exc}")
+
+    def do_step(self, current_time: float, step_size: float) -> bool:
+        if not self._ready:
+            self._refuse(self.error or "initialisation refused", current_time, repeat=True)
+            return False
+        try:
+            self.step(current_time, step_size)
+            return True
+        except Exception as exc:  # noqa: BLE001
+            self._refuse(str(exc), current_time)
+            self._ready = False
+            return False
+
+    def _refuse(self, message: str, time: float | None = None, repeat: bool = False) -> None:
+        text = message if (time is None or repeat or " t = " in message) else f"{message} (step from t = {time:.6g} s)"
+        if repeat and time is not None:
+            text = f"{message}; step from t = {time:.6g} s refused"
+        self.error = message if repeat else text
+        line = f"{self.instance_name}: {text}"
+        self.log(line, Fmi2Status.error, category="logStatusError")
+        print(f"[parcosim] {line}", file=sys.stderr)
+
+
+def require_finite(**values) -> None:
+    """Raise ValueError naming the first non-finite value."""
+    for name, value in values.items():
+        if not math.isfinite(value):
+            raise ValueError(f"{name} = {value!r} is not finite")

@@ -1,0 +1,1 @@
+"""pythonfmu slave modules, one per FMU, each with a unique module name."""

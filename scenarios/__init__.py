@@ -1,0 +1,1 @@
+"""Scene definitions and example scripts a user can copy and change."""

@@ -1,0 +1,104 @@
+"""5R closed-form kinematics (seed 002) in the contract's world convention."""
+import math
+
+import numpy as np
+import pytest
+
+from plant import get_preset
+from plant.fivebar import (KinematicsError, build_mechanism, direct_kinematics, inverse_kinematics,
+                           jacobians, joint_rates, singularity, thesis_coordinates, workspace_map,
+                           NEAR_SINGULAR_MARGIN)
+from plant.parallel import mechanism_state
+
+PRESETS = ("thesis_sim", "bench")
+
+
+def workspace_points(params, n=40, seed=1):
+    """Random points of the upper workspace away from singularities."""
+    rng = np.random.default_rng(seed)
+    points = []
+    while len(points) < n:
+        x, y = rng.uniform(-0.12, 0.12), rng.uniform(0.06, 0.26)
+        try:
+            if singularity(params, x, y).margin > 0.2:
+                points.append((x, y))
+        except KinematicsError:
+            pass
+    return points
+
+
+def test_contract_angles():
+    """SYSTEM.md section 2: elbows outward, angles CCW from +x."""
+    p = get_preset("thesis_sim")
+    q = inverse_kinematics(p, 0.0, 0.17)
+    assert math.degrees(q[0]) == pytest.approx(49.6, abs=0.05)
+    assert math.degrees(q[2]) == pytest.approx(130.4, abs=0.05)
+    q = inverse_kinematics(p, 0.07, 0.17)
+    assert math.degrees(q[0]) == pytest.approx(24.36, abs=0.005)
+    assert math.degrees(q[2]) == pytest.approx(99.97, abs=0.005)
+
+
+@pytest.mark.parametrize("preset", PRESETS)
+def test_ik_fk_round_trip(preset):
+    p = get_preset(preset)
+    for x, y in workspace_points(p):
+        q = inverse_kinematics(p, x, y)
+        np.testing.assert_allclose(direct_kinematics(p, q[0], q[2]), [x, y], atol=1e-13)
+        # Each distal link ends at the end effector.
+        elbow1 = np.array([p.l0, 0]) + p.chain1.l1 * np.array([math.cos(q[0]), math.sin(q[0])])
+        tip1 = elbow1 + p.chain1.l2 * np.array([math.cos(q[1]), math.sin(q[1])])
+        np.testing.assert_allclose(tip1, [x, y], atol=1e-14)
+
+
+@pytest.mark.parametrize("preset", PRESETS)
+def test_thesis_coordinates_close_the_loop(preset):
+    p = get_preset(preset)
+    mech = build_mechanism(p)
+    for x, y in workspace_points(p, 10):
+        st = mechanism_state(mech, thesis_coordinates(p, x, y), np.zeros(7))
+        assert np.max(np.abs(st.residual)) < 1e-15
+
+
+@pytest.mark.parametrize("preset", PRESETS)
+def test_jacobians_match_finite_differences(preset):
+    p = get_preset(preset)
+    eps = 1e-7
+    for x, y in workspace_points(p, 10):
+        q = inverse_kinematics(p, x, y)
+        # J_X dX + J_Theta dTheta = 0: dTheta/dX by differencing the inverse kinematics.
+        dtheta_dx = np.column_stack([
+            (inverse_kinematics(p, x + eps * e[0], y + eps * e[1])[[0, 2]]
+             - inverse_kinematics(p, x - eps * e[0], y - eps * e[1])[[0, 2]]) / (2 * eps)
+            for e in np.eye(2)
+        ])
+        JX, JT = jacobians(p, x, y, q[0], q[2])
+        np.testing.assert_allclose(-np.linalg.solve(JT, JX), dtheta_dx, rtol=1e-6, atol=1e-6)
+        np.testing.assert_allclose(joint_rates(p, x, y, q[0], q[2], 0.1, -0.2), dtheta_dx @ [0.1, -0.2], atol=1e-6)
+
+
+def test_singularity_measures_vanish_at_singular_poses():
+    p = get_preset("thesis_sim")
+    # Chain 1 stretched: the tip at distance l1 + l2 from its base.
+    reach = p.chain1.l1 + p.chain1.l2
+    s = singularity(p, p.l0 + reach * math.cos(1.2) - 1e-12, reach * math.sin(1.2))
+    assert abs(s.serial1) < 1e-4
+    # Parallel singularity: both distal links horizontal, the tip between the elbows
+    # at (0, l1 sin q1) with l0 + l1 cos q1 = l2.
+    q1 = math.acos((p.chain1.l2 - p.l0) / p.chain1.l1)
+    s = singularity(p, 0.0, p.chain1.l1 * math.sin(q1))
+    assert abs(s.parallel) < 1e-9
+    assert singularity(p, 0.0, 0.17).margin > 0.5
+
+
+def test_workspace_map_has_a_near_singular_band():
+    p = get_preset("thesis_sim")
+    ws = workspace_map(p, step=0.01)
+    counts = np.bincount(ws.status.ravel(), minlength=3)
+    assert counts[ws.INSIDE] > 100 and counts[ws.NEAR_SINGULAR] > 5 and counts[ws.OUTSIDE] > 100
+    inside = ~np.isnan(ws.margin)
+    assert np.all((ws.margin[inside] < NEAR_SINGULAR_MARGIN) == (ws.status[inside] == ws.NEAR_SINGULAR))
+
+
+def test_unreachable_point_is_named():
+    with pytest.raises(KinematicsError, match=r"x=0\.5.*outside the workspace"):
+        inverse_kinematics(get_preset("bench"), 0.5, 0.1)
