@@ -79,8 +79,8 @@ def test_jacobians_match_finite_differences(preset):
 def test_singularity_measures_vanish_at_singular_poses():
     p = get_preset("thesis_sim")
     # Chain 1 stretched: the tip at distance l1 + l2 from its base.
-    reach = p.chain1.l1 + p.chain1.l2
-    s = singularity(p, p.l0 + reach * math.cos(1.2) - 1e-12, reach * math.sin(1.2))
+    reach = (p.chain1.l1 + p.chain1.l2) * (1 - 1e-10)
+    s = singularity(p, p.l0 + reach * math.cos(1.9), reach * math.sin(1.9))
     assert abs(s.serial1) < 1e-4
     # Parallel singularity: both distal links horizontal, the tip between the elbows
     # at (0, l1 sin q1) with l0 + l1 cos q1 = l2.
