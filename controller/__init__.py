@@ -1,0 +1,1 @@
+"""Discrete position controller, numerical derivators and reference trajectories of the 5R robot."""

@@ -1,0 +1,136 @@
+"""Tests of controller.trajectories against the thesis' formulas (7.18, 7.23-7.28)."""
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from controller.trajectories import TRAJECTORY_KINDS, ReferenceSample, get_trajectory
+
+STEP = 1e-6
+"""Finite-difference step, s."""
+X1, X2, X3 = (-0.002, 0.108), (0.050, 0.258), (-0.050, 0.258)
+"""Triangle vertices (7.24-7.26), m."""
+
+
+def thesis_circle_formula(t):
+    """(7.18), as printed."""
+    return 0.07 * math.cos(2 * math.pi * t), 0.17 + 0.07 * math.sin(2 * math.pi * t)
+
+
+def bench_circle_formula(t):
+    """(7.23), as printed."""
+    return -0.05 * math.sin(2 * math.pi * t), 0.158 - 0.05 * math.cos(2 * math.pi * t)
+
+
+def triangle_formula(t):
+    """(7.27) on the sides I: x1->x2, II: x2->x3, III: x3->x1, 0.75 s each, 2 cycles, then x1."""
+    if t >= 4.5:
+        return X1
+    side = int(t / 0.75)
+    start, end = [(X1, X2), (X2, X3), (X3, X1)][side % 3]
+    tau = t / 0.75 - side
+    s = 35 * tau**4 - 84 * tau**5 + 70 * tau**6 - 20 * tau**7
+    return tuple(p0 + (pf - p0) * s for p0, pf in zip(start, end))
+
+
+def times(duration, count=997):
+    """Sample times across the motion, away from 0 so that central differences fit."""
+    return np.linspace(2 * STEP, duration - 2 * STEP, count)
+
+
+def central_difference(trajectory, t, fields):
+    """Central differences of the named fields of the trajectory at t."""
+    before, after = trajectory(t - STEP), trajectory(t + STEP)
+    return np.array([(getattr(after, name) - getattr(before, name)) / (2 * STEP) for name in fields])
+
+
+@pytest.mark.parametrize(
+    "kind, formula",
+    [("thesis_circle", thesis_circle_formula), ("circle", bench_circle_formula), ("triangle", triangle_formula)],
+)
+def test_positions_follow_thesis_formulas(kind, formula):
+    trajectory = get_trajectory(kind)
+    for t in np.linspace(0.0, trajectory.duration, 4001)[:-1]:
+        sample = trajectory(t)
+        assert np.allclose((sample.x, sample.y), formula(t), rtol=0, atol=1e-12), t
+
+
+@pytest.mark.parametrize("kind", ["thesis_circle", "circle", "triangle"])
+def test_derivatives_match_central_differences(kind):
+    trajectory = get_trajectory(kind)
+    for t in times(trajectory.duration):
+        sample = trajectory(t)
+        assert np.allclose((sample.dx, sample.dy), central_difference(trajectory, t, ("x", "y")), rtol=0, atol=1e-8), t
+        assert np.allclose((sample.ddx, sample.ddy), central_difference(trajectory, t, ("dx", "dy")), rtol=0, atol=1e-7), t
+
+
+def jerk(trajectory, t):
+    """Difference of the acceleration around t (one-sided at t = 0), m/s^3."""
+    lower = max(t - STEP, 0.0)
+    before, after = trajectory(lower), trajectory(t + STEP)
+    return (np.array(after[4:]) - np.array(before[4:])) / (t + STEP - lower)
+
+
+def test_triangle_vertices_have_zero_velocity_acceleration_and_jerk():
+    trajectory = get_trajectory("triangle")
+    peak_jerk = max(np.abs(jerk(trajectory, t)).max() for t in np.linspace(0.01, 0.74, 147))
+    assert peak_jerk > 10.0
+    for t, vertex in zip(0.75 * np.arange(7), [X1, X2, X3, X1, X2, X3, X1]):
+        sample = trajectory(t)
+        assert np.allclose((sample.x, sample.y), vertex, rtol=0, atol=1e-15), t
+        assert np.allclose(sample[2:], 0.0, rtol=0, atol=1e-12), t
+        assert np.abs(jerk(trajectory, t)).max() < 1e-4 * peak_jerk, t
+
+
+def test_circle_stops_suddenly_and_continuously():
+    trajectory = get_trajectory("circle")
+    assert trajectory.duration == 8.0
+    just_before, at_stop, later = trajectory(8.0 - 1e-9), trajectory(8.0), trajectory(9.3)
+    assert np.allclose((at_stop.x, at_stop.y), bench_circle_formula(8.0), rtol=0, atol=1e-15)
+    assert np.allclose((just_before.x, just_before.y), (at_stop.x, at_stop.y), rtol=0, atol=1e-9)
+    assert math.hypot(just_before.dx, just_before.dy) == pytest.approx(0.05 * 2 * math.pi)
+    assert at_stop[:2] == later[:2] and at_stop[2:] == later[2:] == (0.0, 0.0, 0.0, 0.0)
+
+
+def test_triangle_holds_first_vertex_after_two_cycles():
+    trajectory = get_trajectory("triangle")
+    assert trajectory.duration == pytest.approx(4.5)
+    assert trajectory(4.5) == trajectory(20.0) == ReferenceSample(*X1, 0.0, 0.0, 0.0, 0.0)
+
+
+@pytest.mark.parametrize(
+    "kind, start",
+    [("thesis_circle", (0.07, 0.17)), ("circle", X1), ("triangle", X1), ("hold", X1)],
+)
+def test_start_points_are_those_of_the_spec(kind, start):
+    assert get_trajectory(kind).start_point == pytest.approx(start, abs=1e-15)
+
+
+def test_reference_starts_at_the_start_point_where_the_thesis_says_so():
+    thesis = get_trajectory("thesis_circle")(0.0)
+    assert (thesis.x, thesis.y) == pytest.approx((0.07, 0.17), abs=1e-15)
+    assert get_trajectory("triangle")(0.0) == ReferenceSample(*X1, 0.0, 0.0, 0.0, 0.0)
+
+
+def test_hold_is_constant_at_rest():
+    trajectory = get_trajectory("hold", x=0.01, y=0.2)
+    for t in (0.0, 1.0, 100.0):
+        assert trajectory(t) == ReferenceSample(0.01, 0.2, 0.0, 0.0, 0.0, 0.0)
+
+
+def test_factory_passes_parameters_and_names_unknown_kinds():
+    assert get_trajectory("circle", cycles=3).duration == 3.0
+    assert get_trajectory("triangle", side_time=0.5, cycles=1).duration == pytest.approx(1.5)
+    with pytest.raises(ValueError, match="unknown trajectory kind 'square'") as error:
+        get_trajectory("square")
+    assert all(kind in str(error.value) for kind in TRAJECTORY_KINDS)
+
+
+def test_trajectories_are_immutable_and_reject_negative_time():
+    trajectory = get_trajectory("circle")
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        trajectory.radius = 0.1
+    with pytest.raises(ValueError, match="time"):
+        trajectory(-0.001)
