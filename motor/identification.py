@@ -58,7 +58,8 @@ def _as_data(u, i, omega):
     nonpositive = np.flatnonzero(cols["omega"] <= 0)
     if nonpositive.size:
         k = nonpositive[0]
-        raise ValueError(f"omega[{k}] must be > 0 (D.10 holds for omega > 0), got {float(cols['omega'][k])!r}")
+        raise ValueError(f"omega[{k}] must be > 0 (D.10 holds for omega > 0), "
+                         f"got {float(cols['omega'][k])!r}")
     return cols["u"], cols["i"], cols["omega"]
 
 
