@@ -55,13 +55,14 @@ class Drive:
         self.reset()
 
     def reset(self, i0=0.0, v0=0.0):
-        """Set the armature current ``i0`` [A] and the last applied voltage ``v0`` [V].
+        """Set the armature current ``i0`` [A] and the last applied voltage ``v0`` [V] (saturated).
 
         In current mode the controller restarts holding ``v0`` with zero error
         (use v0 = R i0 + ke omega0 to start in electrical steady state).
         """
+        v_max = self.params.v_max
         self.i = _checks.finite("i0", i0)
-        self.v = _checks.finite("v0", v0)
+        self.v = min(max(_checks.finite("v0", v0), -v_max), v_max)
         self._phase = 0.0
         if self.controller is not None:
             self.controller.reset(self.v)
