@@ -22,6 +22,7 @@ BUNDLED_PACKAGES = ("plant", "motor", "controller")
 #: Model name -> slave module (unique module names: one interpreter per process).
 SLAVES = {
     "FiveBarPlant": "parcosim_fivebarplant",
+    # one line per FMU; keep this order (plant, drives, controller chain)
 }
 
 

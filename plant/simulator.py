@@ -98,14 +98,17 @@ class PlantSimulator:
     ----------
     params : FiveBarParams
     x0, y0 : float
-        Start at rest with the end effector there (working mode).
+        Start with the end effector there (working mode).
+    dx0, dy0 : float
+        Initial end-effector velocity (default: at rest).
     settings : IntegratorSettings
     encoder_counts : int
         Counts per revolution of the encoders (quadrature: 4x the pulses).
     """
 
     def __init__(self, params: FiveBarParams, x0: float, y0: float,
-                 settings: IntegratorSettings = IntegratorSettings(), encoder_counts: int = 20000):
+                 settings: IntegratorSettings = IntegratorSettings(), encoder_counts: int = 20000,
+                 dx0: float = 0.0, dy0: float = 0.0):
         self.params = params.validate()
         self.settings = settings.validate()
         if not (isinstance(encoder_counts, int) and encoder_counts > 0):
@@ -120,7 +123,8 @@ class PlantSimulator:
         margin = fivebar.singularity(params, x0, y0).margin
         if margin < SINGULAR_STOP:
             raise ValueError(f"start point x0={x0!r}, y0={y0!r} is singular (margin {margin:.3g})")
-        self.y = np.concatenate([q, np.zeros(7)])
+        C = mechanism_state(self.mechanism, q, np.zeros(7)).C
+        self.y = np.concatenate([q, C @ np.array([dx0, dy0], dtype=float)])
         self._h_next = None
         self._fast = None
         if self.settings.kernel == "fast":

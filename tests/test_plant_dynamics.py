@@ -1,0 +1,202 @@
+"""The thesis' parallel algorithm (5.1-5.77) against an independent Lagrange
+formulation, its compiled 5R kernel against the general numpy version, and the
+integrated motion against conservation laws and a tight reference."""
+import functools
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from plant import ACCURATE, IntegratorSettings, PlantError, PlantSimulator, get_preset
+from plant import fivebar
+from plant.fast5r import FastKernel
+from plant.parallel import forward_dynamics, inverse_dynamics, inverse_dynamics_terms, mechanism_state
+from tests.support import lagrange5r as ref
+
+PRESETS = ("thesis_sim", "bench")
+
+
+def variant(preset):
+    """The preset with an end-effector mass and in-plane gravity, so every term is exercised."""
+    return replace(get_preset(preset), m0=0.04, gravity=(2.0, -9.81, 0.5))
+
+
+def reference_params(params):
+    """The plain dict the independent model reads, from the same preset."""
+    chains = [dict(l1=c.l1, l2=c.l2, lg1=c.lg1, lg2=c.lg2, m1=c.m1, m2=c.m2, Jz1=c.Jz1, Jz2=c.Jz2,
+                   J_rotor=c.J_rotor) for c in (params.chain1, params.chain2)]
+    return {"l0": params.l0, "chains": chains, "m0": params.m0, "g": tuple(params.gravity)}
+
+
+def random_states(params, n, seed):
+    """Consistent (q, dq) at random non-singular points with random velocities."""
+    rng = np.random.default_rng(seed)
+    mech = fivebar.build_mechanism(params)
+    states = []
+    while len(states) < n:
+        x, y = rng.uniform(-0.1, 0.1), rng.uniform(0.08, 0.25)
+        try:
+            if fivebar.singularity(params, x, y).margin < 0.2:
+                continue
+        except fivebar.KinematicsError:
+            continue
+        q = fivebar.thesis_coordinates(params, x, y)
+        dq = mechanism_state(mech, q, np.zeros(7)).C @ rng.uniform(-1.0, 1.0, 2)
+        states.append((q, dq))
+    return mech, states
+
+
+def world_phi(q, dq):
+    """Absolute world link angles and rates from the thesis' q, dq."""
+    phi = np.array([q[3], q[3] + q[4], math.pi - q[5], math.pi - q[5] - q[6]])
+    dphi = np.array([dq[3], dq[3] + dq[4], -dq[5], -dq[5] - dq[6]])
+    return phi, dphi
+
+
+@pytest.mark.parametrize("preset", PRESETS)
+def test_accelerations_equal_the_lagrange_formulation(preset):
+    params = variant(preset)
+    rp = reference_params(params)
+    mech, states = random_states(params, 20, seed=3)
+    rng = np.random.default_rng(4)
+    for q, dq in states:
+        tau = rng.uniform(-0.3, 0.3, 2)
+        ddq = forward_dynamics(mech, q, dq, fivebar.thesis_torques(*tau), baumgarte=0.0)
+        phi, dphi = world_phi(q, dq)
+        ddphi = ref.accelerations(rp, phi, dphi, tau)
+        mine = np.array([ddq[3], ddq[3] + ddq[4], -ddq[5], -ddq[5] - ddq[6]])
+        np.testing.assert_allclose(mine, ddphi, rtol=1e-10, atol=1e-10 * np.max(np.abs(ddphi)))
+        np.testing.assert_allclose(ddq[:2], ref.tip_acceleration(rp, phi, dphi, ddphi),
+                                   rtol=1e-10, atol=1e-10 * np.max(np.abs(ddq[:2])))
+
+
+@pytest.mark.parametrize("preset", PRESETS)
+def test_fast_kernel_equals_the_general_algorithm(preset):
+    params = variant(preset)
+    kernel = FastKernel(params)
+    mech, states = random_states(params, 20, seed=5)
+    rng = np.random.default_rng(6)
+    for q, dq in states:
+        # Off the manifold too, so the Baumgarte terms are compared.
+        q = q + rng.normal(scale=1e-4, size=7)
+        dq = dq + rng.normal(scale=1e-3, size=7)
+        u = rng.uniform(-0.3, 0.3, 2)
+        general = forward_dynamics(mech, q, dq, u, baumgarte=50.0)
+        fast = kernel.derivative(np.concatenate([q, dq]), u, 50.0)[7:]
+        np.testing.assert_allclose(fast, general, rtol=1e-11, atol=1e-11 * np.max(np.abs(general)))
+        np.testing.assert_allclose(kernel.residual(np.concatenate([q, dq])),
+                                   mechanism_state(mech, q, dq).residual, atol=1e-16)
+
+
+@pytest.mark.parametrize("preset", PRESETS)
+def test_inverse_dynamics_inverts_forward_dynamics(preset):
+    params = variant(preset)
+    mech, states = random_states(params, 10, seed=7)
+    rng = np.random.default_rng(8)
+    for q, dq in states:
+        u = rng.uniform(-0.3, 0.3, 2)
+        ddq = forward_dynamics(mech, q, dq, u, baumgarte=0.0)
+        np.testing.assert_allclose(inverse_dynamics(mech, q, dq, ddq[:2]), u, rtol=1e-10, atol=1e-12)
+        terms = inverse_dynamics_terms(mech, q, dq)
+        st = mechanism_state(mech, q, dq)
+        # (5.68): the full acceleration is C ddq# + c and satisfies the constraints.
+        np.testing.assert_allclose(st.C @ ddq[:2] + terms.c, ddq, atol=1e-10 * np.max(np.abs(ddq)))
+        np.testing.assert_allclose(st.A @ st.C, 0.0, atol=1e-14)
+        assert np.all(np.linalg.eigvalsh(terms.M) > 0)
+
+
+def test_kinetic_energy_is_conserved_without_torque():
+    params = get_preset("bench")
+    sim = PlantSimulator(params, 0.0, 0.16, ACCURATE, dx0=0.3, dy0=-0.2)
+    e0 = sim.kinetic_energy()
+    for _ in range(1000):
+        sim.step(0.0, 0.0, 1e-3)
+    assert abs(sim.kinetic_energy() - e0) / e0 < 1e-9
+    assert sim.residual_norm() < 1e-12
+
+
+def held_with_wobble(out, t):
+    """A PD hold at (0, 0.17) with a wobble: keeps the mechanism moving inside the workspace."""
+    tau1 = 0.05 * math.sin(7 * t) - 2.0 * (out["q1"] - 0.8658) - 0.05 * out["dq1"]
+    tau2 = 0.05 * math.cos(5 * t) - 2.0 * (out["q2"] - 2.2758) - 0.05 * out["dq2"]
+    return tau1, tau2
+
+
+@pytest.mark.parametrize("project", [True, False])
+def test_constraint_residual_stays_closed_over_ten_seconds(project):
+    sim = PlantSimulator(get_preset("thesis_sim"), 0.0, 0.17, IntegratorSettings(project=project))
+    worst = 0.0
+    for k in range(10000):
+        sim.step(*held_with_wobble(sim.outputs(), k * 1e-3), 1e-3)
+        worst = max(worst, sim.residual_norm())
+    assert worst < 1e-10
+    assert math.hypot(sim.outputs()["dx"], sim.outputs()["dy"]) > 1e-3   # it did move
+
+
+def torque_profile(t):
+    return 0.06 * math.sin(2 * math.pi * 2.5 * t) + 0.02, -0.05 * math.cos(2 * math.pi * 1.5 * t)
+
+
+@functools.lru_cache(maxsize=None)
+def reference_run(preset, x0, y0, t_end=0.4, dt=1e-3):
+    """The independent model with each torque held over its 1 ms step, restarted per step
+    (a solver crossing the steps' discontinuities would crawl)."""
+    rp = reference_params(get_preset(preset))
+    phi = ref.ik(rp, x0, y0)
+    q, dq = np.array([phi[0], phi[2]]), np.zeros(2)
+    rows = []
+    for k in range(round(t_end / dt)):
+        tau = torque_profile(k * dt)
+        _, qs, dqs = ref.integrate(rp, q, dq, lambda t: tau, dt)
+        q, dq = qs[-1], dqs[-1]
+        phi, _ = ref.full_state(rp, q, dq)
+        rows.append((*ref.tip(rp, phi), *q))
+    return np.array(rows)
+
+
+def max_deviation(preset, x0, y0, settings):
+    expected = reference_run(preset, x0, y0)
+    sim = PlantSimulator(get_preset(preset), x0, y0, settings)
+    err = 0.0
+    for k, (x, y, q1, q2) in enumerate(expected):
+        sim.step(*torque_profile(k * 1e-3), 1e-3)
+        out = sim.outputs()
+        err = max(err, math.hypot(out["x"] - x, out["y"] - y), abs(out["q1"] - q1) * 0.1, abs(out["q2"] - q2) * 0.1)
+    assert math.hypot(expected[-1, 0] - expected[0, 0], expected[-1, 1] - expected[0, 1]) > 0.005  # it moved
+    return err
+
+
+@pytest.mark.parametrize("preset, x0, y0", [("thesis_sim", 0.07, 0.17), ("bench", -0.002, 0.108)])
+def test_default_and_accurate_settings_against_the_reference(preset, x0, y0):
+    """End-effector error (and joint error x 0.1 m) over 0.4 s: <= 1e-6 m at defaults, <= 1e-9 m accurate."""
+    assert max_deviation(preset, x0, y0, IntegratorSettings()) < 1e-6
+    assert max_deviation(preset, x0, y0, ACCURATE) < 1e-9
+
+
+def test_bad_input_is_refused_with_name_value_and_time():
+    sim = PlantSimulator(get_preset("thesis_sim"), 0.07, 0.17)
+    sim.step(0.0, 0.0, 1e-3)
+    state = sim.y.copy()
+    with pytest.raises(PlantError, match=r"tau2 = nan at t = 0\.001"):
+        sim.step(0.0, float("nan"), 1e-3)
+    with pytest.raises(PlantError, match=r"tau1 = inf"):
+        sim.step(float("inf"), 0.0, 1e-3)
+    np.testing.assert_array_equal(sim.y, state)
+    with pytest.raises(ValueError, match=r"x0=0\.5.*outside the workspace"):
+        PlantSimulator(get_preset("thesis_sim"), 0.5, 0.17)
+    with pytest.raises(ValueError, match=r"preset: unknown preset 'nope'"):
+        get_preset("nope")
+    with pytest.raises(ValueError, match=r"chain1\.m2 must be >= 0, got -0\.1"):
+        PlantSimulator(replace(get_preset("thesis_sim"), chain1=replace(get_preset("thesis_sim").chain1, m2=-0.1)),
+                       0.07, 0.17)
+    with pytest.raises(ValueError, match=r"cannot close the loop"):
+        PlantSimulator(replace(get_preset("thesis_sim"), l0=0.3), 0.0, 0.17)
+
+
+def test_running_into_a_singularity_stops_with_time_and_place():
+    sim = PlantSimulator(get_preset("thesis_sim"), 0.07, 0.17)
+    with pytest.raises(PlantError, match=r"singular pose reached at t = .* at x = .* y = "):
+        for _ in range(5000):
+            sim.step(0.05, 0.0, 1e-3)
+    assert np.all(np.isfinite(sim.y))
