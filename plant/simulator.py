@@ -44,12 +44,16 @@ class IntegratorSettings:
     rtol, atol : float
         Tolerances of ``dopri5``.
     baumgarte : float
-        Baumgarte lambda [1/s] of (5.66).  The default 10/s is far below the
-        thesis' upper bound 1/h and, with projection, only damps round-off.
+        Baumgarte lambda [1/s] of (5.66).  10/s is far below the thesis'
+        upper bound 1/h; measured against 0 and 100/s it gave the smallest
+        end-effector error and residual (docs/plant.md).
     project : bool
         After each communication step, put q and dq back on the constraint
         manifold by Newton steps on q̄(q) = 0 and dq = C(q) dq#, keeping the
-        independent coordinates q# = (x, y).
+        independent coordinates q# = (x, y).  Off by default: it zeroes the
+        residual but, near serial singularities, (A Q°)^-1 amplifies the
+        integration error of (x, y) into the angles (measured 1e4x larger
+        end-effector error on fast motions, docs/plant.md).
     kernel : {"fast", "general"}
         Which implementation of (5.66) evaluates the accelerations.
     """
@@ -59,7 +63,7 @@ class IntegratorSettings:
     rtol: float = 1e-10
     atol: float = 1e-13
     baumgarte: float = 10.0
-    project: bool = True
+    project: bool = False
     kernel: str = "fast"
 
     def validate(self) -> "IntegratorSettings":
@@ -79,7 +83,7 @@ class IntegratorSettings:
 
 
 #: Settings that reach ~1e-9 m against an independent reference (see docs/plant.md).
-ACCURATE = IntegratorSettings(method="dopri5", rtol=1e-12, atol=1e-15)
+ACCURATE = IntegratorSettings(method="dopri5", rtol=1e-12, atol=1e-15, project=False)
 
 
 class PlantError(RuntimeError):
