@@ -258,6 +258,10 @@ class FastKernel:
     def project(self, y, iterations=3):
         return project(self.p, y, iterations)
 
+    def residual_norm(self, y) -> float:
+        residual(self.p, y, self._res)
+        return math.sqrt(float(self._res @ self._res))
+
     def residual(self, y):
         residual(self.p, y, self._res)
         return self._res.copy()

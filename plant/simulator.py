@@ -164,7 +164,7 @@ class PlantSimulator:
                                             s.rtol, s.atol, self._h_next)
         except (IntegrationError, np.linalg.LinAlgError) as exc:
             raise PlantError(f"integration failed in the step from t = {self.time:.6g} s: {exc}") from None
-        if not np.all(np.isfinite(y)):
+        if not math.isfinite(float(y.sum())):
             raise PlantError(f"state became non-finite in the step from t = {self.time:.6g} s")
         if s.project:
             y = self.project(y)
@@ -186,15 +186,15 @@ class PlantSimulator:
         return np.concatenate([q, C @ (Qs.T @ dq)])
 
     def _check_pose(self, y, t):
-        q = y[:7]
+        q = y[:7].tolist()
         phi12 = q[fivebar.TH11] + q[fivebar.TH12]
         phi22 = math.pi - (q[fivebar.TH21] + q[fivebar.TH22])
-        measures = {
-            "chain 1 elbow (serial)": math.sin(q[fivebar.TH12]),
-            "chain 2 elbow (serial)": math.sin(q[fivebar.TH22]),
-            "distal links (parallel)": math.sin(phi12 - phi22),
-        }
-        for name, value in measures.items():
+        measures = (
+            ("chain 1 elbow (serial)", math.sin(q[fivebar.TH12])),
+            ("chain 2 elbow (serial)", math.sin(q[fivebar.TH22])),
+            ("distal links (parallel)", math.sin(phi12 - phi22)),
+        )
+        for name, value in measures:
             if abs(value) < SINGULAR_STOP:
                 raise PlantError(
                     f"singular pose reached at t = {t:.6g} s: {name} measure {value:.3g} "
@@ -211,23 +211,23 @@ class PlantSimulator:
         return self.y[7:]
 
     def outputs(self) -> dict:
-        """The FiveBarPlant outputs of the component contract."""
-        q, dq = self.q, self.dq
-        q1, q2 = fivebar.world_angles(q)
-        dq1, dq2 = fivebar.world_rates(dq)
+        """The FiveBarPlant outputs of the component contract, as Python floats."""
+        y = self.y.tolist()
+        q1, q2 = fivebar.world_angles(y[:7])
+        dq1, dq2 = fivebar.world_rates(y[7:])
         count = 2.0 * math.pi / self.encoder_counts
         return {
             "q1": q1, "q2": q2, "dq1": dq1, "dq2": dq2,
-            "x": q[0], "y": q[1], "dx": dq[0], "dy": dq[1],
-            "q1_enc": count * round(q1 / count),
-            "q2_enc": count * round(q2 / count),
+            "x": y[0], "y": y[1], "dx": y[7], "dy": y[8],
+            "q1_enc": count * math.floor(q1 / count + 0.5),
+            "q2_enc": count * math.floor(q2 / count + 0.5),
             "residual": self.residual_norm(),
         }
 
     def residual_norm(self) -> float:
         """Euclidean norm of the position constraint residual q̄(q) [m] (5.18)."""
         if self._fast is not None:
-            return float(np.linalg.norm(self._fast.residual(self.y)))
+            return self._fast.residual_norm(self.y)
         return float(np.linalg.norm(mechanism_state(self.mechanism, self.q, self.dq).residual))
 
     def kinetic_energy(self) -> float:
