@@ -13,11 +13,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-import numpy as np  # noqa: E402
-
 from plant import ACCURATE, IntegratorSettings, PlantError, PlantSimulator, get_preset  # noqa: E402
-from tests.support import lagrange5r as ref  # noqa: E402
-from tests.test_plant_dynamics import reference_params  # noqa: E402
+from tests.test_plant_dynamics import held_reference  # noqa: E402
 
 CASES = (("thesis_sim", 0.07, 0.17), ("bench", -0.002, 0.108))
 SETTINGS = {
@@ -36,20 +33,6 @@ def profile(amplitude):
     return lambda t: (amplitude * math.sin(5 * math.pi * t) + amplitude / 3, -amplitude * math.cos(3 * math.pi * t))
 
 
-def reference(preset, x0, y0, tau, t_end=0.4, dt=1e-3):
-    rp = reference_params(get_preset(preset))
-    phi = ref.ik(rp, x0, y0)
-    q, dq = np.array([phi[0], phi[2]]), np.zeros(2)
-    rows = []
-    for k in range(round(t_end / dt)):
-        held = tau(k * dt)
-        _, qs, dqs = ref.integrate(rp, q, dq, lambda t: held, dt)
-        q, dq = qs[-1], dqs[-1]
-        phi, _ = ref.full_state(rp, q, dq)
-        rows.append(ref.tip(rp, phi))
-    return np.array(rows)
-
-
 def deviation(preset, x0, y0, settings, tau, expected):
     sim = PlantSimulator(get_preset(preset), x0, y0, settings)
     err = res = 0.0
@@ -66,7 +49,7 @@ def deviation(preset, x0, y0, settings, tau, expected):
 
 def main():
     profiles = {"0.06 N m": profile(0.06), "0.12 N m": profile(0.12)}
-    refs = {(c, p): reference(*c, tau) for c in CASES for p, tau in profiles.items()}
+    refs = {(c, p): held_reference(*c, tau)[:, :2] for c in CASES for p, tau in profiles.items()}
     head = [f"{c[0]} {p}" for c in CASES for p in profiles]
     print("| settings | " + " | ".join(head) + " | µs/step |")
     print("|---" * (len(head) + 2) + "|")

@@ -138,21 +138,28 @@ def torque_profile(t):
     return 0.06 * math.sin(2 * math.pi * 2.5 * t) + 0.02, -0.05 * math.cos(2 * math.pi * 1.5 * t)
 
 
-@functools.lru_cache(maxsize=None)
-def reference_run(preset, x0, y0, t_end=0.4, dt=1e-3):
-    """The independent model with each torque held over its 1 ms step, restarted per step
-    (a solver crossing the steps' discontinuities would crawl)."""
+def held_reference(preset, x0, y0, tau, t_end=0.4, dt=1e-3):
+    """Tip and actuated angles of the independent model, each torque held over its step.
+
+    The reference restarts at every step (a solver crossing the steps'
+    discontinuities would crawl).  Rows: (x, y, q1, q2) at t = dt, 2 dt, ...
+    """
     rp = reference_params(get_preset(preset))
     phi = ref.ik(rp, x0, y0)
     q, dq = np.array([phi[0], phi[2]]), np.zeros(2)
     rows = []
     for k in range(round(t_end / dt)):
-        tau = torque_profile(k * dt)
-        _, qs, dqs = ref.integrate(rp, q, dq, lambda t: tau, dt)
+        held = tau(k * dt)
+        _, qs, dqs = ref.integrate(rp, q, dq, lambda t: held, dt)
         q, dq = qs[-1], dqs[-1]
         phi, _ = ref.full_state(rp, q, dq)
         rows.append((*ref.tip(rp, phi), *q))
     return np.array(rows)
+
+
+@functools.lru_cache(maxsize=None)
+def reference_run(preset, x0, y0):
+    return held_reference(preset, x0, y0, torque_profile)
 
 
 def max_deviation(preset, x0, y0, settings):
