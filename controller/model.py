@@ -1,0 +1,262 @@
+"""The controller's dynamic model: Ĥ and ĥ of (6.1-6.4) in task space, exact or tabulated (7.2.5).
+
+Both models come from the plant's inverse dynamics (:func:`plant.parallel.inverse_dynamics_terms`,
+5.74-5.77) with q# = (x, y)::
+
+    H(x) ddx + h(x, dx) = Z^T u*,   H = M_M (5.75, 6.1),   h = v_M + g_M (5.76-5.77, 6.2)
+
+``v_M`` is exactly quadratic in dx (the velocity terms of the serial chains and the
+constraint bias c of 5.69 are quadratic forms in the quasi-velocities), so
+``v_M(x, dx) = cxx(x) dx^2 + cyy(x) dy^2 + cxy(x) dx dy`` with 2-vectors obtained from
+three evaluations at dx = (1, 0), (0, 1), (1, 1):
+``cxx = v(1,0)``, ``cyy = v(0,1)``, ``cxy = v(1,1) - v(1,0) - v(0,1)``.
+
+:class:`ExactModel` evaluates (5.74-5.77) at every call (~2.5 ms: the general numpy
+algorithm).  :class:`TabulatedModel` stores H (3 entries), the six quadratic coefficients
+and g on a square grid (default 5 mm, thesis 7.2.5) and interpolates bilinearly (a few µs).
+Grid points outside the workspace or in the near-singular band
+(margin < :data:`plant.fivebar.NEAR_SINGULAR_MARGIN`) are left out; asking for a point
+whose cell has a missing corner raises :class:`ModelRangeError`.
+
+The joint-space terms follow by the change of variables x = FK(q) of
+:mod:`controller.kinematics` (no second dynamic model): with ``dx = J dq`` and
+``ddx = J ddq + beta``, ``H_q = J^T H J`` and ``h_q = J^T (H beta + h)``; the actuator
+torques are then the joint-space efforts themselves.
+
+``model_error`` e builds the model from parameters whose masses, link inertias and rotor
+inertias are scaled by (1 + e) (:func:`perturbed_params`).
+"""
+from __future__ import annotations
+
+import hashlib
+import math
+import os
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from plant import fivebar
+from plant.parallel import inverse_dynamics_terms, mechanism_state
+from plant.presets import FiveBarParams
+
+from .kinematics import Kinematics
+
+#: Entries of one table row: H00, H01, H11, cxx(2), cyy(2), cxy(2), g(2).
+N_TERMS = 11
+DEFAULT_GRID_STEP = 0.005
+#: Default tabulated region (x_min, x_max, y_min, y_max), m: covers the bench and simulation
+#: trajectories (thesis 7.18, 7.23-7.26) with margin; pass ``extent="workspace"`` for all of
+#: the upper half-plane workspace.
+DEFAULT_EXTENT = (-0.12, 0.12, 0.06, 0.29)
+
+
+class ModelRangeError(ValueError):
+    """The model has no value at the requested point."""
+
+
+def perturbed_params(params: FiveBarParams, model_error: float) -> FiveBarParams:
+    """Parameters with every mass, link inertia and rotor inertia scaled by (1 + model_error).
+
+    Raises
+    ------
+    ValueError
+        If ``model_error`` is not finite or <= -1.
+    """
+    if not (math.isfinite(model_error) and model_error > -1.0):
+        raise ValueError(f"model_error = {model_error!r} must be finite and > -1")
+    f = 1.0 + float(model_error)
+
+    def chain(c):
+        return replace(c, m1=c.m1 * f, m2=c.m2 * f, Jz1=c.Jz1 * f, Jz2=c.Jz2 * f, J_rotor=c.J_rotor * f)
+
+    return replace(params, chain1=chain(params.chain1), chain2=chain(params.chain2), m0=params.m0 * f)
+
+
+class ExactModel:
+    """Ĥ, ĥ from :func:`plant.parallel.inverse_dynamics_terms` at every call (5.74-5.77).
+
+    Parameters
+    ----------
+    params : FiveBarParams
+        The model's parameters (already perturbed if wanted).
+    """
+
+    kind = "exact"
+
+    def __init__(self, params: FiveBarParams):
+        self.params = params
+        self.mechanism = fivebar.build_mechanism(params)
+        self.kin = Kinematics(params)
+        self.last_Z = None
+
+    def full_state(self, x, y, dx, dy):
+        """Consistent thesis coordinates q (7.12) and dq = C dq# (5.56) for (x, y, dx, dy)."""
+        angles = self.kin.inverse(x, y)
+        p11, p12, p21, p22 = angles
+        q = np.array([x, y, 0.0, p11, p12 - p11, math.pi - p21, p21 - p22])
+        return q, np.array(self.kin.thesis_rates(x, y, angles, dx, dy))
+
+    def terms(self, x, y, dx, dy):
+        """(H00, H01, H11, h0, h1) at (x, y, dx, dy); also keeps Z of (5.72) in ``last_Z``."""
+        q, dq = self.full_state(x, y, dx, dy)
+        state = mechanism_state(self.mechanism, q, dq)
+        t = inverse_dynamics_terms(self.mechanism, q, dq, state)
+        self.last_Z = t.Z
+        h = t.v + t.g
+        return t.M[0, 0], t.M[0, 1], t.M[1, 1], h[0], h[1]
+
+    def row(self, x, y):
+        """One table row (N_TERMS values) at (x, y): H, the quadratic coefficients and g."""
+        q, _ = self.full_state(x, y, 0.0, 0.0)
+        values = []
+        for ux, uy in ((1.0, 0.0), (0.0, 1.0), (1.0, 1.0)):
+            _, dq = self.full_state(x, y, ux, uy)
+            t = inverse_dynamics_terms(self.mechanism, q, dq)
+            values.append(t.v)
+        vx, vy, vxy = values
+        return np.concatenate([[t.M[0, 0], t.M[0, 1], t.M[1, 1]], vx, vy, vxy - vx - vy, t.g])
+
+
+def _grid(extent, step):
+    x0, x1, y0, y1 = extent
+    nx = int(round((x1 - x0) / step)) + 1
+    ny = int(round((y1 - y0) / step)) + 1
+    return x0 + step * np.arange(nx), y0 + step * np.arange(ny)
+
+
+def workspace_extent(params: FiveBarParams):
+    """Bounding box of the upper half-plane workspace (y >= 0), m."""
+    reach = max(params.chain1.l1 + params.chain1.l2, params.chain2.l1 + params.chain2.l2)
+    return (-params.l0 - reach, params.l0 + reach, 0.0, reach)
+
+
+def build_table(params: FiveBarParams, step=DEFAULT_GRID_STEP, extent=DEFAULT_EXTENT,
+                band=fivebar.NEAR_SINGULAR_MARGIN):
+    """Evaluate the model on the grid (7.2.5).
+
+    Returns
+    -------
+    xs, ys : numpy.ndarray
+        Grid lines, m.
+    table : numpy.ndarray
+        Shape (ny, nx, N_TERMS); NaN at left-out points.
+    """
+    exact = ExactModel(params)
+    xs, ys = _grid(extent, step)
+    table = np.full((ys.size, xs.size, N_TERMS), np.nan)
+    for iy, y in enumerate(ys):
+        for ix, x in enumerate(xs):
+            try:
+                if exact.kin.margin(x, y) < band:
+                    continue
+            except fivebar.KinematicsError:
+                continue
+            table[iy, ix] = exact.row(x, y)
+    return xs, ys, table
+
+
+def cache_dir() -> Path:
+    """Where tables are cached: ``$PARCOSIM_CACHE`` or ``$XDG_CACHE_HOME/parcosim`` (~/.cache/parcosim)."""
+    root = os.environ.get("PARCOSIM_CACHE")
+    if root:
+        return Path(root)
+    return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "parcosim"
+
+
+def _cache_key(params, step, extent, band):
+    text = repr((params, float(step), tuple(float(e) for e in extent), float(band), N_TERMS, "v1"))
+    return hashlib.sha256(text.encode()).hexdigest()[:20]
+
+
+class TabulatedModel:
+    """Ĥ, ĥ interpolated bilinearly on a grid over the workspace (7.2.5).
+
+    Parameters
+    ----------
+    params : FiveBarParams
+        The model's parameters (already perturbed if wanted).
+    step : float
+        Grid step, m (thesis: 5 mm).
+    extent : tuple or "workspace"
+        (x_min, x_max, y_min, y_max) of the grid, m.
+    cache : bool
+        Load the table from / save it to :func:`cache_dir` (``np.savez``), keyed by a
+        hash of the parameters, step, extent and band.
+
+    Attributes
+    ----------
+    build_seconds : float
+        Wall time spent building (0 when loaded from the cache).
+    """
+
+    kind = "tabulated"
+
+    def __init__(self, params: FiveBarParams, step=DEFAULT_GRID_STEP, extent=DEFAULT_EXTENT,
+                 cache=True, band=fivebar.NEAR_SINGULAR_MARGIN):
+        if not (math.isfinite(step) and step > 0.0):
+            raise ValueError(f"grid step = {step!r} m must be > 0")
+        if isinstance(extent, str):
+            if extent != "workspace":
+                raise ValueError(f"extent = {extent!r}: give (x_min, x_max, y_min, y_max) or 'workspace'")
+            extent = workspace_extent(params)
+        extent = tuple(float(e) for e in extent)
+        if not (extent[1] > extent[0] and extent[3] > extent[2]):
+            raise ValueError(f"extent = {extent!r} is empty")
+        self.params, self.step, self.extent = params, float(step), extent
+        self.build_seconds = 0.0
+        path = cache_dir() / f"model_{_cache_key(params, step, extent, band)}.npz" if cache else None
+        if path is not None and path.exists():
+            data = np.load(path)
+            xs, ys, table = data["xs"], data["ys"], data["table"]
+        else:
+            start = time.perf_counter()
+            xs, ys, table = build_table(params, step, extent, band)
+            self.build_seconds = time.perf_counter() - start
+            if path is not None:
+                path.parent.mkdir(parents=True, exist_ok=True)
+                tmp = path.with_suffix(f".{os.getpid()}.tmp.npz")
+                np.savez(tmp, xs=xs, ys=ys, table=table)
+                os.replace(tmp, path)
+        self.xs, self.ys, self.table = xs, ys, table
+        valid = ~np.isnan(table[:, :, 0])
+        self.valid = valid
+        self.cell_ok = valid[:-1, :-1] & valid[1:, :-1] & valid[:-1, 1:] & valid[1:, 1:]
+        self._x0, self._y0 = float(xs[0]), float(ys[0])
+        self._nx, self._ny = xs.size - 1, ys.size - 1
+        self._inv = 1.0 / self.step
+
+    def interpolate(self, x, y):
+        """The N_TERMS table values at (x, y), bilinear in the grid cell (7.2.5).
+
+        Raises
+        ------
+        ModelRangeError
+            If (x, y) is outside the grid or a corner of its cell was left out.
+        """
+        fx = (x - self._x0) * self._inv
+        fy = (y - self._y0) * self._inv
+        ix, iy = int(math.floor(fx)), int(math.floor(fy))
+        if ix == self._nx and fx - ix < 1e-9:
+            ix -= 1
+        if iy == self._ny and fy - iy < 1e-9:
+            iy -= 1
+        if not (0 <= ix < self._nx and 0 <= iy < self._ny):
+            raise ModelRangeError(
+                f"point (x={x:.6g}, y={y:.6g}) m is outside the tabulated region "
+                f"x in [{self.extent[0]:g}, {self.extent[1]:g}], y in [{self.extent[2]:g}, {self.extent[3]:g}] m")
+        if not self.cell_ok[iy, ix]:
+            raise ModelRangeError(
+                f"point (x={x:.6g}, y={y:.6g}) m needs a grid point left out of the table "
+                f"(outside the workspace or near-singular)")
+        wx, wy = fx - ix, fy - iy
+        c = self.table[iy:iy + 2, ix:ix + 2]
+        return ((1.0 - wy) * ((1.0 - wx) * c[0, 0] + wx * c[0, 1])
+                + wy * ((1.0 - wx) * c[1, 0] + wx * c[1, 1]))
+
+    def terms(self, x, y, dx, dy):
+        """(H00, H01, H11, h0, h1) at (x, y, dx, dy) from the interpolated table."""
+        H00, H01, H11, a0, a1, b0, b1, c0, c1, g0, g1 = self.interpolate(x, y).tolist()
+        xx, yy, xy = dx * dx, dy * dy, dx * dy
+        return H00, H01, H11, a0 * xx + b0 * yy + c0 * xy + g0, a1 * xx + b1 * yy + c1 * xy + g1

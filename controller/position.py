@@ -1,0 +1,230 @@
+"""The discrete position controller: the unified law of the thesis (7.21-7.22).
+
+At each sample (period T, 1 ms on the bench)::
+
+    e = r_d - r,   s = ddr_d - ddr + kv de + kp e            (6.5, 7.22)
+    I <- I + T k sat(s / phi)                               (6.65, integral of 7.21)
+    u' = Ĥ (ddr_d + kv de + kp e + I) + ĥ                   (7.21)
+    kp = lam^2, kv = 2 lam                                  (7.29-7.30)
+
+with r = q (joint space: the actuated angles q1, q2, world frame) or r = x (task space:
+the end effector, m).  With the exact model and k = 0 the closed loop error obeys
+ë + kv ė + kp e = 0 (6.12 with δ' = 0); with k != 0, s obeys ds/dt = -k sat(s/phi) (the
+integral enters u' with the sign that makes s = -I).  The integral uses the rectangle rule
+including the current sample.
+
+Measurements are the joint angles and their derivatives (encoders + derivators); the task
+state follows by x = FK(q), dx = J dq, ddx = J ddq + beta (:mod:`controller.kinematics`).
+Joint references come from the task references by inverse kinematics and the Jacobians.
+
+Model terms (:mod:`controller.model`) are task-space H, h evaluated at the measured pose;
+in joint space the law uses ``H_q = J^T H J`` and ``h_q = J^T (H beta + h)``, so
+``u' = J^T (H (J a + beta) + h)`` for the commanded joint acceleration a.  Torques: in joint
+space the efforts u' ARE the world torques (tau1, tau2); in task space u' = Z^T u* (5.72):
+the exact model solves it with the plant's Z, the tabulated and PD laws use the equivalent
+closed form tau = J^T u' (tests check both agree).  Current references: tau_k / kt_k.
+
+PD (k = 0, ĥ = 0, Ĥ = m*·1) and TC (k = 0) are the special cases of 7.2.6; the adaptive
+gain of (6.66) is optional (``Strategy.gamma``).
+"""
+from __future__ import annotations
+
+import math
+
+from motor.presets import get_motor_preset
+from plant import fivebar
+from plant.presets import FiveBarParams
+
+from .kinematics import Kinematics
+from .model import DEFAULT_EXTENT, DEFAULT_GRID_STEP, ExactModel, ModelRangeError, TabulatedModel, perturbed_params
+from .strategies import Strategy
+
+SAMPLE_TIME = 1e-3
+MODEL_KINDS = ("exact", "tabulated")
+MEASUREMENTS = ("q1", "q2", "dq1", "dq2", "ddq1", "ddq2")
+REFERENCES = ("x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
+
+
+def sat(x: float) -> float:
+    """Saturation (6.65)."""
+    return x if -1.0 <= x <= 1.0 else (1.0 if x > 0.0 else -1.0)
+
+
+def _sign(x: float) -> float:
+    return 0.0 if x == 0.0 else math.copysign(1.0, x)
+
+
+def default_kt():
+    """(kt1, kt2) of the motor presets motor1, motor2 (Tables 16, 18), N m/A."""
+    return get_motor_preset("motor1").kt, get_motor_preset("motor2").kt
+
+
+class PositionController:
+    """The unified law (7.21-7.22) for one strategy.
+
+    Parameters
+    ----------
+    params : FiveBarParams
+        The nominal plant (e.g. ``plant.get_preset("bench")``).
+    strategy : Strategy
+        From :func:`controller.strategies.get_strategy`, possibly modified with ``with_``.
+    model : {"exact", "tabulated"}
+        Source of Ĥ, ĥ for model-based (TC) strategies; ignored by PD strategies.
+    model_error : float
+        The model's masses and inertias are (1 + model_error) times the plant's.
+    grid_step, extent : float, tuple
+        Table of the tabulated model (:class:`controller.model.TabulatedModel`).
+    kt : tuple of float
+        Torque constants for the current references, N m/A (default: motor presets).
+    T : float
+        Sample time, s, used when :meth:`step` gets no ``dt``.
+    band : float
+        References with singularity margin below it are refused.
+    cache : bool
+        Cache the table on disk.
+    """
+
+    def __init__(self, params: FiveBarParams, strategy: Strategy, model="tabulated", model_error=0.0,
+                 grid_step=DEFAULT_GRID_STEP, extent=DEFAULT_EXTENT, kt=None, T=SAMPLE_TIME,
+                 band=fivebar.NEAR_SINGULAR_MARGIN, cache=True):
+        if strategy.space not in ("q", "x"):
+            raise ValueError(f"strategy.space = {strategy.space!r}: valid: 'q', 'x'")
+        for name in ("lam", "phi"):
+            value = getattr(strategy, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise ValueError(f"{name} = {value!r} must be > 0")
+        if not (math.isfinite(strategy.m_star) and strategy.m_star >= 0.0):
+            raise ValueError(f"m_star = {strategy.m_star!r} must be >= 0")
+        if not strategy.model_based and strategy.m_star <= 0.0:
+            raise ValueError(f"m_star = {strategy.m_star!r} must be > 0 for the PD strategy {strategy.name}")
+        for i, k in enumerate(strategy.k):
+            if not (math.isfinite(k) and k >= 0.0):
+                raise ValueError(f"k{i + 1} = {k!r} must be >= 0")
+        if strategy.gamma is not None and not all(math.isfinite(g) and g >= 0.0 for g in strategy.gamma):
+            raise ValueError(f"gamma = {strategy.gamma!r} must be >= 0")
+        if model not in MODEL_KINDS:
+            raise ValueError(f"model = {model!r} is unknown; valid: {', '.join(MODEL_KINDS)}")
+        if not (math.isfinite(T) and T > 0.0):
+            raise ValueError(f"T = {T!r} s must be > 0")
+        self.params, self.strategy, self.T, self.band = params.validate(), strategy, float(T), float(band)
+        self.kin = Kinematics(params)
+        self.kp, self.kv = strategy.lam ** 2, 2.0 * strategy.lam
+        self.kt = default_kt() if kt is None else tuple(float(v) for v in kt)
+        if not all(math.isfinite(v) and v > 0.0 for v in self.kt):
+            raise ValueError(f"kt = {self.kt!r} must be > 0")
+        self.model_kind = model if strategy.model_based else None
+        self.model = None
+        if strategy.model_based:
+            model_params = perturbed_params(params, model_error)
+            self.model = (ExactModel(model_params) if model == "exact"
+                          else TabulatedModel(model_params, grid_step, extent, cache=cache, band=band))
+        self.reset()
+
+    def reset(self):
+        """Zero the integral of the sliding term and restore the preset gains."""
+        self.integral = [0.0, 0.0]
+        self.k = list(self.strategy.k)
+        self.s_prev = [0.0, 0.0]
+        self.s = [0.0, 0.0]
+        self.e = [0.0, 0.0]
+
+    # --- checks ---------------------------------------------------------------------
+    def _reference_angles(self, t, x_d, y_d):
+        try:
+            angles = self.kin.inverse(x_d, y_d)
+        except fivebar.KinematicsError:
+            raise ValueError(f"reference (x_d, y_d) = ({x_d!r}, {y_d!r}) m at t = {t:.6g} s "
+                             f"is outside the workspace") from None
+        p11, p12, p21, p22 = angles
+        margin = min(abs(math.sin(p12 - p11)), abs(math.sin(p22 - p21)), abs(math.sin(p12 - p22)))
+        if margin < self.band:
+            raise ValueError(f"reference (x_d, y_d) = ({x_d!r}, {y_d!r}) m at t = {t:.6g} s is in the "
+                             f"near-singular band (margin {margin:.3g} < {self.band:g})")
+        return angles
+
+    # --- the law ------------------------------------------------------------------------
+    def step(self, t, q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d, dt=None):
+        """One sample of the law (7.21-7.22).
+
+        Parameters
+        ----------
+        t : float
+            Time of the sample, s (for messages only).
+        q1 ... ddq2 : float
+            Measured actuated angles (world frame, rad) and their first two derivatives.
+        x_d ... ddy_d : float
+            Task-space reference and its derivatives (m, m/s, m/s^2).
+        dt : float, optional
+            Integration step of the sliding term, s (default T).
+
+        Returns
+        -------
+        tau1, tau2, i_ref1, i_ref2 : float
+            World torques (CCW positive, N m) and current references tau/kt (A).
+
+        Raises
+        ------
+        ValueError
+            Naming the variable, its value and t: a non-finite input, a reference outside the
+            workspace or in the near-singular band, a measured pose without assembly, or a
+            pose outside the tabulated model.
+        """
+        values = (q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d)
+        for name, value in zip(MEASUREMENTS + REFERENCES, values):
+            if not math.isfinite(value):
+                raise ValueError(f"input {name} = {value!r} at t = {t:.6g} s is not finite")
+        h = self.T if dt is None else dt
+        angles = self._reference_angles(t, x_d, y_d)
+        try:
+            x, y, dx, dy, ddx, ddy, J, beta = self.kin.task_state(q1, q2, dq1, dq2, ddq1, ddq2)
+        except fivebar.KinematicsError as exc:
+            raise ValueError(f"measured (q1, q2) = ({q1!r}, {q2!r}) rad at t = {t:.6g} s: {exc}") from None
+        st = self.strategy
+        if st.space == "x":
+            r = (x, y, dx, dy, ddx, ddy)
+            rd = (x_d, y_d, dx_d, dy_d, ddx_d, ddy_d)
+        else:
+            r = (q1, q2, dq1, dq2, ddq1, ddq2)
+            rd = self.kin.joint_reference(x_d, y_d, dx_d, dy_d, ddx_d, ddy_d, angles)
+        kp, kv = self.kp, self.kv
+        a = [0.0, 0.0]
+        for i in (0, 1):
+            e, de, dde = rd[i] - r[i], rd[2 + i] - r[2 + i], rd[4 + i] - r[4 + i]
+            feedback = kv * de + kp * e
+            s = dde + feedback                                                    # (7.22)
+            if st.gamma is not None:                                              # (6.66)
+                same = _sign(s) == _sign(self.s_prev[i])
+                if abs(s) >= st.phi or not same:
+                    self.k[i] = abs(self.k[i] + st.gamma[i] * _sign(s) * _sign(self.s_prev[i]))
+            if self.k[i] != 0.0:
+                self.integral[i] += h * self.k[i] * sat(s / st.phi)
+            self.s_prev[i] = s
+            self.s[i], self.e[i] = s, e
+            a[i] = rd[4 + i] + feedback + self.integral[i]                        # (7.21)
+        J00, J01, J10, J11 = J
+        if not st.model_based:                                                    # PD: Ĥ = m*·1, ĥ = 0
+            u0, u1 = st.m_star * a[0], st.m_star * a[1]
+            if st.space == "q":
+                return self._out(u0, u1)
+            return self._out(J00 * u0 + J10 * u1, J01 * u0 + J11 * u1)           # tau = J^T u'
+        try:
+            H00, H01, H11, h0, h1 = self.model.terms(x, y, dx, dy)
+        except (ModelRangeError, fivebar.KinematicsError) as exc:
+            raise ValueError(f"measured pose (x, y) = ({x:.6g}, {y:.6g}) m at t = {t:.6g} s: {exc}") from None
+        if st.space == "x":
+            u0, u1 = H00 * a[0] + H01 * a[1] + h0, H01 * a[0] + H11 * a[1] + h1   # (7.21)
+            if self.model_kind == "exact":                                        # u' = Z^T u* (5.72)
+                Z = self.model.last_Z
+                det = Z[0, 0] * Z[1, 1] - Z[0, 1] * Z[1, 0]
+                us0 = (Z[1, 1] * u0 - Z[1, 0] * u1) / det                         # Z^T = [[Z00, Z10], [Z01, Z11]]
+                us1 = (-Z[0, 1] * u0 + Z[0, 0] * u1) / det
+                return self._out(us0, -us1)                                       # tau2 = -u*_theta21
+            return self._out(J00 * u0 + J10 * u1, J01 * u0 + J11 * u1)
+        # Joint space: u' = J^T (H (J a + beta) + h).
+        ax = J00 * a[0] + J01 * a[1] + beta[0]
+        ay = J10 * a[0] + J11 * a[1] + beta[1]
+        f0, f1 = H00 * ax + H01 * ay + h0, H01 * ax + H11 * ay + h1
+        return self._out(J00 * f0 + J10 * f1, J01 * f0 + J11 * f1)
+
+    def _out(self, tau1, tau2):
+        return tau1, tau2, tau1 / self.kt[0], tau2 / self.kt[1]
