@@ -1,0 +1,1 @@
+"""Test-only support code: independent reference models the project is checked against."""
