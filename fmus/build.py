@@ -22,6 +22,9 @@ BUNDLED_PACKAGES = ("plant", "motor", "controller")
 #: Model name -> slave module (unique module names: one interpreter per process).
 SLAVES = {
     "FiveBarPlant": "parcosim_fivebarplant",
+    "Trajectory": "parcosim_trajectory",
+    "Derivator": "parcosim_derivator",
+    "PositionController": "parcosim_positioncontroller",
     # one line per FMU; keep this order (plant, drives, controller chain)
 }
 

@@ -1,0 +1,79 @@
+"""FMI slave ``Derivator``: velocity and acceleration estimates of q1, q2 (thesis 7.2.3).
+
+Each ``doStep(t, h)`` takes the inputs ``q1``, ``q2`` as the newest sample and outputs the
+estimates at that sample (:class:`controller.derivators.Derivator`: backward difference,
+2nd-order Bessel low-pass for velocity, 8th-order for acceleration, discretised at
+``T``; the step size must equal ``T``).  Wiring: feed the plant's (encoder) angles at t and
+read the estimates for t after this step, before the controller's step at t.  Outputs
+change only in ``doStep``: no direct feedthrough.
+
+Start: with ``start_from_input`` (default) the filters are put at rest at the angles of the
+first ``doStep``'s inputs, so the first estimates are 0 (the thesis' bench starts at rest);
+otherwise at rest at the parameters ``q1_0``, ``q2_0``.
+
+The module name is unique among parcosim slaves: all FMUs loaded in one
+process share one Python interpreter and its module cache.
+"""
+from __future__ import annotations
+
+import math
+
+from controller.derivators import DEFAULT_FC_ACC, DEFAULT_FC_VEL, SAMPLE_TIME
+from controller.derivators import Derivator as _Derivator
+from fmus.guarded import GuardedSlave, require_finite
+
+OUTPUTS = ("dq1", "dq2", "ddq1", "ddq2")
+
+
+class Derivator(GuardedSlave):
+    """Numerical differentiator of the two actuated angles (7.2.3)."""
+
+    author = "parcosim"
+    description = "Derivator (Coutinho 2019, 7.2.3): angles in, Bessel-filtered velocity and acceleration out"
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.author, self.description = type(self).author, type(self).description
+        d = self.declare
+        d("q1", "input", 0.0, "Chain 1 actuated angle sample [rad]")
+        d("q2", "input", 0.0, "Chain 2 actuated angle sample [rad]")
+        d("dq1", "output", 0.0, "Velocity estimate of q1 [rad/s]")
+        d("dq2", "output", 0.0, "Velocity estimate of q2 [rad/s]")
+        d("ddq1", "output", 0.0, "Acceleration estimate of q1 [rad/s2]")
+        d("ddq2", "output", 0.0, "Acceleration estimate of q2 [rad/s2]")
+        d("fc_vel", "parameter", DEFAULT_FC_VEL, "-3 dB frequency of the 2nd-order Bessel velocity low-pass [Hz]")
+        d("fc_acc", "parameter", DEFAULT_FC_ACC, "-3 dB frequency of the 8th-order Bessel acceleration low-pass [Hz]")
+        d("T", "parameter", SAMPLE_TIME, "Sample time the filters are discretised at; doStep sizes must equal it [s]")
+        d("start_from_input", "parameter", True, "Start at rest at the first step's input angles (else at q1_0, q2_0)")
+        d("q1_0", "parameter", 0.0, "Start angle of q1 when start_from_input is false [rad]")
+        d("q2_0", "parameter", 0.0, "Start angle of q2 when start_from_input is false [rad]")
+        self.derivator = None
+        self._started = False
+
+    def setup(self):
+        require_finite(fc_vel=self.fc_vel, fc_acc=self.fc_acc, T=self.T, q1_0=self.q1_0, q2_0=self.q2_0)
+        for name in ("fc_vel", "fc_acc", "T"):
+            if getattr(self, name) <= 0.0:
+                raise ValueError(f"parameter {name} = {getattr(self, name)!r} must be > 0")
+        nyquist = 0.5 / self.T
+        for name in ("fc_vel", "fc_acc"):
+            if getattr(self, name) >= nyquist:
+                raise ValueError(f"parameter {name} = {getattr(self, name)!r} Hz must be below 1/(2T) = {nyquist:g} Hz")
+        self.derivator = _Derivator(self.fc_vel, self.fc_acc, self.T)
+        self._started = not self.start_from_input
+        if self._started:
+            self.derivator.reset([self.q1_0, self.q2_0])
+
+    def step(self, current_time, step_size):
+        if abs(step_size - self.T) > 1e-9 * self.T:
+            raise ValueError(f"step size {step_size!r} s differs from the sample time T = {self.T!r} s")
+        for name in ("q1", "q2"):
+            value = getattr(self, name)
+            if not math.isfinite(value):
+                raise ValueError(f"input {name} = {value!r} at t = {current_time:.6g} s is not finite")
+        if not self._started:
+            self.derivator.reset([self.q1, self.q2])
+            self._started = True
+        dq, ddq = self.derivator.step([self.q1, self.q2])
+        self.dq1, self.dq2 = float(dq[0]), float(dq[1])
+        self.ddq1, self.ddq2 = float(ddq[0]), float(ddq[1])

@@ -1,0 +1,105 @@
+"""FMI slave ``PositionController``: the unified law (thesis 7.21-7.22), eight strategies.
+
+Timing: ``doStep(t, h)`` reads the measurements and references set before it (the samples
+at t), computes the torques and current references and holds them as outputs; the master
+applies them to the drives/plant over [t, t + h].  Outputs change only in ``doStep``: no
+direct feedthrough.  ``h`` is the integration step of the sliding term.
+
+Numeric parameters ``lam``, ``m_star``, ``phi``, ``k1``, ``k2``, ``kt1``, ``kt2`` start at -1,
+meaning "the strategy preset's value" (Tables 6-8; ``trajectory`` picks Table 6 or 7 for
+joint-space strategies) or the motor presets' kt.  ``gamma1``, ``gamma2`` > 0 turn on the
+adaptive gain (6.66).  The tabulated model's grid (``grid_step``, ``x_min`` ... ``y_max``)
+is built at initialisation or loaded from the cache (``controller.model.cache_dir``).
+
+The module name is unique among parcosim slaves: all FMUs loaded in one
+process share one Python interpreter and its module cache.
+"""
+from __future__ import annotations
+
+from controller.model import DEFAULT_EXTENT, DEFAULT_GRID_STEP
+from controller.position import PositionController as _Controller
+from controller.strategies import get_strategy
+from fmus.guarded import GuardedSlave, require_finite
+from plant import get_preset
+
+#: Start value meaning "the preset's value".
+PRESET_VALUE = -1.0
+INPUTS = ("q1", "q2", "dq1", "dq2", "ddq1", "ddq2", "x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
+OUTPUTS = ("tau1", "tau2", "i_ref1", "i_ref2")
+
+
+class PositionController(GuardedSlave):
+    """Discrete position controller of the 5R (Coutinho 2019, 7.2.6, 7.21-7.22)."""
+
+    author = "parcosim"
+    description = "Position controller (Coutinho 2019, 7.21-7.22): PD/TC +- sliding modes, joint or task space"
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.author, self.description = type(self).author, type(self).description
+        d = self.declare
+        for name, text in (("q1", "Measured q1 [rad]"), ("q2", "Measured q2 [rad]"),
+                           ("dq1", "Measured dq1 [rad/s]"), ("dq2", "Measured dq2 [rad/s]"),
+                           ("ddq1", "Measured ddq1 [rad/s2]"), ("ddq2", "Measured ddq2 [rad/s2]"),
+                           ("x_d", "Reference x [m]"), ("y_d", "Reference y [m]"),
+                           ("dx_d", "Reference dx/dt [m/s]"), ("dy_d", "Reference dy/dt [m/s]"),
+                           ("ddx_d", "Reference d2x/dt2 [m/s2]"), ("ddy_d", "Reference d2y/dt2 [m/s2]")):
+            d(name, "input", 0.0, text)
+        d("tau1", "output", 0.0, "Torque command, chain 1, CCW positive [N m]")
+        d("tau2", "output", 0.0, "Torque command, chain 2, CCW positive [N m]")
+        d("i_ref1", "output", 0.0, "Current reference tau1/kt1 [A]")
+        d("i_ref2", "output", 0.0, "Current reference tau2/kt2 [A]")
+        d("e1", "output", 0.0, "Control error, first component (rad or m)")
+        d("e2", "output", 0.0, "Control error, second component (rad or m)")
+        d("strategy", "parameter", "TCx", "PDq, PDx, TCq, TCx, PDMDq, PDMDx, TCMDq, TCMDx (7.2.6)")
+        d("trajectory", "parameter", "circle", "Which table for joint space: 'circle' (Table 6) or 'triangle' (Table 7)")
+        d("lam", "parameter", PRESET_VALUE, "lambda: kp = lam^2, kv = 2 lam (7.29-7.30) [rad/s]; -1: preset")
+        d("m_star", "parameter", PRESET_VALUE, "PD inertia m* [kg m2 or kg]; -1: preset")
+        d("phi", "parameter", PRESET_VALUE, "Boundary layer phi (6.65); -1: preset")
+        d("k1", "parameter", PRESET_VALUE, "Sliding gain k1; -1: preset")
+        d("k2", "parameter", PRESET_VALUE, "Sliding gain k2; -1: preset")
+        d("gamma1", "parameter", 0.0, "Adaptation rate of k1 (6.66); 0: constant gain")
+        d("gamma2", "parameter", 0.0, "Adaptation rate of k2 (6.66); 0: constant gain")
+        d("model", "parameter", "tabulated", "'exact' (inverse dynamics 5.74 each step) or 'tabulated' (7.2.5)")
+        d("model_error", "parameter", 0.0, "Model masses and inertias are (1 + model_error) times the plant's")
+        d("preset", "parameter", "bench", "Plant parameters of the model: 'bench' or 'thesis_sim'")
+        d("grid_step", "parameter", DEFAULT_GRID_STEP, "Tabulated model: grid step [m]")
+        for name, value in zip(("x_min", "x_max", "y_min", "y_max"), DEFAULT_EXTENT):
+            d(name, "parameter", value, f"Tabulated model: grid extent, {name} [m]")
+        d("cache", "parameter", True, "Tabulated model: load/save the table in the user cache directory")
+        d("kt1", "parameter", PRESET_VALUE, "Torque constant of motor 1 [N m/A]; -1: Table 16")
+        d("kt2", "parameter", PRESET_VALUE, "Torque constant of motor 2 [N m/A]; -1: Table 18")
+        self.controller = None
+
+    def setup(self):
+        strategy = get_strategy(self.strategy, self.trajectory)
+        changes = {}
+        for name in ("lam", "m_star", "phi"):
+            value = getattr(self, name)
+            require_finite(**{name: value})
+            if value != PRESET_VALUE:
+                changes[name] = value
+        k = list(strategy.k)
+        for i, name in enumerate(("k1", "k2")):
+            value = getattr(self, name)
+            require_finite(**{name: value})
+            if value != PRESET_VALUE:
+                k[i] = value
+        changes["k"] = tuple(k)
+        require_finite(gamma1=self.gamma1, gamma2=self.gamma2)
+        if self.gamma1 > 0.0 or self.gamma2 > 0.0:
+            changes["gamma"] = (self.gamma1, self.gamma2)
+        strategy = strategy.with_(**changes)
+        require_finite(model_error=self.model_error, kt1=self.kt1, kt2=self.kt2, grid_step=self.grid_step)
+        from controller.position import default_kt
+        kt = tuple(d if v == PRESET_VALUE else v for v, d in zip((self.kt1, self.kt2), default_kt()))
+        self.controller = _Controller(
+            get_preset(self.preset), strategy, model=self.model, model_error=self.model_error,
+            grid_step=self.grid_step, extent=(self.x_min, self.x_max, self.y_min, self.y_max),
+            kt=kt, cache=bool(self.cache))
+
+    def step(self, current_time, step_size):
+        out = self.controller.step(current_time, self.q1, self.q2, self.dq1, self.dq2, self.ddq1, self.ddq2,
+                                   self.x_d, self.y_d, self.dx_d, self.dy_d, self.ddx_d, self.ddy_d, step_size)
+        self.tau1, self.tau2, self.i_ref1, self.i_ref2 = out
+        self.e1, self.e2 = self.controller.e

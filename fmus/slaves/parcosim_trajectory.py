@@ -1,0 +1,76 @@
+"""FMI slave ``Trajectory``: the reference x_d, y_d and its derivatives (thesis 7.18, 7.23-7.27).
+
+Timing convention: after ``doStep(t, h)`` the outputs are the reference at the END of the
+step, t + h; after initialisation they are the reference at the experiment's start time
+(``setupExperiment``, normally 0).  A master that samples the controller at t therefore reads
+the trajectory's outputs from the previous step (or from initialisation at t = 0): the
+values at exactly t.  No inputs, so no feedthrough.
+
+The module name is unique among parcosim slaves: all FMUs loaded in one
+process share one Python interpreter and its module cache.
+"""
+from __future__ import annotations
+
+from controller.trajectories import get_trajectory
+from fmus.guarded import GuardedSlave, require_finite
+
+OUTPUTS = ("x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
+#: Start value of ``cycles`` meaning "the kind's default" (thesis_circle 2, circle 8, triangle 2).
+PRESET_CYCLES = -1
+
+
+class Trajectory(GuardedSlave):
+    """Analytic reference trajectory of the end effector (thesis 7.18, 7.23-7.27)."""
+
+    author = "parcosim"
+    description = "Reference trajectory (Coutinho 2019, 7.18, 7.23-7.27): x_d, y_d and derivatives at the end of each step"
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.author, self.description = type(self).author, type(self).description
+        d = self.declare
+        for name, text in (("x_d", "Reference x [m]"), ("y_d", "Reference y [m]"),
+                           ("dx_d", "d x_d/dt [m/s]"), ("dy_d", "d y_d/dt [m/s]"),
+                           ("ddx_d", "d2 x_d/dt2 [m/s2]"), ("ddy_d", "d2 y_d/dt2 [m/s2]")):
+            d(name, "output", 0.0, f"{text}, at the end of the last step")
+        d("x_start", "output", 0.0, "Where the mechanism starts at rest, x [m] (7.17, 7.28)")
+        d("y_start", "output", 0.0, "Where the mechanism starts at rest, y [m] (7.17, 7.28)")
+        d("kind", "parameter", "circle", "'thesis_circle' (7.18), 'circle' (7.23), 'triangle' (7.24-7.27), 'hold'")
+        d("cycles", "parameter", PRESET_CYCLES, "Cycles of circle/triangle (-1: thesis_circle 2, circle 8, triangle 2)")
+        d("side_time", "parameter", 0.75, "Triangle: time per side [s]")
+        d("x_hold", "parameter", -0.002, "hold: the point held, x [m]")
+        d("y_hold", "parameter", 0.108, "hold: the point held, y [m]")
+        self.trajectory = None
+        self.start_time = 0.0
+
+    def setup_experiment(self, start_time, stop_time=None, tolerance=None):
+        self.start_time = float(start_time)
+
+    def setup(self):
+        kwargs = {}
+        if self.kind == "hold":
+            require_finite(x_hold=self.x_hold, y_hold=self.y_hold)
+            kwargs = {"x": self.x_hold, "y": self.y_hold}
+        else:
+            if self.cycles != PRESET_CYCLES:
+                if self.cycles < 1:
+                    raise ValueError(f"parameter cycles = {self.cycles!r} must be >= 1 (or -1 for the default)")
+                kwargs["cycles"] = self.cycles
+            if self.kind == "triangle":
+                if not self.side_time > 0.0:
+                    raise ValueError(f"parameter side_time = {self.side_time!r} s must be > 0")
+                kwargs["side_time"] = self.side_time
+        try:
+            self.trajectory = get_trajectory(self.kind, **kwargs)
+        except ValueError as exc:
+            raise ValueError(f"parameter kind: {exc}") from None
+        self.x_start, self.y_start = (float(v) for v in self.trajectory.start_point)
+        self._publish(self.start_time)
+
+    def step(self, current_time, step_size):
+        self._publish(current_time + step_size)
+
+    def _publish(self, t):
+        sample = self.trajectory(t)
+        for name, value in zip(OUTPUTS, sample):
+            setattr(self, name, float(value))
