@@ -1,0 +1,83 @@
+"""FMI slave ``CurrentObserver``: a thin adapter over :class:`motor.CurrentObserver`.
+
+Timing and wiring (one communication step from t to t + h): feed ``v`` the
+drive's output ``v`` after the drive's step over the same interval (the
+voltage applied over [t, t + h]) and ``omega`` the plant's speed at t + h;
+the output ``i_hat`` is the estimate for t + h, which the drive reads as its
+input ``i_hat`` at the start of its next step.  A master loop
+``drive.step -> observer.step -> (next) drive.step`` is thus exactly the
+in-process loop ``drive.step(...); i_hat = observer.estimate(v, omega, h)``.
+Outputs change only in ``doStep``: no direct feedthrough.
+
+The module name is unique among parcosim slaves: all FMUs loaded in one
+process share one Python interpreter and its module cache.
+"""
+from __future__ import annotations
+
+from fmus.guarded import GuardedSlave
+from motor import CurrentObserver as _Observer
+from motor import get_motor_preset
+
+#: Start value of the numeric motor parameters meaning "the preset's value".
+PRESET_VALUE = -1.0
+MOTOR_PARAMETERS = (
+    ("R", "Armature resistance [ohm], > 0"),
+    ("ke", "Back-emf constant [V s/rad], > 0"),
+    ("L", "Armature inductance [H], >= 0 (dynamic kind only)"),
+)
+OUTPUTS = ("i_hat",)
+
+
+def motor_params(slave, names):
+    """MotorParams from ``slave.preset`` with every FMU parameter != PRESET_VALUE replacing the preset's.
+
+    Raises ValueError naming the parameter and its value for a negative value
+    other than the sentinel; MotorParams.validate names any other non-physical one.
+    """
+    params = get_motor_preset(slave.preset)
+    changes = {}
+    for name in names:
+        value = float(getattr(slave, name))
+        if value == PRESET_VALUE:
+            continue
+        if value < 0.0:
+            raise ValueError(f"parameter {name} = {value!r} is negative (use -1 for the preset's value)")
+        changes[name] = value
+    try:
+        return params.with_(**changes)
+    except ValueError as exc:
+        raise ValueError(f"parameter {exc}") from None
+
+
+class CurrentObserver(GuardedSlave):
+    """Current estimate from voltage and speed, i_hat = (v - ke omega)/R (thesis 7.20)."""
+
+    author = "parcosim"
+    description = "Current observer (Coutinho 2019, 7.20): applied voltage and speed in, estimated current out"
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        # Fmi2Slave.__init__ resets these to None: set them on the instance for modelDescription.xml.
+        self.author, self.description = type(self).author, type(self).description
+        d = self.declare
+        d("v", "input", 0.0, "Voltage applied over the step just taken (the drive's output v) [V]")
+        d("omega", "input", 0.0, "Shaft speed at the end of the step [rad/s]")
+        d("i_hat", "output", 0.0, "Estimated armature current at the end of the step [A]")
+        d("preset", "parameter", "motor1", "Motor parameters: 'motor1' (Table 16) or 'motor2' (Table 18)")
+        for name, text in MOTOR_PARAMETERS:
+            d(name, "parameter", PRESET_VALUE, f"{text}; -1: the preset's value")
+        d("kind", "parameter", "static",
+          "'static': (v - ke omega)/R (7.20); 'dynamic': (4.162) integrated exactly over the step (needs L)")
+        d("i0", "parameter", 0.0, "Estimate before the first step [A]")
+        d("omega0", "parameter", 0.0,
+          "Speed at the start time [rad/s]: the speed the drive holds over the first step (dynamic kind)")
+        self.observer = None
+
+    def setup(self):
+        params = motor_params(self, [name for name, _ in MOTOR_PARAMETERS])
+        self.observer = _Observer(params, self.kind)
+        self.observer.reset(self.i0, self.omega0)
+        self.i_hat = self.observer.i_hat
+
+    def step(self, current_time, step_size):
+        self.i_hat = self.observer.estimate(self.v, self.omega, step_size)

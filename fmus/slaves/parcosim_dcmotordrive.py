@@ -1,0 +1,101 @@
+"""FMI slave ``DCMotorDrive``: a thin adapter over :class:`motor.Drive`.
+
+Timing (one communication step from t to t + h, inputs held over it):
+``v`` is the voltage applied over [t, t + h] (in current mode the controller
+samples ``i_ref`` and ``i_hat`` at t and holds its voltage), ``i`` and
+``tau`` are the current and shaft torque at t + h.  Outputs change only in
+``doStep``: no direct feedthrough.
+
+The module name is unique among parcosim slaves: all FMUs loaded in one
+process share one Python interpreter and its module cache.
+"""
+from __future__ import annotations
+
+from fmus.guarded import GuardedSlave
+from motor import Drive, get_motor_preset
+
+#: Start value of the numeric motor parameters meaning "the preset's value".
+PRESET_VALUE = -1.0
+#: Motor parameters settable one by one (MotorParams field -> FMU variable, description).
+MOTOR_PARAMETERS = (
+    ("R", "R", "Armature resistance [ohm], > 0"),
+    ("L", "L", "Armature inductance [H], >= 0 (0: quasi-static, voltage mode only)"),
+    ("kt", "kt", "Torque constant [N m/A], > 0"),
+    ("ke", "ke", "Back-emf constant [V s/rad], > 0"),
+    ("b", "b", "Viscous friction [N m s/rad], >= 0"),
+    ("mu", "mu", "Coulomb friction torque [N m], >= 0"),
+    ("v_max", "v_max", "Supply voltage: the driver saturates at +-v_max [V], > 0"),
+    ("omega_eps", "omega_eps", "Width of the regularised sign mu*tanh(omega/omega_eps) [rad/s], > 0"),
+    ("J_rotor", "J_design", "Rotor inertia assumed by the current-controller design G_I(s) (B.10) only "
+                            "[kg m2], > 0; the plant integrates the real rotor inertia"),
+)
+OUTPUTS = ("tau", "v", "i")
+
+
+def motor_params(slave, names):
+    """MotorParams from ``slave.preset`` with every FMU parameter != PRESET_VALUE replacing the preset's.
+
+    ``names`` are (MotorParams field, FMU variable) pairs.  Raises ValueError
+    naming the parameter and its value for a negative value other than the
+    sentinel; MotorParams.validate names any other non-physical value.
+    """
+    params = get_motor_preset(slave.preset)
+    changes = {}
+    for field, var in names:
+        value = float(getattr(slave, var))
+        if value == PRESET_VALUE:
+            continue
+        if value < 0.0:
+            raise ValueError(f"parameter {var} = {value!r} is negative (use -1 for the preset's value)")
+        changes[field] = value
+    try:
+        return params.with_(**changes)
+    except ValueError as exc:
+        field_to_var = dict(names)
+        message = str(exc)
+        for field, var in field_to_var.items():
+            if field != var and message.startswith(f"{field} "):
+                message = var + message[len(field):]
+        raise ValueError(f"parameter {message}") from None
+
+
+class DCMotorDrive(GuardedSlave):
+    """DC motor with its 1 ms discrete current controller (thesis 4.162, B.2, app. C, 7.2.10)."""
+
+    author = "parcosim"
+    description = ("DC motor drive (Coutinho 2019, 4.162, B.2, app. C): current reference or voltage in, "
+                   "shaft torque out")
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        # Fmi2Slave.__init__ resets these to None: set them on the instance for modelDescription.xml.
+        self.author, self.description = type(self).author, type(self).description
+        d = self.declare
+        d("i_ref", "input", 0.0, "Current reference, sampled at the step start (current mode) [A]")
+        d("v_ref", "input", 0.0, "Commanded voltage, applied over the step, saturated at +-v_max (voltage mode) [V]")
+        d("omega", "input", 0.0, "Shaft speed, held over the step [rad/s]")
+        d("i_hat", "input", 0.0, "Observed (or measured) current at the step start (current mode) [A]")
+        d("tau", "output", 0.0, "Shaft torque kt i - b omega - mu sign(omega) at the step end [N m]")
+        d("v", "output", 0.0, "Voltage applied over the step just taken [V]")
+        d("i", "output", 0.0, "Armature current at the step end [A]")
+        d("preset", "parameter", "motor1", "Motor parameters: 'motor1' (Table 16) or 'motor2' (Table 18)")
+        for _, var, text in MOTOR_PARAMETERS:
+            d(var, "parameter", PRESET_VALUE, f"{text}; -1: the preset's value")
+        d("mode", "parameter", "current", "'current' (controller K(z) on i_ref, i_hat) or 'voltage' (v_ref applied)")
+        d("method", "parameter", "exact",
+          "Electrical integration over a step: 'exact' (analytic), 'euler' (explicit) or 'quasi_static' (L = 0)")
+        d("T", "parameter", 1e-3, "Current-controller sample time [s]; in current mode the step must divide it")
+        d("omega0", "parameter", 0.0, "Start in electrical steady state at this speed [rad/s]")
+        d("i0", "parameter", 0.0, "Start in electrical steady state with this current [A]")
+        self.drive = None
+
+    def setup(self):
+        params = motor_params(self, [(field, var) for field, var, _ in MOTOR_PARAMETERS])
+        self.drive = Drive(params, mode=self.mode, method=self.method, T=self.T)
+        self.drive.start(self.omega0, self.i0)
+        self.tau = self.drive.torque(self.omega0)
+        self.v = self.drive.v
+        self.i = self.drive.i
+
+    def step(self, current_time, step_size):
+        self.tau, self.v, self.i = self.drive.step(self.i_ref, self.v_ref, self.omega, self.i_hat, step_size)
