@@ -22,6 +22,8 @@ BUNDLED_PACKAGES = ("plant", "motor", "controller")
 #: Model name -> slave module (unique module names: one interpreter per process).
 SLAVES = {
     "FiveBarPlant": "parcosim_fivebarplant",
+    "DCMotorDrive": "parcosim_dcmotordrive",
+    "CurrentObserver": "parcosim_currentobserver",
     "Trajectory": "parcosim_trajectory",
     "Derivator": "parcosim_derivator",
     "PositionController": "parcosim_positioncontroller",
