@@ -308,7 +308,7 @@ def _chain_inertia_terms(params, chain_index):
     tip_mass = _tip_mass(params, chain_index)
     proximal = (chain["Jz1"] + chain["m1"] * chain["lg1"] ** 2 + chain["J_rotor"]
                 + (chain["m2"] + tip_mass) * chain["l1"] ** 2)
-    distal = chain["Jz2"] + chain["m2"] * chain["lg2"] ** 2 + 0.0 * tip_mass
+    distal = chain["Jz2"] + chain["m2"] * chain["lg2"] ** 2 + tip_mass * chain["l2"] ** 2
     coupling = chain["l1"] * (chain["m2"] * chain["lg2"] + tip_mass * chain["l2"])
     return proximal, distal, coupling
 
