@@ -260,3 +260,29 @@ class TabulatedModel:
         H00, H01, H11, a0, a1, b0, b1, c0, c1, g0, g1 = self.interpolate(x, y).tolist()
         xx, yy, xy = dx * dx, dy * dy, dx * dy
         return H00, H01, H11, a0 * xx + b0 * yy + c0 * xy + g0, a1 * xx + b1 * yy + c1 * xy + g1
+
+
+def tabulation_error(table: TabulatedModel, samples=400, seed=0):
+    """Error of the interpolated table against :class:`ExactModel` at random points.
+
+    Points are drawn uniformly in the table's cells whose four corners are present.
+    Returns a dict: ``H`` max |Ĥ_tab - Ĥ| / max|Ĥ| (entrywise, relative to the largest
+    entry of the exact Ĥ at that point), ``h`` the same for ĥ at |dx| = 1 m/s in a random
+    direction (relative to max |ĥ|), ``points`` the number of points.
+    """
+    rng = np.random.default_rng(seed)
+    exact = ExactModel(table.params)
+    cells = np.argwhere(table.cell_ok)
+    if cells.size == 0:
+        raise ValueError("the table has no complete cell")
+    worst_H = worst_h = 0.0
+    for iy, ix in cells[rng.integers(0, len(cells), samples)]:
+        x = table.xs[ix] + rng.random() * table.step
+        y = table.ys[iy] + rng.random() * table.step
+        angle = rng.random() * 2 * math.pi
+        dx, dy = math.cos(angle), math.sin(angle)
+        e = np.array(exact.terms(x, y, dx, dy))
+        t = np.array(table.terms(x, y, dx, dy))
+        worst_H = max(worst_H, np.abs(t[:3] - e[:3]).max() / np.abs(e[:3]).max())
+        worst_h = max(worst_h, np.abs(t[3:] - e[3:]).max() / np.abs(e[3:]).max())
+    return {"H": worst_H, "h": worst_h, "points": int(samples)}
