@@ -39,6 +39,9 @@ class GuardedSlave(Fmi2Slave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
+        # Fmi2Slave.__init__ resets these to None: copy the class's for modelDescription.xml.
+        self.author = getattr(type(self), "author", None)
+        self.description = getattr(type(self), "description", None)
         self.error = ""
         self.register_variable(String("error", causality=Fmi2Causality.output,
                                       variability=Fmi2Variability.discrete,
@@ -121,6 +124,36 @@ class GuardedSlave(Fmi2Slave):
         line = f"{self.instance_name}: {text}"
         self.log(line, Fmi2Status.error, category="logStatusError")
         print(f"[parcosim] {line}", file=sys.stderr)
+
+
+#: Start value of a numeric parameter meaning "the preset's value".
+PRESET_VALUE = -1.0
+
+
+def with_overrides(params, slave, names):
+    """``params`` (a validated frozen dataclass with ``with_``) with the slave's parameters
+    that are not PRESET_VALUE replacing its fields.
+
+    ``names`` are (field, FMU variable) pairs.  A negative value other than
+    the sentinel is refused naming the variable; the dataclass's own
+    validation names any other non-physical value (as the FMU variable).
+    """
+    changes = {}
+    for field, var in names:
+        value = float(getattr(slave, var))
+        if value == PRESET_VALUE:
+            continue
+        if value < 0.0:
+            raise ValueError(f"parameter {var} = {value!r} is negative (use -1 for the preset's value)")
+        changes[field] = value
+    try:
+        return params.with_(**changes)
+    except ValueError as exc:
+        message = str(exc)
+        for field, var in names:
+            if field != var and message.startswith(f"{field} "):
+                message = var + message[len(field):]
+        raise ValueError(f"parameter {message}") from None
 
 
 def require_finite(**values) -> None:

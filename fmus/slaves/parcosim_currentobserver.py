@@ -14,39 +14,17 @@ process share one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
-from fmus.guarded import GuardedSlave
+from fmus.guarded import PRESET_VALUE, GuardedSlave, with_overrides
 from motor import CurrentObserver as _Observer
 from motor import get_motor_preset
 
 #: Start value of the numeric motor parameters meaning "the preset's value".
-PRESET_VALUE = -1.0
 MOTOR_PARAMETERS = (
     ("R", "Armature resistance [ohm], > 0"),
     ("ke", "Back-emf constant [V s/rad], > 0"),
     ("L", "Armature inductance [H], >= 0 (dynamic kind only)"),
 )
 OUTPUTS = ("i_hat",)
-
-
-def motor_params(slave, names):
-    """MotorParams from ``slave.preset`` with every FMU parameter != PRESET_VALUE replacing the preset's.
-
-    Raises ValueError naming the parameter and its value for a negative value
-    other than the sentinel; MotorParams.validate names any other non-physical one.
-    """
-    params = get_motor_preset(slave.preset)
-    changes = {}
-    for name in names:
-        value = float(getattr(slave, name))
-        if value == PRESET_VALUE:
-            continue
-        if value < 0.0:
-            raise ValueError(f"parameter {name} = {value!r} is negative (use -1 for the preset's value)")
-        changes[name] = value
-    try:
-        return params.with_(**changes)
-    except ValueError as exc:
-        raise ValueError(f"parameter {exc}") from None
 
 
 class CurrentObserver(GuardedSlave):
@@ -57,8 +35,6 @@ class CurrentObserver(GuardedSlave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        # Fmi2Slave.__init__ resets these to None: set them on the instance for modelDescription.xml.
-        self.author, self.description = type(self).author, type(self).description
         d = self.declare
         d("v", "input", 0.0, "Voltage applied over the step just taken (the drive's output v) [V]")
         d("omega", "input", 0.0, "Shaft speed at the end of the step [rad/s]")
@@ -74,7 +50,7 @@ class CurrentObserver(GuardedSlave):
         self.observer = None
 
     def setup(self):
-        params = motor_params(self, [name for name, _ in MOTOR_PARAMETERS])
+        params = with_overrides(get_motor_preset(self.preset), self, [(name, name) for name, _ in MOTOR_PARAMETERS])
         self.observer = _Observer(params, self.kind)
         self.observer.reset(self.i0, self.omega0)
         self.i_hat = self.observer.i_hat

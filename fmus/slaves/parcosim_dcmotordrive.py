@@ -11,11 +11,10 @@ process share one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
-from fmus.guarded import GuardedSlave
+from fmus.guarded import PRESET_VALUE, GuardedSlave, with_overrides
 from motor import Drive, get_motor_preset
 
 #: Start value of the numeric motor parameters meaning "the preset's value".
-PRESET_VALUE = -1.0
 #: Motor parameters settable one by one (MotorParams field -> FMU variable, description).
 MOTOR_PARAMETERS = (
     ("R", "R", "Armature resistance [ohm], > 0"),
@@ -32,33 +31,6 @@ MOTOR_PARAMETERS = (
 OUTPUTS = ("tau", "v", "i")
 
 
-def motor_params(slave, names):
-    """MotorParams from ``slave.preset`` with every FMU parameter != PRESET_VALUE replacing the preset's.
-
-    ``names`` are (MotorParams field, FMU variable) pairs.  Raises ValueError
-    naming the parameter and its value for a negative value other than the
-    sentinel; MotorParams.validate names any other non-physical value.
-    """
-    params = get_motor_preset(slave.preset)
-    changes = {}
-    for field, var in names:
-        value = float(getattr(slave, var))
-        if value == PRESET_VALUE:
-            continue
-        if value < 0.0:
-            raise ValueError(f"parameter {var} = {value!r} is negative (use -1 for the preset's value)")
-        changes[field] = value
-    try:
-        return params.with_(**changes)
-    except ValueError as exc:
-        field_to_var = dict(names)
-        message = str(exc)
-        for field, var in field_to_var.items():
-            if field != var and message.startswith(f"{field} "):
-                message = var + message[len(field):]
-        raise ValueError(f"parameter {message}") from None
-
-
 class DCMotorDrive(GuardedSlave):
     """DC motor with its 1 ms discrete current controller (thesis 4.162, B.2, app. C, 7.2.10)."""
 
@@ -68,8 +40,6 @@ class DCMotorDrive(GuardedSlave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        # Fmi2Slave.__init__ resets these to None: set them on the instance for modelDescription.xml.
-        self.author, self.description = type(self).author, type(self).description
         d = self.declare
         d("i_ref", "input", 0.0, "Current reference, sampled at the step start (current mode) [A]")
         d("v_ref", "input", 0.0, "Commanded voltage, applied over the step, saturated at +-v_max (voltage mode) [V]")
@@ -90,7 +60,7 @@ class DCMotorDrive(GuardedSlave):
         self.drive = None
 
     def setup(self):
-        params = motor_params(self, [(field, var) for field, var, _ in MOTOR_PARAMETERS])
+        params = with_overrides(get_motor_preset(self.preset), self, [(field, var) for field, var, _ in MOTOR_PARAMETERS])
         self.drive = Drive(params, mode=self.mode, method=self.method, T=self.T)
         self.drive.start(self.omega0, self.i0)
         self.tau = self.drive.torque(self.omega0)

@@ -33,7 +33,6 @@ class Derivator(GuardedSlave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        self.author, self.description = type(self).author, type(self).description
         d = self.declare
         d("q1", "input", 0.0, "Chain 1 actuated angle sample [rad]")
         d("q2", "input", 0.0, "Chain 2 actuated angle sample [rad]")

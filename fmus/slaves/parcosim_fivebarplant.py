@@ -7,12 +7,12 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from fmus.guarded import GuardedSlave, require_finite
+from fmus.guarded import PRESET_VALUE, GuardedSlave, require_finite
 from plant import IntegratorSettings, PlantSimulator, get_preset
 
 _DEFAULTS = IntegratorSettings()
 #: Start value of J_rotor1/2 meaning "the preset's rotor inertia".
-PRESET_ROTOR = -1.0
+PRESET_ROTOR = PRESET_VALUE
 OUTPUTS = ("q1", "q2", "dq1", "dq2", "x", "y", "dx", "dy", "q1_enc", "q2_enc", "residual")
 
 

@@ -19,11 +19,10 @@ from __future__ import annotations
 from controller.model import DEFAULT_EXTENT, DEFAULT_GRID_STEP
 from controller.position import PositionController as _Controller
 from controller.strategies import get_strategy
-from fmus.guarded import GuardedSlave, require_finite
+from fmus.guarded import PRESET_VALUE, GuardedSlave, require_finite
 from plant import get_preset
 
 #: Start value meaning "the preset's value".
-PRESET_VALUE = -1.0
 INPUTS = ("q1", "q2", "dq1", "dq2", "ddq1", "ddq2", "x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
 OUTPUTS = ("tau1", "tau2", "i_ref1", "i_ref2")
 
@@ -36,7 +35,6 @@ class PositionController(GuardedSlave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        self.author, self.description = type(self).author, type(self).description
         d = self.declare
         for name, text in (("q1", "Measured q1 [rad]"), ("q2", "Measured q2 [rad]"),
                            ("dq1", "Measured dq1 [rad/s]"), ("dq2", "Measured dq2 [rad/s]"),

@@ -27,7 +27,6 @@ class Trajectory(GuardedSlave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        self.author, self.description = type(self).author, type(self).description
         d = self.declare
         for name, text in (("x_d", "Reference x [m]"), ("y_d", "Reference y [m]"),
                            ("dx_d", "d x_d/dt [m/s]"), ("dy_d", "d y_d/dt [m/s]"),
