@@ -35,7 +35,16 @@ class GuardedSlave(Fmi2Slave):
     Subclasses declare variables with :meth:`declare`, build their model in
     :meth:`setup` (called once parameters are final) and advance it in
     :meth:`step`; both may raise, the base turns that into a logged refusal.
+
+    A sampled component (``sampled = True``: derivator, observer, controller) computes
+    its outputs in ``doStep(t, h)`` from the inputs at t and holds them over the step;
+    its Real outputs are declared ``variability="discrete"``, which tells a master
+    (:mod:`fmus.master`) to step it before the components that read those outputs.
+    Other outputs are values at the end of the step (t + h).
     """
+
+    #: Outputs are samples at the step's start, held over the step (see above).
+    sampled = False
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -56,7 +65,7 @@ class GuardedSlave(Fmi2Slave):
         kwargs = {"causality": _CAUSALITY[causality], "description": description}
         if causality == "parameter":
             kwargs["variability"] = Fmi2Variability.fixed
-        elif kind is not Real:
+        elif kind is not Real or (causality == "output" and self.sampled):
             kwargs["variability"] = Fmi2Variability.discrete
         if variability is not None:
             kwargs["variability"] = variability

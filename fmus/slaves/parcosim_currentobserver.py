@@ -30,6 +30,7 @@ OUTPUTS = ("i_hat",)
 class CurrentObserver(GuardedSlave):
     """Current estimate from voltage and speed, i_hat = (v - ke omega)/R (thesis 7.20)."""
 
+    sampled = True
     author = "parcosim"
     description = "Current observer (Coutinho 2019, 7.20): applied voltage and speed in, estimated current out"
 

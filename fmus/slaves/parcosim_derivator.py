@@ -28,6 +28,7 @@ OUTPUTS = ("dq1", "dq2", "ddq1", "ddq2")
 class Derivator(GuardedSlave):
     """Numerical differentiator of the two actuated angles (7.2.3)."""
 
+    sampled = True
     author = "parcosim"
     description = "Derivator (Coutinho 2019, 7.2.3): angles in, Bessel-filtered velocity and acceleration out"
 

@@ -30,6 +30,7 @@ OUTPUTS = ("tau1", "tau2", "i_ref1", "i_ref2")
 class PositionController(GuardedSlave):
     """Discrete position controller of the 5R (Coutinho 2019, 7.2.6, 7.21-7.22)."""
 
+    sampled = True
     author = "parcosim"
     description = "Position controller (Coutinho 2019, 7.21-7.22): PD/TC +- sliding modes, joint or task space"
 
