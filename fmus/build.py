@@ -67,6 +67,30 @@ def build_fmu(model: str, out_dir: Path = DEFAULT_OUT) -> Path:
     return Path(fmu)
 
 
+def _sources(model: str) -> list[Path]:
+    files = [ROOT / "fmus" / "guarded.py", ROOT / "fmus" / "slaves" / f"{SLAVES[model]}.py"]
+    for package in BUNDLED_PACKAGES:
+        files.extend((ROOT / package).rglob("*.py"))
+        files.extend((ROOT / package).rglob("*.csv"))
+    return files
+
+
+def ensure_built(models, out_dir=None) -> dict:
+    """Model name -> FMU path in out_dir (default :data:`DEFAULT_OUT`), building each FMU
+    that is missing or older than the sources it bundles."""
+    out_dir = Path(out_dir) if out_dir is not None else DEFAULT_OUT
+    paths = {}
+    for model in models:
+        path = out_dir / f"{model}.fmu"
+        if model not in SLAVES:
+            if not path.exists():
+                raise FileNotFoundError(f"no FMU {path} and {model!r} is not a parcosim model")
+        elif not path.exists() or path.stat().st_mtime < max(f.stat().st_mtime for f in _sources(model)):
+            path = build_fmu(model, out_dir)
+        paths[model] = path
+    return paths
+
+
 def build_all(out_dir: Path = DEFAULT_OUT) -> list[Path]:
     """Build every parcosim FMU into out_dir."""
     return [build_fmu(model, out_dir) for model in SLAVES]

@@ -1,0 +1,476 @@
+"""The co-simulation master: a :class:`fmus.system.System` stepped at a fixed communication step.
+
+Two back ends run the same system and give identical results:
+
+* ``"fmu"``: the built FMUs through fmpy.  Each FMU file is extracted and its model
+  description read once per process; each instance gets its value references and a
+  preallocated ctypes buffer once, and every step makes one ``fmi2SetReal``, one
+  ``fmi2DoStep`` and one ``fmi2GetReal`` call (fmpy's list-based convenience calls cost
+  about a third of a step).
+* ``"inprocess"``: the same slave classes (``fmus/slaves``) stepped directly, no FMI.
+
+Couplings (``coupling``):
+
+* ``"gauss-seidel"`` (default): components are stepped one after the other and each reads
+  the outputs its sources hold at that moment.  The order (:func:`stepping_order`) comes
+  from the connections and what the FMUs declare: an output of ``variability="discrete"``
+  is a sample taken at the step's start and held over the step (derivator, observer,
+  controller), so its readers step after it, in the same step; any other output is a
+  value at the end of the producer's step, so a reader stepped before the producer reads
+  it at the step's start, which is what a sampled component wants.  Among the orders
+  that keep every sample in its step, the master picks one where the fewest connections
+  read a continuous output already advanced to t + h (ties: the system's listing order).
+  A loop of samples or of direct-feedthrough outputs has no such order: it is reported
+  as an algebraic loop naming its connections.
+* ``"jacobi"``: every component reads the outputs all components held at the step's
+  start, then all step (what fmpy's SSP runner and Ecos do).
+
+Recorded signals: row 0 holds the outputs after initialisation (t = 0), row k those after
+the k-th step (t = k h): for a continuous output the value at t, for a sampled output the
+sample held over [t - h, t].
+
+A refused step (fmi2Discard/Error/Fatal, or an exception in process) stops the run;
+:class:`Result` keeps the rows recorded so far and ``error`` says which instance refused,
+at what time, with its own message.
+"""
+from __future__ import annotations
+
+import ctypes
+import importlib
+import time as _time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .system import System, split_signal
+
+MODES = ("fmu", "inprocess")
+COUPLINGS = ("gauss-seidel", "jacobi")
+#: Up to this many components in one feedback loop the order is optimal (exhaustive);
+#: larger loops keep the system's listing order where the samples allow.
+EXHAUSTIVE_LIMIT = 16
+
+
+class CoSimulationError(Exception):
+    """A component refused a call; carries the instance, the time and its message."""
+
+    def __init__(self, instance: str, time: float, message: str):
+        super().__init__(f"{instance} refused the step from t = {time:.6g} s: {message}")
+        self.instance, self.time, self.message = instance, time, message
+
+
+class AlgebraicLoopError(ValueError):
+    """Connections that need each other's value in the same step."""
+
+
+@dataclass(frozen=True)
+class Variable:
+    """What the master needs to know of one FMU variable."""
+
+    name: str
+    vr: int
+    type: str  # "Real", "Integer", "Boolean", "String"
+    causality: str
+    variability: str
+    depends_on: tuple = ()  # inputs this output depends on directly (feedthrough)
+
+
+@dataclass
+class Result:
+    """What a run produced: the recorded signals, and why it stopped early if it did."""
+
+    time: np.ndarray
+    signals: dict
+    order: tuple
+    mode: str
+    coupling: str
+    wall_s: float
+    error: str | None = None
+    stop_time: float = 0.0
+    extra: dict = field(default_factory=dict)
+
+    def __getitem__(self, signal: str) -> np.ndarray:
+        return self.signals[signal]
+
+    @property
+    def completed(self) -> bool:
+        """True when the run reached its stop time."""
+        return self.error is None
+
+
+# --- component back ends ----------------------------------------------------------------
+
+class _FmuInstance:
+    """One FMU instance through fmpy, with batched Real I/O."""
+
+    _extracted: dict = {}
+
+    def __init__(self, path: Path, name: str):
+        from fmpy import calloc, extract, free, read_model_description
+        from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                               fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+
+        key = (str(path), path.stat().st_mtime_ns)
+        if key not in self._extracted:
+            md = read_model_description(str(path))
+            self._extracted[key] = (md, extract(str(path)))
+        md, directory = self._extracted[key]
+        self.name = name
+        self.variables = _variables_from_model_description(md)
+        self.messages = []
+        self._fmu = FMU2Slave(guid=md.guid, unzipDirectory=directory,
+                              modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
+        # The callbacks must stay referenced for the instance's lifetime.
+        self._callbacks = fmi2CallbackFunctions()
+        self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
+        self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        self._fmu.instantiate(callbacks=self._callbacks, loggingOn=True)
+        self._component = self._fmu.component
+        self._set_real = self._fmu.dll.fmi2SetReal
+        self._get_real = self._fmu.dll.fmi2GetReal
+        self._do_step = self._fmu.dll.fmi2DoStep
+
+    def _log(self, component, instance, status, category, message):
+        self.messages.append(message.decode(errors="replace") if isinstance(message, bytes) else str(message))
+
+    def initialize(self, parameters: dict, start_time: float) -> None:
+        from fmpy.fmi1 import FMICallException
+
+        fmu = self._fmu
+        try:
+            fmu.setupExperiment(startTime=start_time)
+            fmu.enterInitializationMode()
+            for name, value in parameters.items():
+                variable = self.variables[name]
+                {"Real": lambda: fmu.setReal([variable.vr], [float(value)]),
+                 "Integer": lambda: fmu.setInteger([variable.vr], [int(value)]),
+                 "Boolean": lambda: fmu.setBoolean([variable.vr], [bool(value)]),
+                 "String": lambda: fmu.setString([variable.vr], [str(value)])}[variable.type]()
+            fmu.exitInitializationMode()
+        except FMICallException:
+            raise CoSimulationError(self.name, start_time, self._last_message() or "initialisation failed") from None
+
+    def bind(self, inputs: list, outputs: list) -> None:
+        self._in_vr = (ctypes.c_uint * len(inputs))(*inputs)
+        self._in_val = (ctypes.c_double * len(inputs))()
+        self._n_in = len(inputs)
+        self._out_vr = (ctypes.c_uint * len(outputs))(*outputs)
+        self._out_val = (ctypes.c_double * len(outputs))()
+        self._n_out = len(outputs)
+
+    def set_inputs(self, values: list) -> None:
+        self._in_val[:] = values
+        if self._set_real(self._component, self._in_vr, self._n_in, self._in_val) > 1:
+            raise CoSimulationError(self.name, float("nan"), self._last_message() or "fmi2SetReal failed")
+
+    def get_outputs(self) -> list:
+        self._get_real(self._component, self._out_vr, self._n_out, self._out_val)
+        return self._out_val[:]
+
+    def do_step(self, t: float, h: float) -> None:
+        if self._do_step(self._component, t, h, 1) > 1:
+            raise CoSimulationError(self.name, t, self._last_message() or "fmi2DoStep refused")
+
+    def _last_message(self) -> str:
+        return self.messages[-1] if self.messages else ""
+
+    def close(self) -> None:
+        try:
+            self._fmu.terminate()
+        finally:
+            self._fmu.freeInstance()
+
+
+class _InProcessInstance:
+    """One slave object of ``fmus/slaves`` called directly, as pythonfmu would."""
+
+    def __init__(self, model: str, name: str):
+        from .build import SLAVES
+
+        if model not in SLAVES:
+            raise ValueError(f"component {name}: unknown model {model!r}; valid: {', '.join(SLAVES)}")
+        cls = getattr(importlib.import_module(f"fmus.slaves.{SLAVES[model]}"), model)
+        self.name = name
+        self.slave = cls(instance_name=name)
+        self.variables = _variables_from_slave(self.slave, getattr(cls, "feedthrough", {}))
+
+    def initialize(self, parameters: dict, start_time: float) -> None:
+        slave = self.slave
+        try:
+            slave.setup_experiment(start_time, None, None)
+            slave.enter_initialization_mode()
+            for name, value in parameters.items():
+                variable = self.variables[name]
+                {"Real": lambda: slave.set_real([variable.vr], [float(value)]),
+                 "Integer": lambda: slave.set_integer([variable.vr], [int(value)]),
+                 "Boolean": lambda: slave.set_boolean([variable.vr], [bool(value)]),
+                 "String": lambda: slave.set_string([variable.vr], [str(value)])}[variable.type]()
+            slave.exit_initialization_mode()
+        except Exception as exc:  # noqa: BLE001 - as an importer sees an FMU's fatal error
+            raise CoSimulationError(self.name, start_time, str(exc)) from None
+
+    def bind(self, inputs: list, outputs: list) -> None:
+        self._inputs, self._outputs = list(inputs), list(outputs)
+
+    def set_inputs(self, values: list) -> None:
+        self.slave.set_real(self._inputs, values)
+
+    def get_outputs(self) -> list:
+        return self.slave.get_real(self._outputs)
+
+    def do_step(self, t: float, h: float) -> None:
+        try:
+            ok = self.slave.do_step(t, h)
+        except Exception as exc:  # noqa: BLE001
+            raise CoSimulationError(self.name, t, str(exc)) from None
+        if ok is False:
+            raise CoSimulationError(self.name, t, getattr(self.slave, "error", "") or "do_step refused")
+
+    def close(self) -> None:
+        self.slave.terminate()
+
+
+def _variables_from_model_description(md) -> dict:
+    dependencies = {}
+    for unknown in md.outputs:
+        dependencies[unknown.variable.name] = tuple(v.name for v in (unknown.dependencies or ()))
+    return {v.name: Variable(v.name, v.valueReference, v.type, v.causality, v.variability,
+                             dependencies.get(v.name, ()))
+            for v in md.modelVariables}
+
+
+def _variables_from_slave(slave, feedthrough: dict) -> dict:
+    result = {}
+    for vr, v in slave.vars.items():
+        causality = v.causality.name if v.causality is not None else "local"
+        variability = v.variability.name if v.variability is not None else "continuous"
+        result[v.name] = Variable(v.name, vr, type(v).__name__, causality, variability,
+                                  tuple(feedthrough.get(v.name, ())))
+    return result
+
+
+# --- the stepping order -------------------------------------------------------------------
+
+def stepping_order(system: System, variables: dict) -> tuple:
+    """The Gauss-Seidel order of ``system``'s components (see the module docstring).
+
+    ``variables`` maps each instance name to its :class:`Variable` dict.  Raises
+    :class:`AlgebraicLoopError` when sampled or feedthrough outputs form a loop.
+    """
+    names = [c.name for c in system.components]
+    index = {n: i for i, n in enumerate(names)}
+    hard = {n: set() for n in names}      # hard[b] = components that must step before b
+    soft = {}                              # (reader, source) -> connections preferring reader first
+    hard_edges = {}
+    for conn in system.connections:
+        src, out = split_signal(conn.source)
+        dst, _ = split_signal(conn.target)
+        if src == dst:
+            continue
+        variable = variables[src][out]
+        if variable.variability == "discrete" or variable.depends_on:
+            hard[dst].add(src)
+            hard_edges.setdefault((src, dst), []).append(conn)
+        else:
+            soft[(dst, src)] = soft.get((dst, src), 0) + 1
+    _check_hard_loops(names, hard, hard_edges)
+    if len(names) > EXHAUSTIVE_LIMIT:
+        return _listing_order(names, hard)
+
+    # best[mask] = (violated soft connections, order as listing indices) over placed sets
+    best = {0: (0, ())}
+    for mask in range(1 << len(names)):
+        if mask not in best:
+            continue
+        cost, order = best[mask]
+        for i, n in enumerate(names):
+            if mask & (1 << i) or any(not mask & (1 << index[p]) for p in hard[n]):
+                continue
+            # A reader placed after its continuous source reads t + h: count those.
+            added = sum(count for (reader, source), count in soft.items()
+                        if reader == n and mask & (1 << index[source]))
+            candidate = (cost + added, order + (i,))
+            new = mask | (1 << i)
+            if new not in best or candidate < best[new]:
+                best[new] = candidate
+    return tuple(names[i] for i in best[(1 << len(names)) - 1][1])
+
+
+def _listing_order(names, hard):
+    placed, order = set(), []
+    while len(order) < len(names):
+        n = next(n for n in names if n not in placed and hard[n] <= placed)
+        placed.add(n)
+        order.append(n)
+    return tuple(order)
+
+
+def _check_hard_loops(names, hard, hard_edges):
+    state = {}
+
+    def visit(n, path):
+        state[n] = 1
+        for p in sorted(hard[n]):
+            if state.get(p) == 1:
+                cycle = path[path.index(p):] + [p] if p in path else [p, n]
+                links = []
+                for a, b in zip(cycle, cycle[1:]):
+                    for conn in hard_edges.get((b, a), ()):
+                        links.append(f"{conn.source} -> {conn.target}")
+                raise AlgebraicLoopError(
+                    "algebraic loop: these connections need each other's value within one step "
+                    "(sampled or direct-feedthrough outputs): " + "; ".join(links))
+            if state.get(p) is None:
+                visit(p, path + [p])
+        state[n] = 2
+
+    for n in names:
+        if n not in state:
+            visit(n, [n])
+
+
+# --- running -----------------------------------------------------------------------------
+
+def _instantiate(system: System, mode: str, fmu_dir):
+    if mode == "fmu":
+        from .build import ensure_built
+
+        paths = ensure_built(sorted({c.model for c in system.components}), fmu_dir)
+        return {c.name: _FmuInstance(paths[c.model], c.name) for c in system.components}
+    if mode == "inprocess":
+        return {c.name: _InProcessInstance(c.model, c.name) for c in system.components}
+    raise ValueError(f"mode = {mode!r}; valid: {', '.join(MODES)}")
+
+
+def _check_signals(system: System, instances: dict) -> None:
+    def variable(signal, causalities):
+        instance, name = split_signal(signal)
+        variables = instances[instance].variables
+        if name not in variables:
+            raise ValueError(f"{signal}: {system.component(instance).model} has no variable {name!r}")
+        v = variables[name]
+        if v.causality not in causalities:
+            raise ValueError(f"{signal} is a {v.causality}, expected {' or '.join(causalities)}")
+        if v.type != "Real":
+            raise ValueError(f"{signal} is {v.type}; only Real signals can be connected or recorded")
+        return v
+
+    for conn in system.connections:
+        variable(conn.source, ("output",))
+        variable(conn.target, ("input",))
+    for signal in system.record:
+        variable(signal, ("output", "input", "local"))
+    for c in system.components:
+        for name in c.parameters:
+            v = instances[c.name].variables.get(name)
+            if v is None or v.causality not in ("parameter", "input"):
+                raise ValueError(f"component {c.name}: {c.model} has no parameter {name!r}")
+
+
+def simulate(system: System, mode: str = "inprocess", coupling: str = "gauss-seidel",
+             fmu_dir=None, progress=None) -> Result:
+    """Run ``system`` from 0 to its stop time.
+
+    Parameters
+    ----------
+    system : System
+    mode : {"inprocess", "fmu"}
+        Slave objects called directly, or the built FMUs through fmpy (built into
+        ``fmu_dir``, default ``fmus/build``, when missing or older than the sources).
+    coupling : {"gauss-seidel", "jacobi"}
+    progress : callable, optional
+        Called as ``progress(fraction)`` about a hundred times during the run.
+
+    Returns
+    -------
+    Result
+        Never raises for a refused step: ``Result.error`` says what happened and the
+        rows recorded so far are kept.  Bad systems (unknown variables, algebraic loops)
+        raise ValueError before anything runs.
+    """
+    if coupling not in COUPLINGS:
+        raise ValueError(f"coupling = {coupling!r}; valid: {', '.join(COUPLINGS)}")
+    instances = _instantiate(system, mode, fmu_dir)
+    try:
+        _check_signals(system, instances)
+        variables = {n: inst.variables for n, inst in instances.items()}
+        order = (stepping_order(system, variables) if coupling == "gauss-seidel"
+                 else tuple(c.name for c in system.components))
+        return _run(system, instances, order, mode, coupling, progress)
+    finally:
+        for inst in instances.values():
+            try:
+                inst.close()
+            except Exception:  # noqa: BLE001 - closing must not hide the run's outcome
+                pass
+
+
+def _run(system, instances, order, mode, coupling, progress) -> Result:
+    # One flat store of every output that is read or recorded.
+    slots = {}
+
+    def slot(signal):
+        return slots.setdefault(signal, len(slots))
+
+    feeds = {c.name: [] for c in system.components}
+    for conn in system.connections:
+        feeds[split_signal(conn.target)[0]].append(conn)
+    plan = []
+    for name in order:
+        inst = instances[name]
+        in_vrs = [inst.variables[split_signal(c.target)[1]].vr for c in feeds[name]]
+        in_slots = [slot(c.source) for c in feeds[name]]
+        produced = [s for s in [c.source for c in system.connections] + list(system.record)
+                    if split_signal(s)[0] == name and inst.variables[split_signal(s)[1]].causality == "output"]
+        produced = list(dict.fromkeys(produced))
+        out_vrs = [inst.variables[split_signal(s)[1]].vr for s in produced]
+        inst.bind(in_vrs, out_vrs)
+        plan.append((inst, in_slots, [slot(s) for s in produced], system.component(name).substeps))
+    record_inputs = [s for s in system.record if s not in slots]
+    if record_inputs:
+        raise ValueError(f"recorded signals must be outputs or connected inputs: {record_inputs}")
+    record_slots = [slots[s] for s in system.record]
+    values = [0.0] * len(slots)
+
+    h, steps = system.step, system.steps
+    data = np.full((steps + 1, len(system.record)), np.nan)
+    error, done, rows = None, 0, 0
+    start = _time.perf_counter()
+    try:
+        for c in system.components:
+            instances[c.name].initialize(c.parameters, 0.0)
+        for inst, _, out_slots, _ in plan:
+            for i, v in zip(out_slots, inst.get_outputs()):
+                values[i] = v
+        data[0] = [values[i] for i in record_slots]
+        rows = 1
+        report_every = max(1, steps // 100)
+        jacobi = coupling == "jacobi"
+        for k in range(steps):
+            t = k * h
+            held = values[:] if jacobi else values
+            for inst, in_slots, out_slots, substeps in plan:
+                if in_slots:
+                    inst.set_inputs([held[i] for i in in_slots])
+                if substeps == 1:
+                    inst.do_step(t, h)
+                else:
+                    dt = h / substeps
+                    for j in range(substeps):
+                        inst.do_step(t + j * dt, dt)
+                for i, v in zip(out_slots, inst.get_outputs()):
+                    values[i] = v
+            data[k + 1] = [values[i] for i in record_slots]
+            done = k + 1
+            rows = done + 1
+            if progress is not None and done % report_every == 0:
+                progress(done / steps)
+    except CoSimulationError as exc:
+        error = str(exc) if exc.time == exc.time else f"{exc.instance}: {exc.message} at t = {done * h:.6g} s"
+    wall = _time.perf_counter() - start
+    data = data[:rows]
+    return Result(time=np.arange(rows) * h, signals={s: data[:, j] for j, s in enumerate(system.record)},
+                  order=tuple(order), mode=mode, coupling=coupling, wall_s=wall, error=error,
+                  stop_time=system.stop_time)

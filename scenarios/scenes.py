@@ -1,0 +1,160 @@
+"""The thesis' scenes as data: which components, their parameters, the wiring, what to record.
+
+Each scene is a :class:`Scene`: a :class:`fmus.system.System` plus what the metrics need
+(the trajectory's end and the metric windows, thesis 7.31-7.32).  A scene models only what
+it needs: ``thesis_sim_circle`` has no motors, observers or derivator (ideal torque
+actuators, exact measurements); the bench scenes have the whole chain.
+
+Names (:func:`scene_names`): ``thesis_sim_circle`` (model error 0 %) and
+``thesis_sim_circle_me20`` / ``_me40`` (20 %, 40 %, thesis figures 12-23);
+``bench_circle_<S>`` and ``bench_triangle_<S>`` for the eight strategies S of 7.2.6.
+
+Copy a builder (:func:`thesis_sim_circle`, :func:`bench`) to make your own scene; every
+parameter not given keeps the FMU's default (the presets of Tables 3-8, 16, 18).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from controller.strategies import STRATEGY_NAMES
+from controller.trajectories import get_trajectory
+from fmus.system import Component, Connection, System
+
+REFERENCE_SIGNALS = ("x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
+#: Time the bench scenes run on after the reference stops, for the steady-state error [s].
+SETTLE_TIME = 1.0
+#: The steady-state error is the RMS error over this last part of the run [s].
+STEADY_STATE_WINDOW = 0.2
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A runnable scene.
+
+    Parameters
+    ----------
+    name, description : str
+    system : System
+    columns : dict
+        Result column -> recorded signal ("instance.variable"); the contract's
+        columns ``x, y, x_d, y_d, tau1, tau2`` are always there.
+    window : (float, float)
+        Time window of e_ef and tau_ef (7.31-7.32) [s].
+    reference_end : float
+        When the reference stops moving [s]; the steady-state error is measured over the
+        last :data:`STEADY_STATE_WINDOW` s of the run, after it.
+    strategy : str
+    """
+
+    name: str
+    description: str
+    system: System
+    columns: dict
+    window: tuple
+    reference_end: float
+    strategy: str
+
+
+def _connect(pairs):
+    return tuple(Connection(s, t) for s, t in pairs)
+
+
+def _reference_wiring(trajectory="traj", controller="ctrl"):
+    return [(f"{trajectory}.{s}", f"{controller}.{s}") for s in REFERENCE_SIGNALS]
+
+
+_COLUMNS = {"x": "plant.x", "y": "plant.y", "x_d": "traj.x_d", "y_d": "traj.y_d",
+            "tau1": "ctrl.tau1", "tau2": "ctrl.tau2", "q1": "plant.q1", "q2": "plant.q2",
+            "e1": "ctrl.e1", "e2": "ctrl.e2", "residual": "plant.residual"}
+
+
+def thesis_sim_circle(model_error: float = 0.0, lam: float = 40.0, model: str = "exact",
+                      cycles: int = 2) -> Scene:
+    """Section 7.1.5: Table 3 mechanism, ideal torque actuators, TCx with lambda = 40, circle 7.18.
+
+    The controller reads the plant's exact angles and velocities (no derivator, no motors);
+    its model's inertial parameters are ``1 + model_error`` times the plant's.
+    """
+    trajectory = get_trajectory("thesis_circle", cycles=cycles)
+    x0, y0 = trajectory.start_point
+    components = (
+        Component("traj", "Trajectory", {"kind": "thesis_circle", "cycles": cycles}),
+        Component("ctrl", "PositionController", {
+            "strategy": "TCx", "lam": lam, "model": model, "model_error": model_error,
+            "preset": "thesis_sim"}),
+        Component("plant", "FiveBarPlant", {"preset": "thesis_sim", "x0": x0, "y0": y0}),
+    )
+    wiring = _reference_wiring() + [(f"plant.{s}", f"ctrl.{s}") for s in ("q1", "q2", "dq1", "dq2")]
+    wiring += [("ctrl.tau1", "plant.tau1"), ("ctrl.tau2", "plant.tau2")]
+    columns = dict(_COLUMNS)
+    system = System(components, _connect(wiring), tuple(dict.fromkeys(columns.values())),
+                    stop_time=trajectory.duration)
+    suffix = "" if model_error == 0.0 else f"_me{round(100 * model_error)}"
+    return Scene(f"thesis_sim_circle{suffix}",
+                 f"Simulation of 7.1.5: ideal actuators, TCx lambda={lam:g}, model error {100 * model_error:g} %",
+                 system, columns, (1.0, trajectory.duration), trajectory.duration, "TCx")
+
+
+def bench(strategy: str, kind: str = "circle", model: str = "tabulated") -> Scene:
+    """The bench of 7.2: plant with rotors and encoders, two drives with their current loops
+    and observers, the derivator, the controller with ``strategy`` (Tables 6-8), the trajectory.
+
+    Wiring (the real bench): the derivator and the controller read the encoder angles; the
+    observers read the drives' voltages and the derivator's velocities; the drives read the
+    current references, the observed currents and the true shaft speeds.
+    """
+    if strategy not in STRATEGY_NAMES:
+        raise ValueError(f"strategy = {strategy!r}; valid: {', '.join(STRATEGY_NAMES)}")
+    trajectory = get_trajectory(kind)
+    x0, y0 = trajectory.start_point
+    components = (
+        Component("traj", "Trajectory", {"kind": kind}),
+        Component("deriv", "Derivator", {}),
+        Component("ctrl", "PositionController", {
+            "strategy": strategy, "trajectory": kind, "model": model, "preset": "bench"}),
+        Component("obs1", "CurrentObserver", {"preset": "motor1"}),
+        Component("obs2", "CurrentObserver", {"preset": "motor2"}),
+        Component("drive1", "DCMotorDrive", {"preset": "motor1", "mode": "current"}),
+        Component("drive2", "DCMotorDrive", {"preset": "motor2", "mode": "current"}),
+        Component("plant", "FiveBarPlant", {"preset": "bench", "x0": x0, "y0": y0}),
+    )
+    wiring = _reference_wiring()
+    for j in ("1", "2"):
+        wiring += [
+            (f"plant.q{j}_enc", f"deriv.q{j}"), (f"plant.q{j}_enc", f"ctrl.q{j}"),
+            (f"deriv.dq{j}", f"ctrl.dq{j}"), (f"deriv.ddq{j}", f"ctrl.ddq{j}"),
+            (f"ctrl.i_ref{j}", f"drive{j}.i_ref"), (f"obs{j}.i_hat", f"drive{j}.i_hat"),
+            (f"plant.dq{j}", f"drive{j}.omega"),
+            (f"drive{j}.v", f"obs{j}.v"), (f"deriv.dq{j}", f"obs{j}.omega"),
+            (f"drive{j}.tau", f"plant.tau{j}"),
+        ]
+    columns = dict(_COLUMNS)
+    columns.update({"i1": "drive1.i", "i2": "drive2.i", "i_hat1": "obs1.i_hat", "i_hat2": "obs2.i_hat",
+                    "v1": "drive1.v", "v2": "drive2.v", "tau1_shaft": "drive1.tau", "tau2_shaft": "drive2.tau"})
+    system = System(components, _connect(wiring), tuple(dict.fromkeys(columns.values())),
+                    stop_time=trajectory.duration + SETTLE_TIME)
+    window = (1.0, 8.0) if kind == "circle" else (0.0, trajectory.duration)
+    return Scene(f"bench_{kind}_{strategy}",
+                 f"Bench of 7.2, {kind} trajectory, strategy {strategy} (Tables 6-8), tabulated model",
+                 system, columns, window, trajectory.duration, strategy)
+
+
+def scene_names() -> list[str]:
+    """Every scene name ``get_scene`` accepts."""
+    names = ["thesis_sim_circle", "thesis_sim_circle_me20", "thesis_sim_circle_me40"]
+    names += [f"bench_{kind}_{s}" for kind in ("circle", "triangle") for s in STRATEGY_NAMES]
+    return names
+
+
+def get_scene(name: str) -> Scene:
+    """The scene called ``name`` (see :func:`scene_names`)."""
+    if name == "thesis_sim_circle":
+        return thesis_sim_circle()
+    for error in (20, 40):
+        if name == f"thesis_sim_circle_me{error}":
+            return thesis_sim_circle(model_error=error / 100)
+    for kind in ("circle", "triangle"):
+        prefix = f"bench_{kind}_"
+        if name.startswith(prefix) and name[len(prefix):] in STRATEGY_NAMES:
+            return bench(name[len(prefix):], kind)
+    raise ValueError(f"unknown scene {name!r}; `parcosim list` prints the {len(scene_names())} scenes")
