@@ -7,9 +7,12 @@ Every subcommand is a thin shell over a documented Python call:
 ``parcosim demo``      same, with ``--out`` and ``--preset``
 ``parcosim build``     ``fmus.build.build_all(out_dir)``
 ``parcosim identify-motor``  ``motor.cli.identify_main(argv)``
+``parcosim list``      ``scenarios.scenes.scene_names()``
+``parcosim run``       ``scenarios.run.run_scene(name, mode, out_dir)``
 =====================  ==============================================
 
-Errors end the command with exit status 2 and one readable line on stderr.
+Errors end the command with exit status 2 and one readable line on stderr; a run that a
+component stops early writes what it recorded, prints the component's message and exits 1.
 """
 from __future__ import annotations
 
@@ -25,6 +28,14 @@ def _parser() -> argparse.ArgumentParser:
     demo.add_argument("--preset", default="thesis_sim", help="thesis_sim or bench")
     build = sub.add_parser("build", help="build every FMU")
     build.add_argument("--out", default=None, help="output directory (default: fmus/build/)")
+    sub.add_parser("list", help="print the scenes")
+    run = sub.add_parser("run", help="run a scene: result.csv, metrics.json and plots")
+    run.add_argument("scene", help="a scene name (see `parcosim list`)")
+    run.add_argument("--mode", choices=("inprocess", "fmu"), default="inprocess",
+                     help="slaves in process (default) or the built FMUs through fmpy")
+    run.add_argument("--coupling", choices=("gauss-seidel", "jacobi"), default="gauss-seidel")
+    run.add_argument("--out", default=None, help="output directory (default: out/SCENE)")
+    run.add_argument("--fmu-dir", default=None, help="where the FMUs are (built when missing or stale)")
     sub.add_parser("identify-motor", help="identify DC motor parameters from u,i,omega data",
                    add_help=False)
     return parser
@@ -40,6 +51,12 @@ def main(argv: list[str] | None = None) -> int:
         if args.command in (None, "demo"):
             from scenarios.plant_demo import run
             run(getattr(args, "out", "out"), getattr(args, "preset", "thesis_sim"))
+        elif args.command == "list":
+            from scenarios.scenes import get_scene, scene_names
+            for name in scene_names():
+                print(f"{name:28s} {get_scene(name).description}")
+        elif args.command == "run":
+            return _run(args)
         elif args.command == "build":
             from fmus.build import DEFAULT_OUT, build_all
             for path in build_all(args.out or DEFAULT_OUT):
@@ -47,6 +64,36 @@ def main(argv: list[str] | None = None) -> int:
     except (ValueError, OSError, RuntimeError) as exc:
         print(f"parcosim: error: {exc}", file=sys.stderr)
         return 2
+    return 0
+
+
+def progress_bar(label: str):
+    """A one-line text progress bar on stderr: call it with the fraction done."""
+    def show(fraction: float) -> None:
+        filled = int(30 * fraction)
+        end = "\n" if fraction >= 1.0 else ""
+        print(f"\r{label} [{'#' * filled}{'.' * (30 - filled)}] {100 * fraction:5.1f} %", end=end,
+              file=sys.stderr, flush=True)
+    return show
+
+
+def _run(args) -> int:
+    from pathlib import Path
+
+    from scenarios.run import run_scene
+    from scenarios.scenes import get_scene
+
+    scene = get_scene(args.scene)
+    out = Path(args.out) if args.out else Path("out") / scene.name
+    bar = progress_bar(scene.name) if sys.stderr.isatty() else None
+    outcome = run_scene(scene, mode=args.mode, out_dir=out, coupling=args.coupling,
+                        fmu_dir=args.fmu_dir, progress=bar)
+    m = outcome.metrics
+    if outcome.result.error:
+        print(f"parcosim: {outcome.result.error} (recorded so far: {out})", file=sys.stderr)
+        return 1
+    print(f"{scene.name} [{args.mode}]: e_ef {m['e_ef_mm']:.4g} mm, tau_ef {m['tau_ef_Nm']:.4g} N m, "
+          f"e_ss {m['e_ss_mm']:.4g} mm, {m['wall_s']:.2f} s wall ({m['realtime_factor']:.1f}x real time) -> {out}")
     return 0
 
 

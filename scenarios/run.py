@@ -1,0 +1,120 @@
+"""Run a scene and write what a user looks at: ``result.csv``, ``metrics.json``, plots.
+
+``parcosim run SCENE [--mode fmu|inprocess] [--out DIR]`` is :func:`run_scene`::
+
+    from scenarios.run import run_scene
+    outcome = run_scene("bench_circle_TCMDx", mode="inprocess", out_dir="out/tcmdx")
+    print(outcome.metrics["e_ef_mm"])
+
+A run that a component stops early still writes the rows it recorded and metrics with
+``"completed": false`` and the component's message under ``"error"``.
+"""
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from fmus.master import Result, simulate
+
+from .metrics import scene_metrics
+from .scenes import Scene, get_scene
+
+
+@dataclass
+class Outcome:
+    """A scene's run: the master's result, the named columns, the metrics, the files written."""
+
+    scene: Scene
+    result: Result
+    columns: dict
+    metrics: dict
+    files: list
+
+
+def result_columns(scene: Scene, result: Result) -> dict:
+    """Column name -> array: ``t`` then the scene's columns."""
+    columns = {"t": result.time}
+    columns.update({name: result[signal] for name, signal in scene.columns.items()})
+    return columns
+
+
+def _json_safe(value):
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_safe(v) for v in value]
+    return value
+
+
+def write_csv(path: Path, columns: dict) -> Path:
+    """One row per communication point, full double precision."""
+    data = np.column_stack(list(columns.values())) if len(columns["t"]) else np.empty((0, len(columns)))
+    np.savetxt(path, data, delimiter=",", header=",".join(columns), comments="", fmt="%.17g")
+    return path
+
+
+def plot_run(scene: Scene, columns: dict, out_dir: Path) -> list:
+    """The thesis' figures: path against reference; e_x, e_y; tau1, tau2 (figures 12-23, 27-)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t = columns["t"]
+    files = []
+    fig, ax = plt.subplots(figsize=(5, 5))
+    ax.plot(1e3 * columns["x_d"], 1e3 * columns["y_d"], "k--", lw=1, label="reference")
+    ax.plot(1e3 * columns["x"], 1e3 * columns["y"], "C0", lw=1, label="end effector")
+    ax.set(xlabel="x [mm]", ylabel="y [mm]", title=scene.name, aspect="equal")
+    ax.legend()
+    files.append(out_dir / "path.png")
+    fig.savefig(files[-1], dpi=120, bbox_inches="tight")
+    plt.close(fig)
+    for name, series, unit, scale in (
+            ("errors.png", (("e_x", columns["x_d"] - columns["x"]), ("e_y", columns["y_d"] - columns["y"])), "mm", 1e3),
+            ("torques.png", (("τ1", columns["tau1"]), ("τ2", columns["tau2"])), "N m", 1.0)):
+        fig, axes = plt.subplots(2, 1, figsize=(7, 5), sharex=True)
+        for ax, (label, values) in zip(axes, series):
+            ax.plot(t, scale * values, lw=0.8)
+            ax.set_ylabel(f"{label} [{unit}]")
+            ax.grid(True, alpha=0.3)
+            for edge in scene.window:
+                ax.axvline(edge, color="0.6", lw=0.6, ls=":")
+        axes[-1].set_xlabel("t [s]")
+        axes[0].set_title(f"{scene.name} (dotted: metric window)")
+        files.append(out_dir / name)
+        fig.savefig(files[-1], dpi=120, bbox_inches="tight")
+        plt.close(fig)
+    return files
+
+
+def run_scene(scene, mode: str = "inprocess", out_dir=None, coupling: str = "gauss-seidel",
+              fmu_dir=None, plots: bool = True, progress=None) -> Outcome:
+    """Run a scene (a name or a :class:`Scene`) and, with ``out_dir``, write its files.
+
+    Returns the :class:`Outcome` also when a component stopped the run early
+    (``outcome.result.error``); the files then hold what was recorded.
+    """
+    scene = get_scene(scene) if isinstance(scene, str) else scene
+    result = simulate(scene.system, mode=mode, coupling=coupling, fmu_dir=fmu_dir, progress=progress)
+    columns = result_columns(scene, result)
+    metrics = scene_metrics(scene, columns, result.wall_s, result.completed)
+    metrics.update({"mode": mode, "coupling": coupling, "order": list(result.order)})
+    if result.error:
+        metrics["error"] = result.error
+    files = []
+    if out_dir is not None:
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        files.append(write_csv(out / "result.csv", columns))
+        (out / "metrics.json").write_text(json.dumps(_json_safe(metrics), indent=2) + "\n")
+        files.append(out / "metrics.json")
+        if plots and len(columns["t"]) > 1:
+            files.extend(plot_run(scene, columns, out))
+    return Outcome(scene, result, columns, metrics, files)

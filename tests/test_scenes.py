@@ -1,0 +1,98 @@
+"""Scenes, their metrics and the `parcosim run` / `parcosim list` commands."""
+import json
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from fmus.system import Component, System
+from parcosim.cli import main
+from scenarios import scenes
+from scenarios.metrics import rms_norm
+from scenarios.run import run_scene
+from scenarios.scenes import Scene, get_scene, scene_names
+
+
+def _shortened(name, stop_time):
+    scene = get_scene(name)
+    return replace(scene, system=replace(scene.system, stop_time=stop_time))
+
+
+def test_scene_names_cover_the_contract():
+    names = scene_names()
+    assert "thesis_sim_circle" in names
+    for s in ("PDq", "PDx", "TCq", "TCx", "PDMDq", "PDMDx", "TCMDq", "TCMDx"):
+        assert f"bench_circle_{s}" in names and f"bench_triangle_{s}" in names
+    with pytest.raises(ValueError, match="unknown scene 'bench_circle_XYZ'"):
+        get_scene("bench_circle_XYZ")
+
+
+def test_ideal_actuator_scene_has_no_motors():
+    models = {c.model for c in get_scene("thesis_sim_circle").system.components}
+    assert models == {"Trajectory", "PositionController", "FiveBarPlant"}
+
+
+@pytest.mark.parametrize("name", scene_names())
+def test_every_scene_starts_and_runs(name):
+    outcome = run_scene(_shortened(name, 0.02))
+    assert outcome.result.error is None
+    assert np.all(np.isfinite(outcome.columns["x"]))
+
+
+def test_metrics_are_the_thesis_formulas():
+    scene = _shortened("bench_triangle_TCx", 0.3)
+    scene = replace(scene, window=(0.1, 0.25))
+    outcome = run_scene(scene)
+    c = outcome.columns
+    w = (c["t"] > 0.1 - 1e-9) & (c["t"] < 0.25 + 1e-9)
+    assert w.sum() == 151
+    ex, ey = c["x_d"][w] - c["x"][w], c["y_d"][w] - c["y"][w]
+    expected = 1e3 * np.sqrt(np.sum(ex ** 2 + ey ** 2) / w.sum())
+    assert outcome.metrics["e_ef_mm"] == pytest.approx(expected, rel=1e-12)
+    assert outcome.metrics["tau_ef_Nm"] == pytest.approx(rms_norm(c["tau1"][w], c["tau2"][w]), rel=1e-12)
+    assert outcome.metrics["tau_ef_Nm"] > 0.0
+
+
+def test_thesis_sim_circle_exact_model_tracks_within_a_millimetre():
+    outcome = run_scene("thesis_sim_circle")
+    assert outcome.result.error is None
+    assert outcome.metrics["e_ef_mm"] < 1.0
+    # model error costs accuracy (thesis figures 18-23)
+    worse = run_scene("thesis_sim_circle_me40")
+    assert worse.metrics["e_ef_mm"] > 2 * outcome.metrics["e_ef_mm"]
+
+
+def test_run_command_writes_the_contract_files(tmp_path, monkeypatch):
+    short = _shortened("bench_circle_PDx", 0.05)
+    monkeypatch.setattr(scenes, "get_scene", lambda name: short)   # what the command looks up
+    assert main(["run", "bench_circle_PDx", "--out", str(tmp_path)]) == 0
+    header = (tmp_path / "result.csv").read_text().splitlines()[0].split(",")
+    assert header[:1] == ["t"] and {"x", "y", "x_d", "y_d", "tau1", "tau2"} <= set(header)
+    metrics = json.loads((tmp_path / "metrics.json").read_text())
+    for key in ("e_ef_mm", "tau_ef_Nm", "e_ss_mm", "wall_s", "realtime_factor"):
+        assert key in metrics
+    assert (tmp_path / "path.png").stat().st_size > 1000
+
+
+def test_run_command_bad_scene_one_line(capsys):
+    assert main(["run", "bench_circle_nope"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "unknown scene 'bench_circle_nope'" in err[0]
+
+
+def test_stopped_run_keeps_what_was_recorded(tmp_path):
+    # open loop 0.3 N m: the mechanism reaches a singular pose and the plant refuses
+    components = (Component("traj", "Trajectory", {"kind": "hold"}),
+                  Component("ctrl", "PositionController", {"strategy": "PDx"}),
+                  Component("plant", "FiveBarPlant", {"preset": "bench", "x0": -0.002, "y0": 0.108,
+                                                      "tau1": 0.3, "tau2": -0.3}))
+    record = ("plant.x", "plant.y", "traj.x_d", "traj.y_d", "ctrl.tau1", "ctrl.tau2")
+    system = System(components, (), record, stop_time=2.0)
+    columns = dict(zip(("x", "y", "x_d", "y_d", "tau1", "tau2"), record))
+    scene = Scene("open_loop", "open loop into a singularity", system, columns, (0.0, 2.0), 2.0, "none")
+    outcome = run_scene(scene, out_dir=tmp_path)
+    assert outcome.result.error and "plant" in outcome.result.error
+    rows = (tmp_path / "result.csv").read_text().splitlines()
+    assert 10 < len(rows) - 1 == len(outcome.result.time) < 2001
+    metrics = json.loads((tmp_path / "metrics.json").read_text())
+    assert metrics["completed"] is False and metrics["e_ef_mm"] is None and "plant" in metrics["error"]
