@@ -9,6 +9,7 @@ Every subcommand is a thin shell over a documented Python call:
 ``parcosim identify-motor``  ``motor.cli.identify_main(argv)``
 ``parcosim list``      ``scenarios.scenes.scene_names()``
 ``parcosim run``       ``scenarios.run.run_scene(name, mode, out_dir)``
+``parcosim report``    ``scenarios.report.write_report(out_dir, mode)``
 =====================  ==============================================
 
 Errors end the command with exit status 2 and one readable line on stderr; a run that a
@@ -36,6 +37,9 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--coupling", choices=("gauss-seidel", "jacobi"), default="gauss-seidel")
     run.add_argument("--out", default=None, help="output directory (default: out/SCENE)")
     run.add_argument("--fmu-dir", default=None, help="where the FMUs are (built when missing or stale)")
+    report = sub.add_parser("report", help="run the 16 bench scenes; markdown report beside the thesis' Tables 9-14")
+    report.add_argument("--mode", choices=("inprocess", "fmu"), default="inprocess")
+    report.add_argument("--out", default="out/report", help="output directory (default: out/report)")
     sub.add_parser("identify-motor", help="identify DC motor parameters from u,i,omega data",
                    add_help=False)
     return parser
@@ -57,6 +61,9 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"{name:28s} {get_scene(name).description}")
         elif args.command == "run":
             return _run(args)
+        elif args.command == "report":
+            from scenarios.report import write_report
+            print(write_report(args.out, args.mode, progress=progress_bar("report")))
         elif args.command == "build":
             from fmus.build import DEFAULT_OUT, build_all
             for path in build_all(args.out or DEFAULT_OUT):

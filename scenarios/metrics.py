@@ -43,6 +43,10 @@ def scene_metrics(scene: Scene, columns: dict, wall_s: float, completed: bool) -
         "tau_ef_Nm": rms_norm(columns["tau1"][window], columns["tau2"][window]) if reached_window else float("nan"),
         "e_ss_mm": 1e3 * rms_norm(ex[steady], ey[steady]) if reached_stop and scene.reference_end < stop
         else float("nan"),
+        "e_ss_x_mm": 1e3 * float(np.mean(ex[steady])) if reached_stop and scene.reference_end < stop
+        else float("nan"),
+        "e_ss_y_mm": 1e3 * float(np.mean(ey[steady])) if reached_stop and scene.reference_end < stop
+        else float("nan"),
         "e_max_mm": 1e3 * float(np.max(np.hypot(ex, ey))) if len(t) else float("nan"),
         "window_s": [start, end],
         "simulated_s": simulated,

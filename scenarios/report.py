@@ -1,0 +1,209 @@
+"""The thesis reproduction report: the 16 bench scenes beside the thesis' bench (Tables 9-14).
+
+``parcosim report [--mode fmu|inprocess] [--out DIR]`` is :func:`write_report`: it runs
+``bench_circle_<S>`` and ``bench_triangle_<S>`` for the eight strategies, keeps each run's
+files under ``DIR/<scene>/``, and writes ``DIR/report.md`` and ``DIR/report.png``.  Every
+number in the report is computed from the runs of that call; the thesis' numbers are the
+published bench results (Tables 9-14), quoted, never used to tune anything.
+"""
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+from controller.strategies import STRATEGY_NAMES
+
+from .run import _json_safe, run_scene
+
+#: Thesis Tables 9-10 and 13-14 (bench): strategy -> (e_ef mm, tau_ef N m, e_ss_x, e_ss_y, e_ss mm).
+THESIS_BENCH = {
+    "circle": {
+        "PDq": (3.15, 0.132, 0.444, -0.195, 0.484), "PDMDq": (2.37, 0.141, 0.116, 0.481, 0.494),
+        "TCq": (1.14, 0.143, 0.903, 0.289, 0.949), "TCMDq": (0.77, 0.168, 0.039, 0.012, 0.041),
+        "PDx": (0.91, 0.155, 0.423, -0.033, 0.425), "PDMDx": (0.65, 0.169, -0.010, 0.034, 0.036),
+        "TCx": (1.16, 0.150, 0.748, 0.182, 0.769), "TCMDx": (0.90, 0.185, 0.006, 0.060, 0.061),
+    },
+    "triangle": {
+        "PDq": (5.39, 0.197, 1.601, -1.152, 1.972), "PDMDq": (5.16, 0.212, 0.762, 0.428, 0.874),
+        "TCq": (1.85, 0.181, 0.099, 0.264, 0.279), "TCMDq": (1.63, 0.191, 0.028, 0.017, 0.033),
+        "PDx": (1.98, 0.191, 0.368, -0.229, 0.434), "PDMDx": (1.79, 0.188, 0.017, -0.170, 0.171),
+        "TCx": (1.83, 0.188, 0.228, -0.210, 0.305), "TCMDx": (1.36, 0.186, 0.009, 0.271, 0.271),
+    },
+}
+#: Tables 11-12 as printed: pure -> with sliding modes, change of (e_ef, tau_ef) in %.
+THESIS_MD_CHANGE = {
+    "circle": {"PDq": (-24.9, 6.87), "TCq": (-32.9, 17.5), "PDx": (-28.9, 8.77), "TCx": (-22.1, 23.1)},
+    "triangle": {"PDq": (-4.20, 7.88), "TCq": (-11.5, 5.45), "PDx": (-9.64, -1.69), "TCx": (-25.5, -0.68)},
+}
+PAIRS = (("PDq", "PDMDq"), ("TCq", "TCMDq"), ("PDx", "PDMDx"), ("TCx", "TCMDx"))
+KINDS = ("circle", "triangle")
+
+
+def bench_scene_names() -> list:
+    """The 16 bench scenes, circle first, in the thesis' table order."""
+    order = ("PDq", "PDMDq", "TCq", "TCMDq", "PDx", "PDMDx", "TCx", "TCMDx")
+    assert set(order) == set(STRATEGY_NAMES)
+    return [f"bench_{kind}_{s}" for kind in KINDS for s in order]
+
+
+def run_bench(out_dir, mode="inprocess", progress=None) -> dict:
+    """Run the 16 bench scenes; return scene name -> metrics (each run's files in out_dir/<scene>)."""
+    names = bench_scene_names()
+    metrics = {}
+    for i, name in enumerate(names):
+        def step_progress(fraction, i=i):
+            if progress is not None:
+                progress((i + fraction) / len(names))
+        outcome = run_scene(name, mode=mode, out_dir=Path(out_dir) / name, progress=step_progress)
+        metrics[name] = outcome.metrics
+    if progress is not None:
+        progress(1.0)
+    return metrics
+
+
+def _f(value, spec=".3f") -> str:
+    """A number for a table cell; '—' when there is none (a run that stopped early)."""
+    return format(value, spec) if value is not None and math.isfinite(value) else "—"
+
+
+def _change(new, old):
+    return 100.0 * (new - old) / old
+
+
+def _ranking(values: dict) -> list:
+    """Keys sorted by value, best (smallest) first; runs without a value are left out."""
+    return sorted((k for k, v in values.items() if math.isfinite(v)), key=values.get)
+
+
+def render(metrics: dict, mode: str) -> str:
+    """The markdown report from the 16 runs' metrics."""
+    lines = ["# parcosim: thesis bench reproduction (Tables 9-14)", "",
+             f"Mode `{mode}`; every 'ours' number comes from the runs listed at the end "
+             "(files beside this report). 'Thesis' numbers are the published bench results "
+             "(Coutinho 2019, Tables 9-14) of the real robot. Our bench scenes simulate the whole "
+             "chain: plant with rotor inertias and 20000-count encoders, two drives with their 1 ms "
+             "current loops and observers, the derivator, the controller (tabulated model, 5 mm) "
+             "and the trajectory, with the parameters of Tables 4-8, 16 and 18.", ""]
+    failed = [n for n, m in metrics.items() if not m["completed"]]
+    if failed:
+        lines += ["**Runs stopped early:** " + "; ".join(f"{n}: {metrics[n].get('error')}" for n in failed), ""]
+    number = {"circle": (9, 11, 13), "triangle": (10, 12, 14)}
+    for kind in KINDS:
+        t_ef, t_md, t_ss = number[kind]
+        ours = {s: metrics[f"bench_{kind}_{s}"] for s in THESIS_BENCH[kind]}
+        window = ours["PDq"]["window_s"]
+        lines += [f"## {kind.capitalize()} trajectory", "",
+                  f"### Table {t_ef}: RMS error and effort (7.31-7.32), t in [{window[0]:g}, {window[1]:g}] s", "",
+                  "| strategy | e_ef mm ours | e_ef mm thesis | τ_ef N m ours | τ_ef N m thesis |",
+                  "|---|---|---|---|---|"]
+        for s, (e, tau, *_rest) in THESIS_BENCH[kind].items():
+            lines.append(f"| {s} | {_f(ours[s]['e_ef_mm'])} | {e:.2f} | {_f(ours[s]['tau_ef_Nm'])} | {tau:.3f} |")
+        lines += ["", f"### Table {t_md}: adding sliding modes (MD), change in %", "",
+                  "| pair | e_ef ours | e_ef thesis | τ_ef ours | τ_ef thesis |", "|---|---|---|---|---|"]
+        md_lowers = []
+        for pure, hybrid in PAIRS:
+            de = _change(ours[hybrid]["e_ef_mm"], ours[pure]["e_ef_mm"])
+            dt = _change(ours[hybrid]["tau_ef_Nm"], ours[pure]["tau_ef_Nm"])
+            te, tt = THESIS_MD_CHANGE[kind][pure]
+            md_lowers.append(de < 0.0 if math.isfinite(de) else None)
+            lines.append(f"| {pure} → {hybrid} | {_f(de, '+.1f')}{' %' * math.isfinite(de)} | {te:+.1f} % | {_f(dt, '+.1f')}{' %' * math.isfinite(dt)} | {tt:+.1f} % |")
+        lines += ["", f"### Table {t_ss}: steady-state error after the stop "
+                      f"(mean over the last 0.2 s of a 1 s hold; e = x_d − x)", "",
+                  "| strategy | e_x mm ours | e_y mm ours | e mm ours | e mm thesis |", "|---|---|---|---|---|"]
+        for s, (*_first, ex, ey, e) in THESIS_BENCH[kind].items():
+            m = ours[s]
+            lines.append(f"| {s} | {_f(m['e_ss_x_mm'], '+.3f')} | {_f(m['e_ss_y_mm'], '+.3f')} | "
+                         f"{_f(m['e_ss_mm'])} | {e:.3f} |")
+        lines += ["", "### Reading", ""]
+        lines += _reading(kind, ours, md_lowers)
+        lines.append("")
+    lines += ["## Runs", "", "| scene | completed | simulated s | wall s | × real time |", "|---|---|---|---|---|"]
+    for name, m in metrics.items():
+        lines.append(f"| {name} | {m['completed']} | {m['simulated_s']:.3f} | {m['wall_s']:.2f} | "
+                     f"{m['realtime_factor']:.1f} |")
+    return "\n".join(lines) + "\n"
+
+
+def _reading(kind, ours, md_lowers) -> list:
+    thesis_e = {s: v[0] for s, v in THESIS_BENCH[kind].items()}
+    ours_e = {s: m["e_ef_mm"] for s, m in ours.items()}
+    our_rank = _ranking(ours_e)
+    thesis_rank = [s for s in _ranking(thesis_e) if s in our_rank]
+    missing = [s for s in ours_e if s not in our_rank]
+    out = [f"- Ranking by e_ef, best first — ours: {', '.join(our_rank)}; "
+           f"thesis (same strategies): {', '.join(thesis_rank)}."]
+    if missing:
+        out.append(f"- No e_ef for {', '.join(missing)}: the run stopped early (see above), so these "
+                   "strategies are left out of every comparison below.")
+    ratio = [ours_e[s] / thesis_e[s] for s in our_rank]
+    out.append(f"- Our e_ef is {min(ratio):.2f}–{max(ratio):.2f} times the bench's.")
+    compared = [ok for ok in md_lowers if ok is not None]
+    if compared and all(compared):
+        out.append(f"- As on the bench, adding the sliding-mode term lowers e_ef in all {len(compared)} "
+                   "pairs that ran to the end.")
+    elif compared:
+        broken = [f"{p}→{h}" for (p, h), ok in zip(PAIRS, md_lowers) if ok is False]
+        out.append(f"- Unlike the bench, adding the sliding-mode term does not lower e_ef for {', '.join(broken)}.")
+    model_based = [s for s in ours_e if s.startswith("TC")]
+    pd_based = [s for s in ours_e if s.startswith("PD")]
+    if max(ours_e[s] for s in model_based) < min(ours_e[s] for s in pd_based) and not (
+            max(thesis_e[s] for s in model_based) < min(thesis_e[s] for s in pd_based)):
+        out.append("- Every computed-torque strategy beats every PD strategy here, not on the bench. "
+                   "Likely cause: our controller's model is the simulated plant itself (no model error), "
+                   "whereas the bench's model came from Tables 4-5 and CAD estimates; the thesis' simulations "
+                   "(figures 12-23) show how model error degrades computed torque.")
+    if our_rank != thesis_rank:
+        out.append("- Where the rankings differ, likely causes (not measured here): the real drive's "
+                   "PWM and current sensing, stick-slip friction (ours is a regularised Coulomb law, "
+                   "μ tanh(ω/0.5 rad/s)), backlash and cable forces, parameter errors of the real "
+                   "mechanism, and the computation delay of the Raspberry Pi, none of which the "
+                   "simulation contains.")
+    e_ss_ours = {s: m["e_ss_mm"] for s, m in ours.items()}
+    md_ss = [e_ss_ours[h] < e_ss_ours[p] for p, h in PAIRS
+             if math.isfinite(e_ss_ours[h]) and math.isfinite(e_ss_ours[p])]
+    out.append(f"- Steady-state error: the sliding-mode term lowers it in {sum(md_ss)} of {len(md_ss)} "
+               "compared pairs here "
+               "(the thesis: in all but PDq on the circle and TCx on the triangle). Ours are of the "
+               "order of one encoder count (2π/20000 rad, 0.04 mm at the 0.12 m arm); the bench's are "
+               "up to 50 times larger — likely stick-slip friction, which our regularised Coulomb law "
+               "cannot hold the mechanism with.")
+    return out
+
+
+def plot_report(metrics: dict, path: Path) -> Path:
+    """Bar charts of e_ef and tau_ef, ours beside the thesis', both trajectories."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    fig, axes = plt.subplots(2, 2, figsize=(11, 6))
+    for col, kind in enumerate(KINDS):
+        strategies = list(THESIS_BENCH[kind])
+        x = np.arange(len(strategies))
+        for row, (key, index, unit) in enumerate((("e_ef_mm", 0, "e_ef [mm]"), ("tau_ef_Nm", 1, "τ_ef [N m]"))):
+            ax = axes[row, col]
+            ax.bar(x - 0.2, [metrics[f"bench_{kind}_{s}"][key] for s in strategies], 0.4, label="parcosim")
+            ax.bar(x + 0.2, [THESIS_BENCH[kind][s][index] for s in strategies], 0.4, label="thesis bench")
+            ax.set_xticks(x, strategies, fontsize=8)
+            ax.set_ylabel(unit)
+            ax.set_title(f"{kind}: {unit}")
+            ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def write_report(out_dir="out/report", mode="inprocess", progress=None) -> Path:
+    """Run the 16 bench scenes and write ``report.md``, ``report.png`` and ``metrics.json``."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    metrics = run_bench(out, mode=mode, progress=progress)
+    (out / "metrics.json").write_text(json.dumps(_json_safe(metrics), indent=2) + "\n")
+    plot_report(metrics, out / "report.png")
+    path = out / "report.md"
+    path.write_text(render(metrics, mode) + "\n![e_ef and τ_ef, ours and the thesis'](report.png)\n")
+    return path
