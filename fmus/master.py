@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import ctypes
 import importlib
+import operator
 import time as _time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -212,13 +213,25 @@ class _InProcessInstance:
             raise CoSimulationError(self.name, start_time, str(exc)) from None
 
     def bind(self, inputs: list, outputs: list) -> None:
-        self._inputs, self._outputs = list(inputs), list(outputs)
+        # What the slave's set_real/get_real do for Real variables, with the names looked up
+        # once: attributes set to the values, outputs read back as Python floats.
+        names = {v.vr: v.name for v in self.variables.values() if v.type == "Real"}
+        self._input_names = [names[vr] for vr in inputs]
+        getter = operator.attrgetter(*[names[vr] for vr in outputs]) if outputs else None
+        if len(outputs) == 1:
+            self._read = lambda slave: [float(getter(slave))]
+        elif outputs:
+            self._read = lambda slave: [float(v) for v in getter(slave)]
+        else:
+            self._read = lambda slave: []
 
     def set_inputs(self, values: list) -> None:
-        self.slave.set_real(self._inputs, values)
+        slave = self.slave
+        for name, value in zip(self._input_names, values):
+            setattr(slave, name, value)
 
     def get_outputs(self) -> list:
-        return self.slave.get_real(self._outputs)
+        return self._read(self.slave)
 
     def do_step(self, t: float, h: float) -> None:
         try:
