@@ -3,7 +3,7 @@
 Every subcommand is a thin shell over a documented Python call:
 
 =====================  ==============================================
-``parcosim``           ``scenarios.plant_demo.run("out")`` (the default job)
+``parcosim``           ``parcosim run bench_circle_TCMDx`` (the default job)
 ``parcosim demo``      same, with ``--out`` and ``--preset``
 ``parcosim build``     ``fmus.build.build_all(out_dir)``
 ``parcosim identify-motor``  ``motor.cli.identify_main(argv)``
@@ -52,7 +52,9 @@ def main(argv: list[str] | None = None) -> int:
         return identify_main(argv[1:])
     args = _parser().parse_args(argv)
     try:
-        if args.command in (None, "demo"):
+        if args.command is None:
+            return main(["run", "bench_circle_TCMDx"])
+        if args.command == "demo":
             from scenarios.plant_demo import run
             run(getattr(args, "out", "out"), getattr(args, "preset", "thesis_sim"))
         elif args.command == "list":
