@@ -14,7 +14,7 @@ parameter not given keeps the FMU's default (the presets of Tables 3-8, 16, 18).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from controller.strategies import STRATEGY_NAMES
 from controller.trajectories import get_trajectory
@@ -53,6 +53,57 @@ class Scene:
     window: tuple
     reference_end: float
     strategy: str
+
+
+ELECTRICS = ("full", "euler", "quasi_static", "ideal")
+
+
+@dataclass(frozen=True)
+class Fidelity:
+    """Which effects a bench scene models; an effect switched off costs nothing.
+
+    Parameters
+    ----------
+    electrics : {"full", "euler", "quasi_static", "ideal"}
+        Motor electrics: exact zero-order-hold solution of L di/dt + R i + ke ω = v
+        ("full"), explicit Euler, quasi-static (L = 0), or "ideal": torque sources — no
+        drive or observer components at all, the controller's torques go to the plant
+        (and there is no motor friction).
+    coulomb, viscous : bool
+        The drives' Coulomb (μ) and viscous (b) friction.
+    encoder : bool
+        The derivator and the controller read the 20000-count encoder angles (else the
+        exact angles).
+    observer : bool
+        The current loops read the observed current (7.20; else the drive's own current,
+        and there are no observer components).
+    derivator : bool
+        The controller reads the derivator's estimates (else the plant's exact speeds and
+        zero accelerations: no derivator component).
+    link_inertias : bool
+        The links' Jz (else point masses).
+    m0 : float
+        End-effector mass [kg].
+    gravity : (float, float, float)
+        World gravity [m/s²]; the thesis' plane is horizontal (0, 0, g) has no effect.
+    model_error : float
+        The controller model's inertial parameters are (1 + model_error) times the plant's.
+    """
+
+    electrics: str = "full"
+    coulomb: bool = True
+    viscous: bool = True
+    encoder: bool = True
+    observer: bool = True
+    derivator: bool = True
+    link_inertias: bool = True
+    m0: float = 0.0
+    gravity: tuple = (0.0, 0.0, 0.0)
+    model_error: float = 0.0
+
+    def __post_init__(self):
+        if self.electrics not in ELECTRICS:
+            raise ValueError(f"electrics = {self.electrics!r}; valid: {', '.join(ELECTRICS)}")
 
 
 def _connect(pairs):
@@ -95,48 +146,79 @@ def thesis_sim_circle(model_error: float = 0.0, lam: float = 40.0, model: str = 
                  system, columns, (1.0, trajectory.duration), trajectory.duration, "TCx")
 
 
-def bench(strategy: str, kind: str = "circle", model: str = "tabulated") -> Scene:
+def bench(strategy: str, kind: str = "circle", model: str = "tabulated",
+          fidelity: Fidelity = Fidelity()) -> Scene:
     """The bench of 7.2: plant with rotors and encoders, two drives with their current loops
     and observers, the derivator, the controller with ``strategy`` (Tables 6-8), the trajectory.
 
     Wiring (the real bench): the derivator and the controller read the encoder angles; the
     observers read the drives' voltages and the derivator's velocities; the drives read the
-    current references, the observed currents and the true shaft speeds.
+    current references, the observed currents and the true shaft speeds.  ``fidelity``
+    switches effects off (:class:`Fidelity`); the components they need go with them.
     """
     if strategy not in STRATEGY_NAMES:
         raise ValueError(f"strategy = {strategy!r}; valid: {', '.join(STRATEGY_NAMES)}")
+    f = fidelity
     trajectory = get_trajectory(kind)
     x0, y0 = trajectory.start_point
-    components = (
-        Component("traj", "Trajectory", {"kind": kind}),
-        Component("deriv", "Derivator", {}),
-        Component("ctrl", "PositionController", {
-            "strategy": strategy, "trajectory": kind, "model": model, "preset": "bench"}),
-        Component("obs1", "CurrentObserver", {"preset": "motor1"}),
-        Component("obs2", "CurrentObserver", {"preset": "motor2"}),
-        Component("drive1", "DCMotorDrive", {"preset": "motor1", "mode": "current"}),
-        Component("drive2", "DCMotorDrive", {"preset": "motor2", "mode": "current"}),
-        Component("plant", "FiveBarPlant", {"preset": "bench", "x0": x0, "y0": y0}),
-    )
+    drives = f.electrics != "ideal"
+    observers = drives and f.observer
+    plant = {"preset": "bench", "x0": x0, "y0": y0, "m0": f.m0, "link_inertias": f.link_inertias,
+             "gravity_x": f.gravity[0], "gravity_y": f.gravity[1], "gravity_z": f.gravity[2]}
+    components = [Component("traj", "Trajectory", {"kind": kind})]
+    if f.derivator:
+        components.append(Component("deriv", "Derivator", {}))
+    components.append(Component("ctrl", "PositionController", {
+        "strategy": strategy, "trajectory": kind, "model": model, "preset": "bench",
+        "model_error": f.model_error}))
+    for j in ("1", "2"):
+        if observers:
+            components.append(Component(f"obs{j}", "CurrentObserver", {"preset": f"motor{j}"}))
+    for j in ("1", "2"):
+        if drives:
+            drive = {"preset": f"motor{j}", "mode": "current",
+                     "method": "exact" if f.electrics == "full" else f.electrics}
+            if not f.coulomb:
+                drive["mu"] = 0.0
+            if not f.viscous:
+                drive["b"] = 0.0
+            components.append(Component(f"drive{j}", "DCMotorDrive", drive))
+    components.append(Component("plant", "FiveBarPlant", plant))
+    angle = "_enc" if f.encoder else ""
     wiring = _reference_wiring()
     for j in ("1", "2"):
-        wiring += [
-            (f"plant.q{j}_enc", f"deriv.q{j}"), (f"plant.q{j}_enc", f"ctrl.q{j}"),
-            (f"deriv.dq{j}", f"ctrl.dq{j}"), (f"deriv.ddq{j}", f"ctrl.ddq{j}"),
-            (f"ctrl.i_ref{j}", f"drive{j}.i_ref"), (f"obs{j}.i_hat", f"drive{j}.i_hat"),
-            (f"plant.dq{j}", f"drive{j}.omega"),
-            (f"drive{j}.v", f"obs{j}.v"), (f"deriv.dq{j}", f"obs{j}.omega"),
-            (f"drive{j}.tau", f"plant.tau{j}"),
-        ]
+        wiring.append((f"plant.q{j}{angle}", f"ctrl.q{j}"))
+        if f.derivator:
+            wiring += [(f"plant.q{j}{angle}", f"deriv.q{j}"),
+                       (f"deriv.dq{j}", f"ctrl.dq{j}"), (f"deriv.ddq{j}", f"ctrl.ddq{j}")]
+        else:
+            wiring.append((f"plant.dq{j}", f"ctrl.dq{j}"))
+        if drives:
+            wiring += [(f"ctrl.i_ref{j}", f"drive{j}.i_ref"), (f"plant.dq{j}", f"drive{j}.omega"),
+                       (f"drive{j}.tau", f"plant.tau{j}")]
+            if observers:
+                speed = f"deriv.dq{j}" if f.derivator else f"plant.dq{j}"
+                wiring += [(f"obs{j}.i_hat", f"drive{j}.i_hat"), (f"drive{j}.v", f"obs{j}.v"),
+                           (speed, f"obs{j}.omega")]
+            else:
+                wiring.append((f"drive{j}.i", f"drive{j}.i_hat"))
+        else:
+            wiring.append((f"ctrl.tau{j}", f"plant.tau{j}"))
     columns = dict(_COLUMNS)
-    columns.update({"i1": "drive1.i", "i2": "drive2.i", "i_hat1": "obs1.i_hat", "i_hat2": "obs2.i_hat",
-                    "v1": "drive1.v", "v2": "drive2.v", "tau1_shaft": "drive1.tau", "tau2_shaft": "drive2.tau"})
-    system = System(components, _connect(wiring), tuple(dict.fromkeys(columns.values())),
+    if drives:
+        columns.update({"i1": "drive1.i", "i2": "drive2.i", "v1": "drive1.v", "v2": "drive2.v",
+                        "tau1_shaft": "drive1.tau", "tau2_shaft": "drive2.tau"})
+    if observers:
+        columns.update({"i_hat1": "obs1.i_hat", "i_hat2": "obs2.i_hat"})
+    system = System(tuple(components), _connect(wiring), tuple(dict.fromkeys(columns.values())),
                     stop_time=trajectory.duration + SETTLE_TIME)
     window = (1.0, 8.0) if kind == "circle" else (0.0, trajectory.duration)
-    return Scene(f"bench_{kind}_{strategy}",
-                 f"Bench of 7.2, {kind} trajectory, strategy {strategy} (Tables 6-8), tabulated model",
-                 system, columns, window, trajectory.duration, strategy)
+    name = f"bench_{kind}_{strategy}"
+    description = f"Bench of 7.2, {kind} trajectory, strategy {strategy} (Tables 6-8), {model} model"
+    if f != Fidelity():
+        changed = {k: getattr(f, k) for k in f.__dataclass_fields__ if getattr(f, k) != getattr(Fidelity(), k)}
+        description += "; fidelity " + ", ".join(f"{k}={v}" for k, v in changed.items())
+    return Scene(name, description, system, columns, window, trajectory.duration, strategy)
 
 
 def scene_names() -> list[str]:

@@ -96,3 +96,34 @@ def test_stopped_run_keeps_what_was_recorded(tmp_path):
     assert 10 < len(rows) - 1 == len(outcome.result.time) < 2001
     metrics = json.loads((tmp_path / "metrics.json").read_text())
     assert metrics["completed"] is False and metrics["e_ef_mm"] is None and "plant" in metrics["error"]
+
+
+def test_fidelity_switches_remove_what_they_switch_off():
+    from scenarios.scenes import Fidelity, bench
+
+    def models(**switches):
+        return sorted(c.model for c in bench("TCx", fidelity=Fidelity(**switches)).system.components)
+
+    assert models(electrics="ideal") == ["Derivator", "FiveBarPlant", "PositionController", "Trajectory"]
+    assert "DCMotorDrive" not in models(electrics="ideal") and "CurrentObserver" not in models(electrics="ideal")
+    assert "CurrentObserver" not in models(observer=False)
+    assert "Derivator" not in models(derivator=False)
+    scene = bench("TCx", fidelity=Fidelity(encoder=False, coulomb=False, viscous=False))
+    sources = {c.source for c in scene.system.connections}
+    assert "plant.q1_enc" not in sources and "plant.q1" in sources
+    drive = scene.system.component("drive1").parameters
+    assert drive["mu"] == 0.0 and drive["b"] == 0.0
+    with pytest.raises(ValueError, match="electrics = 'magic'"):
+        Fidelity(electrics="magic")
+
+
+@pytest.mark.parametrize("switches", [dict(electrics="ideal"), dict(observer=False),
+                                      dict(derivator=False, encoder=False), dict(link_inertias=False, m0=0.05)])
+def test_reduced_fidelity_scenes_track(switches):
+    from scenarios.scenes import Fidelity, bench
+
+    scene = bench("PDx", fidelity=Fidelity(**switches))
+    scene = replace(scene, system=replace(scene.system, stop_time=1.5), window=(1.0, 1.5))
+    outcome = run_scene(scene)
+    assert outcome.result.error is None
+    assert outcome.metrics["e_ef_mm"] < 5.0

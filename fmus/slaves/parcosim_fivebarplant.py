@@ -48,6 +48,7 @@ class FiveBarPlant(GuardedSlave):
         d("gravity_x", "parameter", 0.0, "Gravity, world x [m/s2]")
         d("gravity_y", "parameter", 0.0, "Gravity, world y [m/s2]")
         d("gravity_z", "parameter", 0.0, "Gravity, world z [m/s2] (no effect on the planar motion)")
+        d("link_inertias", "parameter", True, "Links have their inertias Jz (false: point masses at the centres of mass)")
         d("encoder_counts", "parameter", 20000, "Encoder counts per revolution (quadrature)")
         d("method", "parameter", _DEFAULTS.method, "Integrator: 'rk4' (fixed step) or 'dopri5' (adaptive)")
         d("substeps", "parameter", _DEFAULTS.substeps, "RK4 steps per communication step")
@@ -71,6 +72,9 @@ class FiveBarPlant(GuardedSlave):
         )
         params = replace(params, m0=self.m0, l0=self.l0,
                          gravity=(self.gravity_x, self.gravity_y, self.gravity_z))
+        if not self.link_inertias:
+            params = replace(params, chain1=replace(params.chain1, Jz1=0.0, Jz2=0.0),
+                             chain2=replace(params.chain2, Jz1=0.0, Jz2=0.0))
         settings = IntegratorSettings(
             method=self.method, substeps=self.substeps, rtol=self.rtol, atol=self.atol,
             baumgarte=self.baumgarte, project=bool(self.project), kernel=self.kernel,
