@@ -11,9 +11,11 @@ constraint bias c of 5.69 are quadratic forms in the quasi-velocities), so
 three evaluations at dx = (1, 0), (0, 1), (1, 1):
 ``cxx = v(1,0)``, ``cyy = v(0,1)``, ``cxy = v(1,1) - v(1,0) - v(0,1)``.
 
-:class:`ExactModel` evaluates (5.74-5.77) at every call (~2.5 ms: the general numpy
-algorithm).  :class:`TabulatedModel` stores H (3 entries), the six quadratic coefficients
-and g on a square grid (default 5 mm, thesis 7.2.5) and interpolates bilinearly (a few µs).
+:class:`ExactModel` evaluates (5.74-5.77) at every call: with the compiled 5R kernel
+(:func:`plant.fast5r.inverse_terms`, default, a few µs) or the general numpy algorithm
+(``kernel="general"``, ~2 ms; the reference).  :class:`TabulatedModel` stores H (3 entries),
+the six quadratic coefficients and g on a square grid (default 5 mm, thesis 7.2.5) and
+interpolates bilinearly (a few µs; compiled into the law by :mod:`controller.fastlaw`).
 Grid points outside the workspace or in the near-singular band
 (margin < :data:`plant.fivebar.NEAR_SINGULAR_MARGIN`) are left out; asking for a point
 whose cell has a missing corner raises :class:`ModelRangeError`.
@@ -38,7 +40,8 @@ from pathlib import Path
 import numpy as np
 
 from plant import fivebar
-from plant.parallel import inverse_dynamics_terms, mechanism_state
+from plant.fast5r import INVERSE_SIZE, inverse_terms, pack_params
+from plant.parallel import inverse_dynamics_terms
 from plant.presets import FiveBarParams
 
 from .kinematics import Kinematics
@@ -50,6 +53,8 @@ DEFAULT_GRID_STEP = 0.005
 #: trajectories (thesis 7.18, 7.23-7.26) with margin; pass ``extent="workspace"`` for all of
 #: the upper half-plane workspace.
 DEFAULT_EXTENT = (-0.12, 0.12, 0.06, 0.29)
+#: Implementations of the exact model: the compiled 5R kernel or the general algorithm.
+EXACT_KERNELS = ("fast", "general")
 
 
 class ModelRangeError(ValueError):
@@ -75,21 +80,41 @@ def perturbed_params(params: FiveBarParams, model_error: float) -> FiveBarParams
 
 
 class ExactModel:
-    """Ĥ, ĥ from :func:`plant.parallel.inverse_dynamics_terms` at every call (5.74-5.77).
+    """Ĥ, ĥ from the inverse dynamics (5.74-5.77) at every call.
 
     Parameters
     ----------
     params : FiveBarParams
         The model's parameters (already perturbed if wanted).
+    kernel : {"fast", "general"}
+        :func:`plant.fast5r.inverse_terms` (compiled, the 5R specialisation) or
+        :func:`plant.parallel.inverse_dynamics_terms` (the general algorithm); equal to
+        round-off (``tests/test_controller_fast.py``).
     """
 
     kind = "exact"
 
-    def __init__(self, params: FiveBarParams):
-        self.params = params
+    def __init__(self, params: FiveBarParams, kernel="fast"):
+        if kernel not in EXACT_KERNELS:
+            raise ValueError(f"kernel = {kernel!r} is unknown; valid: {', '.join(EXACT_KERNELS)}")
+        self.params, self.kernel = params, kernel
         self.mechanism = fivebar.build_mechanism(params)
         self.kin = Kinematics(params)
         self.last_Z = None
+        self._p = pack_params(params)
+        self._out = np.empty(INVERSE_SIZE)
+        if kernel == "fast":
+            # Compile (or load numba's cache) now; any pose with bent elbows does.
+            inverse_terms(self._p, np.array([0.0, 0.2, 0.0, 1.0, 1.0, 1.0, 1.0]), np.zeros(7), self._out)
+
+    def _terms(self, q, dq):
+        """(M_M, v_M, g_M, Z) of (5.74) at (q, dq) with the chosen kernel."""
+        if self.kernel == "general":
+            t = inverse_dynamics_terms(self.mechanism, q, dq)
+            return t.M, t.v, t.g, t.Z
+        out = self._out
+        inverse_terms(self._p, q, dq, out)
+        return out[0:4].reshape(2, 2).copy(), out[4:6].copy(), out[6:8].copy(), out[8:12].reshape(2, 2).copy()
 
     def full_state(self, x, y, dx, dy):
         """Consistent thesis coordinates q (7.12) and dq = C dq# (5.56) for (x, y, dx, dy)."""
@@ -101,11 +126,16 @@ class ExactModel:
     def terms(self, x, y, dx, dy):
         """(H00, H01, H11, h0, h1) at (x, y, dx, dy); also keeps Z of (5.72) in ``last_Z``."""
         q, dq = self.full_state(x, y, dx, dy)
-        state = mechanism_state(self.mechanism, q, dq)
-        t = inverse_dynamics_terms(self.mechanism, q, dq, state)
-        self.last_Z = t.Z
-        h = t.v + t.g
-        return t.M[0, 0], t.M[0, 1], t.M[1, 1], h[0], h[1]
+        if self.kernel == "general":
+            t = inverse_dynamics_terms(self.mechanism, q, dq)
+            self.last_Z = t.Z
+            h = t.v + t.g
+            return float(t.M[0, 0]), float(t.M[0, 1]), float(t.M[1, 1]), float(h[0]), float(h[1])
+        out = self._out
+        inverse_terms(self._p, q, dq, out)
+        self.last_Z = out[8:12].reshape(2, 2).copy()
+        M00, M01, _, M11, v0, v1, g0, g1 = out[:8].tolist()
+        return M00, M01, M11, v0 + g0, v1 + g1
 
     def row(self, x, y):
         """One table row (N_TERMS values) at (x, y): H, the quadratic coefficients and g."""
@@ -113,10 +143,10 @@ class ExactModel:
         values = []
         for ux, uy in ((1.0, 0.0), (0.0, 1.0), (1.0, 1.0)):
             _, dq = self.full_state(x, y, ux, uy)
-            t = inverse_dynamics_terms(self.mechanism, q, dq)
-            values.append(t.v)
+            M, v, g, _ = self._terms(q, dq)
+            values.append(v)
         vx, vy, vxy = values
-        return np.concatenate([[t.M[0, 0], t.M[0, 1], t.M[1, 1]], vx, vy, vxy - vx - vy, t.g])
+        return np.concatenate([[M[0, 0], M[0, 1], M[1, 1]], vx, vy, vxy - vx - vy, g])
 
 
 def _grid(extent, step):
@@ -133,8 +163,8 @@ def workspace_extent(params: FiveBarParams):
 
 
 def build_table(params: FiveBarParams, step=DEFAULT_GRID_STEP, extent=DEFAULT_EXTENT,
-                band=fivebar.NEAR_SINGULAR_MARGIN):
-    """Evaluate the model on the grid (7.2.5).
+                band=fivebar.NEAR_SINGULAR_MARGIN, kernel="fast"):
+    """Evaluate the model on the grid (7.2.5), with :class:`ExactModel` (``kernel``).
 
     Returns
     -------
@@ -143,7 +173,7 @@ def build_table(params: FiveBarParams, step=DEFAULT_GRID_STEP, extent=DEFAULT_EX
     table : numpy.ndarray
         Shape (ny, nx, N_TERMS); NaN at left-out points.
     """
-    exact = ExactModel(params)
+    exact = ExactModel(params, kernel)
     xs, ys = _grid(extent, step)
     table = np.full((ys.size, xs.size, N_TERMS), np.nan)
     for iy, y in enumerate(ys):
@@ -166,7 +196,8 @@ def cache_dir() -> Path:
 
 
 def _cache_key(params, step, extent, band):
-    text = repr((params, float(step), tuple(float(e) for e in extent), float(band), N_TERMS, "v1"))
+    # "v2": tables built with the compiled exact model (v1: the general algorithm; equal to round-off).
+    text = repr((params, float(step), tuple(float(e) for e in extent), float(band), N_TERMS, "v2"))
     return hashlib.sha256(text.encode()).hexdigest()[:20]
 
 

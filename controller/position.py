@@ -26,6 +26,14 @@ closed form tau = J^T u' (tests check both agree).  Current references: tau_k / 
 
 PD (k = 0, ĥ = 0, Ĥ = m*·1) and TC (k = 0) are the special cases of 7.2.6; the adaptive
 gain of (6.66) is optional (``Strategy.gamma``).
+
+Speed (``kernel``): :meth:`PositionController.step_reference` is the readable law in Python
+(~20 µs a sample).  With ``kernel="fast"`` (default) PD and tabulated strategies run the same
+sample compiled (:func:`controller.fastlaw.law_step`, ~2 µs) and fall back to the reference
+only to raise its refusals; the exact model is the Python law over the compiled inverse
+dynamics of :func:`plant.fast5r.inverse_terms`.  ``kernel="python"`` always runs the reference;
+``kernel="general"`` also evaluates the exact model with the general numpy algorithm
+(:func:`plant.parallel.inverse_dynamics_terms`, ~2 ms).
 """
 from __future__ import annotations
 
@@ -35,12 +43,17 @@ from motor.presets import get_motor_preset
 from plant import fivebar
 from plant.presets import FiveBarParams
 
+from . import fastlaw
+from .fastlaw import S_E, S_INTEGRAL, S_K, S_S, S_S_PREV, law_step
 from .kinematics import Kinematics
 from .model import DEFAULT_EXTENT, DEFAULT_GRID_STEP, ExactModel, ModelRangeError, TabulatedModel, perturbed_params
 from .strategies import Strategy
 
 SAMPLE_TIME = 1e-3
 MODEL_KINDS = ("exact", "tabulated")
+#: "fast": compiled law (PD, tabulated) and compiled exact model; "python": the reference law
+#: in Python (exact model compiled); "general": the reference law with the general exact model.
+KERNELS = ("fast", "python", "general")
 MEASUREMENTS = ("q1", "q2", "dq1", "dq2", "ddq1", "ddq2")
 REFERENCES = ("x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
 
@@ -82,11 +95,23 @@ class PositionController:
         References with singularity margin below it are refused.
     cache : bool
         Cache the table on disk.
+    kernel : {"fast", "python", "general"}
+        See :data:`KERNELS` and the module docstring; all give the same law to round-off.
+
+    Attributes
+    ----------
+    integral, k, s_prev, s, e : list of float
+        The state of the law after the last sample (read only): the integral of
+        k sat(s/phi), the sliding gains, s of the previous sample, s and the error e.
+    compiled : bool
+        True when :meth:`step` runs :func:`controller.fastlaw.law_step`.
     """
 
     def __init__(self, params: FiveBarParams, strategy: Strategy, model="tabulated", model_error=0.0,
                  grid_step=DEFAULT_GRID_STEP, extent=DEFAULT_EXTENT, kt=None, T=SAMPLE_TIME,
-                 band=fivebar.NEAR_SINGULAR_MARGIN, cache=True):
+                 band=fivebar.NEAR_SINGULAR_MARGIN, cache=True, kernel="fast"):
+        if kernel not in KERNELS:
+            raise ValueError(f"kernel = {kernel!r} is unknown; valid: {', '.join(KERNELS)}")
         if strategy.space not in ("q", "x"):
             raise ValueError(f"strategy.space = {strategy.space!r}: valid: 'q', 'x'")
         for name in ("lam", "phi"):
@@ -116,17 +141,31 @@ class PositionController:
         self.model = None
         if strategy.model_based:
             model_params = perturbed_params(params, model_error)
-            self.model = (ExactModel(model_params) if model == "exact"
+            self.model = (ExactModel(model_params, kernel="general" if kernel == "general" else "fast")
+                          if model == "exact"
                           else TabulatedModel(model_params, grid_step, extent, cache=cache, band=band))
+        self.kernel = kernel
+        self.compiled = kernel == "fast" and self.model_kind != "exact"
+        # Constants, state and table of the compiled law in one array; the reference keeps its
+        # state in the same place (fastlaw.STATE), so both paths can be mixed.
+        self._buf = fastlaw.pack(self.kin, self.band, strategy.space, self.model if self.compiled else None,
+                                 self.kp, self.kv, strategy.phi, strategy.gamma, strategy.m_star, self.kt)
         self.reset()
 
     def reset(self):
         """Zero the integral of the sliding term and restore the preset gains."""
-        self.integral = [0.0, 0.0]
-        self.k = list(self.strategy.k)
-        self.s_prev = [0.0, 0.0]
-        self.s = [0.0, 0.0]
-        self.e = [0.0, 0.0]
+        self._buf[fastlaw.STATE] = 0.0
+        self._buf[S_K:S_K + 2] = self.strategy.k
+
+    # --- state (read only views as lists) ------------------------------------------------
+    def _pair(self, index):
+        return [float(self._buf[index]), float(self._buf[index + 1])]
+
+    integral = property(lambda self: self._pair(S_INTEGRAL), doc="Integral of k sat(s/phi) (7.21).")
+    k = property(lambda self: self._pair(S_K), doc="Sliding gains (constant unless adaptive, 6.66).")
+    s_prev = property(lambda self: self._pair(S_S_PREV), doc="s of the previous sample.")
+    s = property(lambda self: self._pair(S_S), doc="s of the last sample (7.22).")
+    e = property(lambda self: self._pair(S_E), doc="Error r_d - r of the last sample.")
 
     # --- checks ---------------------------------------------------------------------
     def _reference_angles(self, t, x_d, y_d):
@@ -144,7 +183,30 @@ class PositionController:
 
     # --- the law ------------------------------------------------------------------------
     def step(self, t, q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d, dt=None):
-        """One sample of the law (7.21-7.22).
+        """One sample of the law (7.21-7.22): (tau1, tau2, i_ref1, i_ref2).
+
+        Arguments, results and refusals as :meth:`step_reference`; compiled when
+        :attr:`compiled`.
+        """
+        if self.compiled:
+            r = law_step(self._buf, q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d,
+                         self.T if dt is None else dt)
+            if r[6] == 0.0:
+                return r[:4]
+        return self.step_reference(t, q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d, dt)
+
+    def step_with_errors(self, t, q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d, dt=None):
+        """:meth:`step` and the errors: (tau1, tau2, i_ref1, i_ref2, e1, e2)."""
+        if self.compiled:
+            r = law_step(self._buf, q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d,
+                         self.T if dt is None else dt)
+            if r[6] == 0.0:
+                return r[:6]
+        out = self.step_reference(t, q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d, dt)
+        return out + (float(self._buf[S_E]), float(self._buf[S_E + 1]))
+
+    def step_reference(self, t, q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d, dt=None):
+        """One sample of the law (7.21-7.22), in Python: the reference of the compiled law.
 
         Parameters
         ----------
@@ -186,21 +248,21 @@ class PositionController:
         else:
             r = (q1, q2, dq1, dq2, ddq1, ddq2)
             rd = self.kin.joint_reference(x_d, y_d, dx_d, dy_d, ddx_d, ddy_d, angles)
-        kp, kv = self.kp, self.kv
+        kp, kv, buf = self.kp, self.kv, self._buf
         a = [0.0, 0.0]
         for i in (0, 1):
             e, de, dde = rd[i] - r[i], rd[2 + i] - r[2 + i], rd[4 + i] - r[4 + i]
             feedback = kv * de + kp * e
             s = dde + feedback                                                    # (7.22)
+            k, s_prev, integral = float(buf[S_K + i]), float(buf[S_S_PREV + i]), float(buf[S_INTEGRAL + i])
             if st.gamma is not None:                                              # (6.66)
-                same = _sign(s) == _sign(self.s_prev[i])
+                same = _sign(s) == _sign(s_prev)
                 if abs(s) >= st.phi or not same:
-                    self.k[i] = abs(self.k[i] + st.gamma[i] * _sign(s) * _sign(self.s_prev[i]))
-            if self.k[i] != 0.0:
-                self.integral[i] += h * self.k[i] * sat(s / st.phi)
-            self.s_prev[i] = s
-            self.s[i], self.e[i] = s, e
-            a[i] = rd[4 + i] + feedback + self.integral[i]                        # (7.21)
+                    k = abs(k + st.gamma[i] * _sign(s) * _sign(s_prev))
+            if k != 0.0:
+                integral += h * k * sat(s / st.phi)
+            buf[S_K + i], buf[S_INTEGRAL + i], buf[S_S_PREV + i], buf[S_S + i], buf[S_E + i] = k, integral, s, s, e
+            a[i] = rd[4 + i] + feedback + integral                                # (7.21)
         J00, J01, J10, J11 = J
         if not st.model_based:                                                    # PD: Ĥ = m*·1, ĥ = 0
             u0, u1 = st.m_star * a[0], st.m_star * a[1]

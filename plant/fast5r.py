@@ -238,6 +238,70 @@ def residual(p, y, out):
         out[3 * k + 2] = y[2]
 
 
+#: Layout of :func:`inverse_terms`' output: M_M (2x2, row-major), v_M, g_M, Z (2x2, row-major), c (7).
+INVERSE_M, INVERSE_V, INVERSE_G, INVERSE_Z, INVERSE_C, INVERSE_SIZE = 0, 4, 6, 8, 12, 19
+
+
+@njit(cache=True)
+def inverse_terms(p, q, dq, out):
+    """The inverse dynamics terms of (5.67-5.77) at (q, dq), as :func:`plant.parallel.inverse_dynamics_terms`.
+
+    ``M_M ddq# + v_M + g_M = Z^T u*`` (5.74) with q# = (x, y).  Same elimination as
+    :func:`derivative`: the chain blocks of C (5.56) are Cinv_k = (E_k J_v,k)^-1, so
+
+    * ``M_M = m0 1 + sum_k Cinv_k^T M_k Cinv_k`` (5.75);
+    * c (5.69): the chains' accelerations at ddq# = 0, ``c_k = -Cinv_k E_k a_bias,k``
+      (platform rows 0), and ``v_M = sum_k Cinv_k^T (M_k c_k + v_k)`` (5.76);
+    * ``g_M = -m0 g_xy + sum_k Cinv_k^T g_k`` (5.77, 5.9);
+    * ``Z = U^T C``: the rows of C of theta11 and theta21 (5.72).
+
+    ``out`` (:data:`INVERSE_SIZE` entries): out[0:4] M_M, out[4:6] v_M, out[6:8] g_M,
+    out[8:12] Z, out[12:19] c.
+    """
+    t = np.empty(16)
+    m0 = p[_M0]
+    m00 = m0
+    m01 = 0.0
+    m11 = m0
+    v0 = 0.0
+    v1 = 0.0
+    g0 = -m0 * p[_GX]
+    g1 = -m0 * p[_GY]
+    for i in range(7):
+        out[INVERSE_C + i] = 0.0
+    for k in range(2):
+        _chain_terms(p, k, q[3 + 2 * k], q[4 + 2 * k], dq[3 + 2 * k], dq[4 + 2 * k], t)
+        i00, i01, i10, i11 = _inv2(t[2], t[3], t[4], t[5])
+        c0 = i00 * -t[6] + i01 * -t[7]
+        c1 = i10 * -t[6] + i11 * -t[7]
+        out[INVERSE_C + 3 + 2 * k] = c0
+        out[INVERSE_C + 4 + 2 * k] = c1
+        # M_k Cinv_k, then Cinv_k^T (M_k Cinv_k)
+        mc00 = t[8] * i00 + t[9] * i10
+        mc01 = t[8] * i01 + t[9] * i11
+        mc10 = t[10] * i00 + t[11] * i10
+        mc11 = t[10] * i01 + t[11] * i11
+        m00 += i00 * mc00 + i10 * mc10
+        m01 += i00 * mc01 + i10 * mc11
+        m11 += i01 * mc01 + i11 * mc11
+        f0 = t[8] * c0 + t[9] * c1 + t[12]
+        f1 = t[10] * c0 + t[11] * c1 + t[13]
+        v0 += i00 * f0 + i10 * f1
+        v1 += i01 * f0 + i11 * f1
+        g0 += i00 * t[14] + i10 * t[15]
+        g1 += i01 * t[14] + i11 * t[15]
+        out[INVERSE_Z + 2 * k] = i00
+        out[INVERSE_Z + 2 * k + 1] = i01
+    out[INVERSE_M] = m00
+    out[INVERSE_M + 1] = m01
+    out[INVERSE_M + 2] = m01
+    out[INVERSE_M + 3] = m11
+    out[INVERSE_V] = v0
+    out[INVERSE_V + 1] = v1
+    out[INVERSE_G] = g0
+    out[INVERSE_G + 1] = g1
+
+
 class FastKernel:
     """The compiled functions bound to one parameter set."""
 

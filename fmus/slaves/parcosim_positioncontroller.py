@@ -98,7 +98,7 @@ class PositionController(GuardedSlave):
             kt=kt, cache=bool(self.cache))
 
     def step(self, current_time, step_size):
-        out = self.controller.step(current_time, self.q1, self.q2, self.dq1, self.dq2, self.ddq1, self.ddq2,
-                                   self.x_d, self.y_d, self.dx_d, self.dy_d, self.ddx_d, self.ddy_d, step_size)
-        self.tau1, self.tau2, self.i_ref1, self.i_ref2 = out
-        self.e1, self.e2 = self.controller.e
+        # One call (the compiled law for PD/tabulated): outputs and errors together.
+        self.tau1, self.tau2, self.i_ref1, self.i_ref2, self.e1, self.e2 = self.controller.step_with_errors(
+            current_time, self.q1, self.q2, self.dq1, self.dq2, self.ddq1, self.ddq2,
+            self.x_d, self.y_d, self.dx_d, self.dy_d, self.ddx_d, self.ddy_d, step_size)

@@ -1,0 +1,239 @@
+"""The compiled paths of the controller against their readable references.
+
+* :func:`plant.fast5r.inverse_terms` equals :func:`plant.parallel.inverse_dynamics_terms`
+  (M_M, v_M, g_M, Z, c) at random states of both presets, with m0, gravity and rotors;
+* :class:`ExactModel` with the compiled kernel equals the general one, and so does the exact
+  controller;
+* the compiled law (:func:`controller.fastlaw.law_step`, ``kernel="fast"``) equals the Python
+  reference (``kernel="python"``) over many random samples, all eight strategies, with and
+  without the adaptive gain, including refusals: the compiled law refuses exactly where the
+  reference raises, leaves the state alone, and the caller raises the reference's message.
+"""
+import math
+import re
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from controller import fastlaw
+from controller.model import ExactModel, TabulatedModel
+from controller.position import PositionController
+from controller.strategies import STRATEGY_NAMES, get_strategy
+from plant import fast5r, fivebar, get_preset
+from plant.parallel import inverse_dynamics_terms, mechanism_state
+
+BENCH = get_preset("bench")
+#: Reaches the near-singular band at the top and bottom: cells with left-out corners.
+REGION = (-0.10, 0.10, 0.02, 0.28)
+NAMES = ("q1", "q2", "dq1", "dq2", "ddq1", "ddq2", "x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
+
+
+def loaded(preset):
+    """The preset with an end-effector mass, in-plane gravity and rotors: every term non-zero."""
+    return replace(get_preset(preset), m0=0.031, gravity=(1.3, -9.81, 0.0)).with_rotors(1.469e-4, 1.887e-4)
+
+
+def random_poses(params, rng, n, band=fivebar.NEAR_SINGULAR_MARGIN):
+    """n (x, y) in the workspace with singularity margin >= band."""
+    poses = []
+    while len(poses) < n:
+        x, y = rng.uniform(-0.12, 0.12), rng.uniform(0.03, 0.29)
+        try:
+            if fivebar.singularity(params, x, y).margin >= band:
+                poses.append((x, y))
+        except fivebar.KinematicsError:
+            pass
+    return poses
+
+
+def rel_err(a, b):
+    a, b = np.asarray(a, dtype=float).ravel(), np.asarray(b, dtype=float).ravel()
+    return np.abs(a - b).max() / max(np.abs(b).max(), 1e-300)
+
+
+# --- the compiled inverse dynamics -----------------------------------------------------------
+@pytest.mark.parametrize("preset", ["bench", "thesis_sim"])
+def test_fast_inverse_terms_equal_the_general_algorithm(preset):
+    params = loaded(preset)
+    mech, p = fivebar.build_mechanism(params), fast5r.pack_params(params)
+    rng = np.random.default_rng(7)
+    out = np.empty(fast5r.INVERSE_SIZE)
+    for x, y in random_poses(params, rng, 60):
+        q = fivebar.thesis_coordinates(params, x, y)
+        C = mechanism_state(mech, q, np.zeros(7)).C
+        for dq in (C @ rng.normal(0.0, 1.0, 2), np.zeros(7)):
+            ref = inverse_dynamics_terms(mech, q, dq)
+            fast5r.inverse_terms(p, q, dq, out)
+            assert rel_err(out[fast5r.INVERSE_M:fast5r.INVERSE_M + 4], ref.M) < 1e-10
+            assert rel_err(out[fast5r.INVERSE_G:fast5r.INVERSE_G + 2], ref.g) < 1e-10
+            assert rel_err(out[fast5r.INVERSE_Z:fast5r.INVERSE_Z + 4], ref.Z) < 1e-10
+            if dq.any():
+                assert rel_err(out[fast5r.INVERSE_V:fast5r.INVERSE_V + 2], ref.v) < 1e-10
+                assert rel_err(out[fast5r.INVERSE_C:fast5r.INVERSE_C + 7], ref.c) < 1e-10
+            else:
+                assert not out[fast5r.INVERSE_V:fast5r.INVERSE_V + 2].any()
+
+
+@pytest.mark.parametrize("preset", ["bench", "thesis_sim"])
+def test_exact_model_kernels_agree(preset):
+    params = loaded(preset)
+    fast, general = ExactModel(params), ExactModel(params, kernel="general")
+    rng = np.random.default_rng(3)
+    for x, y in random_poses(params, rng, 30):
+        dx, dy = rng.normal(0.0, 0.5, 2)
+        a, b = fast.terms(x, y, dx, dy), general.terms(x, y, dx, dy)
+        assert rel_err(a[:3], b[:3]) < 1e-10 and rel_err(a[3:], b[3:]) < 1e-10
+        assert rel_err(fast.last_Z, general.last_Z) < 1e-10
+        assert rel_err(fast.row(x, y), general.row(x, y)) < 1e-10
+    with pytest.raises(ValueError, match="kernel = 'numpy' is unknown"):
+        ExactModel(params, kernel="numpy")
+
+
+def moving_samples(rng, n, poses):
+    """Measurements near a pose and references a few mm away, velocities and accelerations
+    large enough for |s| on both sides of phi."""
+    samples = []
+    for k in range(n):
+        x, y = poses[k % len(poses)]
+        ang = fivebar.inverse_kinematics(BENCH, x, y)
+        meas = (ang[0] + rng.normal(0, 1e-3), ang[2] + rng.normal(0, 1e-3), *rng.normal(0, 1.0, 2),
+                *rng.normal(0, 20.0, 2))
+        ref = (x + rng.normal(0, 3e-3), y + rng.normal(0, 3e-3), *rng.normal(0, 0.3, 2), *rng.normal(0, 5.0, 2))
+        samples.append(meas + ref)
+    return samples
+
+
+@pytest.mark.parametrize("space", ["q", "x"])
+def test_exact_controller_kernels_agree(space):
+    rng = np.random.default_rng(11)
+    poses = random_poses(BENCH, rng, 20, band=0.2)
+    for name in (f"TC{space}", f"TCMD{space}"):
+        fast = PositionController(BENCH, get_strategy(name), model="exact", model_error=0.2)
+        general = PositionController(BENCH, get_strategy(name), model="exact", model_error=0.2, kernel="general")
+        assert not fast.compiled and fast.model.kernel == "fast" and general.model.kernel == "general"
+        for k, values in enumerate(moving_samples(rng, 40, poses)):
+            a, b = fast.step(k * 1e-3, *values), general.step(k * 1e-3, *values)
+            assert rel_err(a, b) < 1e-10, (name, k, a, b)
+
+
+# --- the compiled law ------------------------------------------------------------------------
+def random_inputs(rng, table_region=REGION):
+    """One random sample; about one in six is refused by the reference for one reason or another."""
+    kind = rng.integers(0, 24)
+    while True:
+        x, y = rng.uniform(table_region[0] - 0.03, table_region[1] + 0.03), rng.uniform(0.005, 0.30)
+        try:
+            ang = fivebar.inverse_kinematics(BENCH, x, y)
+            break
+        except fivebar.KinematicsError:
+            continue
+    meas = [ang[0] + rng.normal(0, 2e-3), ang[2] + rng.normal(0, 2e-3), *rng.normal(0, 1.0, 2),
+            *rng.normal(0, 20.0, 2)]
+    ref = [x + rng.normal(0, 3e-3), y + rng.normal(0, 3e-3), *rng.normal(0, 0.3, 2), *rng.normal(0, 5.0, 2)]
+    values = meas + ref
+    if kind == 0:
+        values[rng.integers(0, 12)] = rng.choice([math.nan, math.inf, -math.inf])
+    elif kind == 1:
+        values[0], values[1] = 0.0, math.pi                    # elbows too far apart: no assembly
+    elif kind == 2:
+        values[6], values[7] = 0.4, 0.1                        # reference out of reach
+    elif kind == 3:
+        values[6], values[7] = 0.0, rng.uniform(0.0, 0.03)     # reference in or near the near-singular band
+    return values
+
+
+def outcome(ctrl, t, values, dt):
+    try:
+        return ctrl.step(t, *values, dt)
+    except ValueError as exc:
+        return str(exc)
+
+
+def agree(a, b):
+    """The same message, or outputs equal to 1e-12 relative (torques and currents separately)."""
+    if isinstance(a, str) or isinstance(b, str):
+        return a == b
+    a, b = np.array(a), np.array(b)
+    return all(np.abs(a[part] - b[part]).max() <= 1e-12 * np.abs(b[part]).max() for part in (slice(0, 2), slice(2, 4)))
+
+
+@pytest.fixture(scope="module")
+def region_cache(tmp_path_factory):
+    return tmp_path_factory.mktemp("tables")
+
+
+@pytest.mark.parametrize("gamma", [None, (40.0, 25.0)])
+@pytest.mark.parametrize("name", STRATEGY_NAMES)
+def test_compiled_law_equals_the_reference(name, gamma, region_cache, monkeypatch):
+    monkeypatch.setenv("PARCOSIM_CACHE", str(region_cache))
+    st = get_strategy(name, "triangle")
+    if gamma is not None:
+        st = st.with_(gamma=gamma, k=st.k if any(st.k) else (30.0, 10.0))
+    args = dict(model_error=0.3, grid_step=0.01, extent=REGION)
+    fast = PositionController(BENCH, st, kernel="fast", **args)
+    ref = PositionController(BENCH, st, kernel="python", **args)
+    assert fast.compiled and not ref.compiled
+    rng = np.random.default_rng(2 * STRATEGY_NAMES.index(name) + (gamma is not None))
+    refused = answered = 0
+    for k in range(600):
+        values = random_inputs(rng)
+        dt = 1e-3 if k % 5 else 2.5e-4
+        probe = fastlaw.law_step(fast._buf.copy(), *values, dt)
+        a, b = outcome(fast, k * 1e-3, values, dt), outcome(ref, k * 1e-3, values, dt)
+        assert agree(a, b), (k, values, a, b)
+        # The compiled law refuses exactly where the reference raises.
+        assert (probe[6] == fastlaw.REFUSED) == isinstance(b, str), (k, values, b)
+        if isinstance(b, str):
+            refused += 1
+        else:
+            answered += 1
+            assert probe[:4] == tuple(a)
+        for attr in ("integral", "k", "s_prev", "s", "e"):
+            u, v = getattr(fast, attr), getattr(ref, attr)
+            assert np.allclose(u, v, rtol=1e-12, atol=1e-12 * max(1.0, *map(abs, v))), (k, attr, u, v)
+    assert refused > 60 and answered > 300
+    if gamma is not None:
+        assert fast.k != list(st.k)                             # the gains did adapt
+
+
+def test_compiled_law_raises_the_reference_messages(tmp_path, monkeypatch):
+    monkeypatch.setenv("PARCOSIM_CACHE", str(tmp_path))
+    ctrl = PositionController(BENCH, get_strategy("TCMDx"), grid_step=0.01, extent=REGION)
+    assert ctrl.compiled
+    x, y = 0.01, 0.15
+    ang = fivebar.inverse_kinematics(BENCH, x, y)
+    good = [ang[0], ang[2], 0.3, -0.2, 1.0, 0.5, x + 1e-3, y, 0.1, 0.2, -1.0, 0.5]
+    ctrl.step(0.0, *good)
+    top = fivebar.inverse_kinematics(BENCH, 0.0, 0.274)            # reachable, in a cell with a left-out corner
+    side = fivebar.inverse_kinematics(BENCH, 0.115, 0.15)          # reachable, right of the region
+    y_band = next(y for y in np.arange(0.0, 0.3, 0.001)
+                  if 0.0 < fivebar.singularity(BENCH, 0.0, y).margin < fivebar.NEAR_SINGULAR_MARGIN)
+    cases = [
+        (dict(dq2=math.nan), "input dq2 = nan at t = 0.25 s is not finite"),
+        (dict(x_d=0.5, y_d=0.1), "reference (x_d, y_d) = (0.5, 0.1) m at t = 0.25 s is outside the workspace"),
+        (dict(x_d=0.0, y_d=y_band), "near-singular band"),
+        (dict(q1=0.0, q2=math.pi), "measured (q1, q2) = (0.0, 3.14159"),
+        (dict(q1=top[0], q2=top[2], x_d=0.0, y_d=0.27), "left out of the table"),
+        (dict(q1=side[0], q2=side[2], x_d=0.1, y_d=0.15), "outside the tabulated region"),
+    ]
+    for change, message in cases:
+        values = dict(zip(NAMES, good), **change)
+        with pytest.raises(ValueError, match=re.escape(message)):
+            ctrl.step(0.25, *values.values())
+        with pytest.raises(ValueError, match=re.escape(message)):
+            ctrl.step_reference(0.25, *values.values())
+
+
+def test_unknown_kernel_is_refused():
+    with pytest.raises(ValueError, match="kernel = 'c' is unknown"):
+        PositionController(BENCH, get_strategy("PDx"), kernel="c")
+
+
+def test_step_with_errors_returns_the_errors():
+    ctrl = PositionController(BENCH, get_strategy("PDq"))
+    x, y = 0.01, 0.15
+    ang = fivebar.inverse_kinematics(BENCH, x, y)
+    out = ctrl.step_with_errors(0.0, ang[0], ang[2], 0, 0, 0, 0, x + 1e-3, y, 0, 0, 0, 0)
+    assert out[4:] == tuple(ctrl.e) and out[:4] == PositionController(BENCH, get_strategy("PDq")).step(
+        0.0, ang[0], ang[2], 0, 0, 0, 0, x + 1e-3, y, 0, 0, 0, 0)
