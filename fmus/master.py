@@ -25,6 +25,11 @@ Couplings (``coupling``):
 * ``"jacobi"``: every component reads the outputs all components held at the step's
   start, then all step (what fmpy's SSP runner and Ecos do).
 
+Multi-rate: a component with ``substeps = n`` is stepped n times per communication step,
+each ``h / n``; consecutive components (in the stepping order) with the same n step
+together and exchange their values at every sub-step (e.g. the drives and the plant at
+0.25 ms while the sampled components stay at 1 ms); what they read from the others is held.
+
 Recorded signals: row 0 holds the outputs after initialisation (t = 0), row k those after
 the k-th step (t = k h): for a continuous output the value at t, for a sampled output the
 sample held over [t - h, t].
@@ -420,6 +425,18 @@ def simulate(system: System, mode: str = "inprocess", coupling: str = "gauss-sei
                 pass
 
 
+def _rate_groups(plan) -> list:
+    """Consecutive plan entries of equal sub-step count > 1 form one group:
+    [(substeps, [(instance, input slots, output slots), ...]), ...]."""
+    groups = []
+    for inst, in_slots, out_slots, substeps in plan:
+        if substeps > 1 and groups and groups[-1][0] == substeps:
+            groups[-1][1].append((inst, in_slots, out_slots))
+        else:
+            groups.append((substeps, [(inst, in_slots, out_slots)]))
+    return groups
+
+
 def _run(system, instances, order, mode, coupling, progress) -> Result:
     # One flat store of every output that is read or recorded.
     slots = {}
@@ -461,20 +478,32 @@ def _run(system, instances, order, mode, coupling, progress) -> Result:
         rows = 1
         report_every = max(1, steps // 100)
         jacobi = coupling == "jacobi"
+        groups = _rate_groups(plan)
         for k in range(steps):
             t = k * h
             held = values[:] if jacobi else values
-            for inst, in_slots, out_slots, substeps in plan:
-                if in_slots:
-                    inst.set_inputs([held[i] for i in in_slots])
+            for substeps, members in groups:
                 if substeps == 1:
+                    inst, in_slots, out_slots = members[0]
+                    if in_slots:
+                        inst.set_inputs([held[i] for i in in_slots])
                     inst.do_step(t, h)
-                else:
-                    dt = h / substeps
-                    for j in range(substeps):
+                    for i, v in zip(out_slots, inst.get_outputs()):
+                        values[i] = v
+                    continue
+                # Components of one rate step together, exchanging values at every
+                # sub-step; what they read from outside the group is held.
+                local = held[:] if jacobi else values
+                dt = h / substeps
+                for j in range(substeps):
+                    start_of_substep = local[:] if jacobi else local
+                    for inst, in_slots, out_slots in members:
+                        if in_slots:
+                            inst.set_inputs([start_of_substep[i] for i in in_slots])
                         inst.do_step(t + j * dt, dt)
-                for i, v in zip(out_slots, inst.get_outputs()):
-                    values[i] = v
+                        for i, v in zip(out_slots, inst.get_outputs()):
+                            values[i] = v
+                            local[i] = v
             data[k + 1] = [values[i] for i in record_slots]
             done = k + 1
             rows = done + 1
