@@ -23,6 +23,7 @@ should the two ever disagree on a boundary, returns the reference's result).
 
 The module calls no compiled function of another file, so numba's on-disk cache
 (``cache=True``, invalidated by this file's modification time only) cannot go stale.
+:func:`compile_law` compiles :func:`law_step` for its one signature on first use.
 """
 from __future__ import annotations
 
@@ -206,12 +207,23 @@ def _component(buf, i, e, de, dde, ddr_d, h):
     return ddr_d + feedback + buf[S_INTEGRAL + i]                         # (7.21)
 
 
-#: The one signature of :func:`law_step`: ints and bools passed by callers are converted, never
-#: compiled again; compiled (or loaded from numba's cache) when this module is imported.
+#: The one signature of :func:`law_step` (:func:`compile_law`).
 LAW_SIGNATURE = types.UniTuple(float64, 7)(float64[::1], *([float64] * 13))
 
 
-@njit(LAW_SIGNATURE, cache=True, error_model="numpy")
+def compile_law():
+    """Compile :func:`law_step` (or load it from numba's cache) for :data:`LAW_SIGNATURE` only.
+
+    Called by the first controller that uses it (~3 s the first time, ~0.5 s from the cache).
+    Afterwards the dispatcher compiles nothing more: ints or bools passed by a caller are
+    converted to float64 instead of triggering a compilation per type combination.
+    """
+    if not law_step.signatures:
+        law_step.compile(LAW_SIGNATURE.args)
+        law_step.disable_compile()
+
+
+@njit(cache=True, error_model="numpy")
 def law_step(buf, q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d, h):
     """One sample of the law (7.21-7.22): (tau1, tau2, i_ref1, i_ref2, e1, e2, status).
 

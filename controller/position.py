@@ -150,6 +150,8 @@ class PositionController:
         # state in the same place (fastlaw.STATE), so both paths can be mixed.
         self._buf = fastlaw.pack(self.kin, self.band, strategy.space, self.model if self.compiled else None,
                                  self.kp, self.kv, strategy.phi, strategy.gamma, strategy.m_star, self.kt)
+        if self.compiled:
+            fastlaw.compile_law()
         self.reset()
 
     def reset(self):

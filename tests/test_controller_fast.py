@@ -237,3 +237,13 @@ def test_step_with_errors_returns_the_errors():
     out = ctrl.step_with_errors(0.0, ang[0], ang[2], 0, 0, 0, 0, x + 1e-3, y, 0, 0, 0, 0)
     assert out[4:] == tuple(ctrl.e) and out[:4] == PositionController(BENCH, get_strategy("PDq")).step(
         0.0, ang[0], ang[2], 0, 0, 0, 0, x + 1e-3, y, 0, 0, 0, 0)
+
+
+def test_law_is_compiled_once_for_float_arguments():
+    """Ints from a caller are converted to float64: no compilation per type combination."""
+    ctrl = PositionController(BENCH, get_strategy("PDq"))
+    x, y = 0.01, 0.15
+    ang = fivebar.inverse_kinematics(BENCH, x, y)
+    a = ctrl.step(0, ang[0], ang[2], 0, 0, 0, 0, x, y, 0, 0, 0, 0)
+    b = PositionController(BENCH, get_strategy("PDq")).step(0.0, ang[0], ang[2], *[0.0] * 4, x, y, *[0.0] * 4, 1e-3)
+    assert a == b and len(fastlaw.law_step.signatures) == 1
