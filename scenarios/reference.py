@@ -1,0 +1,532 @@
+"""A monolithic reference run of a scene: the truth a co-simulation is measured against.
+
+The co-simulation couples the plant and the drives explicitly at the 1 ms communication
+step: each drive advances its current with the shaft speed of the step's start held and
+hands the plant the torque of the step's END, which the plant holds over the whole step.
+The reference removes that coupling error and the plant's fixed-step error, and nothing
+else:
+
+* the **continuous part** — the plant's state ``[q, dq]`` (7.12, forward dynamics 5.66 with
+  its Baumgarte term, :meth:`plant.PlantSimulator.derivative`) and the armature current of
+  every drive, ``L di/dt = v - R i - ke omega`` (4.162) with omega the plant's actuated
+  joint rate — is ONE ODE, integrated by ``scipy.integrate.solve_ivp`` (DOP853, rtol
+  1e-10 by default) over each sample interval, restarted at every sample; the shaft
+  torque is :func:`motor.shaft_torque` of the instantaneous current and speed (B.2);
+* the **discrete part** — trajectory, derivator, position controller, observers — are the
+  scene's own slave objects (``fmus/slaves``, built from the scene's parameters exactly
+  as the master builds them), stepped in the master's Gauss-Seidel order
+  (:func:`fmus.master.stepping_order`) with the same inputs as in the co-simulation;
+* each drive's discrete current controller (the drive slave's own
+  :class:`motor.CurrentController`) samples ``i_ref`` and ``i_hat`` at t_k, at the
+  drive's place in that order, and its saturated voltage is held over [t_k, t_k+1]
+  (zero-order hold); the drive's ``v`` output is then that voltage, so the observers
+  read the previous interval's voltage, as in the co-simulation.
+
+Encoder quantisation is the plant's own (:meth:`plant.PlantSimulator.outputs`, applied
+to the integrated state at each sample).
+
+So, per sample t_k (order ``deriv, ctrl, traj, obs1, obs2, drive1, drive2, plant`` for
+the bench): derivator and controller read the plant at t_k, the trajectory moves to
+t_k+1, the observers read the voltage over [t_k-1, t_k] and the derivator's speed at
+t_k, the drives sample their voltages, and the continuous part is integrated to t_k+1.
+
+``coupling`` selects what replaces the plant/drive coupling (the discrete part is the
+same in all four):
+
+``"monolithic"`` (the reference)
+    as above.
+``"held_speed"``
+    a diagnostic: as ``"monolithic"``, but each drive sees the shaft speed of the
+    sample instant t_k over the whole interval (back-emf, viscous and Coulomb terms),
+    as the co-simulation's drive does; the torque still follows the current
+    continuously.  Against ``"monolithic"`` it measures the effect of the held speed,
+    against ``"cosim"`` that of the end-of-step torque being held.
+``"cosim"``
+    the co-simulation's own explicit coupling: the drive slaves are stepped as the
+    master steps them and only the plant is integrated by solve_ivp, with the drives'
+    end-of-step torques held.  It differs from the master's run only by the plant's
+    integration error, so comparing the two isolates that error, and comparing it
+    with ``"monolithic"`` isolates the coupling error.
+``"mean"``
+    a what-if: as ``"cosim"``, but the plant holds each drive's MEAN shaft torque over
+    the step, kt * mean(i) - b omega - mu tanh(omega/omega_eps) with omega held at the
+    step start (mean(i) from the exact solution of 4.162 for the held voltage and
+    speed).  It measures what a drive output "torque averaged over the step" would
+    buy the co-simulation.
+
+Scenes: any :class:`fmus.system.System` with one ``FiveBarPlant``, up to two
+``DCMotorDrive`` (each connected ``drive.tau -> plant.tau<j>`` and reading
+``plant.dq<j>`` as ``omega``, L > 0, sample time T equal to the communication step),
+and discrete components; e.g. every ``bench_*`` scene and ``thesis_sim_circle`` (ideal
+actuators: no drives, the controller's torques held on the plant).  See
+``docs/reference.md`` for its convergence and the co-simulation's measured deviation.
+"""
+from __future__ import annotations
+
+import importlib
+import math
+import time as _time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from fmus.master import Variable, stepping_order
+from fmus.system import System, split_signal
+from motor import shaft_torque
+from plant import fivebar
+
+COUPLINGS = ("monolithic", "held_speed", "cosim", "mean")
+#: Default tolerances: convergence measured in docs/reference.md.
+RTOL = 1e-10
+ATOL = 1e-13
+METHOD = "DOP853"
+
+
+class ReferenceError(RuntimeError):
+    """The reference cannot run this system, or a component refused a step."""
+
+
+@dataclass
+class ReferenceResult:
+    """A reference run on the communication grid, laid out as :class:`fmus.master.Result`.
+
+    ``signals`` has every output of every component ("instance.variable"); row 0 is the
+    state after initialisation, row k the state after the k-th sample interval (a
+    continuous output at t_k, a sampled output the sample held over [t_k-1, t_k]), as in
+    the master's record.  ``columns`` (when run from a scene): ``t`` and the scene's
+    columns (``x, y, x_d, y_d, tau1, tau2`` and, on the bench, ``i1, i2`` ...).
+    """
+
+    time: np.ndarray
+    signals: dict
+    columns: dict
+    order: tuple
+    coupling: str
+    method: str
+    rtol: float
+    atol: float
+    wall_s: float
+    nfev: int = 0
+    steps: int = 0
+    error: str | None = None
+    extra: dict = field(default_factory=dict)
+
+    def __getitem__(self, signal: str) -> np.ndarray:
+        return self.signals[signal]
+
+    @property
+    def completed(self) -> bool:
+        return self.error is None
+
+
+# --- the scene's components, built as the master's in-process back end builds them --------
+
+def _slave(component):
+    """The component's slave object, initialised with its parameters (as the master does)."""
+    from pythonfmu import Boolean, Integer, Real, String
+
+    from fmus.build import SLAVES
+
+    if component.model not in SLAVES:
+        raise ReferenceError(f"component {component.name}: unknown model {component.model!r}")
+    cls = getattr(importlib.import_module(f"fmus.slaves.{SLAVES[component.model]}"), component.model)
+    slave = cls(instance_name=component.name)
+    by_name = {v.name: (vr, v) for vr, v in slave.vars.items()}
+    slave.setup_experiment(0.0, None, None)
+    slave.enter_initialization_mode()
+    for name, value in component.parameters.items():
+        if name not in by_name:
+            raise ReferenceError(f"component {component.name}: {component.model} has no parameter {name!r}")
+        vr, v = by_name[name]
+        if isinstance(v, Real):
+            slave.set_real([vr], [float(value)])
+        elif isinstance(v, Integer):
+            slave.set_integer([vr], [int(value)])
+        elif isinstance(v, Boolean):
+            slave.set_boolean([vr], [bool(value)])
+        elif isinstance(v, String):
+            slave.set_string([vr], [str(value)])
+    slave.exit_initialization_mode()
+    if slave.error:
+        raise ReferenceError(f"{component.name}: {slave.error}")
+    return slave
+
+
+def _variables(slave) -> dict:
+    """:class:`fmus.master.Variable` of each slave variable (for the stepping order)."""
+    result = {}
+    for vr, v in slave.vars.items():
+        causality = v.causality.name if v.causality is not None else "local"
+        variability = v.variability.name if v.variability is not None else "continuous"
+        result[v.name] = Variable(v.name, vr, type(v).__name__, causality, variability,
+                                  tuple(getattr(type(slave), "feedthrough", {}).get(v.name, ())))
+    return result
+
+
+def _real_outputs(slave) -> list:
+    from pythonfmu import Real
+
+    return [v.name for v in slave.vars.values()
+            if isinstance(v, Real) and v.causality is not None and v.causality.name == "output"]
+
+
+# --- the continuous part --------------------------------------------------------------------
+
+@dataclass
+class _DriveLink:
+    """One drive of the monolithic block: which plant input it drives, its model and voltage."""
+
+    name: str
+    joint: int          # 0 for plant.tau1/dq1, 1 for plant.tau2/dq2
+    slave: object
+    v: float = 0.0          # voltage held over the interval ("monolithic")
+    tau_mean: float = 0.0   # mean shaft torque over the interval ("mean")
+    omega_held: float = 0.0  # speed at the sample instant ("held_speed")
+
+    @property
+    def params(self):
+        return self.slave.drive.params
+
+
+def _current_rate(i, v, omega, p):
+    """di/dt of (4.162): (v - R i - ke omega) / L."""
+    return (v - p.R * i - p.ke * omega) / p.L
+
+
+class _Continuous:
+    """Plant state [q(7), dq(7)] and the drives' currents, one ODE."""
+
+    def __init__(self, sim, drives, held_speed=False):
+        self.sim = sim
+        self.drives = drives
+        self.held_speed = held_speed
+        self.held = [0.0, 0.0]          # plant torques not delivered by a monolithic drive
+
+    def rhs(self, t, z):
+        y = z[:14]
+        omega = fivebar.world_rates(y[7:])
+        tau = list(self.held)
+        dz = np.empty(z.size)
+        for n, d in enumerate(self.drives):
+            p = d.params
+            i, w = z[14 + n], (d.omega_held if self.held_speed else omega[d.joint])
+            tau[d.joint] = shaft_torque(i, w, p)
+            dz[14 + n] = _current_rate(i, d.v, w, p)
+        dz[:14] = self.sim.derivative(y, fivebar.thesis_torques(tau[0], tau[1]))
+        return dz
+
+
+def _mean_torque(drive_slave, i_start, v, omega, h):
+    """Shaft torque averaged over a step with v and omega held (exact solution of 4.162)."""
+    p = drive_slave.drive.params
+    i_inf = (v - p.ke * omega) / p.R
+    x = p.R * h / p.L
+    i_mean = i_inf + (i_start - i_inf) * (-math.expm1(-x)) / x
+    return shaft_torque(i_mean, omega, p)
+
+
+# --- the run ------------------------------------------------------------------------------
+
+def reference_run(scene_or_name, rtol: float = RTOL, atol: float = ATOL, stop_time: float | None = None,
+                  method: str = METHOD, coupling: str = "monolithic", system_changes=None,
+                  progress=None) -> ReferenceResult:
+    """Run the reference of a scene (a name, a :class:`scenarios.scenes.Scene` or a System).
+
+    Parameters
+    ----------
+    rtol, atol : float
+        Tolerances of solve_ivp over each sample interval (atol on every state: m, rad,
+        m/s, rad/s, A).
+    stop_time : float, optional
+        Default: the system's.
+    method : str
+        solve_ivp method (DOP853 by default; see docs/reference.md for why not Radau).
+    coupling : {"monolithic", "held_speed", "cosim", "mean"}
+        ``"monolithic"`` is the reference; the others are diagnostics (module docstring).
+    system_changes : callable, optional
+        ``System -> System`` applied before running (e.g. to change a parameter).
+
+    Returns
+    -------
+    ReferenceResult
+        Keeps the rows so far and sets ``error`` when a component refused a step.
+    """
+    from .scenes import Scene, get_scene
+
+    if coupling not in COUPLINGS:
+        raise ValueError(f"coupling = {coupling!r}; valid: {', '.join(COUPLINGS)}")
+    scene = get_scene(scene_or_name) if isinstance(scene_or_name, str) else scene_or_name
+    system = scene.system if isinstance(scene, Scene) else scene
+    if not isinstance(system, System):
+        raise TypeError(f"expected a scene name, a Scene or a System, got {type(scene_or_name).__name__}")
+    if stop_time is not None:
+        system = replace(system, stop_time=float(stop_time))
+    if system_changes is not None:
+        system = system_changes(system)
+    h, steps = system.step, system.steps
+
+    slaves = {c.name: _slave(c) for c in system.components}
+    order = stepping_order(system, {n: _variables(s) for n, s in slaves.items()})
+    plants = [c.name for c in system.components if c.model == "FiveBarPlant"]
+    if len(plants) != 1:
+        raise ReferenceError(f"the reference needs exactly one FiveBarPlant, found {len(plants)}")
+    plant_name = plants[0]
+    sim = slaves[plant_name].sim
+    sources = {c.target: c.source for c in system.connections}
+    inputs = {c.name: [] for c in system.components}
+    for conn in system.connections:
+        inputs[split_signal(conn.target)[0]].append((split_signal(conn.target)[1], conn.source))
+
+    # The drives that feed the plant (continuous block in "monolithic").
+    links = {}
+    for c in system.components:
+        if c.model != "DCMotorDrive":
+            continue
+        joints = [j for j in (0, 1) if sources.get(f"{plant_name}.tau{j + 1}") == f"{c.name}.tau"]
+        if len(joints) != 1:
+            raise ReferenceError(f"drive {c.name}: its tau must drive exactly one of {plant_name}.tau1/tau2")
+        j = joints[0]
+        if sources.get(f"{c.name}.omega") != f"{plant_name}.dq{j + 1}":
+            raise ReferenceError(f"drive {c.name}: omega must be {plant_name}.dq{j + 1} "
+                                 f"(got {sources.get(f'{c.name}.omega')})")
+        drive = slaves[c.name].drive
+        if abs(drive.T - h) > 1e-12 * h:
+            raise ReferenceError(f"drive {c.name}: controller period T = {drive.T} s differs from the step {h} s")
+        if drive.params.L <= 0.0:
+            raise ReferenceError(f"drive {c.name}: L = 0 has no electrical state to integrate")
+        if coupling != "cosim" and order.index(c.name) > order.index(plant_name):
+            raise ReferenceError(f"drive {c.name} steps after the plant: its voltage would not be known")
+        links[c.name] = _DriveLink(c.name, j, slaves[c.name], v=drive.v)
+    monolithic = coupling in ("monolithic", "held_speed")
+    block = _Continuous(sim, list(links.values()) if monolithic else [], coupling == "held_speed")
+
+    values = {}
+
+    def publish(name):
+        slave = slaves[name]
+        if name == plant_name:
+            for key, value in sim.outputs().items():
+                values[f"{name}.{key}"] = float(value)
+        else:
+            for key in outputs[name]:
+                values[f"{name}.{key}"] = float(getattr(slave, key))
+
+    outputs = {n: _real_outputs(s) for n, s in slaves.items()}
+    for name in order:
+        publish(name)
+    names = list(values)
+    rows = [[values[s] for s in names]]
+    substeps = {c.name: c.substeps for c in system.components}
+
+    nfev = n_steps = 0
+    first_step = None
+    error = None
+    start = _time.perf_counter()
+    report_every = max(1, steps // 100)
+    for k in range(steps):
+        t = k * h
+        try:
+            for name in order:
+                slave = slaves[name]
+                for var, src in inputs[name]:
+                    setattr(slave, var, values[src])
+                if name == plant_name:
+                    z0 = np.concatenate([sim.y, [slaves[d].drive.i for d in links] if monolithic else []])
+                    block.held = [slave.tau1, slave.tau2]
+                    omega = fivebar.world_rates(sim.y[7:])
+                    for link in links.values():
+                        link.omega_held = omega[link.joint]
+                    if coupling == "mean":
+                        for link in links.values():
+                            block.held[link.joint] = link.tau_mean
+                    sol = solve_ivp(block.rhs, (t, t + h), z0, method=method, rtol=rtol, atol=atol,
+                                    first_step=first_step)
+                    if sol.status != 0 or not np.all(np.isfinite(sol.y[:, -1])):
+                        raise ReferenceError(f"{plant_name}: solve_ivp failed over [{t:.6g}, {t + h:.6g}] s: "
+                                             f"{sol.message}")
+                    nfev += sol.nfev
+                    n_steps += len(sol.t) - 1
+                    if len(sol.t) > 2:
+                        first_step = float(sol.t[-2] - sol.t[-3]) if len(sol.t) > 3 else float(sol.t[-2] - t)
+                    z = sol.y[:, -1]
+                    sim.y = z[:14].copy()
+                    sim.time = t + h
+                    publish(name)
+                    if monolithic:
+                        omega = fivebar.world_rates(sim.y[7:])
+                        for n, (d, link) in enumerate(links.items()):
+                            drive = slaves[d].drive
+                            drive.i = float(z[14 + n])
+                            w = link.omega_held if block.held_speed else omega[link.joint]
+                            values[f"{d}.i"] = drive.i
+                            values[f"{d}.tau"] = shaft_torque(drive.i, w, drive.params)
+                    continue
+                if monolithic and name in links:
+                    drive = slave.drive
+                    if drive.mode == "current":
+                        v = drive.controller.update(slave.i_ref, slave.i_hat)
+                    else:
+                        v = min(max(slave.v_ref, -drive.params.v_max), drive.params.v_max)
+                    links[name].v = drive.v = slave.v = v
+                    values[f"{name}.v"] = v
+                    continue
+                if coupling == "mean" and name in links:
+                    i_start, omega = slave.drive.i, slave.omega
+                n = substeps[name]
+                for j in range(n):
+                    if slave.do_step(t + j * h / n, h / n) is False:
+                        raise ReferenceError(f"{name} refused the step from t = {t:.6g} s: {slave.error}")
+                publish(name)
+                if coupling == "mean" and name in links:
+                    links[name].tau_mean = _mean_torque(slave, i_start, slave.v, omega, h)
+        except ReferenceError as exc:
+            error = str(exc)
+            break
+        rows.append([values[s] for s in names])
+        if progress is not None and (k + 1) % report_every == 0:
+            progress((k + 1) / steps)
+    wall = _time.perf_counter() - start
+    data = np.array(rows)
+    signals = {s: data[:, j] for j, s in enumerate(names)}
+    time = np.arange(len(rows)) * h
+    columns = {"t": time}
+    if isinstance(scene, Scene):
+        columns.update({name: signals[signal] for name, signal in scene.columns.items() if signal in signals})
+    return ReferenceResult(time, signals, columns, tuple(order), coupling, method, rtol, atol, wall,
+                           nfev, n_steps, error,
+                           extra={"stop_time": system.stop_time, "plant": plant_name,
+                                  "mean_steps_per_interval": n_steps / max(1, len(rows) - 1)})
+
+
+def deviation(result, reference, start: float = 0.0, end: float | None = None) -> dict:
+    """End-effector deviation of ``result`` (a master Result or a ReferenceResult) from ``reference``.
+
+    Over the common rows with start <= t <= end: ``rms`` = sqrt(mean(dx² + dy²)) and
+    ``max`` of the distance [m], ``t_max`` where it is largest; signals ``<plant>.x``, ``.y``.
+    """
+    n = min(len(result.time), len(reference.time))
+    t = reference.time[:n]
+    keep = (t >= start - 1e-12) & (t <= (math.inf if end is None else end) + 1e-12)
+    plant = _plant_prefix(reference)
+    dx = (result[f"{plant}.x"][:n] - reference[f"{plant}.x"][:n])[keep]
+    dy = (result[f"{plant}.y"][:n] - reference[f"{plant}.y"][:n])[keep]
+    d = np.hypot(dx, dy)
+    if not d.size:
+        return {"rms": float("nan"), "max": float("nan"), "t_max": float("nan"), "rows": 0}
+    return {"rms": float(np.sqrt(np.mean(d * d))), "max": float(np.max(d)),
+            "t_max": float(t[keep][np.argmax(d)]), "rows": int(d.size)}
+
+
+def _plant_prefix(reference) -> str:
+    return reference.extra.get("plant", "plant") if isinstance(reference, ReferenceResult) else "plant"
+
+
+def with_parameters(system: System, instance: str, component_substeps: int | None = None,
+                    **parameters) -> System:
+    """``system`` with component ``instance``'s parameters updated (and the master's
+    multi-rate ``Component.substeps``, if given)."""
+    components = []
+    for c in system.components:
+        if c.name == instance:
+            c = replace(c, parameters={**c.parameters, **parameters},
+                        substeps=c.substeps if component_substeps is None else component_substeps)
+        components.append(c)
+    if not any(c.name == instance for c in system.components):
+        raise KeyError(instance)
+    return replace(system, components=tuple(components))
+
+
+# --- measurements (docs/reference.md) -----------------------------------------------------
+
+def _windows(stop: float, scene) -> list:
+    from .scenes import Scene
+
+    edges = [0.0, min(0.1, stop)]
+    if isinstance(scene, Scene) and scene.reference_end < stop:
+        edges += [scene.reference_end]
+    edges += [stop]
+    return [(a, b) for a, b in zip(edges, edges[1:]) if b > a]
+
+
+def main(argv=None) -> int:
+    """``python -m scenarios.reference [SCENE] [--stop-time S] [--convergence] [--variants]``:
+    the reference, the master's deviation from it, and where it comes from."""
+    import argparse
+
+    from fmus.master import simulate
+
+    from .scenes import get_scene
+
+    parser = argparse.ArgumentParser(prog="python -m scenarios.reference", description=main.__doc__)
+    parser.add_argument("scene", nargs="?", default="bench_circle_TCMDx")
+    parser.add_argument("--stop-time", type=float, default=None)
+    parser.add_argument("--rtol", type=float, default=RTOL)
+    parser.add_argument("--atol", type=float, default=ATOL)
+    parser.add_argument("--convergence", action="store_true", help="rerun with rtol/2 and rtol/10")
+    parser.add_argument("--variants", action="store_true",
+                        help="decompose the deviation (coupling, plant substeps, encoder, friction)")
+    args = parser.parse_args(argv)
+    scene = get_scene(args.scene)
+    system = scene.system if args.stop_time is None else replace(scene.system, stop_time=args.stop_time)
+    stop = system.stop_time
+    windows = _windows(stop, scene)
+
+    def line(label, result, reference):
+        parts = [f"{label:<44s}"]
+        whole = deviation(result, reference)
+        parts.append(f"all: rms {whole['rms']:.2e} max {whole['max']:.2e} (t {whole['t_max']:.3f})")
+        for a, b in windows:
+            d = deviation(result, reference, a, b)
+            parts.append(f"[{a:g},{b:g}]: rms {d['rms']:.2e} max {d['max']:.2e}")
+        print(" | ".join(parts), flush=True)
+
+    def run(changes=lambda s: s, **kwargs):
+        return reference_run(changes(system), rtol=kwargs.pop("rtol", args.rtol),
+                             atol=kwargs.pop("atol", args.atol), **kwargs)
+
+    ref = run()
+    print(f"{scene.name}, 0-{stop:g} s: reference {ref.method} rtol {ref.rtol:g} atol {ref.atol:g}, "
+          f"{ref.wall_s:.1f} s wall, {ref.nfev} evaluations, {ref.extra['mean_steps_per_interval']:.2f} "
+          f"steps per interval{'' if ref.completed else ', STOPPED: ' + ref.error}", flush=True)
+    if args.convergence:
+        for factor in (2, 10):
+            line(f"reference at rtol, atol / {factor}", run(rtol=args.rtol / factor, atol=args.atol / factor), ref)
+    master = simulate(system)
+    print(f"master (in-process, defaults): {master.wall_s:.1f} s wall"
+          f"{'' if master.completed else ', STOPPED: ' + master.error}", flush=True)
+    line("master - reference", master, ref)
+    if not args.variants:
+        return 0
+    plant = ref.extra["plant"]
+    drives = [c.name for c in system.components if c.model == "DCMotorDrive"]
+    if drives:
+        cosim = run(coupling="cosim")
+        held = run(coupling="held_speed")
+        line("reference(cosim coupling) - reference", cosim, ref)
+        line("  master - reference(cosim): plant RK4", master, cosim)
+        line("  ref(cosim) - ref(held_speed): torque held", cosim, held)
+        line("  ref(held_speed) - reference: speed held", held, ref)
+        line("reference(mean torque) - reference", run(coupling="mean"), ref)
+    line("master, plant RK4 substeps=4 - reference", simulate(with_parameters(system, plant, substeps=4)), ref)
+    line("master, plant Component substeps=4 - ref.",
+         simulate(with_parameters(system, plant, component_substeps=4)), ref)
+    variants = []
+    if any(c.source.startswith(f"{plant}.q1_enc") or c.source.startswith(f"{plant}.q2_enc")
+           for c in system.connections):
+        variants.append(("encoder 2^30 counts", lambda s: with_parameters(s, plant, encoder_counts=2 ** 30)))
+    if drives:
+        def no_friction(s):
+            for d in drives:
+                s = with_parameters(s, d, mu=0.0)
+            return s
+        variants.append(("mu = 0", no_friction))
+        if variants[0][0].startswith("encoder"):
+            variants.append(("mu = 0 and encoder 2^30", lambda s: variants[0][1](no_friction(s))))
+    for label, changes in variants:
+        line(f"{label}: master - reference", simulate(changes(system)), run(changes))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
