@@ -97,6 +97,11 @@ class PositionController:
         Cache the table on disk.
     kernel : {"fast", "python", "general"}
         See :data:`KERNELS` and the module docstring; all give the same law to round-off.
+    table_fallback : bool
+        Tabulated model: at a measured pose outside the table or in a cell with a left-out
+        corner (near the workspace's edge or the singular band), evaluate the exact model
+        there instead of refusing (counted in :attr:`fallbacks`).  The bench triangle's
+        upper vertices (7.24) lie within 2.5 mm of the bench's reach.
 
     Attributes
     ----------
@@ -105,11 +110,13 @@ class PositionController:
         k sat(s/phi), the sliding gains, s of the previous sample, s and the error e.
     compiled : bool
         True when :meth:`step` runs :func:`controller.fastlaw.law_step`.
+    fallbacks : int
+        Samples that used the exact model in place of the table (``table_fallback``).
     """
 
     def __init__(self, params: FiveBarParams, strategy: Strategy, model="tabulated", model_error=0.0,
                  grid_step=DEFAULT_GRID_STEP, extent=DEFAULT_EXTENT, kt=None, T=SAMPLE_TIME,
-                 band=fivebar.NEAR_SINGULAR_MARGIN, cache=True, kernel="fast"):
+                 band=fivebar.NEAR_SINGULAR_MARGIN, cache=True, kernel="fast", table_fallback=True):
         if kernel not in KERNELS:
             raise ValueError(f"kernel = {kernel!r} is unknown; valid: {', '.join(KERNELS)}")
         if strategy.space not in ("q", "x"):
@@ -144,6 +151,9 @@ class PositionController:
             self.model = (ExactModel(model_params, kernel="general" if kernel == "general" else "fast")
                           if model == "exact"
                           else TabulatedModel(model_params, grid_step, extent, cache=cache, band=band))
+        self._fallback = (ExactModel(model_params) if strategy.model_based and model == "tabulated"
+                          and table_fallback else None)
+        self.fallbacks = 0
         self.kernel = kernel
         self.compiled = kernel == "fast" and self.model_kind != "exact"
         # Constants, state and table of the compiled law in one array; the reference keeps its
@@ -272,7 +282,13 @@ class PositionController:
                 return self._out(u0, u1)
             return self._out(J00 * u0 + J10 * u1, J01 * u0 + J11 * u1)           # tau = J^T u'
         try:
-            H00, H01, H11, h0, h1 = self.model.terms(x, y, dx, dy)
+            try:
+                H00, H01, H11, h0, h1 = self.model.terms(x, y, dx, dy)
+            except ModelRangeError:
+                if self._fallback is None:
+                    raise
+                H00, H01, H11, h0, h1 = self._fallback.terms(x, y, dx, dy)
+                self.fallbacks += 1
         except (ModelRangeError, fivebar.KinematicsError) as exc:
             raise ValueError(f"measured pose (x, y) = ({x:.6g}, {y:.6g}) m at t = {t:.6g} s: {exc}") from None
         if st.space == "x":

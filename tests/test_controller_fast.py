@@ -170,7 +170,7 @@ def test_compiled_law_equals_the_reference(name, gamma, region_cache, monkeypatc
     st = get_strategy(name, "triangle")
     if gamma is not None:
         st = st.with_(gamma=gamma, k=st.k if any(st.k) else (30.0, 10.0))
-    args = dict(model_error=0.3, grid_step=0.01, extent=REGION)
+    args = dict(model_error=0.3, grid_step=0.01, extent=REGION, table_fallback=False)
     fast = PositionController(BENCH, st, kernel="fast", **args)
     ref = PositionController(BENCH, st, kernel="python", **args)
     assert fast.compiled and not ref.compiled
@@ -199,7 +199,7 @@ def test_compiled_law_equals_the_reference(name, gamma, region_cache, monkeypatc
 
 def test_compiled_law_raises_the_reference_messages(tmp_path, monkeypatch):
     monkeypatch.setenv("PARCOSIM_CACHE", str(tmp_path))
-    ctrl = PositionController(BENCH, get_strategy("TCMDx"), grid_step=0.01, extent=REGION)
+    ctrl = PositionController(BENCH, get_strategy("TCMDx"), grid_step=0.01, extent=REGION, table_fallback=False)
     assert ctrl.compiled
     x, y = 0.01, 0.15
     ang = fivebar.inverse_kinematics(BENCH, x, y)
@@ -247,3 +247,17 @@ def test_law_is_compiled_once_for_float_arguments():
     a = ctrl.step(0, ang[0], ang[2], 0, 0, 0, 0, x, y, 0, 0, 0, 0)
     b = PositionController(BENCH, get_strategy("PDq")).step(0.0, ang[0], ang[2], *[0.0] * 4, x, y, *[0.0] * 4, 1e-3)
     assert a == b and len(fastlaw.law_step.signatures) == 1
+
+
+def test_table_fallback_uses_the_exact_model_off_the_table(tmp_path, monkeypatch):
+    monkeypatch.setenv("PARCOSIM_CACHE", str(tmp_path))
+    strategy = get_strategy("TCx")
+    tabulated = PositionController(BENCH, strategy, grid_step=0.01, extent=REGION)
+    exact = PositionController(BENCH, strategy, model="exact")
+    for x, y in ((0.0, 0.274), (0.115, 0.15)):   # a left-out cell corner; right of the region
+        ang = fivebar.inverse_kinematics(BENCH, x, y)
+        values = [ang[0], ang[2], 0.3, -0.2, 1.0, 0.5, x + 1e-3, y, 0.1, 0.2, -1.0, 0.5]
+        got = tabulated.step(0.0, *values)
+        want = exact.step(0.0, *values)
+        assert np.allclose(got, want, rtol=1e-9, atol=1e-12)
+    assert tabulated.fallbacks == 2

@@ -148,7 +148,7 @@ def test_controller_fmu_refuses_bad_input(built_fmus):
     message = refused(fmu, **good)
     assert "strategy = 'PID' is unknown" in message
     fmu.close()
-    fmu = FmuInstance(built_fmus["PositionController"], {"strategy": "TCx", **SMALL_GRID})
+    fmu = FmuInstance(built_fmus["PositionController"], {"strategy": "TCx", "table_fallback": False, **SMALL_GRID})
     ang = fivebar.inverse_kinematics(get_preset("bench"), 0.0, 0.25)   # reachable, but off the small table
     message = refused(fmu, **dict(good, q1=ang[0], q2=ang[2], x_d=0.0, y_d=0.25))
     assert "outside the tabulated region" in message and "t = 0 s" in message

@@ -65,6 +65,9 @@ class PositionController(GuardedSlave):
         d("grid_step", "parameter", DEFAULT_GRID_STEP, "Tabulated model: grid step [m]")
         for name, value in zip(("x_min", "x_max", "y_min", "y_max"), DEFAULT_EXTENT):
             d(name, "parameter", value, f"Tabulated model: grid extent, {name} [m]")
+        d("table_fallback", "parameter", True, "Tabulated model: off the table or in a cell with a left-out corner, "
+          "use the exact model there (false: refuse the step)")
+        d("model_fallbacks", "output", 0, "Samples that used the exact model in place of the table")
         d("cache", "parameter", True, "Tabulated model: load/save the table in the user cache directory")
         d("kt1", "parameter", PRESET_VALUE, "Torque constant of motor 1 [N m/A]; -1: Table 16")
         d("kt2", "parameter", PRESET_VALUE, "Torque constant of motor 2 [N m/A]; -1: Table 18")
@@ -95,10 +98,11 @@ class PositionController(GuardedSlave):
         self.controller = _Controller(
             get_preset(self.preset), strategy, model=self.model, model_error=self.model_error,
             grid_step=self.grid_step, extent=(self.x_min, self.x_max, self.y_min, self.y_max),
-            kt=kt, cache=bool(self.cache))
+            kt=kt, cache=bool(self.cache), table_fallback=bool(self.table_fallback))
 
     def step(self, current_time, step_size):
         # One call (the compiled law for PD/tabulated): outputs and errors together.
         self.tau1, self.tau2, self.i_ref1, self.i_ref2, self.e1, self.e2 = self.controller.step_with_errors(
             current_time, self.q1, self.q2, self.dq1, self.dq2, self.ddq1, self.ddq2,
             self.x_d, self.y_d, self.dx_d, self.dy_d, self.ddx_d, self.ddy_d, step_size)
+        self.model_fallbacks = self.controller.fallbacks
