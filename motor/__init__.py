@@ -9,7 +9,7 @@ from motor.current_controller import (THESIS_POLES, THESIS_T, CurrentController,
                                       solve_pole_placement)
 from motor.drive import DRIVE_MODES, Drive
 from motor.electrics import (ELECTRICAL_METHODS, advance_current, coulomb_friction,
-                             electrical_step_coefficients, shaft_torque)
+                             electrical_step_coefficients, mean_current_coefficients, shaft_torque)
 from motor.identification import (DATASHEET_KT_OVER_KE, MEASURED_L, THESIS_SETTLING_TIMES, identify,
                                   inertia_from_pole, normal_equations_electrical,
                                   normal_equations_friction, pole_from_settling_time, read_motor_csv)
@@ -18,7 +18,7 @@ from motor.presets import MOTOR_PRESETS, MotorParams, get_motor_preset, motor1, 
 
 __all__ = [
     "MotorParams", "MOTOR_PRESETS", "get_motor_preset", "motor1", "motor2",
-    "ELECTRICAL_METHODS", "electrical_step_coefficients", "advance_current", "coulomb_friction",
+    "ELECTRICAL_METHODS", "electrical_step_coefficients", "mean_current_coefficients", "advance_current", "coulomb_friction",
     "shaft_torque",
     "THESIS_POLES", "THESIS_T", "current_transfer_function", "solve_pole_placement",
     "design_current_controller", "CurrentControllerDesign", "CurrentController",

@@ -6,10 +6,13 @@ inputs held over each step (zero-order hold).
 
 from motor import _checks
 from motor.current_controller import THESIS_POLES, THESIS_T, CurrentController, design_current_controller
-from motor.electrics import ELECTRICAL_METHODS, advance_current, electrical_step_coefficients, shaft_torque
+from motor.electrics import (ELECTRICAL_METHODS, advance_current, electrical_step_coefficients,
+                             mean_current_coefficients, shaft_torque)
 
 #: Names accepted for ``Drive(mode=...)``.
 DRIVE_MODES = ("current", "voltage")
+#: Names accepted for ``Drive(torque_output=...)``.
+TORQUE_OUTPUTS = ("end", "mean")
 
 # Relative tolerance used to decide that h divides T.
 _PHASE_TOL = 1e-6
@@ -35,6 +38,11 @@ class Drive:
         Controller sample time [s] (current mode).
     poles : sequence of 3 float
         Requested closed-loop current poles (current mode).
+    torque_output : {"end", "mean"}
+        Torque returned by :meth:`step`: at the step's end (B.2 with the end current), or
+        averaged over the step (B.2 with the mean current,
+        :func:`motor.electrics.mean_current_coefficients`), which is the torque a plant
+        holding it over the step should get.
 
     Raises
     ------
@@ -42,9 +50,11 @@ class Drive:
         Unknown mode or method, bad T or poles, or current mode with L = 0.
     """
 
-    def __init__(self, params, mode="current", method="exact", T=THESIS_T, poles=THESIS_POLES):
+    def __init__(self, params, mode="current", method="exact", T=THESIS_T, poles=THESIS_POLES,
+                 torque_output="end"):
         params.validate()
         self.params = params
+        self.torque_output = _checks.choice("torque_output", torque_output, TORQUE_OUTPUTS)
         self.mode = _checks.choice("mode", mode, DRIVE_MODES)
         self.method = _checks.choice("method", method, ELECTRICAL_METHODS)
         self.T = _checks.positive("T", T)
@@ -52,6 +62,7 @@ class Drive:
                            if mode == "current" else None)
         self._h = None
         self._coefficients = None
+        self._mean = None
         self.reset()
 
     def reset(self, i0=0.0, v0=0.0):
@@ -87,6 +98,7 @@ class Drive:
     def _step_coefficients(self, h):
         if h != self._h:
             self._coefficients = electrical_step_coefficients(self.params.R, self.params.L, h, self.method)
+            self._mean = mean_current_coefficients(self.params.R, self.params.L, h, self.method)
             self._h = h
         return self._coefficients
 
@@ -121,7 +133,8 @@ class Drive:
         Returns
         -------
         tau : float
-            Shaft torque at the end of the step [N m] (B.2).
+            Shaft torque at the end of the step, or its mean over the step with
+            ``torque_output="mean"`` [N m] (B.2).
         v : float
             Voltage applied over the step [V].
         i : float
@@ -141,6 +154,12 @@ class Drive:
             v = self._controller_voltage(i_ref, i_hat, h)
         else:
             v = min(max(v_ref, -self.params.v_max), self.params.v_max)
-        self.i = advance_current(self.i, v, omega, self.params.ke, self._step_coefficients(h))
+        coefficients = self._step_coefficients(h)
+        if self.torque_output == "mean":
+            w_i, w_u = self._mean
+            current = w_i * self.i + w_u * (v - self.params.ke * omega)
+        self.i = advance_current(self.i, v, omega, self.params.ke, coefficients)
+        if self.torque_output == "end":
+            current = self.i
         self.v = v
-        return shaft_torque(self.i, omega, self.params), v, self.i
+        return shaft_torque(current, omega, self.params), v, self.i

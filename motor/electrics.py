@@ -74,6 +74,27 @@ def electrical_step_coefficients(R, L, h, method="exact"):
     return 1.0 - h * R / L, h / L
 
 
+def mean_current_coefficients(R, L, h, method="exact"):
+    """Coefficients (w_i, w_u) of the current averaged over a step, ``w_i i(t) + w_u (v - ke omega)``.
+
+    The same held input and method as :func:`electrical_step_coefficients`:
+    ``"exact"``: the mean of i(t + s) = u/R + (i(t) - u/R) exp(-R s/L) over [0, h],
+    w_i = (1 - a)/x, w_u = (1 - w_i)/R with x = R h/L, a = exp(-x);
+    ``"euler"``: the current is linear over the step, so its mean is (i(t) + i(t+h))/2;
+    ``"quasi_static"``: the current is u/R throughout.
+    The plant holds the torque it is given over the step, so handing it the mean torque
+    transfers the drive's impulse over the step exactly (for the held speed).
+    """
+    a, g = electrical_step_coefficients(R, L, h, method)
+    if method == "quasi_static" or (method == "exact" and L == 0.0):
+        return 0.0, 1.0 / R
+    if method == "exact":
+        x = R * h / L
+        w_i = -math.expm1(-x) / x
+        return w_i, (1.0 - w_i) / R
+    return 0.5 * (1.0 + a), 0.5 * g
+
+
 def advance_current(i, v, omega, ke, coefficients):
     """Current at the end of a step with held voltage and speed (4.162).
 

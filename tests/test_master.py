@@ -147,3 +147,17 @@ def test_group_substeps_converge_on_the_coupled_drive_plant_motion():
     # explicit coupling is first order in the exchange step: each halving about halves the gap
     assert gap[1] > 1e-7
     assert 1.5 < gap[1] / gap[2] < 3.0 and 1.5 < gap[2] / gap[4] < 3.0
+
+
+def test_mean_drive_torque_couples_the_plant_better_than_the_end_torque():
+    def torque_output(system, mode):
+        return replace(system, components=tuple(
+            replace(c, parameters={**c.parameters, "torque_output": mode}) if c.model == "DCMotorDrive" else c
+            for c in system.components))
+
+    fine = simulate(_drives_and_plant(32))
+    for n in (1, 4):
+        gap = {mode: np.max(np.hypot(*(simulate(torque_output(_drives_and_plant(n), mode))[s] - fine[s]
+                                        for s in ("plant.x", "plant.y"))))
+               for mode in ("end", "mean")}
+        assert gap["mean"] < 0.5 * gap["end"]

@@ -114,3 +114,27 @@ def test_bad_mode_method_and_step():
         Drive(motor1.with_(L=0.0), mode="current")
     with pytest.raises(ValueError, match="needs L > 0"):
         electrical_step_coefficients(1.0, 0.0, H, "euler")
+
+
+def test_mean_current_coefficients_are_the_step_average():
+    import math
+
+    from scipy.integrate import quad
+
+    from motor.electrics import advance_current, electrical_step_coefficients, mean_current_coefficients
+
+    R, ke, i0, v, omega = 1.101, 5.138e-2, 0.7, 6.0, 40.0
+    u = v - ke * omega
+    for L, h in ((0.667e-3, 1e-3), (0.667e-3, 0.25e-3), (1e-6, 1e-3), (5e-3, 1e-3)):
+        tau = L / R
+        breaks = [b * tau for b in (1, 5, 20, 80) if b * tau < h]      # the transient may be short
+        exact, _ = quad(lambda s: u / R + (i0 - u / R) * math.exp(-s / tau), 0.0, h, epsabs=0, epsrel=1e-13,
+                        points=breaks or None, limit=200)
+        w_i, w_u = mean_current_coefficients(R, L, h, "exact")
+        assert w_i * i0 + w_u * u == pytest.approx(exact / h, rel=1e-12)
+        # Euler: the current is linear over the step; quasi-static: u / R throughout
+        i1 = advance_current(i0, v, omega, ke, electrical_step_coefficients(R, L, h, "euler"))
+        w_i, w_u = mean_current_coefficients(R, L, h, "euler")
+        assert w_i * i0 + w_u * u == pytest.approx(0.5 * (i0 + i1), rel=1e-14)
+    assert mean_current_coefficients(R, 0.667e-3, 1e-3, "quasi_static") == (0.0, 1.0 / R)
+    assert mean_current_coefficients(R, 0.0, 1e-3, "exact") == (0.0, 1.0 / R)

@@ -3,7 +3,8 @@
 Timing (one communication step from t to t + h, inputs held over it):
 ``v`` is the voltage applied over [t, t + h] (in current mode the controller
 samples ``i_ref`` and ``i_hat`` at t and holds its voltage), ``i`` and
-``tau`` are the current and shaft torque at t + h.  Outputs change only in
+``tau`` are the current and shaft torque at t + h (with ``torque_output = "mean"``,
+``tau`` is the shaft torque averaged over [t, t + h]).  Outputs change only in
 ``doStep``: no direct feedthrough.
 
 The module name is unique among parcosim slaves: all FMUs loaded in one
@@ -54,6 +55,9 @@ class DCMotorDrive(GuardedSlave):
         d("mode", "parameter", "current", "'current' (controller K(z) on i_ref, i_hat) or 'voltage' (v_ref applied)")
         d("method", "parameter", "exact",
           "Electrical integration over a step: 'exact' (analytic), 'euler' (explicit) or 'quasi_static' (L = 0)")
+        d("torque_output", "parameter", "end",
+          "'end': tau is the shaft torque at the step's end; 'mean': its average over the step "
+          "(what a plant holding tau over the step should get)")
         d("T", "parameter", 1e-3, "Current-controller sample time [s]; in current mode the step must divide it")
         d("omega0", "parameter", 0.0, "Start in electrical steady state at this speed [rad/s]")
         d("i0", "parameter", 0.0, "Start in electrical steady state with this current [A]")
@@ -61,7 +65,7 @@ class DCMotorDrive(GuardedSlave):
 
     def setup(self):
         params = with_overrides(get_motor_preset(self.preset), self, [(field, var) for field, var, _ in MOTOR_PARAMETERS])
-        self.drive = Drive(params, mode=self.mode, method=self.method, T=self.T)
+        self.drive = Drive(params, mode=self.mode, method=self.method, T=self.T, torque_output=self.torque_output)
         self.drive.start(self.omega0, self.i0)
         self.tau = self.drive.torque(self.omega0)
         self.v = self.drive.v
