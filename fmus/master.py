@@ -189,8 +189,12 @@ class _FmuInstance:
             self._fmu.freeInstance()
 
 
-class _InProcessInstance:
-    """One slave object of ``fmus/slaves`` called directly, as pythonfmu would."""
+class InProcessInstance:
+    """One slave object of ``fmus/slaves`` called directly, as pythonfmu would.
+
+    ``slave`` is the object; ``variables`` its :class:`Variable` dict (see
+    :func:`slave_variables`); :meth:`initialize` sets parameters as an importer does.
+    """
 
     def __init__(self, model: str, name: str):
         from .build import SLAVES
@@ -200,7 +204,7 @@ class _InProcessInstance:
         cls = getattr(importlib.import_module(f"fmus.slaves.{SLAVES[model]}"), model)
         self.name = name
         self.slave = cls(instance_name=name)
-        self.variables = _variables_from_slave(self.slave, getattr(cls, "feedthrough", {}))
+        self.variables = slave_variables(self.slave)
 
     def initialize(self, parameters: dict, start_time: float) -> None:
         slave = self.slave
@@ -259,7 +263,9 @@ def _variables_from_model_description(md) -> dict:
             for v in md.modelVariables}
 
 
-def _variables_from_slave(slave, feedthrough: dict) -> dict:
+def slave_variables(slave) -> dict:
+    """Name -> :class:`Variable` of a pythonfmu slave object (feedthrough from its class)."""
+    feedthrough = getattr(type(slave), "feedthrough", {})
     result = {}
     for vr, v in slave.vars.items():
         causality = v.causality.name if v.causality is not None else "local"
@@ -358,7 +364,7 @@ def _instantiate(system: System, mode: str, fmu_dir):
         paths = ensure_built(sorted({c.model for c in system.components}), fmu_dir)
         return {c.name: _FmuInstance(paths[c.model], c.name) for c in system.components}
     if mode == "inprocess":
-        return {c.name: _InProcessInstance(c.model, c.name) for c in system.components}
+        return {c.name: InProcessInstance(c.model, c.name) for c in system.components}
     raise ValueError(f"mode = {mode!r}; valid: {', '.join(MODES)}")
 
 

@@ -63,7 +63,6 @@ actuators: no drives, the controller's torques held on the plant).  See
 """
 from __future__ import annotations
 
-import importlib
 import math
 import time as _time
 from dataclasses import dataclass, field, replace
@@ -71,7 +70,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from fmus.master import Variable, stepping_order
+from fmus.master import CoSimulationError, InProcessInstance, slave_variables, stepping_order
 from fmus.system import System, split_signal
 from motor import shaft_torque
 from plant import fivebar
@@ -124,44 +123,21 @@ class ReferenceResult:
 
 def _slave(component):
     """The component's slave object, initialised with its parameters (as the master does)."""
-    from pythonfmu import Boolean, Integer, Real, String
-
     from fmus.build import SLAVES
 
     if component.model not in SLAVES:
         raise ReferenceError(f"component {component.name}: unknown model {component.model!r}")
-    cls = getattr(importlib.import_module(f"fmus.slaves.{SLAVES[component.model]}"), component.model)
-    slave = cls(instance_name=component.name)
-    by_name = {v.name: (vr, v) for vr, v in slave.vars.items()}
-    slave.setup_experiment(0.0, None, None)
-    slave.enter_initialization_mode()
-    for name, value in component.parameters.items():
-        if name not in by_name:
+    instance = InProcessInstance(component.model, component.name)
+    for name in component.parameters:
+        if name not in instance.variables:
             raise ReferenceError(f"component {component.name}: {component.model} has no parameter {name!r}")
-        vr, v = by_name[name]
-        if isinstance(v, Real):
-            slave.set_real([vr], [float(value)])
-        elif isinstance(v, Integer):
-            slave.set_integer([vr], [int(value)])
-        elif isinstance(v, Boolean):
-            slave.set_boolean([vr], [bool(value)])
-        elif isinstance(v, String):
-            slave.set_string([vr], [str(value)])
-    slave.exit_initialization_mode()
-    if slave.error:
-        raise ReferenceError(f"{component.name}: {slave.error}")
-    return slave
-
-
-def _variables(slave) -> dict:
-    """:class:`fmus.master.Variable` of each slave variable (for the stepping order)."""
-    result = {}
-    for vr, v in slave.vars.items():
-        causality = v.causality.name if v.causality is not None else "local"
-        variability = v.variability.name if v.variability is not None else "continuous"
-        result[v.name] = Variable(v.name, vr, type(v).__name__, causality, variability,
-                                  tuple(getattr(type(slave), "feedthrough", {}).get(v.name, ())))
-    return result
+    try:
+        instance.initialize(component.parameters, 0.0)
+    except CoSimulationError as exc:
+        raise ReferenceError(str(exc)) from None
+    if instance.slave.error:
+        raise ReferenceError(f"{component.name}: {instance.slave.error}")
+    return instance.slave
 
 
 def _real_outputs(slave) -> list:
@@ -267,7 +243,7 @@ def reference_run(scene_or_name, rtol: float = RTOL, atol: float = ATOL, stop_ti
     h, steps = system.step, system.steps
 
     slaves = {c.name: _slave(c) for c in system.components}
-    order = stepping_order(system, {n: _variables(s) for n, s in slaves.items()})
+    order = stepping_order(system, {n: slave_variables(s) for n, s in slaves.items()})
     plants = [c.name for c in system.components if c.model == "FiveBarPlant"]
     if len(plants) != 1:
         raise ReferenceError(f"the reference needs exactly one FiveBarPlant, found {len(plants)}")
