@@ -1,0 +1,611 @@
+"""Export a :class:`fmus.system.System` to an SSP 1.0 package, and run one with fmpy or Ecos.
+
+The package (a zip) holds:
+
+* ``SystemStructure.ssd``: one ``ssd:System`` with one ``ssd:Component`` per instance
+  (``source="resources/<Model>.fmu"``), typed connectors (``ssc:Real`` ...) of kind
+  ``output`` (connected or recorded outputs), ``input`` (connected inputs only: an
+  unconnected input keeps its FMU start value) and ``parameter`` (every parameter the
+  system sets), the connections, and ``ssd:DefaultExperiment`` (start 0, stop
+  ``system.stop_time``; the communication step in an annotation of type
+  :data:`STEP_ANNOTATION`, since SSP 1.0 has no attribute for it);
+* ``resources/<Model>.fmu``: each FMU once (from :func:`fmus.build.ensure_built`);
+* ``resources/<instance>.ssv``: the component's parameters (Real, Integer, Boolean,
+  String), bound by the component's ``ssd:ParameterBindings``.  Every file is a
+  parameter set named :data:`PARAMETER_SET`, the name Ecos selects them by.
+
+Parameter names in the ``.ssv`` files are the FMU's variable names (names in a
+component's parameter binding are relative to the component).
+
+The runners :func:`simulate_ssp_fmpy` and :func:`simulate_ssp_ecos` run a package the way
+the scene's Jacobi master does (every component reads the outputs all held at the step's
+start); see ``docs/ssp.md`` for what each tool needs and does by default.
+"""
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+import shutil
+import tempfile
+import time as _time
+import xml.etree.ElementTree as ET
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .system import System, split_signal
+
+NS = {
+    "ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
+    "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
+    "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues",
+}
+#: Name of the parameter set in every ``.ssv`` file (Ecos: ``init(parameter_set=...)``).
+PARAMETER_SET = "parameters"
+#: Annotation type of ``ssd:DefaultExperiment`` that carries the communication step.
+STEP_ANNOTATION = "org.parcosim.communicationStep"
+_PARCOSIM_NS = "urn:parcosim:ssp"
+_TYPES = ("Real", "Integer", "Boolean", "String")
+_INT32 = (-2**31, 2**31 - 1)
+
+for _prefix, _uri in {**NS, "parcosim": _PARCOSIM_NS}.items():
+    ET.register_namespace(_prefix, _uri)
+
+
+def _q(prefix: str, tag: str) -> str:
+    return f"{{{NS[prefix]}}}{tag}"
+
+
+# --- export ---------------------------------------------------------------------------------
+
+def export_ssp(system: System, path, fmu_dir=None) -> Path:
+    """Write ``system`` as an SSP 1.0 package to ``path`` and return its path.
+
+    Parameters
+    ----------
+    system : System
+        What to export; every component must be an FMU that :func:`fmus.build.ensure_built`
+        finds or builds in ``fmu_dir``.
+    path : str or Path
+        The ``.ssp`` file to write (its parent directory is created); its stem names the
+        system structure.
+    fmu_dir : str or Path, optional
+        Where the FMUs are (and are built when missing or stale); default
+        :data:`fmus.build.DEFAULT_OUT`.
+
+    Raises
+    ------
+    ValueError
+        For anything SSP 1.0 or the FMUs cannot express: multi-rate components
+        (``substeps > 1``), a missing FMU, a variable the FMU lacks, a connection that is
+        not output -> input of one type, a recorded input that is not connected, a
+        parameter that is no parameter (or input) of its FMU, or a value of the wrong type.
+    """
+    path = Path(path)
+    if path.suffix.lower() != ".ssp":
+        raise ValueError(f"{path}: an SSP package must end in '.ssp'")
+    for c in system.components:
+        if c.substeps != 1:
+            raise ValueError(f"component {c.name}: substeps = {c.substeps}; SSP 1.0 has no per-component "
+                             "step, so multi-rate systems cannot be exported (set substeps=1)")
+    fmus = _fmu_paths(system, fmu_dir)
+    variables = {model: _read_variables(model, fmu) for model, fmu in fmus.items()}
+    connectors, values = _plan(system, variables)
+    ssd = _ssd(system, path.stem, connectors, values)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    try:
+        with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as zf:
+            zf.writestr("SystemStructure.ssd", _xml_bytes(ssd))
+            for model, fmu in fmus.items():
+                # FMUs are zips already: store them as they are.
+                zf.write(fmu, f"resources/{model}.fmu", compress_type=zipfile.ZIP_STORED)
+            for c in system.components:
+                if values[c.name]:
+                    zf.writestr(f"resources/{c.name}.ssv", _xml_bytes(_ssv(values[c.name])))
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+    return path
+
+
+def _fmu_paths(system: System, fmu_dir) -> dict:
+    from .build import ensure_built
+
+    models = list(dict.fromkeys(c.model for c in system.components))
+    for model in models:
+        if not model or any(ch in model for ch in '/\\:*?"<>|') or model in (".", ".."):
+            raise ValueError(f"model name {model!r} cannot name a file resources/{model}.fmu")
+    try:
+        return ensure_built(models, fmu_dir)
+    except (FileNotFoundError, ValueError) as exc:
+        raise ValueError(f"cannot export: {exc}") from None
+
+
+def _read_variables(model: str, fmu: Path) -> dict:
+    from fmpy import read_model_description
+
+    try:
+        md = read_model_description(str(fmu), validate=False)
+    except Exception as exc:  # noqa: BLE001 - any unreadable FMU is an export error
+        raise ValueError(f"cannot read the model description of {fmu}: {exc}") from None
+    if md.fmiVersion != "2.0" or md.coSimulation is None:
+        raise ValueError(f"{fmu} is not an FMI 2.0 co-simulation FMU (fmiVersion {md.fmiVersion})")
+    if md.coSimulation.modelIdentifier != model and md.modelName != model:
+        raise ValueError(f"{fmu} holds model {md.modelName!r}, not {model!r}")
+    return {v.name: v for v in md.modelVariables}
+
+
+def _plan(system: System, variables: dict):
+    """Connectors (instance -> {name: (kind, type)}) and parameter values (instance -> {name: (type, value)})."""
+    connectors = {c.name: {} for c in system.components}
+    values = {c.name: {} for c in system.components}
+
+    def variable(signal, what):
+        instance, name = split_signal(signal)
+        model = system.component(instance).model
+        v = variables[model].get(name)
+        if v is None:
+            raise ValueError(f"{what} {signal}: {model} has no variable {name!r}")
+        if v.type not in _TYPES:
+            raise ValueError(f"{what} {signal}: type {v.type} cannot be exported (only {', '.join(_TYPES)})")
+        return instance, name, v
+
+    def declare(instance, name, kind, type_):
+        old = connectors[instance].get(name)
+        if old is not None and old != (kind, type_):
+            raise ValueError(f"{instance}.{name} would be both a {old[0]} and a {kind} connector")
+        connectors[instance][name] = (kind, type_)
+
+    for conn in system.connections:
+        si, sn, sv = variable(conn.source, "connection source")
+        ti, tn, tv = variable(conn.target, "connection target")
+        if sv.causality != "output":
+            raise ValueError(f"connection {conn.source} -> {conn.target}: the source is a {sv.causality}, "
+                             "not an output")
+        if tv.causality != "input":
+            raise ValueError(f"connection {conn.source} -> {conn.target}: the target is a {tv.causality}, "
+                             "not an input")
+        if sv.type != tv.type:
+            raise ValueError(f"connection {conn.source} -> {conn.target} joins a {sv.type} to a {tv.type}")
+        declare(si, sn, "output", sv.type)
+        declare(ti, tn, "input", tv.type)
+    connected = {c.target for c in system.connections}
+    for signal in system.record:
+        instance, name, v = variable(signal, "recorded signal")
+        if v.causality == "output":
+            declare(instance, name, "output", v.type)
+        elif not (v.causality == "input" and signal in connected):
+            raise ValueError(f"recorded signal {signal} is a {v.causality}; only outputs and connected inputs "
+                             "can be recorded (fmpy's SSP runner needs every declared input connected)")
+    for c in system.components:
+        for name, value in c.parameters.items():
+            _, _, v = variable(f"{c.name}.{name}", "parameter")
+            if v.causality not in ("parameter", "input"):
+                raise ValueError(f"parameter {c.name}.{name}: {c.model}'s {name!r} is a {v.causality}, "
+                                 "not a parameter or input")
+            if v.variability == "constant":
+                raise ValueError(f"parameter {c.name}.{name}: {c.model}'s {name!r} is a constant")
+            values[c.name][name] = (v.type, _coerce(f"{c.name}.{name}", v.type, value))
+            if (c.name + "." + name) not in connected:
+                # An input set as a parameter is declared a parameter connector: an
+                # unconnected input connector would stop fmpy's runner.
+                declare(c.name, name, "parameter", v.type)
+    return connectors, values
+
+
+def _coerce(signal: str, type_: str, value):
+    """The value as its FMI type, or a ValueError that names it."""
+    bad = ValueError(f"parameter {signal} = {value!r} ({type(value).__name__}) is no {type_} value")
+    if type_ == "Real":
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+            raise bad
+        value = float(value)
+        if not math.isfinite(value):
+            raise ValueError(f"parameter {signal} = {value!r} is not finite")
+        return value
+    if type_ == "Integer":
+        if isinstance(value, bool):
+            raise bad
+        if isinstance(value, (float, np.floating)) and float(value).is_integer():
+            value = int(value)
+        if not isinstance(value, (int, np.integer)):
+            raise bad
+        value = int(value)
+        if not _INT32[0] <= value <= _INT32[1]:
+            raise ValueError(f"parameter {signal} = {value} does not fit a 32-bit FMI Integer")
+        return value
+    if type_ == "Boolean":
+        if isinstance(value, (bool, np.bool_)):
+            return bool(value)
+        if isinstance(value, (int, np.integer)) and value in (0, 1):
+            return bool(value)
+        raise bad
+    if type_ == "String":
+        if not isinstance(value, str):
+            raise bad
+        if any(ord(ch) < 32 and ch not in "\t\n\r" for ch in value):
+            raise ValueError(f"parameter {signal} = {value!r} holds control characters XML cannot carry")
+        return value
+    raise bad
+
+
+def _format(type_: str, value) -> str:
+    if type_ == "Real":
+        return repr(float(value))  # shortest string that reads back to the same double
+    if type_ == "Integer":
+        return str(int(value))
+    if type_ == "Boolean":
+        return "true" if value else "false"
+    return value
+
+
+def _ssd(system: System, name: str, connectors: dict, values: dict) -> ET.Element:
+    root = ET.Element(_q("ssd", "SystemStructureDescription"),
+                      {"version": "1.0", "name": name, "generationTool": "parcosim (fmus.ssp.export_ssp)"})
+    sys_el = ET.SubElement(root, _q("ssd", "System"), {
+        "name": name, "description": f"parcosim system, {len(system.components)} components, "
+                                     f"communication step {system.step!r} s"})
+    elements = ET.SubElement(sys_el, _q("ssd", "Elements"))
+    for c in system.components:
+        comp = ET.SubElement(elements, _q("ssd", "Component"), {
+            "name": c.name, "type": "application/x-fmu-sharedlibrary",
+            "source": f"resources/{c.model}.fmu", "implementation": "CoSimulation"})
+        if connectors[c.name]:
+            conns = ET.SubElement(comp, _q("ssd", "Connectors"))
+            for cname, (kind, type_) in connectors[c.name].items():
+                el = ET.SubElement(conns, _q("ssd", "Connector"), {"name": cname, "kind": kind})
+                ET.SubElement(el, _q("ssc", type_))
+        if values[c.name]:
+            bindings = ET.SubElement(comp, _q("ssd", "ParameterBindings"))
+            ET.SubElement(bindings, _q("ssd", "ParameterBinding"), {
+                "type": "application/x-ssp-parameter-set", "source": f"resources/{c.name}.ssv"})
+    if system.connections:
+        conns = ET.SubElement(sys_el, _q("ssd", "Connections"))
+        for conn in system.connections:
+            si, sn = split_signal(conn.source)
+            ti, tn = split_signal(conn.target)
+            ET.SubElement(conns, _q("ssd", "Connection"), {
+                "startElement": si, "startConnector": sn, "endElement": ti, "endConnector": tn})
+    experiment = ET.SubElement(root, _q("ssd", "DefaultExperiment"),
+                               {"startTime": "0.0", "stopTime": repr(float(system.stop_time))})
+    annotations = ET.SubElement(experiment, _q("ssd", "Annotations"))
+    annotation = ET.SubElement(annotations, _q("ssc", "Annotation"), {"type": STEP_ANNOTATION})
+    ET.SubElement(annotation, f"{{{_PARCOSIM_NS}}}CommunicationStep", {"value": repr(float(system.step))})
+    return root
+
+
+def _ssv(values: dict) -> ET.Element:
+    root = ET.Element(_q("ssv", "ParameterSet"), {"version": "1.0", "name": PARAMETER_SET})
+    params = ET.SubElement(root, _q("ssv", "Parameters"))
+    for name, (type_, value) in values.items():
+        p = ET.SubElement(params, _q("ssv", "Parameter"), {"name": name})
+        ET.SubElement(p, _q("ssv", type_), {"value": _format(type_, value)})
+    return root
+
+
+def _xml_bytes(root: ET.Element) -> bytes:
+    ET.indent(root)
+    return ET.tostring(root, encoding="UTF-8", xml_declaration=True) + b"\n"
+
+
+# --- reading back ---------------------------------------------------------------------------
+
+def _parse(zf: zipfile.ZipFile, member: str) -> ET.Element:
+    try:
+        return ET.fromstring(zf.read(member))
+    except KeyError:
+        raise ValueError(f"{zf.filename}: no {member}") from None
+    except ET.ParseError as exc:
+        raise ValueError(f"{zf.filename}: {member} is not well-formed XML: {exc}") from None
+
+
+def read_ssp_parameters(path) -> dict:
+    """The parameters bound to the components of an SSP package:
+    ``"instance.variable" -> value`` (float, int, bool or str).
+
+    Reads each component's ``ssd:ParameterBindings`` (``.ssv`` files in the package or
+    inline ``ssd:ParameterValues``), which is what fmpy's runner ignores.
+    """
+    result = {}
+    with zipfile.ZipFile(path) as zf:
+        ssd = _parse(zf, "SystemStructure.ssd")
+        for comp in ssd.iterfind("ssd:System/ssd:Elements/ssd:Component", NS):
+            instance = comp.get("name")
+            for binding in comp.iterfind("ssd:ParameterBindings/ssd:ParameterBinding", NS):
+                prefix = binding.get("prefix", "")
+                if binding.get("source"):
+                    sets = [_parse(zf, binding.get("source"))]
+                else:
+                    sets = binding.findall("ssd:ParameterValues/ssv:ParameterSet", NS)
+                for pset in sets:
+                    for p in pset.iterfind("ssv:Parameters/ssv:Parameter", NS):
+                        name = p.get("name")
+                        if prefix and name.startswith(prefix):
+                            name = name[len(prefix):]
+                        result[f"{instance}.{name}"] = _parameter_value(p)
+    return result
+
+
+def _parameter_value(p: ET.Element):
+    for type_ in _TYPES:
+        el = p.find(f"ssv:{type_}", NS)
+        if el is not None:
+            text = el.get("value")
+            if type_ == "Real":
+                return float(text)
+            if type_ == "Integer":
+                return int(text)
+            if type_ == "Boolean":
+                return text.strip() in ("true", "1")
+            return text
+    raise ValueError(f"parameter {p.get('name')!r}: no Real, Integer, Boolean or String value")
+
+
+def read_ssp_experiment(path) -> tuple:
+    """``(start_time, stop_time, step)`` of an SSP package's default experiment
+    (``None`` where it gives none)."""
+    with zipfile.ZipFile(path) as zf:
+        ssd = _parse(zf, "SystemStructure.ssd")
+    experiment = ssd.find("ssd:DefaultExperiment", NS)
+    if experiment is None:
+        return None, None, None
+    start = experiment.get("startTime")
+    stop = experiment.get("stopTime")
+    step = None
+    for annotation in experiment.iterfind("ssd:Annotations/ssc:Annotation", NS):
+        if annotation.get("type") == STEP_ANNOTATION:
+            el = annotation.find(f"{{{_PARCOSIM_NS}}}CommunicationStep")
+            if el is not None:
+                step = float(el.get("value"))
+    return (float(start) if start is not None else None, float(stop) if stop is not None else None, step)
+
+
+# --- running a package ----------------------------------------------------------------------
+
+@dataclass
+class SspRun:
+    """What a run of an SSP package recorded.
+
+    ``time[k]`` is the time the values ``signals[name][k]`` hold at (the end of the step
+    that produced them; 0 for the values after initialisation).
+    """
+
+    time: np.ndarray
+    signals: dict
+    tool: str
+    wall_s: float
+    error: str | None = None
+    extra: dict = field(default_factory=dict)
+
+    def __getitem__(self, signal: str) -> np.ndarray:
+        return self.signals[signal]
+
+
+def _experiment(path, stop_time, step_size):
+    _, stop, step = read_ssp_experiment(path)
+    stop_time = stop if stop_time is None else stop_time
+    step_size = step if step_size is None else step_size
+    if stop_time is None or step_size is None:
+        raise ValueError(f"{path}: give stop_time and step_size (the package does not)")
+    if not step_size > 0:
+        raise ValueError(f"step_size = {step_size!r} must be > 0")
+    return float(stop_time), float(step_size)
+
+
+def fmpy_parameter_set(path):
+    """The package's parameter bindings as an ``fmpy.ssp.ssd.ParameterSet`` for
+    ``simulate_ssp(..., parameter_set=...)``: names ``"instance.variable"``, typed values
+    (fmpy would take the XML string ``"false"`` for True)."""
+    from fmpy.ssp.ssd import Parameter, ParameterSet
+
+    pset = ParameterSet(name=PARAMETER_SET)
+    for name, value in read_ssp_parameters(path).items():
+        type_ = {bool: "Boolean", int: "Integer", float: "Real", str: "String"}[type(value)]
+        pset.parameters.append(Parameter(name=name, type=type_, value=value))
+    return pset
+
+
+@contextlib.contextmanager
+def _fmpy_patches(path, initial_outputs: bool):
+    """Additions to fmpy's SSP runner for the time of one run (module globals of
+    ``fmpy.ssp.simulation``, restored afterwards):
+
+    * ``set_value`` also sets String variables (fmpy 0.3 raises "Unsupported type: String");
+    * ``set_parameters`` matches "instance." exactly (fmpy's bare prefix match would give
+      instance "drive" the parameters of "drive2" as well);
+    * with ``initial_outputs``, the first step reads the outputs after initialisation
+      through the connections (fmpy starts every connector at 0.0).
+    """
+    import fmpy.ssp.simulation as sim
+
+    originals = sim.set_value, sim.set_parameters, sim.instantiate_fmu, sim.do_step
+    original_set, _, original_inst, original_step = originals
+    with zipfile.ZipFile(path) as zf:
+        ssd = _parse(zf, "SystemStructure.ssd")
+    links = [(c.get("startElement"), c.get("startConnector"), c.get("endElement"), c.get("endConnector"))
+             for c in ssd.iterfind("ssd:System/ssd:Connections/ssd:Connection", NS)]
+    components, started = {}, [False]
+
+    def set_value(component, name, value):
+        variable = component.variables[name]
+        if variable.type == "String":
+            component.fmu.setString([variable.valueReference], [str(value)])
+        else:
+            original_set(component, name, value)
+
+    def set_parameters(component, parameter_set):
+        # fmpy matches by bare prefix: "drive" would also take the parameters of "drive2".
+        prefix = component.name + "."
+        for parameter in parameter_set.parameters:
+            if parameter.name.startswith(prefix):
+                set_value(component, parameter.name[len(prefix):], parameter.value)
+
+    def instantiate_fmu(component, *args, **kwargs):
+        original_inst(component, *args, **kwargs)
+        components[component.name] = component
+        if initial_outputs:
+            for connector in component.connectors:
+                if connector.kind == "output":
+                    connector.value = sim.get_value(component, connector.name)
+
+    def do_step(component, time, step_size):
+        if initial_outputs and not started[0]:
+            started[0] = True
+            for se, sc, ee, ec in links:
+                src = next(c for c in components[se].connectors if c.name == sc)
+                dst = next(c for c in components[ee].connectors if c.name == ec)
+                dst.value = src.value
+        original_step(component, time, step_size)
+
+    sim.set_value, sim.set_parameters, sim.instantiate_fmu, sim.do_step = (
+        set_value, set_parameters, instantiate_fmu, do_step)
+    try:
+        yield components
+    finally:
+        sim.set_value, sim.set_parameters, sim.instantiate_fmu, sim.do_step = originals
+
+
+def simulate_ssp_fmpy(path, stop_time=None, step_size=None, initial_outputs: bool = True) -> SspRun:
+    """Run an SSP package with ``fmpy.ssp.simulation.simulate_ssp``.
+
+    fmpy's runner is a Jacobi master.  It ignores the package's parameter bindings (they
+    are passed as its ``parameter_set``), cannot set String variables and starts every
+    connector at 0.0; this function adds String support and, with ``initial_outputs``
+    (default), lets the first step read the outputs after initialisation, as
+    ``fmus.master.simulate(..., coupling="jacobi")`` does.  fmpy labels the values after
+    the step from t to t + h with t; the returned times are t + h.  fmpy records no row
+    for t = 0, and as it adds h to its time at every step it may take one step more than
+    ``stop_time / h``.
+
+    Returns every connector (``"instance.connector"``) as a signal.  fmpy raises when an
+    FMU returns fmi2Discard and the rows are lost: this raises RuntimeError naming the
+    component's ``error`` output.
+    """
+    from fmpy.ssp.simulation import simulate_ssp
+
+    stop_time, step_size = _experiment(path, stop_time, step_size)
+    pset = fmpy_parameter_set(path)
+    start = _time.perf_counter()
+    with _fmpy_patches(path, initial_outputs) as components:
+        try:
+            rows = simulate_ssp(str(path), start_time=0.0, stop_time=stop_time, step_size=step_size,
+                                parameter_set=pset)
+        except Exception as exc:
+            # fmpy raises on fmi2Discard and leaves the FMUs instantiated: say who refused, free them.
+            reasons = []
+            for name, component in components.items():
+                variable = component.variables.get("error")
+                if variable is not None and variable.type == "String":
+                    with contextlib.suppress(Exception):
+                        message = component.fmu.getString([variable.valueReference])[0]
+                        message = message.decode(errors="replace") if isinstance(message, bytes) else message
+                        if message:
+                            reasons.append(f"{name}: {message}")
+                with contextlib.suppress(Exception):
+                    component.fmu.terminate()
+                with contextlib.suppress(Exception):
+                    component.fmu.freeInstance()
+                shutil.rmtree(getattr(component, "unzipdir", None) or "", ignore_errors=True)
+            raise RuntimeError(f"fmpy's SSP runner stopped ({exc})"
+                               + (": " + "; ".join(reasons) if reasons else "")) from exc
+    wall = _time.perf_counter() - start
+    names = [n for n in rows.dtype.names if n != "time"]
+    return SspRun(time=rows["time"] + step_size, signals={n: np.asarray(rows[n]) for n in names},
+                  tool="fmpy", wall_s=wall, extra={"fmpy_time_labels": np.asarray(rows["time"])})
+
+
+def ecos_available() -> str | None:
+    """None when ``ecospy`` loads; otherwise why not (e.g. libtbb.so.12 missing)."""
+    try:
+        import ecospy  # noqa: F401
+    except Exception as exc:  # noqa: BLE001 - OSError for a missing libtbb, ImportError ...
+        return f"{type(exc).__name__}: {exc}"
+    return None
+
+
+@contextlib.contextmanager
+def _one_cpu(enabled: bool):
+    """Run the block with the calling thread bound to one CPU.  Ecos (C++17 parallel
+    algorithms on oneTBB) sizes its thread pool from this mask when it first steps, so
+    it steps the models on the calling thread; the mask is restored afterwards."""
+    if not enabled or not hasattr(os, "sched_getaffinity"):
+        yield
+        return
+    before = os.sched_getaffinity(0)
+    os.sched_setaffinity(0, {min(before)})
+    try:
+        yield
+    finally:
+        os.sched_setaffinity(0, before)
+
+
+def simulate_ssp_ecos(path, signals, stop_time=None, step_size=None, serial: bool = True,
+                      log_level: str = "warn") -> SspRun:
+    """Run an SSP package with Ecos (PyPI ``ecospy``) and record ``signals``
+    (``"instance.variable"``, Real) after initialisation and after every step.
+
+    Ecos applies a parameter set only when ``init`` names it: this passes
+    :data:`PARAMETER_SET`.  Ecos is a Jacobi master that also passes the outputs after
+    initialisation to the inputs before the first step.  ``serial`` (default) keeps Ecos
+    on the calling thread (see :func:`_one_cpu`): Python FMUs stepped from TBB worker
+    threads only take turns on the GIL.
+
+    Ecos steps on after an FMU returns fmi2Discard; this run stops at the first step after
+    which a component's String output ``error`` (every parcosim FMU has one) is not empty,
+    keeps the rows recorded so far and says why in ``SspRun.error``, as
+    :func:`fmus.master.simulate` does.
+    """
+    reason = ecos_available()
+    if reason is not None:
+        raise RuntimeError(f"ecospy cannot be loaded ({reason}); pip install ecospy and apt-get install libtbb12")
+    from ecospy import EcosLib, EcosSimulation
+
+    stop_time, step_size = _experiment(path, stop_time, step_size)
+    steps = int(round(stop_time / step_size))
+    ids = [f"{i}::{v}" for i, v in map(split_signal, signals)]
+    data = np.full((steps + 1, len(ids)), np.nan)
+    with zipfile.ZipFile(path) as zf:
+        instances = [c.get("name") for c in
+                     _parse(zf, "SystemStructure.ssd").iterfind("ssd:System/ssd:Elements/ssd:Component", NS)]
+    EcosLib.set_log_level(log_level)
+    error, times = None, []
+    start = _time.perf_counter()
+    with _one_cpu(serial):
+        sim = EcosSimulation(step_size, ssp_path=str(path))
+        loaded = _time.perf_counter()
+        try:
+            if not sim.init(0.0, PARAMETER_SET):
+                raise RuntimeError(f"Ecos could not initialise {path}: {EcosLib.get_last_error()}")
+            watched = []
+            for name in instances:
+                with contextlib.suppress(Exception):  # an FMU without a String output 'error'
+                    sim.get_string(f"{name}::error")
+                    watched.append(name)
+            get, get_string = sim.get_real, sim.get_string
+            data[0] = [get(i) for i in ids]
+            times.append(sim.get_time())
+            for k in range(steps):
+                sim.step(1)
+                for name in watched:
+                    message = get_string(f"{name}::error")
+                    if message:
+                        error = f"{name} refused the step from t = {k * step_size:.6g} s: {message}"
+                        break
+                if error:
+                    break
+                data[k + 1] = [get(i) for i in ids]
+                times.append(sim.get_time())
+            sim.terminate()
+        finally:
+            sim.free()
+    wall = _time.perf_counter() - start
+    rows = len(times)
+    return SspRun(time=np.asarray(times), signals={s: data[:rows, j] for j, s in enumerate(signals)},
+                  tool="ecos", wall_s=wall, error=error, extra={"load_s": loaded - start})
