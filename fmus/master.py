@@ -485,8 +485,8 @@ def _run(system, instances, order, mode, coupling, progress) -> Result:
         report_every = max(1, steps // 100)
         jacobi = coupling == "jacobi"
         groups = _rate_groups(plan)
+        t = 0.0
         for k in range(steps):
-            t = k * h
             held = values[:] if jacobi else values
             for substeps, members in groups:
                 if substeps == 1:
@@ -510,6 +510,9 @@ def _run(system, instances, order, mode, coupling, progress) -> Result:
                         for i, v in zip(out_slots, inst.get_outputs()):
                             values[i] = v
                             local[i] = v
+            # The communication point advances by adding h, as fmpy's and Ecos' masters
+            # do: an exported system then runs there on the very same time points.
+            t += h
             data[k + 1] = [values[i] for i in record_slots]
             done = k + 1
             rows = done + 1
