@@ -214,6 +214,9 @@ def breakdown(system, mode, fmu_dir, classes=None) -> dict:
     steps = system.steps
     # get_outputs is also called once after initialisation (1 call in steps + 1): ignored.
     per = {name: {c: 1e6 * cells.get(c, [0, 0.0])[1] / steps for c in CELLS} for name, cells in table.items()}
+    for name, cells in table.items():
+        if cells.get("python_do_step", [0])[0] == 0:   # a slave that overrides do_step: not seen
+            per[name]["python_do_step"] = float("nan")
     accounted = sum(v[m] for v in per.values() for m in METHODS)
     return {"components": per, "us_per_step": run["us_per_step"],
             "rest_us": run["us_per_step"] - accounted, "order": run["order"]}
