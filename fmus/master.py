@@ -91,9 +91,10 @@ class Result:
     order: tuple
     mode: str
     coupling: str
-    wall_s: float
+    wall_s: float   # stepping, from the first communication point to the last
     error: str | None = None
     stop_time: float = 0.0
+    init_s: float = 0.0   # loading, instantiating and initialising (tables, numba compilation)
     extra: dict = field(default_factory=dict)
 
     def __getitem__(self, signal: str) -> np.ndarray:
@@ -416,13 +417,15 @@ def simulate(system: System, mode: str = "inprocess", coupling: str = "gauss-sei
     """
     if coupling not in COUPLINGS:
         raise ValueError(f"coupling = {coupling!r}; valid: {', '.join(COUPLINGS)}")
+    loading = _time.perf_counter()
     instances = _instantiate(system, mode, fmu_dir)
+    loading_s = _time.perf_counter() - loading
     try:
         _check_signals(system, instances)
         variables = {n: inst.variables for n, inst in instances.items()}
         order = (stepping_order(system, variables) if coupling == "gauss-seidel"
                  else tuple(c.name for c in system.components))
-        return _run(system, instances, order, mode, coupling, progress)
+        return _run(system, instances, order, mode, coupling, progress, loading_s)
     finally:
         for inst in instances.values():
             try:
@@ -443,7 +446,7 @@ def _rate_groups(plan) -> list:
     return groups
 
 
-def _run(system, instances, order, mode, coupling, progress) -> Result:
+def _run(system, instances, order, mode, coupling, progress, loading_s=0.0) -> Result:
     # One flat store of every output that is read or recorded.
     slots = {}
 
@@ -473,10 +476,11 @@ def _run(system, instances, order, mode, coupling, progress) -> Result:
     h, steps = system.step, system.steps
     data = np.full((steps + 1, len(system.record)), np.nan)
     error, done, rows = None, 0, 0
-    start = _time.perf_counter()
+    init_start = start = _time.perf_counter()
     try:
         for c in system.components:
             instances[c.name].initialize(c.parameters, 0.0)
+        start = _time.perf_counter()
         for inst, _, out_slots, _ in plan:
             for i, v in zip(out_slots, inst.get_outputs()):
                 values[i] = v
@@ -524,4 +528,4 @@ def _run(system, instances, order, mode, coupling, progress) -> Result:
     data = data[:rows]
     return Result(time=np.arange(rows) * h, signals={s: data[:, j] for j, s in enumerate(system.record)},
                   order=tuple(order), mode=mode, coupling=coupling, wall_s=wall, error=error,
-                  stop_time=system.stop_time)
+                  stop_time=system.stop_time, init_s=loading_s + (start - init_start))

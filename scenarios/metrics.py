@@ -19,9 +19,10 @@ def rms_norm(a: np.ndarray, b: np.ndarray) -> float:
     return math.sqrt(float(np.mean(a * a + b * b))) if len(a) else float("nan")
 
 
-def scene_metrics(scene: Scene, columns: dict, wall_s: float, completed: bool) -> dict:
+def scene_metrics(scene: Scene, columns: dict, wall_s: float, completed: bool, init_s: float = 0.0) -> dict:
     """The contract's metrics (``e_ef_mm``, ``tau_ef_Nm``, ``e_ss_mm``, ``wall_s``,
-    ``realtime_factor``) and a few more, from result columns (name -> array, with ``t``).
+    ``realtime_factor`` = simulated time / stepping wall time) and a few more (``init_s``:
+loading and initialising the components, not in ``wall_s``), from result columns (name -> array, with ``t``).
 
     Windows that the run did not reach give NaN (written as null in JSON).
     """
@@ -51,5 +52,6 @@ def scene_metrics(scene: Scene, columns: dict, wall_s: float, completed: bool) -
         "window_s": [start, end],
         "simulated_s": simulated,
         "wall_s": wall_s,
+        "init_s": init_s,
         "realtime_factor": simulated / wall_s if wall_s > 0 else float("nan"),
     }

@@ -104,7 +104,7 @@ def run_scene(scene, mode: str = "inprocess", out_dir=None, coupling: str = "gau
     scene = get_scene(scene) if isinstance(scene, str) else scene
     result = simulate(scene.system, mode=mode, coupling=coupling, fmu_dir=fmu_dir, progress=progress)
     columns = result_columns(scene, result)
-    metrics = scene_metrics(scene, columns, result.wall_s, result.completed)
+    metrics = scene_metrics(scene, columns, result.wall_s, result.completed, result.init_s)
     metrics.update({"mode": mode, "coupling": coupling, "order": list(result.order)})
     if result.error:
         metrics["error"] = result.error
