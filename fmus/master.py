@@ -108,6 +108,16 @@ class Result:
 
 # --- component back ends ----------------------------------------------------------------
 
+_CONVERT = {"Real": float, "Integer": int, "Boolean": bool, "String": str}
+
+
+def _set_parameters(variables: dict, parameters: dict, setters: dict) -> None:
+    """Set each parameter with the setter of its FMI type (``setters[type](vrs, values)``)."""
+    for name, value in parameters.items():
+        variable = variables[name]
+        setters[variable.type]([variable.vr], [_CONVERT[variable.type](value)])
+
+
 class _FmuInstance:
     """One FMU instance through fmpy, with batched Real I/O."""
 
@@ -149,12 +159,8 @@ class _FmuInstance:
         try:
             fmu.setupExperiment(startTime=start_time)
             fmu.enterInitializationMode()
-            for name, value in parameters.items():
-                variable = self.variables[name]
-                {"Real": lambda: fmu.setReal([variable.vr], [float(value)]),
-                 "Integer": lambda: fmu.setInteger([variable.vr], [int(value)]),
-                 "Boolean": lambda: fmu.setBoolean([variable.vr], [bool(value)]),
-                 "String": lambda: fmu.setString([variable.vr], [str(value)])}[variable.type]()
+            _set_parameters(self.variables, parameters, {"Real": fmu.setReal, "Integer": fmu.setInteger,
+                                                         "Boolean": fmu.setBoolean, "String": fmu.setString})
             fmu.exitInitializationMode()
         except FMICallException:
             raise CoSimulationError(self.name, start_time, self._last_message() or "initialisation failed") from None
@@ -212,12 +218,8 @@ class InProcessInstance:
         try:
             slave.setup_experiment(start_time, None, None)
             slave.enter_initialization_mode()
-            for name, value in parameters.items():
-                variable = self.variables[name]
-                {"Real": lambda: slave.set_real([variable.vr], [float(value)]),
-                 "Integer": lambda: slave.set_integer([variable.vr], [int(value)]),
-                 "Boolean": lambda: slave.set_boolean([variable.vr], [bool(value)]),
-                 "String": lambda: slave.set_string([variable.vr], [str(value)])}[variable.type]()
+            _set_parameters(self.variables, parameters, {"Real": slave.set_real, "Integer": slave.set_integer,
+                                                         "Boolean": slave.set_boolean, "String": slave.set_string})
             slave.exit_initialization_mode()
         except Exception as exc:  # noqa: BLE001 - as an importer sees an FMU's fatal error
             raise CoSimulationError(self.name, start_time, str(exc)) from None
