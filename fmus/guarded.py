@@ -138,6 +138,12 @@ class GuardedSlave(Fmi2Slave):
 #: Start value of a numeric parameter meaning "the preset's value".
 PRESET_VALUE = -1.0
 
+#: A numeric parameter beyond this magnitude (SI units) is refused as absurd: no quantity of
+#: the robot, its drives or its controller comes near it, and beyond it the models' products
+#: overflow, their designs fail without naming the culprit or their loops never end
+#: (docs/extremes.md).
+ABSURD = 1e6
+
 
 def with_overrides(params, slave, names):
     """``params`` (a validated frozen dataclass with ``with_``) with the slave's parameters
@@ -154,6 +160,7 @@ def with_overrides(params, slave, names):
             continue
         if value < 0.0:
             raise ValueError(f"parameter {var} = {value!r} is negative (use -1 for the preset's value)")
+        refuse_absurd(**{var: value})
         changes[field] = value
     try:
         return params.with_(**changes)
@@ -170,3 +177,11 @@ def require_finite(**values) -> None:
     for name, value in values.items():
         if not math.isfinite(value):
             raise ValueError(f"{name} = {value!r} is not finite")
+
+
+def refuse_absurd(**values) -> None:
+    """Raise ValueError naming the first parameter whose magnitude exceeds :data:`ABSURD`
+    (non-finite values pass: the caller's own checks name them)."""
+    for name, value in values.items():
+        if math.isfinite(value) and abs(value) > ABSURD:
+            raise ValueError(f"parameter {name} = {value!r} is absurd: |{name}| must be <= {ABSURD:g} (SI units)")

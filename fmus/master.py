@@ -184,10 +184,23 @@ class _FmuInstance:
 
     def do_step(self, t: float, h: float) -> None:
         if self._do_step(self._component, t, h, 1) > 1:
-            raise CoSimulationError(self.name, t, self._last_message() or "fmi2DoStep refused")
+            raise CoSimulationError(self.name, t, self._error_output() or self._last_message() or "fmi2DoStep refused")
+
+    def _error_output(self) -> str:
+        """The String output ``error`` of a parcosim FMU: the same text as in process."""
+        variable = self.variables.get("error")
+        if variable is None or variable.type != "String" or variable.causality != "output":
+            return ""
+        try:
+            value = self._fmu.getString([variable.vr])[0]
+        except Exception:  # noqa: BLE001 - a failed read must not hide the refusal
+            return ""
+        return value.decode(errors="replace") if isinstance(value, bytes) else str(value or "")
 
     def _last_message(self) -> str:
-        return self.messages[-1] if self.messages else ""
+        # parcosim slaves log "<instance>: <message>"; the error names the instance already.
+        message = self.messages[-1] if self.messages else ""
+        return message[len(self.name) + 2:] if message.startswith(f"{self.name}: ") else message
 
     def close(self) -> None:
         try:

@@ -4,6 +4,8 @@ One :class:`Drive` per motor, stepped by the co-simulation master with
 inputs held over each step (zero-order hold).
 """
 
+import math
+
 from motor import _checks
 from motor.current_controller import THESIS_POLES, THESIS_T, CurrentController, design_current_controller
 from motor.electrics import (ELECTRICAL_METHODS, advance_current, electrical_step_coefficients,
@@ -16,6 +18,16 @@ TORQUE_OUTPUTS = ("end", "mean")
 
 # Relative tolerance used to decide that h divides T.
 _PHASE_TOL = 1e-6
+
+
+def _design(params, T, poles):
+    """:func:`design_current_controller`, its numerical failures named with the parameters."""
+    try:
+        return design_current_controller(params, T, poles)
+    except (ValueError, RuntimeError, ArithmeticError) as exc:
+        p = params
+        raise ValueError(f"current controller design (app. C) failed for R = {p.R!r}, L = {p.L!r}, kt = {p.kt!r}, "
+                         f"ke = {p.ke!r}, b = {p.b!r}, J_rotor = {p.J_rotor!r}, T = {T!r}: {exc}") from None
 
 
 class Drive:
@@ -58,7 +70,7 @@ class Drive:
         self.mode = _checks.choice("mode", mode, DRIVE_MODES)
         self.method = _checks.choice("method", method, ELECTRICAL_METHODS)
         self.T = _checks.positive("T", T)
-        self.controller = (CurrentController(design_current_controller(params, T, poles), params.v_max)
+        self.controller = (CurrentController(_design(params, self.T, poles), params.v_max)
                            if mode == "current" else None)
         self._h = None
         self._coefficients = None
@@ -158,8 +170,21 @@ class Drive:
         if self.torque_output == "mean":
             w_i, w_u = self._mean
             current = w_i * self.i + w_u * (v - self.params.ke * omega)
-        self.i = advance_current(self.i, v, omega, self.params.ke, coefficients)
+        i = advance_current(self.i, v, omega, self.params.ke, coefficients)
         if self.torque_output == "end":
-            current = self.i
+            current = i
+        tau = shaft_torque(current, omega, self.params)
+        if not (math.isfinite(i) and math.isfinite(tau)):
+            raise ValueError(self._diverged(i, tau, h))
+        self.i = i
         self.v = v
-        return shaft_torque(current, omega, self.params), v, self.i
+        return tau, v, i
+
+    def _diverged(self, i, tau, h):
+        """Why the current or torque of a step is not finite."""
+        text = f"armature current i = {i!r} A, shaft torque tau = {tau!r} N m after this step are not finite"
+        a = self._coefficients[0]
+        if self.method == "euler" and a < -1.0:
+            text += (f": method 'euler' diverges for h = {h!r} s > 2 L/R = {2 * self.params.L / self.params.R:.3g} s "
+                     f"(the current is multiplied by 1 - hR/L = {a:.3g} every step); use 'exact'")
+        return text

@@ -71,8 +71,8 @@ class IntegratorSettings:
             raise ValueError(f"method: unknown integrator {self.method!r}; valid: {', '.join(METHODS)}")
         if self.kernel not in KERNELS:
             raise ValueError(f"kernel: unknown kernel {self.kernel!r}; valid: {', '.join(KERNELS)}")
-        if not (isinstance(self.substeps, int) and self.substeps >= 1):
-            raise ValueError(f"substeps must be an integer >= 1, got {self.substeps!r}")
+        if not (isinstance(self.substeps, int) and 1 <= self.substeps <= MAX_SUBSTEPS):
+            raise ValueError(f"substeps must be an integer in [1, {MAX_SUBSTEPS}], got {self.substeps!r}")
         for name in ("rtol", "atol"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
@@ -81,6 +81,20 @@ class IntegratorSettings:
             raise ValueError(f"baumgarte must be >= 0, got {self.baumgarte!r}")
         return self
 
+
+#: Upper bound of ``substeps``: 0.1 µs RK4 steps at the 1 ms communication step.
+MAX_SUBSTEPS = 10000
+#: RK4's stability interval on the negative real axis: |R(z)| <= 1 for -2.785... <= z <= 0.
+#: The Baumgarte term gives the residual a double pole at -baumgarte (5.66), so an RK4 step h
+#: with baumgarte * h beyond it makes the residual grow at every step.
+RK4_REAL_STABILITY = 2.785293563405282
+#: Largest baumgarte * h accepted with RK4.  Beyond 2 RK4's factor on the residual per step,
+#: |R(-baumgarte h)|, rises from 1/3 to 1 (instability at 2.785), and the end-effector error
+#: with it: 2.7e-6 m at 2, 4.5e-5 m at 2.5, 7.8e-3 m at 2.7 (docs/extremes.md).
+BAUMGARTE_RK4_LIMIT = 2.0
+#: A loop-closure residual (5.18) above this after a step means the integration diverged:
+#: the state no longer describes the closed mechanism (in normal runs it is ~1e-10 m).
+RESIDUAL_STOP = 1e-3
 
 #: Settings that reach ~1e-9 m against an independent reference (see docs/plant.md).
 ACCURATE = IntegratorSettings(method="dopri5", rtol=1e-12, atol=1e-15, project=False)
@@ -130,6 +144,7 @@ class PlantSimulator:
         C = mechanism_state(self.mechanism, q, np.zeros(7)).C
         self.y = np.concatenate([q, C @ np.array([dx0, dy0], dtype=float)])
         self._h_next = None
+        self._residual = None   # (state, its residual norm) of the last step
         self._fast = None
         if self.settings.kernel == "fast":
             from .fast5r import FastKernel
@@ -146,14 +161,28 @@ class PlantSimulator:
 
     # --- stepping ----------------------------------------------------------------
     def step(self, tau1: float, tau2: float, dt: float) -> None:
-        """Advance by dt with the world torques held; the state is kept on error."""
+        """Advance by dt with the world torques held; the state is kept on error.
+
+        Refused (:class:`PlantError`, naming the cause): a non-finite torque or step, a
+        Baumgarte lambda above :data:`BAUMGARTE_RK4_LIMIT` / h for the RK4 step h, an integration
+        that fails or diverges (non-finite state, or loop-closure residual above
+        :data:`RESIDUAL_STOP`; the message gives the torques held), a singular pose.
+        """
         for name, value in (("tau1", tau1), ("tau2", tau2)):
             if not math.isfinite(value):
                 raise PlantError(f"input {name} = {value!r} at t = {self.time:.6g} s is not finite")
         if not (math.isfinite(dt) and dt > 0.0):
             raise PlantError(f"step size {dt!r} at t = {self.time:.6g} s must be > 0")
-        u_star = fivebar.thesis_torques(tau1, tau2)
         s = self.settings
+        if s.method == "rk4" and s.baumgarte * dt / s.substeps > BAUMGARTE_RK4_LIMIT:
+            h = dt / s.substeps
+            raise PlantError(
+                f"baumgarte = {s.baumgarte!r} /s with RK4 steps of {h:.6g} s (step from t = {self.time:.6g} s): "
+                f"baumgarte * h = {s.baumgarte * h:.4g} > {BAUMGARTE_RK4_LIMIT:g}, RK4 no longer damps the "
+                f"loop-closure residual (unstable beyond {RK4_REAL_STABILITY:.4g}); use baumgarte <= "
+                f"{BAUMGARTE_RK4_LIMIT / h:.4g} /s (the thesis advises <= 1/h), more substeps or dopri5")
+        u_star = fivebar.thesis_torques(tau1, tau2)
+        held = f"tau1 = {tau1!r}, tau2 = {tau2!r} N m held"
         try:
             if s.method == "rk4" and self._fast is not None:
                 y = self._fast.rk4(self.y, u_star, s.baumgarte, dt, s.substeps)
@@ -163,13 +192,21 @@ class PlantSimulator:
                 y, self._h_next, _ = dopri5(lambda z: self.derivative(z, u_star), self.y, dt,
                                             s.rtol, s.atol, self._h_next)
         except (IntegrationError, np.linalg.LinAlgError) as exc:
-            raise PlantError(f"integration failed in the step from t = {self.time:.6g} s: {exc}") from None
-        if not math.isfinite(float(y.sum())):
-            raise PlantError(f"state became non-finite in the step from t = {self.time:.6g} s")
-        if s.project:
+            raise PlantError(f"integration failed in the step from t = {self.time:.6g} s ({held}): {exc}") from None
+        if s.project and math.isfinite(float(y.sum())):
             y = self.project(y)
+        if not math.isfinite(float(y.sum())):
+            raise PlantError(f"state became non-finite in the step from t = {self.time:.6g} s ({held})")
+        residual = self._residual_of(y)
+        if not residual <= RESIDUAL_STOP:
+            raise PlantError(
+                f"integration diverged in the step from t = {self.time:.6g} s ({held}): loop-closure "
+                f"residual {residual:.3g} m > {RESIDUAL_STOP:g} m, the state no longer closes the loop "
+                + (f"(motion too fast for RK4 steps of {dt / s.substeps:.3g} s: check the torques, use "
+                   f"substeps or dopri5)" if s.method == "rk4" else "(check the torques)"))
         self._check_pose(y, self.time + dt)
         self.y = y
+        self._residual = (y, residual)
         self.time += dt
 
     def project(self, y, iterations: int = 3):
@@ -226,9 +263,15 @@ class PlantSimulator:
 
     def residual_norm(self) -> float:
         """Euclidean norm of the position constraint residual q̄(q) [m] (5.18)."""
+        cached = self._residual
+        if cached is not None and cached[0] is self.y:   # computed by step() for this state
+            return cached[1]
+        return self._residual_of(self.y)
+
+    def _residual_of(self, y) -> float:
         if self._fast is not None:
-            return self._fast.residual_norm(self.y)
-        return float(np.linalg.norm(mechanism_state(self.mechanism, self.q, self.dq).residual))
+            return self._fast.residual_norm(y)
+        return float(np.linalg.norm(mechanism_state(self.mechanism, y[:7], y[7:]).residual))
 
     def kinetic_energy(self) -> float:
         """1/2 dq^T M'(q) dq, from the general model."""

@@ -14,7 +14,7 @@ process share one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
-from fmus.guarded import PRESET_VALUE, GuardedSlave, with_overrides
+from fmus.guarded import PRESET_VALUE, GuardedSlave, refuse_absurd, with_overrides
 from motor import CurrentObserver as _Observer
 from motor import get_motor_preset
 
@@ -52,6 +52,7 @@ class CurrentObserver(GuardedSlave):
 
     def setup(self):
         params = with_overrides(get_motor_preset(self.preset), self, [(name, name) for name, _ in MOTOR_PARAMETERS])
+        refuse_absurd(i0=self.i0, omega0=self.omega0)
         self.observer = _Observer(params, self.kind)
         self.observer.reset(self.i0, self.omega0)
         self.i_hat = self.observer.i_hat

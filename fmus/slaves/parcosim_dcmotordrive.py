@@ -12,7 +12,7 @@ process share one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
-from fmus.guarded import PRESET_VALUE, GuardedSlave, with_overrides
+from fmus.guarded import PRESET_VALUE, GuardedSlave, refuse_absurd, with_overrides
 from motor import Drive, get_motor_preset
 
 #: Start value of the numeric motor parameters meaning "the preset's value".
@@ -65,6 +65,7 @@ class DCMotorDrive(GuardedSlave):
 
     def setup(self):
         params = with_overrides(get_motor_preset(self.preset), self, [(field, var) for field, var, _ in MOTOR_PARAMETERS])
+        refuse_absurd(T=self.T, omega0=self.omega0, i0=self.i0)
         self.drive = Drive(params, mode=self.mode, method=self.method, T=self.T, torque_output=self.torque_output)
         self.drive.start(self.omega0, self.i0)
         self.tau = self.drive.torque(self.omega0)

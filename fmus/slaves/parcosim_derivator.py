@@ -20,7 +20,7 @@ import math
 
 from controller.derivators import DEFAULT_FC_ACC, DEFAULT_FC_VEL, SAMPLE_TIME
 from controller.derivators import Derivator as _Derivator
-from fmus.guarded import GuardedSlave, require_finite
+from fmus.guarded import GuardedSlave, refuse_absurd, require_finite
 
 OUTPUTS = ("dq1", "dq2", "ddq1", "ddq2")
 
@@ -52,6 +52,7 @@ class Derivator(GuardedSlave):
 
     def setup(self):
         require_finite(fc_vel=self.fc_vel, fc_acc=self.fc_acc, T=self.T, q1_0=self.q1_0, q2_0=self.q2_0)
+        refuse_absurd(fc_vel=self.fc_vel, fc_acc=self.fc_acc, T=self.T, q1_0=self.q1_0, q2_0=self.q2_0)
         for name in ("fc_vel", "fc_acc", "T"):
             if getattr(self, name) <= 0.0:
                 raise ValueError(f"parameter {name} = {getattr(self, name)!r} must be > 0")

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from fmus.guarded import PRESET_VALUE, GuardedSlave, require_finite
+from fmus.guarded import PRESET_VALUE, GuardedSlave, refuse_absurd, require_finite
 from plant import IntegratorSettings, PlantSimulator, get_preset
 
 _DEFAULTS = IntegratorSettings()
@@ -61,7 +61,10 @@ class FiveBarPlant(GuardedSlave):
 
     def setup(self):
         params = get_preset(self.preset)
-        require_finite(J_rotor1=self.J_rotor1, J_rotor2=self.J_rotor2)
+        numeric = {name: getattr(self, name) for name in (
+            "J_rotor1", "J_rotor2", "m0", "l0", "gravity_x", "gravity_y", "gravity_z", "baumgarte", "rtol", "atol")}
+        require_finite(**numeric)
+        refuse_absurd(**numeric)
         for name in ("J_rotor1", "J_rotor2"):
             value = getattr(self, name)
             if value < 0.0 and value != PRESET_ROTOR:

@@ -16,15 +16,21 @@ process share one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
+import math
+
 from controller.model import DEFAULT_EXTENT, DEFAULT_GRID_STEP
 from controller.position import PositionController as _Controller
 from controller.strategies import get_strategy
-from fmus.guarded import PRESET_VALUE, GuardedSlave, require_finite
+from fmus.guarded import PRESET_VALUE, GuardedSlave, refuse_absurd, require_finite
 from plant import get_preset
 
 #: Start value meaning "the preset's value".
 INPUTS = ("q1", "q2", "dq1", "dq2", "ddq1", "ddq2", "x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
 OUTPUTS = ("tau1", "tau2", "i_ref1", "i_ref2")
+NUMERIC_PARAMETERS = ("lam", "m_star", "phi", "k1", "k2", "gamma1", "gamma2", "model_error", "kt1", "kt2",
+                      "grid_step", "x_min", "x_max", "y_min", "y_max")
+#: Most points a tabulated model's grid may have (the default 5 mm table has 2303).
+MAX_TABLE_POINTS = 1e6
 
 
 class PositionController(GuardedSlave):
@@ -75,34 +81,61 @@ class PositionController(GuardedSlave):
 
     def setup(self):
         strategy = get_strategy(self.strategy, self.trajectory)
+        numeric = {name: getattr(self, name) for name in NUMERIC_PARAMETERS}
+        require_finite(**numeric)
+        refuse_absurd(**numeric)
         changes = {}
         for name in ("lam", "m_star", "phi"):
             value = getattr(self, name)
-            require_finite(**{name: value})
             if value != PRESET_VALUE:
                 changes[name] = value
         k = list(strategy.k)
         for i, name in enumerate(("k1", "k2")):
             value = getattr(self, name)
-            require_finite(**{name: value})
             if value != PRESET_VALUE:
                 k[i] = value
         changes["k"] = tuple(k)
-        require_finite(gamma1=self.gamma1, gamma2=self.gamma2)
+        for name in ("gamma1", "gamma2", "kt1", "kt2"):
+            value = getattr(self, name)
+            if value < 0.0 and not (name.startswith("kt") and value == PRESET_VALUE):
+                raise ValueError(f"parameter {name} = {value!r} must be >= 0")
         if self.gamma1 > 0.0 or self.gamma2 > 0.0:
             changes["gamma"] = (self.gamma1, self.gamma2)
         strategy = strategy.with_(**changes)
-        require_finite(model_error=self.model_error, kt1=self.kt1, kt2=self.kt2, grid_step=self.grid_step)
+        self._check_table()
         from controller.position import default_kt
         kt = tuple(d if v == PRESET_VALUE else v for v, d in zip((self.kt1, self.kt2), default_kt()))
+        for name, value in zip(("kt1", "kt2"), kt):
+            if not value > 0.0:
+                raise ValueError(f"parameter {name} = {value!r} must be > 0 (or -1 for the motor preset's)")
         self.controller = _Controller(
             get_preset(self.preset), strategy, model=self.model, model_error=self.model_error,
             grid_step=self.grid_step, extent=(self.x_min, self.x_max, self.y_min, self.y_max),
             kt=kt, cache=bool(self.cache), table_fallback=bool(self.table_fallback))
 
+    def _check_table(self):
+        """The tabulated model's grid parameters, named (the model's own messages are about its grid)."""
+        if not self.grid_step > 0.0:
+            raise ValueError(f"parameter grid_step = {self.grid_step!r} m must be > 0")
+        for low, high in (("x_min", "x_max"), ("y_min", "y_max")):
+            if not getattr(self, high) > getattr(self, low):
+                raise ValueError(f"parameters {low} = {getattr(self, low)!r}, {high} = {getattr(self, high)!r}: "
+                                 f"the table's range is empty ({high} must be > {low})")
+        points = ((self.x_max - self.x_min) / self.grid_step + 1) * ((self.y_max - self.y_min) / self.grid_step + 1)
+        if points > MAX_TABLE_POINTS:
+            raise ValueError(f"parameters grid_step = {self.grid_step!r}, x_min = {self.x_min!r}, x_max = {self.x_max!r}, "
+                             f"y_min = {self.y_min!r}, y_max = {self.y_max!r} m give a table of {points:.3g} points, "
+                             f"more than {MAX_TABLE_POINTS:g}")
+
     def step(self, current_time, step_size):
         # One call (the compiled law for PD/tabulated): outputs and errors together.
-        self.tau1, self.tau2, self.i_ref1, self.i_ref2, self.e1, self.e2 = self.controller.step_with_errors(
+        out = self.controller.step_with_errors(
             current_time, self.q1, self.q2, self.dq1, self.dq2, self.ddq1, self.ddq2,
             self.x_d, self.y_d, self.dx_d, self.dy_d, self.ddx_d, self.ddy_d, step_size)
+        if not math.isfinite(sum(out)):             # one check for all six (NaN propagates)
+            # Finite but absurd inputs (e.g. a speed of 1e300 rad/s) overflow the law: name the largest.
+            name = max(INPUTS, key=lambda n: abs(getattr(self, n)))
+            raise ValueError(f"the law's outputs (tau1, tau2, i_ref1, i_ref2, e1, e2) = {tuple(out)!r} at "
+                             f"t = {current_time:.6g} s are not finite; largest input: {name} = {getattr(self, name)!r}")
+        self.tau1, self.tau2, self.i_ref1, self.i_ref2, self.e1, self.e2 = out
         self.model_fallbacks = self.controller.fallbacks

@@ -12,7 +12,7 @@ process share one Python interpreter and its module cache.
 from __future__ import annotations
 
 from controller.trajectories import get_trajectory
-from fmus.guarded import GuardedSlave, require_finite
+from fmus.guarded import GuardedSlave, refuse_absurd, require_finite
 
 OUTPUTS = ("x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
 #: Start value of ``cycles`` meaning "the kind's default" (thesis_circle 2, circle 8, triangle 2).
@@ -47,8 +47,9 @@ class Trajectory(GuardedSlave):
 
     def setup(self):
         kwargs = {}
+        require_finite(side_time=self.side_time, x_hold=self.x_hold, y_hold=self.y_hold)   # used or not
+        refuse_absurd(side_time=self.side_time, x_hold=self.x_hold, y_hold=self.y_hold)
         if self.kind == "hold":
-            require_finite(x_hold=self.x_hold, y_hold=self.y_hold)
             kwargs = {"x": self.x_hold, "y": self.y_hold}
         else:
             if self.cycles != PRESET_CYCLES:
