@@ -10,6 +10,7 @@ Every subcommand is a thin shell over a documented Python call:
 ``parcosim list``      ``scenarios.scenes.scene_names()``
 ``parcosim run``       ``scenarios.run.run_scene(name, mode, out_dir)``
 ``parcosim report``    ``scenarios.report.write_report(out_dir, mode)``
+``parcosim trade``     ``scenarios.trade.run_trade(scene, quick, out_dir)``
 =====================  ==============================================
 
 Errors end the command with exit status 2 and one readable line on stderr; a run that a
@@ -40,6 +41,11 @@ def _parser() -> argparse.ArgumentParser:
     report = sub.add_parser("report", help="run the 16 bench scenes; markdown report beside the thesis' Tables 9-14")
     report.add_argument("--mode", choices=("inprocess", "fmu"), default="inprocess")
     report.add_argument("--out", default="out/report", help="output directory (default: out/report)")
+    trade = sub.add_parser("trade", help="speed against accuracy: sweep the settings, table and Pareto plot")
+    trade.add_argument("scene", nargs="?", default="bench_circle_TCMDx",
+                       help="a scene name (default: bench_circle_TCMDx)")
+    trade.add_argument("--quick", action="store_true", help="1 s and fewer settings (under a minute)")
+    trade.add_argument("--out", default="out/trade", help="output directory (default: out/trade)")
     sub.add_parser("identify-motor", help="identify DC motor parameters from u,i,omega data",
                    add_help=False)
     return parser
@@ -66,6 +72,8 @@ def main(argv: list[str] | None = None) -> int:
         elif args.command == "report":
             from scenarios.report import write_report
             print(write_report(args.out, args.mode, progress=progress_bar("report")))
+        elif args.command == "trade":
+            return _trade(args)
         elif args.command == "build":
             from fmus.build import DEFAULT_OUT, build_all
             for path in build_all(args.out or DEFAULT_OUT):
@@ -103,6 +111,18 @@ def _run(args) -> int:
         return 1
     print(f"{scene.name} [{args.mode}]: e_ef {m['e_ef_mm']:.4g} mm, tau_ef {m['tau_ef_Nm']:.4g} N m, "
           f"e_ss {m['e_ss_mm']:.4g} mm, {m['wall_s']:.2f} s wall ({m['realtime_factor']:.1f}x real time) -> {out}")
+    return 0
+
+
+def _trade(args) -> int:
+    from scenarios.trade import run_trade
+
+    trade = run_trade(args.scene, quick=args.quick, out_dir=args.out,
+                      progress=lambda line: print(line, file=sys.stderr, flush=True))
+    base = trade.row("defaults")
+    front = ", ".join(r["setting"] for r in trade.rows if r["pareto"])
+    print(f"{trade.scene} 0-{trade.stop_time:g} s: defaults {base['wall_s']:.2f} s wall, "
+          f"RMS deviation {base['rms_err_m']:.2g} m; front: {front} -> {args.out}/trade.md")
     return 0
 
 
