@@ -55,6 +55,10 @@ class Drive:
         averaged over the step (B.2 with the mean current,
         :func:`motor.electrics.mean_current_coefficients`), which is the torque a plant
         holding it over the step should get.
+    design_params : motor.presets.MotorParams, optional
+        Parameters the current controller is designed for (default ``params``): a
+        controller tuned for the real motor can drive a model without some effect (e.g.
+        b = 0, which would put the design's cancelled zero on z = 1).
 
     Raises
     ------
@@ -63,14 +67,15 @@ class Drive:
     """
 
     def __init__(self, params, mode="current", method="exact", T=THESIS_T, poles=THESIS_POLES,
-                 torque_output="end"):
+                 torque_output="end", design_params=None):
         params.validate()
         self.params = params
         self.torque_output = _checks.choice("torque_output", torque_output, TORQUE_OUTPUTS)
         self.mode = _checks.choice("mode", mode, DRIVE_MODES)
         self.method = _checks.choice("method", method, ELECTRICAL_METHODS)
         self.T = _checks.positive("T", T)
-        self.controller = (CurrentController(_design(params, self.T, poles), params.v_max)
+        design = params if design_params is None else design_params
+        self.controller = (CurrentController(_design(design, self.T, poles), params.v_max)
                            if mode == "current" else None)
         self._h = None
         self._coefficients = None

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from controller.strategies import STRATEGY_NAMES
 from controller.trajectories import get_trajectory
 from fmus.system import Component, Connection, System
+from motor import get_motor_preset
 
 REFERENCE_SIGNALS = ("x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
 #: Time the bench scenes run on after the reference stops, for the steady-state error [s].
@@ -56,6 +57,10 @@ class Scene:
 
 
 ELECTRICS = ("full", "euler", "quasi_static", "ideal")
+#: The drives hand the plant their torque averaged over the step: chosen from the
+#: speed/accuracy front (docs/trade.md: same cost, peak deviation from the monolithic
+#: reference 9.3e-5 -> 3.5e-5 m on bench_circle_TCMDx).
+DRIVE_TORQUE_OUTPUT = "mean"
 
 
 @dataclass(frozen=True)
@@ -176,12 +181,13 @@ def bench(strategy: str, kind: str = "circle", model: str = "tabulated",
             components.append(Component(f"obs{j}", "CurrentObserver", {"preset": f"motor{j}"}))
     for j in ("1", "2"):
         if drives:
-            drive = {"preset": f"motor{j}", "mode": "current",
+            drive = {"preset": f"motor{j}", "mode": "current", "torque_output": DRIVE_TORQUE_OUTPUT,
                      "method": "exact" if f.electrics == "full" else f.electrics}
             if not f.coulomb:
                 drive["mu"] = 0.0
-            if not f.viscous:
+            if not f.viscous:   # the current loop stays designed for the real motor's b
                 drive["b"] = 0.0
+                drive["b_design"] = get_motor_preset(f"motor{j}").b
             components.append(Component(f"drive{j}", "DCMotorDrive", drive))
     components.append(Component("plant", "FiveBarPlant", plant))
     angle = "_enc" if f.encoder else ""

@@ -152,3 +152,15 @@ def test_substeps_hold_controller_voltage_over_period():
     assert v[0] == v[1] == v[2] == v[3] != v[4] == v[7]
     with pytest.raises(ValueError, match="i_hat must be a finite number, got inf"):
         drive.step(1.0, 0.0, 0.0, math.inf, T)
+
+
+def test_design_params_keep_the_controller_of_the_real_motor():
+    from motor import Drive, get_motor_preset
+
+    real = get_motor_preset("motor1")
+    frictionless = real.with_(b=0.0)
+    tuned = Drive(frictionless, design_params=real)
+    coefficients = ("alpha", "beta", "gamma", "delta")
+    assert ([getattr(tuned.controller.design, c) for c in coefficients]
+            == [getattr(Drive(real).controller.design, c) for c in coefficients])
+    assert tuned.params.b == 0.0

@@ -118,7 +118,8 @@ def test_fidelity_switches_remove_what_they_switch_off():
 
 
 @pytest.mark.parametrize("switches", [dict(electrics="ideal"), dict(observer=False),
-                                      dict(derivator=False, encoder=False), dict(link_inertias=False, m0=0.05)])
+                                      dict(derivator=False, encoder=False), dict(link_inertias=False, m0=0.05),
+                                      dict(viscous=False, coulomb=False)])
 def test_reduced_fidelity_scenes_track(switches):
     from scenarios.scenes import Fidelity, bench
 

@@ -12,6 +12,8 @@ process share one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
+import math
+
 from fmus.guarded import PRESET_VALUE, GuardedSlave, refuse_absurd, with_overrides
 from motor import Drive, get_motor_preset
 
@@ -55,6 +57,8 @@ class DCMotorDrive(GuardedSlave):
         d("mode", "parameter", "current", "'current' (controller K(z) on i_ref, i_hat) or 'voltage' (v_ref applied)")
         d("method", "parameter", "exact",
           "Electrical integration over a step: 'exact' (analytic), 'euler' (explicit) or 'quasi_static' (L = 0)")
+        d("b_design", "parameter", PRESET_VALUE,
+          "Viscous friction assumed by the current-controller design only [N m s/rad], > 0; -1: b")
         d("torque_output", "parameter", "end",
           "'end': tau is the shaft torque at the step's end; 'mean': its average over the step "
           "(what a plant holding tau over the step should get)")
@@ -66,7 +70,14 @@ class DCMotorDrive(GuardedSlave):
     def setup(self):
         params = with_overrides(get_motor_preset(self.preset), self, [(field, var) for field, var, _ in MOTOR_PARAMETERS])
         refuse_absurd(T=self.T, omega0=self.omega0, i0=self.i0)
-        self.drive = Drive(params, mode=self.mode, method=self.method, T=self.T, torque_output=self.torque_output)
+        design = None
+        if self.b_design != PRESET_VALUE:
+            refuse_absurd(b_design=self.b_design)
+            if not (math.isfinite(self.b_design) and self.b_design > 0.0):
+                raise ValueError(f"parameter b_design = {self.b_design!r} must be > 0 (or -1: the value of b)")
+            design = params.with_(b=self.b_design)
+        self.drive = Drive(params, mode=self.mode, method=self.method, T=self.T, torque_output=self.torque_output,
+                           design_params=design)
         self.drive.start(self.omega0, self.i0)
         self.tau = self.drive.torque(self.omega0)
         self.v = self.drive.v
