@@ -11,6 +11,7 @@ Every subcommand is a thin shell over a documented Python call:
 ``parcosim run``       ``scenarios.run.run_scene(name, mode, out_dir)``
 ``parcosim report``    ``scenarios.report.write_report(out_dir, mode)``
 ``parcosim trade``     ``scenarios.trade.run_trade(scene, quick, out_dir)``
+``parcosim export-ssp``  ``fmus.ssp.export_ssp(get_scene(name).system, path, fmu_dir)``
 =====================  ==============================================
 
 Errors end the command with exit status 2 and one readable line on stderr; a run that a
@@ -41,6 +42,10 @@ def _parser() -> argparse.ArgumentParser:
     report = sub.add_parser("report", help="run the 16 bench scenes; markdown report beside the thesis' Tables 9-14")
     report.add_argument("--mode", choices=("inprocess", "fmu"), default="inprocess")
     report.add_argument("--out", default="out/report", help="output directory (default: out/report)")
+    ssp = sub.add_parser("export-ssp", help="write a scene as an SSP 1.0 package (runs in fmpy and Ecos)")
+    ssp.add_argument("scene", help="a scene name (see `parcosim list`)")
+    ssp.add_argument("path", help="the .ssp file to write")
+    ssp.add_argument("--fmu-dir", default=None, help="where the FMUs are (built when missing or stale)")
     trade = sub.add_parser("trade", help="speed against accuracy: sweep the settings, table and Pareto plot")
     trade.add_argument("scene", nargs="?", default="bench_circle_TCMDx",
                        help="a scene name (default: bench_circle_TCMDx)")
@@ -72,6 +77,10 @@ def main(argv: list[str] | None = None) -> int:
         elif args.command == "report":
             from scenarios.report import write_report
             print(write_report(args.out, args.mode, progress=progress_bar("report")))
+        elif args.command == "export-ssp":
+            from fmus.ssp import export_ssp
+            from scenarios.scenes import get_scene
+            print(export_ssp(get_scene(args.scene).system, args.path, args.fmu_dir))
         elif args.command == "trade":
             return _trade(args)
         elif args.command == "build":

@@ -128,3 +128,15 @@ def test_reduced_fidelity_scenes_track(switches):
     outcome = run_scene(scene)
     assert outcome.result.error is None
     assert outcome.metrics["e_ef_mm"] < 5.0
+
+
+def test_export_ssp_command(tmp_path, built_fmus, capsys):
+    import zipfile
+
+    fmu_dir = next(iter(built_fmus.values())).parent
+    path = tmp_path / "tcmdx.ssp"
+    assert main(["export-ssp", "bench_circle_TCMDx", str(path), "--fmu-dir", str(fmu_dir)]) == 0
+    names = zipfile.ZipFile(path).namelist()
+    assert "SystemStructure.ssd" in names and "resources/FiveBarPlant.fmu" in names
+    assert main(["export-ssp", "no_such_scene", str(tmp_path / "x.ssp")]) == 2
+    assert "unknown scene 'no_such_scene'" in capsys.readouterr().err
