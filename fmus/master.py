@@ -82,8 +82,21 @@ class Variable:
     depends_on: tuple = ()  # inputs this output depends on directly (feedthrough)
 
 
+class RecordedRun:
+    """Signals by name (``run["plant.x"]``) and whether the run reached its end; a base of
+    run results that have ``signals`` and ``error``."""
+
+    def __getitem__(self, signal: str) -> np.ndarray:
+        return self.signals[signal]
+
+    @property
+    def completed(self) -> bool:
+        """True when the run reached its stop time."""
+        return self.error is None
+
+
 @dataclass
-class Result:
+class Result(RecordedRun):
     """What a run produced: the recorded signals, and why it stopped early if it did."""
 
     time: np.ndarray
@@ -96,14 +109,6 @@ class Result:
     stop_time: float = 0.0
     init_s: float = 0.0   # loading, instantiating and initialising (tables, numba compilation)
     extra: dict = field(default_factory=dict)
-
-    def __getitem__(self, signal: str) -> np.ndarray:
-        return self.signals[signal]
-
-    @property
-    def completed(self) -> bool:
-        """True when the run reached its stop time."""
-        return self.error is None
 
 
 # --- component back ends ----------------------------------------------------------------

@@ -70,7 +70,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from fmus.master import CoSimulationError, InProcessInstance, slave_variables, stepping_order
+from fmus.master import CoSimulationError, InProcessInstance, RecordedRun, slave_variables, stepping_order
 from fmus.system import System, split_signal
 from motor import shaft_torque
 from plant import fivebar
@@ -87,7 +87,7 @@ class ReferenceError(RuntimeError):
 
 
 @dataclass
-class ReferenceResult:
+class ReferenceResult(RecordedRun):
     """A reference run on the communication grid, laid out as :class:`fmus.master.Result`.
 
     ``signals`` has every output of every component ("instance.variable"); row 0 is the
@@ -111,12 +111,6 @@ class ReferenceResult:
     error: str | None = None
     extra: dict = field(default_factory=dict)
 
-    def __getitem__(self, signal: str) -> np.ndarray:
-        return self.signals[signal]
-
-    @property
-    def completed(self) -> bool:
-        return self.error is None
 
 
 # --- the scene's components, built as the master's in-process back end builds them --------
