@@ -112,7 +112,6 @@ class ReferenceResult(RecordedRun):
     extra: dict = field(default_factory=dict)
 
 
-
 # --- the scene's components, built as the master's in-process back end builds them --------
 
 def _slave(component):
