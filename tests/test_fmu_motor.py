@@ -15,6 +15,7 @@ from fmpy.validation import validate_fmu
 from fmus.slaves.parcosim_dcmotordrive import OUTPUTS as DRIVE_OUTPUTS
 from motor import CurrentObserver, Drive, get_motor_preset, motor1
 from tests.fmi_support import FmuInstance
+from tests.support.motor_loops import current_step
 
 T = 1e-3
 
@@ -140,20 +141,6 @@ def test_observer_fmu_equals_in_process_observer(observer_fmu, kind):
 
 # --- a 1 A current step with the observer FMU in the loop -------------------------------------------------
 
-def in_process_step(params, kind, omega, n):
-    """The loop of tests/test_motor_current_control.py::current_step."""
-    drive, obs = Drive(params), CurrentObserver(params, kind)
-    drive.start(omega)
-    obs.reset(0.0, omega)
-    i_hat = obs.estimate(drive.v, omega, T)
-    i = [drive.i]
-    for _ in range(n):
-        _, v, i_end = drive.step(1.0, 0.0, omega, i_hat, T)
-        i_hat = obs.estimate(v, omega, T)
-        i.append(i_end)
-    return np.array(i)
-
-
 def fmu_step(drive_fmu, observer_fmu, preset, kind, omega, n):
     """Master loop at 1 ms: drive.step (reads observer.i_hat) -> observer.step (drive's new v, the speed)."""
     drive = FmuInstance(drive_fmu, {"preset": preset, "omega0": omega}, "drive")
@@ -174,7 +161,7 @@ def fmu_step(drive_fmu, observer_fmu, preset, kind, omega, n):
 def test_current_step_with_observer_fmu_settles(drive_fmu, observer_fmu, preset, kind, omega):
     """Within 1 % from 20 ms on, peak under 2 A; the same numbers as the in-process loop."""
     i = fmu_step(drive_fmu, observer_fmu, preset, kind, omega, n=60)
-    np.testing.assert_array_equal(i, in_process_step(get_motor_preset(preset), kind, omega, n=60))
+    np.testing.assert_array_equal(i, current_step(get_motor_preset(preset), kind, omega, n=60))
     assert i[0] == 0.0
     assert np.all(np.abs(i[20:] - 1.0) <= 0.01)
     assert i.max() < 2.0

@@ -6,7 +6,9 @@ import control
 import numpy as np
 import pytest
 
-from motor import CurrentObserver, Drive, current_transfer_function, design_current_controller, motor1, motor2
+from motor import Drive, current_transfer_function, design_current_controller, motor1, motor2
+
+from tests.support.motor_loops import current_step
 
 T = 1e-3
 
@@ -96,20 +98,6 @@ def test_locked_rotor_loop_poles_exact(params):
     assert_same_poles(prony_poles(v, order=3, k0=4), wanted, atol=1e-7)
 
 
-def current_step(params, kind, omega, n=40):
-    """1 A step at t = 0; observer in the loop; drive started in electrical steady state."""
-    drive, obs = Drive(params), CurrentObserver(params, kind)
-    drive.start(omega)
-    obs.reset(0.0, omega)
-    i_hat = obs.estimate(drive.v, omega, T)
-    i = [drive.i]
-    for _ in range(n):
-        _, v, i_end = drive.step(1.0, 0.0, omega, i_hat, T)
-        i_hat = obs.estimate(v, omega, T)
-        i.append(i_end)
-    return np.array(i)
-
-
 @pytest.mark.parametrize("kind", ["static", "dynamic"])
 @pytest.mark.parametrize("omega", [0.0, 50.0])
 @pytest.mark.parametrize("params", [motor1, motor2])
@@ -155,7 +143,7 @@ def test_substeps_hold_controller_voltage_over_period():
 
 
 def test_design_params_keep_the_controller_of_the_real_motor():
-    from motor import Drive, get_motor_preset
+    from motor import get_motor_preset
 
     real = get_motor_preset("motor1")
     frictionless = real.with_(b=0.0)
