@@ -53,6 +53,16 @@ class FmuInstance:
         self.fmu.doStep(currentCommunicationPoint=self.time, communicationStepSize=dt)
         self.time += dt
 
+    def refused_step(self, dt=1e-3, **inputs):
+        """Step expecting a refusal: assert it is not fmi2Fatal, return the ``error`` output."""
+        import pytest
+        from fmpy.fmi1 import FMICallException
+
+        with pytest.raises(FMICallException) as info:
+            self.step(dt, **inputs)
+        assert info.value.status != 4, "never fmi2Fatal"
+        return self.get("error")
+
     def close(self):
         self.fmu.terminate()
         self.fmu.freeInstance()

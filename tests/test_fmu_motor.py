@@ -169,19 +169,12 @@ def test_current_step_with_observer_fmu_settles(drive_fmu, observer_fmu, preset,
 
 # --- refusals ----------------------------------------------------------------------------------------------
 
-def refused_step(fmu, **inputs):
-    with pytest.raises(FMICallException) as info:
-        fmu.step(T, **inputs)
-    assert info.value.status != 4, "never fmi2Fatal"
-    return fmu.get("error")
-
-
 @pytest.mark.parametrize("name", ["i_ref", "v_ref", "omega", "i_hat"])
 def test_nan_drive_input_is_refused_and_outputs_stay(drive_fmu, name):
     fmu = FmuInstance(drive_fmu, {"omega0": 10.0})
     fmu.step(T, i_ref=0.5, omega=10.0)
     before = [fmu.get(n) for n in DRIVE_OUTPUTS]
-    message = refused_step(fmu, **{name: float("nan")})
+    message = fmu.refused_step(T, **{name: float("nan")})
     assert f"{name} must be a finite number, got nan" in message and "t = 0.001" in message
     assert any(f"{name} must be a finite number, got nan" in m and "t = 0.001" in m for m in fmu.messages)
     assert [fmu.get(n) for n in DRIVE_OUTPUTS] == before and all(map(math.isfinite, before))
@@ -193,7 +186,7 @@ def test_nan_observer_input_is_refused(observer_fmu, name):
     fmu = FmuInstance(observer_fmu)
     fmu.step(T, v=2.0, omega=1.0)
     before = fmu.get("i_hat")
-    message = refused_step(fmu, **{name: float("inf")})
+    message = fmu.refused_step(T, **{name: float("inf")})
     assert f"{name} must be a finite number, got inf" in message and "t = 0.001" in message
     assert any(message in m for m in fmu.messages)
     assert fmu.get("i_hat") == before and math.isfinite(before)
@@ -213,11 +206,11 @@ def test_nan_observer_input_is_refused(observer_fmu, name):
 ])
 def test_bad_drive_parameters_are_refused_with_their_name(drive_fmu, parameters, expected):
     fmu = FmuInstance(drive_fmu, parameters)
-    message = refused_step(fmu, i_ref=1.0)
+    message = fmu.refused_step(T, i_ref=1.0)
     assert expected in message
     assert any(expected in m and "step from t = 0 s refused" in m for m in fmu.messages)
     assert all(math.isfinite(fmu.get(n)) for n in DRIVE_OUTPUTS)
-    refused_step(fmu, i_ref=1.0)                              # and every later step too
+    fmu.refused_step(T, i_ref=1.0)                              # and every later step too
     fmu.close()
 
 
@@ -239,7 +232,7 @@ def test_current_mode_step_must_divide_the_controller_period(drive_fmu):
 ])
 def test_bad_observer_parameters_are_refused_with_their_name(observer_fmu, parameters, expected):
     fmu = FmuInstance(observer_fmu, parameters)
-    message = refused_step(fmu, v=1.0)
+    message = fmu.refused_step(T, v=1.0)
     assert expected in message
     assert any(expected in m and "step from t = 0 s refused" in m for m in fmu.messages)
     assert math.isfinite(fmu.get("i_hat"))
