@@ -1,7 +1,7 @@
 """Build the parcosim FMUs with pythonfmu and fix their model descriptions.
 
 Each FMU bundles the pure model packages (``plant``, ``motor``,
-``controller``) and the slave base (``fmus.guarded``) in its resources, so
+``controller``) and the slave base (:data:`BUNDLED_FMUS_MODULES`) in its resources, so
 an importer needs only a Python 3.11 with numpy, scipy, numba and control.
 """
 from __future__ import annotations
@@ -18,6 +18,8 @@ from .modeldescription import fix_model_structure
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_OUT = ROOT / "fmus" / "build"
 BUNDLED_PACKAGES = ("plant", "motor", "controller")
+#: The modules of ``fmus`` the slaves import (the rest is the importer's side).
+BUNDLED_FMUS_MODULES = ("guarded.py", "parts.py")
 
 #: Model name -> slave module (unique module names: one interpreter per process).
 SLAVES = {
@@ -27,6 +29,7 @@ SLAVES = {
     "Trajectory": "parcosim_trajectory",
     "Derivator": "parcosim_derivator",
     "PositionController": "parcosim_positioncontroller",
+    "ActuatedFiveBarPlant": "parcosim_actuatedfivebarplant",
     # one line per FMU; keep this order (plant, drives, controller chain)
 }
 
@@ -42,7 +45,8 @@ def _stage(tmp: Path) -> list[Path]:
     fmus_pkg = tmp / "fmus"
     fmus_pkg.mkdir()
     (fmus_pkg / "__init__.py").write_text('"""The slave base bundled into each parcosim FMU."""\n')
-    shutil.copy2(ROOT / "fmus" / "guarded.py", fmus_pkg / "guarded.py")
+    for module in BUNDLED_FMUS_MODULES:
+        shutil.copy2(ROOT / "fmus" / module, fmus_pkg / module)
     staged.append(fmus_pkg)
     return staged
 
@@ -68,7 +72,8 @@ def build_fmu(model: str, out_dir: Path = DEFAULT_OUT) -> Path:
 
 
 def _sources(model: str) -> list[Path]:
-    files = [ROOT / "fmus" / "guarded.py", ROOT / "fmus" / "slaves" / f"{SLAVES[model]}.py"]
+    files = [ROOT / "fmus" / module for module in BUNDLED_FMUS_MODULES]
+    files.append(ROOT / "fmus" / "slaves" / f"{SLAVES[model]}.py")
     for package in BUNDLED_PACKAGES:
         files.extend((ROOT / package).rglob("*.py"))
         files.extend((ROOT / package).rglob("*.csv"))

@@ -8,7 +8,7 @@ from motor.current_controller import (THESIS_POLES, THESIS_T, CurrentController,
                                       current_transfer_function, design_current_controller,
                                       solve_pole_placement)
 from motor.drive import DRIVE_MODES, Drive
-from motor.electrics import (ELECTRICAL_METHODS, advance_current, coulomb_friction,
+from motor.electrics import (ELECTRICAL_METHODS, advance_current, armature_current_rate, coulomb_friction,
                              electrical_step_coefficients, mean_current_coefficients, shaft_torque)
 from motor.identification import (DATASHEET_KT_OVER_KE, MEASURED_L, THESIS_SETTLING_TIMES, identify,
                                   inertia_from_pole, normal_equations_electrical,
@@ -19,6 +19,7 @@ from motor.presets import MOTOR_PRESETS, MotorParams, get_motor_preset, motor1, 
 __all__ = [
     "MotorParams", "MOTOR_PRESETS", "get_motor_preset", "motor1", "motor2",
     "ELECTRICAL_METHODS", "electrical_step_coefficients", "mean_current_coefficients", "advance_current", "coulomb_friction",
+    "armature_current_rate",
     "shaft_torque",
     "THESIS_POLES", "THESIS_T", "current_transfer_function", "solve_pole_placement",
     "design_current_controller", "CurrentControllerDesign", "CurrentController",

@@ -131,6 +131,29 @@ class Drive:
             self._phase = 0.0
         return v
 
+    def sample_voltage(self, i_ref, v_ref, i_hat, h):
+        """The voltage applied over the next step of length h [V].
+
+        Current mode: at the start of a controller period T the controller samples
+        ``i_ref`` and ``i_hat`` (appendix C) and its saturated output is held over the
+        period; within a period the held voltage.  Voltage mode: ``v_ref`` saturated at
+        +-v_max.  :meth:`step` uses it; so does a plant that integrates the armature
+        current itself (:class:`plant.actuated.ActuatedPlant`), which then sets
+        ``i`` and ``v`` after its step.
+
+        Raises
+        ------
+        ValueError
+            Naming the input, for a NaN/inf input or a bad step length.
+        """
+        i_ref = _checks.finite("i_ref", i_ref)
+        v_ref = _checks.finite("v_ref", v_ref)
+        i_hat = _checks.finite("i_hat", i_hat)
+        h = _checks.positive("h", h)
+        if self.mode == "current":
+            return self._controller_voltage(i_ref, i_hat, h)
+        return min(max(v_ref, -self.params.v_max), self.params.v_max)
+
     def step(self, i_ref, v_ref, omega, i_hat, h):
         """Advance the drive by one step with inputs held over it.
 
@@ -162,15 +185,8 @@ class Drive:
         ValueError
             Naming the input, for a NaN/inf input or a bad step length.
         """
-        i_ref = _checks.finite("i_ref", i_ref)
-        v_ref = _checks.finite("v_ref", v_ref)
         omega = _checks.finite("omega", omega)
-        i_hat = _checks.finite("i_hat", i_hat)
-        h = _checks.positive("h", h)
-        if self.mode == "current":
-            v = self._controller_voltage(i_ref, i_hat, h)
-        else:
-            v = min(max(v_ref, -self.params.v_max), self.params.v_max)
+        v = self.sample_voltage(i_ref, v_ref, i_hat, h)
         coefficients = self._step_coefficients(h)
         if self.torque_output == "mean":
             w_i, w_u = self._mean

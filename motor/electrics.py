@@ -120,6 +120,23 @@ def advance_current(i, v, omega, ke, coefficients):
     return a * i + g * (v - ke * omega)
 
 
+def armature_current_rate(i, v, omega, params):
+    """di/dt of the armature circuit (4.162): (v - R i - ke omega) / L, for L > 0.
+
+    Parameters
+    ----------
+    i, v, omega : float
+        Current [A], voltage [V], shaft speed [rad/s] at this instant.
+    params : motor.presets.MotorParams
+
+    Returns
+    -------
+    float
+        [A/s].
+    """
+    return (v - params.R * i - params.ke * omega) / params.L
+
+
 def coulomb_friction(omega, mu, omega_eps):
     """Coulomb friction torque mu sign(omega) of (B.2), regularised.
 

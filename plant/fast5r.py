@@ -174,9 +174,43 @@ def derivative(p, y, u1, u2, lam, out):
         out[11 + 2 * k] = c[2] * ddx + c[3] * ddy + e[k, 1]
 
 
+#: Columns of one motor row of :func:`actuated_derivative`: the joint it drives (0: tau1/q1,
+#: 1: tau2/q2, world convention), then R, L, kt, ke, b, mu, omega_eps (motor.MotorParams).
+MOTOR_COLUMNS = 8
+_NO_MOTORS = np.empty((0, MOTOR_COLUMNS))
+_NO_VOLTAGES = np.empty(0)
+
+
 @njit(cache=True)
-def rk4(p, y, u1, u2, lam, dt, substeps):
-    """Classical RK4, ``substeps`` steps over dt (same scheme as plant.integrators.rk4)."""
+def actuated_derivative(p, motors, y, v, u1, u2, lam, out):
+    """out = dz/dt for z = [q(7), dq(7), i_1 .. i_n]: the plant (5.66) and n armature circuits.
+
+    Motor n (row ``motors[n]``, :data:`MOTOR_COLUMNS`) on world joint j at speed omega
+    (``plant.fivebar.world_rates``) delivers the shaft torque kt i - b omega - mu tanh(omega /
+    omega_eps) (B.2, ``motor.shaft_torque``), added to the held efforts (u1, u2) on theta11,
+    theta21 (world -> thesis sign as ``plant.fivebar.thesis_torques``), and its current obeys
+    L di/dt = v_n - R i - ke omega (4.162, ``motor.armature_current_rate``).  With no motors
+    this is :func:`derivative`.  ``plant.actuated.ActuatedPlant.derivative`` is the Python
+    reference it is tested against.
+    """
+    for n in range(motors.shape[0]):
+        joint = int(motors[n, 0])
+        sign = 1.0 if joint == 0 else -1.0
+        omega = sign * y[10 + 2 * joint]
+        i = y[14 + n]
+        tau = motors[n, 3] * i - motors[n, 5] * omega - motors[n, 6] * math.tanh(omega / motors[n, 7])
+        if joint == 0:
+            u1 += tau
+        else:
+            u2 -= tau
+        out[14 + n] = (v[n] - motors[n, 1] * i - motors[n, 4] * omega) / motors[n, 2]
+    derivative(p, y, u1, u2, lam, out)
+
+
+@njit(cache=True)
+def actuated_rk4(p, motors, y, v, u1, u2, lam, dt, substeps):
+    """Classical RK4, ``substeps`` steps over dt, of :func:`actuated_derivative` (inputs held;
+    the same scheme as plant.integrators.rk4)."""
     h = dt / substeps
     n = y.size
     k1 = np.empty(n)
@@ -186,19 +220,25 @@ def rk4(p, y, u1, u2, lam, dt, substeps):
     tmp = np.empty(n)
     y = y.copy()
     for _ in range(substeps):
-        derivative(p, y, u1, u2, lam, k1)
+        actuated_derivative(p, motors, y, v, u1, u2, lam, k1)
         for i in range(n):
             tmp[i] = y[i] + 0.5 * h * k1[i]
-        derivative(p, tmp, u1, u2, lam, k2)
+        actuated_derivative(p, motors, tmp, v, u1, u2, lam, k2)
         for i in range(n):
             tmp[i] = y[i] + 0.5 * h * k2[i]
-        derivative(p, tmp, u1, u2, lam, k3)
+        actuated_derivative(p, motors, tmp, v, u1, u2, lam, k3)
         for i in range(n):
             tmp[i] = y[i] + h * k3[i]
-        derivative(p, tmp, u1, u2, lam, k4)
+        actuated_derivative(p, motors, tmp, v, u1, u2, lam, k4)
         for i in range(n):
             y[i] += (h / 6.0) * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
     return y
+
+
+@njit(cache=True)
+def rk4(p, y, u1, u2, lam, dt, substeps):
+    """Classical RK4 of :func:`derivative`, ``substeps`` steps over dt, efforts held."""
+    return actuated_rk4(p, _NO_MOTORS, y, _NO_VOLTAGES, u1, u2, lam, dt, substeps)
 
 
 @njit(cache=True)

@@ -171,16 +171,8 @@ class PlantSimulator:
         for name, value in (("tau1", tau1), ("tau2", tau2)):
             if not math.isfinite(value):
                 raise PlantError(f"input {name} = {value!r} at t = {self.time:.6g} s is not finite")
-        if not (math.isfinite(dt) and dt > 0.0):
-            raise PlantError(f"step size {dt!r} at t = {self.time:.6g} s must be > 0")
+        self.check_step(dt)
         s = self.settings
-        if s.method == "rk4" and s.baumgarte * dt / s.substeps > BAUMGARTE_RK4_LIMIT:
-            h = dt / s.substeps
-            raise PlantError(
-                f"baumgarte = {s.baumgarte!r} /s with RK4 steps of {h:.6g} s (step from t = {self.time:.6g} s): "
-                f"baumgarte * h = {s.baumgarte * h:.4g} > {BAUMGARTE_RK4_LIMIT:g}, RK4 no longer damps the "
-                f"loop-closure residual (unstable beyond {RK4_REAL_STABILITY:.4g}); use baumgarte <= "
-                f"{BAUMGARTE_RK4_LIMIT / h:.4g} /s (the thesis advises <= 1/h), more substeps or dopri5")
         u_star = fivebar.thesis_torques(tau1, tau2)
         held = f"tau1 = {tau1!r}, tau2 = {tau2!r} N m held"
         try:
@@ -193,6 +185,30 @@ class PlantSimulator:
                                             s.rtol, s.atol, self._h_next)
         except (IntegrationError, np.linalg.LinAlgError) as exc:
             raise PlantError(f"integration failed in the step from t = {self.time:.6g} s ({held}): {exc}") from None
+        self.accept(y, dt, held)
+
+    def check_step(self, dt: float) -> None:
+        """Refuse (:class:`PlantError`) a step length that is not finite and > 0, or a Baumgarte
+        lambda above :data:`BAUMGARTE_RK4_LIMIT` / h for the RK4 step h."""
+        if not (math.isfinite(dt) and dt > 0.0):
+            raise PlantError(f"step size {dt!r} at t = {self.time:.6g} s must be > 0")
+        s = self.settings
+        if s.method == "rk4" and s.baumgarte * dt / s.substeps > BAUMGARTE_RK4_LIMIT:
+            h = dt / s.substeps
+            raise PlantError(
+                f"baumgarte = {s.baumgarte!r} /s with RK4 steps of {h:.6g} s (step from t = {self.time:.6g} s): "
+                f"baumgarte * h = {s.baumgarte * h:.4g} > {BAUMGARTE_RK4_LIMIT:g}, RK4 no longer damps the "
+                f"loop-closure residual (unstable beyond {RK4_REAL_STABILITY:.4g}); use baumgarte <= "
+                f"{BAUMGARTE_RK4_LIMIT / h:.4g} /s (the thesis advises <= 1/h), more substeps or dopri5")
+
+    def accept(self, y, dt: float, held: str) -> None:
+        """Make ``y``, the state integrated over dt from the present one, the new state.
+
+        Projects it if the settings say so, then refuses it (:class:`PlantError`, the state
+        kept; ``held`` names the inputs held over the step) when it is not finite, does not
+        close the loop (residual above :data:`RESIDUAL_STOP`) or is singular.
+        """
+        s = self.settings
         if s.project and math.isfinite(float(y.sum())):
             y = self.project(y)
         if not math.isfinite(float(y.sum())):

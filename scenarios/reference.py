@@ -9,9 +9,10 @@ else:
 * the **continuous part** — the plant's state ``[q, dq]`` (7.12, forward dynamics 5.66 with
   its Baumgarte term, :meth:`plant.PlantSimulator.derivative`) and the armature current of
   every drive, ``L di/dt = v - R i - ke omega`` (4.162) with omega the plant's actuated
-  joint rate — is ONE ODE, integrated by ``scipy.integrate.solve_ivp`` (DOP853, rtol
-  1e-10 by default) over each sample interval, restarted at every sample; the shaft
-  torque is :func:`motor.shaft_torque` of the instantaneous current and speed (B.2);
+  joint rate — is ONE ODE, :meth:`plant.actuated.ActuatedPlant.derivative` (the same model
+  code as the ``ActuatedFiveBarPlant`` FMU), integrated by ``scipy.integrate.solve_ivp``
+  (DOP853, rtol 1e-10 by default) over each sample interval, restarted at every sample; the
+  shaft torque is :func:`motor.shaft_torque` of the instantaneous current and speed (B.2);
 * the **discrete part** — trajectory, derivator, position controller, observers — are the
   scene's own slave objects (``fmus/slaves``, built from the scene's parameters exactly
   as the master builds them), stepped in the master's Gauss-Seidel order
@@ -74,6 +75,7 @@ from fmus.master import CoSimulationError, InProcessInstance, RecordedRun, slave
 from fmus.system import System, split_signal
 from motor import shaft_torque
 from plant import fivebar
+from plant.actuated import ActuatedPlant
 
 COUPLINGS = ("monolithic", "held_speed", "cosim", "mean")
 #: Default tolerances: convergence measured in docs/reference.md.
@@ -153,37 +155,23 @@ class _DriveLink:
     tau_mean: float = 0.0   # mean shaft torque over the interval ("mean")
     omega_held: float = 0.0  # speed at the sample instant ("held_speed")
 
-    @property
-    def params(self):
-        return self.slave.drive.params
-
-
-def _current_rate(i, v, omega, p):
-    """di/dt of (4.162): (v - R i - ke omega) / L."""
-    return (v - p.R * i - p.ke * omega) / p.L
-
 
 class _Continuous:
-    """Plant state [q(7), dq(7)] and the drives' currents, one ODE."""
+    """Plant state [q(7), dq(7)] and the drives' currents, one ODE: the
+    :class:`plant.actuated.ActuatedPlant` of the plant and the drives' models."""
 
     def __init__(self, sim, drives, held_speed=False):
-        self.sim = sim
         self.drives = drives
+        self.actuated = ActuatedPlant(sim, [(d.joint + 1, d.slave.drive) for d in drives])
         self.held_speed = held_speed
-        self.held = [0.0, 0.0]          # plant torques not delivered by a monolithic drive
+        self.held = [0.0, 0.0]          # the plant's inputs tau1, tau2 at the sample
 
     def rhs(self, t, z):
-        y = z[:14]
-        omega = fivebar.world_rates(y[7:])
-        tau = list(self.held)
-        dz = np.empty(z.size)
-        for n, d in enumerate(self.drives):
-            p = d.params
-            i, w = z[14 + n], (d.omega_held if self.held_speed else omega[d.joint])
-            tau[d.joint] = shaft_torque(i, w, p)
-            dz[14 + n] = _current_rate(i, d.v, w, p)
-        dz[:14] = self.sim.derivative(y, fivebar.thesis_torques(tau[0], tau[1]))
-        return dz
+        external = list(self.held)
+        for d in self.drives:           # a driven joint gets its drive's torque instead
+            external[d.joint] = 0.0
+        return self.actuated.derivative(z, [d.v for d in self.drives], external,
+                                        [d.omega_held for d in self.drives] if self.held_speed else None)
 
 
 def _mean_torque(drive_slave, i_start, v, omega, h):

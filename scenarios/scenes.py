@@ -14,7 +14,7 @@ parameter not given keeps the FMU's default (the presets of Tables 3-8, 16, 18).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from controller.strategies import STRATEGY_NAMES
 from controller.trajectories import get_trajectory
@@ -225,6 +225,81 @@ def bench(strategy: str, kind: str = "circle", model: str = "tabulated",
         changed = {k: getattr(f, k) for k in f.__dataclass_fields__ if getattr(f, k) != getattr(Fidelity(), k)}
         description += "; fidelity " + ", ".join(f"{k}={v}" for k, v in changed.items())
     return Scene(name, description, system, columns, window, trajectory.duration, strategy)
+
+
+#: Drive parameters that describe the separate drive's coupling to the plant (its own
+#: electrical integration and the torque it hands over): meaningless once the plant
+#: integrates the currents.
+_COUPLING_ONLY = ("method", "torque_output")
+#: Drive parameters shared by both drives of an ``ActuatedFiveBarPlant``.
+_SHARED = ("mode", "T")
+
+
+def drives_in_plant(scene: Scene, **plant_parameters) -> Scene:
+    """``scene`` with its plant and its drives replaced by ONE ``ActuatedFiveBarPlant``.
+
+    The monolithic plant-motor coupling (:mod:`plant.actuated`): the drives' currents and
+    the mechanism are integrated together, the current controllers still sample at the
+    communication step.  Every connection and recorded signal of ``drive<j>`` moves to the
+    plant's ``*<j>`` variable (``drive1.v`` -> ``plant.v1``, ``ctrl.i_ref1 -> drive1.i_ref``
+    becomes ``-> plant.i_ref1``), ``drive<j>.tau -> plant.tau<j>`` and
+    ``plant.dq<j> -> drive<j>.omega`` go (they are inside), the drives' parameters move to
+    the plant with the suffix j.  ``plant_parameters`` (e.g. ``substeps=8``) are set on the
+    new plant.
+
+    Raises
+    ------
+    ValueError
+        The scene has no single ``FiveBarPlant``, no drive, or a drive not wired as on the
+        bench (its torque to one plant input, the same joint's speed back), drives that
+        differ in ``mode`` or ``T``, or a drive started spinning or with a current.
+    """
+    system = scene.system
+    plants = [c for c in system.components if c.model == "FiveBarPlant"]
+    if len(plants) != 1:
+        raise ValueError(f"scene {scene.name}: drives_in_plant needs one FiveBarPlant, found {len(plants)}")
+    plant = plants[0]
+    sources = {c.target: c.source for c in system.connections}
+    joint_of = {}
+    for c in system.components:
+        if c.model != "DCMotorDrive":
+            continue
+        joints = [j for j in ("1", "2") if sources.get(f"{plant.name}.tau{j}") == f"{c.name}.tau"]
+        if len(joints) != 1 or sources.get(f"{c.name}.omega") != f"{plant.name}.dq{joints[0]}":
+            raise ValueError(f"scene {scene.name}: drive {c.name} must drive one of {plant.name}.tau1/tau2 "
+                             f"and read the same joint's {plant.name}.dq1/dq2 as omega")
+        joint_of[c.name] = joints[0]
+    if not joint_of:
+        raise ValueError(f"scene {scene.name}: no DCMotorDrive to move into the plant")
+    parameters = dict(plant.parameters)
+    for name, j in joint_of.items():
+        for key, value in system.component(name).parameters.items():
+            if key in ("omega0", "i0") and value != 0.0:
+                raise ValueError(f"scene {scene.name}: drive {name} starts with {key} = {value!r}; "
+                                 f"the actuated plant starts at rest with zero current")
+            if key in _SHARED:
+                if parameters.setdefault(key, value) != value:
+                    raise ValueError(f"scene {scene.name}: the drives differ in {key} "
+                                     f"({parameters[key]!r}, {value!r}); the actuated plant has one")
+            elif key not in _COUPLING_ONLY + ("omega0", "i0"):
+                parameters[f"{key}{j}"] = value
+    parameters.update(plant_parameters)
+
+    def moved(signal):
+        instance, variable = signal.split(".", 1)
+        if instance in joint_of:
+            return f"{plant.name}.{'tau' if variable == 'tau' else variable}{joint_of[instance]}"
+        return signal
+
+    inside = {f"{plant.name}.tau{j}" for j in joint_of.values()} | {f"{d}.omega" for d in joint_of}
+    connections = tuple(Connection(moved(c.source), moved(c.target)) for c in system.connections
+                        if c.target not in inside)
+    components = tuple(replace(c, model="ActuatedFiveBarPlant", parameters=parameters) if c is plant else c
+                       for c in system.components if c.name not in joint_of)
+    record = tuple(dict.fromkeys(moved(r) for r in system.record))
+    columns = {k: moved(v) for k, v in scene.columns.items()}
+    return replace(scene, system=replace(system, components=components, connections=connections, record=record),
+                   columns=columns, description=scene.description + "; drives integrated in the plant")
 
 
 def scene_names() -> list[str]:

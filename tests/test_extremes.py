@@ -407,6 +407,9 @@ def _good_inputs():
         "Derivator": ({}, {"q1": 0.5, "q2": 2.0}),
         "PositionController": ({"strategy": "TCMDx"}, {"q1": float(q1), "q2": float(q2), "x_d": X1[0], "y_d": X1[1]}),
         "Trajectory": ({}, {}),
+        "ActuatedFiveBarPlant": ({"preset": "bench", "x0": X1[0], "y0": X1[1]},
+                                 {"i_ref1": 1.0, "i_ref2": -1.0, "i_hat1": 0.5, "i_hat2": -0.5, "v_ref1": 1.0,
+                                  "v_ref2": 1.0}),
     }
 
 
@@ -469,7 +472,8 @@ def _variable_cases():
 REFUSED_HUGE_INPUTS = {("FiveBarPlant", "tau1"), ("FiveBarPlant", "tau2"), ("PositionController", "dq1"),
                        ("PositionController", "dq2"), ("PositionController", "x_d"), ("PositionController", "y_d")}
 #: Absurd integer parameters that are legitimate: a finer encoder, more cycles (a long run).
-ALLOWED_INTEGERS = {("FiveBarPlant", "encoder_counts", 2 ** 31 - 1), ("Trajectory", "cycles", 2 ** 31 - 1)}
+ALLOWED_INTEGERS = {("FiveBarPlant", "encoder_counts", 2 ** 31 - 1), ("Trajectory", "cycles", 2 ** 31 - 1),
+                    ("ActuatedFiveBarPlant", "encoder_counts", 2 ** 31 - 1)}
 
 
 @pytest.mark.parametrize("model, name, causality, value", _variable_cases())

@@ -14,8 +14,9 @@ from scipy.integrate import quad, solve_ivp
 
 from fmus.master import simulate
 from fmus.system import Component, System
-from motor import CurrentController, advance_current, electrical_step_coefficients, get_motor_preset, shaft_torque
-from scenarios.reference import (ReferenceError, _current_rate, _mean_torque, deviation, reference_run,
+from motor import (CurrentController, advance_current, armature_current_rate, electrical_step_coefficients,
+                   get_motor_preset, shaft_torque)
+from scenarios.reference import (ReferenceError, _mean_torque, deviation, reference_run,
                                  with_parameters)
 from scenarios.scenes import get_scene
 
@@ -49,7 +50,7 @@ def test_current_rate_integrates_to_the_drives_exact_step(preset):
     """L di/dt = v - R i - ke w, integrated with v, w held, is the drive's own exact step."""
     p = get_motor_preset(preset)
     h, i0, v, w = 1e-3, 0.7, 9.0, -12.0
-    sol = solve_ivp(lambda t, i: [_current_rate(i[0], v, w, p)], (0.0, h), [i0], method="DOP853",
+    sol = solve_ivp(lambda t, i: [armature_current_rate(i[0], v, w, p)], (0.0, h), [i0], method="DOP853",
                     rtol=1e-13, atol=1e-15)
     exact = advance_current(i0, v, w, p.ke, electrical_step_coefficients(p.R, p.L, h, "exact"))
     assert sol.y[0, -1] == pytest.approx(exact, abs=1e-11)

@@ -1,0 +1,142 @@
+"""Variable declarations and model construction that several slaves share.
+
+``FiveBarPlant`` and ``ActuatedFiveBarPlant`` declare the same mechanism parameters and
+outputs; ``DCMotorDrive`` and ``ActuatedFiveBarPlant`` the same motor parameters (the
+latter once per drive, with a suffix 1 or 2).  Declared once here, so an FMU variable
+means the same thing in every FMU that has it.  Bundled into every FMU with
+:mod:`fmus.guarded`.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+from fmus.guarded import PRESET_VALUE, refuse_absurd, require_finite, with_overrides
+
+#: The plant's outputs (name, description).
+PLANT_OUTPUTS = (
+    ("q1", "Chain 1 actuated angle, CCW from +x [rad]"),
+    ("q2", "Chain 2 actuated angle, CCW from +x [rad]"),
+    ("dq1", "d q1/dt [rad/s]"), ("dq2", "d q2/dt [rad/s]"),
+    ("x", "End effector x [m]"), ("y", "End effector y [m]"),
+    ("dx", "d x/dt [m/s]"), ("dy", "d y/dt [m/s]"),
+    ("q1_enc", "q1 quantised to encoder counts [rad]"),
+    ("q2_enc", "q2 quantised to encoder counts [rad]"),
+    ("residual", "Norm of the loop-closure residual (5.18) [m]"),
+)
+
+#: Motor parameters settable one by one (MotorParams field, FMU variable, description).
+MOTOR_PARAMETERS = (
+    ("R", "R", "Armature resistance [ohm], > 0"),
+    ("L", "L", "Armature inductance [H], >= 0 (0: quasi-static, voltage mode only)"),
+    ("kt", "kt", "Torque constant [N m/A], > 0"),
+    ("ke", "ke", "Back-emf constant [V s/rad], > 0"),
+    ("b", "b", "Viscous friction [N m s/rad], >= 0"),
+    ("mu", "mu", "Coulomb friction torque [N m], >= 0"),
+    ("v_max", "v_max", "Supply voltage: the driver saturates at +-v_max [V], > 0"),
+    ("omega_eps", "omega_eps", "Width of the regularised sign mu*tanh(omega/omega_eps) [rad/s], > 0"),
+    ("J_rotor", "J_design", "Rotor inertia assumed by the current-controller design G_I(s) (B.10) only "
+                            "[kg m2], > 0; the plant integrates the real rotor inertia"),
+)
+
+
+# --- the plant -------------------------------------------------------------------------------
+
+def declare_plant(slave) -> None:
+    """The mechanism's outputs and parameters (thesis ch. 7.1, Tables 3-5)."""
+    from plant import IntegratorSettings
+
+    defaults = IntegratorSettings()
+    d = slave.declare
+    for name, text in PLANT_OUTPUTS:
+        d(name, "output", 0.0, text)
+    d("preset", "parameter", "thesis_sim", "Mechanism parameters: 'thesis_sim' (Table 3) or 'bench' (Tables 4-5)")
+    d("x0", "parameter", 0.07, "Start at rest with the end effector at (x0, y0) [m]")
+    d("y0", "parameter", 0.17, "Start at rest with the end effector at (x0, y0) [m]")
+    d("J_rotor1", "parameter", PRESET_VALUE, "Rotor inertia on q1 [kg m2]; -1: the preset's (bench: Table 16)")
+    d("J_rotor2", "parameter", PRESET_VALUE, "Rotor inertia on q2 [kg m2]; -1: the preset's (bench: Table 18)")
+    d("m0", "parameter", 0.0, "End-effector point mass [kg]")
+    d("l0", "parameter", 0.05, "Half the distance between the base joints [m]")
+    d("gravity_x", "parameter", 0.0, "Gravity, world x [m/s2]")
+    d("gravity_y", "parameter", 0.0, "Gravity, world y [m/s2]")
+    d("gravity_z", "parameter", 0.0, "Gravity, world z [m/s2] (no effect on the planar motion)")
+    d("link_inertias", "parameter", True, "Links have their inertias Jz (false: point masses at the centres of mass)")
+    d("encoder_counts", "parameter", 20000, "Encoder counts per revolution (quadrature)")
+    d("method", "parameter", defaults.method, "Integrator: 'rk4' (fixed step) or 'dopri5' (adaptive)")
+    d("substeps", "parameter", defaults.substeps, "RK4 steps per communication step")
+    d("rtol", "parameter", defaults.rtol, "Relative tolerance of dopri5")
+    d("atol", "parameter", defaults.atol, "Absolute tolerance of dopri5")
+    d("baumgarte", "parameter", defaults.baumgarte, "Baumgarte lambda of (5.66) [1/s]")
+    d("project", "parameter", defaults.project, "Project q, dq on the constraints after each step")
+    d("kernel", "parameter", defaults.kernel, "'fast' (compiled 5R) or 'general' (thesis algorithm in numpy)")
+
+
+def build_plant(slave):
+    """The :class:`plant.PlantSimulator` the slave's plant parameters describe."""
+    from plant import IntegratorSettings, PlantSimulator, get_preset
+
+    params = get_preset(slave.preset)
+    numeric = {name: getattr(slave, name) for name in (
+        "J_rotor1", "J_rotor2", "m0", "l0", "gravity_x", "gravity_y", "gravity_z", "baumgarte", "rtol", "atol")}
+    require_finite(**numeric)
+    refuse_absurd(**numeric)
+    for name in ("J_rotor1", "J_rotor2"):
+        value = getattr(slave, name)
+        if value < 0.0 and value != PRESET_VALUE:
+            raise ValueError(f"{name} = {value!r} must be >= 0 (or -1 for the preset's value)")
+    params = params.with_rotors(
+        params.chain1.J_rotor if slave.J_rotor1 == PRESET_VALUE else slave.J_rotor1,
+        params.chain2.J_rotor if slave.J_rotor2 == PRESET_VALUE else slave.J_rotor2,
+    )
+    params = replace(params, m0=slave.m0, l0=slave.l0,
+                     gravity=(slave.gravity_x, slave.gravity_y, slave.gravity_z))
+    if not slave.link_inertias:
+        params = replace(params, chain1=replace(params.chain1, Jz1=0.0, Jz2=0.0),
+                         chain2=replace(params.chain2, Jz1=0.0, Jz2=0.0))
+    settings = IntegratorSettings(
+        method=slave.method, substeps=slave.substeps, rtol=slave.rtol, atol=slave.atol,
+        baumgarte=slave.baumgarte, project=bool(slave.project), kernel=slave.kernel,
+    )
+    return PlantSimulator(params, slave.x0, slave.y0, settings, encoder_counts=slave.encoder_counts)
+
+
+def publish_plant(slave, sim) -> None:
+    """Copy the plant's outputs to the slave's variables."""
+    for name, value in sim.outputs().items():
+        setattr(slave, name, float(value))
+
+
+# --- a drive ---------------------------------------------------------------------------------
+
+def declare_motor(slave, suffix: str = "", default_preset: str = "motor1") -> None:
+    """A drive's motor parameters (Tables 16, 18): ``preset``, the :data:`MOTOR_PARAMETERS`
+    and ``b_design``, each name followed by ``suffix``."""
+    d = slave.declare
+    d(f"preset{suffix}", "parameter", default_preset,
+      "Motor parameters: 'motor1' (Table 16) or 'motor2' (Table 18)")
+    for _, var, text in MOTOR_PARAMETERS:
+        d(f"{var}{suffix}", "parameter", PRESET_VALUE, f"{text}; -1: the preset's value")
+    d(f"b_design{suffix}", "parameter", PRESET_VALUE,
+      "Viscous friction assumed by the current-controller design only [N m s/rad], > 0; -1: b")
+
+
+def build_drive(slave, suffix: str = "", **options):
+    """The :class:`motor.Drive` of the slave's motor parameters with ``suffix``; ``options``
+    (mode, method, T, torque_output) go to the Drive."""
+    from motor import Drive, get_motor_preset
+
+    preset = getattr(slave, f"preset{suffix}")
+    try:
+        params = get_motor_preset(preset)
+    except ValueError as exc:
+        raise ValueError(f"parameter preset{suffix} = {preset!r}: {exc}") from None
+    params = with_overrides(params, slave,
+                            [(field, f"{var}{suffix}") for field, var, _ in MOTOR_PARAMETERS])
+    design = None
+    b_design = getattr(slave, f"b_design{suffix}")
+    if b_design != PRESET_VALUE:
+        refuse_absurd(**{f"b_design{suffix}": b_design})
+        if not (math.isfinite(b_design) and b_design > 0.0):
+            raise ValueError(f"parameter b_design{suffix} = {b_design!r} must be > 0 (or -1: the value of b)")
+        design = params.with_(b=b_design)
+    return Drive(params, design_params=design, **options)

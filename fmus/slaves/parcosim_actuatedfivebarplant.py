@@ -1,0 +1,79 @@
+"""FMI slave ``ActuatedFiveBarPlant``: the 5R plant with both drives inside, one ODE.
+
+A thin adapter over :class:`plant.actuated.ActuatedPlant`: ``FiveBarPlant`` and two
+``DCMotorDrive`` in one FMU, their coupling removed.  The mechanism and the two armature
+currents are integrated together (the plant's ``method``/``substeps``/``rtol`` apply to the
+whole state); each drive's discrete current controller samples ``i_ref<j>`` and ``i_hat<j>``
+at the step start and holds its voltage, as the separate drive does.  This is the
+monolithic plant-motor coupling of the trade study (docs/trade.md): what a co-simulation
+buys when the 0.6 ms electrical time constant and the mechanics are not split by the 1 ms
+communication step.
+
+Timing (one step from t to t + h): ``v<j>`` is the voltage applied over [t, t + h] (read it
+into the observer, as the drive's ``v``), ``i<j>`` and ``tau<j>`` the current and shaft
+torque at t + h; the mechanical outputs are those of ``FiveBarPlant``.  Parameters: the
+plant's, the motors' with a suffix 1 (chain 1, default Table 16's motor) or 2 (Table 18's),
+``mode`` and ``T`` of both current controllers.  No direct feedthrough.
+
+The module name is unique among parcosim slaves: all FMUs loaded in one
+process share one Python interpreter and its module cache.
+"""
+from __future__ import annotations
+
+from fmus.guarded import GuardedSlave, refuse_absurd, require_finite
+from fmus.parts import PLANT_OUTPUTS, build_drive, build_plant, declare_motor, declare_plant, publish_plant
+from plant.actuated import ActuatedPlant
+
+OUTPUTS = tuple(name for name, _ in PLANT_OUTPUTS) + ("tau1", "tau2", "v1", "v2", "i1", "i2")
+JOINTS = ("1", "2")
+
+
+class ActuatedFiveBarPlant(GuardedSlave):
+    """The 5R mechanism and its two DC motor drives integrated as one system."""
+
+    author = "parcosim"
+    description = ("5R parallel robot with its two DC motor drives (Coutinho 2019, 5.66, 4.162, B.2, app. C) "
+                   "as one ODE: current references in, motion out")
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        d = self.declare
+        for j in JOINTS:
+            d(f"i_ref{j}", "input", 0.0, f"Drive {j}: current reference, sampled at the step start (current mode) [A]")
+            d(f"i_hat{j}", "input", 0.0, f"Drive {j}: observed (or measured) current at the step start "
+                                         "(current mode) [A]")
+            d(f"v_ref{j}", "input", 0.0, f"Drive {j}: commanded voltage, saturated at +-v_max (voltage mode) [V]")
+        for j in JOINTS:
+            d(f"tau{j}", "output", 0.0, f"Drive {j}: shaft torque kt i - b omega - mu sign(omega) at the step end [N m]")
+            d(f"v{j}", "output", 0.0, f"Drive {j}: voltage applied over the step just taken [V]")
+            d(f"i{j}", "output", 0.0, f"Drive {j}: armature current at the step end [A]")
+        declare_plant(self)
+        for j in JOINTS:
+            declare_motor(self, j, default_preset=f"motor{j}")
+        d("mode", "parameter", "current",
+          "Both drives: 'current' (controller K(z) on i_ref, i_hat) or 'voltage' (v_ref applied)")
+        d("T", "parameter", 1e-3, "Current-controller sample time [s]; in current mode the step must divide it")
+        self.actuated = None
+
+    def setup(self):
+        refuse_absurd(T=self.T)
+        sim = build_plant(self)
+        drives = [(int(j), build_drive(self, j, mode=self.mode, T=self.T)) for j in JOINTS]
+        self.actuated = ActuatedPlant(sim, drives)
+        self._publish()
+
+    def step(self, current_time, step_size):
+        require_finite(**{f"{name}{j}": getattr(self, f"{name}{j}") for name in ("i_ref", "i_hat", "v_ref")
+                          for j in JOINTS})
+        self.actuated.plant.time = current_time
+        self.actuated.step((self.i_ref1, self.i_ref2), (self.i_hat1, self.i_hat2), (self.v_ref1, self.v_ref2),
+                           step_size)
+        self._publish()
+
+    def _publish(self):
+        a = self.actuated
+        publish_plant(self, a.plant)
+        for j, (_, drive), tau in zip(JOINTS, a.drives, a.shaft_torques()):
+            setattr(self, f"tau{j}", tau)
+            setattr(self, f"v{j}", drive.v)
+            setattr(self, f"i{j}", drive.i)

@@ -1,0 +1,137 @@
+"""The plant with its drives' armature circuits: one ODE, the monolithic plant-motor coupling.
+
+The co-simulation's bench couples each :class:`motor.Drive` to the plant at the
+communication step: the drive integrates its current with the shaft speed held and the
+plant holds the drive's torque.  :class:`ActuatedPlant` removes that coupling: the state
+
+    z = [q (7), dq (7), i_1, ..., i_n]
+
+(the thesis' coordinates 7.12 and the drives' armature currents) is integrated as one ODE:
+
+* dq/dt from the forward dynamics (5.66) with, on each driven joint, the shaft torque
+  kt i - b omega - mu tanh(omega / omega_eps) of the present current and speed (B.2,
+  :func:`motor.shaft_torque`);
+* L di/dt = v - R i - ke omega (4.162, :func:`motor.armature_current_rate`), v the voltage
+  the drive's discrete current controller holds over the step
+  (:meth:`motor.Drive.sample_voltage`).
+
+What stays discrete is the drives' own: each controller samples i_ref and i_hat at the
+step's start (zero-order hold), as in the separate drive.  The plant's integrator settings
+(:class:`plant.IntegratorSettings`: RK4 and its substeps, or dopri5 and its tolerances) apply
+to the whole state, and its refusals (residual, singular pose) to the mechanical part.
+The monolithic reference (``scenarios/reference.py``) integrates this same
+:meth:`ActuatedPlant.derivative` with scipy's DOP853 at rtol 1e-10.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from motor import armature_current_rate, shaft_torque
+
+from . import fast5r, fivebar
+from .integrators import IntegrationError, dopri5, rk4
+from .simulator import RK4_REAL_STABILITY, PlantError, PlantSimulator
+
+
+class ActuatedPlant:
+    """A :class:`PlantSimulator` whose actuated joints are driven by drives it integrates.
+
+    Parameters
+    ----------
+    plant : PlantSimulator
+        The mechanism, its state and its integrator settings (used for the whole state).
+    drives : sequence of (int, motor.Drive)
+        (joint, drive) pairs: the drive delivers the world torque tau_joint and turns at
+        dq_joint, joint 1 or 2, each at most once.  Every drive needs L > 0 (an armature
+        current to integrate).  The drives keep their controllers, parameters, ``i``
+        (the current) and ``v`` (the last voltage); this class updates ``i`` and ``v``.
+    """
+
+    def __init__(self, plant: PlantSimulator, drives):
+        self.plant = plant
+        self.drives = tuple((int(j), d) for j, d in drives)
+        joints = [j for j, _ in self.drives]
+        if any(j not in (1, 2) for j in joints) or len(set(joints)) != len(joints):
+            raise ValueError(f"drive joints must be 1 and/or 2, each at most once, got {joints}")
+        for j, d in self.drives:
+            if not d.params.L > 0.0:
+                raise ValueError(f"drive on joint {j}: L = {d.params.L!r} H has no armature current to integrate "
+                                 f"(use a separate drive with method 'quasi_static')")
+        self._motors = np.array([[j - 1, d.params.R, d.params.L, d.params.kt, d.params.ke, d.params.b, d.params.mu,
+                                  d.params.omega_eps] for j, d in self.drives]).reshape(-1, fast5r.MOTOR_COLUMNS)
+        self._h_next = None
+
+    @property
+    def currents(self) -> list:
+        """The armature currents [A], one per drive."""
+        return [d.i for _, d in self.drives]
+
+    def state(self) -> np.ndarray:
+        """z = [q, dq, currents]."""
+        return np.concatenate([self.plant.y, self.currents])
+
+    def derivative(self, z, voltages, external=(0.0, 0.0), omega_held=None):
+        """dz/dt with the drives' voltages and world torques ``external`` on (q1, q2) held.
+
+        The Python reference of the compiled :func:`plant.fast5r.actuated_derivative`.
+        ``omega_held`` (one speed per drive), a diagnostic of the reference, replaces the
+        joint speed the drives see (back-emf and friction) by a held one.
+        """
+        y = z[:14]
+        rates = fivebar.world_rates(y[7:])
+        tau = list(external)
+        dz = np.empty(len(z))
+        for n, (j, drive) in enumerate(self.drives):
+            omega = rates[j - 1] if omega_held is None else omega_held[n]
+            tau[j - 1] += shaft_torque(z[14 + n], omega, drive.params)
+            dz[14 + n] = armature_current_rate(z[14 + n], voltages[n], omega, drive.params)
+        dz[:14] = self.plant.derivative(y, fivebar.thesis_torques(tau[0], tau[1]))
+        return dz
+
+    def step(self, i_ref, i_hat, v_ref, dt: float) -> None:
+        """Advance by dt: each drive samples its voltage (:meth:`motor.Drive.sample_voltage`
+        with ``i_ref[n]``, ``i_hat[n]``, ``v_ref[n]``), held over the step, and the whole
+        state is integrated.  Refused (:class:`plant.PlantError`, the state kept) for the
+        plant's reasons, for RK4 steps beyond the stability of the electrical pole
+        (R h / L > 2.785), and for non-finite currents.
+        """
+        plant = self.plant
+        plant.check_step(dt)
+        s = plant.settings
+        h = dt / s.substeps
+        if s.method == "rk4":
+            for j, d in self.drives:
+                x = d.params.R * h / d.params.L
+                if x > RK4_REAL_STABILITY:
+                    raise PlantError(
+                        f"drive on joint {j}: RK4 steps of {h:.6g} s are unstable for its armature circuit: "
+                        f"R h / L = {x:.4g} > {RK4_REAL_STABILITY:.4g} (L/R = {d.params.L / d.params.R:.3g} s); "
+                        f"use substeps >= {math.ceil(dt * d.params.R / (d.params.L * 2.0))} or dopri5")
+        voltages = [d.sample_voltage(i_ref[n], v_ref[n], i_hat[n], dt) for n, (_, d) in enumerate(self.drives)]
+        held = ", ".join(f"v{j} = {v!r} V" for (j, _), v in zip(self.drives, voltages)) + " held"
+        z = self.state()
+        try:
+            if s.method == "rk4" and plant._fast is not None:
+                z = fast5r.actuated_rk4(plant._fast.p, self._motors, z, np.array(voltages, dtype=float), 0.0, 0.0,
+                                        float(s.baumgarte), float(dt), int(s.substeps))
+            elif s.method == "rk4":
+                z = rk4(lambda w: self.derivative(w, voltages), z, dt, s.substeps)
+            else:
+                z, self._h_next, _ = dopri5(lambda w: self.derivative(w, voltages), z, dt, s.rtol, s.atol,
+                                            self._h_next)
+        except (IntegrationError, np.linalg.LinAlgError) as exc:
+            raise PlantError(f"integration failed in the step from t = {plant.time:.6g} s ({held}): {exc}") from None
+        currents = z[14:].tolist()
+        if not all(math.isfinite(i) for i in currents):
+            raise PlantError(f"armature currents {currents} after the step from t = {plant.time:.6g} s "
+                             f"({held}) are not finite")
+        plant.accept(z[:14], dt, held)
+        for (_, d), i, v in zip(self.drives, currents, voltages):
+            d.i, d.v = i, v
+
+    def shaft_torques(self) -> list:
+        """Each drive's shaft torque at the present current and joint speed [N m] (B.2)."""
+        rates = fivebar.world_rates(self.plant.y[7:])
+        return [shaft_torque(d.i, rates[j - 1], d.params) for j, d in self.drives]

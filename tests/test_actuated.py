@@ -1,0 +1,158 @@
+"""The plant with its drives inside (plant/actuated.py, the ActuatedFiveBarPlant FMU, drives_in_plant)."""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from fmus.master import simulate
+from motor import Drive, get_motor_preset, shaft_torque
+from plant import IntegratorSettings, PlantError, PlantSimulator, fast5r, get_preset
+from plant.actuated import ActuatedPlant
+from scenarios.reference import deviation, reference_run
+from scenarios.scenes import drives_in_plant, get_scene
+
+START = (-0.002, 0.108)      # the bench circle's start
+
+
+def _actuated(kernel="fast", settings=None, **motor_changes):
+    settings = settings or IntegratorSettings(kernel=kernel)
+    sim = PlantSimulator(get_preset("bench"), *START, settings)
+    drives = [(j, Drive(get_motor_preset(f"motor{j}").with_(**motor_changes))) for j in (1, 2)]
+    return ActuatedPlant(sim, drives)
+
+
+def _random_state(a, rng):
+    z = a.state()
+    z[7:14] += rng.normal(scale=0.3, size=7)
+    z[14:] = rng.normal(scale=2.0, size=2)
+    return z
+
+
+@pytest.mark.parametrize("kernel", ["fast", "general"])
+def test_compiled_derivative_equals_the_python_one(kernel):
+    a = _actuated(kernel)
+    p = fast5r.pack_params(a.plant.params)
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        z, v = _random_state(a, rng), rng.normal(scale=10.0, size=2)
+        external = rng.normal(scale=0.05, size=2)
+        expected = a.derivative(z, v, external)
+        out = np.empty(16)
+        fast5r.actuated_derivative(p, a._motors, z, v, *[float(u) for u in (external[0], -external[1])],
+                                   a.plant.settings.baumgarte, out)
+        assert np.allclose(out, expected, rtol=1e-12, atol=1e-12 * np.max(np.abs(expected)))
+
+
+def test_without_drives_it_is_the_plant():
+    a = _actuated()
+    bare = ActuatedPlant(a.plant, [])
+    z = a.plant.y.copy()
+    z[7:] += 0.1
+    assert np.array_equal(bare.derivative(z, [], (0.02, -0.03)), a.plant.derivative(z, np.array([0.02, 0.03])))
+
+
+def test_shaft_torque_and_current_rate_enter_with_the_world_signs():
+    """Joint 2's world torque is -u*2 and its world speed -dtheta21 (plant.fivebar): a
+    current in drive 2 must accelerate q2 as the same torque on the bare plant's tau2 does."""
+    a = _actuated()
+    z = a.state()
+    z[14:] = [0.0, 1.5]
+    tau2 = shaft_torque(1.5, 0.0, a.drives[1][1].params)
+    expected = a.plant.derivative(z[:14], np.array([0.0, -tau2]))
+    assert np.allclose(a.derivative(z, [0.0, 0.0])[:14], expected, rtol=1e-14, atol=1e-14)
+
+
+def test_energy_balance_with_kt_equal_ke():
+    """With kt = ke the electromechanical conversion is lossless: over a run, the energy the
+    supply delivers = resistive + friction losses + magnetic + kinetic energy (no gravity).
+    A sign error in the coupling of either joint breaks it."""
+    motor = get_motor_preset("motor1")
+    a = _actuated(settings=IntegratorSettings(substeps=16), ke=motor.kt, mu=0.0)
+    h, steps = 1e-3, 200
+    supplied = lost = 0.0
+    ke0 = a.plant.kinetic_energy()
+    magnetic = lambda: sum(0.5 * d.params.L * d.i ** 2 for _, d in a.drives)   # noqa: E731
+    m0 = magnetic()
+    for k in range(steps):
+        i_ref = (2.0 * np.sin(20 * k * h), -1.5 * np.cos(15 * k * h))
+        # trapezoidal sums over sub-intervals of the step: integrate power with the states
+        z0 = a.state()
+        a.step(i_ref, [d.i for _, d in a.drives], (0.0, 0.0), h)
+        z1 = a.state()
+        for n, (j, d) in enumerate(a.drives):
+            w0 = (z0[10], -z0[12])[j - 1]
+            w1 = (z1[10], -z1[12])[j - 1]
+            p = d.params
+            supplied += 0.5 * h * d.v * (z0[14 + n] + z1[14 + n])
+            lost += 0.5 * h * (p.R * (z0[14 + n] ** 2 + z1[14 + n] ** 2) + p.b * (w0 ** 2 + w1 ** 2))
+    stored = (a.plant.kinetic_energy() - ke0) + (magnetic() - m0)
+    assert supplied > 1e-2                          # the test moved something
+    assert abs(supplied - lost - stored) < 1e-3 * supplied
+
+
+def test_rk4_steps_beyond_the_electrical_pole_are_refused_by_name():
+    a = _actuated(L=1e-5)
+    state = a.state()
+    with pytest.raises(PlantError, match=r"drive on joint 1: RK4 steps of 0.001 s are unstable.*R h / L = 110.1.*"
+                                         r"substeps >= 56"):
+        a.step((1.0, 1.0), (0.0, 0.0), (0.0, 0.0), 1e-3)
+    assert np.array_equal(a.state(), state)
+
+
+def test_quasi_static_drive_refused():
+    sim = PlantSimulator(get_preset("bench"), *START)
+    drive = Drive(get_motor_preset("motor2").with_(L=0.0), mode="voltage")
+    with pytest.raises(ValueError, match="drive on joint 2: L = 0.0 H has no armature current"):
+        ActuatedPlant(sim, [(2, drive)])
+
+
+# --- the scene --------------------------------------------------------------------------------
+
+def _short(scene, stop):
+    return replace(scene, system=replace(scene.system, stop_time=stop))
+
+
+def test_drives_in_plant_rewires_the_bench():
+    scene = drives_in_plant(get_scene("bench_circle_TCMDx"), substeps=4)
+    models = {c.name: c.model for c in scene.system.components}
+    assert "drive1" not in models and models["plant"] == "ActuatedFiveBarPlant"
+    plant = scene.system.component("plant").parameters
+    assert plant["preset1"] == "motor1" and plant["preset2"] == "motor2" and plant["substeps"] == 4
+    assert "torque_output1" not in plant and plant["mode"] == "current"
+    pairs = {(c.source, c.target) for c in scene.system.connections}
+    assert ("ctrl.i_ref1", "plant.i_ref1") in pairs and ("plant.v2", "obs2.v") in pairs
+    assert ("obs1.i_hat", "plant.i_hat1") in pairs
+    assert scene.columns["i1"] == "plant.i1" and scene.columns["tau2_shaft"] == "plant.tau2"
+
+
+def test_drives_in_plant_needs_drives():
+    with pytest.raises(ValueError, match="no DCMotorDrive to move into the plant"):
+        drives_in_plant(get_scene("thesis_sim_circle"))
+
+
+def test_converges_to_the_monolithic_reference():
+    """The reference integrates the same ODE with DOP853 at rtol 1e-10; with the controllers
+    sampling identically, RK4 substeps must converge to it at 4th order, far below the
+    separate drives' coupling error."""
+    base = _short(get_scene("bench_circle_TCMDx"), 0.3)
+    reference = reference_run(base)
+    errors = {}
+    for n in (2, 4, 8):
+        result = simulate(drives_in_plant(base, substeps=n).system)
+        assert result.completed, result.error
+        errors[n] = deviation(result, reference)["max"]
+    separate = deviation(simulate(base.system), reference)["max"]
+    assert errors[8] < 1e-9 < separate
+    assert errors[8] < errors[4] / 8 and errors[4] < errors[2] / 8
+
+
+def test_fmu_and_inprocess_identical(built_fmus):
+    fmu_dir = next(iter(built_fmus.values())).parent
+    system = drives_in_plant(_short(get_scene("bench_triangle_TCMDx"), 0.1), substeps=2).system
+    a = simulate(system, mode="inprocess")
+    b = simulate(system, mode="fmu", fmu_dir=fmu_dir)
+    assert a.completed and b.completed, (a.error, b.error)
+    for signal in system.record:
+        assert np.array_equal(a[signal], b[signal]), signal
