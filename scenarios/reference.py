@@ -356,18 +356,28 @@ def reference_run(scene_or_name, rtol: float = RTOL, atol: float = ATOL, stop_ti
                                   "mean_steps_per_interval": n_steps / max(1, len(rows) - 1)})
 
 
+def common_rows(time_a, time_b) -> tuple[np.ndarray, np.ndarray]:
+    """Row indices (ia, ib) at which the two time grids meet (to 1 ns), in time order: all rows
+    for equal steps, every second reference row for a run at twice the step."""
+    ka = np.round(np.asarray(time_a) * 1e9).astype(np.int64)
+    kb = np.round(np.asarray(time_b) * 1e9).astype(np.int64)
+    _, ia, ib = np.intersect1d(ka, kb, assume_unique=True, return_indices=True)
+    return ia, ib
+
+
 def deviation(result, reference, start: float = 0.0, end: float | None = None) -> dict:
     """End-effector deviation of ``result`` (a master Result or a ReferenceResult) from ``reference``.
 
-    Over the common rows with start <= t <= end: ``rms`` = sqrt(mean(dx² + dy²)) and
-    ``max`` of the distance [m], ``t_max`` where it is largest; signals ``<plant>.x``, ``.y``.
+    Over the rows at common times (:func:`common_rows`) with start <= t <= end: ``rms`` =
+    sqrt(mean(dx² + dy²)) and ``max`` of the distance [m], ``t_max`` where it is largest;
+    signals ``<plant>.x``, ``.y``.
     """
-    n = min(len(result.time), len(reference.time))
-    t = reference.time[:n]
+    ia, ib = common_rows(result.time, reference.time)
+    t = reference.time[ib]
     keep = (t >= start - 1e-12) & (t <= (math.inf if end is None else end) + 1e-12)
     plant = _plant_prefix(reference)
-    dx = (result[f"{plant}.x"][:n] - reference[f"{plant}.x"][:n])[keep]
-    dy = (result[f"{plant}.y"][:n] - reference[f"{plant}.y"][:n])[keep]
+    dx = (result[f"{plant}.x"][ia] - reference[f"{plant}.x"][ib])[keep]
+    dy = (result[f"{plant}.y"][ia] - reference[f"{plant}.y"][ib])[keep]
     d = np.hypot(dx, dy)
     if not d.size:
         return {"rms": float("nan"), "max": float("nan"), "t_max": float("nan"), "rows": 0}

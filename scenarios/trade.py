@@ -55,8 +55,8 @@ from fmus.master import simulate
 from fmus.system import System
 
 from .metrics import rms_norm, scene_metrics
-from .reference import deviation, reference_run
-from .scenes import Fidelity, Scene, bench, get_scene
+from .reference import common_rows, deviation, reference_run
+from .scenes import Fidelity, Scene, bench, drives_in_plant, get_scene
 
 DEFAULT_SCENE = "bench_circle_TCMDx"
 #: Simulated time of the quick sweep [s].
@@ -68,6 +68,8 @@ QUICK_ROUNDS = 1
 REPEAT_BELOW_S = 5.0
 COLUMNS = ("setting", "kind", "what", "wall_s", "cpu_s", "speedup", "rms_err_m", "max_err_m", "gain", "residual_m",
            "current_err_A", "energy_err", "enc_diff", "enc_first_s", "e_ef_mm", "pareto", "error")
+#: Each setting runs this long once before it is timed [s].
+WARM_UP_S = 0.02
 #: Wall times within this fraction of each other count as equally fast on the front.
 WALL_TOLERANCE = 0.10
 #: Encoder counts that make the quantisation negligible (the no-quantisation study).
@@ -122,8 +124,12 @@ def _drives(scene: Scene) -> list:
     return [c.name for c in scene.system.components if c.model == "DCMotorDrive"]
 
 
+#: Models that are the scene's plant (its end effector is the measured output).
+PLANT_MODELS = ("FiveBarPlant", "ActuatedFiveBarPlant")
+
+
 def _plant(scene: Scene) -> str | None:
-    plants = [c.name for c in scene.system.components if c.model == "FiveBarPlant"]
+    plants = [c.name for c in scene.system.components if c.model in PLANT_MODELS]
     return plants[0] if len(plants) == 1 else None
 
 
@@ -167,6 +173,15 @@ def _group(n: int, **drive_parameters):
             return None
         scene = _change(scene, drives, substeps=n, **drive_parameters)
         return _change(scene, [plant], substeps=n)
+    return build
+
+
+def _in_plant(**plant_parameters):
+    """The drives moved into the plant (one ODE, :func:`scenarios.scenes.drives_in_plant`)."""
+    def build(scene):
+        if not _drives(scene) or _plant(scene) is None:
+            return None
+        return drives_in_plant(scene, **plant_parameters)
     return build
 
 
@@ -240,6 +255,14 @@ def settings(quick: bool = False) -> list:
                                "drive outputs the torque averaged over its step"
                                + ("" if n == 1 else f"; drives + plant at 1/{n} ms"),
                                _group(n, torque_output="mean")))
+    for n in ((4,) if quick else (1, 2, 4, 8, 16)):
+        acc.append(Setting("drives in plant" + ("" if n == 1 else f", substeps={n}"), "accuracy",
+                           "drives' currents and the mechanism as one ODE in the plant (ActuatedFiveBarPlant), "
+                           f"RK4 {n} step{'s' if n > 1 else ''} per 1 ms", _in_plant(substeps=n)))
+    if not quick:
+        acc.append(Setting("drives in plant, substeps=4, fmu", "accuracy",
+                           "as 'drives in plant, substeps=4', the built FMUs through fmpy", _in_plant(substeps=4),
+                           mode="fmu"))
     acc.append(Setting("jacobi", "accuracy", "Jacobi coupling: every sample read one step late", _unchanged,
                        coupling="jacobi"))
     if not quick:
@@ -284,60 +307,68 @@ def settings(quick: bool = False) -> list:
 
 # --- measuring --------------------------------------------------------------------------
 
-def _with_record(system: System, plant: str | None, drives: list) -> System:
-    extra = []
+def _with_record(system: System, plant: str | None, columns: dict) -> System:
+    extra = list(columns.values())
     if plant is not None:
         extra += [f"{plant}.{s}" for s in ("x", "y", "q1_enc", "q2_enc", "residual")]
-    for d in drives:
-        extra += [f"{d}.i", f"{d}.v"]
     return replace(system, record=tuple(dict.fromkeys(tuple(system.record) + tuple(extra))))
 
 
-def _energy(result, drives, h) -> float:
+#: The scene columns of the drives' currents and voltages.
+ELECTRICAL_COLUMNS = ("i1", "i2", "v1", "v2")
+
+
+def _electrical(get) -> dict | None:
+    """Columns i1, i2, v1, v2 through ``get(column)`` (None when one is missing)."""
+    try:
+        return {c: np.asarray(get(c)) for c in ELECTRICAL_COLUMNS}
+    except KeyError:
+        return None
+
+
+def _energy(e: dict, time: np.ndarray) -> float:
+    """Electrical energy the drives draw over ``time``, ∫ (v1 i1 + v2 i2) dt (v held over each
+    interval, i trapezoidal)."""
     total = 0.0
-    for d in drives:
-        i, v = np.asarray(result[f"{d}.i"]), np.asarray(result[f"{d}.v"])
-        total += float(np.sum(v[1:] * 0.5 * (i[1:] + i[:-1]))) * h
+    dt = np.diff(time)
+    for j in ("1", "2"):
+        i, v = e[f"i{j}"], e[f"v{j}"]
+        total += float(np.sum(dt * v[1:] * 0.5 * (i[1:] + i[:-1])))
     return total
 
 
 def measure(result, reference, scene: Scene) -> dict:
-    """The error columns of one run against the reference (empty where they do not apply)."""
+    """The error columns of one run against the reference (empty where they do not apply).
+
+    Rows at common times are compared (:func:`scenarios.reference.common_rows`: a run at a
+    longer step meets every k-th reference row).  Currents compare the scene columns
+    ``i1, i2`` (wherever the scene computes them: drives or the actuated plant) with the
+    reference's; the energy error is that of each run's own ∫ (v1 i1 + v2 i2) dt."""
     plant = _plant(scene)
-    n = min(len(result.time), len(reference.time))
+    ia, ib = common_rows(result.time, reference.time)
     d = deviation(result, reference)
     row = {"rms_err_m": d["rms"], "max_err_m": d["max"], "residual_m": float("nan"),
            "current_err_A": float("nan"), "energy_err": float("nan"), "enc_diff": "", "enc_first_s": float("nan")}
     if plant is not None and f"{plant}.residual" in result.signals:
         row["residual_m"] = float(np.max(np.abs(result[f"{plant}.residual"])))
-    ref_drives = [k[:-2] for k in reference.signals if k.endswith(".i")]
-    drives = [x for x in _drives(scene) if x in ref_drives]
-    if drives and len(drives) == len(ref_drives):
-        di = [np.asarray(result[f"{x}.i"][:n]) - reference[f"{x}.i"][:n] for x in drives]
-        row["current_err_A"] = rms_norm(di[0], di[1] if len(di) > 1 else np.zeros_like(di[0]))
-        h = scene.system.step
-        e_ref = _energy(_Rows(reference, n), drives, h)
+    ours = _electrical(lambda c: result[scene.columns[c]])
+    theirs = _electrical(lambda c: reference.columns[c])
+    if ours is not None and theirs is not None:
+        row["current_err_A"] = rms_norm(ours["i1"][ia] - theirs["i1"][ib], ours["i2"][ia] - theirs["i2"][ib])
+        end = min(result.time[-1], reference.time[-1]) + 1e-12
+        e_ref = _energy({c: x[reference.time <= end] for c, x in theirs.items()}, reference.time[reference.time <= end])
         if e_ref != 0.0:
-            row["energy_err"] = (_energy(_Rows(result, n), drives, h) - e_ref) / abs(e_ref)
+            e = _energy({c: x[result.time <= end] for c, x in ours.items()}, result.time[result.time <= end])
+            row["energy_err"] = (e - e_ref) / abs(e_ref)
     encoders = [f"{plant}.q1_enc", f"{plant}.q2_enc"] if plant else []
     if encoders and all(s in result.signals and s in reference.signals for s in encoders):
-        differs = np.zeros(n, dtype=bool)
+        differs = np.zeros(len(ia), dtype=bool)
         for s in encoders:
-            differs |= np.asarray(result[s][:n]) != reference[s][:n]
+            differs |= np.asarray(result[s])[ia] != reference[s][ib]
         row["enc_diff"] = int(np.sum(differs))
         if differs.any():
-            row["enc_first_s"] = float(reference.time[int(np.argmax(differs))])
+            row["enc_first_s"] = float(reference.time[ib][int(np.argmax(differs))])
     return row
-
-
-class _Rows:
-    """The first n rows of a result's signals."""
-
-    def __init__(self, result, n):
-        self._result, self._n = result, n
-
-    def __getitem__(self, signal):
-        return self._result[signal][:self._n]
 
 
 def pareto(rows: list, wall_tolerance: float = None) -> list:
@@ -380,12 +411,15 @@ def _sweep(base: Scene, chosen: list, reference, rounds: int, say) -> tuple[list
         if scene is None:
             skipped.append(s.name)
             continue
-        plant, drives = _plant(scene), _drives(scene)
-        scene = replace(scene, system=_with_record(scene.system, plant, drives))
-        built.append((s, scene, plant, drives))
+        plant = _plant(scene)
+        scene = replace(scene, system=_with_record(scene.system, plant, scene.columns))
+        built.append((s, scene, plant))
+    for s, scene, plant in built:     # load compiled kernels and tables before anything is timed
+        _run_setting(s, replace(scene, system=replace(scene.system, stop_time=min(scene.system.stop_time,
+                                                                                  WARM_UP_S))))
     kept, timings = {}, {s.name: [] for s, *_ in built}
     for k in range(rounds):
-        for s, scene, plant, drives in built:
+        for s, scene, plant in built:
             if k > 0 and (kept[s.name][0] is None or min(timings[s.name])[0] > REPEAT_BELOW_S):
                 continue
             result, failure = _run_setting(s, scene)
@@ -398,9 +432,9 @@ def _sweep(base: Scene, chosen: list, reference, rounds: int, say) -> tuple[list
                 kept[s.name] = (result, failure)
             if k == 0:
                 wall = result.extra["call_s"] if result is not None else float("nan")
-                say(f"  {s.name:<26s} {wall:7.2f} s" + (f"  {failure}" if failure else ""))
+                say(f"  {s.name:<36s} {wall:7.2f} s" + (f"  {failure}" if failure else ""))
     rows = []
-    for s, scene, plant, drives in built:
+    for s, scene, plant in built:
         result, failure = kept[s.name]
         row = {"setting": s.name, "kind": s.kind, "what": s.what, "wall_s": float("nan"), "cpu_s": float("nan"),
                "error": failure or ""}
@@ -439,7 +473,7 @@ def _noquant(base: Scene, rounds: int, say) -> list:
         return []
     smooth = _change(base, [plant], encoder_counts=FINE_ENCODER)
     say(f"no-quantisation study: reference of {base.name} with {FINE_ENCODER} encoder counts ...")
-    reference = reference_run(smooth.system)
+    reference = reference_run(smooth)
     chosen = [Setting("defaults", "accuracy", "encoder 2^30 counts", _unchanged)]
     chosen += [Setting(f"group {n}", "accuracy", f"drives + plant at 1/{n} ms", _group(n)) for n in (4, 16, 32)]
     if drive_has_torque_output():
@@ -612,13 +646,6 @@ def plot(trade: Trade, path: Path) -> Path:
 
 # --- the command ------------------------------------------------------------------------
 
-def _warm_up(base: Scene, modes) -> None:
-    """Load the compiled kernels and the controller table before anything is timed."""
-    short = replace(base.system, stop_time=min(base.system.stop_time, 0.02))
-    for mode in modes:
-        simulate(short, mode=mode)
-
-
 def run_trade(scene=DEFAULT_SCENE, quick: bool = False, out_dir=None, stop_time: float | None = None,
               rounds: int | None = None, progress=None) -> Trade:
     """Sweep the settings of ``scene`` (a name or a :class:`Scene`) and write the report.
@@ -648,8 +675,7 @@ def run_trade(scene=DEFAULT_SCENE, quick: bool = False, out_dir=None, stop_time:
     reference = reference_run(base)
     if not reference.completed:
         raise RuntimeError(f"the reference of {base.name} stopped: {reference.error}")
-    say(f"reference: {reference.wall_s:.1f} s wall; warming up ...")
-    _warm_up(base, sorted({s.mode for s in chosen}))
+    say(f"reference: {reference.wall_s:.1f} s wall; the settings ...")
     rows, skipped = _sweep(base, chosen, reference, rounds, say)
     _relative(rows)
     trade = Trade(base.name, stop, rows, reference.wall_s, rounds=rounds, skipped=skipped)
