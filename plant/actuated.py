@@ -62,6 +62,7 @@ class ActuatedPlant:
         self._motors = np.array([[j - 1, d.params.R, d.params.L, d.params.kt, d.params.ke, d.params.b, d.params.mu,
                                   d.params.omega_eps] for j, d in self.drives]).reshape(-1, fast5r.MOTOR_COLUMNS)
         self._h_next = None
+        self._stable_for = None     # the step RK4 was last found stable for
 
     @property
     def currents(self) -> list:
@@ -69,8 +70,12 @@ class ActuatedPlant:
         return [d.i for _, d in self.drives]
 
     def state(self) -> np.ndarray:
-        """z = [q, dq, currents]."""
-        return np.concatenate([self.plant.y, self.currents])
+        """z = [q, dq, currents] (a new array)."""
+        z = np.empty(14 + len(self.drives))
+        z[:14] = self.plant.y
+        for n, (_, d) in enumerate(self.drives):
+            z[14 + n] = d.i
+        return z
 
     def derivative(self, z, voltages, external=(0.0, 0.0), omega_held=None):
         """dz/dt with the drives' voltages and world torques ``external`` on (q1, q2) held.
@@ -100,17 +105,13 @@ class ActuatedPlant:
         plant = self.plant
         plant.check_step(dt)
         s = plant.settings
-        h = dt / s.substeps
-        if s.method == "rk4":
-            for j, d in self.drives:
-                x = d.params.R * h / d.params.L
-                if x > RK4_REAL_STABILITY:
-                    raise PlantError(
-                        f"drive on joint {j}: RK4 steps of {h:.6g} s are unstable for its armature circuit: "
-                        f"R h / L = {x:.4g} > {RK4_REAL_STABILITY:.4g} (L/R = {d.params.L / d.params.R:.3g} s); "
-                        f"use substeps >= {math.ceil(dt * d.params.R / (d.params.L * 2.0))} or dopri5")
+        if s.method == "rk4" and dt != self._stable_for:
+            self._check_rk4_stability(dt, s.substeps)
         voltages = [d.sample_voltage(i_ref[n], v_ref[n], i_hat[n], dt) for n, (_, d) in enumerate(self.drives)]
-        held = ", ".join(f"v{j} = {v!r} V" for (j, _), v in zip(self.drives, voltages)) + " held"
+
+        def held():
+            return ", ".join(f"v{j} = {v!r} V" for (j, _), v in zip(self.drives, voltages)) + " held"
+
         z = self.state()
         try:
             if s.method == "rk4" and plant._fast is not None:
@@ -122,14 +123,26 @@ class ActuatedPlant:
                 z, self._h_next, _ = dopri5(lambda w: self.derivative(w, voltages), z, dt, s.rtol, s.atol,
                                             self._h_next)
         except (IntegrationError, np.linalg.LinAlgError) as exc:
-            raise PlantError(f"integration failed in the step from t = {plant.time:.6g} s ({held}): {exc}") from None
+            raise PlantError(f"integration failed in the step from t = {plant.time:.6g} s ({held()}): {exc}") from None
         currents = z[14:].tolist()
         if not all(math.isfinite(i) for i in currents):
             raise PlantError(f"armature currents {currents} after the step from t = {plant.time:.6g} s "
-                             f"({held}) are not finite")
+                             f"({held()}) are not finite")
         plant.accept(z[:14], dt, held)
         for (_, d), i, v in zip(self.drives, currents, voltages):
             d.i, d.v = i, v
+
+    def _check_rk4_stability(self, dt, substeps):
+        """Refuse RK4 sub-steps beyond the stability of an electrical pole -R/L."""
+        h = dt / substeps
+        for j, d in self.drives:
+            x = d.params.R * h / d.params.L
+            if x > RK4_REAL_STABILITY:
+                raise PlantError(
+                    f"drive on joint {j}: RK4 steps of {h:.6g} s are unstable for its armature circuit: "
+                    f"R h / L = {x:.4g} > {RK4_REAL_STABILITY:.4g} (L/R = {d.params.L / d.params.R:.3g} s); "
+                    f"use substeps >= {math.ceil(dt * d.params.R / (d.params.L * 2.0))} or dopri5")
+        self._stable_for = dt
 
     def shaft_torques(self) -> list:
         """Each drive's shaft torque at the present current and joint speed [N m] (B.2)."""

@@ -174,7 +174,9 @@ class PlantSimulator:
         self.check_step(dt)
         s = self.settings
         u_star = fivebar.thesis_torques(tau1, tau2)
-        held = f"tau1 = {tau1!r}, tau2 = {tau2!r} N m held"
+        def held():
+            return f"tau1 = {tau1!r}, tau2 = {tau2!r} N m held"
+
         try:
             if s.method == "rk4" and self._fast is not None:
                 y = self._fast.rk4(self.y, u_star, s.baumgarte, dt, s.substeps)
@@ -184,7 +186,7 @@ class PlantSimulator:
                 y, self._h_next, _ = dopri5(lambda z: self.derivative(z, u_star), self.y, dt,
                                             s.rtol, s.atol, self._h_next)
         except (IntegrationError, np.linalg.LinAlgError) as exc:
-            raise PlantError(f"integration failed in the step from t = {self.time:.6g} s ({held}): {exc}") from None
+            raise PlantError(f"integration failed in the step from t = {self.time:.6g} s ({held()}): {exc}") from None
         self.accept(y, dt, held)
 
     def check_step(self, dt: float) -> None:
@@ -201,22 +203,22 @@ class PlantSimulator:
                 f"loop-closure residual (unstable beyond {RK4_REAL_STABILITY:.4g}); use baumgarte <= "
                 f"{BAUMGARTE_RK4_LIMIT / h:.4g} /s (the thesis advises <= 1/h), more substeps or dopri5")
 
-    def accept(self, y, dt: float, held: str) -> None:
+    def accept(self, y, dt: float, held) -> None:
         """Make ``y``, the state integrated over dt from the present one, the new state.
 
         Projects it if the settings say so, then refuses it (:class:`PlantError`, the state
-        kept; ``held`` names the inputs held over the step) when it is not finite, does not
+        kept; ``held()`` names the inputs held over the step) when it is not finite, does not
         close the loop (residual above :data:`RESIDUAL_STOP`) or is singular.
         """
         s = self.settings
         if s.project and math.isfinite(float(y.sum())):
             y = self.project(y)
         if not math.isfinite(float(y.sum())):
-            raise PlantError(f"state became non-finite in the step from t = {self.time:.6g} s ({held})")
+            raise PlantError(f"state became non-finite in the step from t = {self.time:.6g} s ({held()})")
         residual = self._residual_of(y)
         if not residual <= RESIDUAL_STOP:
             raise PlantError(
-                f"integration diverged in the step from t = {self.time:.6g} s ({held}): loop-closure "
+                f"integration diverged in the step from t = {self.time:.6g} s ({held()}): loop-closure "
                 f"residual {residual:.3g} m > {RESIDUAL_STOP:g} m, the state no longer closes the loop "
                 + (f"(motion too fast for RK4 steps of {dt / s.substeps:.3g} s: check the torques, use "
                    f"substeps or dopri5)" if s.method == "rk4" else "(check the torques)"))

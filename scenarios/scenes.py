@@ -302,6 +302,27 @@ def drives_in_plant(scene: Scene, **plant_parameters) -> Scene:
                    columns=columns, description=scene.description + "; drives integrated in the plant")
 
 
+#: Models whose discrete parts are designed for a sample time: their parameter ``T``.
+SAMPLE_TIME_MODELS = ("Derivator", "DCMotorDrive", "ActuatedFiveBarPlant")
+
+
+def with_sample_time(scene: Scene, T: float) -> Scene:
+    """``scene`` run at the communication step and sample time ``T`` [s] (the thesis: 1 ms).
+
+    The step and the ``T`` of every component designed for one (:data:`SAMPLE_TIME_MODELS`:
+    the derivator's Bessel filters, the drives' current controllers) change together; the
+    position controller and the observers use the step they are given.  A different T is a
+    different discrete controller: the trade study lists it as a fidelity change
+    (docs/trade.md), the extremes suite checks 0.1 ms and 10 ms (docs/extremes.md).
+    """
+    if not (T > 0.0):
+        raise ValueError(f"sample time T = {T!r} s must be > 0")
+    components = tuple(replace(c, parameters={**c.parameters, "T": T}) if c.model in SAMPLE_TIME_MODELS else c
+                       for c in scene.system.components)
+    return replace(scene, system=replace(scene.system, components=components, step=T),
+                   description=scene.description + f"; sample time {1e3 * T:g} ms")
+
+
 def scene_names() -> list[str]:
     """Every scene name ``get_scene`` accepts."""
     names = ["thesis_sim_circle", "thesis_sim_circle_me20", "thesis_sim_circle_me40"]

@@ -56,7 +56,7 @@ from fmus.system import System
 
 from .metrics import rms_norm, scene_metrics
 from .reference import common_rows, deviation, reference_run
-from .scenes import Fidelity, Scene, bench, drives_in_plant, get_scene
+from .scenes import Fidelity, Scene, bench, drives_in_plant, get_scene, with_sample_time
 
 DEFAULT_SCENE = "bench_circle_TCMDx"
 #: Simulated time of the quick sweep [s].
@@ -68,6 +68,8 @@ QUICK_ROUNDS = 1
 REPEAT_BELOW_S = 5.0
 COLUMNS = ("setting", "kind", "what", "wall_s", "cpu_s", "speedup", "rms_err_m", "max_err_m", "gain", "residual_m",
            "current_err_A", "energy_err", "enc_diff", "enc_first_s", "e_ef_mm", "pareto", "error")
+#: Coarser sample times of the sweep (fidelity rows) [s].
+SAMPLE_TIMES = (2e-3, 4e-3)
 #: Each setting runs this long once before it is timed [s].
 WARM_UP_S = 0.02
 #: Wall times within this fraction of each other count as equally fast on the front.
@@ -213,6 +215,14 @@ def _fidelity(**switches):
     return build
 
 
+def _sampled_at(T: float, build=None):
+    """The scene (after ``build``, if given) at sample time ``T``."""
+    def rebuild(scene):
+        scene = scene if build is None else build(scene)
+        return None if scene is None else with_sample_time(scene, T)
+    return rebuild
+
+
 def _unchanged(scene):
     return scene
 
@@ -255,13 +265,13 @@ def settings(quick: bool = False) -> list:
                                "drive outputs the torque averaged over its step"
                                + ("" if n == 1 else f"; drives + plant at 1/{n} ms"),
                                _group(n, torque_output="mean")))
-    for n in ((4,) if quick else (1, 2, 4, 8, 16)):
+    for n in ((8,) if quick else (1, 2, 4, 8, 16)):
         acc.append(Setting("drives in plant" + ("" if n == 1 else f", substeps={n}"), "accuracy",
                            "drives' currents and the mechanism as one ODE in the plant (ActuatedFiveBarPlant), "
                            f"RK4 {n} step{'s' if n > 1 else ''} per 1 ms", _in_plant(substeps=n)))
     if not quick:
-        acc.append(Setting("drives in plant, substeps=4, fmu", "accuracy",
-                           "as 'drives in plant, substeps=4', the built FMUs through fmpy", _in_plant(substeps=4),
+        acc.append(Setting("drives in plant, substeps=8, fmu", "accuracy",
+                           "as 'drives in plant, substeps=8', the built FMUs through fmpy", _in_plant(substeps=8),
                            mode="fmu"))
     acc.append(Setting("jacobi", "accuracy", "Jacobi coupling: every sample read one step late", _unchanged,
                        coupling="jacobi"))
@@ -302,6 +312,13 @@ def settings(quick: bool = False) -> list:
         Setting("ideal + exact sensors", "fidelity", "ideal actuators, exact angles, no derivator",
                 _fidelity(electrics="ideal", encoder=False, derivator=False)),
     ]
+    fid += [Setting(f"sample {1e3 * T:g} ms", "fidelity", f"communication step and every sample time T = "
+                    f"{1e3 * T:g} ms (derivator filters and current controllers designed for it)", _sampled_at(T))
+            for T in SAMPLE_TIMES]
+    fid += [Setting(f"ideal + exact sensors, sample {1e3 * T:g} ms", "fidelity",
+                    f"ideal actuators, exact angles, no derivator, at T = {1e3 * T:g} ms",
+                    _sampled_at(T, _fidelity(electrics="ideal", encoder=False, derivator=False)))
+            for T in SAMPLE_TIMES]
     return acc + fid
 
 

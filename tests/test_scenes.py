@@ -140,3 +140,24 @@ def test_export_ssp_command(tmp_path, built_fmus, capsys):
     assert "SystemStructure.ssd" in names and "resources/FiveBarPlant.fmu" in names
     assert main(["export-ssp", "no_such_scene", str(tmp_path / "x.ssp")]) == 2
     assert "unknown scene 'no_such_scene'" in capsys.readouterr().err
+
+
+def test_with_sample_time_sets_every_sample_time():
+    import importlib
+
+    from fmus.build import SLAVES
+    from fmus.master import simulate
+    from scenarios.scenes import SAMPLE_TIME_MODELS, with_sample_time
+
+    declaring_T = set()
+    for model, module in SLAVES.items():
+        slave = getattr(importlib.import_module(f"fmus.slaves.{module}"), model)(instance_name="probe")
+        if any(v.name == "T" for v in slave.vars.values()):
+            declaring_T.add(model)
+    assert declaring_T == set(SAMPLE_TIME_MODELS)
+    scene = with_sample_time(get_scene("bench_circle_TCMDx"), 2e-3)
+    assert scene.system.step == 2e-3
+    for c in scene.system.components:
+        assert (c.parameters.get("T") == 2e-3) == (c.model in SAMPLE_TIME_MODELS), c.name
+    result = simulate(replace(scene.system, stop_time=0.1))
+    assert result.completed and len(result.time) == 51

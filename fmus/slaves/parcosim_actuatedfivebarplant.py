@@ -26,6 +26,7 @@ from plant.actuated import ActuatedPlant
 
 OUTPUTS = tuple(name for name, _ in PLANT_OUTPUTS) + ("tau1", "tau2", "v1", "v2", "i1", "i2")
 JOINTS = ("1", "2")
+INPUTS = tuple(f"{name}{j}" for name in ("i_ref", "i_hat", "v_ref") for j in JOINTS)
 
 
 class ActuatedFiveBarPlant(GuardedSlave):
@@ -63,8 +64,7 @@ class ActuatedFiveBarPlant(GuardedSlave):
         self._publish()
 
     def step(self, current_time, step_size):
-        require_finite(**{f"{name}{j}": getattr(self, f"{name}{j}") for name in ("i_ref", "i_hat", "v_ref")
-                          for j in JOINTS})
+        require_finite(**{name: getattr(self, name) for name in INPUTS})
         self.actuated.plant.time = current_time
         self.actuated.step((self.i_ref1, self.i_ref2), (self.i_hat1, self.i_hat2), (self.v_ref1, self.v_ref2),
                            step_size)
