@@ -34,7 +34,7 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m scenarios.accurate_bench", description=__doc__.splitlines()[0])
     parser.add_argument("scene", nargs="?", default="bench_circle_TCMDx")
     parser.add_argument("--stop-time", type=float, default=2.0)
-    parser.add_argument("--substeps", type=int, default=4)
+    parser.add_argument("--substeps", type=int, default=8)
     args = parser.parse_args(argv)
 
     scene = get_scene(args.scene)

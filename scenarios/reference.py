@@ -227,7 +227,10 @@ def reference_run(scene_or_name, rtol: float = RTOL, atol: float = ATOL, stop_ti
     order = stepping_order(system, {n: slave_variables(s) for n, s in slaves.items()})
     plants = [c.name for c in system.components if c.model == "FiveBarPlant"]
     if len(plants) != 1:
-        raise ReferenceError(f"the reference needs exactly one FiveBarPlant, found {len(plants)}")
+        actuated = [c.name for c in system.components if c.model == "ActuatedFiveBarPlant"]
+        hint = (f" ({', '.join(actuated)} is an ActuatedFiveBarPlant: its truth is the reference of the scene "
+                "before scenarios.scenes.drives_in_plant)") if actuated else ""
+        raise ReferenceError(f"the reference needs exactly one FiveBarPlant, found {len(plants)}{hint}")
     plant_name = plants[0]
     sim = slaves[plant_name].sim
     sources = {c.target: c.source for c in system.connections}

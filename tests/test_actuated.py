@@ -156,3 +156,11 @@ def test_fmu_and_inprocess_identical(built_fmus):
     assert a.completed and b.completed, (a.error, b.error)
     for signal in system.record:
         assert np.array_equal(a[signal], b[signal]), signal
+
+
+def test_the_reference_of_an_in_plant_scene_points_to_its_original():
+    from scenarios.reference import ReferenceError
+
+    with pytest.raises(ReferenceError, match="plant is an ActuatedFiveBarPlant: its truth is the reference of the "
+                                             "scene before scenarios.scenes.drives_in_plant"):
+        reference_run(drives_in_plant(_short(get_scene("bench_circle_TCMDx"), 0.01)))
