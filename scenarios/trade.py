@@ -14,12 +14,13 @@ things for the two kinds of row:
 
 * ``kind = "accuracy"``: the same model computed differently (plant integrator, sub-steps
   and tolerances, the drive's electrical integration, drive/plant sub-stepping, the drive's
-  torque output, Gauss-Seidel or Jacobi, ``fmu`` or ``inprocess``). The deviation is an
-  error. The Pareto front (wall time against RMS error) is taken over these rows only.
+  torque output, the drives integrated inside the plant, Gauss-Seidel or Jacobi, ``fmu`` or
+  ``inprocess``). The deviation is an error. The Pareto front (wall time against RMS error)
+  is taken over these rows only.
 * ``kind = "fidelity"``: a different model (the :class:`scenarios.scenes.Fidelity` switches,
-  the controller's exact or tabulated model and its grid). The deviation is what the
-  effect changes in the result, not an error. These rows are in the table and the plot
-  (another marker), never on the front.
+  the controller's exact or tabulated model and its grid, another sample time). The
+  deviation is what the effect changes in the result, not an error. These rows are in the
+  table and the plot (another marker), never on the front.
 
 Columns of ``trade.csv`` (one row per setting): ``setting``, ``kind``, ``what`` (the change);
 ``wall_s`` (the whole :func:`fmus.master.simulate` call: loading, initialisation and stepping,
@@ -227,16 +228,8 @@ def _unchanged(scene):
     return scene
 
 
-def drive_has_torque_output() -> bool:
-    """Whether ``DCMotorDrive`` has the ``torque_output`` parameter ('end' or 'mean')."""
-    from fmus.slaves.parcosim_dcmotordrive import DCMotorDrive
-
-    return any(v.name == "torque_output" for v in DCMotorDrive(instance_name="probe").vars.values())
-
-
 def settings(quick: bool = False) -> list:
     """The sweep: :class:`Setting` list, ``defaults`` first."""
-    mean = drive_has_torque_output()
     acc = [Setting("defaults", "accuracy", "the scene as it is (plant RK4 1 step, drive exact, GS, in-process)",
                    _unchanged)]
     acc.append(Setting("plant rk4 substeps=4", "accuracy", "plant RK4, 4 steps per 1 ms",
@@ -259,12 +252,9 @@ def settings(quick: bool = False) -> list:
     for n in ((4,) if quick else (2, 4, 8, 16, 32)):
         acc.append(Setting(f"group {n}", "accuracy", f"drives + plant stepped together at 1/{n} ms "
                            "(controller, observers, derivator at 1 ms)", _group(n)))
-    if mean:
-        for n in ((1, 4) if quick else (1, 4, 16, 32)):
-            acc.append(Setting("torque mean" if n == 1 else f"group {n} + torque mean", "accuracy",
-                               "drive outputs the torque averaged over its step"
-                               + ("" if n == 1 else f"; drives + plant at 1/{n} ms"),
-                               _group(n, torque_output="mean")))
+    acc.append(Setting("torque end", "accuracy", "the drives hand the plant their torque at the step's end "
+                       "(DCMotorDrive's own default) instead of its mean over the step",
+                       _drive_setting(torque_output="end")))
     for n in ((8,) if quick else (1, 2, 4, 8, 16)):
         acc.append(Setting("drives in plant" + ("" if n == 1 else f", substeps={n}"), "accuracy",
                            "drives' currents and the mechanism as one ODE in the plant (ActuatedFiveBarPlant), "
@@ -492,11 +482,9 @@ def _noquant(base: Scene, rounds: int, say) -> list:
     say(f"no-quantisation study: reference of {base.name} with {FINE_ENCODER} encoder counts ...")
     reference = reference_run(smooth)
     chosen = [Setting("defaults", "accuracy", "encoder 2^30 counts", _unchanged)]
-    chosen += [Setting(f"group {n}", "accuracy", f"drives + plant at 1/{n} ms", _group(n)) for n in (4, 16, 32)]
-    if drive_has_torque_output():
-        chosen += [Setting("torque mean" if n == 1 else f"group {n} + torque mean", "accuracy",
-                           "mean torque" + ("" if n == 1 else f", drives + plant at 1/{n} ms"),
-                           _group(n, torque_output="mean")) for n in (1, 4, 16, 32, 64)]
+    chosen += [Setting(f"group {n}", "accuracy", f"drives + plant at 1/{n} ms", _group(n)) for n in (4, 16, 32, 64)]
+    chosen += [Setting(f"drives in plant, substeps={n}", "accuracy", f"drives in the plant, RK4 {n} steps per 1 ms",
+                       _in_plant(substeps=n)) for n in (2, 4, 8)]
     rows, _ = _sweep(smooth, chosen, reference, rounds, say)
     _relative(rows)
     for r in rows:
