@@ -112,9 +112,12 @@ class ActuatedPlant:
         def held():
             return ", ".join(f"v{j} = {v!r} V" for (j, _), v in zip(self.drives, voltages)) + " held"
 
-        z = self.state()
+        z, report = self.state(), None
         try:
-            if s.method == "rk4" and plant._fast is not None:
+            if s.method == "rk4" and plant._fast is not None and not s.project:
+                z, report = plant._fast.step(z, 0.0, 0.0, s.baumgarte, dt, s.substeps, plant.count, self._motors,
+                                             np.array(voltages, dtype=float))
+            elif s.method == "rk4" and plant._fast is not None:
                 z = fast5r.actuated_rk4(plant._fast.p, self._motors, z, np.array(voltages, dtype=float), 0.0, 0.0,
                                         float(s.baumgarte), float(dt), int(s.substeps))
             elif s.method == "rk4":
@@ -128,7 +131,7 @@ class ActuatedPlant:
         if not all(math.isfinite(i) for i in currents):
             raise PlantError(f"armature currents {currents} after the step from t = {plant.time:.6g} s "
                              f"({held()}) are not finite")
-        plant.accept(z[:14], dt, held)
+        plant.accept(z[:14], dt, held, report)
         for (_, d), i, v in zip(self.drives, currents, voltages):
             d.i, d.v = i, v
 

@@ -235,6 +235,44 @@ def actuated_rk4(p, motors, y, v, u1, u2, lam, dt, substeps):
     return y
 
 
+#: Layout of the report of :func:`actuated_step`: 1.0 if every state is finite; the norm of
+#: the position residual (5.18); the three singularity measures of
+#: ``plant.simulator.PlantSimulator`` (sin theta12, sin theta22, sin(phi12 - phi22)); then the
+#: plant's outputs q1, q2, dq1, dq2, x, y, dx, dy, q1_enc, q2_enc (world convention,
+#: ``plant.fivebar.world_angles``/``world_rates``).
+REPORT_FINITE, REPORT_RESIDUAL, REPORT_MEASURES, REPORT_OUTPUTS, REPORT_SIZE = 0, 1, 2, 5, 15
+
+
+@njit(cache=True)
+def report(p, y, count, out):
+    """What the simulator checks and publishes after a step, for the state y (layout above)."""
+    finite = True
+    for i in range(y.size):
+        if not math.isfinite(y[i]):
+            finite = False
+    out[REPORT_FINITE] = 1.0 if finite else 0.0
+    res = np.empty(6)
+    residual(p, y, res)
+    out[REPORT_RESIDUAL] = math.sqrt(np.dot(res, res))
+    out[REPORT_MEASURES] = math.sin(y[4])
+    out[REPORT_MEASURES + 1] = math.sin(y[6])
+    out[REPORT_MEASURES + 2] = math.sin((y[3] + y[4]) - (math.pi - (y[5] + y[6])))
+    q1, q2 = y[3], math.pi - y[5]
+    o = REPORT_OUTPUTS
+    out[o], out[o + 1], out[o + 2], out[o + 3] = q1, q2, y[10], -y[12]
+    out[o + 4], out[o + 5], out[o + 6], out[o + 7] = y[0], y[1], y[7], y[8]
+    out[o + 8] = count * math.floor(q1 / count + 0.5)
+    out[o + 9] = count * math.floor(q2 / count + 0.5)
+
+
+@njit(cache=True)
+def actuated_step(p, motors, y, v, u1, u2, lam, dt, substeps, count, out):
+    """:func:`actuated_rk4`, then :func:`report` of the new plant state into ``out``; returns z."""
+    z = actuated_rk4(p, motors, y, v, u1, u2, lam, dt, substeps)
+    report(p, z[:14], count, out)
+    return z
+
+
 @njit(cache=True)
 def rk4(p, y, u1, u2, lam, dt, substeps):
     """Classical RK4 of :func:`derivative`, ``substeps`` steps over dt, efforts held."""
@@ -358,6 +396,13 @@ class FastKernel:
 
     def rk4(self, y, u_star, baumgarte, dt, substeps):
         return rk4(self.p, y, float(u_star[0]), float(u_star[1]), float(baumgarte), float(dt), int(substeps))
+
+    def step(self, y, u1, u2, baumgarte, dt, substeps, count, motors=_NO_MOTORS, voltages=_NO_VOLTAGES):
+        """RK4 over dt and the report of the new state: (z, report as a list, :data:`REPORT_SIZE`)."""
+        out = np.empty(REPORT_SIZE)
+        z = actuated_step(self.p, motors, y, voltages, float(u1), float(u2), float(baumgarte), float(dt),
+                          int(substeps), float(count), out)
+        return z, out.tolist()
 
     def project(self, y, iterations=3):
         return project(self.p, y, iterations)

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import fivebar
+from . import fast5r, fivebar
 from .integrators import IntegrationError, dopri5, rk4
 from .parallel import left_inverse_solve, mechanism_state, forward_dynamics
 from .presets import FiveBarParams
@@ -132,6 +132,7 @@ class PlantSimulator:
         if not (isinstance(encoder_counts, int) and encoder_counts > 0):
             raise ValueError(f"encoder_counts must be a positive integer, got {encoder_counts!r}")
         self.encoder_counts = encoder_counts
+        self.count = 2.0 * math.pi / encoder_counts    # one encoder count [rad]
         self.mechanism = fivebar.build_mechanism(params)
         self.time = 0.0
         try:
@@ -145,6 +146,7 @@ class PlantSimulator:
         self.y = np.concatenate([q, C @ np.array([dx0, dy0], dtype=float)])
         self._h_next = None
         self._residual = None   # (state, its residual norm) of the last step
+        self._report = None     # (state, the compiled step's report or None) of the last step
         self._fast = None
         if self.settings.kernel == "fast":
             from .fast5r import FastKernel
@@ -177,6 +179,10 @@ class PlantSimulator:
         def held():
             return f"tau1 = {tau1!r}, tau2 = {tau2!r} N m held"
 
+        if s.method == "rk4" and self._fast is not None and not s.project:
+            y, report = self._fast.step(self.y, u_star[0], u_star[1], s.baumgarte, dt, s.substeps, self.count)
+            self.accept(y, dt, held, report)
+            return
         try:
             if s.method == "rk4" and self._fast is not None:
                 y = self._fast.rk4(self.y, u_star, s.baumgarte, dt, s.substeps)
@@ -203,28 +209,37 @@ class PlantSimulator:
                 f"loop-closure residual (unstable beyond {RK4_REAL_STABILITY:.4g}); use baumgarte <= "
                 f"{BAUMGARTE_RK4_LIMIT / h:.4g} /s (the thesis advises <= 1/h), more substeps or dopri5")
 
-    def accept(self, y, dt: float, held) -> None:
+    def accept(self, y, dt: float, held, report=None) -> None:
         """Make ``y``, the state integrated over dt from the present one, the new state.
 
         Projects it if the settings say so, then refuses it (:class:`PlantError`, the state
         kept; ``held()`` names the inputs held over the step) when it is not finite, does not
-        close the loop (residual above :data:`RESIDUAL_STOP`) or is singular.
+        close the loop (residual above :data:`RESIDUAL_STOP`) or is singular.  ``report``,
+        from the compiled kernel's step (:func:`plant.fast5r.report`, without projection),
+        gives those checks and the outputs already computed.
         """
         s = self.settings
-        if s.project and math.isfinite(float(y.sum())):
-            y = self.project(y)
-        if not math.isfinite(float(y.sum())):
+        if report is None:
+            if s.project and math.isfinite(float(y.sum())):
+                y = self.project(y)
+            finite = math.isfinite(float(y.sum()))
+        else:
+            finite = report[fast5r.REPORT_FINITE] == 1.0
+        if not finite:
             raise PlantError(f"state became non-finite in the step from t = {self.time:.6g} s ({held()})")
-        residual = self._residual_of(y)
+        residual = self._residual_of(y) if report is None else report[fast5r.REPORT_RESIDUAL]
         if not residual <= RESIDUAL_STOP:
             raise PlantError(
                 f"integration diverged in the step from t = {self.time:.6g} s ({held()}): loop-closure "
                 f"residual {residual:.3g} m > {RESIDUAL_STOP:g} m, the state no longer closes the loop "
                 + (f"(motion too fast for RK4 steps of {dt / s.substeps:.3g} s: check the torques, use "
                    f"substeps or dopri5)" if s.method == "rk4" else "(check the torques)"))
-        self._check_pose(y, self.time + dt)
+        measures = (self._pose_measures(y) if report is None
+                    else report[fast5r.REPORT_MEASURES:fast5r.REPORT_MEASURES + 3])
+        self._check_pose(y, measures, self.time + dt)
         self.y = y
         self._residual = (y, residual)
+        self._report = (y, report)
         self.time += dt
 
     def project(self, y, iterations: int = 3):
@@ -240,20 +255,21 @@ class PlantSimulator:
         C = mechanism_state(mech, q, dq).C
         return np.concatenate([q, C @ (Qs.T @ dq)])
 
-    def _check_pose(self, y, t):
+    @staticmethod
+    def _pose_measures(y):
+        """sin theta12, sin theta22 (serial) and sin(phi12 - phi22) (parallel singularity)."""
         q = y[:7].tolist()
         phi12 = q[fivebar.TH11] + q[fivebar.TH12]
         phi22 = math.pi - (q[fivebar.TH21] + q[fivebar.TH22])
-        measures = (
-            ("chain 1 elbow (serial)", math.sin(q[fivebar.TH12])),
-            ("chain 2 elbow (serial)", math.sin(q[fivebar.TH22])),
-            ("distal links (parallel)", math.sin(phi12 - phi22)),
-        )
-        for name, value in measures:
+        return math.sin(q[fivebar.TH12]), math.sin(q[fivebar.TH22]), math.sin(phi12 - phi22)
+
+    def _check_pose(self, y, measures, t):
+        names = ("chain 1 elbow (serial)", "chain 2 elbow (serial)", "distal links (parallel)")
+        for name, value in zip(names, measures):
             if abs(value) < SINGULAR_STOP:
                 raise PlantError(
                     f"singular pose reached at t = {t:.6g} s: {name} measure {value:.3g} "
-                    f"at x = {q[0]:.6g} m, y = {q[1]:.6g} m"
+                    f"at x = {float(y[0]):.6g} m, y = {float(y[1]):.6g} m"
                 )
 
     # --- outputs --------------------------------------------------------------
@@ -267,10 +283,15 @@ class PlantSimulator:
 
     def outputs(self) -> dict:
         """The FiveBarPlant outputs of the component contract, as Python floats."""
+        cached = self._report
+        if cached is not None and cached[0] is self.y and cached[1] is not None:
+            o = cached[1][fast5r.REPORT_OUTPUTS:]
+            return {"q1": o[0], "q2": o[1], "dq1": o[2], "dq2": o[3], "x": o[4], "y": o[5], "dx": o[6], "dy": o[7],
+                    "q1_enc": o[8], "q2_enc": o[9], "residual": cached[1][fast5r.REPORT_RESIDUAL]}
         y = self.y.tolist()
         q1, q2 = fivebar.world_angles(y[:7])
         dq1, dq2 = fivebar.world_rates(y[7:])
-        count = 2.0 * math.pi / self.encoder_counts
+        count = self.count
         return {
             "q1": q1, "q2": q2, "dq1": dq1, "dq2": dq2,
             "x": y[0], "y": y[1], "dx": y[7], "dy": y[8],

@@ -164,3 +164,30 @@ def test_the_reference_of_an_in_plant_scene_points_to_its_original():
     with pytest.raises(ReferenceError, match="plant is an ActuatedFiveBarPlant: its truth is the reference of the "
                                              "scene before scenarios.scenes.drives_in_plant"):
         reference_run(drives_in_plant(_short(get_scene("bench_circle_TCMDx"), 0.01)))
+
+
+# --- the compiled step's report ------------------------------------------------------------------
+
+def test_compiled_report_equals_the_python_checks_and_outputs():
+    """plant.fast5r.report must give exactly what PlantSimulator computes in Python for the
+    same state: the residual, the singularity measures and every output."""
+    sim = PlantSimulator(get_preset("bench"), *START, IntegratorSettings(project=True))   # Python path
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        sim.y = sim.y.copy()
+        sim.y[7:] += rng.normal(scale=0.2, size=7)
+        sim.y[3:7] += rng.normal(scale=1e-4, size=4)        # off the constraints: a residual to report
+        out = np.empty(fast5r.REPORT_SIZE)
+        fast5r.report(fast5r.pack_params(sim.params), sim.y, sim.count, out)
+        report = out.tolist()
+        expected = sim.outputs()
+        assert report[fast5r.REPORT_FINITE] == 1.0
+        assert report[fast5r.REPORT_RESIDUAL] == pytest.approx(expected["residual"], rel=1e-12)
+        assert tuple(report[fast5r.REPORT_MEASURES:fast5r.REPORT_MEASURES + 3]) == pytest.approx(
+            sim._pose_measures(sim.y), rel=1e-14, abs=1e-15)
+        names = ("q1", "q2", "dq1", "dq2", "x", "y", "dx", "dy", "q1_enc", "q2_enc")
+        assert report[fast5r.REPORT_OUTPUTS:] == [expected[n] for n in names]
+    z = sim.y.copy()
+    z[8] = np.nan
+    fast5r.report(fast5r.pack_params(sim.params), z, sim.count, out)
+    assert out[fast5r.REPORT_FINITE] == 0.0
