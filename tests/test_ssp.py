@@ -13,16 +13,19 @@ from fmus.master import simulate
 from fmus.ssp import (NS, PARAMETER_SET, ecos_available, export_ssp, read_ssp_experiment,
                       read_ssp_parameters, simulate_ssp_ecos, simulate_ssp_fmpy)
 from fmus.system import Component, Connection, System
-from scenarios.scenes import get_scene
+from scenarios.scenes import drives_in_plant, get_scene
 
-SCENES = ("thesis_sim_circle", "bench_circle_TCMDx")
+#: The bench with its drives inside the plant (ActuatedFiveBarPlant, RK4 x8) is exported too.
+IN_PLANT = "bench_circle_TCMDx, drives in plant"
+SCENES = ("thesis_sim_circle", "bench_circle_TCMDx", IN_PLANT)
 STOP = 0.2          # s: a short copy of each scene keeps the file fast
 TOL = 1e-9          # m
 SIGNALS = ("plant.x", "plant.y")
 
 
 def _short(name):
-    return dataclasses.replace(get_scene(name).system, stop_time=STOP)
+    scene = drives_in_plant(get_scene("bench_circle_TCMDx"), substeps=8) if name == IN_PLANT else get_scene(name)
+    return dataclasses.replace(scene.system, stop_time=STOP)
 
 
 @pytest.fixture(scope="module")
@@ -34,7 +37,7 @@ def fmu_dir(built_fmus):
 def exported(request, fmu_dir, tmp_path_factory):
     """(system, .ssp path, Jacobi master result through the same FMUs)."""
     system = _short(request.param)
-    path = export_ssp(system, tmp_path_factory.mktemp("ssp") / f"{request.param}.ssp", fmu_dir)
+    path = export_ssp(system, tmp_path_factory.mktemp("ssp") / f"{request.param.split(',')[0]}.ssp", fmu_dir)
     reference = simulate(system, mode="fmu", coupling="jacobi", fmu_dir=fmu_dir)
     assert reference.completed, reference.error
     return system, path, reference
