@@ -8,7 +8,8 @@ Every subcommand is a thin shell over a documented Python call:
 ``parcosim build``     ``fmus.build.build_all(out_dir)``
 ``parcosim identify-motor``  ``motor.cli.identify_main(argv)``
 ``parcosim list``      ``scenarios.scenes.scene_names()``
-``parcosim run``       ``scenarios.run.run_scene(name, mode, out_dir)``
+``parcosim run``       ``scenarios.run.run_scene(name, mode, out_dir)``; with ``--drives-in-plant N``
+                       ``run_scene(drives_in_plant(get_scene(name), substeps=N), ...)``
 ``parcosim report``    ``scenarios.report.write_report(out_dir, mode)``
 ``parcosim trade``     ``scenarios.trade.run_trade(scene, quick, out_dir)``
 ``parcosim export-ssp``  ``fmus.ssp.export_ssp(get_scene(name).system, path, fmu_dir)``
@@ -39,6 +40,9 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--coupling", choices=("gauss-seidel", "jacobi"), default="gauss-seidel")
     run.add_argument("--out", default=None, help="output directory (default: out/SCENE)")
     run.add_argument("--fmu-dir", default=None, help="where the FMUs are (built when missing or stale)")
+    run.add_argument("--drives-in-plant", type=int, default=None, metavar="N",
+                     help="integrate the drives inside the plant (ActuatedFiveBarPlant), RK4 N steps per "
+                          "sample; 8 is 2.2e4x more accurate than separate drives (docs/actuated.md)")
     report = sub.add_parser("report", help="run the 16 bench scenes; markdown report beside the thesis' Tables 9-14")
     report.add_argument("--mode", choices=("inprocess", "fmu"), default="inprocess")
     report.add_argument("--out", default="out/report", help="output directory (default: out/report)")
@@ -46,6 +50,8 @@ def _parser() -> argparse.ArgumentParser:
     ssp.add_argument("scene", help="a scene name (see `parcosim list`)")
     ssp.add_argument("path", help="the .ssp file to write")
     ssp.add_argument("--fmu-dir", default=None, help="where the FMUs are (built when missing or stale)")
+    ssp.add_argument("--drives-in-plant", type=int, default=None, metavar="N",
+                     help="export the scene with its drives inside the plant, RK4 N steps per sample")
     trade = sub.add_parser("trade", help="speed against accuracy: sweep the settings, table and Pareto plot")
     trade.add_argument("scene", nargs="?", default="bench_circle_TCMDx",
                        help="a scene name (default: bench_circle_TCMDx)")
@@ -79,8 +85,7 @@ def main(argv: list[str] | None = None) -> int:
             print(write_report(args.out, args.mode, progress=progress_bar("report")))
         elif args.command == "export-ssp":
             from fmus.ssp import export_ssp
-            from scenarios.scenes import get_scene
-            print(export_ssp(get_scene(args.scene).system, args.path, args.fmu_dir))
+            print(export_ssp(_scene(args).system, args.path, args.fmu_dir))
         elif args.command == "trade":
             return _trade(args)
         elif args.command == "build":
@@ -103,14 +108,26 @@ def progress_bar(label: str):
     return show
 
 
+def _scene(args):
+    """The scene ``args.scene``, with its drives inside the plant if ``--drives-in-plant N``."""
+    from scenarios.scenes import drives_in_plant, get_scene
+
+    scene = get_scene(args.scene)
+    if args.drives_in_plant is None:
+        return scene
+    if args.drives_in_plant < 1:
+        raise ValueError(f"--drives-in-plant {args.drives_in_plant}: the RK4 steps per sample must be >= 1")
+    return drives_in_plant(scene, substeps=args.drives_in_plant)
+
+
 def _run(args) -> int:
     from pathlib import Path
 
     from scenarios.run import run_scene
-    from scenarios.scenes import get_scene
 
-    scene = get_scene(args.scene)
-    out = Path(args.out) if args.out else Path("out") / scene.name
+    scene = _scene(args)
+    default = scene.name if args.drives_in_plant is None else f"{scene.name}_drives_in_plant"
+    out = Path(args.out) if args.out else Path("out") / default
     bar = progress_bar(scene.name) if sys.stderr.isatty() else None
     outcome = run_scene(scene, mode=args.mode, out_dir=out, coupling=args.coupling,
                         fmu_dir=args.fmu_dir, progress=bar)

@@ -161,3 +161,16 @@ def test_with_sample_time_sets_every_sample_time():
         assert (c.parameters.get("T") == 2e-3) == (c.model in SAMPLE_TIME_MODELS), c.name
     result = simulate(replace(scene.system, stop_time=0.1))
     assert result.completed and len(result.time) == 51
+
+
+def test_run_command_with_the_drives_in_the_plant(tmp_path, capsys):
+    out = tmp_path / "in_plant"
+    assert main(["run", "bench_triangle_PDx", "--drives-in-plant", "8", "--out", str(out)]) == 0
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["completed"] and 0.0 < metrics["e_ef_mm"] < 5.0
+    header = (out / "result.csv").read_text().splitlines()[0].split(",")
+    assert {"i1", "i2", "v1", "v2"} <= set(header)
+    capsys.readouterr()
+    assert main(["run", "thesis_sim_circle", "--drives-in-plant", "8", "--out", str(tmp_path / "x")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no DCMotorDrive to move into the plant" in err[0]
