@@ -628,13 +628,20 @@ def plot(trade: Trade, path: Path) -> Path:
         if base:
             ax.scatter([base[0]["wall_s"]], [base[0]["rms_err_m"]], marker="*", s=160, color="k", zorder=4,
                        label="defaults")
-        # Labels: defaults, the front, then the rest, leaving out those that would overlap.
+        # Labels: defaults, the front, then the rest, leaving out those whose box (in log10
+        # units, from the label's length and the axes' spans) would overlap a placed one.
+        xs = [math.log10(r["wall_s"]) for r in ok]
+        ys = [math.log10(r["rms_err_m"]) for r in ok]
+        span_x = max(max(xs) - min(xs), 0.5) * 1.1
+        span_y = max(max(ys) - min(ys), 0.5) * 1.1
+        char_w, line_h = 0.0105 * span_x, 0.03 * span_y     # fontsize 7 on a 7.5 x 6 in panel
         placed = []
         for r in sorted(ok, key=lambda r: (r["setting"] != "defaults", not r.get("pareto"), r["wall_s"])):
             x, y = math.log10(r["wall_s"]), math.log10(r["rms_err_m"])
-            if any(abs(x - px) < 0.35 and abs(y - py) < 0.1 for px, py in placed):
+            box = (x, x + char_w * len(r["setting"]), y, y + line_h)
+            if any(box[0] < b[1] and b[0] < box[1] and box[2] < b[3] and b[2] < box[3] for b in placed):
                 continue
-            placed.append((x, y))
+            placed.append(box)
             ax.annotate(r["setting"], (r["wall_s"], r["rms_err_m"]), fontsize=7, xytext=(4, 2),
                         textcoords="offset points")
         ax.axhline(1e-5, color="0.5", ls=":", lw=1, label="1e-5 m")
@@ -643,7 +650,7 @@ def plot(trade: Trade, path: Path) -> Path:
         ax.set(xlabel="wall time [s]", ylabel="RMS end-effector deviation from the reference [m]",
                title=f"{trade.scene}, 0–{trade.stop_time:g} s: {title}")
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=8, loc="best")
+        ax.legend(fontsize=8, loc="lower left" if rows is trade.rows else "best")   # the fast, inaccurate corner is empty
     fig.savefig(path, dpi=120, bbox_inches="tight")
     plt.close(fig)
     return path
