@@ -31,7 +31,6 @@ import numpy as np
 from motor import armature_current_rate, shaft_torque
 
 from . import fast5r, fivebar
-from .integrators import IntegrationError, dopri5, rk4
 from .simulator import RK4_REAL_STABILITY, PlantError, PlantSimulator
 
 
@@ -61,7 +60,6 @@ class ActuatedPlant:
                                  f"(use a separate drive with method 'quasi_static')")
         self._motors = np.array([[j - 1, d.params.R, d.params.L, d.params.kt, d.params.ke, d.params.b, d.params.mu,
                                   d.params.omega_eps] for j, d in self.drives]).reshape(-1, fast5r.MOTOR_COLUMNS)
-        self._h_next = None
         self._stable_for = None     # the step RK4 was last found stable for
 
     @property
@@ -112,21 +110,8 @@ class ActuatedPlant:
         def held():
             return ", ".join(f"v{j} = {v!r} V" for (j, _), v in zip(self.drives, voltages)) + " held"
 
-        z, report = self.state(), None
-        try:
-            if s.method == "rk4" and plant._fast is not None and not s.project:
-                z, report = plant._fast.step(z, 0.0, 0.0, s.baumgarte, dt, s.substeps, plant.count, self._motors,
-                                             np.array(voltages, dtype=float))
-            elif s.method == "rk4" and plant._fast is not None:
-                z = fast5r.actuated_rk4(plant._fast.p, self._motors, z, np.array(voltages, dtype=float), 0.0, 0.0,
-                                        float(s.baumgarte), float(dt), int(s.substeps))
-            elif s.method == "rk4":
-                z = rk4(lambda w: self.derivative(w, voltages), z, dt, s.substeps)
-            else:
-                z, self._h_next, _ = dopri5(lambda w: self.derivative(w, voltages), z, dt, s.rtol, s.atol,
-                                            self._h_next)
-        except (IntegrationError, np.linalg.LinAlgError) as exc:
-            raise PlantError(f"integration failed in the step from t = {plant.time:.6g} s ({held()}): {exc}") from None
+        z, report = plant.integrate(self.state(), dt, 0.0, 0.0, held, lambda w: self.derivative(w, voltages),
+                                    self._motors, np.array(voltages, dtype=float))
         currents = z[14:].tolist()
         if not all(math.isfinite(i) for i in currents):
             raise PlantError(f"armature currents {currents} after the step from t = {plant.time:.6g} s "

@@ -177,8 +177,8 @@ def derivative(p, y, u1, u2, lam, out):
 #: Columns of one motor row of :func:`actuated_derivative`: the joint it drives (0: tau1/q1,
 #: 1: tau2/q2, world convention), then R, L, kt, ke, b, mu, omega_eps (motor.MotorParams).
 MOTOR_COLUMNS = 8
-_NO_MOTORS = np.empty((0, MOTOR_COLUMNS))
-_NO_VOLTAGES = np.empty(0)
+NO_MOTORS = np.empty((0, MOTOR_COLUMNS))
+NO_VOLTAGES = np.empty(0)
 
 
 @njit(cache=True)
@@ -271,12 +271,6 @@ def actuated_step(p, motors, y, v, u1, u2, lam, dt, substeps, count, out):
     z = actuated_rk4(p, motors, y, v, u1, u2, lam, dt, substeps)
     report(p, z[:14], count, out)
     return z
-
-
-@njit(cache=True)
-def rk4(p, y, u1, u2, lam, dt, substeps):
-    """Classical RK4 of :func:`derivative`, ``substeps`` steps over dt, efforts held."""
-    return actuated_rk4(p, _NO_MOTORS, y, _NO_VOLTAGES, u1, u2, lam, dt, substeps)
 
 
 @njit(cache=True)
@@ -394,10 +388,7 @@ class FastKernel:
                    float(baumgarte), out)
         return out
 
-    def rk4(self, y, u_star, baumgarte, dt, substeps):
-        return rk4(self.p, y, float(u_star[0]), float(u_star[1]), float(baumgarte), float(dt), int(substeps))
-
-    def step(self, y, u1, u2, baumgarte, dt, substeps, count, motors=_NO_MOTORS, voltages=_NO_VOLTAGES):
+    def step(self, y, u1, u2, baumgarte, dt, substeps, count, motors=NO_MOTORS, voltages=NO_VOLTAGES):
         """RK4 over dt and the report of the new state: (z, report as a list, :data:`REPORT_SIZE`)."""
         out = np.empty(REPORT_SIZE)
         z = actuated_step(self.p, motors, y, voltages, float(u1), float(u2), float(baumgarte), float(dt),

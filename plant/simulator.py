@@ -179,21 +179,34 @@ class PlantSimulator:
         def held():
             return f"tau1 = {tau1!r}, tau2 = {tau2!r} N m held"
 
-        if s.method == "rk4" and self._fast is not None and not s.project:
-            y, report = self._fast.step(self.y, u_star[0], u_star[1], s.baumgarte, dt, s.substeps, self.count)
-            self.accept(y, dt, held, report)
-            return
+        y, report = self.integrate(self.y, dt, u_star[0], u_star[1], held, lambda z: self.derivative(z, u_star))
+        self.accept(y, dt, held, report)
+
+    def integrate(self, z, dt: float, u1: float, u2: float, held, derivative,
+                  motors=fast5r.NO_MOTORS, voltages=fast5r.NO_VOLTAGES):
+        """Integrate ``z`` over dt with the settings; return (z at the end, report or None).
+
+        ``z`` is the plant's state, followed by the currents of ``motors`` when a plant with
+        drives calls (:class:`plant.actuated.ActuatedPlant`: rows of
+        :data:`plant.fast5r.MOTOR_COLUMNS`, their ``voltages`` held).  (u1, u2) are the efforts
+        held on theta11, theta21.  The compiled kernel integrates when it can (RK4; with no
+        projection it also returns the :func:`plant.fast5r.report` of the new state for
+        :meth:`accept`); ``derivative(z)``, the Python right-hand side, serves the general
+        kernel and dopri5.  A failed integration is a :class:`PlantError` naming ``held()``.
+        """
+        s = self.settings
         try:
+            if s.method == "rk4" and self._fast is not None and not s.project:
+                return self._fast.step(z, u1, u2, s.baumgarte, dt, s.substeps, self.count, motors, voltages)
             if s.method == "rk4" and self._fast is not None:
-                y = self._fast.rk4(self.y, u_star, s.baumgarte, dt, s.substeps)
-            elif s.method == "rk4":
-                y = rk4(lambda z: self.derivative(z, u_star), self.y, dt, s.substeps)
-            else:
-                y, self._h_next, _ = dopri5(lambda z: self.derivative(z, u_star), self.y, dt,
-                                            s.rtol, s.atol, self._h_next)
+                return fast5r.actuated_rk4(self._fast.p, motors, z, voltages, float(u1), float(u2),
+                                           float(s.baumgarte), float(dt), int(s.substeps)), None
+            if s.method == "rk4":
+                return rk4(derivative, z, dt, s.substeps), None
+            z, self._h_next, _ = dopri5(derivative, z, dt, s.rtol, s.atol, self._h_next)
+            return z, None
         except (IntegrationError, np.linalg.LinAlgError) as exc:
             raise PlantError(f"integration failed in the step from t = {self.time:.6g} s ({held()}): {exc}") from None
-        self.accept(y, dt, held)
 
     def check_step(self, dt: float) -> None:
         """Refuse (:class:`PlantError`) a step length that is not finite and > 0, or a Baumgarte
