@@ -149,8 +149,10 @@ class PlantSimulator:
         self._report = None     # (state, the compiled step's report or None) of the last step
         self._fast = None
         if self.settings.kernel == "fast":
-            from .fast5r import FastKernel
-            self._fast = FastKernel(params)
+            self._fast = fast5r.FastKernel(params)
+            # Compile the step now (numba: seconds in a fresh process, e.g. a just-extracted
+            # FMU), so that initialisation, not the first step, pays for it.
+            self._fast.step(self.y, 0.0, 0.0, self.settings.baumgarte, 1e-3, 1, self.count)
 
     # --- derivatives -----------------------------------------------------------
     def derivative(self, y, u_star):
