@@ -71,9 +71,12 @@ class Fidelity:
     ----------
     electrics : {"full", "euler", "quasi_static", "ideal"}
         Motor electrics: exact zero-order-hold solution of L di/dt + R i + ke ω = v
-        ("full"), explicit Euler, quasi-static (L = 0), or "ideal": torque sources — no
-        drive or observer components at all, the controller's torques go to the plant
-        (and there is no motor friction).
+        ("full"), explicit Euler, quasi-static (the drive's method "quasi_static": the
+        current follows the voltage at once, i = (v - ke ω)/R), or "ideal": torque sources —
+        no drive or observer components at all, the controller's torques go to the plant
+        (and there is no motor friction).  Euler and quasi-static simplify the motor model
+        only: the current controller stays the one designed for the real motor (with its L),
+        as the bench's drive would run it.
     coulomb, viscous : bool
         The drives' Coulomb (μ) and viscous (b) friction.
     encoder : bool
