@@ -209,7 +209,7 @@ def reference_run(scene_or_name, rtol: float = RTOL, atol: float = ATOL, stop_ti
     ReferenceResult
         Keeps the rows so far and sets ``error`` when a component refused a step.
     """
-    from .scenes import Scene, get_scene
+    from .scenes import Scene, drive_joints, get_scene
 
     if coupling not in COUPLINGS:
         raise ValueError(f"coupling = {coupling!r}; valid: {', '.join(COUPLINGS)}")
@@ -233,23 +233,18 @@ def reference_run(scene_or_name, rtol: float = RTOL, atol: float = ATOL, stop_ti
         raise ReferenceError(f"the reference needs exactly one FiveBarPlant, found {len(plants)}{hint}")
     plant_name = plants[0]
     sim = slaves[plant_name].sim
-    sources = {c.target: c.source for c in system.connections}
     inputs = {c.name: [] for c in system.components}
     for conn in system.connections:
         inputs[split_signal(conn.target)[0]].append((split_signal(conn.target)[1], conn.source))
 
     # The drives that feed the plant (continuous block in "monolithic").
     links = {}
-    for c in system.components:
-        if c.model != "DCMotorDrive":
-            continue
-        joints = [j for j in (0, 1) if sources.get(f"{plant_name}.tau{j + 1}") == f"{c.name}.tau"]
-        if len(joints) != 1:
-            raise ReferenceError(f"drive {c.name}: its tau must drive exactly one of {plant_name}.tau1/tau2")
-        j = joints[0]
-        if sources.get(f"{c.name}.omega") != f"{plant_name}.dq{j + 1}":
-            raise ReferenceError(f"drive {c.name}: omega must be {plant_name}.dq{j + 1} "
-                                 f"(got {sources.get(f'{c.name}.omega')})")
+    try:
+        joints = drive_joints(system, plant_name)
+    except ValueError as exc:
+        raise ReferenceError(str(exc)) from None
+    for name, joint in joints.items():
+        c, j = system.component(name), joint - 1
         drive = slaves[c.name].drive
         if abs(drive.T - h) > 1e-12 * h:
             raise ReferenceError(f"drive {c.name}: controller period T = {drive.T} s differs from the step {h} s")

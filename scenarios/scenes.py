@@ -230,6 +230,28 @@ def bench(strategy: str, kind: str = "circle", model: str = "tabulated",
     return Scene(name, description, system, columns, window, trajectory.duration, strategy)
 
 
+def drive_joints(system, plant: str) -> dict:
+    """Drive instance -> the plant joint (1 or 2) it drives, for every ``DCMotorDrive``.
+
+    A drive must be wired as on the bench: its ``tau`` to exactly one of ``<plant>.tau1`` /
+    ``tau2``, and that joint's ``<plant>.dq1`` / ``dq2`` to its ``omega``; otherwise a
+    ValueError names the drive and the wiring it needs.
+    """
+    sources = {c.target: c.source for c in system.connections}
+    joints = {}
+    for c in system.components:
+        if c.model != "DCMotorDrive":
+            continue
+        driven = [j for j in (1, 2) if sources.get(f"{plant}.tau{j}") == f"{c.name}.tau"]
+        if len(driven) != 1:
+            raise ValueError(f"drive {c.name}: its tau must drive exactly one of {plant}.tau1/tau2")
+        if sources.get(f"{c.name}.omega") != f"{plant}.dq{driven[0]}":
+            raise ValueError(f"drive {c.name}: omega must be {plant}.dq{driven[0]} "
+                             f"(got {sources.get(f'{c.name}.omega')})")
+        joints[c.name] = driven[0]
+    return joints
+
+
 #: Drive parameters that describe the separate drive's coupling to the plant (its own
 #: electrical integration and the torque it hands over): meaningless once the plant
 #: integrates the currents.
@@ -262,16 +284,10 @@ def drives_in_plant(scene: Scene, **plant_parameters) -> Scene:
     if len(plants) != 1:
         raise ValueError(f"scene {scene.name}: drives_in_plant needs one FiveBarPlant, found {len(plants)}")
     plant = plants[0]
-    sources = {c.target: c.source for c in system.connections}
-    joint_of = {}
-    for c in system.components:
-        if c.model != "DCMotorDrive":
-            continue
-        joints = [j for j in ("1", "2") if sources.get(f"{plant.name}.tau{j}") == f"{c.name}.tau"]
-        if len(joints) != 1 or sources.get(f"{c.name}.omega") != f"{plant.name}.dq{joints[0]}":
-            raise ValueError(f"scene {scene.name}: drive {c.name} must drive one of {plant.name}.tau1/tau2 "
-                             f"and read the same joint's {plant.name}.dq1/dq2 as omega")
-        joint_of[c.name] = joints[0]
+    try:
+        joint_of = {name: str(j) for name, j in drive_joints(system, plant.name).items()}
+    except ValueError as exc:
+        raise ValueError(f"scene {scene.name}: {exc}") from None
     if not joint_of:
         raise ValueError(f"scene {scene.name}: no DCMotorDrive to move into the plant")
     parameters = dict(plant.parameters)

@@ -211,3 +211,18 @@ def test_every_integration_path_agrees(settings):
     assert np.hypot(*(other[:2] - reference[:2])) < 1e-10
     assert np.max(np.abs(other[14:] - reference[14:])) < 1e-8
     assert np.hypot(*(reference[:2] - _actuated().plant.y[:2])) > 1e-4      # it moved
+
+
+def test_a_miswired_drive_is_refused_by_name():
+    """The drive's omega read from the other joint: drives_in_plant and the reference refuse it alike."""
+    from fmus.system import Connection
+    from scenarios.reference import ReferenceError
+
+    scene = _short(get_scene("bench_circle_TCMDx"), 0.01)
+    wrong = tuple(Connection("plant.dq2", c.target) if c.target == "drive1.omega" else c
+                  for c in scene.system.connections)
+    scene = replace(scene, system=replace(scene.system, connections=wrong))
+    with pytest.raises(ValueError, match=r"drive drive1: omega must be plant.dq1 \(got plant.dq2\)"):
+        drives_in_plant(scene)
+    with pytest.raises(ReferenceError, match=r"drive drive1: omega must be plant.dq1 \(got plant.dq2\)"):
+        reference_run(scene)
