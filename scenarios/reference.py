@@ -383,6 +383,19 @@ def deviation(result, reference, start: float = 0.0, end: float | None = None) -
             "t_max": float(t[keep][np.argmax(d)]), "rows": int(d.size)}
 
 
+def encoder_differences(result, reference) -> tuple[int, float]:
+    """(samples at which an encoder reading of ``result`` differs from the reference's, the
+    first one's time [s] or nan) over the rows at common times; signals ``<plant>.q1_enc``,
+    ``.q2_enc``."""
+    ia, ib = common_rows(result.time, reference.time)
+    plant = _plant_prefix(reference)
+    differs = np.zeros(len(ia), dtype=bool)
+    for signal in (f"{plant}.q1_enc", f"{plant}.q2_enc"):
+        differs |= np.asarray(result[signal])[ia] != np.asarray(reference[signal])[ib]
+    first = float(reference.time[ib][int(np.argmax(differs))]) if differs.any() else float("nan")
+    return int(differs.sum()), first
+
+
 def _plant_prefix(reference) -> str:
     return reference.extra.get("plant", "plant") if isinstance(reference, ReferenceResult) else "plant"
 

@@ -56,7 +56,7 @@ from fmus.master import simulate
 from fmus.system import System
 
 from .metrics import rms_norm, scene_metrics
-from .reference import common_rows, deviation, reference_run
+from .reference import common_rows, deviation, encoder_differences, reference_run
 from .scenes import Fidelity, Scene, bench, drives_in_plant, get_scene, with_sample_time
 
 DEFAULT_SCENE = "bench_circle_TCMDx"
@@ -369,12 +369,7 @@ def measure(result, reference, scene: Scene) -> dict:
             row["energy_err"] = (e - e_ref) / abs(e_ref)
     encoders = [f"{plant}.q1_enc", f"{plant}.q2_enc"] if plant else []
     if encoders and all(s in result.signals and s in reference.signals for s in encoders):
-        differs = np.zeros(len(ia), dtype=bool)
-        for s in encoders:
-            differs |= np.asarray(result[s])[ia] != reference[s][ib]
-        row["enc_diff"] = int(np.sum(differs))
-        if differs.any():
-            row["enc_first_s"] = float(reference.time[ib][int(np.argmax(differs))])
+        row["enc_diff"], row["enc_first_s"] = encoder_differences(result, reference)
     return row
 
 
