@@ -96,8 +96,9 @@ class ActuatedPlant:
     def step(self, i_ref, i_hat, v_ref, dt: float) -> None:
         """Advance by dt: each drive samples its voltage (:meth:`motor.Drive.sample_voltage`
         with ``i_ref[n]``, ``i_hat[n]``, ``v_ref[n]``), held over the step, and the whole
-        state is integrated.  Refused (:class:`plant.PlantError`, the state kept) for the
-        plant's reasons, for RK4 steps beyond the stability of the electrical pole
+        state is integrated.  Refused, the state and the controllers kept: ValueError naming
+        the input with its joint (e.g. ``i_ref2``) when one is not finite; :class:`plant.PlantError`
+        for the plant's reasons, for RK4 steps beyond the stability of the electrical pole
         (R h / L > 2.785), and for non-finite currents.
         """
         plant = self.plant
@@ -105,6 +106,10 @@ class ActuatedPlant:
         s = plant.settings
         if s.method == "rk4" and dt != self._stable_for:
             self._check_rk4_stability(dt, s.substeps)
+        for name, values in (("i_ref", i_ref), ("i_hat", i_hat), ("v_ref", v_ref)):
+            for (j, _), value in zip(self.drives, values):   # all before any controller samples
+                if not math.isfinite(value):
+                    raise ValueError(f"input {name}{j} = {value!r} is not finite")
         voltages = [d.sample_voltage(i_ref[n], v_ref[n], i_hat[n], dt) for n, (_, d) in enumerate(self.drives)]
 
         def held():

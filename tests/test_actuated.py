@@ -226,3 +226,15 @@ def test_a_miswired_drive_is_refused_by_name():
         drives_in_plant(scene)
     with pytest.raises(ReferenceError, match=r"drive drive1: omega must be plant.dq1 \(got plant.dq2\)"):
         reference_run(scene)
+
+
+def test_a_bad_input_changes_nothing():
+    """A NaN at drive 2's input is refused by name before drive 1's controller samples."""
+    a = _actuated()
+    a.step((1.0, -1.0), (0.2, -0.2), (0.0, 0.0), 1e-3)
+    controller = a.drives[0][1].controller
+    state, before = a.state(), dict(vars(controller))
+    with pytest.raises(ValueError, match=r"input i_ref2 = nan is not finite"):
+        a.step((2.0, float("nan")), (0.2, -0.2), (0.0, 0.0), 1e-3)
+    assert np.array_equal(a.state(), state) and vars(controller) == before
+    a.step((1.0, -1.0), (0.2, -0.2), (0.0, 0.0), 1e-3)            # and it steps on

@@ -20,13 +20,12 @@ process share one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
-from fmus.guarded import GuardedSlave, refuse_absurd, require_finite
+from fmus.guarded import GuardedSlave, refuse_absurd
 from fmus.parts import PLANT_OUTPUTS, build_drive, build_plant, declare_motor, declare_plant, publish_plant
 from plant.actuated import ActuatedPlant
 
 OUTPUTS = tuple(name for name, _ in PLANT_OUTPUTS) + ("tau1", "tau2", "v1", "v2", "i1", "i2")
 JOINTS = ("1", "2")
-INPUTS = tuple(f"{name}{j}" for name in ("i_ref", "i_hat", "v_ref") for j in JOINTS)
 
 
 class ActuatedFiveBarPlant(GuardedSlave):
@@ -64,7 +63,6 @@ class ActuatedFiveBarPlant(GuardedSlave):
         self._publish()
 
     def step(self, current_time, step_size):
-        require_finite(**{name: getattr(self, name) for name in INPUTS})
         self.actuated.plant.time = current_time
         self.actuated.step((self.i_ref1, self.i_ref2), (self.i_hat1, self.i_hat2), (self.v_ref1, self.v_ref2),
                            step_size)
