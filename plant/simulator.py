@@ -145,8 +145,8 @@ class PlantSimulator:
         C = mechanism_state(self.mechanism, q, np.zeros(7)).C
         self.y = np.concatenate([q, C @ np.array([dx0, dy0], dtype=float)])
         self._h_next = None
-        self._residual = None   # (state, its residual norm) of the last step
-        self._report = None     # (state, the compiled step's report or None) of the last step
+        # (state, its residual norm, the compiled step's report or None) after the last step
+        self._last = None
         self._fast = None
         if self.settings.kernel == "fast":
             self._fast = fast5r.FastKernel(params)
@@ -253,8 +253,7 @@ class PlantSimulator:
                     else report[fast5r.REPORT_MEASURES:fast5r.REPORT_MEASURES + 3])
         self._check_pose(y, measures, self.time + dt)
         self.y = y
-        self._residual = (y, residual)
-        self._report = (y, report)
+        self._last = (y, residual, report)
         self.time += dt
 
     def project(self, y, iterations: int = 3):
@@ -298,11 +297,11 @@ class PlantSimulator:
 
     def outputs(self) -> dict:
         """The FiveBarPlant outputs of the component contract, as Python floats."""
-        cached = self._report
-        if cached is not None and cached[0] is self.y and cached[1] is not None:
-            o = cached[1][fast5r.REPORT_OUTPUTS:]
+        last = self._last
+        if last is not None and last[0] is self.y and last[2] is not None:
+            o = last[2][fast5r.REPORT_OUTPUTS:]
             return {"q1": o[0], "q2": o[1], "dq1": o[2], "dq2": o[3], "x": o[4], "y": o[5], "dx": o[6], "dy": o[7],
-                    "q1_enc": o[8], "q2_enc": o[9], "residual": cached[1][fast5r.REPORT_RESIDUAL]}
+                    "q1_enc": o[8], "q2_enc": o[9], "residual": last[1]}
         y = self.y.tolist()
         q1, q2 = fivebar.world_angles(y[:7])
         dq1, dq2 = fivebar.world_rates(y[7:])
@@ -317,9 +316,9 @@ class PlantSimulator:
 
     def residual_norm(self) -> float:
         """Euclidean norm of the position constraint residual q̄(q) [m] (5.18)."""
-        cached = self._residual
-        if cached is not None and cached[0] is self.y:   # computed by step() for this state
-            return cached[1]
+        last = self._last
+        if last is not None and last[0] is self.y:   # computed by step() for this state
+            return last[1]
         return self._residual_of(self.y)
 
     def _residual_of(self, y) -> float:
