@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .serial import SerialChain, chain_dynamics, chain_kinematics
+from .serial import chain_dynamics, chain_kinematics
 
 
 @dataclass(frozen=True)

@@ -176,8 +176,8 @@ class PlantSimulator:
             if not math.isfinite(value):
                 raise PlantError(f"input {name} = {value!r} at t = {self.time:.6g} s is not finite")
         self.check_step(dt)
-        s = self.settings
         u_star = fivebar.thesis_torques(tau1, tau2)
+
         def held():
             return f"tau1 = {tau1!r}, tau2 = {tau2!r} N m held"
 

@@ -14,7 +14,7 @@ parameter not given keeps the FMU's default (the presets of Tables 3-8, 16, 18).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 from controller.strategies import STRATEGY_NAMES
 from controller.trajectories import get_trajectory
