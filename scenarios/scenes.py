@@ -307,7 +307,7 @@ def drives_in_plant(scene: Scene, **plant_parameters) -> Scene:
     def moved(signal):
         instance, variable = signal.split(".", 1)
         if instance in joint_of:
-            return f"{plant.name}.{'tau' if variable == 'tau' else variable}{joint_of[instance]}"
+            return f"{plant.name}.{variable}{joint_of[instance]}"
         return signal
 
     inside = {f"{plant.name}.tau{j}" for j in joint_of.values()} | {f"{d}.omega" for d in joint_of}
