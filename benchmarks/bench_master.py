@@ -1,7 +1,8 @@
 """The closed loop's speed: a scene through the master, in process and through the FMUs,
 beside the floor of pass-through FMUs in the same topology, measured in one run.
 
-    python benchmarks/bench_master.py [--quick] [--repeats N] [--scene NAME] [--fmu-dir DIR] [--json FILE]
+    python benchmarks/bench_master.py [--quick] [--repeats N] [--scene NAME] [--drives-in-plant N] [--fmu-dir DIR]
+                                      [--json FILE]
 
 Four cases run the same system (same instances, connections, recorded signals and step
 count, Gauss-Seidel):
@@ -344,14 +345,20 @@ def main(argv=None) -> int:
                     help="directory of the real FMUs (default fmus/build; built when missing or stale)")
     ap.add_argument("--no-breakdown", action="store_true", help="skip the timed per-component runs")
     ap.add_argument("--json", type=Path, default=None, help="also write every measurement to this file")
+    ap.add_argument("--drives-in-plant", type=int, default=None, metavar="N",
+                    help="the scene with its drives inside the plant, RK4 N steps per sample (docs/actuated.md)")
     args = ap.parse_args(argv)
     if args.repeats < 1:
         ap.error("--repeats must be >= 1")
 
     from fmus.build import ensure_built
-    from scenarios.scenes import get_scene
+    from scenarios.scenes import drives_in_plant, get_scene
 
-    system = get_scene(args.scene).system
+    scene = get_scene(args.scene)
+    if args.drives_in_plant is not None:
+        scene = drives_in_plant(scene, substeps=args.drives_in_plant)
+        args.scene += f", drives in plant x{args.drives_in_plant}"
+    system = scene.system
     if args.quick:
         system = replace(system, stop_time=min(system.stop_time, QUICK_STOP_TIME))
     floor_system = passthrough.passthrough_system(system)
