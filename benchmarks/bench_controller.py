@@ -226,12 +226,12 @@ def fmpy_cases(fmus, steps):
 def build_fmus(out):
     """The three controller-chain FMUs and the floor's pass-through FMU, built into out."""
     from pythonfmu import FmuBuilder
-    from fmus.build import _stage, build_fmu
+    from fmus.build import build_fmu, stage_sources
     from fmus.modeldescription import fix_model_structure
     paths = {name: build_fmu(name, out) for name in ("PositionController", "Derivator", "Trajectory")}
     with tempfile.TemporaryDirectory(prefix="parcosim_floor_") as tmp:
         tmp = Path(tmp)
-        base = [p for p in _stage(tmp) if p.name == "fmus"]          # only the slave base goes in
+        base = [p for p in stage_sources(tmp) if p.name == "fmus"]          # only the slave base goes in
         script = tmp / "parcosim_passthrough.py"
         script.write_text(FLOOR_SLAVE.format(inputs=INPUTS))
         fmu = FmuBuilder.build_FMU(script, dest=out, project_files=base,

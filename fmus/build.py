@@ -14,6 +14,7 @@ from pathlib import Path
 from pythonfmu import FmuBuilder
 
 from .modeldescription import fix_model_structure
+from .registry import SLAVES
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_OUT = ROOT / "fmus" / "build"
@@ -21,21 +22,11 @@ BUNDLED_PACKAGES = ("plant", "motor", "controller")
 #: The modules of ``fmus`` the slaves import (the rest is the importer's side).
 BUNDLED_FMUS_MODULES = ("guarded.py", "parts.py")
 
-#: Model name -> slave module (unique module names: one interpreter per process).
-SLAVES = {
-    "FiveBarPlant": "parcosim_fivebarplant",
-    "DCMotorDrive": "parcosim_dcmotordrive",
-    "CurrentObserver": "parcosim_currentobserver",
-    "Trajectory": "parcosim_trajectory",
-    "Derivator": "parcosim_derivator",
-    "PositionController": "parcosim_positioncontroller",
-    "ActuatedFiveBarPlant": "parcosim_actuatedfivebarplant",
-    # one line per FMU; keep this order (plant, drives, controller chain)
-}
 
 
-def _stage(tmp: Path) -> list[Path]:
-    """Copy the bundled sources (no caches) into tmp; return the project files."""
+def stage_sources(tmp: Path, fmus_modules=BUNDLED_FMUS_MODULES, slaves: bool = False) -> list[Path]:
+    """Copy the bundled sources (no caches) into tmp: the model packages, the ``fmus``
+    modules named and, with ``slaves``, every slave module; return the project files."""
     ignore = shutil.ignore_patterns("__pycache__", "*.pyc", "build")
     staged = []
     for package in BUNDLED_PACKAGES:
@@ -44,9 +35,11 @@ def _stage(tmp: Path) -> list[Path]:
             staged.append(tmp / package)
     fmus_pkg = tmp / "fmus"
     fmus_pkg.mkdir()
-    (fmus_pkg / "__init__.py").write_text('"""The slave base bundled into each parcosim FMU."""\n')
-    for module in BUNDLED_FMUS_MODULES:
+    (fmus_pkg / "__init__.py").write_text('"""The parcosim modules bundled into this FMU."""\n')
+    for module in dict.fromkeys(BUNDLED_FMUS_MODULES + tuple(fmus_modules)):
         shutil.copy2(ROOT / "fmus" / module, fmus_pkg / module)
+    if slaves:
+        shutil.copytree(ROOT / "fmus" / "slaves", fmus_pkg / "slaves", ignore=ignore)
     staged.append(fmus_pkg)
     return staged
 
@@ -62,7 +55,7 @@ def build_fmu(model: str, out_dir: Path = DEFAULT_OUT) -> Path:
     slave_class = getattr(importlib.import_module(f"fmus.slaves.{module_name}"), model)
     with tempfile.TemporaryDirectory(prefix="parcosim_build_") as tmp:
         tmp = Path(tmp)
-        project_files = _stage(tmp)
+        project_files = stage_sources(tmp)
         staged_script = tmp / script.name
         shutil.copy2(script, staged_script)
         fmu = FmuBuilder.build_FMU(staged_script, dest=out_dir, project_files=project_files,

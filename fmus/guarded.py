@@ -15,7 +15,9 @@ return.  So:
 """
 from __future__ import annotations
 
+import json
 import math
+import os
 import sys
 
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, Real, String, Boolean
@@ -26,6 +28,8 @@ _CAUSALITY = {
     "output": Fmi2Causality.output,
     "parameter": Fmi2Causality.parameter,
 }
+#: In an FMU's resources: start values that replace the declared ones (name -> value).
+START_VALUES_FILE = "start_values.json"
 _KIND = {float: Real, int: Integer, str: String, bool: Boolean}
 
 
@@ -71,7 +75,38 @@ class GuardedSlave(Fmi2Slave):
             kwargs["variability"] = variability
         if causality == "output":
             kwargs["initial"] = Fmi2Initial.calculated
+        if "." in name:   # "ctrl.lam" of a system FMU: a flat attribute, not an object path
+            kwargs["getter"] = lambda: getattr(self, name)
+            kwargs["setter"] = lambda value: setattr(self, name, value)
         self.register_variable(kind(name, **kwargs))
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        declare_variables = cls.__init__
+
+        def __init__(self, *args, **kw):
+            declare_variables(self, *args, **kw)
+            if type(self) is cls:   # the most derived class: every variable is declared
+                self._apply_start_values()
+
+        cls.__init__ = __init__
+
+    def _apply_start_values(self) -> None:
+        """Give the variables the start values of ``resources/start_values.json``, if the FMU
+        has one: an exported package (:mod:`fmus.ssp`) bakes each instance's parameters into
+        its own copy of the FMU, so they hold in a tool that ignores parameter bindings."""
+        resources = getattr(self, "resources", None)
+        if not resources:
+            return
+        path = os.path.join(resources, START_VALUES_FILE)
+        if not os.path.isfile(path):
+            return
+        with open(path, encoding="utf-8") as f:
+            values = json.load(f)
+        declared = {v.name for v in self.vars.values()}
+        for name, value in values.items():
+            if name in declared:
+                setattr(self, name, value)
 
     # --- hooks for subclasses ------------------------------------------------------------
     def setup(self) -> None:

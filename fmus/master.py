@@ -49,6 +49,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .stepper import Stepper
 from .system import System, split_signal
 
 MODES = ("fmu", "inprocess")
@@ -222,7 +223,7 @@ class InProcessInstance:
     """
 
     def __init__(self, model: str, name: str):
-        from .build import SLAVES
+        from .registry import SLAVES
 
         if model not in SLAVES:
             raise ValueError(f"component {name}: unknown model {model!r}; valid: {', '.join(SLAVES)}")
@@ -454,90 +455,21 @@ def simulate(system: System, mode: str = "inprocess", coupling: str = "gauss-sei
                 pass
 
 
-def _rate_groups(plan) -> list:
-    """Consecutive plan entries of equal sub-step count > 1 form one group:
-    [(substeps, [(instance, input slots, output slots), ...]), ...]."""
-    groups = []
-    for inst, in_slots, out_slots, substeps in plan:
-        if substeps > 1 and groups and groups[-1][0] == substeps:
-            groups[-1][1].append((inst, in_slots, out_slots))
-        else:
-            groups.append((substeps, [(inst, in_slots, out_slots)]))
-    return groups
-
-
 def _run(system, instances, order, mode, coupling, progress, loading_s=0.0) -> Result:
-    # One flat store of every output that is read or recorded.
-    slots = {}
-
-    def slot(signal):
-        return slots.setdefault(signal, len(slots))
-
-    feeds = {c.name: [] for c in system.components}
-    for conn in system.connections:
-        feeds[split_signal(conn.target)[0]].append(conn)
-    plan = []
-    for name in order:
-        inst = instances[name]
-        in_vrs = [inst.variables[split_signal(c.target)[1]].vr for c in feeds[name]]
-        in_slots = [slot(c.source) for c in feeds[name]]
-        produced = [s for s in [c.source for c in system.connections] + list(system.record)
-                    if split_signal(s)[0] == name and inst.variables[split_signal(s)[1]].causality == "output"]
-        produced = list(dict.fromkeys(produced))
-        out_vrs = [inst.variables[split_signal(s)[1]].vr for s in produced]
-        inst.bind(in_vrs, out_vrs)
-        plan.append((inst, in_slots, [slot(s) for s in produced], system.component(name).substeps))
-    record_inputs = [s for s in system.record if s not in slots]
-    if record_inputs:
-        raise ValueError(f"recorded signals must be outputs or connected inputs: {record_inputs}")
-    record_slots = [slots[s] for s in system.record]
-    values = [0.0] * len(slots)
-
+    stepper = Stepper(system, instances, order, jacobi=coupling == "jacobi")
     h, steps = system.step, system.steps
     data = np.full((steps + 1, len(system.record)), np.nan)
     error, done, rows = None, 0, 0
     init_start = start = _time.perf_counter()
     try:
-        for c in system.components:
-            instances[c.name].initialize(c.parameters, 0.0)
+        stepper.initialize(0.0)
         start = _time.perf_counter()
-        for inst, _, out_slots, _ in plan:
-            for i, v in zip(out_slots, inst.get_outputs()):
-                values[i] = v
-        data[0] = [values[i] for i in record_slots]
+        data[0] = stepper.row()
         rows = 1
         report_every = max(1, steps // 100)
-        jacobi = coupling == "jacobi"
-        groups = _rate_groups(plan)
-        t = 0.0
         for k in range(steps):
-            held = values[:] if jacobi else values
-            for substeps, members in groups:
-                if substeps == 1:
-                    inst, in_slots, out_slots = members[0]
-                    if in_slots:
-                        inst.set_inputs([held[i] for i in in_slots])
-                    inst.do_step(t, h)
-                    for i, v in zip(out_slots, inst.get_outputs()):
-                        values[i] = v
-                    continue
-                # Components of one rate step together, exchanging values at every
-                # sub-step; what they read from outside the group is held.
-                local = held[:] if jacobi else values
-                dt = h / substeps
-                for j in range(substeps):
-                    start_of_substep = local[:] if jacobi else local
-                    for inst, in_slots, out_slots in members:
-                        if in_slots:
-                            inst.set_inputs([start_of_substep[i] for i in in_slots])
-                        inst.do_step(t + j * dt, dt)
-                        for i, v in zip(out_slots, inst.get_outputs()):
-                            values[i] = v
-                            local[i] = v
-            # The communication point advances by adding h, as fmpy's and Ecos' masters
-            # do: an exported system then runs there on the very same time points.
-            t += h
-            data[k + 1] = [values[i] for i in record_slots]
+            stepper.step()
+            data[k + 1] = stepper.row()
             done = k + 1
             rows = done + 1
             if progress is not None and done % report_every == 0:

@@ -100,6 +100,27 @@ def build_plant(slave):
     return PlantSimulator(params, slave.x0, slave.y0, settings, encoder_counts=slave.encoder_counts)
 
 
+def correct_plant(sim, snapshot, measured: dict, redo) -> bool:
+    """Redo the step ``sim`` took from ``snapshot`` = (state, time), from that state made
+    consistent with the ``measured`` outputs (:func:`plant.correction.corrected_state`).
+
+    ``redo()`` takes the step again with the inputs held in it.  Returns False, changing
+    nothing, when the state agreed with every measurement.
+    """
+    from plant.correction import corrected_state
+
+    y, time = snapshot
+    now = sim.y
+    sim.y = y
+    z = corrected_state(sim, measured)
+    if z is None:
+        sim.y = now
+        return False
+    sim.y, sim.time = z, time
+    redo()
+    return True
+
+
 def publish_plant(slave, sim) -> None:
     """Copy the plant's outputs to the slave's variables."""
     for name, value in sim.outputs().items():

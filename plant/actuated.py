@@ -111,6 +111,13 @@ class ActuatedPlant:
                 if not math.isfinite(value):
                     raise ValueError(f"input {name}{j} = {value!r} is not finite")
         voltages = [d.sample_voltage(i_ref[n], v_ref[n], i_hat[n], dt) for n, (_, d) in enumerate(self.drives)]
+        self.advance(voltages, dt)
+
+    def advance(self, voltages, dt: float) -> None:
+        """Integrate the whole state over dt with the drives' ``voltages`` held (the part of
+        :meth:`step` after the controllers sampled); each drive's ``v`` becomes its voltage.
+        Refused as :meth:`step`, the state kept."""
+        plant = self.plant
 
         def held():
             return ", ".join(f"v{j} = {v!r} V" for (j, _), v in zip(self.drives, voltages)) + " held"

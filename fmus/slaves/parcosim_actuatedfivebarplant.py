@@ -21,7 +21,8 @@ process share one Python interpreter and its module cache.
 from __future__ import annotations
 
 from fmus.guarded import GuardedSlave, refuse_absurd
-from fmus.parts import PLANT_OUTPUTS, build_drive, build_plant, declare_motor, declare_plant, publish_plant
+from fmus.parts import (PLANT_OUTPUTS, build_drive, build_plant, correct_plant, declare_motor, declare_plant,
+                        publish_plant)
 from plant.actuated import ActuatedPlant
 
 OUTPUTS = tuple(name for name, _ in PLANT_OUTPUTS) + ("tau1", "tau2", "v1", "v2", "i1", "i2")
@@ -75,3 +76,26 @@ class ActuatedFiveBarPlant(GuardedSlave):
             setattr(self, f"tau{j}", tau)
             setattr(self, f"v{j}", drive.v)
             setattr(self, f"i{j}", drive.i)
+
+    # --- a model of the plant inside a controller (fmus.embedded.ChainCore) -------------
+    def snapshot(self):
+        """The state before the next step (mechanism and currents), for :meth:`correct`."""
+        a = self.actuated
+        return a.plant.y, a.plant.time, a.currents
+
+    def correct(self, snapshot, measured: dict, step_size: float) -> bool:
+        """Redo the last step (taken from ``snapshot``, with the voltages it held) from the
+        state the ``measured`` outputs allow; the currents, unmeasured, restart from the
+        snapshot's.  False, nothing changed, when the outputs agreed."""
+        a = self.actuated
+        y, time, currents = snapshot
+
+        def redo():
+            for (_, drive), i in zip(a.drives, currents):
+                drive.i = i
+            a.advance([drive.v for _, drive in a.drives], step_size)
+
+        if not correct_plant(a.plant, (y, time), measured, redo):
+            return False
+        self._publish()
+        return True

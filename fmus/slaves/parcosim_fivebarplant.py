@@ -6,7 +6,7 @@ process share one Python interpreter and its module cache.
 from __future__ import annotations
 
 from fmus.guarded import GuardedSlave
-from fmus.parts import PLANT_OUTPUTS, build_plant, declare_plant, publish_plant
+from fmus.parts import PLANT_OUTPUTS, build_plant, correct_plant, declare_plant, publish_plant
 
 OUTPUTS = tuple(name for name, _ in PLANT_OUTPUTS)
 
@@ -32,3 +32,17 @@ class FiveBarPlant(GuardedSlave):
         self.sim.time = current_time
         self.sim.step(self.tau1, self.tau2, step_size)
         publish_plant(self, self.sim)
+
+    # --- a model of the plant inside a controller (fmus.embedded.ChainCore) -------------
+    def snapshot(self):
+        """The state before the next step, for :meth:`correct`."""
+        return self.sim.y, self.sim.time
+
+    def correct(self, snapshot, measured: dict, step_size: float) -> bool:
+        """Redo the last step (taken from ``snapshot``, with the same torques) from the state
+        the ``measured`` outputs allow; False, nothing changed, when they agreed."""
+        sim = self.sim
+        if not correct_plant(sim, snapshot, measured, lambda: sim.step(self.tau1, self.tau2, step_size)):
+            return False
+        publish_plant(self, sim)
+        return True

@@ -1,0 +1,124 @@
+"""FMUs made for one system: a scene's whole loop (``ClosedLoop``), a package's chain
+(``ControlChain``), and copies of an FMU with other start values.
+
+* :func:`export_fmu` (``parcosim export-fmu SCENE OUT.fmu``): the whole closed loop as one
+  FMI 2.0 co-simulation FMU (:mod:`fmus.slaves.parcosim_closedloop`).
+* :func:`build_system_fmu`: the FMU of a system slave (``ClosedLoop`` or ``ControlChain``)
+  with the system in its resources (``system.json``), bundling the model packages and the
+  ``fmus`` modules that step a system in process.
+* :func:`with_start_values`: a copy of an FMU whose parameters start at given values, in
+  its model description and, for the slave, in ``resources/start_values.json``
+  (:mod:`fmus.guarded`): what an SSP package gives each instance so that its parameters
+  hold in a tool that ignores parameter bindings (fmpy's SSP runner).
+"""
+from __future__ import annotations
+
+import json
+import shutil
+import tempfile
+import zipfile
+from pathlib import Path
+from xml.etree import ElementTree as ET
+
+from .build import ROOT, stage_sources
+from .embedded import SYSTEM_FILE, system_to_dict
+from .guarded import START_VALUES_FILE
+from .modeldescription import fix_model_structure
+from .system import System
+
+#: Slave module and class of each system role.
+ROLES = {"loop": ("parcosim_closedloop", "ClosedLoop"), "chain": ("parcosim_controlchain", "ControlChain")}
+#: The ``fmus`` modules a system FMU needs beyond the slave base: the in-process master.
+SYSTEM_MODULES = ("embedded.py", "master.py", "registry.py", "stepper.py", "system.py", "systemslave.py")
+
+
+def build_system_fmu(role: str, system: System, path, plant: str = "plant") -> Path:
+    """Build the FMU of ``role`` ("loop": ``ClosedLoop``; "chain": ``ControlChain``) for
+    ``system`` at ``path`` (a ``.fmu`` file) and return its path.
+
+    Raises ValueError for an unknown role, a path not ending in ``.fmu``, or a system whose
+    components are not all parcosim models (their slaves run inside the FMU).
+    """
+    from pythonfmu import FmuBuilder
+
+    from .registry import SLAVES
+
+    if role not in ROLES:
+        raise ValueError(f"role = {role!r}; valid: {', '.join(ROLES)}")
+    path = Path(path)
+    if path.suffix.lower() != ".fmu":
+        raise ValueError(f"{path}: an FMU file must end in '.fmu'")
+    foreign = [c.model for c in system.components if c.model not in SLAVES]
+    if foreign:
+        raise ValueError(f"cannot put {foreign} inside one FMU: only parcosim models ({', '.join(SLAVES)}) run "
+                         "in process")
+    module, _ = ROLES[role]
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix="parcosim_system_") as tmp:
+        tmp = Path(tmp)
+        staged = stage_sources(tmp, SYSTEM_MODULES, slaves=True)
+        spec = tmp / SYSTEM_FILE
+        spec.write_text(json.dumps({"role": role, "plant": plant, "system": system_to_dict(system)}, indent=1))
+        script = tmp / f"{module}.py"
+        shutil.copy2(ROOT / "fmus" / "slaves" / f"{module}.py", script)
+        # The loop takes any whole number of its steps per doStep; the chain exactly one.
+        variable = "true" if role == "loop" else "false"
+        fmu = FmuBuilder.build_FMU(script, dest=path, project_files=staged + [spec],
+                                   canHandleVariableCommunicationStepSize=variable)
+    fix_model_structure(fmu, {})
+    return Path(fmu)
+
+
+def export_fmu(system: System, path) -> Path:
+    """``system``'s whole closed loop as one FMU (``ClosedLoop``) at ``path``.
+
+    Its run in any FMI 2.0 importer stepping it at the system's communication step is the
+    master's run of ``system`` (:func:`fmus.master.simulate`, in process): outputs ``x``,
+    ``y`` and the recorded signals; parameters ``<instance>.<name>`` of every component.
+    The system's plant must be the instance ``plant`` (its ``x``, ``y`` are the outputs).
+    """
+    names = [c.name for c in system.components]
+    if "plant" not in names:
+        raise ValueError(f"the system needs a component 'plant' (its x, y are the FMU's outputs); it has {names}")
+    record = tuple(dict.fromkeys(("plant.x", "plant.y") + tuple(system.record)))
+    system = System(system.components, system.connections, record, system.stop_time, system.step)
+    return build_system_fmu("loop", system, path)
+
+
+def _start_text(value) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        return repr(value)
+    return str(value)
+
+
+def with_start_values(fmu, values: dict, path) -> Path:
+    """A copy of ``fmu`` at ``path`` whose variables ``values`` (name -> value of the
+    variable's type) start there: the ``start`` attributes of its modelDescription.xml and,
+    read by every parcosim slave at instantiation, ``resources/start_values.json``."""
+    fmu, path = Path(fmu), Path(path)
+    with zipfile.ZipFile(fmu) as z:
+        root = ET.fromstring(z.read("modelDescription.xml"))
+    declared = set()
+    for sv in root.find("ModelVariables").findall("ScalarVariable"):
+        name = sv.get("name")
+        declared.add(name)
+        if name in values:
+            typed = next(iter(sv))
+            typed.set("start", _start_text(values[name]))
+    missing = set(values) - declared
+    if missing:
+        raise ValueError(f"{fmu.name} has no variables {sorted(missing)}")
+    ET.indent(root)
+    xml = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+    start_file = f"resources/{START_VALUES_FILE}"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with zipfile.ZipFile(fmu) as src, zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as dst:
+        for item in src.infolist():
+            if item.filename == start_file:
+                continue
+            data = xml if item.filename == "modelDescription.xml" else src.read(item.filename)
+            dst.writestr(item, data)
+        dst.writestr(start_file, json.dumps(values, indent=1))
+    return path

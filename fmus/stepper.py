@@ -1,0 +1,134 @@
+"""A system's instances stepped one communication step at a time.
+
+:class:`Stepper` is the loop of :func:`fmus.master.simulate`, cut at the step: built
+from the instances and their stepping order, it initialises them, then each
+:meth:`Stepper.step` advances every instance by one communication step and updates
+the values of the signals that are read or recorded.  The master runs a whole system
+with it; an FMU that contains a system (:mod:`fmus.embedded`) steps it in its
+``doStep``.  The semantics (coupling, multi-rate groups, rows) are the master's: see
+:mod:`fmus.master`.
+"""
+from __future__ import annotations
+
+from .system import System, split_signal
+
+
+def rate_groups(plan) -> list:
+    """Consecutive plan entries of equal sub-step count > 1 form one group:
+    [(substeps, [(instance, input slots, output slots), ...]), ...]."""
+    groups = []
+    for inst, in_slots, out_slots, substeps in plan:
+        if substeps > 1 and groups and groups[-1][0] == substeps:
+            groups[-1][1].append((inst, in_slots, out_slots))
+        else:
+            groups.append((substeps, [(inst, in_slots, out_slots)]))
+    return groups
+
+
+class Stepper:
+    """Instances of ``system`` wired together, stepped in ``order``.
+
+    Parameters
+    ----------
+    system : System
+    instances : dict
+        Instance name -> back-end instance (``fmus.master.InProcessInstance`` or an FMU
+        instance): ``variables``, ``bind``, ``initialize``, ``set_inputs``,
+        ``get_outputs``, ``do_step``.
+    order : sequence of str
+        The stepping order (Gauss-Seidel) or the listing order (Jacobi).
+    jacobi : bool
+        Every instance reads the values all held at the step's start.
+
+    Raises
+    ------
+    ValueError
+        A recorded signal that is neither an output nor a connected input.
+    """
+
+    def __init__(self, system: System, instances: dict, order, jacobi: bool = False):
+        self.system, self.instances, self.order, self.jacobi = system, instances, tuple(order), jacobi
+        self.slots = {}
+        feeds = {c.name: [] for c in system.components}
+        for conn in system.connections:
+            feeds[split_signal(conn.target)[0]].append(conn)
+        sources = [c.source for c in system.connections]
+        plan = []
+        for name in self.order:
+            inst = instances[name]
+            in_vrs = [inst.variables[split_signal(c.target)[1]].vr for c in feeds[name]]
+            in_slots = [self._slot(c.source) for c in feeds[name]]
+            produced = [s for s in sources + list(system.record)
+                        if split_signal(s)[0] == name and inst.variables[split_signal(s)[1]].causality == "output"]
+            produced = list(dict.fromkeys(produced))
+            out_vrs = [inst.variables[split_signal(s)[1]].vr for s in produced]
+            inst.bind(in_vrs, out_vrs)
+            plan.append((inst, in_slots, [self._slot(s) for s in produced], system.component(name).substeps))
+        record_inputs = [s for s in system.record if s not in self.slots]
+        if record_inputs:
+            raise ValueError(f"recorded signals must be outputs or connected inputs: {record_inputs}")
+        self.record_slots = [self.slots[s] for s in system.record]
+        self.plan = plan
+        self.groups = rate_groups(plan)
+        self.values = [0.0] * len(self.slots)
+        self.time = 0.0
+
+    def _slot(self, signal):
+        return self.slots.setdefault(signal, len(self.slots))
+
+    def initialize(self, start_time: float = 0.0) -> None:
+        """Initialise every instance with its component's parameters, then read the outputs."""
+        for c in self.system.components:
+            self.instances[c.name].initialize(c.parameters, start_time)
+        self.time = start_time
+        for inst, _, out_slots, _ in self.plan:
+            self.refresh(inst, out_slots)
+
+    def refresh(self, inst, out_slots=None) -> None:
+        """Read ``inst``'s outputs into the values again (after its state was changed)."""
+        if out_slots is None:
+            out_slots = next(p[2] for p in self.plan if p[0] is inst)
+        values = self.values
+        for i, v in zip(out_slots, inst.get_outputs()):
+            values[i] = v
+
+    def row(self) -> list:
+        """The recorded signals' present values, in ``system.record`` order."""
+        values = self.values
+        return [values[i] for i in self.record_slots]
+
+    def value(self, signal: str) -> float:
+        """The present value of a connected or recorded ``signal``."""
+        return self.values[self.slots[signal]]
+
+    def step(self) -> None:
+        """One communication step of every instance from ``time``; ``time`` += h.
+
+        A refusal raises the instance's :class:`fmus.master.CoSimulationError`."""
+        h, t, jacobi, values = self.system.step, self.time, self.jacobi, self.values
+        held = values[:] if jacobi else values
+        for substeps, members in self.groups:
+            if substeps == 1:
+                inst, in_slots, out_slots = members[0]
+                if in_slots:
+                    inst.set_inputs([held[i] for i in in_slots])
+                inst.do_step(t, h)
+                for i, v in zip(out_slots, inst.get_outputs()):
+                    values[i] = v
+                continue
+            # Components of one rate step together, exchanging values at every
+            # sub-step; what they read from outside the group is held.
+            local = held[:] if jacobi else values
+            dt = h / substeps
+            for j in range(substeps):
+                start_of_substep = local[:] if jacobi else local
+                for inst, in_slots, out_slots in members:
+                    if in_slots:
+                        inst.set_inputs([start_of_substep[i] for i in in_slots])
+                    inst.do_step(t + j * dt, dt)
+                    for i, v in zip(out_slots, inst.get_outputs()):
+                        values[i] = v
+                        local[i] = v
+        # The communication point advances by adding h, as fmpy's and Ecos' masters do:
+        # an exported system then runs there on the very same time points.
+        self.time = t + h

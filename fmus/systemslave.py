@@ -1,0 +1,54 @@
+"""The FMI slave base of an FMU that contains a system (:mod:`fmus.embedded`).
+
+The system travels in the FMU's resources (``system.json``, written by
+:mod:`fmus.export`); the slave declares from it, at instantiation:
+
+* a parameter ``<instance>.<parameter>`` for every parameter of every inner component,
+  typed and started as the inner component's (the system's value where it sets one);
+  set one before initialisation and the inner component gets it;
+* an output per recorded signal, named by the signal (``traj.x_d``), held as the master
+  records it (row k at t = k h).
+
+Subclasses add their own inputs and outputs and build their core in :meth:`build`.
+"""
+from __future__ import annotations
+
+from pythonfmu import DefaultExperiment
+
+from fmus.embedded import component_parameters, read_system, with_parameters
+from fmus.guarded import GuardedSlave
+
+
+class SystemSlave(GuardedSlave):
+    """Base of ``ClosedLoop`` and ``ControlChain``."""
+
+    author = "parcosim"
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.system, self.role, self.plant = read_system(self.resources)
+        self.default_experiment = DefaultExperiment(0.0, self.system.stop_time, self.system.step)
+        self._parameters = component_parameters(self.system)
+        for name, value in self._parameters.items():
+            self.declare(name, "parameter", value, f"Parameter {name.split('.', 1)[1]} of the inner "
+                                                   f"component {name.split('.', 1)[0]}")
+        self.core = None
+
+    def recorded_signals(self) -> tuple:
+        """The recorded signals this FMU publishes (subclasses may leave some out)."""
+        return self.system.record
+
+    def configured_system(self):
+        """The system with the parameters as they are set now."""
+        return with_parameters(self.system, {name: getattr(self, name) for name in self._parameters})
+
+    def setup(self):
+        self.core = self.build(self.configured_system())
+        self.core.initialize()
+        self.publish()
+
+    def build(self, system):
+        raise NotImplementedError
+
+    def publish(self):
+        raise NotImplementedError

@@ -1,0 +1,91 @@
+"""A scene as a package for Jacobi masters: its control chain and its plant, two FMU instances.
+
+Ecos, libcosim and fmpy's SSP runner step every instance from the values all held at the
+step's start, so every connection of a scene adds a step of delay: exported component by
+component, the bench's loop trajectory -> derivator -> controller -> drive -> plant runs
+about 90 times worse there than in our master (docs/ssp.md).  :func:`package_scene` cuts
+the scene in two instead:
+
+* ``plant``: the mechanism's FMU.  With drives, the ``ActuatedFiveBarPlant`` of
+  :func:`scenarios.scenes.drives_in_plant` (mechanism and armature currents, one ODE) in
+  voltage mode: the drives' voltages come from the chain.  Without (``thesis_sim_circle``),
+  the ``FiveBarPlant`` with its torques from the chain.
+* ``control``: the FMU ``ControlChain`` (:class:`fmus.embedded.ChainCore`): trajectory,
+  derivator, controller, observers and the drives' current controllers stepped in our
+  master's order, one sample ahead, with the plant predicted by a model of it.
+
+Connections: the plant's outputs the chain reads (encoder angles on the bench; the exact
+angles and speeds in thesis_sim) go to the chain's inputs of the same names, the chain's
+commands (``v_ref1``, ``v_ref2`` or ``tau1``, ``tau2``) to the plant.  The scene's recorded
+signals keep their names on the plant (``plant.x``) and become outputs of the chain named
+by the signal (``control.traj.x_d``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+from fmus.embedded import chain_interface
+from fmus.system import Component, Connection, System, split_signal
+
+from .scenes import Scene, drives_in_plant
+
+PLANT = "plant"
+CONTROL = "control"
+CHAIN_MODEL = "ControlChain"
+
+
+@dataclass(frozen=True)
+class Package:
+    """A scene cut for a Jacobi master.
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene whose columns name the package's signals (``columns``).
+    system : System
+        The two instances ``control`` (model :data:`CHAIN_MODEL`) and ``plant``.
+    chain : System
+        What the ``control`` FMU steps inside: the scene (drives moved into its plant),
+        whose plant component is the chain's model of the plant.
+    """
+
+    scene: Scene
+    system: System
+    chain: System
+
+
+def package_scene(scene: Scene) -> Package:
+    """Cut ``scene`` into its control chain and its plant (module docstring).
+
+    Raises
+    ------
+    ValueError
+        The scene has no component ``plant`` of model ``FiveBarPlant``, or drives that
+        cannot move into it (:func:`scenarios.scenes.drives_in_plant`), or a multi-rate
+        component.
+    """
+    models = {c.name: c.model for c in scene.system.components}
+    if models.get(PLANT) not in ("FiveBarPlant", "ActuatedFiveBarPlant"):
+        raise ValueError(f"scene {scene.name}: a package needs a 5R plant instance named {PLANT!r}")
+    if "DCMotorDrive" in models.values():
+        scene = drives_in_plant(scene)
+    chain = scene.system
+    if any(c.substeps != 1 for c in chain.components):
+        raise ValueError(f"scene {scene.name}: multi-rate components cannot be packaged (substeps = 1 needed)")
+    measured, commanded = chain_interface(chain, PLANT)
+    plant = chain.component(PLANT)
+    parameters = dict(plant.parameters)
+    if plant.model == "ActuatedFiveBarPlant":
+        parameters["mode"] = "voltage"
+    connections = [Connection(f"{PLANT}.{m}", f"{CONTROL}.{m}") for m in measured]
+    connections += [Connection(f"{CONTROL}.{name}", f"{PLANT}.{name}") for name in commanded]
+
+    def moved(signal):
+        return signal if split_signal(signal)[0] == PLANT else f"{CONTROL}.{signal}"
+
+    system = System((Component(CONTROL, CHAIN_MODEL, {}), Component(PLANT, plant.model, parameters)),
+                    tuple(connections), tuple(moved(s) for s in chain.record), chain.stop_time, chain.step)
+    columns = {name: moved(signal) for name, signal in scene.columns.items()}
+    packaged = replace(scene, system=system, columns=columns,
+                       description=scene.description + "; packaged for Jacobi masters (control chain + plant)")
+    return Package(packaged, system, chain)
