@@ -61,7 +61,7 @@ def _q(prefix: str, tag: str) -> str:
 
 # --- export ---------------------------------------------------------------------------------
 
-def export_ssp(system: System, path, fmu_dir=None) -> Path:
+def export_ssp(system: System, path, fmu_dir=None, fmus: dict | None = None, bake: bool = True) -> Path:
     """Write ``system`` as an SSP 1.0 package to ``path`` and return its path.
 
     Parameters
@@ -75,6 +75,14 @@ def export_ssp(system: System, path, fmu_dir=None) -> Path:
     fmu_dir : str or Path, optional
         Where the FMUs are (and are built when missing or stale); default
         :data:`fmus.build.DEFAULT_OUT`.
+    fmus : dict, optional
+        Model -> FMU file for models that are not in ``fmu_dir`` (e.g. the
+        ``ControlChain`` built for one scene, :mod:`scenarios.package`).
+    bake : bool
+        Each instance gets its own copy of its FMU, ``resources/<instance>.fmu``, whose
+        parameters start at the instance's values (:func:`fmus.export.with_start_values`),
+        so they hold in tools that ignore parameter bindings (fmpy's SSP runner).  False:
+        one ``resources/<Model>.fmu`` per model, the values in the bindings only.
 
     Raises
     ------
@@ -91,19 +99,31 @@ def export_ssp(system: System, path, fmu_dir=None) -> Path:
         if c.substeps != 1:
             raise ValueError(f"component {c.name}: substeps = {c.substeps}; SSP 1.0 has no per-component "
                              "step, so multi-rate systems cannot be exported (set substeps=1)")
-    fmus = _fmu_paths(system, fmu_dir)
+    given = dict(fmus or {})
+    fmus = _fmu_paths([c.model for c in system.components if c.model not in given], fmu_dir)
+    fmus.update({model: Path(fmu) for model, fmu in given.items()})
     variables = {model: _read_variables(model, fmu) for model, fmu in fmus.items()}
     connectors, values = _plan(system, variables)
-    ssd = _ssd(system, path.stem, connectors, values)
+    sources = {c.name: f"resources/{c.name if bake else c.model}.fmu" for c in system.components}
+    ssd = _ssd(system, path.stem, connectors, values, sources)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
     os.close(fd)
     try:
-        with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as zf:
+        with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as zf, \
+                tempfile.TemporaryDirectory(prefix="parcosim_ssp_") as copies:
             zf.writestr("SystemStructure.ssd", _xml_bytes(ssd))
-            for model, fmu in fmus.items():
-                # FMUs are zips already: store them as they are.
-                zf.write(fmu, f"resources/{model}.fmu", compress_type=zipfile.ZIP_STORED)
+            if bake:
+                from .export import with_start_values
+
+                for c in system.components:
+                    start = {name: value for name, (_, value) in values[c.name].items()}
+                    copy = with_start_values(fmus[c.model], start, Path(copies) / f"{c.name}.fmu")
+                    zf.write(copy, sources[c.name], compress_type=zipfile.ZIP_STORED)
+            else:
+                for model, fmu in fmus.items():
+                    # FMUs are zips already: store them as they are.
+                    zf.write(fmu, f"resources/{model}.fmu", compress_type=zipfile.ZIP_STORED)
             for c in system.components:
                 if values[c.name]:
                     zf.writestr(f"resources/{c.name}.ssv", _xml_bytes(_ssv(values[c.name])))
@@ -115,10 +135,10 @@ def export_ssp(system: System, path, fmu_dir=None) -> Path:
     return path
 
 
-def _fmu_paths(system: System, fmu_dir) -> dict:
+def _fmu_paths(models, fmu_dir) -> dict:
     from .build import ensure_built
 
-    models = list(dict.fromkeys(c.model for c in system.components))
+    models = list(dict.fromkeys(models))
     for model in models:
         if not model or any(ch in model for ch in '/\\:*?"<>|') or model in (".", ".."):
             raise ValueError(f"model name {model!r} cannot name a file resources/{model}.fmu")
@@ -246,7 +266,7 @@ def _format(type_: str, value) -> str:
     return value
 
 
-def _ssd(system: System, name: str, connectors: dict, values: dict) -> ET.Element:
+def _ssd(system: System, name: str, connectors: dict, values: dict, sources: dict) -> ET.Element:
     root = ET.Element(_q("ssd", "SystemStructureDescription"),
                       {"version": "1.0", "name": name, "generationTool": "parcosim (fmus.ssp.export_ssp)"})
     sys_el = ET.SubElement(root, _q("ssd", "System"), {
@@ -256,7 +276,7 @@ def _ssd(system: System, name: str, connectors: dict, values: dict) -> ET.Elemen
     for c in system.components:
         comp = ET.SubElement(elements, _q("ssd", "Component"), {
             "name": c.name, "type": "application/x-fmu-sharedlibrary",
-            "source": f"resources/{c.model}.fmu", "implementation": "CoSimulation"})
+            "source": sources[c.name], "implementation": "CoSimulation"})
         if connectors[c.name]:
             conns = ET.SubElement(comp, _q("ssd", "Connectors"))
             for cname, (kind, type_) in connectors[c.name].items():

@@ -22,9 +22,13 @@ by the signal (``control.traj.x_d``).
 """
 from __future__ import annotations
 
+import tempfile
 from dataclasses import dataclass, replace
+from pathlib import Path
 
 from fmus.embedded import chain_interface
+from fmus.export import build_system_fmu
+from fmus.ssp import export_ssp
 from fmus.system import Component, Connection, System, split_signal
 
 from .scenes import Scene, drives_in_plant
@@ -89,3 +93,19 @@ def package_scene(scene: Scene) -> Package:
     packaged = replace(scene, system=system, columns=columns,
                        description=scene.description + "; packaged for Jacobi masters (control chain + plant)")
     return Package(packaged, system, chain)
+
+
+def export_package(scene: Scene, path, fmu_dir=None) -> Path:
+    """Write ``scene`` as an SSP package for Jacobi masters (:func:`package_scene`) to
+    ``path`` and return its path.
+
+    The ``ControlChain`` FMU is built for the scene (:func:`fmus.export.build_system_fmu`);
+    the plant's FMU comes from ``fmu_dir`` (built there when missing or stale).  Every
+    instance's parameters are baked into its FMU's start values (``bake`` of
+    :func:`fmus.ssp.export_ssp`), so the package runs as it is in tools that ignore
+    parameter bindings.
+    """
+    package = package_scene(scene)
+    with tempfile.TemporaryDirectory(prefix="parcosim_chain_") as tmp:
+        chain = build_system_fmu("chain", package.chain, Path(tmp) / f"{CHAIN_MODEL}.fmu", plant=PLANT)
+        return export_ssp(package.system, path, fmu_dir, fmus={CHAIN_MODEL: chain})
