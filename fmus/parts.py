@@ -100,7 +100,7 @@ def build_plant(slave):
     return PlantSimulator(params, slave.x0, slave.y0, settings, encoder_counts=slave.encoder_counts)
 
 
-def correct_plant(sim, snapshot, measured: dict, redo) -> bool:
+def correct_plant(sim, snapshot, measured: dict, redo, step: float) -> bool:
     """Redo the step ``sim`` took from ``snapshot`` = (state, time), from that state made
     consistent with the ``measured`` outputs (:func:`plant.correction.corrected_state`).
 
@@ -112,7 +112,7 @@ def correct_plant(sim, snapshot, measured: dict, redo) -> bool:
     y, time = snapshot
     now = sim.y
     sim.y = y
-    z = corrected_state(sim, measured)
+    z = corrected_state(sim, measured, step)
     if z is None:
         sim.y = now
         return False

@@ -12,7 +12,9 @@ Every subcommand is a thin shell over a documented Python call:
                        ``run_scene(drives_in_plant(get_scene(name), substeps=N), ...)``
 ``parcosim report``    ``scenarios.report.write_report(out_dir, mode)``
 ``parcosim trade``     ``scenarios.trade.run_trade(scene, quick, out_dir)``
-``parcosim export-ssp``  ``fmus.ssp.export_ssp(get_scene(name).system, path, fmu_dir)``
+``parcosim export-ssp``  ``scenarios.package.export_package(get_scene(name), path, fmu_dir)``;
+                       with ``--per-component`` ``fmus.ssp.export_ssp(get_scene(name).system, path, fmu_dir)``
+``parcosim export-fmu``  ``fmus.export.export_fmu(get_scene(name).system, path)``
 =====================  ==============================================
 
 Errors end the command with exit status 2 and one readable line on stderr; a run that a
@@ -46,12 +48,21 @@ def _parser() -> argparse.ArgumentParser:
     report = sub.add_parser("report", help="run the 16 bench scenes; markdown report beside the thesis' Tables 9-14")
     report.add_argument("--mode", choices=("inprocess", "fmu"), default="inprocess")
     report.add_argument("--out", default="out/report", help="output directory (default: out/report)")
-    ssp = sub.add_parser("export-ssp", help="write a scene as an SSP 1.0 package (runs in fmpy and Ecos)")
+    ssp = sub.add_parser("export-ssp", help="write a scene as an SSP 1.0 package for Jacobi masters "
+                                            "(Ecos, libcosim, fmpy): control chain + plant")
     ssp.add_argument("scene", help="a scene name (see `parcosim list`)")
     ssp.add_argument("path", help="the .ssp file to write")
     ssp.add_argument("--fmu-dir", default=None, help="where the FMUs are (built when missing or stale)")
     ssp.add_argument("--drives-in-plant", type=int, default=None, metavar="N",
                      help="export the scene with its drives inside the plant, RK4 N steps per sample")
+    ssp.add_argument("--per-component", action="store_true",
+                     help="one FMU instance per component (for masters that order components by their "
+                          "dependencies; in Jacobi masters each connection adds a step of delay: docs/ssp.md)")
+    fmu = sub.add_parser("export-fmu", help="write a scene's whole closed loop as one FMI 2.0 co-simulation FMU")
+    fmu.add_argument("scene", help="a scene name (see `parcosim list`)")
+    fmu.add_argument("path", help="the .fmu file to write")
+    fmu.add_argument("--drives-in-plant", type=int, default=None, metavar="N",
+                     help="the scene with its drives inside the plant, RK4 N steps per sample")
     trade = sub.add_parser("trade", help="speed against accuracy: sweep the settings, table and Pareto plot")
     trade.add_argument("scene", nargs="?", default="bench_circle_TCMDx",
                        help="a scene name (default: bench_circle_TCMDx)")
@@ -84,8 +95,15 @@ def main(argv: list[str] | None = None) -> int:
             from scenarios.report import write_report
             print(write_report(args.out, args.mode, progress=progress_bar("report")))
         elif args.command == "export-ssp":
-            from fmus.ssp import export_ssp
-            print(export_ssp(_scene(args).system, args.path, args.fmu_dir))
+            if args.per_component:
+                from fmus.ssp import export_ssp
+                print(export_ssp(_scene(args).system, args.path, args.fmu_dir))
+            else:
+                from scenarios.package import export_package
+                print(export_package(_scene(args), args.path, args.fmu_dir))
+        elif args.command == "export-fmu":
+            from fmus.export import export_fmu
+            print(export_fmu(_scene(args).system, args.path))
         elif args.command == "trade":
             return _trade(args)
         elif args.command == "build":

@@ -65,7 +65,7 @@ def test_ssd_is_well_formed(exported):
     declared = {}
     for c in system.components:
         el = comps[c.name]
-        assert el.get("source") == f"resources/{c.model}.fmu" and el.get("source") in names
+        assert el.get("source") == f"resources/{c.name}.fmu" and el.get("source") in names
         for conn in el.iterfind("ssd:Connectors/ssd:Connector", NS):
             types = [t.tag.split("}")[1] for t in conn]
             assert len(types) == 1 and types[0] in ("Real", "Integer", "Boolean", "String")
@@ -109,6 +109,40 @@ def test_parameter_set_holds_the_scene_parameters(exported):
             if c.parameters:
                 ssv = ET.fromstring(zf.read(f"resources/{c.name}.ssv"))
                 assert ssv.tag == f"{{{NS['ssv']}}}ParameterSet" and ssv.get("name") == PARAMETER_SET
+
+
+def test_each_instance_fmu_starts_at_its_parameters(exported):
+    """The parameters are baked into each instance's FMU copy: its model description's start
+    values and the start_values.json its slave reads equal the bound parameter set."""
+    import json
+
+    system, path, _ = exported
+    bound = read_ssp_parameters(path)
+    with zipfile.ZipFile(path) as zf:
+        for c in system.components:
+            with zipfile.ZipFile(zf.open(f"resources/{c.name}.fmu")) as fmu:
+                baked = json.loads(fmu.read("resources/start_values.json"))
+                md = ET.fromstring(fmu.read("modelDescription.xml"))
+            assert {f"{c.name}.{k}": v for k, v in baked.items()} == \
+                {k: v for k, v in bound.items() if k.startswith(f"{c.name}.")}
+            starts = {sv.get("name"): next(iter(sv)).get("start") for sv in md.iter("ScalarVariable")}
+            for name, value in baked.items():
+                expected = ("true" if value else "false") if isinstance(value, bool) else (
+                    repr(value) if isinstance(value, float) else str(value))
+                assert starts[name] == expected
+
+
+def test_plain_fmpy_runs_the_package_without_its_parameter_bindings(exported):
+    """fmpy's simulate_ssp ignores parameter bindings; with the baked start values its plain
+    run (no parameter_set, fmpy's own zero start of the connectors) equals the run given
+    the bindings."""
+    from fmpy.ssp.simulation import simulate_ssp
+
+    system, path, _ = exported
+    plain = simulate_ssp(str(path), stop_time=system.stop_time, step_size=system.step)
+    bound = simulate_ssp_fmpy(path, initial_outputs=False)
+    for s in SIGNALS:
+        assert np.array_equal(plain[s], bound[s])
 
 
 def test_string_and_boolean_parameters_round_trip(fmu_dir, tmp_path):

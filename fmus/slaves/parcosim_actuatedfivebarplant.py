@@ -95,7 +95,7 @@ class ActuatedFiveBarPlant(GuardedSlave):
                 drive.i = i
             a.advance([drive.v for _, drive in a.drives], step_size)
 
-        if not correct_plant(a.plant, (y, time), measured, redo):
+        if not correct_plant(a.plant, (y, time), measured, redo, step_size):
             return False
         self._publish()
         return True

@@ -42,7 +42,8 @@ class FiveBarPlant(GuardedSlave):
         """Redo the last step (taken from ``snapshot``, with the same torques) from the state
         the ``measured`` outputs allow; False, nothing changed, when they agreed."""
         sim = self.sim
-        if not correct_plant(sim, snapshot, measured, lambda: sim.step(self.tau1, self.tau2, step_size)):
+        if not correct_plant(sim, snapshot, measured, lambda: sim.step(self.tau1, self.tau2, step_size),
+                             step_size):
             return False
         publish_plant(self, sim)
         return True
