@@ -1,0 +1,122 @@
+"""``parcosim export-fmu``: a scene's whole closed loop as one FMU (fmus.export.export_fmu).
+
+Its run in an importer is the master's run: fmpy.simulate_fmu as a user calls it, Ecos and
+libcosim (the FMU alone in an SSP package) give ``parcosim run``'s path to the last bit;
+its inner parameters act as they do in a scene; bad step sizes are refused, not stepped.
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from fmpy import simulate_fmu
+from fmpy.validation import validate_fmu
+
+from fmus.export import export_fmu
+from fmus.master import simulate
+from fmus.ssp import ecos_available, export_ssp, simulate_ssp_ecos
+from fmus.system import Component, System
+from scenarios.scenes import get_scene
+
+STOP = {"thesis_sim_circle": 2.0, "bench_circle_TCMDx": 1.0}
+TOL = 1e-9   # m: what the issue allows; the runs are bit-identical
+
+
+def _system(name, **changes):
+    system = dataclasses.replace(get_scene(name).system, stop_time=STOP[name])
+    if not changes:
+        return system
+    components = tuple(dataclasses.replace(c, parameters={**c.parameters, **{k.split(".", 1)[1]: v for k, v in
+                                                                          changes.items() if k.startswith(c.name + ".")}})
+                       for c in system.components)
+    return dataclasses.replace(system, components=components)
+
+
+@pytest.fixture(scope="module", params=tuple(STOP))
+def exported(request, tmp_path_factory):
+    system = _system(request.param)
+    return request.param, system, export_fmu(system, tmp_path_factory.mktemp("fmu") / f"{request.param}.fmu")
+
+
+def _deviation(time, x, y, reference, h):
+    k = np.round(np.asarray(time) / h).astype(int)
+    assert np.allclose(time, k * h, atol=1e-9)
+    assert k[-1] == len(reference.time) - 1, "the run did not reach the stop time"
+    return max(np.max(np.abs(x - reference["plant.x"][k])), np.max(np.abs(y - reference["plant.y"][k])))
+
+
+def test_the_fmu_validates(exported):
+    _, _, path = exported
+    assert validate_fmu(str(path)) == []
+
+
+def test_fmpy_simulate_fmu_is_parcosim_run(exported):
+    """As a user calls it: stop time and step size only (fmpy then steps 16 ms at a time
+    over long runs; the FMU takes 16 of its steps each time)."""
+    _, system, path = exported
+    reference = simulate(system)
+    run = simulate_fmu(str(path), stop_time=system.stop_time, step_size=system.step, output=["x", "y"])
+    assert _deviation(run["time"], run["x"], run["y"], reference, system.step) <= TOL
+
+
+#: An inner parameter change per scene: the controller's lambda; the plant's start and the strategy.
+CHANGES = {"thesis_sim_circle": {"ctrl.lam": 20.0}, "bench_circle_TCMDx": {"plant.x0": 0.0, "ctrl.strategy": "PDq"}}
+
+
+def test_an_inner_parameter_changes_the_path_as_in_the_scene(exported):
+    name, system, path = exported
+    change = CHANGES[name]
+    changed = simulate(_system(name, **change))
+    run = simulate_fmu(str(path), stop_time=system.stop_time, step_size=system.step, output=["x", "y"],
+                       start_values=change, output_interval=system.step)
+    assert _deviation(run["time"], run["x"], run["y"], changed, system.step) <= TOL
+    assert _deviation(run["time"], run["x"], run["y"], simulate(system), system.step) > 1e-6
+
+
+def test_ecos_runs_the_fmu_as_parcosim_run(exported, tmp_path):
+    reason = ecos_available()
+    if reason:
+        pytest.skip(f"ecospy cannot be loaded: {reason}")
+    _, system, path = exported
+    alone = System((Component("loop", "ClosedLoop"),), (), ("loop.x", "loop.y"), system.stop_time, system.step)
+    package = export_ssp(alone, tmp_path / "loop.ssp", fmus={"ClosedLoop": path})
+    run = simulate_ssp_ecos(package, ["loop.x", "loop.y"])
+    assert run.error is None
+    assert _deviation(run.time, run["loop.x"], run["loop.y"], simulate(system), system.step) <= TOL
+
+
+def test_libcosim_runs_the_fmu_as_parcosim_run(exported, tmp_path):
+    from fmus.libcosim_runner import libcosim_available, simulate_ssp_libcosim
+
+    reason = libcosim_available()
+    if reason:
+        pytest.skip(f"libcosimpy cannot be loaded: {reason}")
+    _, system, path = exported
+    alone = System((Component("loop", "ClosedLoop"),), (), ("loop.x", "loop.y"), system.stop_time, system.step)
+    package = export_ssp(alone, tmp_path / "loop.ssp", fmus={"ClosedLoop": path})
+    run = simulate_ssp_libcosim(package, ["loop.x", "loop.y"])
+    assert run.error is None
+    assert _deviation(run.time, run["loop.x"], run["loop.y"], simulate(system), system.step) <= TOL
+
+
+def test_a_step_that_is_not_a_whole_number_of_its_steps_is_refused(exported):
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    _, system, path = exported
+    md = read_model_description(str(path))
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=extract(str(path)),
+                    modelIdentifier=md.coSimulation.modelIdentifier, instanceName="loop")
+    fmu.instantiate()
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    fmu.doStep(0.0, 2 * system.step)
+    with pytest.raises(Exception, match="2"):          # fmi2Discard
+        fmu.doStep(2 * system.step, 0.5 * system.step)
+    error = {v.name: v for v in md.modelVariables}["error"]
+    message = fmu.getString([error.valueReference])[0].decode()
+    assert "step size 0.0005 s" in message and "whole multiple of h = 0.001 s" in message
+    fmu.terminate()
+    fmu.freeInstance()
