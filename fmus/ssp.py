@@ -48,10 +48,19 @@ PARAMETER_SET = "parameters"
 #: Annotation type of ``ssd:DefaultExperiment`` that carries the communication step.
 STEP_ANNOTATION = "org.parcosim.communicationStep"
 _PARCOSIM_NS = "urn:parcosim:ssp"
+#: Namespace of the OSP annotations (libcosim matches the literal prefix ``osp:``).
+OSP_NS = "http://opensimulationplatform.com/SSP/OSPAnnotations"
+#: Annotation type of ``ssd:DefaultExperiment`` that libcosim reads.
+OSP_ANNOTATION = "com.opensimulationplatform"
+#: libcosim's time unit: durations and time points are integer nanoseconds.
+#: libcosim steps the FMUs on the calling thread: Python FMUs hold the GIL anyway (one
+#: worker thread is 5-8x slower, docs/ssp_tools.md), and an FMU error in initialisation
+#: then fails the first step instead of aborting the importing process.
+LIBCOSIM_WORKER_THREADS = 0
 _TYPES = ("Real", "Integer", "Boolean", "String")
 _INT32 = (-2**31, 2**31 - 1)
 
-for _prefix, _uri in {**NS, "parcosim": _PARCOSIM_NS}.items():
+for _prefix, _uri in {**NS, "parcosim": _PARCOSIM_NS, "osp": OSP_NS}.items():
     ET.register_namespace(_prefix, _uri)
 
 
@@ -298,6 +307,7 @@ def _ssd(system: System, name: str, connectors: dict, values: dict, sources: dic
     annotations = ET.SubElement(experiment, _q("ssd", "Annotations"))
     annotation = ET.SubElement(annotations, _q("ssc", "Annotation"), {"type": STEP_ANNOTATION})
     ET.SubElement(annotation, f"{{{_PARCOSIM_NS}}}CommunicationStep", {"value": repr(float(system.step))})
+    annotations.append(libcosim_annotation(system.step, LIBCOSIM_WORKER_THREADS))
     return root
 
 
@@ -313,6 +323,67 @@ def _ssv(values: dict) -> ET.Element:
 def _xml_bytes(root: ET.Element) -> bytes:
     ET.indent(root)
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True) + b"\n"
+
+
+# --- libcosim's annotation ------------------------------------------------------------------
+
+def _step_text(step) -> str:
+    step = float(step)
+    if not (step > 0 and np.isfinite(step)):
+        raise ValueError(f"step = {step!r} must be a finite number > 0")
+    return repr(step)
+
+
+def _threads_text(worker_threads) -> str | None:
+    if worker_threads is None:
+        return None
+    if isinstance(worker_threads, bool) or int(worker_threads) != worker_threads or worker_threads < 0:
+        raise ValueError(f"worker_threads = {worker_threads!r} must be an integer >= 0")
+    return str(int(worker_threads))
+
+
+def libcosim_annotation(step: float, worker_threads: int | None = None) -> ET.Element:
+    """The ``ssc:Annotation`` element to append to ``ssd:DefaultExperiment/ssd:Annotations``
+    so that libcosim takes its fixed-step algorithm and communication step (``step``, s)
+    from the package, and ``CosimExecution.from_ssp_file(path)`` needs no ``step_size``.
+
+    ``worker_threads`` sets ``numWorkerThreads`` (0: libcosim steps the FMUs on the
+    calling thread; absent: ``hardware_concurrency - 1`` worker threads).
+
+    libcosim matches the prefixes literally (``ssd:``, ``ssc:``, ``osp:``); this module
+    registers ``osp`` for :data:`OSP_NS` with ElementTree, so serialising the whole
+    document writes ``xmlns:osp="..."`` on the root and ``osp:`` on these elements.
+    """
+    annotation = ET.Element(f"{{{NS['ssc']}}}Annotation", {"type": OSP_ANNOTATION})
+    algorithm = ET.SubElement(annotation, f"{{{OSP_NS}}}Algorithm")
+    attrs = {"baseStepSize": _step_text(step)}
+    threads = _threads_text(worker_threads)
+    if threads is not None:
+        attrs["numWorkerThreads"] = threads
+    ET.SubElement(algorithm, f"{{{OSP_NS}}}FixedStepAlgorithm", attrs)
+    return annotation
+
+
+def libcosim_annotation_xml(step: float, worker_threads: int | None = None) -> str:
+    """:func:`libcosim_annotation` as text; for ``step = 1e-3``::
+
+        <ssc:Annotation type="com.opensimulationplatform">
+          <osp:Algorithm>
+            <osp:FixedStepAlgorithm baseStepSize="0.001"/>
+          </osp:Algorithm>
+        </ssc:Annotation>
+
+    It goes into ``ssd:DefaultExperiment/ssd:Annotations``; an enclosing element (the
+    root) must declare ``xmlns:osp="http://opensimulationplatform.com/SSP/OSPAnnotations"``
+    and ``xmlns:ssc`` with exactly these prefixes.
+    """
+    threads = _threads_text(worker_threads)
+    attrs = f' numWorkerThreads="{threads}"' if threads is not None else ""
+    return (f'<ssc:Annotation type="{OSP_ANNOTATION}">\n'
+            f'  <osp:Algorithm>\n'
+            f'    <osp:FixedStepAlgorithm baseStepSize="{_step_text(step)}"{attrs}/>\n'
+            f'  </osp:Algorithm>\n'
+            f'</ssc:Annotation>')
 
 
 # --- reading back ---------------------------------------------------------------------------
@@ -384,6 +455,10 @@ def read_ssp_experiment(path) -> tuple:
             el = annotation.find(f"{{{_PARCOSIM_NS}}}CommunicationStep")
             if el is not None:
                 step = float(el.get("value"))
+        elif annotation.get("type") == OSP_ANNOTATION and step is None:
+            el = annotation.find(f"{{{OSP_NS}}}Algorithm/{{{OSP_NS}}}FixedStepAlgorithm")
+            if el is not None and el.get("baseStepSize") is not None:
+                step = float(el.get("baseStepSize"))
     return (float(start) if start is not None else None, float(stop) if stop is not None else None, step)
 
 

@@ -137,7 +137,14 @@ def test_export_ssp_command(tmp_path, built_fmus, capsys):
     path = tmp_path / "tcmdx.ssp"
     assert main(["export-ssp", "bench_circle_TCMDx", str(path), "--fmu-dir", str(fmu_dir)]) == 0
     names = zipfile.ZipFile(path).namelist()
-    assert "SystemStructure.ssd" in names and "resources/FiveBarPlant.fmu" in names
+    assert set(names) >= {"SystemStructure.ssd", "resources/control.fmu", "resources/plant.fmu"}
+    per_component = tmp_path / "per_component.ssp"
+    assert main(["export-ssp", "bench_circle_TCMDx", str(per_component), "--fmu-dir", str(fmu_dir),
+                 "--per-component"]) == 0
+    assert {"resources/ctrl.fmu", "resources/drive2.fmu"} <= set(zipfile.ZipFile(per_component).namelist())
+    loop = tmp_path / "loop.fmu"
+    assert main(["export-fmu", "thesis_sim_circle", str(loop)]) == 0
+    assert "modelDescription.xml" in zipfile.ZipFile(loop).namelist()
     assert main(["export-ssp", "no_such_scene", str(tmp_path / "x.ssp")]) == 2
     assert "unknown scene 'no_such_scene'" in capsys.readouterr().err
 
