@@ -153,14 +153,20 @@ class ChainCore:
     """The components of ``system`` stepped one sample ahead of a real plant, with the
     system's plant component as the model that predicts it (module docstring).
 
+    ``zero_start`` (default): the plant's first step [0, h] is commanded zero (0 V, or
+    0 N m), in the model and in the plant, and the controllers' first sample is that of h:
+    the same run whether the master passes the outputs after initialisation to the first
+    step (Ecos, libcosim) or zeros (fmpy's SSP runner).  False: the sample of t = 0
+    commands the first step, as in our master, in masters that pass those outputs.
+
     After :meth:`initialize` and after each :meth:`step` from t_k, :meth:`command` gives
     what the real plant is to apply over the next step [t_k+1, t_k+2] (the sample of
     t_k+1), and :meth:`recorded` the system's other signals at t_k+1 as the master
     records them.
     """
 
-    def __init__(self, system: System, plant: str = "plant"):
-        self.system, self.plant = system, plant
+    def __init__(self, system: System, plant: str = "plant", zero_start: bool = True):
+        self.system, self.plant, self.zero_start = system, plant, zero_start
         self.measured, self.commanded = chain_interface(system, plant)
         self.stepper = _in_process(system)
         self.model = self.stepper.instances[plant]
@@ -168,7 +174,11 @@ class ChainCore:
         self._row, self._snapshot, self._time = None, None, 0.0
 
     def initialize(self) -> None:
+        """Initialise the components and take the sample of t = 0; with ``zero_start`` the
+        plant's first step is commanded zero instead, in the model as in the plant."""
         self.stepper.initialize(0.0)
+        if self.zero_start:
+            self.model.slave.idle_steps = 1
         self._advance()
 
     def _advance(self) -> None:
@@ -198,6 +208,9 @@ class ChainCore:
         self._time = current_time + h
 
     def command(self) -> dict:
+        """What the plant is to apply over its next step."""
+        if self.zero_start and self._time == 0.0:     # the first step: what the model applied
+            return {name: 0.0 for name in self.commanded}
         return {name: self.stepper.value(signal) for name, signal in self.commanded.items()}
 
     def recorded(self) -> dict:

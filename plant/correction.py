@@ -30,9 +30,10 @@ from .parallel import mechanism_state
 CELL_MARGIN = 0.05
 #: A moved angle also moves its speed by this fraction of (the move / the step): a
 #: model that leaves its encoder cell is off in speed too, and without a speed correction
-#: it leaves the cell again at once.  Measured on 2 s of three bench scenes with a 0-100 g
-#: payload the model does not have (docs/ssp.md): tracking 1.00-1.35x the master's with
-#: gain 0, 0.99-1.08x with 0.1, 1.00-1.04x with 0.3, 0.99-1.04x with 0.6, 0.99-1.03x with 1.
+#: it leaves the cell again at once.  A moderate observer gain; measured on 2 s of three
+#: bench scenes with a 0, 40 and 100 g payload the model does not have (docs/ssp.md), RMS
+#: error against the master's with the same plant: gain 0: 1.00-1.35x, 0.1: 0.99-1.08x,
+#: 0.3: 0.99-1.05x, 1: 1.00-1.04x (twice the corrections).
 VELOCITY_GAIN = 0.3
 MEASURABLE = ("q1", "q2", "dq1", "dq2", "q1_enc", "q2_enc")
 

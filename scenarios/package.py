@@ -26,9 +26,12 @@ import tempfile
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from fmus.embedded import chain_interface
+import numpy as np
+
+from fmus.embedded import ChainCore, chain_interface
 from fmus.export import build_system_fmu
 from fmus.ssp import export_ssp
+from fmus.master import InProcessInstance
 from fmus.system import Component, Connection, System, split_signal
 
 from .scenes import Scene, drives_in_plant
@@ -109,3 +112,53 @@ def export_package(scene: Scene, path, fmu_dir=None) -> Path:
     with tempfile.TemporaryDirectory(prefix="parcosim_chain_") as tmp:
         chain = build_system_fmu("chain", package.chain, Path(tmp) / f"{CHAIN_MODEL}.fmu", plant=PLANT)
         return export_ssp(package.system, path, fmu_dir, fmus={CHAIN_MODEL: chain})
+
+
+@dataclass
+class PackageRun:
+    """A package run in process by :func:`run_jacobi`: the plant's end effector, the
+    reference, and the chain (its ``corrections``)."""
+
+    time: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    x_d: np.ndarray
+    y_d: np.ndarray
+    chain: ChainCore
+
+
+def run_jacobi(package: Package, plant_parameters: dict | None = None, zero_first_inputs: bool = False,
+               zero_start: bool = True) -> PackageRun:
+    """``package`` stepped as a Jacobi master steps it, in process: both instances read what
+    the other held at the step's start (what Ecos, libcosim and fmpy do with the FMUs).
+
+    ``plant_parameters`` change the real plant only (the chain keeps its model);
+    ``zero_first_inputs`` feeds the plant zeros on the first step, as fmpy's SSP runner
+    does; ``zero_start`` is the chain's (:class:`fmus.embedded.ChainCore`).
+    """
+    chain = ChainCore(package.chain, PLANT, zero_start=zero_start)
+    component = package.system.component(PLANT)
+    plant = InProcessInstance(component.model, PLANT)
+    measured = [split_signal(c.source)[1] for c in package.system.connections if c.source.startswith(f"{PLANT}.")]
+    commands = [split_signal(c.target)[1] for c in package.system.connections if c.target.startswith(f"{PLANT}.")]
+    plant.bind([plant.variables[n].vr for n in commands], [plant.variables[n].vr for n in measured + ["x", "y"]])
+    chain.initialize()
+    plant.initialize({**component.parameters, **(plant_parameters or {})}, 0.0)
+    h, rows, t = package.system.step, [], 0.0
+
+    def row():
+        outputs, recorded = plant.get_outputs(), chain.recorded()
+        rows.append((outputs[-2], outputs[-1], recorded["traj.x_d"], recorded["traj.y_d"]))
+
+    row()
+    for k in range(package.system.steps):
+        outputs = plant.get_outputs()
+        command = chain.command()
+        plant.set_inputs([0.0 if (zero_first_inputs and k == 0) else command[n] for n in commands])
+        plant.do_step(t, h)
+        chain.step(t, h, dict(zip(measured, outputs[:len(measured)])))
+        t += h
+        row()
+    plant.close()
+    x, y, x_d, y_d = np.array(rows).T
+    return PackageRun(np.arange(len(x)) * h, x, y, x_d, y_d, chain)

@@ -55,6 +55,7 @@ class ActuatedFiveBarPlant(GuardedSlave):
           "Both drives: 'current' (controller K(z) on i_ref, i_hat) or 'voltage' (v_ref applied)")
         d("T", "parameter", 1e-3, "Current-controller sample time [s]; in current mode the step must divide it")
         self.actuated = None
+        self.idle_steps = 0    # a model in a controller: steps with the drives at 0 V (ChainCore)
 
     def setup(self):
         refuse_absurd(T=self.T)
@@ -64,9 +65,14 @@ class ActuatedFiveBarPlant(GuardedSlave):
         self._publish()
 
     def step(self, current_time, step_size):
-        self.actuated.plant.time = current_time
-        self.actuated.step((self.i_ref1, self.i_ref2), (self.i_hat1, self.i_hat2), (self.v_ref1, self.v_ref2),
-                           step_size)
+        a = self.actuated
+        a.plant.time = current_time
+        if self.idle_steps:
+            a.plant.check_step(step_size)
+            a.advance([0.0] * len(a.drives), step_size)
+            self.idle_steps -= 1
+        else:
+            a.step((self.i_ref1, self.i_ref2), (self.i_hat1, self.i_hat2), (self.v_ref1, self.v_ref2), step_size)
         self._publish()
 
     def _publish(self):

@@ -38,12 +38,16 @@ class ControlChain(SystemSlave):
         for signal in self.recorded_signals():
             self.declare(signal, "output", 0.0, f"Recorded signal {signal}")
         self.declare("corrections", "output", 0, "Steps where the measurement corrected the model of the plant")
+        self.declare("zero_start", "parameter", True,
+                     "The plant's first step [0, h] is commanded zero, in every master (false: the sample of t = 0, "
+                     "as in parcosim's master, right only where the master passes the outputs after "
+                     "initialisation to the first step)")
 
     def recorded_signals(self):
         return tuple(s for s in self.system.record if not s.startswith(f"{self.plant}."))
 
     def build(self, system):
-        return ChainCore(system, self.plant)
+        return ChainCore(system, self.plant, zero_start=bool(self.zero_start))
 
     def step(self, current_time, step_size):
         self.core.step(current_time, step_size, {name: getattr(self, name) for name in self.measured})

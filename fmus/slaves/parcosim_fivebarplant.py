@@ -23,6 +23,7 @@ class FiveBarPlant(GuardedSlave):
         self.declare("tau2", "input", 0.0, "Torque on chain 2's base joint, CCW positive [N m]")
         declare_plant(self)
         self.sim = None
+        self.idle_steps = 0    # a model in a controller: steps with zero torques (ChainCore)
 
     def setup(self):
         self.sim = build_plant(self)
@@ -30,7 +31,11 @@ class FiveBarPlant(GuardedSlave):
 
     def step(self, current_time, step_size):
         self.sim.time = current_time
-        self.sim.step(self.tau1, self.tau2, step_size)
+        if self.idle_steps:
+            self.sim.step(0.0, 0.0, step_size)
+            self.idle_steps -= 1
+        else:
+            self.sim.step(self.tau1, self.tau2, step_size)
         publish_plant(self, self.sim)
 
     # --- a model of the plant inside a controller (fmus.embedded.ChainCore) -------------

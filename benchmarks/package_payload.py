@@ -1,0 +1,63 @@
+"""The package's chain against a plant unlike its model: a payload the model does not have.
+
+    python benchmarks/package_payload.py [--gains 0,0.1,0.3,1] [--stop-time 2]
+
+For three bench scenes and payloads of 0, 40 and 100 g on the real plant only, the package
+is run as a Jacobi master runs it (``scenarios.package.run_jacobi``, fmpy's zeros on the
+first step) and its RMS end-effector error over [1, stop] s is divided by our master's
+with the same loaded plant (whose controller does not know the payload either).  One row
+per speed gain of the measurement correction (``plant.correction.VELOCITY_GAIN``).
+Figures in docs/ssp.md.
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+
+import plant.correction as correction
+from fmus.master import simulate
+from scenarios.metrics import rms_norm
+from scenarios.package import package_scene, run_jacobi
+from scenarios.scenes import Fidelity, bench
+
+CASES = (("TCMDx", "circle"), ("PDq", "circle"), ("TCMDq", "triangle"))
+PAYLOADS = (0.0, 0.04, 0.1)
+
+
+def _short(scene, stop):
+    return dataclasses.replace(scene, system=dataclasses.replace(scene.system, stop_time=stop))
+
+
+def _tracking(time, x, y, x_d, y_d, stop):
+    w = (time >= 1.0 - 1e-9) & (time <= stop + 1e-9)
+    return rms_norm(x_d[w] - x[w], y_d[w] - y[w])
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--gains", default="0,0.1,0.3,1")
+    parser.add_argument("--stop-time", type=float, default=2.0)
+    args = parser.parse_args()
+    stop = args.stop_time
+    masters = {}
+    for strategy, kind in CASES:
+        for m0 in PAYLOADS:
+            r = simulate(_short(bench(strategy, kind, fidelity=Fidelity(m0=m0)), stop).system)
+            masters[strategy, kind, m0] = _tracking(r.time, r["plant.x"], r["plant.y"], r["traj.x_d"],
+                                                    r["traj.y_d"], stop)
+    print("gain | " + " | ".join(f"{s} {k} {1000 * m:.0f} g" for s, k in CASES for m in PAYLOADS) + " | range")
+    for gain in (float(g) for g in args.gains.split(",")):
+        correction.VELOCITY_GAIN = gain
+        ratios, cells = [], []
+        for strategy, kind in CASES:
+            package = package_scene(_short(bench(strategy, kind), stop))
+            for m0 in PAYLOADS:
+                run = run_jacobi(package, {"m0": m0}, zero_first_inputs=True)
+                ratio = _tracking(run.time, run.x, run.y, run.x_d, run.y_d, stop) / masters[strategy, kind, m0]
+                ratios.append(ratio)
+                cells.append(f"{ratio:.4f} ({run.chain.corrections})")
+        print(f"{gain:g} | " + " | ".join(cells) + f" | {min(ratios):.3f}-{max(ratios):.3f}")
+
+
+if __name__ == "__main__":
+    main()
