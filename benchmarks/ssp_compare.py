@@ -13,7 +13,8 @@ from pathlib import Path
 import numpy as np
 
 from fmus.master import simulate
-from fmus.ssp import ecos_available, export_ssp, simulate_ssp_ecos, simulate_ssp_fmpy
+from fmus.ssp import export_ssp
+from fmus.ssp_run import ecos_available, simulate_ssp_ecos, simulate_ssp_fmpy
 from scenarios.scenes import get_scene
 
 

@@ -48,8 +48,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .ssp import (NS, OSP_ANNOTATION, OSP_NS, SspRun, _threads_text, libcosim_annotation,
-                  read_ssp_experiment)
+from .ssp import NS, OSP_ANNOTATION, OSP_NS, _threads_text, libcosim_annotation, read_ssp_experiment
+from .ssp_run import SspRun
 from .system import split_signal
 
 NS_PER_S = 1_000_000_000
@@ -191,7 +191,7 @@ def simulate_ssp_libcosim(path, signals, stop_time=None, step_size=None, log_lev
                           worker_threads: int | None = 0, isolated: bool = False) -> SspRun:
     """Run an SSP package in libcosim and record ``signals`` (``"instance.variable"``,
     Real) after initialisation (t = 0) and after every step, like
-    :func:`fmus.ssp.simulate_ssp_ecos`.
+    :func:`fmus.ssp_run.simulate_ssp_ecos`.
 
     Parameters
     ----------

@@ -9,7 +9,7 @@ process, as the tool's documentation says (nothing but the ``.ssp``):
   ignores parameter bindings and feeds 0.0 to every input on the first step; its row
   labelled t holds the values at t + h);
 * Ecos: ``ecospy.EcosSimulation`` initialised with the parameter set the package
-  declares (``"parameters"``), :func:`fmus.ssp.simulate_ssp_ecos`;
+  declares (``"parameters"``), :func:`fmus.ssp_run.simulate_ssp_ecos`;
 * libcosim: ``CosimExecution.from_ssp_file(path)``, the step from the package's OSP
   annotation, :func:`fmus.libcosim_runner.simulate_ssp_libcosim`;
 
@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fmus.ssp import SspRun
+from fmus.ssp_run import SspRun
 
 from .metrics import scene_metrics
 from .package import export_package, package_scene
@@ -67,7 +67,7 @@ def run_tool(tool: str, path, signals, stop_time: float, step: float) -> SspRun:
         return SspRun(time=time[keep], signals={s: np.asarray(rows[s])[keep] for s in signals},
                       tool="fmpy", wall_s=wall)
     if tool == "ecos":
-        from fmus.ssp import simulate_ssp_ecos
+        from fmus.ssp_run import simulate_ssp_ecos
 
         return simulate_ssp_ecos(path, list(signals), stop_time=stop_time, step_size=step)
     if tool == "libcosim":

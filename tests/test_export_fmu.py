@@ -15,7 +15,8 @@ from fmpy.validation import validate_fmu
 
 from fmus.export import export_fmu
 from fmus.master import simulate
-from fmus.ssp import ecos_available, export_ssp, simulate_ssp_ecos
+from fmus.ssp import export_ssp
+from fmus.ssp_run import ecos_available, simulate_ssp_ecos
 from fmus.system import Component, System
 from scenarios.scenes import get_scene
 

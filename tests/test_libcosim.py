@@ -20,8 +20,8 @@ import pytest
 from fmus.libcosim_runner import (libcosim_available,
                                   read_libcosim_step, simulate_ssp_libcosim, with_libcosim_annotation)
 from fmus.master import simulate
-from fmus.ssp import (NS, OSP_ANNOTATION, OSP_NS, ecos_available, export_ssp, libcosim_annotation_xml,
-                      simulate_ssp_ecos)
+from fmus.ssp import NS, OSP_ANNOTATION, OSP_NS, export_ssp, libcosim_annotation_xml
+from fmus.ssp_run import ecos_available, simulate_ssp_ecos
 from fmus.system import Component, System
 from scenarios.scenes import get_scene
 

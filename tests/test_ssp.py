@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from fmus.master import simulate
-from fmus.ssp import (NS, PARAMETER_SET, ecos_available, export_ssp, read_ssp_experiment,
-                      read_ssp_parameters, simulate_ssp_ecos, simulate_ssp_fmpy)
+from fmus.ssp import NS, PARAMETER_SET, export_ssp, read_ssp_experiment, read_ssp_parameters
+from fmus.ssp_run import ecos_available, simulate_ssp_ecos, simulate_ssp_fmpy
 from fmus.system import Component, Connection, System
 from scenarios.scenes import drives_in_plant, get_scene
 

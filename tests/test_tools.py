@@ -14,7 +14,7 @@ import dataclasses
 
 import pytest
 
-from fmus.ssp import ecos_available
+from fmus.ssp_run import ecos_available
 from scenarios.scenes import get_scene
 from scenarios.tools import compare, short
 
