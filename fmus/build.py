@@ -20,8 +20,10 @@ ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_OUT = ROOT / "fmus" / "build"
 BUNDLED_PACKAGES = ("plant", "motor", "controller")
 #: The modules of ``fmus`` the slaves import (the rest is the importer's side).
-BUNDLED_FMUS_MODULES = ("guarded.py", "parts.py")
+BUNDLED_FMUS_MODULES = ("guarded.py", "fmustate.py", "parts.py")
 
+#: Every parcosim FMU can save, restore and serialise its whole state (:mod:`fmus.fmustate`).
+STATE_OPTIONS = {"canGetAndSetFMUstate": "true", "canSerializeFMUstate": "true"}
 
 
 def stage_sources(tmp: Path, fmus_modules=BUNDLED_FMUS_MODULES, slaves: bool = False) -> list[Path]:
@@ -59,7 +61,7 @@ def build_fmu(model: str, out_dir: Path = DEFAULT_OUT) -> Path:
         staged_script = tmp / script.name
         shutil.copy2(script, staged_script)
         fmu = FmuBuilder.build_FMU(staged_script, dest=out_dir, project_files=project_files,
-                                   canHandleVariableCommunicationStepSize="true")
+                                   canHandleVariableCommunicationStepSize="true", **STATE_OPTIONS)
     fix_model_structure(fmu, getattr(slave_class, "feedthrough", {}))
     return Path(fmu)
 

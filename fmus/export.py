@@ -20,7 +20,7 @@ import zipfile
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
-from .build import ROOT, stage_sources
+from .build import ROOT, STATE_OPTIONS, stage_sources
 from .embedded import SYSTEM_FILE, system_to_dict
 from .guarded import START_VALUES_FILE
 from .modeldescription import fix_model_structure
@@ -64,7 +64,7 @@ def build_system_fmu(role: str, system: System, path, plant: str = "plant") -> P
         # The loop takes any whole number of its steps per doStep; the chain exactly one.
         variable = "true" if role == "loop" else "false"
         fmu = FmuBuilder.build_FMU(script, dest=path, project_files=staged + [spec],
-                                   canHandleVariableCommunicationStepSize=variable)
+                                   canHandleVariableCommunicationStepSize=variable, **STATE_OPTIONS)
     fix_model_structure(fmu, {})
     return Path(fmu)
 

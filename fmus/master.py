@@ -208,6 +208,22 @@ class _FmuInstance:
         message = self.messages[-1] if self.messages else ""
         return message[len(self.name) + 2:] if message.startswith(f"{self.name}: ") else message
 
+    def get_state(self):
+        """The FMU's ``fmi2GetFMUstate`` (free it with :meth:`free_state`)."""
+        return self._fmu.getFMUstate()
+
+    def set_state(self, state) -> None:
+        self._fmu.setFMUstate(state)
+
+    def free_state(self, state) -> None:
+        self._fmu.freeFMUstate(state)
+
+    def serialize_state(self, state) -> bytes:
+        return bytes(self._fmu.serializeFMUstate(state))
+
+    def deserialize_state(self, data: bytes):
+        return self._fmu.deSerializeFMUstate(data)
+
     def close(self) -> None:
         try:
             self._fmu.terminate()
@@ -271,6 +287,25 @@ class InProcessInstance:
             raise CoSimulationError(self.name, t, str(exc)) from None
         if ok is False:
             raise CoSimulationError(self.name, t, getattr(self.slave, "error", "") or "do_step refused")
+
+    def get_state(self) -> dict:
+        """An independent copy of the slave's state (its ``fmi2GetFMUstate``)."""
+        return self.slave._get_fmu_state()
+
+    def set_state(self, state: dict) -> None:
+        """Go back to ``state`` (its ``fmi2SetFMUstate``; the state stays valid)."""
+        self.slave._set_fmu_state(state)
+
+    def free_state(self, state) -> None:
+        """Nothing to free: a state in process is a Python object."""
+
+    def serialize_state(self, state) -> bytes:
+        """``state`` as the bytes of ``fmi2SerializeFMUstate``."""
+        return self.slave._fmu_state_to_bytes(state)
+
+    def deserialize_state(self, data: bytes):
+        """The state of ``fmi2DeSerializeFMUstate`` (set it with :meth:`set_state`)."""
+        return self.slave._fmu_state_from_bytes(data)
 
     def close(self) -> None:
         self.slave.terminate()

@@ -34,7 +34,7 @@ class Stepper:
     instances : dict
         Instance name -> back-end instance (``fmus.master.InProcessInstance`` or an FMU
         instance): ``variables``, ``bind``, ``initialize``, ``set_inputs``,
-        ``get_outputs``, ``do_step``.
+        ``get_outputs``, ``do_step``; ``get_state``, ``set_state`` for :meth:`state`.
     order : sequence of str
         The stepping order (Gauss-Seidel) or the listing order (Jacobi).
     jacobi : bool
@@ -91,6 +91,19 @@ class Stepper:
         values = self.values
         for i, v in zip(out_slots, inst.get_outputs()):
             values[i] = v
+
+    def state(self) -> dict:
+        """A snapshot of the run: time, the signals' values and each instance's state
+        (``inst.get_state()``); :meth:`restore` goes back to it."""
+        return {"time": self.time, "values": list(self.values),
+                "instances": {name: inst.get_state() for name, inst in self.instances.items()}}
+
+    def restore(self, state: dict) -> None:
+        """Go back to ``state`` (of :meth:`state`; it can be restored again)."""
+        for name, inst in self.instances.items():
+            inst.set_state(state["instances"][name])
+        self.values[:] = state["values"]
+        self.time = state["time"]
 
     def row(self) -> list:
         """The recorded signals' present values, in ``system.record`` order."""
