@@ -44,7 +44,8 @@ import ctypes
 import importlib
 import operator
 import time as _time
-from dataclasses import dataclass, field
+import warnings
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -124,8 +125,31 @@ def _set_parameters(variables: dict, parameters: dict, setters: dict) -> None:
         setters[variable.type]([variable.vr], [_CONVERT[variable.type](value)])
 
 
+#: ctypes of the FMI 2.0 types a connection can carry (fmi2Boolean is an int).
+_CTYPES = {"Real": ctypes.c_double, "Integer": ctypes.c_int, "Boolean": ctypes.c_int}
+
+
+class _Batch:
+    """The value references of some variables, grouped by type, with preallocated ctypes
+    arrays: one FMI call per type moves all their values (in the variables' order)."""
+
+    def __init__(self, variables: list, dll, verb: str):
+        self.n = len(variables)
+        self.groups = []
+        for kind in _CTYPES:
+            positions = [k for k, v in enumerate(variables) if v.type == kind]
+            if positions:
+                vrs = (ctypes.c_uint * len(positions))(*[variables[k].vr for k in positions])
+                values = (_CTYPES[kind] * len(positions))()
+                self.groups.append((getattr(dll, f"fmi2{verb}{kind}"), vrs, values, len(positions), positions,
+                                    _CONVERT[kind]))
+        # All Real, in order (every parcosim FMU): no regrouping on the step's path.
+        self.plain = len(self.groups) == 1 and self.groups[0][4] == list(range(self.n)) and \
+            self.groups[0][5] is float
+
+
 class _FmuInstance:
-    """One FMU instance through fmpy, with batched Real I/O."""
+    """One FMU instance through fmpy, with batched I/O (one call per type and direction)."""
 
     _extracted: dict = {}
 
@@ -134,14 +158,19 @@ class _FmuInstance:
         from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
                                fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
 
+        path = Path(path)
         key = (str(path), path.stat().st_mtime_ns)
         if key not in self._extracted:
             md = read_model_description(str(path))
+            if md.fmiVersion != "2.0" or md.coSimulation is None:
+                raise ValueError(f"component {name}: {path} is not an FMI 2.0 co-simulation FMU "
+                                 f"(fmiVersion {md.fmiVersion})")
             self._extracted[key] = (md, extract(str(path)))
         md, directory = self._extracted[key]
-        self.name = name
+        self.name, self.path = name, path
         self.variables = _variables_from_model_description(md)
         self.messages = []
+        self._start_time = 0.0
         self._fmu = FMU2Slave(guid=md.guid, unzipDirectory=directory,
                               modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
         # The callbacks must stay referenced for the instance's lifetime.
@@ -151,42 +180,66 @@ class _FmuInstance:
         self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
         self._fmu.instantiate(callbacks=self._callbacks, loggingOn=True)
         self._component = self._fmu.component
-        self._set_real = self._fmu.dll.fmi2SetReal
-        self._get_real = self._fmu.dll.fmi2GetReal
         self._do_step = self._fmu.dll.fmi2DoStep
 
     def _log(self, component, instance, status, category, message):
         self.messages.append(message.decode(errors="replace") if isinstance(message, bytes) else str(message))
 
-    def initialize(self, parameters: dict, start_time: float) -> None:
+    def enter_initialization(self, parameters: dict, start_time: float) -> None:
+        """Set up the experiment, enter initialisation mode and set ``parameters``."""
         from fmpy.fmi1 import FMICallException
 
         fmu = self._fmu
+        self._start_time = start_time
         try:
             fmu.setupExperiment(startTime=start_time)
             fmu.enterInitializationMode()
             _set_parameters(self.variables, parameters, {"Real": fmu.setReal, "Integer": fmu.setInteger,
                                                          "Boolean": fmu.setBoolean, "String": fmu.setString})
-            fmu.exitInitializationMode()
         except FMICallException:
             raise CoSimulationError(self.name, start_time, self._last_message() or "initialisation failed") from None
 
+    def exit_initialization(self) -> None:
+        from fmpy.fmi1 import FMICallException
+
+        try:
+            self._fmu.exitInitializationMode()
+        except FMICallException:
+            raise CoSimulationError(self.name, self._start_time,
+                                    self._last_message() or "initialisation failed") from None
+
+    def initialize(self, parameters: dict, start_time: float) -> None:
+        """Initialise with ``parameters`` and no inputs set."""
+        self.enter_initialization(parameters, start_time)
+        self.exit_initialization()
+
     def bind(self, inputs: list, outputs: list) -> None:
-        self._in_vr = (ctypes.c_uint * len(inputs))(*inputs)
-        self._in_val = (ctypes.c_double * len(inputs))()
-        self._n_in = len(inputs)
-        self._out_vr = (ctypes.c_uint * len(outputs))(*outputs)
-        self._out_val = (ctypes.c_double * len(outputs))()
-        self._n_out = len(outputs)
+        """The :class:`Variable` lists that :meth:`set_inputs` and :meth:`get_outputs` move."""
+        self._inputs = _Batch(inputs, self._fmu.dll, "Set")
+        self._outputs = _Batch(outputs, self._fmu.dll, "Get")
 
     def set_inputs(self, values: list) -> None:
-        self._in_val[:] = values
-        if self._set_real(self._component, self._in_vr, self._n_in, self._in_val) > 1:
-            raise CoSimulationError(self.name, float("nan"), self._last_message() or "fmi2SetReal failed")
+        batch = self._inputs
+        for setter, vrs, array, n, positions, convert in batch.groups:
+            if batch.plain:
+                array[:] = values
+            else:
+                array[:] = [convert(values[k]) for k in positions]
+            if setter(self._component, vrs, n, array) > 1:
+                raise CoSimulationError(self.name, float("nan"), self._last_message() or "setting inputs failed")
 
     def get_outputs(self) -> list:
-        self._get_real(self._component, self._out_vr, self._n_out, self._out_val)
-        return self._out_val[:]
+        batch = self._outputs
+        if batch.plain:
+            getter, vrs, array, n, _, _ = batch.groups[0]
+            getter(self._component, vrs, n, array)
+            return array[:]
+        values = [None] * batch.n
+        for getter, vrs, array, n, positions, convert in batch.groups:
+            getter(self._component, vrs, n, array)
+            for k, value in zip(positions, array):
+                values[k] = convert(value)
+        return values
 
     def do_step(self, t: float, h: float) -> None:
         if self._do_step(self._component, t, h, 1) > 1:
@@ -248,34 +301,50 @@ class InProcessInstance:
         self.slave = cls(instance_name=name)
         self.variables = slave_variables(self.slave)
 
-    def initialize(self, parameters: dict, start_time: float) -> None:
+    def enter_initialization(self, parameters: dict, start_time: float) -> None:
+        """Set up the experiment, enter initialisation mode and set ``parameters``."""
         slave = self.slave
+        self._start_time = start_time
         try:
             slave.setup_experiment(start_time, None, None)
             slave.enter_initialization_mode()
             _set_parameters(self.variables, parameters, {"Real": slave.set_real, "Integer": slave.set_integer,
                                                          "Boolean": slave.set_boolean, "String": slave.set_string})
-            slave.exit_initialization_mode()
         except Exception as exc:  # noqa: BLE001 - as an importer sees an FMU's fatal error
             raise CoSimulationError(self.name, start_time, str(exc)) from None
 
+    def exit_initialization(self) -> None:
+        try:
+            self.slave.exit_initialization_mode()
+        except Exception as exc:  # noqa: BLE001
+            raise CoSimulationError(self.name, self._start_time, str(exc)) from None
+
+    def initialize(self, parameters: dict, start_time: float) -> None:
+        """Initialise with ``parameters`` and no inputs set."""
+        self.enter_initialization(parameters, start_time)
+        self.exit_initialization()
+
     def bind(self, inputs: list, outputs: list) -> None:
-        # What the slave's set_real/get_real do for Real variables, with the names looked up
-        # once: attributes set to the values, outputs read back as Python floats.
-        names = {v.vr: v.name for v in self.variables.values() if v.type == "Real"}
-        self._input_names = [names[vr] for vr in inputs]
-        getter = operator.attrgetter(*[names[vr] for vr in outputs]) if outputs else None
-        if len(outputs) == 1:
-            self._read = lambda slave: [float(getter(slave))]
-        elif outputs:
+        """The :class:`Variable` lists that :meth:`set_inputs` and :meth:`get_outputs` move."""
+        # What the slave's setters and getters do, with the names looked up once:
+        # attributes set to the values, outputs read back as Python values of their type.
+        self._inputs = [(v.name, _CONVERT[v.type]) for v in inputs]
+        converters = [_CONVERT[v.type] for v in outputs]
+        getter = operator.attrgetter(*[v.name for v in outputs]) if outputs else None
+        if not outputs:
+            self._read = lambda slave: []
+        elif len(outputs) == 1:
+            convert = converters[0]
+            self._read = lambda slave: [convert(getter(slave))]
+        elif all(c is float for c in converters):
             self._read = lambda slave: [float(v) for v in getter(slave)]
         else:
-            self._read = lambda slave: []
+            self._read = lambda slave: [c(v) for c, v in zip(converters, getter(slave))]
 
     def set_inputs(self, values: list) -> None:
         slave = self.slave
-        for name, value in zip(self._input_names, values):
-            setattr(slave, name, value)
+        for (name, convert), value in zip(self._inputs, values):
+            setattr(slave, name, convert(value))
 
     def get_outputs(self) -> list:
         return self._read(self.slave)
@@ -312,11 +381,16 @@ class InProcessInstance:
 
 
 def _variables_from_model_description(md) -> dict:
+    """Name -> :class:`Variable` of an FMU's model description.  An output whose
+    ``ModelStructure`` entry has no ``dependencies`` attribute, or that has no entry, depends
+    on every input (FMI 2.0 §2.2.8); ``dependencies=""`` means on none."""
+    inputs = tuple(v.name for v in md.modelVariables if v.causality == "input")
     dependencies = {}
     for unknown in md.outputs:
-        dependencies[unknown.variable.name] = tuple(v.name for v in (unknown.dependencies or ()))
+        listed = unknown.dependencies
+        dependencies[unknown.variable.name] = inputs if listed is None else tuple(v.name for v in listed)
     return {v.name: Variable(v.name, v.valueReference, v.type, v.causality, v.variability,
-                             dependencies.get(v.name, ()))
+                             dependencies.get(v.name, inputs) if v.causality == "output" else ())
             for v in md.modelVariables}
 
 
@@ -415,14 +489,46 @@ def _check_hard_loops(names, hard, hard_edges):
 # --- running -----------------------------------------------------------------------------
 
 def _instantiate(system: System, mode: str, fmu_dir):
+    """Instance name -> back-end instance: our components in process or as our built FMUs
+    (by ``mode``), components given as an FMU file through fmpy in either mode."""
+    from .foreign import is_fmu_file
+
+    if mode not in MODES:
+        raise ValueError(f"mode = {mode!r}; valid: {', '.join(MODES)}")
+    ours = [c for c in system.components if not is_fmu_file(c.model)]
+    for c in system.components:
+        if is_fmu_file(c.model) and not Path(c.model).is_file():
+            raise ValueError(f"component {c.name}: no FMU file {c.model}")
+    paths = {}
     if mode == "fmu":
         from .build import ensure_built
 
-        paths = ensure_built(sorted({c.model for c in system.components}), fmu_dir)
-        return {c.name: _FmuInstance(paths[c.model], c.name) for c in system.components}
-    if mode == "inprocess":
-        return {c.name: InProcessInstance(c.model, c.name) for c in system.components}
-    raise ValueError(f"mode = {mode!r}; valid: {', '.join(MODES)}")
+        paths = ensure_built(sorted({c.model for c in ours}), fmu_dir)
+    instances = {}
+    try:
+        for c in system.components:
+            if is_fmu_file(c.model):
+                instances[c.name] = _FmuInstance(Path(c.model), c.name)
+            elif mode == "fmu":
+                instances[c.name] = _FmuInstance(paths[c.model], c.name)
+            else:
+                instances[c.name] = InProcessInstance(c.model, c.name)
+    except BaseException:
+        _close(instances)
+        raise
+    return instances
+
+
+def _close(instances: dict) -> None:
+    for inst in instances.values():
+        try:
+            inst.close()
+        except Exception:  # noqa: BLE001 - closing must not hide the run's outcome
+            pass
+
+
+#: Types a connection can carry (and a recorded signal can have).
+CONNECTABLE = ("Real", "Integer", "Boolean")
 
 
 def _check_signals(system: System, instances: dict) -> None:
@@ -430,17 +536,23 @@ def _check_signals(system: System, instances: dict) -> None:
         instance, name = split_signal(signal)
         variables = instances[instance].variables
         if name not in variables:
-            raise ValueError(f"{signal}: {system.component(instance).model} has no variable {name!r}")
+            model = system.component(instance).model
+            listing = ", ".join(v.name for v in variables.values() if v.causality in causalities)
+            raise ValueError(f"{signal}: {model} has no variable {name!r}; its {' and '.join(causalities)} "
+                             f"variables: {listing}")
         v = variables[name]
         if v.causality not in causalities:
             raise ValueError(f"{signal} is a {v.causality}, expected {' or '.join(causalities)}")
-        if v.type != "Real":
-            raise ValueError(f"{signal} is {v.type}; only Real signals can be connected or recorded")
+        if v.type not in CONNECTABLE:
+            raise ValueError(f"{signal} is {v.type}; only {', '.join(CONNECTABLE)} signals can be connected "
+                             "or recorded")
         return v
 
     for conn in system.connections:
-        variable(conn.source, ("output",))
-        variable(conn.target, ("input",))
+        source, target = variable(conn.source, ("output",)), variable(conn.target, ("input",))
+        if source.type != target.type:
+            raise ValueError(f"{conn.source} ({source.type}) -> {conn.target} ({target.type}): a connection "
+                             "joins variables of one type")
     for signal in system.record:
         variable(signal, ("output", "input", "local"))
     for c in system.components:
@@ -448,6 +560,27 @@ def _check_signals(system: System, instances: dict) -> None:
             v = instances[c.name].variables.get(name)
             if v is None or v.causality not in ("parameter", "input"):
                 raise ValueError(f"component {c.name}: {c.model} has no parameter {name!r}")
+
+
+def _foreign_parameters_kept(system: System, instances: dict) -> System:
+    """``system`` without the parameters that its FMU-file components do not have (a scene
+    written for our model sets ``torque_output``, ``J_design`` ...), with one warning
+    that lists them."""
+    from .foreign import is_fmu_file
+
+    skipped, components = [], []
+    for c in system.components:
+        if is_fmu_file(c.model):
+            variables = instances[c.name].variables
+            missing = [n for n in c.parameters if n not in variables]
+            if missing:
+                skipped.append(f"{c.name} ({Path(c.model).name}): {', '.join(missing)}")
+                c = replace(c, parameters={n: v for n, v in c.parameters.items() if n not in missing})
+        components.append(c)
+    if not skipped:
+        return system
+    warnings.warn("parameters the foreign FMUs do not have are skipped: " + "; ".join(skipped), stacklevel=3)
+    return replace(system, components=tuple(components))
 
 
 def simulate(system: System, mode: str = "inprocess", coupling: str = "gauss-seidel",
@@ -477,17 +610,14 @@ def simulate(system: System, mode: str = "inprocess", coupling: str = "gauss-sei
     instances = _instantiate(system, mode, fmu_dir)
     loading_s = _time.perf_counter() - loading
     try:
+        system = _foreign_parameters_kept(system, instances)
         _check_signals(system, instances)
         variables = {n: inst.variables for n, inst in instances.items()}
         order = (stepping_order(system, variables) if coupling == "gauss-seidel"
                  else tuple(c.name for c in system.components))
         return _run(system, instances, order, mode, coupling, progress, loading_s)
     finally:
-        for inst in instances.values():
-            try:
-                inst.close()
-            except Exception:  # noqa: BLE001 - closing must not hide the run's outcome
-                pass
+        _close(instances)
 
 
 def _run(system, instances, order, mode, coupling, progress, loading_s=0.0) -> Result:

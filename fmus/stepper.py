@@ -56,13 +56,12 @@ class Stepper:
         plan = []
         for name in self.order:
             inst = instances[name]
-            in_vrs = [inst.variables[split_signal(c.target)[1]].vr for c in feeds[name]]
+            in_vars = [inst.variables[split_signal(c.target)[1]] for c in feeds[name]]
             in_slots = [self._slot(c.source) for c in feeds[name]]
             produced = [s for s in sources + list(system.record)
                         if split_signal(s)[0] == name and inst.variables[split_signal(s)[1]].causality == "output"]
             produced = list(dict.fromkeys(produced))
-            out_vrs = [inst.variables[split_signal(s)[1]].vr for s in produced]
-            inst.bind(in_vrs, out_vrs)
+            inst.bind(in_vars, [inst.variables[split_signal(s)[1]] for s in produced])
             plan.append((inst, in_slots, [self._slot(s) for s in produced], system.component(name).substeps))
         record_inputs = [s for s in system.record if s not in self.slots]
         if record_inputs:
@@ -77,12 +76,45 @@ class Stepper:
         return self.slots.setdefault(signal, len(self.slots))
 
     def initialize(self, start_time: float = 0.0) -> None:
-        """Initialise every instance with its component's parameters, then read the outputs."""
+        """Initialise every instance with its component's parameters and its connected inputs.
+
+        All instances enter initialisation mode and get their parameters; then, in the
+        order of :meth:`initialization_order`, each gets its connected inputs (from the
+        outputs its sources hold: after their initialisation for sources that left it, their
+        values in initialisation mode for the others), leaves initialisation mode, and its
+        outputs are read.  So the t = 0 row is consistent: an output that depends on an input
+        was computed from the connected value, not from the input's start value.
+        """
         for c in self.system.components:
-            self.instances[c.name].initialize(c.parameters, start_time)
+            self.instances[c.name].enter_initialization(c.parameters, start_time)
         self.time = start_time
         for inst, _, out_slots, _ in self.plan:
             self.refresh(inst, out_slots)
+        values = self.values
+        for inst, in_slots, out_slots, _ in self.initialization_order():
+            if in_slots:
+                inst.set_inputs([values[i] for i in in_slots])
+            inst.exit_initialization()
+            self.refresh(inst, out_slots)
+
+    def initialization_order(self) -> list:
+        """The plan's entries in the order instances leave initialisation mode: every
+        source before its readers where the connections allow it; in a loop, the first
+        instance in the stepping order (which keeps every sampled or feedthrough source
+        before its readers) goes first."""
+        sources = {name: set() for name in self.order}
+        for conn in self.system.connections:
+            src, dst = split_signal(conn.source)[0], split_signal(conn.target)[0]
+            if src != dst:
+                sources[dst].add(src)
+        entries = dict(zip(self.order, self.plan))
+        placed, order = set(), []
+        while len(order) < len(self.order):
+            waiting = [name for name in self.order if name not in placed]
+            name = next((n for n in waiting if sources[n] <= placed), waiting[0])
+            placed.add(name)
+            order.append(entries[name])
+        return order
 
     def refresh(self, inst, out_slots=None) -> None:
         """Read ``inst``'s outputs into the values again (after its state was changed)."""

@@ -99,8 +99,8 @@ def system_fmus(tmp_path_factory):
 def _bind_all(inst):
     """Bind every Real input and output; return the inputs' names."""
     inputs = [v for v in inst.variables.values() if v.causality == "input" and v.type == "Real"]
-    outputs = [v.vr for v in inst.variables.values() if v.causality == "output" and v.type == "Real"]
-    inst.bind([v.vr for v in inputs], outputs)
+    outputs = [v for v in inst.variables.values() if v.causality == "output" and v.type == "Real"]
+    inst.bind(inputs, outputs)
     return [v.name for v in inputs]
 
 
@@ -176,7 +176,7 @@ def test_restoring_a_state_taken_before_a_refused_step_clears_the_refusal(backen
             "fmu": lambda: _FmuInstance(built_fmus["FiveBarPlant"], "plant")}[backend]
     inst = make()
     variables = inst.variables
-    inst.bind([variables["tau1"].vr, variables["tau2"].vr], [variables["x"].vr, variables["y"].vr])
+    inst.bind([variables["tau1"], variables["tau2"]], [variables["x"], variables["y"]])
     inst.initialize({}, 0.0)
     inst.set_inputs([0.01, -0.02])
     inst.do_step(0.0, 1e-3)

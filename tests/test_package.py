@@ -37,7 +37,7 @@ def jacobi_package_run(package, plant_parameters=None, zero_first_inputs=False, 
     plant = InProcessInstance(component.model, PLANT)
     measured = [c.source.split(".")[1] for c in package.system.connections if c.source.startswith(f"{PLANT}.")]
     commands = [c.target.split(".")[1] for c in package.system.connections if c.target.startswith(f"{PLANT}.")]
-    plant.bind([plant.variables[n].vr for n in commands], [plant.variables[n].vr for n in measured + ["x", "y"]])
+    plant.bind([plant.variables[n] for n in commands], [plant.variables[n] for n in measured + ["x", "y"]])
     chain.initialize()
     plant.initialize({**component.parameters, **(plant_parameters or {})}, 0.0)
     h, rows, t = package.system.step, [], 0.0
