@@ -48,10 +48,11 @@ def build_system_fmu(role: str, system: System, path, plant: str = "plant") -> P
     path = Path(path)
     if path.suffix.lower() != ".fmu":
         raise ValueError(f"{path}: an FMU file must end in '.fmu'")
-    foreign = [c.model for c in system.components if c.model not in SLAVES]
+    foreign = [f"{c.name} ({c.model})" for c in system.components if c.model not in SLAVES]
     if foreign:
-        raise ValueError(f"cannot put {foreign} inside one FMU: only parcosim models ({', '.join(SLAVES)}) run "
-                         "in process")
+        raise ValueError(f"cannot put {', '.join(foreign)} inside one FMU: it runs its components in process, "
+                         f"and only parcosim models ({', '.join(SLAVES)}) can; run the scene with parcosim run "
+                         "--replace, or export it with parcosim export-ssp --per-component --replace")
     module, _ = ROLES[role]
     path.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="parcosim_system_") as tmp:

@@ -22,11 +22,19 @@ def is_fmu_file(model) -> bool:
     return str(model).lower().endswith(".fmu")
 
 
+#: What every FMU parcosim built before the mark existed holds: the slave base.
+_LEGACY = "resources/fmus/guarded.py"
+
+
 def built_by_parcosim(path, model: str) -> bool:
-    """True when ``path`` is an FMU that ``parcosim build`` made for ``model``."""
+    """True when ``path`` is an FMU that ``parcosim build`` made for ``model``: it carries
+    the mark (or, built before the mark, the slave base and the model's name)."""
     try:
         with zipfile.ZipFile(path) as z:
-            return json.loads(z.read(MARK)).get("model") == model
+            names = set(z.namelist())
+            if MARK in names:
+                return json.loads(z.read(MARK)).get("model") == model
+            return _LEGACY in names and f'modelName="{model}"'.encode() in z.read("modelDescription.xml")
     except (KeyError, OSError, ValueError, zipfile.BadZipFile):
         return False
 
@@ -66,8 +74,30 @@ def replace_components(system, replacements: dict):
     return replace(system, components=components)
 
 
-def model_identifier(path) -> str:
-    """The co-simulation model identifier of the FMU at ``path``."""
+def named_models(system):
+    """``system`` with each FMU-file component's model replaced by its FMU's model
+    identifier, and identifier -> file: the ``system`` and ``fmus`` arguments of
+    :func:`fmus.ssp.export_ssp`, which carries the files into the package.
+
+    Raises
+    ------
+    ValueError
+        Two different files with one model identifier.
+    """
     from fmpy import read_model_description
 
-    return read_model_description(str(path), validate=False).coSimulation.modelIdentifier
+    fmus, components = {}, []
+    for c in system.components:
+        if is_fmu_file(c.model):
+            identifier = read_model_description(c.model, validate=False).coSimulation.modelIdentifier
+            if fmus.setdefault(identifier, c.model) != c.model:
+                raise ValueError(f"component {c.name}: {c.model} and {fmus[identifier]} are both model "
+                                 f"{identifier!r}; an SSP package names each model's FMU once")
+            c = replace(c, model=identifier)
+        components.append(c)
+    return replace(system, components=tuple(components)), fmus
+
+
+def foreign_components(system) -> list:
+    """``"instance (path)"`` for each component of ``system`` given as an FMU file."""
+    return [f"{c.name} ({c.model})" for c in system.components if is_fmu_file(c.model)]
