@@ -9,6 +9,7 @@ file it did not make and ``--mode fmu`` never loads a foreign file in place of o
 from __future__ import annotations
 
 import json
+import warnings
 import zipfile
 from dataclasses import replace
 from pathlib import Path
@@ -74,10 +75,32 @@ def replace_components(system, replacements: dict):
     return replace(system, components=components)
 
 
+def without_missing_parameters(system, variables: dict) -> tuple:
+    """``system`` without the parameters that its FMU-file components do not have (a scene
+    written for our drive sets ``method``, ``J_design`` ...), and one line that lists them
+    ("" when none is missing).
+
+    ``variables``: instance name -> the names of its FMU's variables.
+    """
+    skipped, components = [], []
+    for c in system.components:
+        missing = [n for n in c.parameters if n not in variables[c.name]] if is_fmu_file(c.model) else []
+        if missing:
+            skipped.append(f"{c.name} ({Path(c.model).name}): {', '.join(missing)}")
+            c = replace(c, parameters={n: v for n, v in c.parameters.items() if n not in missing})
+        components.append(c)
+    if not skipped:
+        return system, ""
+    return (replace(system, components=tuple(components)),
+            "parameters the foreign FMUs do not have are skipped: " + "; ".join(skipped))
+
+
 def named_models(system):
     """``system`` with each FMU-file component's model replaced by its FMU's model
     identifier, and identifier -> file: the ``system`` and ``fmus`` arguments of
     :func:`fmus.ssp.export_ssp`, which carries the files into the package.
+
+    Parameters the FMU does not have are left out, with one warning that lists them.
 
     Raises
     ------
@@ -86,10 +109,17 @@ def named_models(system):
     """
     from fmpy import read_model_description
 
+    descriptions = {c.model: read_model_description(c.model, validate=False)
+                    for c in system.components if is_fmu_file(c.model)}
+    system, skipped = without_missing_parameters(system, {
+        c.name: {v.name for v in descriptions[c.model].modelVariables} if c.model in descriptions else set()
+        for c in system.components})
+    if skipped:
+        warnings.warn(skipped, stacklevel=2)
     fmus, components = {}, []
     for c in system.components:
         if is_fmu_file(c.model):
-            identifier = read_model_description(c.model, validate=False).coSimulation.modelIdentifier
+            identifier = descriptions[c.model].coSimulation.modelIdentifier
             if fmus.setdefault(identifier, c.model) != c.model:
                 raise ValueError(f"component {c.name}: {c.model} and {fmus[identifier]} are both model "
                                  f"{identifier!r}; an SSP package names each model's FMU once")

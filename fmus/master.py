@@ -537,9 +537,11 @@ def _check_signals(system: System, instances: dict) -> None:
         variables = instances[instance].variables
         if name not in variables:
             model = system.component(instance).model
-            listing = ", ".join(v.name for v in variables.values() if v.causality in causalities)
-            raise ValueError(f"{signal}: {model} has no variable {name!r}; its {' and '.join(causalities)} "
-                             f"variables: {listing}")
+            kinds = {}
+            for v in variables.values():
+                kinds.setdefault(v.causality, []).append(v.name)
+            listing = "; ".join(f"{kind} {', '.join(names)}" for kind, names in kinds.items())
+            raise ValueError(f"{signal}: {model} has no variable {name!r}; its variables: {listing}")
         v = variables[name]
         if v.causality not in causalities:
             raise ValueError(f"{signal} is a {v.causality}, expected {' or '.join(causalities)}")
@@ -560,27 +562,6 @@ def _check_signals(system: System, instances: dict) -> None:
             v = instances[c.name].variables.get(name)
             if v is None or v.causality not in ("parameter", "input"):
                 raise ValueError(f"component {c.name}: {c.model} has no parameter {name!r}")
-
-
-def _foreign_parameters_kept(system: System, instances: dict) -> System:
-    """``system`` without the parameters that its FMU-file components do not have (a scene
-    written for our model sets ``torque_output``, ``J_design`` ...), with one warning
-    that lists them."""
-    from .foreign import is_fmu_file
-
-    skipped, components = [], []
-    for c in system.components:
-        if is_fmu_file(c.model):
-            variables = instances[c.name].variables
-            missing = [n for n in c.parameters if n not in variables]
-            if missing:
-                skipped.append(f"{c.name} ({Path(c.model).name}): {', '.join(missing)}")
-                c = replace(c, parameters={n: v for n, v in c.parameters.items() if n not in missing})
-        components.append(c)
-    if not skipped:
-        return system
-    warnings.warn("parameters the foreign FMUs do not have are skipped: " + "; ".join(skipped), stacklevel=3)
-    return replace(system, components=tuple(components))
 
 
 def simulate(system: System, mode: str = "inprocess", coupling: str = "gauss-seidel",
@@ -610,8 +591,12 @@ def simulate(system: System, mode: str = "inprocess", coupling: str = "gauss-sei
     instances = _instantiate(system, mode, fmu_dir)
     loading_s = _time.perf_counter() - loading
     try:
-        system = _foreign_parameters_kept(system, instances)
+        from .foreign import without_missing_parameters
+
+        system, skipped = without_missing_parameters(system, {n: set(i.variables) for n, i in instances.items()})
         _check_signals(system, instances)
+        if skipped:
+            warnings.warn(skipped, stacklevel=2)
         variables = {n: inst.variables for n, inst in instances.items()}
         order = (stepping_order(system, variables) if coupling == "gauss-seidel"
                  else tuple(c.name for c in system.components))
