@@ -565,7 +565,7 @@ def _check_signals(system: System, instances: dict) -> None:
 
 
 def simulate(system: System, mode: str = "inprocess", coupling: str = "gauss-seidel",
-             fmu_dir=None, progress=None) -> Result:
+             fmu_dir=None, progress=None, retry_substeps: int | None = None) -> Result:
     """Run ``system`` from 0 to its stop time.
 
     Parameters
@@ -577,6 +577,12 @@ def simulate(system: System, mode: str = "inprocess", coupling: str = "gauss-sei
     coupling : {"gauss-seidel", "jacobi"}
     progress : callable, optional
         Called as ``progress(fraction)`` about a hundred times during the run.
+    retry_substeps : int, optional
+        On a refused step, set every instance back to the step's start (FMU state, taken
+        before every step) and take the step again with the refusing instance in this many
+        sub-steps, inputs held; the step is refused only if that refuses too.  Retried
+        steps are listed in ``Result.extra["retried"]`` as (time, instance).  None
+        (default): a refused step stops the run, and no state is taken.
 
     Returns
     -------
@@ -587,6 +593,8 @@ def simulate(system: System, mode: str = "inprocess", coupling: str = "gauss-sei
     """
     if coupling not in COUPLINGS:
         raise ValueError(f"coupling = {coupling!r}; valid: {', '.join(COUPLINGS)}")
+    if retry_substeps is not None and not (isinstance(retry_substeps, int) and retry_substeps >= 2):
+        raise ValueError(f"retry_substeps = {retry_substeps!r} must be an integer >= 2 (or None: no retry)")
     loading = _time.perf_counter()
     instances = _instantiate(system, mode, fmu_dir)
     loading_s = _time.perf_counter() - loading
@@ -600,13 +608,34 @@ def simulate(system: System, mode: str = "inprocess", coupling: str = "gauss-sei
         variables = {n: inst.variables for n, inst in instances.items()}
         order = (stepping_order(system, variables) if coupling == "gauss-seidel"
                  else tuple(c.name for c in system.components))
-        return _run(system, instances, order, mode, coupling, progress, loading_s)
+        return _run(system, instances, order, mode, coupling, progress, loading_s, retry_substeps)
     finally:
         _close(instances)
 
 
-def _run(system, instances, order, mode, coupling, progress, loading_s=0.0) -> Result:
+def _retrying_step(stepper: Stepper, substeps: int, retried: list) -> None:
+    """One step; if an instance refuses it, the step again from its start with that
+    instance in ``substeps`` sub-steps (the second refusal is the step's)."""
+    state = stepper.state()
+    try:
+        try:
+            stepper.step()
+        except CoSimulationError as exc:
+            stepper.restore(state)
+            retried.append((stepper.time, exc.instance))
+            try:
+                stepper.step(split={exc.instance: substeps})
+            except CoSimulationError as again:
+                raise CoSimulationError(again.instance, again.time, f"{again.message} (also refused in {substeps} "
+                                        f"sub-steps after {exc.instance} refused the full step)") from None
+    finally:
+        stepper.free_state(state)
+
+
+def _run(system, instances, order, mode, coupling, progress, loading_s=0.0, retry_substeps=None) -> Result:
     stepper = Stepper(system, instances, order, jacobi=coupling == "jacobi")
+    retried = []
+    advance = stepper.step if retry_substeps is None else lambda: _retrying_step(stepper, retry_substeps, retried)
     h, steps = system.step, system.steps
     data = np.full((steps + 1, len(system.record)), np.nan)
     error, done, rows = None, 0, 0
@@ -618,7 +647,7 @@ def _run(system, instances, order, mode, coupling, progress, loading_s=0.0) -> R
         rows = 1
         report_every = max(1, steps // 100)
         for k in range(steps):
-            stepper.step()
+            advance()
             data[k + 1] = stepper.row()
             done = k + 1
             rows = done + 1
@@ -630,4 +659,5 @@ def _run(system, instances, order, mode, coupling, progress, loading_s=0.0) -> R
     data = data[:rows]
     return Result(time=np.arange(rows) * h, signals={s: data[:, j] for j, s in enumerate(system.record)},
                   order=tuple(order), mode=mode, coupling=coupling, wall_s=wall, error=error,
-                  stop_time=system.stop_time, init_s=loading_s + (start - init_start))
+                  stop_time=system.stop_time, init_s=loading_s + (start - init_start),
+                  extra={"retried": retried} if retry_substeps is not None else {})

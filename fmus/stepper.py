@@ -146,13 +146,25 @@ class Stepper:
         """The present value of a connected or recorded ``signal``."""
         return self.values[self.slots[signal]]
 
-    def step(self) -> None:
+    def free_state(self, state: dict) -> None:
+        """Release the instances' states in ``state`` (FMU states live in the FMU)."""
+        for name, inst in self.instances.items():
+            inst.free_state(state["instances"][name])
+
+    def step(self, split: dict | None = None) -> None:
         """One communication step of every instance from ``time``; ``time`` += h.
 
-        A refusal raises the instance's :class:`fmus.master.CoSimulationError`."""
+        ``split`` (instance name -> n) takes this one step with those instances in n times
+        their sub-steps (inputs held), as a master retrying a refused step does.  A refusal
+        raises the instance's :class:`fmus.master.CoSimulationError`."""
         h, t, jacobi, values = self.system.step, self.time, self.jacobi, self.values
+        groups = self.groups
+        if split:
+            by_instance = {id(inst): name for name, inst in self.instances.items()}
+            groups = rate_groups([(inst, ins, outs, n * split.get(by_instance[id(inst)], 1))
+                                  for inst, ins, outs, n in self.plan])
         held = values[:] if jacobi else values
-        for substeps, members in self.groups:
+        for substeps, members in groups:
             if substeps == 1:
                 inst, in_slots, out_slots = members[0]
                 if in_slots:

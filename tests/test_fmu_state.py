@@ -11,8 +11,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fmus.master import InProcessInstance, _FmuInstance, stepping_order
+from fmus.master import InProcessInstance, _FmuInstance, simulate, stepping_order
 from fmus.stepper import Stepper
+from fmus.system import Component, System
 from scenarios.scenes import drives_in_plant, get_scene
 
 BEFORE, AFTER = 150, 60
@@ -228,3 +229,37 @@ def test_every_fmu_declares_state_capabilities(model, built_fmus):
 
     cs = read_model_description(str(built_fmus[model])).coSimulation
     assert cs.canGetAndSetFMUstate and cs.canSerializeFMUstate
+
+
+# --- the master retries a refused step from the state before it (issue 12.6) ---------------
+
+def _spin_up(stop_time=0.3):
+    """thesis_sim arms from rest under a constant 3 N m / -3 N m torque step, no controller,
+    the state projected on the constraints after every step: they spin up to ~150 rad/s,
+    and at t = 0.165 s a full 1 ms RK4 step ends in a pose the plant refuses as singular."""
+    plant = Component("plant", "FiveBarPlant", {"preset": "thesis_sim", "tau1": 3.0, "tau2": -3.0, "project": True})
+    return System((plant,), (), ("plant.x", "plant.y", "plant.residual"), stop_time)
+
+
+@pytest.mark.parametrize("mode", ["inprocess", "fmu"])
+def test_retry_in_sub_steps_completes_a_run_a_full_step_stops(mode, built_fmus):
+    fmu_dir = next(iter(built_fmus.values())).parent
+    stopped = simulate(_spin_up(), mode=mode, fmu_dir=fmu_dir)
+    assert not stopped.completed and "plant refused the step from t = 0.165 s" in stopped.error
+    retried = simulate(_spin_up(), mode=mode, fmu_dir=fmu_dir, retry_substeps=4)
+    assert retried.completed
+    assert [(round(t, 9), name) for t, name in retried.extra["retried"]] == [(0.165, "plant")]
+    # Until the refusal the option changes nothing; afterwards the loop still closes.
+    rows = len(stopped.time)
+    np.testing.assert_array_equal(retried["plant.x"][:rows], stopped["plant.x"])
+    assert retried["plant.residual"].max() < 1e-9
+
+
+def test_without_retry_no_state_is_taken(monkeypatch):
+    monkeypatch.setattr(InProcessInstance, "get_state", lambda self: pytest.fail("state taken"))
+    assert simulate(_spin_up(0.01)).completed
+
+
+def test_retry_substeps_must_split_the_step():
+    with pytest.raises(ValueError, match="retry_substeps = 1 must be an integer >= 2"):
+        simulate(_spin_up(0.01), retry_substeps=1)
