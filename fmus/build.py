@@ -9,10 +9,12 @@ from __future__ import annotations
 import importlib
 import shutil
 import tempfile
+import warnings
 from pathlib import Path
 
 from pythonfmu import FmuBuilder
 
+from .foreign import built_by_parcosim, mark_file
 from .modeldescription import fix_model_structure
 from .registry import SLAVES
 
@@ -20,8 +22,10 @@ ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_OUT = ROOT / "fmus" / "build"
 BUNDLED_PACKAGES = ("plant", "motor", "controller")
 #: The modules of ``fmus`` the slaves import (the rest is the importer's side).
-BUNDLED_FMUS_MODULES = ("guarded.py", "parts.py")
+BUNDLED_FMUS_MODULES = ("guarded.py", "fmustate.py", "parts.py")
 
+#: Every parcosim FMU can save, restore and serialise its whole state (:mod:`fmus.fmustate`).
+STATE_OPTIONS = {"canGetAndSetFMUstate": "true", "canSerializeFMUstate": "true"}
 
 
 def stage_sources(tmp: Path, fmus_modules=BUNDLED_FMUS_MODULES, slaves: bool = False) -> list[Path]:
@@ -44,24 +48,38 @@ def stage_sources(tmp: Path, fmus_modules=BUNDLED_FMUS_MODULES, slaves: bool = F
     return staged
 
 
-def build_fmu(model: str, out_dir: Path = DEFAULT_OUT) -> Path:
-    """Build one FMU into out_dir and return its path."""
+class ForeignFmuError(ValueError):
+    """A file where parcosim would put one of its FMUs, that parcosim did not build."""
+
+
+def build_fmu(model: str, out_dir: Path = DEFAULT_OUT) -> Path | None:
+    """Build one FMU into out_dir and return its path.
+
+    A file ``<model>.fmu`` already there that parcosim did not build (a foreign FMU,
+    :func:`fmus.foreign.built_by_parcosim`) is left alone, with a warning: returns None.
+    """
     if model not in SLAVES:
         raise ValueError(f"unknown FMU {model!r}; valid: {', '.join(SLAVES)}")
     out_dir = Path(out_dir)
+    target = out_dir / f"{model}.fmu"
+    if target.exists() and not built_by_parcosim(target, model):
+        warnings.warn(f"{target} was not built by parcosim: left alone, not rebuilt (run a foreign FMU with "
+                      "--replace INSTANCE=PATH)", stacklevel=2)
+        return None
     out_dir.mkdir(parents=True, exist_ok=True)
     module_name = SLAVES[model]
     script = ROOT / "fmus" / "slaves" / f"{module_name}.py"
     slave_class = getattr(importlib.import_module(f"fmus.slaves.{module_name}"), model)
     with tempfile.TemporaryDirectory(prefix="parcosim_build_") as tmp:
         tmp = Path(tmp)
-        project_files = stage_sources(tmp)
+        project_files = stage_sources(tmp) + [mark_file(tmp, model)]
         staged_script = tmp / script.name
         shutil.copy2(script, staged_script)
-        fmu = FmuBuilder.build_FMU(staged_script, dest=out_dir, project_files=project_files,
-                                   canHandleVariableCommunicationStepSize="true")
-    fix_model_structure(fmu, getattr(slave_class, "feedthrough", {}))
-    return Path(fmu)
+        fmu = FmuBuilder.build_FMU(staged_script, dest=tmp / "out" / target.name, project_files=project_files,
+                                   canHandleVariableCommunicationStepSize="true", **STATE_OPTIONS)
+        fix_model_structure(fmu, getattr(slave_class, "feedthrough", {}))
+        shutil.move(fmu, target)
+    return target
 
 
 def _sources(model: str) -> list[Path]:
@@ -75,7 +93,16 @@ def _sources(model: str) -> list[Path]:
 
 def ensure_built(models, out_dir=None) -> dict:
     """Model name -> FMU path in out_dir (default :data:`DEFAULT_OUT`), building each FMU
-    that is missing or older than the sources it bundles."""
+    that is missing or older than the sources it bundles.
+
+    Raises
+    ------
+    ForeignFmuError
+        ``<model>.fmu`` there was not built by parcosim: it is never loaded in place of ours
+        (a foreign FMU runs as a component's FMU file, ``--replace INSTANCE=PATH``).
+    FileNotFoundError
+        A model that is not parcosim's, with no FMU file there.
+    """
     out_dir = Path(out_dir) if out_dir is not None else DEFAULT_OUT
     paths = {}
     for model in models:
@@ -83,6 +110,9 @@ def ensure_built(models, out_dir=None) -> dict:
         if model not in SLAVES:
             if not path.exists():
                 raise FileNotFoundError(f"no FMU {path} and {model!r} is not a parcosim model")
+        elif path.exists() and not built_by_parcosim(path, model):
+            raise ForeignFmuError(f"{path} was not built by parcosim; to run it in place of {model}, use "
+                                  "--replace INSTANCE=PATH (Component(model=PATH))")
         elif not path.exists() or path.stat().st_mtime < max(f.stat().st_mtime for f in _sources(model)):
             path = build_fmu(model, out_dir)
         paths[model] = path
@@ -90,5 +120,6 @@ def ensure_built(models, out_dir=None) -> dict:
 
 
 def build_all(out_dir: Path = DEFAULT_OUT) -> list[Path]:
-    """Build every parcosim FMU into out_dir."""
-    return [build_fmu(model, out_dir) for model in SLAVES]
+    """Build every parcosim FMU into out_dir; foreign FMUs there are left alone (with a
+    warning) and not listed."""
+    return [path for path in (build_fmu(model, out_dir) for model in SLAVES) if path is not None]

@@ -118,6 +118,13 @@ class LoopCore:
     def value(self, signal: str) -> float:
         return self.stepper.value(signal)
 
+    def state(self) -> dict:
+        """The loop's state: the stepper's (time, values, every inner slave's state)."""
+        return self.stepper.state()
+
+    def restore(self, state: dict) -> None:
+        self.stepper.restore(state)
+
 
 # --- the control chain of a package ----------------------------------------------------------
 
@@ -206,6 +213,17 @@ class ChainCore:
                 self.stepper.refresh(self.model)
         self._advance()
         self._time = current_time + h
+
+    def state(self) -> dict:
+        """The chain's state: the stepper's, the row and snapshot of the sample ahead, the
+        time of the next step and the count of corrections."""
+        return {"stepper": self.stepper.state(), "row": self._row, "snapshot": self._snapshot,
+                "time": self._time, "corrections": self.corrections}
+
+    def restore(self, state: dict) -> None:
+        self.stepper.restore(state["stepper"])
+        self._row, self._snapshot = state["row"], state["snapshot"]
+        self._time, self.corrections = state["time"], state["corrections"]
 
     def command(self) -> dict:
         """What the plant is to apply over its next step."""

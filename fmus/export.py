@@ -20,7 +20,7 @@ import zipfile
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
-from .build import ROOT, stage_sources
+from .build import ROOT, STATE_OPTIONS, stage_sources
 from .embedded import SYSTEM_FILE, system_to_dict
 from .guarded import START_VALUES_FILE
 from .modeldescription import fix_model_structure
@@ -48,10 +48,11 @@ def build_system_fmu(role: str, system: System, path, plant: str = "plant") -> P
     path = Path(path)
     if path.suffix.lower() != ".fmu":
         raise ValueError(f"{path}: an FMU file must end in '.fmu'")
-    foreign = [c.model for c in system.components if c.model not in SLAVES]
+    foreign = [f"{c.name} ({c.model})" for c in system.components if c.model not in SLAVES]
     if foreign:
-        raise ValueError(f"cannot put {foreign} inside one FMU: only parcosim models ({', '.join(SLAVES)}) run "
-                         "in process")
+        raise ValueError(f"cannot put {', '.join(foreign)} inside one FMU: it runs its components in process, "
+                         f"and only parcosim models ({', '.join(SLAVES)}) can; run the scene with parcosim run "
+                         "--replace, or export it with parcosim export-ssp --per-component --replace")
     module, _ = ROLES[role]
     path.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="parcosim_system_") as tmp:
@@ -64,7 +65,7 @@ def build_system_fmu(role: str, system: System, path, plant: str = "plant") -> P
         # The loop takes any whole number of its steps per doStep; the chain exactly one.
         variable = "true" if role == "loop" else "false"
         fmu = FmuBuilder.build_FMU(script, dest=path, project_files=staged + [spec],
-                                   canHandleVariableCommunicationStepSize=variable)
+                                   canHandleVariableCommunicationStepSize=variable, **STATE_OPTIONS)
     fix_model_structure(fmu, {})
     return Path(fmu)
 

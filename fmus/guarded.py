@@ -12,6 +12,10 @@ return.  So:
   keeps the outputs of the last good step and returns False (fmi2Discard);
 * log messages reach the importer only if it turned logging on, so the same
   message also goes to stderr and to the String output ``error``.
+
+The FMU state (``fmi2GetFMUstate`` ...) is the slave's whole Python state, model objects
+and refusal flag included (:mod:`fmus.fmustate`): restoring a state taken before a
+refused step clears the refusal.
 """
 from __future__ import annotations
 
@@ -19,6 +23,8 @@ import json
 import math
 import os
 import sys
+
+from fmus import fmustate
 
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, Real, String, Boolean
 from pythonfmu.enums import Fmi2Initial, Fmi2Status
@@ -115,6 +121,31 @@ class GuardedSlave(Fmi2Slave):
     def step(self, current_time: float, step_size: float) -> None:
         """Advance the model; raise on failure (state and outputs must stay valid)."""
         raise NotImplementedError
+
+    # --- FMU state ---------------------------------------------------------------------
+    def model_state(self) -> dict:
+        """What the continuation depends on, as live references (:func:`fmus.fmustate.model_state`);
+        a system slave replaces its inner system by that system's state."""
+        return fmustate.model_state(self)
+
+    def restore_model_state(self, state: dict) -> None:
+        """Make ``state`` (of :meth:`model_state`, owned by the slave from now on) the slave's."""
+        vars(self).update(state)
+
+    def _get_fmu_state(self):
+        return fmustate.captured(self.model_state())
+
+    def _set_fmu_state(self, state):
+        self.restore_model_state(fmustate.captured(state))
+
+    # pythonfmu calls these two on the class.
+    @classmethod
+    def _fmu_state_to_bytes(cls, state) -> bytes:
+        return fmustate.to_bytes(cls.__name__, state)
+
+    @classmethod
+    def _fmu_state_from_bytes(cls, data: bytes):
+        return fmustate.from_bytes(cls.__name__, data)
 
     # --- FMI callbacks -------------------------------------------------------------------
     # get_real/set_real are on every step's path: pythonfmu's versions cost ~1 µs a

@@ -44,7 +44,8 @@ import ctypes
 import importlib
 import operator
 import time as _time
-from dataclasses import dataclass, field
+import warnings
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -124,8 +125,31 @@ def _set_parameters(variables: dict, parameters: dict, setters: dict) -> None:
         setters[variable.type]([variable.vr], [_CONVERT[variable.type](value)])
 
 
+#: ctypes of the FMI 2.0 types a connection can carry (fmi2Boolean is an int).
+_CTYPES = {"Real": ctypes.c_double, "Integer": ctypes.c_int, "Boolean": ctypes.c_int}
+
+
+class _Batch:
+    """The value references of some variables, grouped by type, with preallocated ctypes
+    arrays: one FMI call per type moves all their values (in the variables' order)."""
+
+    def __init__(self, variables: list, dll, verb: str):
+        self.n = len(variables)
+        self.groups = []
+        for kind in _CTYPES:
+            positions = [k for k, v in enumerate(variables) if v.type == kind]
+            if positions:
+                vrs = (ctypes.c_uint * len(positions))(*[variables[k].vr for k in positions])
+                values = (_CTYPES[kind] * len(positions))()
+                self.groups.append((getattr(dll, f"fmi2{verb}{kind}"), vrs, values, len(positions), positions,
+                                    _CONVERT[kind]))
+        # All Real, in order (every parcosim FMU): no regrouping on the step's path.
+        self.plain = len(self.groups) == 1 and self.groups[0][4] == list(range(self.n)) and \
+            self.groups[0][5] is float
+
+
 class _FmuInstance:
-    """One FMU instance through fmpy, with batched Real I/O."""
+    """One FMU instance through fmpy, with batched I/O (one call per type and direction)."""
 
     _extracted: dict = {}
 
@@ -134,14 +158,19 @@ class _FmuInstance:
         from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
                                fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
 
+        path = Path(path)
         key = (str(path), path.stat().st_mtime_ns)
         if key not in self._extracted:
             md = read_model_description(str(path))
+            if md.fmiVersion != "2.0" or md.coSimulation is None:
+                raise ValueError(f"component {name}: {path} is not an FMI 2.0 co-simulation FMU "
+                                 f"(fmiVersion {md.fmiVersion})")
             self._extracted[key] = (md, extract(str(path)))
         md, directory = self._extracted[key]
-        self.name = name
+        self.name, self.path = name, path
         self.variables = _variables_from_model_description(md)
         self.messages = []
+        self._start_time = 0.0
         self._fmu = FMU2Slave(guid=md.guid, unzipDirectory=directory,
                               modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
         # The callbacks must stay referenced for the instance's lifetime.
@@ -151,42 +180,66 @@ class _FmuInstance:
         self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
         self._fmu.instantiate(callbacks=self._callbacks, loggingOn=True)
         self._component = self._fmu.component
-        self._set_real = self._fmu.dll.fmi2SetReal
-        self._get_real = self._fmu.dll.fmi2GetReal
         self._do_step = self._fmu.dll.fmi2DoStep
 
     def _log(self, component, instance, status, category, message):
         self.messages.append(message.decode(errors="replace") if isinstance(message, bytes) else str(message))
 
-    def initialize(self, parameters: dict, start_time: float) -> None:
+    def enter_initialization(self, parameters: dict, start_time: float) -> None:
+        """Set up the experiment, enter initialisation mode and set ``parameters``."""
         from fmpy.fmi1 import FMICallException
 
         fmu = self._fmu
+        self._start_time = start_time
         try:
             fmu.setupExperiment(startTime=start_time)
             fmu.enterInitializationMode()
             _set_parameters(self.variables, parameters, {"Real": fmu.setReal, "Integer": fmu.setInteger,
                                                          "Boolean": fmu.setBoolean, "String": fmu.setString})
-            fmu.exitInitializationMode()
         except FMICallException:
             raise CoSimulationError(self.name, start_time, self._last_message() or "initialisation failed") from None
 
+    def exit_initialization(self) -> None:
+        from fmpy.fmi1 import FMICallException
+
+        try:
+            self._fmu.exitInitializationMode()
+        except FMICallException:
+            raise CoSimulationError(self.name, self._start_time,
+                                    self._last_message() or "initialisation failed") from None
+
+    def initialize(self, parameters: dict, start_time: float) -> None:
+        """Initialise with ``parameters`` and no inputs set."""
+        self.enter_initialization(parameters, start_time)
+        self.exit_initialization()
+
     def bind(self, inputs: list, outputs: list) -> None:
-        self._in_vr = (ctypes.c_uint * len(inputs))(*inputs)
-        self._in_val = (ctypes.c_double * len(inputs))()
-        self._n_in = len(inputs)
-        self._out_vr = (ctypes.c_uint * len(outputs))(*outputs)
-        self._out_val = (ctypes.c_double * len(outputs))()
-        self._n_out = len(outputs)
+        """The :class:`Variable` lists that :meth:`set_inputs` and :meth:`get_outputs` move."""
+        self._inputs = _Batch(inputs, self._fmu.dll, "Set")
+        self._outputs = _Batch(outputs, self._fmu.dll, "Get")
 
     def set_inputs(self, values: list) -> None:
-        self._in_val[:] = values
-        if self._set_real(self._component, self._in_vr, self._n_in, self._in_val) > 1:
-            raise CoSimulationError(self.name, float("nan"), self._last_message() or "fmi2SetReal failed")
+        batch = self._inputs
+        for setter, vrs, array, n, positions, convert in batch.groups:
+            if batch.plain:
+                array[:] = values
+            else:
+                array[:] = [convert(values[k]) for k in positions]
+            if setter(self._component, vrs, n, array) > 1:
+                raise CoSimulationError(self.name, float("nan"), self._last_message() or "setting inputs failed")
 
     def get_outputs(self) -> list:
-        self._get_real(self._component, self._out_vr, self._n_out, self._out_val)
-        return self._out_val[:]
+        batch = self._outputs
+        if batch.plain:
+            getter, vrs, array, n, _, _ = batch.groups[0]
+            getter(self._component, vrs, n, array)
+            return array[:]
+        values = [None] * batch.n
+        for getter, vrs, array, n, positions, convert in batch.groups:
+            getter(self._component, vrs, n, array)
+            for k, value in zip(positions, array):
+                values[k] = convert(value)
+        return values
 
     def do_step(self, t: float, h: float) -> None:
         if self._do_step(self._component, t, h, 1) > 1:
@@ -207,6 +260,22 @@ class _FmuInstance:
         # parcosim slaves log "<instance>: <message>"; the error names the instance already.
         message = self.messages[-1] if self.messages else ""
         return message[len(self.name) + 2:] if message.startswith(f"{self.name}: ") else message
+
+    def get_state(self):
+        """The FMU's ``fmi2GetFMUstate`` (free it with :meth:`free_state`)."""
+        return self._fmu.getFMUstate()
+
+    def set_state(self, state) -> None:
+        self._fmu.setFMUstate(state)
+
+    def free_state(self, state) -> None:
+        self._fmu.freeFMUstate(state)
+
+    def serialize_state(self, state) -> bytes:
+        return bytes(self._fmu.serializeFMUstate(state))
+
+    def deserialize_state(self, data: bytes):
+        return self._fmu.deSerializeFMUstate(data)
 
     def close(self) -> None:
         try:
@@ -232,34 +301,50 @@ class InProcessInstance:
         self.slave = cls(instance_name=name)
         self.variables = slave_variables(self.slave)
 
-    def initialize(self, parameters: dict, start_time: float) -> None:
+    def enter_initialization(self, parameters: dict, start_time: float) -> None:
+        """Set up the experiment, enter initialisation mode and set ``parameters``."""
         slave = self.slave
+        self._start_time = start_time
         try:
             slave.setup_experiment(start_time, None, None)
             slave.enter_initialization_mode()
             _set_parameters(self.variables, parameters, {"Real": slave.set_real, "Integer": slave.set_integer,
                                                          "Boolean": slave.set_boolean, "String": slave.set_string})
-            slave.exit_initialization_mode()
         except Exception as exc:  # noqa: BLE001 - as an importer sees an FMU's fatal error
             raise CoSimulationError(self.name, start_time, str(exc)) from None
 
+    def exit_initialization(self) -> None:
+        try:
+            self.slave.exit_initialization_mode()
+        except Exception as exc:  # noqa: BLE001
+            raise CoSimulationError(self.name, self._start_time, str(exc)) from None
+
+    def initialize(self, parameters: dict, start_time: float) -> None:
+        """Initialise with ``parameters`` and no inputs set."""
+        self.enter_initialization(parameters, start_time)
+        self.exit_initialization()
+
     def bind(self, inputs: list, outputs: list) -> None:
-        # What the slave's set_real/get_real do for Real variables, with the names looked up
-        # once: attributes set to the values, outputs read back as Python floats.
-        names = {v.vr: v.name for v in self.variables.values() if v.type == "Real"}
-        self._input_names = [names[vr] for vr in inputs]
-        getter = operator.attrgetter(*[names[vr] for vr in outputs]) if outputs else None
-        if len(outputs) == 1:
-            self._read = lambda slave: [float(getter(slave))]
-        elif outputs:
+        """The :class:`Variable` lists that :meth:`set_inputs` and :meth:`get_outputs` move."""
+        # What the slave's setters and getters do, with the names looked up once:
+        # attributes set to the values, outputs read back as Python values of their type.
+        self._inputs = [(v.name, _CONVERT[v.type]) for v in inputs]
+        converters = [_CONVERT[v.type] for v in outputs]
+        getter = operator.attrgetter(*[v.name for v in outputs]) if outputs else None
+        if not outputs:
+            self._read = lambda slave: []
+        elif len(outputs) == 1:
+            convert = converters[0]
+            self._read = lambda slave: [convert(getter(slave))]
+        elif all(c is float for c in converters):
             self._read = lambda slave: [float(v) for v in getter(slave)]
         else:
-            self._read = lambda slave: []
+            self._read = lambda slave: [c(v) for c, v in zip(converters, getter(slave))]
 
     def set_inputs(self, values: list) -> None:
         slave = self.slave
-        for name, value in zip(self._input_names, values):
-            setattr(slave, name, value)
+        for (name, convert), value in zip(self._inputs, values):
+            setattr(slave, name, convert(value))
 
     def get_outputs(self) -> list:
         return self._read(self.slave)
@@ -272,16 +357,40 @@ class InProcessInstance:
         if ok is False:
             raise CoSimulationError(self.name, t, getattr(self.slave, "error", "") or "do_step refused")
 
+    def get_state(self) -> dict:
+        """An independent copy of the slave's state (its ``fmi2GetFMUstate``)."""
+        return self.slave._get_fmu_state()
+
+    def set_state(self, state: dict) -> None:
+        """Go back to ``state`` (its ``fmi2SetFMUstate``; the state stays valid)."""
+        self.slave._set_fmu_state(state)
+
+    def free_state(self, state) -> None:
+        """Nothing to free: a state in process is a Python object."""
+
+    def serialize_state(self, state) -> bytes:
+        """``state`` as the bytes of ``fmi2SerializeFMUstate``."""
+        return self.slave._fmu_state_to_bytes(state)
+
+    def deserialize_state(self, data: bytes):
+        """The state of ``fmi2DeSerializeFMUstate`` (set it with :meth:`set_state`)."""
+        return self.slave._fmu_state_from_bytes(data)
+
     def close(self) -> None:
         self.slave.terminate()
 
 
 def _variables_from_model_description(md) -> dict:
+    """Name -> :class:`Variable` of an FMU's model description.  An output whose
+    ``ModelStructure`` entry has no ``dependencies`` attribute, or that has no entry, depends
+    on every input (FMI 2.0 §2.2.8); ``dependencies=""`` means on none."""
+    inputs = tuple(v.name for v in md.modelVariables if v.causality == "input")
     dependencies = {}
     for unknown in md.outputs:
-        dependencies[unknown.variable.name] = tuple(v.name for v in (unknown.dependencies or ()))
+        listed = unknown.dependencies
+        dependencies[unknown.variable.name] = inputs if listed is None else tuple(v.name for v in listed)
     return {v.name: Variable(v.name, v.valueReference, v.type, v.causality, v.variability,
-                             dependencies.get(v.name, ()))
+                             dependencies.get(v.name, inputs) if v.causality == "output" else ())
             for v in md.modelVariables}
 
 
@@ -380,14 +489,46 @@ def _check_hard_loops(names, hard, hard_edges):
 # --- running -----------------------------------------------------------------------------
 
 def _instantiate(system: System, mode: str, fmu_dir):
+    """Instance name -> back-end instance: our components in process or as our built FMUs
+    (by ``mode``), components given as an FMU file through fmpy in either mode."""
+    from .foreign import is_fmu_file
+
+    if mode not in MODES:
+        raise ValueError(f"mode = {mode!r}; valid: {', '.join(MODES)}")
+    ours = [c for c in system.components if not is_fmu_file(c.model)]
+    for c in system.components:
+        if is_fmu_file(c.model) and not Path(c.model).is_file():
+            raise ValueError(f"component {c.name}: no FMU file {c.model}")
+    paths = {}
     if mode == "fmu":
         from .build import ensure_built
 
-        paths = ensure_built(sorted({c.model for c in system.components}), fmu_dir)
-        return {c.name: _FmuInstance(paths[c.model], c.name) for c in system.components}
-    if mode == "inprocess":
-        return {c.name: InProcessInstance(c.model, c.name) for c in system.components}
-    raise ValueError(f"mode = {mode!r}; valid: {', '.join(MODES)}")
+        paths = ensure_built(sorted({c.model for c in ours}), fmu_dir)
+    instances = {}
+    try:
+        for c in system.components:
+            if is_fmu_file(c.model):
+                instances[c.name] = _FmuInstance(Path(c.model), c.name)
+            elif mode == "fmu":
+                instances[c.name] = _FmuInstance(paths[c.model], c.name)
+            else:
+                instances[c.name] = InProcessInstance(c.model, c.name)
+    except BaseException:
+        _close(instances)
+        raise
+    return instances
+
+
+def _close(instances: dict) -> None:
+    for inst in instances.values():
+        try:
+            inst.close()
+        except Exception:  # noqa: BLE001 - closing must not hide the run's outcome
+            pass
+
+
+#: Types a connection can carry (and a recorded signal can have).
+CONNECTABLE = ("Real", "Integer", "Boolean")
 
 
 def _check_signals(system: System, instances: dict) -> None:
@@ -395,17 +536,25 @@ def _check_signals(system: System, instances: dict) -> None:
         instance, name = split_signal(signal)
         variables = instances[instance].variables
         if name not in variables:
-            raise ValueError(f"{signal}: {system.component(instance).model} has no variable {name!r}")
+            model = system.component(instance).model
+            kinds = {}
+            for v in variables.values():
+                kinds.setdefault(v.causality, []).append(v.name)
+            listing = "; ".join(f"{kind} {', '.join(names)}" for kind, names in kinds.items())
+            raise ValueError(f"{signal}: {model} has no variable {name!r}; its variables: {listing}")
         v = variables[name]
         if v.causality not in causalities:
             raise ValueError(f"{signal} is a {v.causality}, expected {' or '.join(causalities)}")
-        if v.type != "Real":
-            raise ValueError(f"{signal} is {v.type}; only Real signals can be connected or recorded")
+        if v.type not in CONNECTABLE:
+            raise ValueError(f"{signal} is {v.type}; only {', '.join(CONNECTABLE)} signals can be connected "
+                             "or recorded")
         return v
 
     for conn in system.connections:
-        variable(conn.source, ("output",))
-        variable(conn.target, ("input",))
+        source, target = variable(conn.source, ("output",)), variable(conn.target, ("input",))
+        if source.type != target.type:
+            raise ValueError(f"{conn.source} ({source.type}) -> {conn.target} ({target.type}): a connection "
+                             "joins variables of one type")
     for signal in system.record:
         variable(signal, ("output", "input", "local"))
     for c in system.components:
@@ -416,7 +565,7 @@ def _check_signals(system: System, instances: dict) -> None:
 
 
 def simulate(system: System, mode: str = "inprocess", coupling: str = "gauss-seidel",
-             fmu_dir=None, progress=None) -> Result:
+             fmu_dir=None, progress=None, retry_substeps: int | None = None) -> Result:
     """Run ``system`` from 0 to its stop time.
 
     Parameters
@@ -428,6 +577,12 @@ def simulate(system: System, mode: str = "inprocess", coupling: str = "gauss-sei
     coupling : {"gauss-seidel", "jacobi"}
     progress : callable, optional
         Called as ``progress(fraction)`` about a hundred times during the run.
+    retry_substeps : int, optional
+        On a refused step, set every instance back to the step's start (FMU state, taken
+        before every step) and take the step again with the refusing instance in this many
+        sub-steps, inputs held; the step is refused only if that refuses too.  Retried
+        steps are listed in ``Result.extra["retried"]`` as (time, instance).  None
+        (default): a refused step stops the run, and no state is taken.
 
     Returns
     -------
@@ -438,25 +593,49 @@ def simulate(system: System, mode: str = "inprocess", coupling: str = "gauss-sei
     """
     if coupling not in COUPLINGS:
         raise ValueError(f"coupling = {coupling!r}; valid: {', '.join(COUPLINGS)}")
+    if retry_substeps is not None and not (isinstance(retry_substeps, int) and retry_substeps >= 2):
+        raise ValueError(f"retry_substeps = {retry_substeps!r} must be an integer >= 2 (or None: no retry)")
     loading = _time.perf_counter()
     instances = _instantiate(system, mode, fmu_dir)
     loading_s = _time.perf_counter() - loading
     try:
+        from .foreign import without_missing_parameters
+
+        system, skipped = without_missing_parameters(system, {n: set(i.variables) for n, i in instances.items()})
         _check_signals(system, instances)
+        if skipped:
+            warnings.warn(skipped, stacklevel=2)
         variables = {n: inst.variables for n, inst in instances.items()}
         order = (stepping_order(system, variables) if coupling == "gauss-seidel"
                  else tuple(c.name for c in system.components))
-        return _run(system, instances, order, mode, coupling, progress, loading_s)
+        return _run(system, instances, order, mode, coupling, progress, loading_s, retry_substeps)
     finally:
-        for inst in instances.values():
+        _close(instances)
+
+
+def _retrying_step(stepper: Stepper, substeps: int, retried: list) -> None:
+    """One step; if an instance refuses it, the step again from its start with that
+    instance in ``substeps`` sub-steps (the second refusal is the step's)."""
+    state = stepper.state()
+    try:
+        try:
+            stepper.step()
+        except CoSimulationError as exc:
+            stepper.restore(state)
+            retried.append((stepper.time, exc.instance))
             try:
-                inst.close()
-            except Exception:  # noqa: BLE001 - closing must not hide the run's outcome
-                pass
+                stepper.step(split={exc.instance: substeps})
+            except CoSimulationError as again:
+                raise CoSimulationError(again.instance, again.time, f"{again.message} (also refused in {substeps} "
+                                        f"sub-steps after {exc.instance} refused the full step)") from None
+    finally:
+        stepper.free_state(state)
 
 
-def _run(system, instances, order, mode, coupling, progress, loading_s=0.0) -> Result:
+def _run(system, instances, order, mode, coupling, progress, loading_s=0.0, retry_substeps=None) -> Result:
     stepper = Stepper(system, instances, order, jacobi=coupling == "jacobi")
+    retried = []
+    advance = stepper.step if retry_substeps is None else lambda: _retrying_step(stepper, retry_substeps, retried)
     h, steps = system.step, system.steps
     data = np.full((steps + 1, len(system.record)), np.nan)
     error, done, rows = None, 0, 0
@@ -468,7 +647,7 @@ def _run(system, instances, order, mode, coupling, progress, loading_s=0.0) -> R
         rows = 1
         report_every = max(1, steps // 100)
         for k in range(steps):
-            stepper.step()
+            advance()
             data[k + 1] = stepper.row()
             done = k + 1
             rows = done + 1
@@ -480,4 +659,5 @@ def _run(system, instances, order, mode, coupling, progress, loading_s=0.0) -> R
     data = data[:rows]
     return Result(time=np.arange(rows) * h, signals={s: data[:, j] for j, s in enumerate(system.record)},
                   order=tuple(order), mode=mode, coupling=coupling, wall_s=wall, error=error,
-                  stop_time=system.stop_time, init_s=loading_s + (start - init_start))
+                  stop_time=system.stop_time, init_s=loading_s + (start - init_start),
+                  extra={"retried": retried} if retry_substeps is not None else {})

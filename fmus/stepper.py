@@ -34,7 +34,7 @@ class Stepper:
     instances : dict
         Instance name -> back-end instance (``fmus.master.InProcessInstance`` or an FMU
         instance): ``variables``, ``bind``, ``initialize``, ``set_inputs``,
-        ``get_outputs``, ``do_step``.
+        ``get_outputs``, ``do_step``; ``get_state``, ``set_state`` for :meth:`state`.
     order : sequence of str
         The stepping order (Gauss-Seidel) or the listing order (Jacobi).
     jacobi : bool
@@ -56,13 +56,12 @@ class Stepper:
         plan = []
         for name in self.order:
             inst = instances[name]
-            in_vrs = [inst.variables[split_signal(c.target)[1]].vr for c in feeds[name]]
+            in_vars = [inst.variables[split_signal(c.target)[1]] for c in feeds[name]]
             in_slots = [self._slot(c.source) for c in feeds[name]]
             produced = [s for s in sources + list(system.record)
                         if split_signal(s)[0] == name and inst.variables[split_signal(s)[1]].causality == "output"]
             produced = list(dict.fromkeys(produced))
-            out_vrs = [inst.variables[split_signal(s)[1]].vr for s in produced]
-            inst.bind(in_vrs, out_vrs)
+            inst.bind(in_vars, [inst.variables[split_signal(s)[1]] for s in produced])
             plan.append((inst, in_slots, [self._slot(s) for s in produced], system.component(name).substeps))
         record_inputs = [s for s in system.record if s not in self.slots]
         if record_inputs:
@@ -77,12 +76,45 @@ class Stepper:
         return self.slots.setdefault(signal, len(self.slots))
 
     def initialize(self, start_time: float = 0.0) -> None:
-        """Initialise every instance with its component's parameters, then read the outputs."""
+        """Initialise every instance with its component's parameters and its connected inputs.
+
+        All instances enter initialisation mode and get their parameters; then, in the
+        order of :meth:`initialization_order`, each gets its connected inputs (from the
+        outputs its sources hold: after their initialisation for sources that left it, their
+        values in initialisation mode for the others), leaves initialisation mode, and its
+        outputs are read.  So the t = 0 row is consistent: an output that depends on an input
+        was computed from the connected value, not from the input's start value.
+        """
         for c in self.system.components:
-            self.instances[c.name].initialize(c.parameters, start_time)
+            self.instances[c.name].enter_initialization(c.parameters, start_time)
         self.time = start_time
         for inst, _, out_slots, _ in self.plan:
             self.refresh(inst, out_slots)
+        values = self.values
+        for inst, in_slots, out_slots, _ in self.initialization_order():
+            if in_slots:
+                inst.set_inputs([values[i] for i in in_slots])
+            inst.exit_initialization()
+            self.refresh(inst, out_slots)
+
+    def initialization_order(self) -> list:
+        """The plan's entries in the order instances leave initialisation mode: every
+        source before its readers where the connections allow it; in a loop, the first
+        instance in the stepping order (which keeps every sampled or feedthrough source
+        before its readers) goes first."""
+        sources = {name: set() for name in self.order}
+        for conn in self.system.connections:
+            src, dst = split_signal(conn.source)[0], split_signal(conn.target)[0]
+            if src != dst:
+                sources[dst].add(src)
+        entries = dict(zip(self.order, self.plan))
+        placed, order = set(), []
+        while len(order) < len(self.order):
+            waiting = [name for name in self.order if name not in placed]
+            name = next((n for n in waiting if sources[n] <= placed), waiting[0])
+            placed.add(name)
+            order.append(entries[name])
+        return order
 
     def refresh(self, inst, out_slots=None) -> None:
         """Read ``inst``'s outputs into the values again (after its state was changed)."""
@@ -91,6 +123,19 @@ class Stepper:
         values = self.values
         for i, v in zip(out_slots, inst.get_outputs()):
             values[i] = v
+
+    def state(self) -> dict:
+        """A snapshot of the run: time, the signals' values and each instance's state
+        (``inst.get_state()``); :meth:`restore` goes back to it."""
+        return {"time": self.time, "values": list(self.values),
+                "instances": {name: inst.get_state() for name, inst in self.instances.items()}}
+
+    def restore(self, state: dict) -> None:
+        """Go back to ``state`` (of :meth:`state`; it can be restored again)."""
+        for name, inst in self.instances.items():
+            inst.set_state(state["instances"][name])
+        self.values[:] = state["values"]
+        self.time = state["time"]
 
     def row(self) -> list:
         """The recorded signals' present values, in ``system.record`` order."""
@@ -101,13 +146,25 @@ class Stepper:
         """The present value of a connected or recorded ``signal``."""
         return self.values[self.slots[signal]]
 
-    def step(self) -> None:
+    def free_state(self, state: dict) -> None:
+        """Release the instances' states in ``state`` (FMU states live in the FMU)."""
+        for name, inst in self.instances.items():
+            inst.free_state(state["instances"][name])
+
+    def step(self, split: dict | None = None) -> None:
         """One communication step of every instance from ``time``; ``time`` += h.
 
-        A refusal raises the instance's :class:`fmus.master.CoSimulationError`."""
+        ``split`` (instance name -> n) takes this one step with those instances in n times
+        their sub-steps (inputs held), as a master retrying a refused step does.  A refusal
+        raises the instance's :class:`fmus.master.CoSimulationError`."""
         h, t, jacobi, values = self.system.step, self.time, self.jacobi, self.values
+        groups = self.groups
+        if split:
+            by_instance = {id(inst): name for name, inst in self.instances.items()}
+            groups = rate_groups([(inst, ins, outs, n * split.get(by_instance[id(inst)], 1))
+                                  for inst, ins, outs, n in self.plan])
         held = values[:] if jacobi else values
-        for substeps, members in self.groups:
+        for substeps, members in groups:
             if substeps == 1:
                 inst, in_slots, out_slots = members[0]
                 if in_slots:

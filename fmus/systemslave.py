@@ -9,7 +9,9 @@ The system travels in the FMU's resources (``system.json``, written by
 * an output per recorded signal, named by the signal (``traj.x_d``), held as the master
   records it (row k at t = k h).
 
-Subclasses add their own inputs and outputs and build their core in :meth:`build`.
+Subclasses add their own inputs and outputs and build their core in :meth:`build`.  The
+FMU state is the slave's attributes and the inner system's state (every inner slave's,
+the stepper's values and time): after ``fmi2SetFMUstate`` the FMU's time is the state's.
 """
 from __future__ import annotations
 
@@ -46,6 +48,25 @@ class SystemSlave(GuardedSlave):
         self.core = self.build(self.configured_system())
         self.core.initialize()
         self.publish()
+
+    def model_state(self) -> dict:
+        """The slave's own attributes with ``core`` replaced by the inner system's state."""
+        state = super().model_state()
+        state["core"] = None if self.core is None else self.core.state()
+        return state
+
+    def restore_model_state(self, state: dict) -> None:
+        """Restore the slave's attributes, then its inner system (built first in a fresh
+        instance, from the restored parameters)."""
+        state = dict(state)
+        core = state.pop("core")
+        super().restore_model_state(state)
+        if core is None:
+            self.core = None
+            return
+        if self.core is None:
+            self.core = self.build(self.configured_system())
+        self.core.restore(core)
 
     def build(self, system):
         raise NotImplementedError

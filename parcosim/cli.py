@@ -9,7 +9,8 @@ Every subcommand is a thin shell over a documented Python call:
 ``parcosim identify-motor``  ``motor.cli.identify_main(argv)``
 ``parcosim list``      ``scenarios.scenes.scene_names()``
 ``parcosim run``       ``scenarios.run.run_scene(name, mode, out_dir)``; with ``--drives-in-plant N``
-                       ``run_scene(drives_in_plant(get_scene(name), substeps=N), ...)``
+                       ``run_scene(drives_in_plant(get_scene(name), substeps=N), ...)``; with
+                       ``--replace I=F.fmu`` ``run_scene(with_fmu_files(scene, {I: F}), ...)``
 ``parcosim report``    ``scenarios.report.write_report(out_dir, mode)``
 ``parcosim trade``     ``scenarios.trade.run_trade(scene, quick, out_dir)``
 ``parcosim export-ssp``  ``scenarios.package.export_package(get_scene(name), path, fmu_dir)``;
@@ -24,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -45,6 +47,7 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--drives-in-plant", type=int, default=None, metavar="N",
                      help="integrate the drives inside the plant (ActuatedFiveBarPlant), RK4 N steps per "
                           "sample; 8 is 2.2e4x more accurate than separate drives (docs/actuated.md)")
+    _replace_option(run)
     report = sub.add_parser("report", help="run the 16 bench scenes; markdown report beside the thesis' Tables 9-14")
     report.add_argument("--mode", choices=("inprocess", "fmu"), default="inprocess")
     report.add_argument("--out", default="out/report", help="output directory (default: out/report)")
@@ -58,11 +61,13 @@ def _parser() -> argparse.ArgumentParser:
     ssp.add_argument("--per-component", action="store_true",
                      help="one FMU instance per component (for masters that order components by their "
                           "dependencies; in Jacobi masters each connection adds a step of delay: docs/ssp.md)")
+    _replace_option(ssp)
     fmu = sub.add_parser("export-fmu", help="write a scene's whole closed loop as one FMI 2.0 co-simulation FMU")
     fmu.add_argument("scene", help="a scene name (see `parcosim list`)")
     fmu.add_argument("path", help="the .fmu file to write")
     fmu.add_argument("--drives-in-plant", type=int, default=None, metavar="N",
                      help="the scene with its drives inside the plant, RK4 N steps per sample")
+    _replace_option(fmu)
     trade = sub.add_parser("trade", help="speed against accuracy: sweep the settings, table and Pareto plot")
     trade.add_argument("scene", nargs="?", default="bench_circle_TCMDx",
                        help="a scene name (default: bench_circle_TCMDx)")
@@ -73,12 +78,27 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _replace_option(parser) -> None:
+    parser.add_argument("--replace", action="append", default=[], metavar="INSTANCE=PATH.fmu",
+                        help="run the instance as this FMI 2.0 co-simulation FMU (repeatable; docs/master.md)")
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     if argv and argv[0] == "identify-motor":
         from motor.cli import identify_main
         return identify_main(argv[1:])
     args = _parser().parse_args(argv)
+    with warnings.catch_warnings():
+        warnings.showwarning = _show_warning
+        return _command(args)
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    print(f"parcosim: warning: {message}", file=sys.stderr)
+
+
+def _command(args) -> int:
     try:
         if args.command is None:
             return main(["run", "bench_circle_TCMDx"])
@@ -96,8 +116,14 @@ def main(argv: list[str] | None = None) -> int:
             print(write_report(args.out, args.mode, progress=progress_bar("report")))
         elif args.command == "export-ssp":
             if args.per_component:
+                from fmus.foreign import named_models
                 from fmus.ssp import export_ssp
-                print(export_ssp(_scene(args).system, args.path, args.fmu_dir))
+                system, fmus = named_models(_scene(args).system)
+                print(export_ssp(system, args.path, args.fmu_dir, fmus=fmus))
+            elif args.replace:
+                raise ValueError("the package (control chain + plant) runs the control chain inside one FMU, "
+                                 "which cannot contain a foreign FMU; add --per-component to export "
+                                 f"{', '.join(args.replace)}")
             else:
                 from scenarios.package import export_package
                 print(export_package(_scene(args), args.path, args.fmu_dir))
@@ -128,14 +154,27 @@ def progress_bar(label: str):
 
 def _scene(args):
     """The scene ``args.scene``, with its drives inside the plant if ``--drives-in-plant N``."""
-    from scenarios.scenes import drives_in_plant, get_scene
+    from scenarios.scenes import drives_in_plant, get_scene, with_fmu_files
 
     scene = get_scene(args.scene)
-    if args.drives_in_plant is None:
-        return scene
-    if args.drives_in_plant < 1:
-        raise ValueError(f"--drives-in-plant {args.drives_in_plant}: the RK4 steps per sample must be >= 1")
-    return drives_in_plant(scene, substeps=args.drives_in_plant)
+    if args.drives_in_plant is not None:
+        if args.drives_in_plant < 1:
+            raise ValueError(f"--drives-in-plant {args.drives_in_plant}: the RK4 steps per sample must be >= 1")
+        scene = drives_in_plant(scene, substeps=args.drives_in_plant)
+    return with_fmu_files(scene, _replacements(args.replace))
+
+
+def _replacements(items) -> dict:
+    """``["drive1=a.fmu", ...]`` -> ``{"drive1": "a.fmu"}``."""
+    result = {}
+    for item in items:
+        instance, eq, path = item.partition("=")
+        if not eq or not instance or not path:
+            raise ValueError(f"--replace {item}: write INSTANCE=PATH.fmu")
+        if instance in result:
+            raise ValueError(f"--replace {instance}: given twice")
+        result[instance] = path
+    return result
 
 
 def _run(args) -> int:
@@ -144,7 +183,8 @@ def _run(args) -> int:
     from scenarios.run import run_scene
 
     scene = _scene(args)
-    default = scene.name if args.drives_in_plant is None else f"{scene.name}_drives_in_plant"
+    default = scene.name + ("" if args.drives_in_plant is None else "_drives_in_plant") + \
+        ("_replaced" if args.replace else "")
     out = Path(args.out) if args.out else Path("out") / default
     bar = progress_bar(scene.name) if sys.stderr.isatty() else None
     outcome = run_scene(scene, mode=args.mode, out_dir=out, coupling=args.coupling,

@@ -15,6 +15,7 @@ parameter not given keeps the FMU's default (the presets of Tables 3-8, 16, 18).
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from pathlib import Path
 
 from controller.strategies import STRATEGY_NAMES
 from controller.trajectories import get_trajectory
@@ -340,6 +341,18 @@ def with_sample_time(scene: Scene, T: float) -> Scene:
                        for c in scene.system.components)
     return replace(scene, system=replace(scene.system, components=components, step=T),
                    description=scene.description + f"; sample time {1e3 * T:g} ms")
+
+
+def with_fmu_files(scene: Scene, replacements: dict) -> Scene:
+    """``scene`` with instances run as FMU files (``parcosim run SCENE --replace I=F.fmu``):
+    instance name -> path of an FMI 2.0 co-simulation FMU (:func:`fmus.foreign.replace_components`)."""
+    if not replacements:
+        return scene
+    from fmus.foreign import replace_components
+
+    names = ", ".join(f"{name}={Path(path).name}" for name, path in replacements.items())
+    return replace(scene, system=replace_components(scene.system, replacements),
+                   description=f"{scene.description}; FMU files: {names}")
 
 
 def scene_names() -> list[str]:
