@@ -54,15 +54,41 @@ def system_from_dict(data: dict) -> System:
 
 def component_parameters(system: System) -> dict:
     """``"instance.parameter"`` -> value for every parameter of every component: the
-    system's value where it sets one, else the component's default (its start value)."""
+    system's value where it sets one, else the component's default (its start value).
+    A component given as an FMU file (:mod:`fmus.foreign`) has the parameters of its
+    model description; the system's values it lacks are left out."""
+    from .foreign import is_fmu_file
+
     result = {}
     for c in system.components:
-        inst = InProcessInstance(c.model, c.name)
-        for v in inst.variables.values():
-            if v.causality == "parameter":
-                value = c.parameters.get(v.name, getattr(inst.slave, v.name))
-                result[f"{c.name}.{v.name}"] = _CONVERT[v.type](value)
+        if is_fmu_file(c.model):
+            defaults = _fmu_parameters(c.model)
+        else:
+            inst = InProcessInstance(c.model, c.name)
+            defaults = {v.name: (v.type, getattr(inst.slave, v.name)) for v in inst.variables.values()
+                        if v.causality == "parameter"}
+        for name, (type_, default) in defaults.items():
+            result[f"{c.name}.{name}"] = _CONVERT[type_](c.parameters.get(name, default))
     return result
+
+
+def _fmu_parameters(path) -> dict:
+    """Name -> (type, start value) of an FMU file's parameters."""
+    from fmpy import read_model_description
+
+    md = read_model_description(str(path), validate=False)
+    result = {}
+    for v in md.modelVariables:
+        if v.causality == "parameter" and v.start is not None:
+            start = v.start
+            if v.type == "Boolean" and isinstance(start, str):
+                start = start.strip() in ("true", "1")
+            result[v.name] = (v.type, start)
+    return result
+
+
+#: Where a system FMU keeps the FMU files of its foreign components, in its resources.
+FOREIGN_DIR = "foreign"
 
 
 def with_parameters(system: System, values: dict) -> System:
@@ -77,7 +103,12 @@ def with_parameters(system: System, values: dict) -> System:
 
 
 def _in_process(system: System) -> Stepper:
-    instances = {c.name: InProcessInstance(c.model, c.name) for c in system.components}
+    """Our components in process, FMU files through fmpy (the master's back ends)."""
+    from .foreign import without_missing_parameters
+    from .master import _instantiate
+
+    instances = _instantiate(system, "inprocess", None)
+    system, _ = without_missing_parameters(system, {n: set(i.variables) for n, i in instances.items()})
     order = stepping_order(system, {n: inst.variables for n, inst in instances.items()})
     return Stepper(system, instances, order)
 
@@ -241,4 +272,7 @@ def read_system(resources: str) -> tuple:
 
     with open(os.path.join(resources, SYSTEM_FILE), encoding="utf-8") as f:
         data = json.load(f)
+    for c in data["system"]["components"]:      # foreign FMUs travel in the resources
+        if c["model"].startswith(FOREIGN_DIR + "/"):
+            c["model"] = os.path.join(resources, c["model"])
     return system_from_dict(data["system"]), data["role"], data.get("plant", "plant")

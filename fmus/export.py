@@ -17,11 +17,13 @@ import json
 import shutil
 import tempfile
 import zipfile
+from dataclasses import replace
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
 from .build import ROOT, STATE_OPTIONS, stage_sources
-from .embedded import SYSTEM_FILE, system_to_dict
+from .embedded import FOREIGN_DIR, SYSTEM_FILE, system_to_dict
+from .foreign import is_fmu_file
 from .guarded import START_VALUES_FILE
 from .modeldescription import fix_model_structure
 from .system import System
@@ -48,16 +50,17 @@ def build_system_fmu(role: str, system: System, path, plant: str = "plant") -> P
     path = Path(path)
     if path.suffix.lower() != ".fmu":
         raise ValueError(f"{path}: an FMU file must end in '.fmu'")
-    foreign = [f"{c.name} ({c.model})" for c in system.components if c.model not in SLAVES]
-    if foreign:
-        raise ValueError(f"cannot put {', '.join(foreign)} inside one FMU: it runs its components in process, "
-                         f"and only parcosim models ({', '.join(SLAVES)}) can; run the scene with parcosim run "
-                         "--replace, or export it with parcosim export-ssp --per-component --replace")
+    unknown = [f"{c.name} ({c.model})" for c in system.components if c.model not in SLAVES and not is_fmu_file(c.model)]
+    if unknown:
+        raise ValueError(f"cannot put {', '.join(unknown)} inside one FMU: a component is a parcosim model "
+                         f"({', '.join(SLAVES)}) or an FMU file")
     module, _ = ROLES[role]
     path.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="parcosim_system_") as tmp:
         tmp = Path(tmp)
         staged = stage_sources(tmp, SYSTEM_MODULES, slaves=True)
+        system, foreign = _carry_foreign(system, tmp)
+        staged += foreign
         spec = tmp / SYSTEM_FILE
         spec.write_text(json.dumps({"role": role, "plant": plant, "system": system_to_dict(system)}, indent=1))
         script = tmp / f"{module}.py"
@@ -68,6 +71,26 @@ def build_system_fmu(role: str, system: System, path, plant: str = "plant") -> P
                                    canHandleVariableCommunicationStepSize=variable, **STATE_OPTIONS)
     fix_model_structure(fmu, {})
     return Path(fmu)
+
+
+def _carry_foreign(system: System, tmp: Path):
+    """``system`` with each FMU-file component's file copied to ``tmp/foreign/<instance>.fmu``
+    and named so (resolved in the FMU's resources, :func:`fmus.embedded.read_system`);
+    and the project files to bundle."""
+    foreign = [c for c in system.components if is_fmu_file(c.model)]
+    if not foreign:
+        return system, []
+    folder = tmp / FOREIGN_DIR
+    folder.mkdir()
+    components = []
+    for c in system.components:
+        if is_fmu_file(c.model):
+            if not Path(c.model).is_file():
+                raise ValueError(f"component {c.name}: no FMU file {c.model}")
+            shutil.copy2(c.model, folder / f"{c.name}.fmu")
+            c = replace(c, model=f"{FOREIGN_DIR}/{c.name}.fmu")
+        components.append(c)
+    return replace(system, components=tuple(components)), [folder]
 
 
 def export_fmu(system: System, path) -> Path:

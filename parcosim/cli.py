@@ -120,10 +120,6 @@ def _command(args) -> int:
                 from fmus.ssp import export_ssp
                 system, fmus = named_models(_scene(args).system)
                 print(export_ssp(system, args.path, args.fmu_dir, fmus=fmus))
-            elif args.replace:
-                raise ValueError("the package (control chain + plant) runs the control chain inside one FMU, "
-                                 "which cannot contain a foreign FMU; add --per-component to export "
-                                 f"{', '.join(args.replace)}")
             else:
                 from scenarios.package import export_package
                 print(export_package(_scene(args), args.path, args.fmu_dir))

@@ -14,6 +14,12 @@ the scene in two instead:
   derivator, controller, observers and the drives' current controllers stepped in our
   master's order, one sample ahead, with the plant predicted by a model of it.
 
+With foreign FMUs (``Component.model`` an FMU file, ``parcosim export-ssp --replace``):
+a foreign drive stays a drive, inside ``control`` with the other components (run there
+through fmpy, its file in ``control``'s resources), and ``plant`` is the ``FiveBarPlant``
+driven by the drives' torques, its speeds measured for the drives' back-emf; a foreign
+plant cannot be packaged (the chain needs our model of it).
+
 Connections: the plant's outputs the chain reads (encoder angles on the bench; the exact
 angles and speeds in thesis_sim) go to the chain's inputs of the same names, the chain's
 commands (``v_ref1``, ``v_ref2`` or ``tau1``, ``tau2``) to the plant.  The scene's recorded
@@ -29,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from fmus.embedded import ChainCore, chain_interface
+from fmus.foreign import is_fmu_file
 from fmus.export import build_system_fmu
 from fmus.ssp import export_ssp
 from fmus.master import InProcessInstance
@@ -72,10 +79,16 @@ def package_scene(scene: Scene) -> Package:
         component.
     """
     models = {c.name: c.model for c in scene.system.components}
+    if is_fmu_file(models.get(PLANT, "")):
+        raise ValueError(f"scene {scene.name}: the plant is an FMU file ({models[PLANT]}); the package's control "
+                         "chain predicts the plant with a parcosim model of it, so the plant must be ours "
+                         "(export the scene --per-component, or as one FMU with export-fmu)")
     if models.get(PLANT) not in ("FiveBarPlant", "ActuatedFiveBarPlant"):
         raise ValueError(f"scene {scene.name}: a package needs a 5R plant instance named {PLANT!r}")
-    if "DCMotorDrive" in models.values():
-        scene = drives_in_plant(scene)
+    drives_to_plant = [split_signal(c.source)[0] for c in scene.system.connections
+                       if split_signal(c.target)[0] == PLANT]
+    if "DCMotorDrive" in models.values() and not any(is_fmu_file(models[d]) for d in drives_to_plant):
+        scene = drives_in_plant(scene)       # else the (foreign) drives stay in the chain
     chain = scene.system
     if any(c.substeps != 1 for c in chain.components):
         raise ValueError(f"scene {scene.name}: multi-rate components cannot be packaged (substeps = 1 needed)")
@@ -141,7 +154,7 @@ def run_jacobi(package: Package, plant_parameters: dict | None = None, zero_firs
     plant = InProcessInstance(component.model, PLANT)
     measured = [split_signal(c.source)[1] for c in package.system.connections if c.source.startswith(f"{PLANT}.")]
     commands = [split_signal(c.target)[1] for c in package.system.connections if c.target.startswith(f"{PLANT}.")]
-    plant.bind([plant.variables[n].vr for n in commands], [plant.variables[n].vr for n in measured + ["x", "y"]])
+    plant.bind([plant.variables[n] for n in commands], [plant.variables[n] for n in measured + ["x", "y"]])
     chain.initialize()
     plant.initialize({**component.parameters, **(plant_parameters or {})}, 0.0)
     h, rows, t = package.system.step, [], 0.0
