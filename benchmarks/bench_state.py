@@ -13,7 +13,8 @@ import statistics
 import time
 
 from fmus.build import ensure_built
-from fmus.master import _FmuInstance, stepping_order
+from fmus.instances import _FmuInstance
+from fmus.master import stepping_order
 from fmus.stepper import Stepper
 from scenarios.scenes import drives_in_plant, get_scene
 

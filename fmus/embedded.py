@@ -27,7 +27,8 @@ import math
 
 from plant.correction import MEASURABLE
 
-from .master import _CONVERT, CoSimulationError, InProcessInstance, stepping_order
+from .instances import _CONVERT, CoSimulationError, InProcessInstance
+from .master import stepping_order
 from .stepper import Stepper
 from .system import Component, Connection, System, split_signal
 

@@ -31,7 +31,8 @@ from .system import System
 #: Slave module and class of each system role.
 ROLES = {"loop": ("parcosim_closedloop", "ClosedLoop"), "chain": ("parcosim_controlchain", "ControlChain")}
 #: The ``fmus`` modules a system FMU needs beyond the slave base: the in-process master.
-SYSTEM_MODULES = ("embedded.py", "master.py", "registry.py", "stepper.py", "system.py", "systemslave.py")
+SYSTEM_MODULES = ("embedded.py", "foreign.py", "instances.py", "master.py", "registry.py", "stepper.py", "system.py",
+                  "systemslave.py")
 
 
 def build_system_fmu(role: str, system: System, path, plant: str = "plant") -> Path:

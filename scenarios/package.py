@@ -38,7 +38,7 @@ from fmus.embedded import ChainCore, chain_interface
 from fmus.foreign import is_fmu_file
 from fmus.export import build_system_fmu
 from fmus.ssp import export_ssp
-from fmus.master import InProcessInstance
+from fmus.instances import InProcessInstance
 from fmus.system import Component, Connection, System, split_signal
 
 from .scenes import Scene, drives_in_plant

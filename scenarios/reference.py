@@ -71,7 +71,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from fmus.master import CoSimulationError, InProcessInstance, RecordedRun, slave_variables, stepping_order
+from fmus.instances import InProcessInstance, slave_variables
+from fmus.master import CoSimulationError, RecordedRun, stepping_order
 from fmus.system import System, split_signal
 from motor import shaft_torque
 from plant import fivebar

@@ -16,7 +16,7 @@ from fmpy.validation import validate_fmu
 from fmus.export import export_fmu
 from fmus.master import simulate
 from fmus.ssp import export_ssp
-from fmus.ssp_run import ecos_available, simulate_ssp_ecos
+from fmus.ssp_run import ecos_available
 from fmus.system import Component, System
 from scenarios.scenes import get_scene
 
@@ -75,28 +75,26 @@ def test_an_inner_parameter_changes_the_path_as_in_the_scene(exported):
     assert _deviation(run["time"], run["x"], run["y"], simulate(system), system.step) > 1e-6
 
 
-def test_ecos_runs_the_fmu_as_parcosim_run(exported, tmp_path):
-    reason = ecos_available()
+def _unavailable(tool):
+    if tool == "ecos":
+        return ecos_available()
+    from fmus.libcosim_runner import libcosim_available
+
+    return libcosim_available()
+
+
+@pytest.mark.parametrize("tool", ["ecos", "libcosim"])
+def test_the_tools_run_the_fmu_as_parcosim_run(exported, tmp_path, tool):
+    """The FMU alone in a package, run by Ecos and by libcosim as by fmpy."""
+    reason = _unavailable(tool)
     if reason:
-        pytest.skip(f"ecospy cannot be loaded: {reason}")
+        pytest.skip(f"{tool} cannot be loaded: {reason}")
+    from scenarios.tools import run_tool
+
     _, system, path = exported
     alone = System((Component("loop", "ClosedLoop"),), (), ("loop.x", "loop.y"), system.stop_time, system.step)
     package = export_ssp(alone, tmp_path / "loop.ssp", fmus={"ClosedLoop": path})
-    run = simulate_ssp_ecos(package, ["loop.x", "loop.y"])
-    assert run.error is None
-    assert _deviation(run.time, run["loop.x"], run["loop.y"], simulate(system), system.step) <= TOL
-
-
-def test_libcosim_runs_the_fmu_as_parcosim_run(exported, tmp_path):
-    from fmus.libcosim_runner import libcosim_available, simulate_ssp_libcosim
-
-    reason = libcosim_available()
-    if reason:
-        pytest.skip(f"libcosimpy cannot be loaded: {reason}")
-    _, system, path = exported
-    alone = System((Component("loop", "ClosedLoop"),), (), ("loop.x", "loop.y"), system.stop_time, system.step)
-    package = export_ssp(alone, tmp_path / "loop.ssp", fmus={"ClosedLoop": path})
-    run = simulate_ssp_libcosim(package, ["loop.x", "loop.y"])
+    run = run_tool(tool, package, ["loop.x", "loop.y"], system.stop_time, system.step)
     assert run.error is None
     assert _deviation(run.time, run["loop.x"], run["loop.y"], simulate(system), system.step) <= TOL
 
@@ -121,3 +119,37 @@ def test_a_step_that_is_not_a_whole_number_of_its_steps_is_refused(exported):
     assert "step size 0.0005 s" in message and "whole multiple of h = 0.001 s" in message
     fmu.terminate()
     fmu.freeInstance()
+
+
+def _imports_of(source: str) -> set:
+    """The ``fmus`` modules a module imports (``from .x``, ``from fmus.x``, ``from fmus import x``)."""
+    import ast
+
+    found = set()
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.ImportFrom):
+            module = node.module or ""
+            if node.level == 1:
+                found.add(module.split(".")[0] if module else "")
+                if not module:
+                    found.update(alias.name for alias in node.names)
+            elif module.startswith("fmus."):
+                found.add(module.split(".")[1])
+            elif module == "fmus":
+                found.update(alias.name for alias in node.names)
+    return found - {""}
+
+
+def test_the_fmu_bundles_every_fmus_module_it_imports(exported):
+    """An importer's Python has no parcosim: every ``fmus`` module the bundled code imports
+    must travel in the FMU (in this process the repository's would hide a missing one)."""
+    import zipfile
+
+    _, _, path = exported
+    with zipfile.ZipFile(path) as z:
+        sources = {name[len("resources/fmus/"):]: z.read(name).decode() for name in z.namelist()
+                   if name.startswith("resources/fmus/") and name.endswith(".py")}
+    bundled = {name[:-3] for name in sources if "/" not in name} | {"slaves"}
+    # fmus.build: only the master's "fmu" mode imports it; a system FMU runs in process.
+    needed = set().union(*(_imports_of(text) for text in sources.values())) - {"build"}
+    assert needed <= bundled, f"imported but not in the FMU: {sorted(needed - bundled)}"

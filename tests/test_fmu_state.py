@@ -11,7 +11,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fmus.master import InProcessInstance, _FmuInstance, simulate, stepping_order
+from fmus.instances import InProcessInstance, _FmuInstance
+from fmus.master import simulate, stepping_order
 from fmus.stepper import Stepper
 from fmus.system import Component, System
 from scenarios.scenes import drives_in_plant, get_scene
