@@ -15,7 +15,7 @@ process, as the tool's documentation says (nothing but the ``.ssp``):
 
 and prints, per scene and tool, e_ef and τ_ef (7.31-7.32) against ``parcosim run SCENE``
 and the wall time per step.  With no scene: all 16 bench scenes and thesis_sim_circle
-(slow: tens of minutes).  The table in docs/ssp.md is its output.
+(about 4 minutes here).  ``--docs`` puts the table into docs/ssp.md.
 """
 from __future__ import annotations
 
@@ -161,6 +161,7 @@ def main(argv=None) -> int:
     parser.add_argument("--tools", default=",".join(TOOLS), help="comma-separated, from " + ", ".join(TOOLS))
     parser.add_argument("--stop-time", type=float, default=None, help="shorten every scene to this [s]")
     parser.add_argument("--out", default=None, help="also write the markdown table here")
+    parser.add_argument("--docs", action="store_true", help="also put the table into docs/ssp.md")
     args = parser.parse_args(argv)
     tools = [t for t in args.tools.split(",") if t]
     results = {}
@@ -176,7 +177,21 @@ def main(argv=None) -> int:
     print(text)
     if args.out:
         Path(args.out).write_text(text)
+    if args.docs:
+        write_docs_table(text)
     return 0
+
+
+#: Where :func:`write_docs_table` puts the table: between these lines of docs/ssp.md.
+DOCS = Path(__file__).resolve().parent.parent / "docs" / "ssp.md"
+TABLE_START, TABLE_END = "<!-- tools table: python -m scenarios.tools --docs -->", "<!-- end of tools table -->"
+
+
+def write_docs_table(text: str, path=DOCS) -> None:
+    """Replace the table between :data:`TABLE_START` and :data:`TABLE_END` in ``path``."""
+    doc = Path(path).read_text()
+    start, end = doc.index(TABLE_START) + len(TABLE_START), doc.index(TABLE_END)
+    Path(path).write_text(doc[:start] + "\n" + text + doc[end:])
 
 
 if __name__ == "__main__":
