@@ -30,10 +30,11 @@ from .parallel import mechanism_state
 CELL_MARGIN = 0.05
 #: A moved angle also moves its speed by this fraction of (the move / the step): a
 #: model that leaves its encoder cell is off in speed too, and without a speed correction
-#: it leaves the cell again at once.  A moderate observer gain; measured on 2 s of three
-#: bench scenes with a 0, 40 and 100 g payload the model does not have (docs/ssp.md), RMS
-#: error against the master's with the same plant: gain 0: 1.00-1.35x, 0.1: 0.99-1.08x,
-#: 0.3: 0.99-1.05x, 1: 1.00-1.04x (twice the corrections).
+#: it leaves the cell again at once (where the speed is not measured).  A moderate
+#: observer gain; measured with the drives in the plant on 2 s of three bench scenes with a
+#: 0, 40 and 100 g payload the model does not have (docs/ssp.md), RMS error against the
+#: master's with the same plant: gain 0: 1.00-1.35x, 0.1: 0.995-1.08x, 0.3: 0.996-1.05x,
+#: 1: 0.997-1.03x (twice the corrections).
 VELOCITY_GAIN = 0.3
 MEASURABLE = ("q1", "q2", "dq1", "dq2", "q1_enc", "q2_enc")
 

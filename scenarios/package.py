@@ -6,23 +6,23 @@ component, the bench's loop trajectory -> derivator -> controller -> drive -> pl
 about 90 times worse there than in our master (docs/ssp.md).  :func:`package_scene` cuts
 the scene in two instead:
 
-* ``plant``: the mechanism's FMU.  With drives, the ``ActuatedFiveBarPlant`` of
-  :func:`scenarios.scenes.drives_in_plant` (mechanism and armature currents, one ODE) in
-  voltage mode: the drives' voltages come from the chain.  Without (``thesis_sim_circle``),
-  the ``FiveBarPlant`` with its torques from the chain.
-* ``control``: the FMU ``ControlChain`` (:class:`fmus.embedded.ChainCore`): trajectory,
-  derivator, controller, observers and the drives' current controllers stepped in our
-  master's order, one sample ahead, with the plant predicted by a model of it.
+* ``plant``: the mechanism's FMU, the scene's own plant component: on the bench the
+  ``FiveBarPlant`` with its torques ``tau1``, ``tau2`` from the drives; in
+  ``thesis_sim_circle`` from the controller; after
+  :func:`scenarios.scenes.drives_in_plant` (``--drives-in-plant N``) the
+  ``ActuatedFiveBarPlant`` in voltage mode, the voltages from the drives' current
+  controllers.
+* ``control``: the FMU ``ControlChain`` (:class:`fmus.embedded.ChainCore`): every other
+  component of the scene (trajectory, derivator, controller, observers, drives: foreign
+  ones too, run there through fmpy from its resources) stepped in our master's order, one
+  sample ahead, with the plant predicted by the scene's plant component as the model.
 
-With foreign FMUs (``Component.model`` an FMU file, ``parcosim export-ssp --replace``):
-a foreign drive stays a drive, inside ``control`` with the other components (run there
-through fmpy, its file in ``control``'s resources), and ``plant`` is the ``FiveBarPlant``
-driven by the drives' torques, its speeds measured for the drives' back-emf; a foreign
-plant cannot be packaged (the chain needs our model of it).
+A foreign plant cannot be packaged (the chain needs our model of it).
 
-Connections: the plant's outputs the chain reads (encoder angles on the bench; the exact
-angles and speeds in thesis_sim) go to the chain's inputs of the same names, the chain's
-commands (``v_ref1``, ``v_ref2`` or ``tau1``, ``tau2``) to the plant.  The scene's recorded
+Connections: the plant's outputs the chain reads (on the bench the encoder angles and the
+shaft speeds the drives' back-emf needs; in thesis_sim the exact angles and speeds) go to
+the chain's inputs of the same names, the chain's commands (``tau1``, ``tau2`` or
+``v_ref1``, ``v_ref2``) to the plant.  The scene's recorded
 signals keep their names on the plant (``plant.x``) and become outputs of the chain named
 by the signal (``control.traj.x_d``).
 """
@@ -41,7 +41,7 @@ from fmus.ssp import export_ssp
 from fmus.instances import InProcessInstance
 from fmus.system import Component, Connection, System, split_signal
 
-from .scenes import Scene, drives_in_plant
+from .scenes import Scene
 
 PLANT = "plant"
 CONTROL = "control"
@@ -59,8 +59,8 @@ class Package:
     system : System
         The two instances ``control`` (model :data:`CHAIN_MODEL`) and ``plant``.
     chain : System
-        What the ``control`` FMU steps inside: the scene (drives moved into its plant),
-        whose plant component is the chain's model of the plant.
+        What the ``control`` FMU steps inside: the scene, whose plant component is the
+        chain's model of the plant.
     """
 
     scene: Scene
@@ -74,9 +74,8 @@ def package_scene(scene: Scene) -> Package:
     Raises
     ------
     ValueError
-        The scene has no component ``plant`` of model ``FiveBarPlant``, or drives that
-        cannot move into it (:func:`scenarios.scenes.drives_in_plant`), or a multi-rate
-        component.
+        The scene has no component ``plant`` of model ``FiveBarPlant`` or
+        ``ActuatedFiveBarPlant`` (a foreign plant among them), or a multi-rate component.
     """
     models = {c.name: c.model for c in scene.system.components}
     if is_fmu_file(models.get(PLANT, "")):
@@ -85,10 +84,6 @@ def package_scene(scene: Scene) -> Package:
                          "(export the scene --per-component, or as one FMU with export-fmu)")
     if models.get(PLANT) not in ("FiveBarPlant", "ActuatedFiveBarPlant"):
         raise ValueError(f"scene {scene.name}: a package needs a 5R plant instance named {PLANT!r}")
-    drives_to_plant = [split_signal(c.source)[0] for c in scene.system.connections
-                       if split_signal(c.target)[0] == PLANT]
-    if "DCMotorDrive" in models.values() and not any(is_fmu_file(models[d]) for d in drives_to_plant):
-        scene = drives_in_plant(scene)       # else the (foreign) drives stay in the chain
     chain = scene.system
     if any(c.substeps != 1 for c in chain.components):
         raise ValueError(f"scene {scene.name}: multi-rate components cannot be packaged (substeps = 1 needed)")

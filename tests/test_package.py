@@ -38,31 +38,36 @@ def _tracking(x, y, x_d, y_d, h, window=(1.0, 2.0)):
 
 def test_package_shape():
     """Two instances, the plant named ``plant`` with its x, y; only measurements and commands
-    cross; the bench's drives are inside the plant, driven in voltage mode."""
+    cross: the drives' torques to the plant, its encoder angles and shaft speeds back."""
     package = package_scene(get_scene("bench_circle_TCMDx"))
     system = package.system
     assert [c.name for c in system.components] == [CONTROL, PLANT]
-    assert system.component(PLANT).model == "ActuatedFiveBarPlant"
-    assert system.component(PLANT).parameters["mode"] == "voltage"
+    assert system.component(PLANT).model == "FiveBarPlant"
     links = {(c.source, c.target) for c in system.connections}
     assert links == {("plant.q1_enc", "control.q1_enc"), ("plant.q2_enc", "control.q2_enc"),
-                     ("control.v_ref1", "plant.v_ref1"), ("control.v_ref2", "plant.v_ref2")}
+                     ("plant.dq1", "control.dq1"), ("plant.dq2", "control.dq2"),
+                     ("control.tau1", "plant.tau1"), ("control.tau2", "plant.tau2")}
     assert package.scene.columns["x"] == "plant.x" and package.scene.columns["x_d"] == "control.traj.x_d"
+    assert package.scene.columns["i1"] == "control.drive1.i"
     thesis = package_scene(get_scene("thesis_sim_circle"))
     assert chain_interface(thesis.chain) == (("q1", "q2", "dq1", "dq2"),
                                              {"tau1": "ctrl.tau1", "tau2": "ctrl.tau2"})
+    in_plant = package_scene(drives_in_plant(get_scene("bench_circle_TCMDx"), substeps=8)).system
+    assert in_plant.component(PLANT).parameters["mode"] == "voltage"
+    assert {c.target for c in in_plant.connections} >= {"plant.v_ref1", "plant.v_ref2"}
 
 
-@pytest.mark.parametrize("name", ["thesis_sim_circle", "bench_circle_TCMDx"])
+@pytest.mark.parametrize("name", ["thesis_sim_circle", "bench_circle_TCMDx", "bench_circle_TCMDx in plant"])
 def test_chain_one_step_ahead_is_the_masters_loop(name):
     """With its model equal to the plant and the sample of t = 0 commanding the first step
     (``zero_start=False``, for masters that pass the outputs after initialisation), the
-    Jacobi-stepped package is the Gauss-Seidel master's run of the same physics bit for
-    bit (the bench: its drives in the plant), and the measurement never corrects the model."""
-    scene = _short(get_scene(name), 0.5)
+    Jacobi-stepped package is the Gauss-Seidel master's run of the scene bit for bit (also
+    with the drives in the plant), and the measurement never corrects the model."""
+    scene = _short(get_scene(name.split()[0]), 0.5)
+    if name.endswith("in plant"):
+        scene = drives_in_plant(scene, substeps=8)
     (x, y, x_d, y_d), chain = jacobi_package_run(package_scene(scene), zero_start=False)
-    same_physics = drives_in_plant(scene) if name.startswith("bench") else scene
-    master = simulate(same_physics.system)
+    master = simulate(scene.system)
     assert chain.corrections == 0
     assert np.array_equal(x, master["plant.x"]) and np.array_equal(y, master["plant.y"])
     assert np.array_equal(x_d, master["traj.x_d"])
