@@ -60,3 +60,12 @@ def test_exact_measurements_are_taken_as_they_are(moving):
 def test_unmeasurable_outputs_are_refused(moving):
     with pytest.raises(ValueError, match="cannot correct the plant model with \\['x'\\]"):
         corrected_state(moving, {"x": 0.0}, H)
+
+
+def test_an_exact_measurement_an_ulp_away_changes_nothing(moving):
+    """A master whose step sizes are an ulp off the model's (libcosim) must not make the
+    model correct itself every step; a real difference still does."""
+    o = moving.outputs()
+    nudged = {k: float(np.nextafter(o[k], np.inf)) for k in ("q1", "q2", "dq1", "dq2")}
+    assert corrected_state(moving, nudged, H) is None
+    assert corrected_state(moving, {**nudged, "dq2": o["dq2"] + 1e-6}, H) is not None
