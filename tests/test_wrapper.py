@@ -351,3 +351,30 @@ def test_instances_neither_grow_sys_path_nor_leak_objects(built_fmus, tmp_path):
     """)
     assert result["paths"][0] == result["paths"][1] and result["resources"] == 1
     assert result["objects"][1] - result["objects"][0] < 50, result["objects"]
+
+
+def test_without_a_compiler_fmus_keep_pythonfmus_binary_with_one_warning(built_fmus, tmp_path, monkeypatch):
+    import shutil
+    import warnings
+
+    import fmus.wrapper as wrapper
+
+    fmu = tmp_path / "Trajectory.fmu"
+    shutil.copy2(built_fmus["Trajectory"], fmu)
+    with zipfile.ZipFile(fmu) as z:   # pythonfmu's binary in place of ours
+        items = {i.filename: z.read(i.filename) for i in z.infolist()}
+    import pythonfmu
+    items["binaries/linux64/Trajectory.so"] = (Path(pythonfmu.__file__).parent / "resources" / "binaries" / "linux64"
+                                               / "libpythonfmu-export.so").read_bytes()
+    with zipfile.ZipFile(fmu, "w") as z:
+        for name, data in items.items():
+            z.writestr(name, data)
+    monkeypatch.setattr(wrapper, "compiler", lambda: None)
+    monkeypatch.setattr(wrapper, "_warned", False)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert not wrapper.install_wrapper(fmu) and not wrapper.install_wrapper(fmu)
+    assert len(caught) == 1 and "no C compiler" in str(caught[0].message)
+    assert not has_wrapper(fmu)
+    monkeypatch.undo()
+    assert wrapper.install_wrapper(fmu) and has_wrapper(fmu)
