@@ -25,7 +25,6 @@ import os
 import subprocess
 import sys
 import tempfile
-import textwrap
 import zipfile
 from pathlib import Path
 
@@ -127,8 +126,9 @@ def run(what: str, timeout: float = 600, **args):
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--runs", type=int, default=20, help="processes per FMU and binary for the exit count")
-    parser.add_argument("--cycles", type=int, default=500, help="instantiate/free cycles measured (after --warmup)")
-    parser.add_argument("--warmup", type=int, default=50)
+    parser.add_argument("--cycles", type=int, default=1000, help="instantiate/free cycles measured (after --warmup)")
+    parser.add_argument("--warmup", type=int, default=200)
+    parser.add_argument("--measures", default="memory,speed,exit", help="which measures, comma-separated")
     parser.add_argument("--calls", type=int, default=20000, help="SetReal+DoStep+GetReal triples per repeat")
     parser.add_argument("--exit-models", default="DCMotorDrive,FiveBarPlant")
     parser.add_argument("--memory-models", default="Trajectory,DCMotorDrive,PositionController")
@@ -150,35 +150,52 @@ def main(argv=None) -> None:
             for label, binary in binaries.items():
                 paths[model, label] = str(with_binary(fmu, binary, tmp / label / model))
 
-        print(f"memory: RSS growth per instantiate/initialise/step/free cycle after {args.warmup} cycles, "
-              f"over {args.cycles} cycles")
-        print(f"{'FMU':<22}{'wrapper':<11}{'kB/cycle':>10}{'sys.path +':>12}")
-        for model in args.memory_models.split(","):
-            for label in binaries:
-                result, status = run("memory", path=paths[model, label], warmup=args.warmup, cycles=args.cycles)
-                if result is None:
-                    print(f"{model:<22}{label:<11}{'crashed (exit status ' + str(status) + ')':>22}")
-                else:
-                    print(f"{model:<22}{label:<11}{result['kb_per_cycle']:>10.2f}{result['sys_path_growth']:>12d}")
+        measures = args.measures.split(",")
+        if "memory" in measures:
+            memory(args, paths, binaries)
+        if "speed" in measures:
+            speed(args, paths, binaries)
+        if "exit" in measures:
+            exits(args, paths, binaries)
 
-        print(f"\nspeed: µs per fmi2SetReal(i_ref) + fmi2DoStep(1 ms) + fmi2GetReal(tau), DCMotorDrive, raw ctypes, "
-              f"best of 5 x {args.calls}")
-        result, status = run("speed", paths=[paths["DCMotorDrive", label] for label in binaries], calls=args.calls,
-                             repeats=5, input_name="i_ref", output_name="tau")
-        if result is None:
-            print(f"crashed (exit status {status})")
-        else:
-            ours, theirs = result["us_per_call"]
-            print(f"parcosim {ours:.2f} µs, pythonfmu {theirs:.2f} µs: parcosim/pythonfmu = {ours / theirs:.3f} "
-                  f"({theirs - ours:+.2f} µs per step saved)")
 
-        print(f"\nexit: abnormal exits of {args.runs} processes that instantiate, initialise, step once, free and exit")
-        for model in args.exit_models.split(","):
-            for label in binaries:
-                statuses = [run("exit_run", path=paths[model, label])[1] for _ in range(args.runs)]
-                bad = [s for s in statuses if s != 0]
-                print(f"{model:<22}{label:<11}{len(bad):>3} of {args.runs} abnormal"
-                      + (f" (exit statuses {sorted(set(bad))})" if bad else ""))
+def memory(args, paths, binaries):
+    """RSS and sys.path growth per cycle, each FMU and binary in its own process."""
+    print(f"memory: RSS growth per instantiate/initialise/step/free cycle after {args.warmup} cycles, "
+          f"over {args.cycles} cycles")
+    print(f"{'FMU':<22}{'wrapper':<11}{'kB/cycle':>10}{'sys.path +':>12}")
+    for model in args.memory_models.split(","):
+        for label in binaries:
+            result, status = run("memory", path=paths[model, label], warmup=args.warmup, cycles=args.cycles)
+            if result is None:
+                print(f"{model:<22}{label:<11}{'crashed (exit status ' + str(status) + ')':>22}")
+            else:
+                print(f"{model:<22}{label:<11}{result['kb_per_cycle']:>10.2f}{result['sys_path_growth']:>12d}")
+
+
+def speed(args, paths, binaries):
+    """µs per SetReal + DoStep + GetReal, both binaries in one process."""
+    print(f"\nspeed: µs per fmi2SetReal(i_ref) + fmi2DoStep(1 ms) + fmi2GetReal(tau), DCMotorDrive, raw ctypes, "
+          f"best of 5 x {args.calls}")
+    result, status = run("speed", paths=[paths["DCMotorDrive", label] for label in binaries], calls=args.calls,
+                         repeats=5, input_name="i_ref", output_name="tau")
+    if result is None:
+        print(f"crashed (exit status {status})")
+    else:
+        ours, theirs = result["us_per_call"]
+        print(f"parcosim {ours:.2f} µs, pythonfmu {theirs:.2f} µs: parcosim/pythonfmu = {ours / theirs:.3f} "
+              f"({theirs - ours:+.2f} µs per step saved)")
+
+
+def exits(args, paths, binaries):
+    """Abnormal exits over --runs processes per FMU and binary."""
+    print(f"\nexit: abnormal exits of {args.runs} processes that instantiate, initialise, step once, free and exit")
+    for model in args.exit_models.split(","):
+        for label in binaries:
+            statuses = [run("exit_run", path=paths[model, label])[1] for _ in range(args.runs)]
+            bad = [s for s in statuses if s != 0]
+            print(f"{model:<22}{label:<11}{len(bad):>3} of {args.runs} abnormal"
+                  + (f" (exit statuses {sorted(set(bad))})" if bad else ""))
 
 
 if __name__ == "__main__":
