@@ -2,7 +2,9 @@
 
 Each FMU bundles the pure model packages (``plant``, ``motor``,
 ``controller``) and the slave base (:data:`BUNDLED_FMUS_MODULES`) in its resources, so
-an importer needs only a Python 3.11 with numpy, scipy, numba and control.
+an importer needs only a Python 3.11 with numpy, scipy, numba and control.  Each FMU's
+binary is parcosim's FMI wrapper (:mod:`fmus.wrapper`), compiled once per machine; without
+a C compiler it stays pythonfmu's.
 """
 from __future__ import annotations
 
@@ -17,6 +19,8 @@ from pythonfmu import FmuBuilder
 from .foreign import built_by_parcosim, mark_file
 from .modeldescription import fix_model_structure
 from .registry import SLAVES
+from .wrapper import SOURCE as WRAPPER_SOURCE
+from .wrapper import install_wrapper
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_OUT = ROOT / "fmus" / "build"
@@ -78,12 +82,13 @@ def build_fmu(model: str, out_dir: Path = DEFAULT_OUT) -> Path | None:
         fmu = FmuBuilder.build_FMU(staged_script, dest=tmp / "out" / target.name, project_files=project_files,
                                    canHandleVariableCommunicationStepSize="true", **STATE_OPTIONS)
         fix_model_structure(fmu, getattr(slave_class, "feedthrough", {}))
+        install_wrapper(fmu)
         shutil.move(fmu, target)
     return target
 
 
 def _sources(model: str) -> list[Path]:
-    files = [ROOT / "fmus" / module for module in BUNDLED_FMUS_MODULES]
+    files = [ROOT / "fmus" / module for module in BUNDLED_FMUS_MODULES] + [WRAPPER_SOURCE]
     files.append(ROOT / "fmus" / "slaves" / f"{SLAVES[model]}.py")
     for package in BUNDLED_PACKAGES:
         files.extend((ROOT / package).rglob("*.py"))

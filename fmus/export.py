@@ -27,6 +27,7 @@ from .foreign import is_fmu_file
 from .guarded import START_VALUES_FILE
 from .modeldescription import fix_model_structure
 from .system import System
+from .wrapper import install_wrapper
 
 #: Slave module and class of each system role.
 ROLES = {"loop": ("parcosim_closedloop", "ClosedLoop"), "chain": ("parcosim_controlchain", "ControlChain")}
@@ -71,6 +72,7 @@ def build_system_fmu(role: str, system: System, path, plant: str = "plant") -> P
         fmu = FmuBuilder.build_FMU(script, dest=path, project_files=staged + [spec],
                                    canHandleVariableCommunicationStepSize=variable, **STATE_OPTIONS)
     fix_model_structure(fmu, {})
+    install_wrapper(fmu)
     return Path(fmu)
 
 

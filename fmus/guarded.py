@@ -11,7 +11,10 @@ return.  So:
 * ``do_step`` catches everything, logs "<instance>: <what> at t = <time>",
   keeps the outputs of the last good step and returns False (fmi2Discard);
 * log messages reach the importer only if it turned logging on, so the same
-  message also goes to stderr and to the String output ``error``.
+  message also goes to stderr (where a failed write is ignored) and to the String
+  output ``error``;
+* :class:`FmiError` raised in a callback refuses that call with ``fmi2Error`` under
+  parcosim's FMI wrapper (:mod:`fmus.wrapper`).
 
 The FMU state (``fmi2GetFMUstate`` ...) is the slave's whole Python state, model objects
 and refusal flag included (:mod:`fmus.fmustate`): restoring a state taken before a
@@ -198,7 +201,22 @@ class GuardedSlave(Fmi2Slave):
         self.error = message if repeat else text
         line = f"{self.instance_name}: {text}"
         self.log(line, Fmi2Status.error, category="logStatusError")
-        print(f"[parcosim] {line}", file=sys.stderr)
+        try:   # a closed, full or unwritable stderr must not turn a refusal into a failure
+            print(f"[parcosim] {line}", file=sys.stderr, flush=True)
+        except (OSError, ValueError, AttributeError):   # ValueError: closed; AttributeError: sys.stderr is None
+            pass
+
+
+class FmiError(Exception):
+    """Refuse the current FMI call with ``fmi2Error``.
+
+    parcosim's FMI wrapper (``fmus/wrapper/parcosim_fmi2.c``) turns this exception, raised
+    in any callback of a slave, into ``fmi2Error`` and logs its message alone (category
+    ``logStatusError``); any other exception, ``KeyboardInterrupt`` included, also becomes
+    ``fmi2Error``, logged as ``<Type>: <message>``.  The instance stays valid: the importer
+    may go on calling it or free it.  (Under pythonfmu's own wrapper any exception is
+    ``fmi2Fatal``.)
+    """
 
 
 #: Start value of a numeric parameter meaning "the preset's value".
