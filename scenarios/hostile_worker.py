@@ -110,11 +110,14 @@ class Runner:
         self.call("enterInitializationMode", f.enterInitializationMode)
         for op in case["ops"]:
             if op[0] == "step_before_init":
-                self.call("doStep before initialisation", lambda: f.doStep(op[1], op[2]))
+                status, _ = self.call("doStep before initialisation", lambda: f.doStep(op[1], op[2]))
+                if status == 0:
+                    self.problems.append("doStep before initialisation returned fmi2OK")
         for name, value in case["parameters"]:
             self.set(name, value)
         self.call("exitInitializationMode", f.exitInitializationMode)
         t, last = case["start_time"], 0.0
+        terminated, state_time = False, None
         for op in case["ops"]:
             kind = op[0]
             if kind == "set":
@@ -124,9 +127,18 @@ class Runner:
             elif kind == "step":
                 point = t + last if op[1] is None else op[1]
                 h = op[2]
-                status, _ = self.call(f"doStep({point!r}, {h!r})", lambda: f.doStep(point, h))
+                label = f"doStep({point!r}, {h!r})"
+                status, _ = self.call(label, lambda: f.doStep(point, h))
                 if status == 0:
-                    self.check_outputs(f"doStep({point!r}, {h!r})")
+                    self.check_outputs(label)
+                    expected = t + last
+                    if not (math.isfinite(h) and h > 0.0):
+                        self.problems.append(f"{label} accepted a step size that is not finite and > 0")
+                    if not abs(point - expected) <= 1e-9 * max(1e-3, abs(expected)):
+                        self.problems.append(f"{label} accepted a communication point that does not follow "
+                                             f"the last one ({expected!r})")
+                    if terminated:
+                        self.problems.append(f"{label} after fmi2Terminate returned fmi2OK")
                     t, last = point, h
             elif kind == "get":
                 self.check_outputs("get")
@@ -134,15 +146,19 @@ class Runner:
                 os.kill(os.getpid(), signal.SIGSEGV)
             elif kind == "terminate":
                 self.call("terminate", f.terminate)
-            elif kind == "get_state":
+                terminated = True
+            elif kind == "get_state" and not terminated:
                 status, state = self.call("getFMUstate", f.getFMUState)
                 if status == 0:
-                    self.state = state
-            elif kind == "set_state" and self.state is not None:
-                self.call("setFMUstate", lambda: f.setFMUState(self.state))
+                    self.state, state_time = state, t + last
+            elif kind == "set_state" and self.state is not None and not terminated:
+                status, _ = self.call("setFMUstate", lambda: f.setFMUState(self.state))
+                if status == 0:
+                    t, last = state_time, 0.0
         if self.state is not None:
             self.call("freeFMUstate", lambda: f.freeFMUState(self.state))
-        self.call("terminate", f.terminate)
+        if not terminated:
+            self.call("terminate", f.terminate)
         self.call("freeInstance", f.freeInstance)
 
 
