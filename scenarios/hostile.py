@@ -311,3 +311,13 @@ def cases_for(model: str, unzip_dir, seeds, wrapper: bool = False, kinds=None) -
     variables = variable_table(read_model_description(str(unzip_dir)))
     return [make_case(model, variables, seed, kind=kinds[i % len(kinds)] if kinds else None, wrapper=wrapper)
             for i, seed in enumerate(seeds)]
+
+
+def warm_up(unzipped: dict, numba_cache) -> list:
+    """Instantiate, initialise and step each FMU once in a worker, filling the shared numba
+    cache: the first initialisation with an empty cache compiles the kernels (3-11 s on two
+    shared cores), the one call allowed over :data:`CALL_LIMIT` (docs/extremes.md).  The
+    results are returned, not judged."""
+    cases = [{"model": model, "kind": "warm-up", "seed": 0, "instance_name": "warm-up", "logging": False,
+              "start_time": 0.0, "parameters": [], "ops": [["step", None, 1e-3]]} for model in unzipped]
+    return run_cases(cases, unzipped, numba_cache, case_timeout=10 * CASE_TIMEOUT)

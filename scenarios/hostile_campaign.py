@@ -47,6 +47,7 @@ def main(argv=None) -> int:
         kinds = [k for k in hostile.KINDS if wrapper[model] or k not in hostile.WRAPPER_KINDS]
         cases += hostile.cases_for(model, path, range(args.seed, args.seed + per_model), wrapper=wrapper[model],
                                    kinds=kinds)
+    hostile.warm_up(unzipped, work / "numba")
     start = time.perf_counter()
     done = [0]
 

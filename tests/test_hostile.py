@@ -39,7 +39,9 @@ CI = settings(max_examples=1, derandomize=True, deadline=None, database=None,
 def extracted(built_fmus, tmp_path_factory):
     """Model -> its FMU extracted once; a numba cache shared by all workers."""
     root = tmp_path_factory.mktemp("hostile")
-    return hostile.extract_fmus(built_fmus, root / "fmus"), root / "numba"
+    unzipped = hostile.extract_fmus(built_fmus, root / "fmus")
+    hostile.warm_up(unzipped, root / "numba")         # compiles the kernels: not a hostile call
+    return unzipped, root / "numba"
 
 
 @pytest.fixture(scope="session")
