@@ -286,7 +286,7 @@ class GuardedSlave(Fmi2Slave):
 
     def _settable(self, kind) -> dict:
         """Value reference -> name of the variables of ``kind`` a set may change now: inputs,
-        and parameters until initialisation."""
+        tunable parameters, and fixed parameters until initialisation."""
         key = (kind, self._initialised)
         try:
             cache = self.__settable
@@ -297,7 +297,8 @@ class GuardedSlave(Fmi2Slave):
             names = cache[key] = {
                 vr: v.name for vr, v in self.vars.items()
                 if isinstance(v, kind) and (v.causality == Fmi2Causality.input or (
-                    v.causality == Fmi2Causality.parameter and not self._initialised))}
+                    v.causality == Fmi2Causality.parameter and (
+                        not self._initialised or v.variability == Fmi2Variability.tunable)))}
         return names
 
     def _now(self) -> str:

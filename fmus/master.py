@@ -44,7 +44,7 @@ counts as the interruption).
 from __future__ import annotations
 
 import contextlib
-import signal
+import signal as _signal
 import threading
 import time as _time
 import warnings
@@ -306,7 +306,7 @@ def deferred_sigint():
     Outside the main thread, or under a handler other than Python's default, nothing changes."""
     interrupt = _Interrupt()
     if threading.current_thread() is not threading.main_thread() or \
-            signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+            _signal.getsignal(_signal.SIGINT) is not _signal.default_int_handler:
         yield interrupt
         return
 
@@ -315,11 +315,11 @@ def deferred_sigint():
             raise KeyboardInterrupt
         interrupt.requested = True
 
-    signal.signal(signal.SIGINT, handler)
+    _signal.signal(_signal.SIGINT, handler)
     try:
         yield interrupt
     finally:
-        signal.signal(signal.SIGINT, signal.default_int_handler)
+        _signal.signal(_signal.SIGINT, _signal.default_int_handler)
 
 
 def _simulate(system, mode, coupling, fmu_dir, progress, retry_substeps, interrupt) -> Result:

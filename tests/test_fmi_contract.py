@@ -328,3 +328,27 @@ def test_a_controller_with_an_unwritable_cache_initialises(tmp_path, monkeypatch
         warnings.simplefilter("ignore")
         slave = make_slave("PositionController", {"grid_step": 0.02})
     assert slave._ready, slave.error
+
+
+def test_a_tunable_parameter_may_be_set_after_initialisation():
+    from pythonfmu import Fmi2Variability
+
+    from fmus.guarded import GuardedSlave
+
+    class Tunable(GuardedSlave):
+        def __init__(self, **kwargs):
+            super().__init__(**kwargs)
+            self.declare("gain", "parameter", 1.0, "a tunable gain", variability=Fmi2Variability.tunable)
+            self.declare("fixed", "parameter", 1.0, "a fixed one")
+
+        def step(self, current_time, step_size):
+            pass
+
+    slave = Tunable(instance_name="t")
+    slave.setup_experiment(0.0, None, None)
+    slave.exit_initialization_mode()
+    vr = {v.name: v.value_reference for v in slave.vars.values()}
+    slave.set_real([vr["gain"]], [2.0])
+    assert slave.gain == 2.0
+    with pytest.raises(FmiError, match="parameter fixed = 2.0 refused after initialisation"):
+        slave.set_real([vr["fixed"]], [2.0])
