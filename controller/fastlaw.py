@@ -30,6 +30,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import threading
+
 from numba import float64, njit, types
 
 # --- layout of buf ---------------------------------------------------------------------
@@ -211,16 +213,23 @@ def _component(buf, i, e, de, dde, ddr_d, h):
 LAW_SIGNATURE = types.UniTuple(float64, 7)(float64[::1], *([float64] * 13))
 
 
+#: Serialises :func:`compile_law`: two controllers initialised at once from two threads
+#: would otherwise both see no signature, and the second compile the disabled dispatcher.
+_COMPILE_LOCK = threading.Lock()
+
+
 def compile_law():
     """Compile :func:`law_step` (or load it from numba's cache) for :data:`LAW_SIGNATURE` only.
 
     Called by the first controller that uses it (~3 s the first time, ~0.5 s from the cache).
     Afterwards the dispatcher compiles nothing more: ints or bools passed by a caller are
     converted to float64 instead of triggering a compilation per type combination.
+    Thread-safe: a second thread waits for the first one's compilation.
     """
-    if not law_step.signatures:
-        law_step.compile(LAW_SIGNATURE.args)
-        law_step.disable_compile()
+    with _COMPILE_LOCK:
+        if not law_step.signatures:
+            law_step.compile(LAW_SIGNATURE.args)
+            law_step.disable_compile()
 
 
 @njit(cache=True, error_model="numpy")

@@ -33,7 +33,9 @@ from __future__ import annotations
 import hashlib
 import math
 import os
+import threading
 import time
+import warnings
 from dataclasses import replace
 from pathlib import Path
 
@@ -195,6 +197,44 @@ def cache_dir() -> Path:
     return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "parcosim"
 
 
+#: Serialises loading and building tables (:class:`TabulatedModel`).
+_TABLE_LOCK = threading.RLock()
+
+
+def _load_table(path: Path):
+    """(xs, ys, table) from the cache file ``path``; None if there is none, or (with a
+    warning naming the file) if it cannot be read or is not a table."""
+    if not path.exists():
+        return None
+    try:
+        with np.load(path) as data:
+            xs, ys, table = data["xs"], data["ys"], data["table"]
+        if xs.ndim != 1 or ys.ndim != 1 or table.shape[:2] != (ys.size, xs.size) or xs.size < 2 or ys.size < 2:
+            raise ValueError(f"shapes xs {xs.shape}, ys {ys.shape}, table {table.shape} do not fit")
+        return xs, ys, table
+    except Exception as exc:  # noqa: BLE001 - any unreadable cache file is rebuilt
+        warnings.warn(f"controller table cache {path} is unreadable ({type(exc).__name__}: {exc}); "
+                      "rebuilding the table", stacklevel=3)
+        return None
+
+
+def _save_table(path: Path, xs, ys, table) -> None:
+    """Write the table to ``path`` atomically; on failure warn naming the file and keep
+    the table in memory only."""
+    tmp = path.with_suffix(f".{os.getpid()}.{threading.get_ident()}.tmp.npz")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        np.savez(tmp, xs=xs, ys=ys, table=table)
+        os.replace(tmp, path)
+    except OSError as exc:
+        warnings.warn(f"controller table cache {path} cannot be written ({exc}); the table stays in memory",
+                      stacklevel=3)
+        try:
+            tmp.unlink()
+        except OSError:
+            pass
+
+
 def _cache_key(params, step, extent, band):
     # "v2": tables built with the compiled exact model (v1: the general algorithm; equal to round-off).
     text = repr((params, float(step), tuple(float(e) for e in extent), float(band), N_TERMS, "v2"))
@@ -238,18 +278,16 @@ class TabulatedModel:
         self.params, self.step, self.extent = params, float(step), extent
         self.build_seconds = 0.0
         path = cache_dir() / f"model_{_cache_key(params, step, extent, band)}.npz" if cache else None
-        if path is not None and path.exists():
-            data = np.load(path)
-            xs, ys, table = data["xs"], data["ys"], data["table"]
-        else:
-            start = time.perf_counter()
-            xs, ys, table = build_table(params, step, extent, band)
-            self.build_seconds = time.perf_counter() - start
-            if path is not None:
-                path.parent.mkdir(parents=True, exist_ok=True)
-                tmp = path.with_suffix(f".{os.getpid()}.tmp.npz")
-                np.savez(tmp, xs=xs, ys=ys, table=table)
-                os.replace(tmp, path)
+        with _TABLE_LOCK:   # one build per table, also with controllers initialised from two threads
+            loaded = _load_table(path) if path is not None else None
+            if loaded is not None:
+                xs, ys, table = loaded
+            else:
+                start = time.perf_counter()
+                xs, ys, table = build_table(params, step, extent, band)
+                self.build_seconds = time.perf_counter() - start
+                if path is not None:
+                    _save_table(path, xs, ys, table)
         self.xs, self.ys, self.table = xs, ys, table
         valid = ~np.isnan(table[:, :, 0])
         self.valid = valid

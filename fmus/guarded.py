@@ -19,6 +19,20 @@ return.  So:
 The FMU state (``fmi2GetFMUstate`` ...) is the slave's whole Python state, model objects
 and refusal flag included (:mod:`fmus.fmustate`): restoring a state taken before a
 refused step clears the refusal.
+
+What every parcosim FMU does with careless or hostile calls (the contract table of
+docs/extremes.md, "The FMI calls under hostile use"):
+
+* a set of an output, of a fixed parameter after initialisation, of an unknown value
+  reference or of a variable of another type raises :class:`FmiError` naming the variable,
+  the value and the time, and changes nothing;
+* ``doStep`` refuses (fmi2Discard) a step size that is not finite, is below
+  :data:`MIN_STEP`, ends after :data:`MAX_TIME`, or that the FMU's model cannot honour
+  (:meth:`GuardedSlave.check_step_size`: a sampled component's sample time), a
+  communication point that does not follow the last one (the time of the state after
+  ``fmi2SetFMUstate``), a step before initialisation or after ``fmi2Terminate``;
+* after a refused step (fmi2Discard) every later step is refused, as FMI 2.0's
+  ``stepFailed`` state wants, until ``fmi2SetFMUstate`` restores a state taken before it.
 """
 from __future__ import annotations
 
@@ -40,6 +54,30 @@ _CAUSALITY = {
 #: In an FMU's resources: start values that replace the declared ones (name -> value).
 START_VALUES_FILE = "start_values.json"
 _KIND = {float: Real, int: Integer, str: String, bool: Boolean}
+_TYPE_NAME = {Real: "Real", Integer: "Integer", String: "String", Boolean: "Boolean"}
+
+#: Shortest step any parcosim FMU takes [s]: below it no model of ours changes, and step
+#: counts (T / h) and rates (1 / h) overflow or lose their meaning.
+MIN_STEP = 1e-9
+#: Latest communication point t + h accepted [s] (about 32 years): beyond it a double
+#: resolves time more coarsely than 0.1 µs and the models' samples lose their meaning.
+MAX_TIME = 1e9
+
+
+class FmiError(Exception):
+    """Refuse the current FMI call with ``fmi2Error``.
+
+    parcosim's FMI wrapper (``fmus/wrapper/parcosim_fmi2.c``) turns this exception, raised
+    in any callback of a slave, into ``fmi2Error`` and logs its message alone (category
+    ``logStatusError``); any other exception, ``KeyboardInterrupt`` included, also becomes
+    ``fmi2Error``, logged as ``<Type>: <message>``.  The instance stays valid: the importer
+    may go on calling it or free it.  (Under pythonfmu's own binary any exception is
+    ``fmi2Fatal``.)
+    """
+
+
+#: In a refusal's message: the call was interrupted by a KeyboardInterrupt (SIGINT).
+INTERRUPTED_MARK = "interrupted (KeyboardInterrupt)"
 
 
 class GuardedSlave(Fmi2Slave):
@@ -68,7 +106,13 @@ class GuardedSlave(Fmi2Slave):
         self.register_variable(String("error", causality=Fmi2Causality.output,
                                       variability=Fmi2Variability.discrete,
                                       description="Why the last step was refused ('' when all is well)"))
-        self._ready = False
+        self._ready = False          # initialised well, no step refused since
+        self._initialised = False    # fmi2ExitInitializationMode was called
+        self._terminated = False     # fmi2Terminate was called
+        self._start_time = 0.0       # of fmi2SetupExperiment
+        self._next_time = None       # the communication point the next doStep must start at
+        self._last_step = None
+        _drop_duplicate_path_entries()
 
     # --- declaration -----------------------------------------------------------------
     def declare(self, name: str, causality: str, start, description: str = "", variability=None):
@@ -125,6 +169,46 @@ class GuardedSlave(Fmi2Slave):
         """Advance the model; raise on failure (state and outputs must stay valid)."""
         raise NotImplementedError
 
+    def accepted_steps(self) -> str:
+        """The step sizes this FMU accepts, in words (for refusals and docs/extremes.md)."""
+        return f"any step size h with {MIN_STEP:g} s <= h and t + h <= {MAX_TIME:g} s"
+
+    def check_step_size(self, current_time: float, step_size: float) -> None:
+        """Raise ValueError if the model cannot honour ``step_size``; subclasses with a
+        sample time add their rule to this one (finite, >= :data:`MIN_STEP`, ending by
+        :data:`MAX_TIME`)."""
+        h = step_size
+        if not math.isfinite(h) or h <= 0.0:
+            why = "is not a finite positive number"
+        elif h < MIN_STEP:
+            why = f"is below the shortest step {MIN_STEP:g} s"
+        elif not current_time + h <= MAX_TIME:
+            why = f"ends after t = {MAX_TIME:g} s"
+        else:
+            return
+        raise ValueError(self.step_size_message(current_time, h, why))
+
+    def step_size_message(self, current_time: float, step_size: float, why: str) -> str:
+        """'step size h = ... s at t = ... s <why>; <Model> accepts <accepted_steps()>'."""
+        return (f"step size h = {step_size!r} s at t = {current_time!r} s {why}; "
+                f"{type(self).__name__} accepts {self.accepted_steps()}")
+
+    def check_sample_time(self, current_time: float, step_size: float, T: float, divides: bool) -> None:
+        """The rule of a sampled model with sample time ``T``: h = T, or (``divides``) T / h a
+        whole number (the multi-rate sub-steps of the drives)."""
+        GuardedSlave.check_step_size(self, current_time, step_size)
+        if not (math.isfinite(T) and T > 0.0):
+            raise ValueError(f"parameter T = {T!r} s is not a finite positive sample time")
+        n = T / step_size
+        whole = round(n)
+        if divides:
+            ok = whole >= 1 and abs(n - whole) <= 1e-6 * n
+        else:
+            ok = abs(step_size - T) <= 1e-9 * T
+        if not ok:
+            rule = f"divide the sample time T = {T!r} s" if divides else f"equal the sample time T = {T!r} s"
+            raise ValueError(self.step_size_message(current_time, step_size, f"does not {rule}"))
+
     # --- FMU state ---------------------------------------------------------------------
     def model_state(self) -> dict:
         """What the continuation depends on, as live references (:func:`fmus.fmustate.model_state`);
@@ -158,15 +242,51 @@ class GuardedSlave(Fmi2Slave):
         try:
             return [float(getattr(self, names[vr])) for vr in vrs]
         except KeyError:
-            return super().get_real(vrs)
+            self._refuse_get(vrs, Real)
 
     def set_real(self, vrs, values):
-        names = self._real_names()
+        names = self._settable(Real)
         try:
-            for vr, value in zip(vrs, values):
-                setattr(self, names[vr], value)
+            pairs = [(names[vr], value) for vr, value in zip(vrs, values)]
         except KeyError:
-            super().set_real(vrs, values)
+            self._refuse_set(vrs, values, Real)
+        for name, value in pairs:
+            setattr(self, name, value)
+
+    def get_integer(self, vrs):
+        return self._get(vrs, Integer, int)
+
+    def get_boolean(self, vrs):
+        return self._get(vrs, Boolean, bool)
+
+    def get_string(self, vrs):
+        return self._get(vrs, String, str)
+
+    def set_integer(self, vrs, values):
+        self._set(vrs, values, Integer)
+
+    def set_boolean(self, vrs, values):
+        self._set(vrs, values, Boolean)
+
+    def set_string(self, vrs, values):
+        self._set(vrs, values, String)
+
+    def _get(self, vrs, kind, convert):
+        variables = self.vars
+        try:
+            chosen = [variables[vr] for vr in vrs]
+        except KeyError:
+            chosen = []
+        if len(chosen) != len(vrs) or not all(isinstance(v, kind) for v in chosen):
+            self._refuse_get(vrs, kind)
+        return [convert(v.getter()) for v in chosen]
+
+    def _set(self, vrs, values, kind):
+        names = self._settable(kind)
+        if not all(vr in names for vr in vrs):
+            self._refuse_set(vrs, values, kind)
+        for var, value in [(self.vars[vr], value) for vr, value in zip(vrs, values)]:
+            var.setter(value)
 
     def _real_names(self):
         try:
@@ -175,48 +295,150 @@ class GuardedSlave(Fmi2Slave):
             self.__real_names = {vr: v.name for vr, v in self.vars.items() if isinstance(v, Real)}
             return self.__real_names
 
+    def _settable(self, kind) -> dict:
+        """Value reference -> name of the variables of ``kind`` a set may change now: inputs,
+        tunable parameters, and fixed parameters until initialisation."""
+        key = (kind, self._initialised)
+        try:
+            cache = self.__settable
+        except AttributeError:
+            cache = self.__settable = {}
+        names = cache.get(key)
+        if names is None:
+            names = cache[key] = {
+                vr: v.name for vr, v in self.vars.items()
+                if isinstance(v, kind) and (v.causality == Fmi2Causality.input or (
+                    v.causality == Fmi2Causality.parameter and (
+                        not self._initialised or v.variability == Fmi2Variability.tunable)))}
+        return names
+
+    def _now(self) -> str:
+        if not self._initialised:
+            return "before initialisation"
+        t = self._next_time if self._next_time is not None else self._start_time
+        return f"at t = {t!r} s"
+
+    def _refuse_get(self, vrs, kind):
+        for vr in vrs:
+            var = self.vars.get(vr)
+            if var is None:
+                raise FmiError(f"fmi2Get{_TYPE_NAME[kind]}: value reference {vr!r} is no variable of "
+                               f"{type(self).__name__} ({self._now()})")
+            if not isinstance(var, kind):
+                raise FmiError(f"fmi2Get{_TYPE_NAME[kind]}: {var.name} (value reference {vr}) is a "
+                               f"{_TYPE_NAME[type(var)]} ({self._now()})")
+        raise FmiError(f"fmi2Get{_TYPE_NAME[kind]}: value references {list(vrs)!r} refused ({self._now()})")
+
+    def _refuse_set(self, vrs, values, kind):
+        """Raise FmiError naming the first variable of a refused set, its value and the time."""
+        call = f"fmi2Set{_TYPE_NAME[kind]}"
+        settable = self._settable(kind)
+        for vr, value in zip(vrs, values):
+            if vr in settable:
+                continue
+            var = self.vars.get(vr)
+            if var is None:
+                raise FmiError(f"{call}: value reference {vr!r} (value {value!r}) is no variable of "
+                               f"{type(self).__name__} ({self._now()}); nothing was set")
+            if not isinstance(var, kind):
+                raise FmiError(f"{call}: {var.name} (value reference {vr}) is a {_TYPE_NAME[type(var)]}, "
+                               f"value {value!r} refused ({self._now()}); nothing was set")
+            old = getattr(self, var.name, None)
+            if var.causality == Fmi2Causality.parameter:
+                raise FmiError(f"{call}: parameter {var.name} = {value!r} refused after initialisation "
+                               f"({self._now()}): a fixed parameter keeps its value {old!r}; nothing was set")
+            raise FmiError(f"{call}: {var.name} is an output ({var.causality.name}), value {value!r} refused "
+                           f"({self._now()}): it keeps {old!r}; nothing was set")
+        raise FmiError(f"{call}: value references {list(vrs)!r} refused ({self._now()})")
+
+    def setup_experiment(self, start_time, stop_time=None, tolerance=None):
+        self._start_time = float(start_time)
+
     def exit_initialization_mode(self):
+        self._initialised = True
+        self._next_time, self._last_step = self._start_time, None
         try:
             self.setup()
             self._ready = True
+            self.error = ""
+        except KeyboardInterrupt:
+            self._ready = False
+            self._refuse(f"initialisation refused: {INTERRUPTED_MARK} (t = {self._start_time:.6g} s)")
         except Exception as exc:  # noqa: BLE001 - nothing may escape to pythonfmu
-            self._refuse(f"initialisation refused: {exc}")
+            self._ready = False
+            self._refuse(f"initialisation refused: {exc} (t = {self._start_time:.6g} s)")
+
+    def terminate(self):
+        self._terminated = True
 
     def do_step(self, current_time: float, step_size: float) -> bool:
+        if self._terminated:
+            self._refuse(f"doStep from t = {current_time!r} s after fmi2Terminate refused", repeat=True)
+            return False
+        if not self._initialised:
+            self._refuse(f"doStep from t = {current_time!r} s before initialisation "
+                         "(fmi2ExitInitializationMode) refused", repeat=True)
+            return False
         if not self._ready:
-            self._refuse(self.error or "initialisation refused", current_time, repeat=True)
+            if self._initialised and self.error and not self.error.startswith("initialisation refused"):
+                self._refuse(f"an earlier step was refused ({self.error}); restore an FMU state taken before it "
+                             "(fmi2SetFMUstate) to go on", current_time, repeat=True, keep_error=True)
+            else:
+                self._refuse(self.error or "initialisation refused", current_time, repeat=True)
             return False
         try:
+            self._check_communication_point(current_time)
+            self.check_step_size(current_time, step_size)
             self.step(current_time, step_size)
+            self._next_time, self._last_step = current_time + step_size, step_size
             return True
+        except KeyboardInterrupt:
+            self._refuse(f"step {INTERRUPTED_MARK} at t = {current_time!r} s", current_time)
+            self._ready = False
+            return False
         except Exception as exc:  # noqa: BLE001
             self._refuse(str(exc), current_time)
             self._ready = False
             return False
 
-    def _refuse(self, message: str, time: float | None = None, repeat: bool = False) -> None:
+    def _check_communication_point(self, current_time: float) -> None:
+        """Raise ValueError unless ``current_time`` is the last point plus the last step, to
+        rounding: 1e-9 of max(|t|, 1 ms), at most half the last step."""
+        expected = self._next_time
+        if expected is None:
+            return
+        tolerance = 1e-9 * max(abs(expected), 1e-3)
+        if self._last_step:
+            tolerance = min(tolerance, 0.5 * self._last_step)
+        if not abs(current_time - expected) <= tolerance:
+            raise ValueError(f"communication point t = {current_time!r} s does not follow the last one: "
+                             f"the next doStep must start at t = {expected!r} s (the last step's end, or the "
+                             "time of the state set by fmi2SetFMUstate)")
+
+    def _refuse(self, message: str, time: float | None = None, repeat: bool = False,
+                keep_error: bool = False) -> None:
         text = message if (time is None or repeat or " t = " in message) else f"{message} (step from t = {time:.6g} s)"
         if repeat and time is not None:
             text = f"{message}; step from t = {time:.6g} s refused"
-        self.error = message if repeat else text
+        if not keep_error:
+            self.error = message if repeat else text
         line = f"{self.instance_name}: {text}"
-        self.log(line, Fmi2Status.error, category="logStatusError")
-        try:   # a closed, full or unwritable stderr must not turn a refusal into a failure
+        self.log(line if self._wrapper_is_ours() else line.replace("%", "%%"), Fmi2Status.error,
+                 category="logStatusError")
+        try:
             print(f"[parcosim] {line}", file=sys.stderr, flush=True)
-        except (OSError, ValueError, AttributeError):   # ValueError: closed; AttributeError: sys.stderr is None
-            pass
+        except (OSError, ValueError, AttributeError):   # stderr full, closed or absent: the log and
+            pass                                          # ``error`` still carry the message
 
-
-class FmiError(Exception):
-    """Refuse the current FMI call with ``fmi2Error``.
-
-    parcosim's FMI wrapper (``fmus/wrapper/parcosim_fmi2.c``) turns this exception, raised
-    in any callback of a slave, into ``fmi2Error`` and logs its message alone (category
-    ``logStatusError``); any other exception, ``KeyboardInterrupt`` included, also becomes
-    ``fmi2Error``, logged as ``<Type>: <message>``.  The instance stays valid: the importer
-    may go on calling it or free it.  (Under pythonfmu's own wrapper any exception is
-    ``fmi2Fatal``.)
-    """
+    def _wrapper_is_ours(self) -> bool:
+        """True when the FMU's binary is parcosim's own FMI wrapper (it exports
+        :data:`WRAPPER_SYMBOL` and passes log messages as data).  pythonfmu's binary hands the
+        message to the importer's logger as its printf format, so ``%`` is doubled for it."""
+        try:
+            return self.__wrapper_is_ours
+        except AttributeError:
+            self.__wrapper_is_ours = wrapper_symbol_present(getattr(self, "resources", None), type(self).__name__)
+            return self.__wrapper_is_ours
 
 
 #: Start value of a numeric parameter meaning "the preset's value".
@@ -229,13 +451,57 @@ PRESET_VALUE = -1.0
 ABSURD = 1e6
 
 
-def with_overrides(params, slave, names):
+#: Exported by parcosim's own FMI 2.0 wrapper (not by pythonfmu's binary).
+WRAPPER_SYMBOL = "parcosimFmi2WrapperVersion"
+
+
+def wrapper_symbol_present(resources, model: str) -> bool:
+    """Whether the FMU binary next to ``resources`` (``../binaries/<platform>/<model>.so``)
+    exports :data:`WRAPPER_SYMBOL`; False when there is no such binary (in process)."""
+    if not resources:
+        return False
+    import ctypes
+    import glob
+
+    binaries = os.path.join(os.path.dirname(os.path.abspath(resources)), "binaries")
+    for path in glob.glob(os.path.join(binaries, "*", f"{model}.*")):
+        try:
+            return hasattr(ctypes.CDLL(path), WRAPPER_SYMBOL)
+        except OSError:
+            continue
+    return False
+
+
+def _drop_duplicate_path_entries() -> None:
+    """Remove repeated entries of ``sys.path`` (keeping the first of each), in place.
+
+    pythonfmu's wrapper puts the FMU's resources on ``sys.path`` at every instantiation;
+    without this, ``sys.path`` grows by one entry per instance.  A later duplicate never
+    changes what an import finds, so dropping it is safe.
+    """
+    seen = set()
+    keep = []
+    for entry in sys.path:
+        if entry not in seen:
+            seen.add(entry)
+            keep.append(entry)
+    if len(keep) != len(sys.path):
+        sys.path[:] = keep
+
+
+#: A parameter that must be > 0 (a resistance, a torque constant, a frequency) is refused
+#: below this (SI units): its reciprocal, which the models use, would overflow or be absurd.
+TINY = 1e-12
+
+
+def with_overrides(params, slave, names, positive=()):
     """``params`` (a validated frozen dataclass with ``with_``) with the slave's parameters
     that are not PRESET_VALUE replacing its fields.
 
     ``names`` are (field, FMU variable) pairs.  A negative value other than
-    the sentinel is refused naming the variable; the dataclass's own
-    validation names any other non-physical value (as the FMU variable).
+    the sentinel is refused naming the variable; so is a value below :data:`TINY` of a
+    field in ``positive``; the dataclass's own validation names any other non-physical
+    value (as the FMU variable).
     """
     changes = {}
     for field, var in names:
@@ -245,6 +511,8 @@ def with_overrides(params, slave, names):
         if value < 0.0:
             raise ValueError(f"parameter {var} = {value!r} is negative (use -1 for the preset's value)")
         refuse_absurd(**{var: value})
+        if field in positive:
+            refuse_tiny(**{var: value})
         changes[field] = value
     try:
         return params.with_(**changes)
@@ -269,3 +537,11 @@ def refuse_absurd(**values) -> None:
     for name, value in values.items():
         if math.isfinite(value) and abs(value) > ABSURD:
             raise ValueError(f"parameter {name} = {value!r} is absurd: |{name}| must be <= {ABSURD:g} (SI units)")
+
+
+def refuse_tiny(**values) -> None:
+    """Raise ValueError naming the first parameter (that must be > 0) in (0, :data:`TINY`): the
+    caller's own checks name 0 and negative values."""
+    for name, value in values.items():
+        if math.isfinite(value) and 0.0 < value < TINY:
+            raise ValueError(f"parameter {name} = {value!r} is absurdly small: it must be >= {TINY:g} (SI units)")

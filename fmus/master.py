@@ -36,10 +36,16 @@ sample held over [t - h, t].
 
 A refused step (fmi2Discard/Error/Fatal, or an exception in process) stops the run;
 :class:`Result` keeps the rows recorded so far and ``error`` says which instance refused,
-at what time, with its own message.
+at what time, with its own message.  A KeyboardInterrupt (SIGINT) stops it the same way:
+the rows recorded so far, ``error`` "interrupted at t = ...", ``interrupted`` true (an FMU
+interrupted inside a call refuses it with a message naming the KeyboardInterrupt, which
+counts as the interruption).
 """
 from __future__ import annotations
 
+import contextlib
+import signal as _signal
+import threading
 import time as _time
 import warnings
 from dataclasses import dataclass, field
@@ -47,6 +53,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .guarded import INTERRUPTED_MARK
 from .instances import CoSimulationError, InProcessInstance, _FmuInstance
 from .stepper import Stepper
 from .system import System, split_signal
@@ -89,6 +96,7 @@ class Result(RecordedRun):
     stop_time: float = 0.0
     init_s: float = 0.0   # loading, instantiating and initialising (tables, numba compilation)
     extra: dict = field(default_factory=dict)
+    interrupted: bool = False   # stopped by KeyboardInterrupt (SIGINT); ``error`` says when
 
 
 # --- the stepping order -------------------------------------------------------------------
@@ -280,6 +288,41 @@ def simulate(system: System, mode: str = "inprocess", coupling: str = "gauss-sei
         raise ValueError(f"coupling = {coupling!r}; valid: {', '.join(COUPLINGS)}")
     if retry_substeps is not None and not (isinstance(retry_substeps, int) and retry_substeps >= 2):
         raise ValueError(f"retry_substeps = {retry_substeps!r} must be an integer >= 2 (or None: no retry)")
+    with deferred_sigint() as interrupt:
+        return _simulate(system, mode, coupling, fmu_dir, progress, retry_substeps, interrupt)
+
+
+class _Interrupt:
+    """Whether a SIGINT arrived (:func:`deferred_sigint`)."""
+
+    requested = False
+
+
+@contextlib.contextmanager
+def deferred_sigint():
+    """While inside, the first SIGINT only sets ``requested`` on the object yielded (the
+    master stops between steps, never inside an FMU's call, where a KeyboardInterrupt
+    would reach the FMU's own Python); a second one raises KeyboardInterrupt at once.
+    Outside the main thread, or under a handler other than Python's default, nothing changes."""
+    interrupt = _Interrupt()
+    if threading.current_thread() is not threading.main_thread() or \
+            _signal.getsignal(_signal.SIGINT) is not _signal.default_int_handler:
+        yield interrupt
+        return
+
+    def handler(signum, frame):
+        if interrupt.requested:
+            raise KeyboardInterrupt
+        interrupt.requested = True
+
+    _signal.signal(_signal.SIGINT, handler)
+    try:
+        yield interrupt
+    finally:
+        _signal.signal(_signal.SIGINT, _signal.default_int_handler)
+
+
+def _simulate(system, mode, coupling, fmu_dir, progress, retry_substeps, interrupt) -> Result:
     loading = _time.perf_counter()
     instances = _instantiate(system, mode, fmu_dir)
     loading_s = _time.perf_counter() - loading
@@ -293,7 +336,7 @@ def simulate(system: System, mode: str = "inprocess", coupling: str = "gauss-sei
         variables = {n: inst.variables for n, inst in instances.items()}
         order = (stepping_order(system, variables) if coupling == "gauss-seidel"
                  else tuple(c.name for c in system.components))
-        return _run(system, instances, order, mode, coupling, progress, loading_s, retry_substeps)
+        return _run(system, instances, order, mode, coupling, progress, loading_s, retry_substeps, interrupt)
     finally:
         _close(instances)
 
@@ -317,13 +360,14 @@ def _retrying_step(stepper: Stepper, substeps: int, retried: list) -> None:
         stepper.free_state(state)
 
 
-def _run(system, instances, order, mode, coupling, progress, loading_s=0.0, retry_substeps=None) -> Result:
+def _run(system, instances, order, mode, coupling, progress, loading_s=0.0, retry_substeps=None,
+         interrupt=_Interrupt) -> Result:
     stepper = Stepper(system, instances, order, jacobi=coupling == "jacobi")
     retried = []
     advance = stepper.step if retry_substeps is None else lambda: _retrying_step(stepper, retry_substeps, retried)
     h, steps = system.step, system.steps
     data = np.full((steps + 1, len(system.record)), np.nan)
-    error, done, rows = None, 0, 0
+    error, done, rows, interrupted = None, 0, 0, False
     init_start = start = _time.perf_counter()
     try:
         stepper.initialize(0.0)
@@ -332,6 +376,8 @@ def _run(system, instances, order, mode, coupling, progress, loading_s=0.0, retr
         rows = 1
         report_every = max(1, steps // 100)
         for k in range(steps):
+            if interrupt.requested:
+                raise KeyboardInterrupt
             advance()
             data[k + 1] = stepper.row()
             done = k + 1
@@ -340,9 +386,15 @@ def _run(system, instances, order, mode, coupling, progress, loading_s=0.0, retr
                 progress(done / steps)
     except CoSimulationError as exc:
         error = str(exc) if exc.time == exc.time else f"{exc.instance}: {exc.message} at t = {done * h:.6g} s"
+        if INTERRUPTED_MARK in exc.message:
+            interrupted = True
+            error = f"interrupted at t = {done * h:.6g} s ({exc.instance}: {exc.message})"
+    except KeyboardInterrupt:
+        interrupted = True
+        error = f"interrupted at t = {done * h:.6g} s"
     wall = _time.perf_counter() - start
     data = data[:rows]
     return Result(time=np.arange(rows) * h, signals={s: data[:, j] for j, s in enumerate(system.record)},
                   order=tuple(order), mode=mode, coupling=coupling, wall_s=wall, error=error,
                   stop_time=system.stop_time, init_s=loading_s + (start - init_start),
-                  extra={"retried": retried} if retry_substeps is not None else {})
+                  extra={"retried": retried} if retry_substeps is not None else {}, interrupted=interrupted)

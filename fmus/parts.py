@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
-from fmus.guarded import PRESET_VALUE, refuse_absurd, require_finite, with_overrides
+from fmus.guarded import PRESET_VALUE, TINY, refuse_absurd, require_finite, with_overrides
 
 #: The plant's outputs (name, description).
 PLANT_OUTPUTS = (
@@ -38,6 +38,9 @@ MOTOR_PARAMETERS = (
     ("J_rotor", "J_design", "Rotor inertia assumed by the current-controller design G_I(s) (B.10) only "
                             "[kg m2], > 0; the plant integrates the real rotor inertia"),
 )
+
+#: MotorParams fields that must be > 0 (refused below :data:`fmus.guarded.TINY`).
+POSITIVE_MOTOR_FIELDS = frozenset({"R", "kt", "ke", "v_max", "omega_eps", "J_rotor"})
 
 
 # --- the plant -------------------------------------------------------------------------------
@@ -97,7 +100,39 @@ def build_plant(slave):
         method=slave.method, substeps=slave.substeps, rtol=slave.rtol, atol=slave.atol,
         baumgarte=slave.baumgarte, project=bool(slave.project), kernel=slave.kernel,
     )
-    return PlantSimulator(params, slave.x0, slave.y0, settings, encoder_counts=slave.encoder_counts)
+    sim = PlantSimulator(params, slave.x0, slave.y0, settings, encoder_counts=slave.encoder_counts)
+    check_step_cost(sim)
+    return sim
+
+
+#: Longest any FMI call of ours may take [s].  A plant whose doStep would take more than
+#: half of it (a margin for slower machines) is refused at initialisation.
+MAX_CALL_SECONDS = 10.0
+
+
+def check_step_cost(sim) -> None:
+    """Refuse (ValueError naming ``kernel`` and ``substeps``) RK4 settings whose doStep
+    would take more than MAX_CALL_SECONDS / 2: substeps x 4 right-hand sides, each timed
+    here on the plant's start state (the best of three)."""
+    import time
+
+    from plant import fivebar
+
+    s = sim.settings
+    if s.method != "rk4":
+        return
+    u_star = fivebar.thesis_torques(0.0, 0.0)
+    best = math.inf
+    for _ in range(3):
+        start = time.perf_counter()
+        sim.derivative(sim.y, u_star)
+        best = min(best, time.perf_counter() - start)
+    estimate = 4 * s.substeps * best
+    if estimate > 0.5 * MAX_CALL_SECONDS:
+        most = max(1, int(0.5 * MAX_CALL_SECONDS / (4 * best)))
+        raise ValueError(f"parameters kernel = {s.kernel!r}, substeps = {s.substeps!r}: a doStep would take about "
+                         f"{estimate:.3g} s ({4 * best * 1e3:.3g} ms per RK4 substep), more than the "
+                         f"{0.5 * MAX_CALL_SECONDS:g} s allowed per call; use substeps <= {most} or kernel 'fast'")
 
 
 def correct_plant(sim, snapshot, measured: dict, redo, step: float) -> bool:
@@ -152,12 +187,13 @@ def build_drive(slave, suffix: str = "", **options):
     except ValueError as exc:
         raise ValueError(f"parameter preset{suffix} = {preset!r}: {exc}") from None
     params = with_overrides(params, slave,
-                            [(field, f"{var}{suffix}") for field, var, _ in MOTOR_PARAMETERS])
+                            [(field, f"{var}{suffix}") for field, var, _ in MOTOR_PARAMETERS],
+                            positive=POSITIVE_MOTOR_FIELDS)
     design = None
     b_design = getattr(slave, f"b_design{suffix}")
     if b_design != PRESET_VALUE:
         refuse_absurd(**{f"b_design{suffix}": b_design})
-        if not (math.isfinite(b_design) and b_design > 0.0):
+        if not (math.isfinite(b_design) and b_design >= TINY):
             raise ValueError(f"parameter b_design{suffix} = {b_design!r} must be > 0 (or -1: the value of b)")
         design = params.with_(b=b_design)
     return Drive(params, design_params=design, **options)

@@ -18,14 +18,21 @@ Every subcommand is a thin shell over a documented Python call:
 ``parcosim export-fmu``  ``fmus.export.export_fmu(get_scene(name).system, path)``
 =====================  ==============================================
 
-Errors end the command with exit status 2 and one readable line on stderr; a run that a
-component stops early writes what it recorded, prints the component's message and exits 1.
+Errors end the command with exit status 2 and one readable line on stderr (an output
+directory that cannot be written is reported before the run; a file that cannot be written
+is named); a run that a component stops early writes what it recorded, prints the
+component's message and exits 1.  SIGINT (Ctrl-C) during ``parcosim run`` writes the whole
+rows recorded so far and metrics with ``"completed": false``, prints one line and exits 130.
 """
 from __future__ import annotations
 
 import argparse
 import sys
 import warnings
+
+
+#: Exit status after SIGINT (128 + 2, as shells report it).
+EXIT_INTERRUPTED = 130
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -91,7 +98,11 @@ def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     with warnings.catch_warnings():
         warnings.showwarning = _show_warning
-        return _command(args)
+        try:
+            return _command(args)
+        except KeyboardInterrupt:
+            print("parcosim: interrupted", file=sys.stderr)
+            return EXIT_INTERRUPTED
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
@@ -186,6 +197,10 @@ def _run(args) -> int:
     outcome = run_scene(scene, mode=args.mode, out_dir=out, coupling=args.coupling,
                         fmu_dir=args.fmu_dir, progress=bar)
     m = outcome.metrics
+    if outcome.result.interrupted:
+        print(f"parcosim: {outcome.result.error}; recorded so far ({len(outcome.result.time)} rows): {out}",
+              file=sys.stderr)
+        return EXIT_INTERRUPTED
     if outcome.result.error:
         print(f"parcosim: {outcome.result.error} (recorded so far: {out})", file=sys.stderr)
         return 1

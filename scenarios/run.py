@@ -6,13 +6,20 @@
     outcome = run_scene("bench_circle_TCMDx", mode="inprocess", out_dir="out/tcmdx")
     print(outcome.metrics["e_ef_mm"])
 
-A run that a component stops early still writes the rows it recorded and metrics with
-``"completed": false`` and the component's message under ``"error"``.
+A run that a component stops early, or that a KeyboardInterrupt (SIGINT) stops, still writes
+the rows it recorded and metrics with ``"completed": false`` and the message under ``"error"``
+(``"interrupted": true`` for SIGINT).  Every file is written atomically (a temporary file in
+the same directory, then ``os.replace``): a reader never sees half a file, and a failed
+write (a full disk) leaves the previous file, if any, and raises :class:`WriteError` naming
+the file.
 """
 from __future__ import annotations
 
+import errno
 import json
 import math
+import os
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -52,11 +59,64 @@ def _json_safe(value):
     return value
 
 
-def write_csv(path: Path, columns: dict) -> Path:
-    """One row per communication point, full double precision."""
-    data = np.column_stack(list(columns.values())) if len(columns["t"]) else np.empty((0, len(columns)))
-    np.savetxt(path, data, delimiter=",", header=",".join(columns), comments="", fmt="%.17g")
+class WriteError(OSError):
+    """A result file could not be written; the message names the file."""
+
+
+def atomic_write(path: Path, write) -> Path:
+    """Call ``write(file)`` on a temporary text file beside ``path``, then rename it to
+    ``path``.  On any OSError the temporary file is removed and :class:`WriteError`
+    (naming ``path``) is raised; ``path`` keeps its previous content."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as f:
+            write(f)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except OSError as exc:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        reason = exc.strerror or str(exc)
+        raise WriteError(exc.errno or errno.EIO, f"cannot write {path}: {reason}") from None
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
     return path
+
+
+def check_writable(out_dir) -> Path:
+    """Create ``out_dir`` if needed and check a file can be written in it (before a run);
+    :class:`WriteError` naming the directory otherwise."""
+    out = Path(out_dir)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        fd, probe = tempfile.mkstemp(prefix=".parcosim-probe.", dir=out)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise WriteError(exc.errno or errno.EIO,
+                         f"output directory {out} is not writable: {exc.strerror or exc}") from None
+    return out
+
+
+def write_csv(path: Path, columns: dict) -> Path:
+    """One row per communication point, full double precision; written atomically."""
+    data = np.column_stack(list(columns.values())) if len(columns["t"]) else np.empty((0, len(columns)))
+    return atomic_write(path, lambda f: np.savetxt(f, data, delimiter=",", header=",".join(columns), comments="",
+                                                   fmt="%.17g"))
+
+
+def write_json(path: Path, value) -> Path:
+    """``value`` as indented JSON (non-finite floats as null); written atomically."""
+    text = json.dumps(_json_safe(value), indent=2) + "\n"
+    return atomic_write(path, lambda f: f.write(text))
 
 
 def plot_run(scene: Scene, columns: dict, out_dir: Path) -> list:
@@ -102,19 +162,22 @@ def run_scene(scene, mode: str = "inprocess", out_dir=None, coupling: str = "gau
     (``outcome.result.error``); the files then hold what was recorded.
     """
     scene = get_scene(scene) if isinstance(scene, str) else scene
+    if out_dir is not None:
+        check_writable(out_dir)
     result = simulate(scene.system, mode=mode, coupling=coupling, fmu_dir=fmu_dir, progress=progress)
     columns = result_columns(scene, result)
     metrics = scene_metrics(scene, columns, result.wall_s, result.completed, result.init_s)
     metrics.update({"mode": mode, "coupling": coupling, "order": list(result.order)})
     if result.error:
         metrics["error"] = result.error
+    if result.interrupted:
+        metrics["interrupted"] = True
     files = []
     if out_dir is not None:
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
         files.append(write_csv(out / "result.csv", columns))
-        (out / "metrics.json").write_text(json.dumps(_json_safe(metrics), indent=2) + "\n")
-        files.append(out / "metrics.json")
-        if plots and len(columns["t"]) > 1:
+        files.append(write_json(out / "metrics.json", metrics))
+        if plots and len(columns["t"]) > 1 and not result.interrupted:
             files.extend(plot_run(scene, columns, out))
     return Outcome(scene, result, columns, metrics, files)

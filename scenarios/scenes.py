@@ -323,15 +323,15 @@ def drives_in_plant(scene: Scene, **plant_parameters) -> Scene:
 
 
 #: Models whose discrete parts are designed for a sample time: their parameter ``T``.
-SAMPLE_TIME_MODELS = ("Derivator", "DCMotorDrive", "ActuatedFiveBarPlant")
+SAMPLE_TIME_MODELS = ("Derivator", "DCMotorDrive", "ActuatedFiveBarPlant", "PositionController", "CurrentObserver")
 
 
 def with_sample_time(scene: Scene, T: float) -> Scene:
     """``scene`` run at the communication step and sample time ``T`` [s] (the thesis: 1 ms).
 
     The step and the ``T`` of every component designed for one (:data:`SAMPLE_TIME_MODELS`:
-    the derivator's Bessel filters, the drives' current controllers) change together; the
-    position controller and the observers use the step they are given.  A different T is a
+    the derivator's Bessel filters, the drives' current controllers, the position controller's
+    and the observers' samples) change together; each refuses a step its T cannot honour.  A different T is a
     different discrete controller: the trade study lists it as a fidelity change
     (docs/trade.md), the extremes suite checks 0.1 ms and 10 ms (docs/extremes.md).
     """

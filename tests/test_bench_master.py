@@ -31,7 +31,7 @@ def test_passthrough_slave_has_the_real_variables_and_copies(model, classes):
     cls = classes[passthrough.passthrough_model(model)]
     real = passthrough.variable_specs(model)
     slave = cls(instance_name="p")
-    slave.setup_experiment(0.0, None, None)
+    slave.setup_experiment(0.25, None, None)
     slave.enter_initialization_mode()
     slave.exit_initialization_mode()
     fake = [{"name": v.name, "causality": v.causality.name if v.causality else None,

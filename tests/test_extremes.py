@@ -279,8 +279,8 @@ def test_baumgarte_beyond_2_over_h_is_refused_naming_it(baumgarte):
 
 @pytest.mark.parametrize("h, rms_bound", [(1e-4, 1e-6), (1e-3, 1e-5), (1e-2, 1e-4)])
 def test_communication_step_of_the_thesis_simulation(h, rms_bound):
-    """No derivator, no drives: every component takes any step; the error grows like h."""
-    r = completed(simulate(short(thesis_sim_circle(), 1.0, step=h)))
+    """No derivator, no drives: the controller sampled at T = h; the error grows like h."""
+    r = completed(simulate(with_parameters(short(thesis_sim_circle(), 1.0, step=h), ("ctrl",), T=h)))
     assert rms_after(r, 0.5) < rms_bound
     assert rms_after(r, 0.5) > 0.3 * rms_bound
 
@@ -288,13 +288,13 @@ def test_communication_step_of_the_thesis_simulation(h, rms_bound):
 @pytest.mark.parametrize("h", [1e-4, 1e-2])
 def test_bench_step_other_than_T_is_refused_by_the_derivator(h):
     r = simulate(short(bench("TCMDx"), 0.1, step=h))
-    refused(r, "deriv", "t = 0 s", f"step size {h!r} s differs from the sample time T = 0.001 s")
+    refused(r, "deriv", "t = 0 s", f"step size h = {h!r} s at t = 0.0 s does not equal the sample time T = 0.001 s")
 
 
 def _consistent_bench(h, fidelity=Fidelity(), stop_time=1.0, **derivator):
     system = short(bench("TCMDx", fidelity=fidelity), stop_time, step=h)
     system = with_parameters(system, ("deriv",), T=h, **derivator)
-    return with_parameters(system, ("drive1", "drive2"), T=h)
+    return with_parameters(system, ("drive1", "drive2", "ctrl", "obs1", "obs2"), T=h)
 
 
 def test_bench_at_10_ms_with_every_sample_time_set_is_stable_but_coarse():
@@ -470,7 +470,8 @@ def _variable_cases():
 #: the plant's integration diverges under 1e300 N m; the law overflows at a speed of 1e300;
 #: a reference at 1e300 m is outside the workspace.
 REFUSED_HUGE_INPUTS = {("FiveBarPlant", "tau1"), ("FiveBarPlant", "tau2"), ("PositionController", "dq1"),
-                       ("PositionController", "dq2"), ("PositionController", "x_d"), ("PositionController", "y_d")}
+                       ("PositionController", "dq2"), ("PositionController", "x_d"), ("PositionController", "y_d"),
+                       ("Derivator", "q1"), ("Derivator", "q2")}
 #: Absurd integer parameters that are legitimate: a finer encoder, more cycles (a long run).
 ALLOWED_INTEGERS = {("FiveBarPlant", "encoder_counts", 2 ** 31 - 1), ("Trajectory", "cycles", 2 ** 31 - 1),
                     ("ActuatedFiveBarPlant", "encoder_counts", 2 ** 31 - 1)}
@@ -521,7 +522,7 @@ def refused_step(fmu, h=H, **inputs):
     ("DCMotorDrive", {"R": 1e300}, {"i_ref": 1.0}, H, ("parameter R = 1e+300 is absurd",)),
     ("DCMotorDrive", {"mu": math.nan}, {"i_ref": 1.0}, H, ("parameter mu must be a finite number, got nan",)),
     ("CurrentObserver", {"kind": "kalman"}, {"v": 1.0}, H, ("kind must be one of", "'kalman'")),
-    ("Derivator", {}, {"q1": 0.1}, 1e-2, ("step size 0.01 s differs from the sample time T = 0.001 s",)),
+    ("Derivator", {}, {"q1": 0.1}, 1e-2, ("step size h = 0.01 s at t = 0.0 s does not equal the sample time T = 0.001 s",)),
     ("Trajectory", {"side_time": math.inf}, {}, H, ("side_time = inf is not finite",)),
 ])
 def test_fmu_refusals_are_discards_naming_the_cause(built_fmus, model, parameters, inputs, h, fragments):

@@ -220,7 +220,7 @@ def test_current_mode_step_must_divide_the_controller_period(drive_fmu):
         fmu.fmu.doStep(currentCommunicationPoint=0.0, communicationStepSize=0.3e-3)
     assert info.value.status != 4
     message = fmu.get("error")
-    assert "must divide the controller period" in message and "h=0.0003" in message and "t = 0 s" in message
+    assert "does not divide the sample time T = 0.001 s" in message and "h = 0.0003 s" in message and "t = 0.0 s" in message
     fmu.close()
 
 

@@ -20,7 +20,7 @@ process share one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
-from fmus.guarded import GuardedSlave, refuse_absurd
+from fmus.guarded import MIN_STEP, PRESET_VALUE, TINY, GuardedSlave, refuse_absurd
 from fmus.parts import (PLANT_OUTPUTS, build_drive, build_plant, correct_plant, declare_motor, declare_plant,
                         publish_plant)
 from plant.actuated import ActuatedPlant
@@ -59,10 +59,29 @@ class ActuatedFiveBarPlant(GuardedSlave):
 
     def setup(self):
         refuse_absurd(T=self.T)
-        sim = build_plant(self)
+        if 0.0 < self.T < MIN_STEP:
+            raise ValueError(f"parameter T = {self.T!r} s must be >= {MIN_STEP:g} s")
+        for j in JOINTS:
+            value = getattr(self, f"L{j}")
+            if value != PRESET_VALUE and 0.0 <= value < TINY:
+                raise ValueError(f"parameter L{j} = {value!r} H must be > 0: the drives inside the plant integrate "
+                                 "the armature current (use a separate DCMotorDrive with method 'quasi_static' "
+                                 "for L = 0)")
         drives = [(int(j), build_drive(self, j, mode=self.mode, T=self.T)) for j in JOINTS]
+        sim = build_plant(self)
         self.actuated = ActuatedPlant(sim, drives)
         self._publish()
+
+    def accepted_steps(self):
+        if self.mode == "current":
+            return "in current mode h dividing the sample time T (T / h a whole number: the multi-rate sub-steps)"
+        return super().accepted_steps() + " (voltage mode)"
+
+    def check_step_size(self, current_time, step_size):
+        if self.mode == "current":
+            self.check_sample_time(current_time, step_size, self.T, divides=True)
+        else:
+            super().check_step_size(current_time, step_size)
 
     def step(self, current_time, step_size):
         a = self.actuated

@@ -14,7 +14,9 @@ process share one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
-from fmus.guarded import PRESET_VALUE, GuardedSlave, refuse_absurd, with_overrides
+import math
+
+from fmus.guarded import MIN_STEP, PRESET_VALUE, GuardedSlave, refuse_absurd, require_finite, with_overrides
 from motor import CurrentObserver as _Observer
 from motor import get_motor_preset
 
@@ -48,14 +50,31 @@ class CurrentObserver(GuardedSlave):
         d("i0", "parameter", 0.0, "Estimate before the first step [A]")
         d("omega0", "parameter", 0.0,
           "Speed at the start time [rad/s]: the speed the drive holds over the first step (dynamic kind)")
+        d("T", "parameter", 1e-3, "Sample time [s]: the step must divide it (the drives' sub-steps)")
         self.observer = None
 
     def setup(self):
-        params = with_overrides(get_motor_preset(self.preset), self, [(name, name) for name, _ in MOTOR_PARAMETERS])
-        refuse_absurd(i0=self.i0, omega0=self.omega0)
+        params = with_overrides(get_motor_preset(self.preset), self, [(name, name) for name, _ in MOTOR_PARAMETERS],
+                                positive=("R", "ke"))
+        require_finite(T=self.T)
+        refuse_absurd(i0=self.i0, omega0=self.omega0, T=self.T)
+        if not self.T > 0.0:
+            raise ValueError(f"parameter T = {self.T!r} s must be > 0")
+        if 0.0 < self.T < MIN_STEP:
+            raise ValueError(f"parameter T = {self.T!r} s must be >= {MIN_STEP:g} s")
         self.observer = _Observer(params, self.kind)
         self.observer.reset(self.i0, self.omega0)
         self.i_hat = self.observer.i_hat
 
+    def accepted_steps(self):
+        return "h dividing the sample time T (T / h a whole number: the drives' multi-rate sub-steps)"
+
+    def check_step_size(self, current_time, step_size):
+        self.check_sample_time(current_time, step_size, self.T, divides=True)
+
     def step(self, current_time, step_size):
-        self.i_hat = self.observer.estimate(self.v, self.omega, step_size)
+        i_hat = self.observer.estimate(self.v, self.omega, step_size)
+        if not math.isfinite(i_hat):
+            raise ValueError(f"the estimate i_hat = {i_hat!r} A at t = {current_time:.6g} s is not finite "
+                             f"(inputs v = {self.v!r} V, omega = {self.omega!r} rad/s)")
+        self.i_hat = i_hat

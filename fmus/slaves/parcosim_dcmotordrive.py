@@ -12,7 +12,7 @@ process share one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
-from fmus.guarded import GuardedSlave, refuse_absurd
+from fmus.guarded import MIN_STEP, GuardedSlave, refuse_absurd
 from fmus.parts import build_drive, declare_motor
 
 OUTPUTS = ("tau", "v", "i")
@@ -49,12 +49,25 @@ class DCMotorDrive(GuardedSlave):
 
     def setup(self):
         refuse_absurd(T=self.T, omega0=self.omega0, i0=self.i0)
+        if 0.0 < self.T < MIN_STEP:
+            raise ValueError(f"parameter T = {self.T!r} s must be >= {MIN_STEP:g} s")
         self.drive = build_drive(self, mode=self.mode, method=self.method, T=self.T,
                                  torque_output=self.torque_output)
         self.drive.start(self.omega0, self.i0)
         self.tau = self.drive.torque(self.omega0)
         self.v = self.drive.v
         self.i = self.drive.i
+
+    def accepted_steps(self):
+        if self.mode == "current":
+            return "in current mode h dividing the sample time T (T / h a whole number: the multi-rate sub-steps)"
+        return super().accepted_steps() + " (voltage mode)"
+
+    def check_step_size(self, current_time, step_size):
+        if self.mode == "current":
+            self.check_sample_time(current_time, step_size, self.T, divides=True)
+        else:
+            super().check_step_size(current_time, step_size)
 
     def step(self, current_time, step_size):
         self.tau, self.v, self.i = self.drive.step(self.i_ref, self.v_ref, self.omega, self.i_hat, step_size)

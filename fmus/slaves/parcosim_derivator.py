@@ -18,11 +18,15 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from controller.derivators import DEFAULT_FC_ACC, DEFAULT_FC_VEL, SAMPLE_TIME
 from controller.derivators import Derivator as _Derivator
-from fmus.guarded import GuardedSlave, refuse_absurd, require_finite
+from fmus.guarded import ABSURD, MIN_STEP, GuardedSlave, refuse_absurd, require_finite
 
 OUTPUTS = ("dq1", "dq2", "ddq1", "ddq2")
+#: Lowest fc T of a filter: below (fc T ~ 1e-9) the discretised Bessel filters are singular.
+MIN_FC_T = 1e-6
 
 
 class Derivator(GuardedSlave):
@@ -56,25 +60,45 @@ class Derivator(GuardedSlave):
         for name in ("fc_vel", "fc_acc", "T"):
             if getattr(self, name) <= 0.0:
                 raise ValueError(f"parameter {name} = {getattr(self, name)!r} must be > 0")
+        if self.T < MIN_STEP:
+            raise ValueError(f"parameter T = {self.T!r} s is below the shortest step {MIN_STEP:g} s")
         nyquist = 0.5 / self.T
+        lowest = MIN_FC_T / self.T
         for name in ("fc_vel", "fc_acc"):
             if getattr(self, name) >= nyquist:
                 raise ValueError(f"parameter {name} = {getattr(self, name)!r} Hz must be below 1/(2T) = {nyquist:g} Hz")
-        self.derivator = _Derivator(self.fc_vel, self.fc_acc, self.T)
+            if getattr(self, name) < lowest:
+                raise ValueError(f"parameter {name} = {getattr(self, name)!r} Hz is below {MIN_FC_T:g}/T = "
+                                 f"{lowest:g} Hz: the filter discretised at T = {self.T!r} s would be singular")
+        try:
+            self.derivator = _Derivator(self.fc_vel, self.fc_acc, self.T)
+        except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+            raise ValueError(f"parameters fc_vel = {self.fc_vel!r} Hz, fc_acc = {self.fc_acc!r} Hz, T = {self.T!r} s: "
+                             f"the filter design failed ({exc})") from None
         self._started = not self.start_from_input
         if self._started:
             self.derivator.reset([self.q1_0, self.q2_0])
 
+    def accepted_steps(self):
+        return "h = T (the sample time the filters are discretised at; 1e-9 relative)"
+
+    def check_step_size(self, current_time, step_size):
+        self.check_sample_time(current_time, step_size, self.T, divides=False)
+
     def step(self, current_time, step_size):
-        if abs(step_size - self.T) > 1e-9 * self.T:
-            raise ValueError(f"step size {step_size!r} s differs from the sample time T = {self.T!r} s")
         for name in ("q1", "q2"):
             value = getattr(self, name)
             if not math.isfinite(value):
                 raise ValueError(f"input {name} = {value!r} at t = {current_time:.6g} s is not finite")
+            if abs(value) > ABSURD:
+                raise ValueError(f"input {name} = {value!r} rad at t = {current_time:.6g} s is absurd: "
+                                 f"|{name}| must be <= {ABSURD:g} rad")
         if not self._started:
             self.derivator.reset([self.q1, self.q2])
             self._started = True
         dq, ddq = self.derivator.step([self.q1, self.q2])
-        self.dq1, self.dq2 = float(dq[0]), float(dq[1])
-        self.ddq1, self.ddq2 = float(ddq[0]), float(ddq[1])
+        estimates = (float(dq[0]), float(dq[1]), float(ddq[0]), float(ddq[1]))
+        if not all(math.isfinite(v) for v in estimates):
+            raise ValueError(f"the estimates (dq1, dq2, ddq1, ddq2) = {estimates!r} at t = {current_time:.6g} s "
+                             f"are not finite (inputs q1 = {self.q1!r}, q2 = {self.q2!r} rad)")
+        self.dq1, self.dq2, self.ddq1, self.ddq2 = estimates

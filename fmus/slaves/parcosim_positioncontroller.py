@@ -21,16 +21,18 @@ import math
 from controller.model import DEFAULT_EXTENT, DEFAULT_GRID_STEP
 from controller.position import PositionController as _Controller
 from controller.strategies import get_strategy
-from fmus.guarded import PRESET_VALUE, GuardedSlave, refuse_absurd, require_finite
+from fmus.guarded import MIN_STEP, PRESET_VALUE, GuardedSlave, refuse_absurd, require_finite
 from plant import get_preset
 
 #: Start value meaning "the preset's value".
 INPUTS = ("q1", "q2", "dq1", "dq2", "ddq1", "ddq2", "x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
 OUTPUTS = ("tau1", "tau2", "i_ref1", "i_ref2")
 NUMERIC_PARAMETERS = ("lam", "m_star", "phi", "k1", "k2", "gamma1", "gamma2", "model_error", "kt1", "kt2",
-                      "grid_step", "x_min", "x_max", "y_min", "y_max")
-#: Most points a tabulated model's grid may have (the default 5 mm table has 2303).
-MAX_TABLE_POINTS = 1e6
+                      "grid_step", "x_min", "x_max", "y_min", "y_max", "T")
+#: Most points a tabulated model's grid may have (the default 5 mm table has 2303, built in
+#: about 0.2 s; a point costs about 80 µs): building more would take fmi2ExitInitializationMode
+#: over the 10 s any call may take (docs/extremes.md).
+MAX_TABLE_POINTS = 6e4
 
 
 class PositionController(GuardedSlave):
@@ -77,10 +79,13 @@ class PositionController(GuardedSlave):
         d("cache", "parameter", True, "Tabulated model: load/save the table in the user cache directory")
         d("kt1", "parameter", PRESET_VALUE, "Torque constant of motor 1 [N m/A]; -1: Table 16")
         d("kt2", "parameter", PRESET_VALUE, "Torque constant of motor 2 [N m/A]; -1: Table 18")
+        d("T", "parameter", 1e-3, "Sample time [s]; doStep sizes must equal it")
         self.controller = None
 
     def setup(self):
         strategy = get_strategy(self.strategy, self.trajectory)
+        if not self.T >= MIN_STEP:
+            raise ValueError(f"parameter T = {self.T!r} s must be >= {MIN_STEP:g} s")
         numeric = {name: getattr(self, name) for name in NUMERIC_PARAMETERS}
         require_finite(**numeric)
         refuse_absurd(**numeric)
@@ -111,7 +116,7 @@ class PositionController(GuardedSlave):
         self.controller = _Controller(
             get_preset(self.preset), strategy, model=self.model, model_error=self.model_error,
             grid_step=self.grid_step, extent=(self.x_min, self.x_max, self.y_min, self.y_max),
-            kt=kt, cache=bool(self.cache), table_fallback=bool(self.table_fallback))
+            kt=kt, T=self.T, cache=bool(self.cache), table_fallback=bool(self.table_fallback))
 
     def _check_table(self):
         """The tabulated model's grid parameters, named (the model's own messages are about its grid)."""
@@ -125,7 +130,13 @@ class PositionController(GuardedSlave):
         if points > MAX_TABLE_POINTS:
             raise ValueError(f"parameters grid_step = {self.grid_step!r}, x_min = {self.x_min!r}, x_max = {self.x_max!r}, "
                              f"y_min = {self.y_min!r}, y_max = {self.y_max!r} m give a table of {points:.3g} points, "
-                             f"more than {MAX_TABLE_POINTS:g}")
+                             f"more than {MAX_TABLE_POINTS:g} (building it would take initialisation over 10 s)")
+
+    def accepted_steps(self):
+        return "h = T (the sample time; 1e-9 relative)"
+
+    def check_step_size(self, current_time, step_size):
+        self.check_sample_time(current_time, step_size, self.T, divides=False)
 
     def step(self, current_time, step_size):
         # One call (the compiled law for PD/tabulated): outputs and errors together.

@@ -43,6 +43,7 @@ class Trajectory(GuardedSlave):
         self.start_time = 0.0
 
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
+        super().setup_experiment(start_time, stop_time, tolerance)
         self.start_time = float(start_time)
 
     def setup(self):

@@ -1,0 +1,81 @@
+"""The long hostile-use campaign (issue 13): thousands of cases through fmpy, a summary table.
+
+    python -m scenarios.hostile_campaign --cases 3000 [--fmu-dir DIR] [--out out/hostile] [--seed 0]
+
+Runs ``--cases`` cases (spread evenly over the FMUs, every kind in turn) from
+:func:`scenarios.hostile.make_case` in worker subprocesses (:func:`scenarios.hostile.run_cases`),
+then writes ``summary.md`` (outcome counts per FMU and kind: the table of docs/extremes.md),
+``cases.jsonl`` (every case with its outcome, statuses and problems: a failing case can be
+replayed from it) and prints the summary.  Exit status 1 if any case crashed, hung, returned
+fmi2Fatal or broke a property.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from scenarios import hostile
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m scenarios.hostile_campaign", description=__doc__.splitlines()[0])
+    parser.add_argument("--cases", type=int, default=3000, help="number of cases (default 3000)")
+    parser.add_argument("--fmu-dir", default=None, help="the built FMUs (default: built into a temporary directory)")
+    parser.add_argument("--out", default="out/hostile", help="where summary.md and cases.jsonl go")
+    parser.add_argument("--seed", type=int, default=0, help="first case seed (default 0)")
+    parser.add_argument("--batch", type=int, default=30, help="cases per worker process (default 30)")
+    parser.add_argument("--models", default=None, help="comma-separated FMUs (default: all)")
+    args = parser.parse_args(argv)
+
+    work = Path(tempfile.mkdtemp(prefix="parcosim-hostile-"))
+    if args.fmu_dir:
+        paths = {p.stem: p for p in Path(args.fmu_dir).glob("*.fmu")}
+    else:
+        from fmus.build import build_all
+        paths = {p.stem: p for p in build_all(work / "build")}
+    if args.models:
+        paths = {m: paths[m] for m in args.models.split(",")}
+    unzipped = hostile.extract_fmus(paths, work / "fmus")
+    wrapper = {model: hostile.wrapper_is_ours(path, model) for model, path in unzipped.items()}
+    per_model = -(-args.cases // len(unzipped))
+    cases = []
+    for model, path in unzipped.items():
+        kinds = [k for k in hostile.KINDS if wrapper[model] or k not in hostile.WRAPPER_KINDS]
+        cases += hostile.cases_for(model, path, range(args.seed, args.seed + per_model), wrapper=wrapper[model],
+                                   kinds=kinds)
+    hostile.warm_up(unzipped, work / "numba")
+    start = time.perf_counter()
+    done = [0]
+
+    def progress(result):
+        done[0] += 1
+        if done[0] % 100 == 0 or result.outcome not in ("ok", "refused"):
+            print(f"{done[0]}/{len(cases)} {time.perf_counter() - start:.0f} s"
+                  + ("" if result.outcome in ("ok", "refused") else
+                     f"  {result.outcome}: {result.case['model']} {result.case['kind']} seed {result.case['seed']} "
+                     f"{result.problems[:1]}"), file=sys.stderr, flush=True)
+
+    results = hostile.run_cases(cases, unzipped, work / "numba", batch=args.batch, progress=progress)
+    wall = time.perf_counter() - start
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    with open(out / "cases.jsonl", "w", encoding="utf-8") as f:
+        for r in results:
+            f.write(json.dumps({"case": r.case, "outcome": r.outcome, "problems": r.problems,
+                                "statuses": r.statuses, "seconds": r.seconds}) + "\n")
+    binaries = ", ".join(sorted({"parcosim's FMI wrapper" if w else "pythonfmu 0.7's binary" for w in wrapper.values()}))
+    text = (f"{len(results)} cases, {wall:.0f} s wall ({binaries}); "
+            f"`python -m scenarios.hostile_campaign --cases {args.cases} --seed {args.seed}`\n\n"
+            + hostile.markdown_summary(results) + "\n")
+    (out / "summary.md").write_text(text, encoding="utf-8")
+    print(text)
+    bad = [r for r in results if r.outcome not in ("ok", "refused")]
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
