@@ -136,17 +136,10 @@ def main(argv=None) -> int:
         _child(args)
         return 0
 
-    from scenarios.hostile import extract_fmus
+    from scenarios.hostile import prepared_fmus
 
     work = Path(tempfile.mkdtemp(prefix="parcosim-bench-instances-"))
-    if args.fmu_dir:
-        paths = {p.stem: p for p in Path(args.fmu_dir).glob("*.fmu")}
-    else:
-        from fmus.build import build_all
-        paths = {p.stem: p for p in build_all(work / "build")}
-    if args.models:
-        paths = {m: paths[m] for m in args.models.split(",")}
-    unzipped = extract_fmus(paths, work / "fmus")
+    unzipped = prepared_fmus(args.fmu_dir, args.models, work)
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")])),
            "NUMBA_CACHE_DIR": str(work / "numba")}
     print(f"{args.warmup} warm-up cycles, then {args.cycles} measured; a fresh process per FMU and mode")

@@ -197,3 +197,23 @@ def build_drive(slave, suffix: str = "", **options):
             raise ValueError(f"parameter b_design{suffix} = {b_design!r} must be > 0 (or -1: the value of b)")
         design = params.with_(b=b_design)
     return Drive(params, design_params=design, **options)
+
+
+class CurrentLoopSteps:
+    """The step sizes of a slave whose drives' current controllers sample at ``T`` (mixed
+    in before :class:`fmus.guarded.GuardedSlave`: ``DCMotorDrive``, ``ActuatedFiveBarPlant``).
+
+    In current mode a step must divide T (T / h a whole number: the multi-rate sub-steps of
+    the master); in voltage mode any step the base accepts.
+    """
+
+    def accepted_steps(self):
+        if self.mode == "current":
+            return "in current mode h dividing the sample time T (T / h a whole number: the multi-rate sub-steps)"
+        return super().accepted_steps() + " (voltage mode)"
+
+    def check_step_size(self, current_time, step_size):
+        if self.mode == "current":
+            self.check_sample_time(current_time, step_size, self.T, divides=True)
+        else:
+            super().check_step_size(current_time, step_size)

@@ -293,6 +293,23 @@ def extract_fmus(paths: dict, directory) -> dict:
     return unzipped
 
 
+def prepared_fmus(fmu_dir, models, work) -> dict:
+    """The FMUs to drive, extracted under ``work``: those of ``fmu_dir`` (every ``*.fmu``)
+    or, without it, all of ``parcosim build`` built under ``work``; ``models`` (a
+    comma-separated string, or None for all) picks some.  Model -> its directory."""
+    if fmu_dir:
+        paths = {p.stem: p for p in Path(fmu_dir).glob("*.fmu")}
+    else:
+        from fmus.build import build_all
+        paths = {p.stem: p for p in build_all(Path(work) / "build")}
+    if models:
+        unknown = [m for m in models.split(",") if m not in paths]
+        if unknown:
+            raise ValueError(f"no FMU {unknown}; available: {', '.join(sorted(paths))}")
+        paths = {m: paths[m] for m in models.split(",")}
+    return extract_fmus(paths, Path(work) / "fmus")
+
+
 def wrapper_is_ours(unzip_dir, model: str) -> bool:
     """Whether the extracted FMU's binary is parcosim's own FMI wrapper (checked in a
     subprocess: loading the binary here would start its Python in this process)."""

@@ -32,14 +32,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
 
     work = Path(tempfile.mkdtemp(prefix="parcosim-hostile-"))
-    if args.fmu_dir:
-        paths = {p.stem: p for p in Path(args.fmu_dir).glob("*.fmu")}
-    else:
-        from fmus.build import build_all
-        paths = {p.stem: p for p in build_all(work / "build")}
-    if args.models:
-        paths = {m: paths[m] for m in args.models.split(",")}
-    unzipped = hostile.extract_fmus(paths, work / "fmus")
+    unzipped = hostile.prepared_fmus(args.fmu_dir, args.models, work)
     wrapper = {model: hostile.wrapper_is_ours(path, model) for model, path in unzipped.items()}
     per_model = -(-args.cases // len(unzipped))
     cases = []

@@ -21,15 +21,15 @@ process share one Python interpreter and its module cache.
 from __future__ import annotations
 
 from fmus.guarded import MIN_STEP, PRESET_VALUE, TINY, GuardedSlave, refuse_absurd
-from fmus.parts import (PLANT_OUTPUTS, build_drive, build_plant, correct_plant, declare_motor, declare_plant,
-                        publish_plant)
+from fmus.parts import (PLANT_OUTPUTS, CurrentLoopSteps, build_drive, build_plant, correct_plant, declare_motor,
+                        declare_plant, publish_plant)
 from plant.actuated import ActuatedPlant
 
 OUTPUTS = tuple(name for name, _ in PLANT_OUTPUTS) + ("tau1", "tau2", "v1", "v2", "i1", "i2")
 JOINTS = ("1", "2")
 
 
-class ActuatedFiveBarPlant(GuardedSlave):
+class ActuatedFiveBarPlant(CurrentLoopSteps, GuardedSlave):
     """The 5R mechanism and its two DC motor drives integrated as one system."""
 
     author = "parcosim"
@@ -71,17 +71,6 @@ class ActuatedFiveBarPlant(GuardedSlave):
         sim = build_plant(self)
         self.actuated = ActuatedPlant(sim, drives)
         self._publish()
-
-    def accepted_steps(self):
-        if self.mode == "current":
-            return "in current mode h dividing the sample time T (T / h a whole number: the multi-rate sub-steps)"
-        return super().accepted_steps() + " (voltage mode)"
-
-    def check_step_size(self, current_time, step_size):
-        if self.mode == "current":
-            self.check_sample_time(current_time, step_size, self.T, divides=True)
-        else:
-            super().check_step_size(current_time, step_size)
 
     def step(self, current_time, step_size):
         a = self.actuated

@@ -13,12 +13,12 @@ process share one Python interpreter and its module cache.
 from __future__ import annotations
 
 from fmus.guarded import MIN_STEP, GuardedSlave, refuse_absurd
-from fmus.parts import build_drive, declare_motor
+from fmus.parts import CurrentLoopSteps, build_drive, declare_motor
 
 OUTPUTS = ("tau", "v", "i")
 
 
-class DCMotorDrive(GuardedSlave):
+class DCMotorDrive(CurrentLoopSteps, GuardedSlave):
     """DC motor with its 1 ms discrete current controller (thesis 4.162, B.2, app. C, 7.2.10)."""
 
     author = "parcosim"
@@ -57,17 +57,6 @@ class DCMotorDrive(GuardedSlave):
         self.tau = self.drive.torque(self.omega0)
         self.v = self.drive.v
         self.i = self.drive.i
-
-    def accepted_steps(self):
-        if self.mode == "current":
-            return "in current mode h dividing the sample time T (T / h a whole number: the multi-rate sub-steps)"
-        return super().accepted_steps() + " (voltage mode)"
-
-    def check_step_size(self, current_time, step_size):
-        if self.mode == "current":
-            self.check_sample_time(current_time, step_size, self.T, divides=True)
-        else:
-            super().check_step_size(current_time, step_size)
 
     def step(self, current_time, step_size):
         self.tau, self.v, self.i = self.drive.step(self.i_ref, self.v_ref, self.omega, self.i_hat, step_size)
