@@ -51,6 +51,8 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--coupling", choices=("gauss-seidel", "jacobi"), default="gauss-seidel")
     run.add_argument("--out", default=None, help="output directory (default: out/SCENE)")
     run.add_argument("--fmu-dir", default=None, help="where the FMUs are (built when missing or stale)")
+    run.add_argument("--retry-substeps", type=int, default=None, metavar="N",
+                     help="retry a refused step from the saved FMU states in N sub-steps (docs/master.md)")
     run.add_argument("--drives-in-plant", type=int, default=None, metavar="N",
                      help="integrate the drives inside the plant (ActuatedFiveBarPlant), RK4 N steps per "
                           "sample; 8 is 2.2e4x more accurate than separate drives (docs/actuated.md)")
@@ -195,7 +197,7 @@ def _run(args) -> int:
     out = Path(args.out) if args.out else Path("out") / default
     bar = progress_bar(scene.name) if sys.stderr.isatty() else None
     outcome = run_scene(scene, mode=args.mode, out_dir=out, coupling=args.coupling,
-                        fmu_dir=args.fmu_dir, progress=bar)
+                        fmu_dir=args.fmu_dir, progress=bar, retry_substeps=args.retry_substeps)
     m = outcome.metrics
     if outcome.result.interrupted:
         print(f"parcosim: {outcome.result.error}; recorded so far ({len(outcome.result.time)} rows): {out}",

@@ -155,8 +155,12 @@ def plot_run(scene: Scene, columns: dict, out_dir: Path) -> list:
 
 
 def run_scene(scene, mode: str = "inprocess", out_dir=None, coupling: str = "gauss-seidel",
-              fmu_dir=None, plots: bool = True, progress=None) -> Outcome:
+              fmu_dir=None, plots: bool = True, progress=None, retry_substeps: int | None = None) -> Outcome:
     """Run a scene (a name or a :class:`Scene`) and, with ``out_dir``, write its files.
+
+    ``retry_substeps`` (:func:`fmus.master.simulate`): a refused step is retried from the
+    saved FMU states in that many sub-steps; ``metrics["retried_steps"]`` lists them as
+    [time, instance].
 
     Returns the :class:`Outcome` also when a component stopped the run early
     (``outcome.result.error``); the files then hold what was recorded.
@@ -164,7 +168,8 @@ def run_scene(scene, mode: str = "inprocess", out_dir=None, coupling: str = "gau
     scene = get_scene(scene) if isinstance(scene, str) else scene
     if out_dir is not None:
         check_writable(out_dir)
-    result = simulate(scene.system, mode=mode, coupling=coupling, fmu_dir=fmu_dir, progress=progress)
+    result = simulate(scene.system, mode=mode, coupling=coupling, fmu_dir=fmu_dir, progress=progress,
+                      retry_substeps=retry_substeps)
     columns = result_columns(scene, result)
     metrics = scene_metrics(scene, columns, result.wall_s, result.completed, result.init_s)
     metrics.update({"mode": mode, "coupling": coupling, "order": list(result.order)})
@@ -172,6 +177,8 @@ def run_scene(scene, mode: str = "inprocess", out_dir=None, coupling: str = "gau
         metrics["error"] = result.error
     if result.interrupted:
         metrics["interrupted"] = True
+    if retry_substeps is not None:
+        metrics["retried_steps"] = [[t, instance] for t, instance in result.extra.get("retried", [])]
     files = []
     if out_dir is not None:
         out = Path(out_dir)

@@ -181,3 +181,15 @@ def test_run_command_with_the_drives_in_the_plant(tmp_path, capsys):
     assert main(["run", "thesis_sim_circle", "--drives-in-plant", "8", "--out", str(tmp_path / "x")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "no DCMotorDrive to move into the plant" in err[0]
+
+
+def test_run_retry_substeps_option(tmp_path, capsys):
+    """``parcosim run --retry-substeps N`` passes N to the master: a completed run lists no
+    retried step; N < 2 is one line and exit 2 (the retry itself: tests/test_fmu_state.py)."""
+    import json
+
+    out = tmp_path / "retry"
+    assert main(["run", "thesis_sim_circle", "--retry-substeps", "4", "--out", str(out)]) == 0
+    assert json.loads((out / "metrics.json").read_text())["retried_steps"] == []
+    assert main(["run", "thesis_sim_circle", "--retry-substeps", "1", "--out", str(tmp_path / "x")]) == 2
+    assert "retry_substeps = 1 must be an integer >= 2" in capsys.readouterr().err
