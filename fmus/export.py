@@ -21,6 +21,7 @@ from dataclasses import replace
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
+from .archive import rewrite
 from .build import ROOT, STATE_OPTIONS, stage_sources
 from .embedded import FOREIGN_DIR, SYSTEM_FILE, system_to_dict
 from .foreign import is_fmu_file
@@ -139,13 +140,5 @@ def with_start_values(fmu, values: dict, path) -> Path:
         raise ValueError(f"{fmu.name} has no variables {sorted(missing)}")
     ET.indent(root)
     xml = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
-    start_file = f"resources/{START_VALUES_FILE}"
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with zipfile.ZipFile(fmu) as src, zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as dst:
-        for item in src.infolist():
-            if item.filename == start_file:
-                continue
-            data = xml if item.filename == "modelDescription.xml" else src.read(item.filename)
-            dst.writestr(item, data)
-        dst.writestr(start_file, json.dumps(values, indent=1))
-    return path
+    return rewrite(fmu, path, {"modelDescription.xml": xml,
+                               f"resources/{START_VALUES_FILE}": json.dumps(values, indent=1)})

@@ -48,6 +48,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .archive import rewrite
 from .ssp import NS, OSP_ANNOTATION, OSP_NS, _threads_text, libcosim_annotation, read_ssp_experiment
 from .ssp_run import SspRun
 from .system import split_signal
@@ -112,11 +113,7 @@ def with_libcosim_annotation(path, out, step: float | None = None, worker_thread
     out = Path(out)
     with zipfile.ZipFile(path) as zf:
         if out.suffix.lower() == ".ssp":
-            out.parent.mkdir(parents=True, exist_ok=True)
-            with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as dst:
-                for info in zf.infolist():
-                    data = text if info.filename == "SystemStructure.ssd" else zf.read(info.filename)
-                    dst.writestr(info, data, compress_type=info.compress_type)
+            rewrite(path, out, {"SystemStructure.ssd": text})
         else:
             out.mkdir(parents=True, exist_ok=True)
             zf.extractall(out)

@@ -9,11 +9,11 @@ at initialisation.
 """
 from __future__ import annotations
 
-import shutil
-import tempfile
 import zipfile
 from pathlib import Path
 from xml.etree import ElementTree as ET
+
+from .archive import rewrite
 
 
 def model_structure(root: ET.Element, feedthrough: dict) -> ET.Element:
@@ -58,10 +58,4 @@ def fix_model_structure(fmu: Path, feedthrough: dict) -> None:
     root.insert(position, model_structure(root, feedthrough))
     ET.indent(root)
     xml = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
-    with tempfile.TemporaryDirectory() as tmp:
-        rebuilt = Path(tmp) / fmu.name
-        with zipfile.ZipFile(fmu) as src, zipfile.ZipFile(rebuilt, "w", zipfile.ZIP_DEFLATED) as dst:
-            for item in src.infolist():
-                data = xml if item.filename == "modelDescription.xml" else src.read(item.filename)
-                dst.writestr(item, data)
-        shutil.move(rebuilt, fmu)
+    rewrite(fmu, fmu, {"modelDescription.xml": xml})

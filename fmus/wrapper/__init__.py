@@ -28,6 +28,8 @@ import zipfile
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
+from ..archive import rewrite
+
 #: The wrapper's C source.
 SOURCE = Path(__file__).resolve().parent / "parcosim_fmi2.c"
 #: The symbol every parcosim wrapper exports (a function returning its version string).
@@ -137,21 +139,10 @@ def install_wrapper(fmu, quiet: bool = False) -> bool:
         return False
     fmu = Path(fmu)
     binary = f"binaries/{PLATFORM}/{model_identifier(fmu)}.so"
-    fd, tmp = tempfile.mkstemp(prefix=".wrapped-", suffix=".fmu", dir=fmu.parent)
-    os.close(fd)
-    try:
-        with zipfile.ZipFile(fmu) as src, zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as dst:
-            for item in src.infolist():
-                if item.filename != binary:
-                    dst.writestr(item, src.read(item.filename))
-            info = zipfile.ZipInfo(binary, date_time=(2020, 1, 1, 0, 0, 0))
-            info.external_attr = 0o755 << 16
-            info.compress_type = zipfile.ZIP_DEFLATED
-            dst.writestr(info, wrapper.read_bytes())
-        os.replace(tmp, fmu)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+    info = zipfile.ZipInfo(binary, date_time=(2020, 1, 1, 0, 0, 0))
+    info.external_attr = 0o755 << 16
+    info.compress_type = zipfile.ZIP_DEFLATED
+    rewrite(fmu, fmu, {binary: (info, wrapper.read_bytes())})
     return True
 
 

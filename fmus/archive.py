@@ -1,0 +1,36 @@
+"""Copy a zip archive (an FMU, an SSP package) with some members replaced or added.
+
+The FMU build fixes the model description, installs the FMI wrapper and bakes start values;
+the SSP tools rewrite a package's ``SystemStructure.ssd``: all of them copy an archive
+member by member with a few members new.  :func:`rewrite` does that once, atomically.
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+import zipfile
+from pathlib import Path
+
+
+def rewrite(source, target, members: dict) -> Path:
+    """Write ``target`` as a copy of the zip ``source`` whose members ``members`` (name ->
+    bytes, or name -> (ZipInfo, bytes) to set its attributes) replace or add to the old
+    ones; the others keep their entries.  ``target`` may be ``source``: it is replaced
+    atomically (a temporary file in its folder, then renamed), as is any target."""
+    source, target = Path(source), Path(target)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    os.close(fd)
+    try:
+        with zipfile.ZipFile(source) as src, zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as dst:
+            for item in src.infolist():
+                if item.filename not in members:
+                    dst.writestr(item, src.read(item.filename))
+            for name, data in members.items():
+                info, data = data if isinstance(data, tuple) else (name, data)
+                dst.writestr(info, data)
+        os.replace(tmp, target)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    return target
