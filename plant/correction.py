@@ -15,7 +15,7 @@ they disagree, moves the model's state to the nearest state the measurement allo
 The new state keeps the model's unmeasured quantities (the end effector's velocity where
 no speed is measured) and closes the loop exactly: the end effector from the actuated
 angles by the direct kinematics (002 eq. 7-11, working mode), the thesis coordinates
-(7.12) from it, the speeds through J_X dX + J_Theta dTheta = 0 (002 eq. 15) and C (5.40).
+(7.12) from it, the speeds through J_X dX + J_Theta dTheta = 0 (002 eq. 15) and C (5.56).
 """
 from __future__ import annotations
 
