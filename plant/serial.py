@@ -30,6 +30,7 @@ differences in ``tests/test_serial.py``):
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -80,6 +81,39 @@ class RigidLink:
         object.__setattr__(
             self, "inertia", tuple(tuple(float(v) for v in row) for row in np.reshape(self.inertia, (3, 3)))
         )
+
+
+def with_point_mass(link: RigidLink, mass: float, position) -> RigidLink:
+    """The link with a point mass rigidly attached: one composite rigid body.
+
+    A counter-mass or a payload (seed 001 (55)-(63)) enters the mass matrix and the
+    gravity terms exactly as this composite link does: the masses add, the centre of
+    mass is their weighted mean, and the inertia about the new centre follows from the
+    parallel-axis theorem applied to both bodies.
+
+    Parameters
+    ----------
+    link : RigidLink
+    mass : float
+        The point mass [kg], >= 0.
+    position : array_like, shape (3,)
+        Where it sits, in the link's own DH frame [m].
+    """
+    if not (math.isfinite(mass) and mass >= 0.0):
+        raise ValueError(f"point mass must be a finite number >= 0 kg, got {mass!r}")
+    if mass == 0.0:
+        return link
+    p = np.asarray(position, dtype=float)
+    g = np.asarray(link.com)
+    total = link.mass + mass
+    com = (link.mass * g + mass * p) / total
+
+    def shifted(m, r):
+        """Inertia of a point mass m at offset r (the parallel-axis term)."""
+        return m * (np.dot(r, r) * np.eye(3) - np.outer(r, r))
+
+    inertia = np.asarray(link.inertia) + shifted(link.mass, g - com) + shifted(mass, p - com)
+    return RigidLink(total, com, inertia)
 
 
 @dataclass(frozen=True)

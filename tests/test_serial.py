@@ -4,7 +4,7 @@ and prismatic joints and a rotor."""
 import numpy as np
 import pytest
 
-from plant.serial import DHJoint, RigidLink, SerialChain, chain_dynamics, chain_kinematics
+from plant.serial import DHJoint, RigidLink, SerialChain, chain_dynamics, chain_kinematics, with_point_mass
 
 EPS = 1e-6
 
@@ -121,3 +121,27 @@ def test_gravity_terms_are_the_gradient_of_the_potential(q, dq):
 def test_bad_joint_kind_is_refused():
     with pytest.raises(ValueError, match="'R' or 'P'"):
         DHJoint("X", a=0.1, alpha=0.0)
+
+
+@pytest.mark.parametrize("q, dq", STATES)
+def test_a_point_mass_adds_its_own_kinetic_and_potential_energy(q, dq):
+    """with_point_mass: the composite link's M and g are the bare chain's plus the
+    point's m v.v/2 and -m p.g, the point's motion taken from the bare chain's frames."""
+    mass, where = 0.7, np.array([-0.12, 0.04, 0.03])
+    links = list(CHAIN.links)
+    links[2] = with_point_mass(links[2], mass, where)
+    loaded = SerialChain(CHAIN.joints, tuple(links), CHAIN.rotor_inertia, CHAIN.gear_ratio)
+    gravity = np.array([0.3, -9.81, 1.2])
+
+    def point(qq):
+        frame = chain_kinematics(CHAIN, qq, dq).frames[3]
+        return frame[:3, :3] @ where + frame[:3, 3]
+
+    v = (point(q + EPS * dq) - point(q - EPS * dq)) / (2 * EPS)
+    bare, both = chain_dynamics(CHAIN, q, dq, gravity), chain_dynamics(loaded, q, dq, gravity)
+    np.testing.assert_allclose(0.5 * dq @ both.M @ dq, 0.5 * dq @ bare.M @ dq + 0.5 * mass * v @ v, rtol=1e-8)
+    grad = np.array([(point(q + EPS * e) - point(q - EPS * e)) @ gravity / (2 * EPS) for e in np.eye(4)])
+    np.testing.assert_allclose(both.g, bare.g - mass * grad, atol=1e-8)
+    assert with_point_mass(links[1], 0.0, where) is links[1]
+    with pytest.raises(ValueError, match="point mass"):
+        with_point_mass(links[1], -1.0, where)
