@@ -72,6 +72,26 @@ def declare_plant(slave) -> None:
     d("baumgarte", "parameter", defaults.baumgarte, "Baumgarte lambda of (5.66) [1/s]")
     d("project", "parameter", defaults.project, "Project q, dq on the constraints after each step")
     d("kernel", "parameter", defaults.kernel, "'fast' (compiled 5R) or 'general' (thesis algorithm in numpy)")
+    declare_counter_masses(slave)
+
+
+def declare_counter_masses(slave) -> None:
+    """``counter_mass1``, ``counter_mass2``: the balanced 5R of seed 001 (SYSTEM.md §7)."""
+    for j, link in (("1", "proximal"), ("2", "distal")):
+        slave.declare(f"counter_mass{j}", "parameter", 0.0,
+                      f"Counter-mass on each chain's {link} link, behind its joint where seed 001 (64) puts it "
+                      f"(each chain's gravity terms vanish) [kg]; 0: none; needs m0 = 0")
+
+
+def with_counter_masses(slave, params):
+    """``params`` with the slave's ``counter_mass1``/``counter_mass2`` (checked, named)."""
+    values = {name: getattr(slave, name) for name in ("counter_mass1", "counter_mass2")}
+    require_finite(**values)
+    refuse_absurd(**values)
+    for name, value in values.items():
+        if value < 0.0:
+            raise ValueError(f"parameter {name} = {value!r} kg must be >= 0")
+    return params.with_counter_masses(values["counter_mass1"], values["counter_mass2"])
 
 
 def build_plant(slave):
@@ -93,6 +113,7 @@ def build_plant(slave):
     )
     params = replace(params, m0=slave.m0, l0=slave.l0,
                      gravity=(slave.gravity_x, slave.gravity_y, slave.gravity_z))
+    params = with_counter_masses(slave, params)
     if not slave.link_inertias:
         params = replace(params, chain1=replace(params.chain1, Jz1=0.0, Jz2=0.0),
                          chain2=replace(params.chain2, Jz1=0.0, Jz2=0.0))

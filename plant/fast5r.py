@@ -27,7 +27,8 @@ import math
 import numpy as np
 from numba import njit
 
-from .presets import FiveBarParams
+from .presets import ChainParams, FiveBarParams
+from .serial import RigidLink, with_point_mass
 
 # Layout of the parameter vector.
 _L0, _M0, _GX, _GY = 0, 1, 2, 3
@@ -36,11 +37,26 @@ _L1, _L2, _LG1, _LG2, _M1, _M2, _JZ1, _JZ2, _JR = range(9)
 _SIGN = (1.0, -1.0)  # s_k of E_k (7.3-7.4)
 
 
+def composite_link(m: float, lg: float, Jz: float, mass: float, offset: float) -> tuple[float, float, float]:
+    """(m, lg, Jz) of a planar link with a point ``mass`` on its line at ``offset`` from its
+    proximal joint (:func:`plant.serial.with_point_mass`); unchanged, bit for bit, for mass 0."""
+    link = with_point_mass(RigidLink(m, (lg, 0.0, 0.0), np.diag([0.0, Jz, Jz])), mass, (offset, 0.0, 0.0))
+    return link.mass, link.com[0], link.inertia[2][2]
+
+
+def _chain_entries(c: ChainParams) -> list:
+    """The 9 chain entries, the counter-masses absorbed into the links (seed 001 (55)-(64))."""
+    L1, L2 = c.counter_offsets()
+    m1, lg1, Jz1 = composite_link(c.m1, c.lg1, c.Jz1, c.counter_mass1, L1)
+    m2, lg2, Jz2 = composite_link(c.m2, c.lg2, c.Jz2, c.counter_mass2, L2)
+    return [c.l1, c.l2, lg1, lg2, m1, m2, Jz1, Jz2, c.J_rotor]
+
+
 def pack_params(params: FiveBarParams) -> np.ndarray:
     """The parameter vector the compiled functions read."""
     p = [params.l0, params.m0, params.gravity[0], params.gravity[1]]
     for c in (params.chain1, params.chain2):
-        p += [c.l1, c.l2, c.lg1, c.lg2, c.m1, c.m2, c.Jz1, c.Jz2, c.J_rotor]
+        p += _chain_entries(c)
     return np.array(p, dtype=np.float64)
 
 

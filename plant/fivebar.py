@@ -24,7 +24,7 @@ import numpy as np
 
 from .parallel import ParallelMechanism
 from .presets import ChainParams, FiveBarParams
-from .serial import REVOLUTE, DHJoint, RigidLink, SerialChain
+from .serial import REVOLUTE, DHJoint, RigidLink, SerialChain, with_point_mass
 
 #: E_2 of (7.4): chain 2's base frame seen from the world frame.
 MIRROR = np.diag([-1.0, 1.0, -1.0])
@@ -38,11 +38,19 @@ class KinematicsError(ValueError):
 
 
 def _rr_chain(c: ChainParams) -> SerialChain:
-    """The RR chain of Table 2; link frames sit at the distal joint of each link."""
+    """The RR chain of Table 2; link frames sit at the distal joint of each link.
+
+    The counter-masses (seed 001 (55)-(64)) are point masses on the links' lines at
+    :meth:`~plant.presets.ChainParams.counter_offsets` from the proximal joints, each link
+    and its counter-mass one composite rigid body (:func:`plant.serial.with_point_mass`).
+    """
     joints = (DHJoint(REVOLUTE, a=c.l1, alpha=0.0), DHJoint(REVOLUTE, a=c.l2, alpha=0.0))
+    L1, L2 = c.counter_offsets()
     links = (
-        RigidLink(c.m1, (c.lg1 - c.l1, 0.0, 0.0), np.diag([0.0, c.Jz1, c.Jz1])),
-        RigidLink(c.m2, (c.lg2 - c.l2, 0.0, 0.0), np.diag([0.0, c.Jz2, c.Jz2])),
+        with_point_mass(RigidLink(c.m1, (c.lg1 - c.l1, 0.0, 0.0), np.diag([0.0, c.Jz1, c.Jz1])),
+                        c.counter_mass1, (L1 - c.l1, 0.0, 0.0)),
+        with_point_mass(RigidLink(c.m2, (c.lg2 - c.l2, 0.0, 0.0), np.diag([0.0, c.Jz2, c.Jz2])),
+                        c.counter_mass2, (L2 - c.l2, 0.0, 0.0)),
     )
     return SerialChain(joints, links, rotor_inertia=(c.J_rotor, 0.0))
 

@@ -7,6 +7,11 @@ motor presets ``motor1``/``motor2``) on the actuated joints.
 Link inertias ``Jz`` are about each link's centre of mass, which sits at
 ``lg`` from the link's proximal joint.  Chain 1 is the chain whose base is at
 (+l0, 0), chain 2 at (-l0, 0).
+
+Counter-masses (seed 001, the balanced RR and 5R, (55)-(72)): ``counter_mass1`` is a
+point mass on the proximal link, ``counter_mass2`` one on the distal link, each on the
+link's line behind its proximal joint at the distance :meth:`ChainParams.counter_offsets`
+gives, so that the chain's gravity terms g# (62)-(63) vanish.
 """
 from __future__ import annotations
 
@@ -27,6 +32,38 @@ class ChainParams:
     Jz1: float
     Jz2: float
     J_rotor: float = 0.0
+    counter_mass1: float = 0.0
+    counter_mass2: float = 0.0
+
+    def counter_offsets(self) -> tuple[float, float]:
+        """(L1, L2): where the counter-masses sit [m], along each link from its proximal joint.
+
+        Seed 001 (62)-(63) for an RR chain carrying point masses M1 at L1 on link 1 and M2 at
+        L2 on link 2 (from the base joint and from the elbow)::
+
+            g1# = g (M1 L1 + m1 lg1 + (M2 + m2) l1) c1 + g (M2 L2 + m2 lg2) c12
+            g2# = g (M2 L2 + m2 lg2) c12
+
+        Both vanish for every pose when (64), with its typo corrected (the seed prints
+        ``m2 l2`` where (62) gives ``m2 l1``)::
+
+            L2 = -m2 lg2 / M2,   L1 = -(m1 lg1 + (M2 + m2) l1) / M1
+
+        i.e. the distal link's centre of mass (counter-mass included) is moved to the elbow and
+        the proximal link's (carrying all of link 2 at the elbow) to the base joint.  Both are
+        negative: behind the joint.  A counter-mass of 0 kg has no place: its entry is 0.  With
+        M1 = 0 and M2 > 0 only g2# and the distal part of g1# vanish; with M2 = 0 and M1 > 0
+        only the proximal link's own part of g1#.
+        """
+        M1, M2 = self.counter_mass1, self.counter_mass2
+        L2 = -self.m2 * self.lg2 / M2 if M2 > 0.0 else 0.0
+        L1 = -(self.m1 * self.lg1 + (M2 + self.m2) * self.l1) / M1 if M1 > 0.0 else 0.0
+        return L1, L2
+
+
+#: A counter-mass may sit at most this many chain lengths (l1 + l2) behind its joint: a
+#: lighter one (tiny masses, far away) is refused as non-physical.
+COUNTER_REACH = 10.0
 
 
 @dataclass(frozen=True)
@@ -55,7 +92,33 @@ class FiveBarParams:
                 f"links cannot close the loop: base distance 2*l0 = {2 * self.l0:g} m "
                 f"exceeds the reach of both chains together"
             )
+        for k, chain in ((1, self.chain1), (2, self.chain2)):
+            reach = COUNTER_REACH * (chain.l1 + chain.l2)
+            for j, (mass, offset) in enumerate(zip((chain.counter_mass1, chain.counter_mass2),
+                                                   chain.counter_offsets()), start=1):
+                if abs(offset) > reach:
+                    raise ValueError(
+                        f"chain{k}.counter_mass{j} = {mass!r} kg is too light to balance chain {k}: it would "
+                        f"sit {abs(offset):.3g} m behind its joint, more than {COUNTER_REACH:g} times the "
+                        f"chain's length ({reach:.3g} m)"
+                    )
+        counter = max(c.counter_mass1 + c.counter_mass2 for c in (self.chain1, self.chain2))
+        if self.m0 > 0.0 and counter > 0.0:
+            raise ValueError(
+                f"m0 = {self.m0!r} kg with counter-masses (counter_mass1/counter_mass2 > 0): the "
+                f"counter-masses balance each chain without an end-effector mass (seed 001 (64)), "
+                f"so the pair is refused; set m0 = 0 or both counter-masses to 0"
+            )
         return self
+
+    def with_counter_masses(self, counter_mass1: float, counter_mass2: float) -> "FiveBarParams":
+        """Both chains with ``counter_mass1`` on the proximal and ``counter_mass2`` on the
+        distal link [kg], placed by :meth:`ChainParams.counter_offsets`."""
+        return replace(
+            self,
+            chain1=replace(self.chain1, counter_mass1=float(counter_mass1), counter_mass2=float(counter_mass2)),
+            chain2=replace(self.chain2, counter_mass1=float(counter_mass1), counter_mass2=float(counter_mass2)),
+        )
 
     def with_rotors(self, J_rotor1: float, J_rotor2: float) -> "FiveBarParams":
         return replace(

@@ -19,7 +19,11 @@ are unactuated). Each link is a planar rigid body of mass ``m``, centre-of-mass
 inertia ``Jz`` and centre of mass at ``lg`` from its proximal joint along the
 link. The rotor inertia ``J_rotor`` of a chain turns with its first link. The
 end-effector point mass ``m0`` sits on the common tip (attached to chain 1's
-distal link; the closure constraint makes the choice immaterial). Gravity is
+distal link; the closure constraint makes the choice immaterial). A chain may
+carry point masses (counter-masses, seed 001 (55)): optional keys ``M1`` at
+the signed distance ``L1`` from the base joint along link 1 and ``M2`` at
+``L2`` from the elbow along link 2 (negative: behind the joint); each is a
+particle of its own in the Lagrangian, moving with its link. Gravity is
 the 3-vector ``g`` in the world frame; only its in-plane part does work.
 Torques ``tau = (tau1, tau2)`` act between the ground and links 11 and 21,
 counter-clockwise positive.
@@ -119,6 +123,11 @@ def _base(params, chain_index):
 def _tip_mass(params, chain_index):
     """Tip point mass carried by this chain's distal link (all of it on chain 1)."""
     return params["m0"] if chain_index == 0 else 0.0
+
+
+def _point_masses(chain):
+    """(M1, L1, M2, L2): the chain's point masses and where they sit (0 when absent)."""
+    return chain.get("M1", 0.0), chain.get("L1", 0.0), chain.get("M2", 0.0), chain.get("L2", 0.0)
 
 
 def _chain_angles(phi, chain_index):
@@ -306,10 +315,13 @@ def _chain_inertia_terms(params, chain_index):
     """
     chain = params["chains"][chain_index]
     tip_mass = _tip_mass(params, chain_index)
-    proximal = (chain["Jz1"] + chain["m1"] * chain["lg1"] ** 2 + chain["J_rotor"]
-                + (chain["m2"] + tip_mass) * chain["l1"] ** 2)
-    distal = chain["Jz2"] + chain["m2"] * chain["lg2"] ** 2 + tip_mass * chain["l2"] ** 2
-    coupling = chain["l1"] * (chain["m2"] * chain["lg2"] + tip_mass * chain["l2"])
+    M1, L1, M2, L2 = _point_masses(chain)
+    # A particle at r along link 1 contributes m r^2 dphi11^2 / 2; on link 2 its velocity
+    # is l1 dphi11 e_perp(phi11) + r dphi12 e_perp(phi12).
+    proximal = (chain["Jz1"] + chain["m1"] * chain["lg1"] ** 2 + chain["J_rotor"] + M1 * L1 ** 2
+                + (chain["m2"] + tip_mass + M2) * chain["l1"] ** 2)
+    distal = chain["Jz2"] + chain["m2"] * chain["lg2"] ** 2 + tip_mass * chain["l2"] ** 2 + M2 * L2 ** 2
+    coupling = chain["l1"] * (chain["m2"] * chain["lg2"] + tip_mass * chain["l2"] + M2 * L2)
     return proximal, distal, coupling
 
 
@@ -350,10 +362,11 @@ def gravity_forces(params, phi):
         chain = params["chains"][chain_index]
         tip_mass = _tip_mass(params, chain_index)
         angle_proximal, angle_distal = _chain_angles(phi, chain_index)
+        M1, L1, M2, L2 = _point_masses(chain)
         # Moment arm of the weight of everything a link carries about its joint.
-        proximal_moment = (chain["m1"] * chain["lg1"]
-                           + (chain["m2"] + tip_mass) * chain["l1"])
-        distal_moment = chain["m2"] * chain["lg2"] + tip_mass * chain["l2"]
+        proximal_moment = (chain["m1"] * chain["lg1"] + M1 * L1
+                           + (chain["m2"] + tip_mass + M2) * chain["l1"])
+        distal_moment = chain["m2"] * chain["lg2"] + tip_mass * chain["l2"] + M2 * L2
         forces[2 * chain_index] = proximal_moment * gravity @ _unit_perp(angle_proximal)
         forces[2 * chain_index + 1] = distal_moment * gravity @ _unit_perp(angle_distal)
     return forces
@@ -441,10 +454,12 @@ def potential_energy(params, phi):
         angle_proximal, angle_distal = _chain_angles(phi, chain_index)
         base = _base(params, chain_index)
         elbow = base + chain["l1"] * _unit(angle_proximal)
+        M1, L1, M2, L2 = _point_masses(chain)
         weighted_positions = (
             chain["m1"] * (base + chain["lg1"] * _unit(angle_proximal))
             + chain["m2"] * (elbow + chain["lg2"] * _unit(angle_distal))
-            + _tip_mass(params, chain_index) * (elbow + chain["l2"] * _unit(angle_distal)))
+            + _tip_mass(params, chain_index) * (elbow + chain["l2"] * _unit(angle_distal))
+            + M1 * (base + L1 * _unit(angle_proximal)) + M2 * (elbow + L2 * _unit(angle_distal)))
         energy -= gravity @ weighted_positions
     return float(energy)
 
