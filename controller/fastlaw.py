@@ -48,15 +48,17 @@ B_TX0, B_TY0, B_TINV, B_TNX, B_TNY = 17, 18, 19, 20, 21   # table: first grid po
 #: The controller's state: integral (2), k (2), s_prev (2), s (2), e (2).
 S_INTEGRAL, S_K, S_S_PREV, S_S, S_E = 22, 24, 26, 28, 30
 STATE = slice(22, 32)
+B_LAW = 32                                           # 0: unified law (7.21-7.22), 1: seed 001's
 #: First entry of the table, shape (ny + 1, nx + 1, N_TERMS) flattened row-major.
-B_TABLE = 32
+B_TABLE = 33
 
 SPACE_Q, SPACE_X = 0.0, 1.0
 MODEL_PD, MODEL_TABULATED = 0.0, 1.0
 OK, REFUSED = 0.0, 1.0
+LAW_UNIFIED, LAW_SEED = 0.0, 1.0
 
 
-def pack(kin, band, space, model, kp, kv, phi, gamma, m_star, kt, table=None):
+def pack(kin, band, space, model, kp, kv, phi, gamma, m_star, kt, law="unified"):
     """The ``buf`` of :func:`law_step`, state zero (:func:`reset_state` sets k).
 
     Parameters
@@ -69,6 +71,8 @@ def pack(kin, band, space, model, kp, kv, phi, gamma, m_star, kt, table=None):
     kp, kv, phi, m_star : float
     gamma : tuple or None
     kt : (float, float)
+    law : {"unified", "seed001"}
+        :attr:`controller.strategies.Strategy.law`.
     """
     if model is None:
         n_table = 0
@@ -86,6 +90,7 @@ def pack(kin, band, space, model, kp, kv, phi, gamma, m_star, kt, table=None):
         buf[B_GAMMA:B_GAMMA + 2] = gamma
     buf[B_MSTAR] = m_star
     buf[B_KT:B_KT + 2] = kt
+    buf[B_LAW] = LAW_SEED if law == "seed001" else LAW_UNIFIED
     if model is not None:
         buf[B_TX0], buf[B_TY0], buf[B_TINV] = model._x0, model._y0, model._inv
         buf[B_TNX], buf[B_TNY] = model._nx, model._ny
@@ -191,9 +196,18 @@ def _interpolate(buf, x, y, out):
 
 @njit(cache=True, error_model="numpy")
 def _component(buf, i, e, de, dde, ddr_d, h):
-    """The law (7.21-7.22) on component i: updates the state, returns the commanded acceleration."""
-    feedback = buf[B_KV] * de + buf[B_KP] * e
-    s = dde + feedback                                                    # (7.22)
+    """The law (7.21-7.22) on component i: updates the state, returns the commanded acceleration.
+
+    Seed 001's law (:data:`LAW_SEED`, section 1.2, docs/controller.md): s = de + lam e,
+    a = ddr_d + lam de + k sat(s/phi), no integral (lam = kv / 2)."""
+    seed = buf[B_LAW] == LAW_SEED
+    if seed:
+        lam = 0.5 * buf[B_KV]
+        feedback = lam * de
+        s = de + lam * e                                                  # seed 001: -s
+    else:
+        feedback = buf[B_KV] * de + buf[B_KP] * e
+        s = dde + feedback                                                # (7.22)
     phi = buf[B_PHI]
     if buf[B_ADAPT] != 0.0:                                               # (6.66)
         s_prev = buf[S_S_PREV + i]
@@ -201,11 +215,13 @@ def _component(buf, i, e, de, dde, ddr_d, h):
         if abs(s) >= phi or not same:
             buf[S_K + i] = abs(buf[S_K + i] + buf[B_GAMMA + i] * _sign(s) * _sign(s_prev))
     k = buf[S_K + i]
-    if k != 0.0:
-        buf[S_INTEGRAL + i] += h * k * _sat(s / phi)
     buf[S_S_PREV + i] = s
     buf[S_S + i] = s
     buf[S_E + i] = e
+    if seed:
+        return ddr_d + feedback + k * _sat(s / phi)
+    if k != 0.0:
+        buf[S_INTEGRAL + i] += h * k * _sat(s / phi)
     return ddr_d + feedback + buf[S_INTEGRAL + i]                         # (7.21)
 
 

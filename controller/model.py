@@ -64,7 +64,8 @@ class ModelRangeError(ValueError):
 
 
 def perturbed_params(params: FiveBarParams, model_error: float) -> FiveBarParams:
-    """Parameters with every mass, link inertia and rotor inertia scaled by (1 + model_error).
+    """Parameters with every mass (counter-masses too, which keeps them where they balance),
+    link inertia and rotor inertia scaled by (1 + model_error).
 
     Raises
     ------
@@ -76,7 +77,8 @@ def perturbed_params(params: FiveBarParams, model_error: float) -> FiveBarParams
     f = 1.0 + float(model_error)
 
     def chain(c):
-        return replace(c, m1=c.m1 * f, m2=c.m2 * f, Jz1=c.Jz1 * f, Jz2=c.Jz2 * f, J_rotor=c.J_rotor * f)
+        return replace(c, m1=c.m1 * f, m2=c.m2 * f, Jz1=c.Jz1 * f, Jz2=c.Jz2 * f, J_rotor=c.J_rotor * f,
+                       counter_mass1=c.counter_mass1 * f, counter_mass2=c.counter_mass2 * f)
 
     return replace(params, chain1=chain(params.chain1), chain2=chain(params.chain2), m0=params.m0 * f)
 

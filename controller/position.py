@@ -25,7 +25,9 @@ the exact model solves it with the plant's Z, the tabulated and PD laws use the 
 closed form tau = J^T u' (tests check both agree).  Current references: tau_k / kt_k.
 
 PD (k = 0, ĥ = 0, Ĥ = m*·1) and TC (k = 0) are the special cases of 7.2.6; the adaptive
-gain of (6.66) is optional (``Strategy.gamma``).
+gain of (6.66) is optional (``Strategy.gamma``).  Seed 001's sliding-mode law
+(``Strategy.law == "seed001"``, strategies SMCq/SMCx, docs/controller.md) replaces (7.21-7.22)
+by s = de + lam e, u' = Ĥ (ddr_d + lam de + k sat(s/phi)) + ĥ, with no integral.
 
 Speed (``kernel``): :meth:`PositionController.step_reference` is the readable law in Python
 (~20 µs a sample).  With ``kernel="fast"`` (default) PD and tabulated strategies run the same
@@ -159,7 +161,8 @@ class PositionController:
         # Constants, state and table of the compiled law in one array; the reference keeps its
         # state in the same place (fastlaw.STATE), so both paths can be mixed.
         self._buf = fastlaw.pack(self.kin, self.band, strategy.space, self.model if self.compiled else None,
-                                 self.kp, self.kv, strategy.phi, strategy.gamma, strategy.m_star, self.kt)
+                                 self.kp, self.kv, strategy.phi, strategy.gamma, strategy.m_star, self.kt,
+                                 strategy.law)
         if self.compiled:
             fastlaw.compile_law()
         self.reset()
@@ -261,20 +264,28 @@ class PositionController:
             r = (q1, q2, dq1, dq2, ddq1, ddq2)
             rd = self.kin.joint_reference(x_d, y_d, dx_d, dy_d, ddx_d, ddy_d, angles)
         kp, kv, buf = self.kp, self.kv, self._buf
+        seed = st.law == "seed001"
         a = [0.0, 0.0]
         for i in (0, 1):
             e, de, dde = rd[i] - r[i], rd[2 + i] - r[2 + i], rd[4 + i] - r[4 + i]
-            feedback = kv * de + kp * e
-            s = dde + feedback                                                    # (7.22)
+            if seed:                                                              # seed 001, 1.2
+                feedback = st.lam * de
+                s = de + st.lam * e
+            else:
+                feedback = kv * de + kp * e
+                s = dde + feedback                                                # (7.22)
             k, s_prev, integral = float(buf[S_K + i]), float(buf[S_S_PREV + i]), float(buf[S_INTEGRAL + i])
             if st.gamma is not None:                                              # (6.66)
                 same = _sign(s) == _sign(s_prev)
                 if abs(s) >= st.phi or not same:
                     k = abs(k + st.gamma[i] * _sign(s) * _sign(s_prev))
-            if k != 0.0:
-                integral += h * k * sat(s / st.phi)
+            if seed:
+                a[i] = rd[4 + i] + feedback + k * sat(s / st.phi)
+            else:
+                if k != 0.0:
+                    integral += h * k * sat(s / st.phi)
+                a[i] = rd[4 + i] + feedback + integral                            # (7.21)
             buf[S_K + i], buf[S_INTEGRAL + i], buf[S_S_PREV + i], buf[S_S + i], buf[S_E + i] = k, integral, s, s, e
-            a[i] = rd[4 + i] + feedback + integral                                # (7.21)
         J00, J01, J10, J11 = J
         if not st.model_based:                                                    # PD: Ĥ = m*·1, ĥ = 0
             u0, u1 = st.m_star * a[0], st.m_star * a[1]

@@ -12,12 +12,25 @@ Suffix ``q``: joint space (the actuated angles, units rad, m* in kg m^2); ``x``:
 triangle (Table 7): :func:`get_strategy` takes ``trajectory`` ("circle", the default, also used
 for ``thesis_circle`` and ``hold``; or "triangle").  Task space has one table (Table 8) for
 both.  Table 8 gives k2 = 0 for PDMDx and TCMDx: no sliding term on y.
+
+Two more, not the thesis': ``SMCq`` and ``SMCx``, seed 001's sliding-mode law (section 1.2;
+``law = "seed001"``): s = de + lam e, u' = Ĥ (ddr_d + lam de + k sat(s/phi)) + ĥ.  Inside the
+boundary layer it is computed torque with kv = lam + k/phi, kp = lam k/phi; outside, the
+feedback saturates at k.  It is not the unified law written differently (docs/controller.md,
+"Seed 001's sliding-mode law").  Their gains: lam = 60/s as TC; k/phi = 3 lam (a layer three
+times stiffer than TC, kp = 3 lam^2, kv = 4 lam), phi = 0.05 m/s (task) or 0.4 rad/s (joint),
+about the largest |s| of bench_circle_TCx/TCq, so the feedback saturates only on transients.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
 STRATEGY_NAMES = ("PDq", "PDx", "TCq", "TCx", "PDMDq", "PDMDx", "TCMDq", "TCMDx")
+#: Seed 001's sliding-mode law on the coupled form (section 1.2), joint and task space.
+SEED_STRATEGY_NAMES = ("SMCq", "SMCx")
+#: Every strategy :func:`get_strategy` knows: the thesis' eight, then seed 001's.
+ALL_STRATEGY_NAMES = STRATEGY_NAMES + SEED_STRATEGY_NAMES
+LAWS = ("unified", "seed001")
 TABLE_TRAJECTORIES = ("circle", "triangle")
 
 
@@ -42,6 +55,9 @@ class Strategy:
         (k1, k2) sliding gains, rad/s^2 or m/s^2 (per second of integration); (0, 0): no MD term.
     gamma : tuple of float or None
         Adaptation rates of (6.66); None: constant k.
+    law : {"unified", "seed001"}
+        The thesis' law (7.21-7.22) or seed 001's (section 1.2): s = de + lam e,
+        u' = Ĥ (ddr_d + lam de + k sat(s/phi)) + ĥ, no integral.
     """
 
     name: str
@@ -52,6 +68,13 @@ class Strategy:
     phi: float = 1.0
     k: tuple = (0.0, 0.0)
     gamma: tuple | None = None
+    law: str = "unified"
+
+    def __post_init__(self):
+        if self.law not in LAWS:
+            raise ValueError(f"law = {self.law!r} is unknown; valid: {', '.join(LAWS)}")
+        if self.law == "seed001" and not self.model_based:
+            raise ValueError(f"strategy {self.name}: seed 001's law needs the model (model_based = True)")
 
     def with_(self, **changes) -> "Strategy":
         return replace(self, **changes)
@@ -77,7 +100,10 @@ _TASK = {
     "PDMDx": Strategy("PDMDx", "x", False, 70.0, m_star=0.207, phi=6.0, k=(70.0, 0.0)),
     "TCx": Strategy("TCx", "x", True, 60.0),
     "TCMDx": Strategy("TCMDx", "x", True, 60.0, phi=6.0, k=(103.0, 0.0)),
+    "SMCx": Strategy("SMCx", "x", True, 60.0, phi=0.05, k=(9.0, 9.0), law="seed001"),
 }
+#: Seed 001's law in joint space: one set for every trajectory.
+_SEED_JOINT = {"SMCq": Strategy("SMCq", "q", True, 60.0, phi=0.4, k=(72.0, 72.0), law="seed001")}
 
 
 def get_strategy(name: str, trajectory: str = "circle") -> Strategy:
@@ -86,7 +112,7 @@ def get_strategy(name: str, trajectory: str = "circle") -> Strategy:
     Parameters
     ----------
     name : str
-        One of :data:`STRATEGY_NAMES`.
+        One of :data:`ALL_STRATEGY_NAMES`.
     trajectory : str
         "circle" (Table 6; also for thesis_circle and hold) or "triangle" (Table 7);
         only joint-space strategies depend on it.
@@ -103,6 +129,8 @@ def get_strategy(name: str, trajectory: str = "circle") -> Strategy:
                          "(thesis_circle and hold use the circle table)")
     if name in _TASK:
         return _TASK[name]
+    if name in _SEED_JOINT:
+        return _SEED_JOINT[name]
     if name in _TABLES[trajectory]:
         return _TABLES[trajectory][name]
-    raise ValueError(f"strategy = {name!r} is unknown; valid: {', '.join(STRATEGY_NAMES)}")
+    raise ValueError(f"strategy = {name!r} is unknown; valid: {', '.join(ALL_STRATEGY_NAMES)}")

@@ -120,8 +120,9 @@ def _command(args) -> int:
             run(getattr(args, "out", "out"), getattr(args, "preset", "thesis_sim"))
         elif args.command == "list":
             from scenarios.scenes import get_scene, scene_names
+            width = max(len(name) for name in scene_names())
             for name in scene_names():
-                print(f"{name:28s} {get_scene(name).description}")
+                print(f"{name:{width}s} {get_scene(name).description}")
         elif args.command == "run":
             return _run(args)
         elif args.command == "report":

@@ -7,7 +7,9 @@ actuators, exact measurements); the bench scenes have the whole chain.
 
 Names (:func:`scene_names`): ``thesis_sim_circle`` (model error 0 %) and
 ``thesis_sim_circle_me20`` / ``_me40`` (20 %, 40 %, thesis figures 12-23);
-``bench_circle_<S>`` and ``bench_triangle_<S>`` for the eight strategies S of 7.2.6.
+``bench_circle_<S>`` and ``bench_triangle_<S>`` for the eight strategies S of 7.2.6 and seed
+001's two (SMCq, SMCx); ``vertical_circle_<S>`` and ``vertical_circle_balanced_<S>``: the bench
+in a vertical plane, without and with counter-masses (:func:`vertical_circle`, docs/balanced.md).
 
 Copy a builder (:func:`thesis_sim_circle`, :func:`bench`) to make your own scene; every
 parameter not given keeps the FMU's default (the presets of Tables 3-8, 16, 18).
@@ -17,7 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from controller.strategies import STRATEGY_NAMES
+from controller.strategies import ALL_STRATEGY_NAMES
 from controller.trajectories import get_trajectory
 from fmus.system import Component, Connection, System
 from motor import get_motor_preset
@@ -97,6 +99,11 @@ class Fidelity:
         World gravity [m/s²]; the thesis' plane is horizontal (0, 0, g) has no effect.
     model_error : float
         The controller model's inertial parameters are (1 + model_error) times the plant's.
+    counter_masses : (float, float)
+        ``counter_mass1``, ``counter_mass2`` of the plant [kg] (seed 001's balanced 5R); the
+        controller's model has them too.
+    model_gravity : bool
+        The controller's model has the plant's in-plane gravity (else it assumes none).
     """
 
     electrics: str = "full"
@@ -109,6 +116,8 @@ class Fidelity:
     m0: float = 0.0
     gravity: tuple = (0.0, 0.0, 0.0)
     model_error: float = 0.0
+    counter_masses: tuple = (0.0, 0.0)
+    model_gravity: bool = False
 
     def __post_init__(self):
         if self.electrics not in ELECTRICS:
@@ -165,8 +174,8 @@ def bench(strategy: str, kind: str = "circle", model: str = "tabulated",
     current references, the observed currents and the true shaft speeds.  ``fidelity``
     switches effects off (:class:`Fidelity`); the components they need go with them.
     """
-    if strategy not in STRATEGY_NAMES:
-        raise ValueError(f"strategy = {strategy!r}; valid: {', '.join(STRATEGY_NAMES)}")
+    if strategy not in ALL_STRATEGY_NAMES:
+        raise ValueError(f"strategy = {strategy!r}; valid: {', '.join(ALL_STRATEGY_NAMES)}")
     f = fidelity
     trajectory = get_trajectory(kind)
     x0, y0 = trajectory.start_point
@@ -177,9 +186,15 @@ def bench(strategy: str, kind: str = "circle", model: str = "tabulated",
     components = [Component("traj", "Trajectory", {"kind": kind})]
     if f.derivator:
         components.append(Component("deriv", "Derivator", {}))
-    components.append(Component("ctrl", "PositionController", {
-        "strategy": strategy, "trajectory": kind, "model": model, "preset": "bench",
-        "model_error": f.model_error}))
+    controller = {"strategy": strategy, "trajectory": kind, "model": model, "preset": "bench",
+                  "model_error": f.model_error}
+    if f.counter_masses != (0.0, 0.0):
+        loads = {"counter_mass1": f.counter_masses[0], "counter_mass2": f.counter_masses[1]}
+        plant.update(loads)
+        controller.update(loads)
+    if f.model_gravity:
+        controller.update(gravity_x=f.gravity[0], gravity_y=f.gravity[1])
+    components.append(Component("ctrl", "PositionController", controller))
     for j in ("1", "2"):
         if observers:
             components.append(Component(f"obs{j}", "CurrentObserver", {"preset": f"motor{j}"}))
@@ -229,6 +244,34 @@ def bench(strategy: str, kind: str = "circle", model: str = "tabulated",
         changed = {k: getattr(f, k) for k in f.__dataclass_fields__ if getattr(f, k) != getattr(Fidelity(), k)}
         description += "; fidelity " + ", ".join(f"{k}={v}" for k, v in changed.items())
     return Scene(name, description, system, columns, window, trajectory.duration, strategy)
+
+
+#: Gravity of the vertical scenes: the mechanism's plane vertical, world y up (SYSTEM.md §2).
+VERTICAL_GRAVITY = (0.0, -9.81, 0.0)
+#: Counter-masses of the balanced vertical scenes [kg] on each chain's proximal and distal
+#: link, placed by seed 001 (64): 0.4 kg 0.107 m (chain 1) / 0.098 m (chain 2) behind the
+#: base joints, 0.2 kg 0.048 m / 0.028 m behind the elbows (docs/balanced.md).
+VERTICAL_COUNTER_MASSES = (0.4, 0.2)
+
+
+def vertical_circle(strategy: str, balanced: bool = False, model: str = "tabulated",
+                    fidelity: Fidelity = Fidelity()) -> Scene:
+    """The bench (:func:`bench`) standing in a vertical plane, tracking the circle (7.23).
+
+    Gravity :data:`VERTICAL_GRAVITY` acts in the mechanism's plane; ``balanced`` adds the
+    counter-masses :data:`VERTICAL_COUNTER_MASSES` (seed 001's balanced 5R).  The controller's
+    model (Ĥ, ĥ of 5.74-5.77) has the same gravity and counter-masses as the plant.
+    """
+    counter = VERTICAL_COUNTER_MASSES if balanced else (0.0, 0.0)
+    f = replace(fidelity, gravity=VERTICAL_GRAVITY, model_gravity=True, counter_masses=counter)
+    scene = bench(strategy, "circle", model, f)
+    name = f"vertical_circle_{'balanced_' if balanced else ''}{strategy}"
+    what = (f"counter-masses {counter[0]:g} kg (proximal) and {counter[1]:g} kg (distal) on each chain"
+            if balanced else "no counter-masses")
+    return replace(scene, name=name,
+                   description=f"Bench of 7.2 in a vertical plane (gravity -9.81 m/s² along -y), {what}, "
+                               f"circle (7.23), strategy {strategy}, {model} model with the same gravity "
+                               f"and masses")
 
 
 def drive_joints(system, plant: str) -> dict:
@@ -358,7 +401,8 @@ def with_fmu_files(scene: Scene, replacements: dict) -> Scene:
 def scene_names() -> list[str]:
     """Every scene name ``get_scene`` accepts."""
     names = ["thesis_sim_circle", "thesis_sim_circle_me20", "thesis_sim_circle_me40"]
-    names += [f"bench_{kind}_{s}" for kind in ("circle", "triangle") for s in STRATEGY_NAMES]
+    names += [f"bench_{kind}_{s}" for kind in ("circle", "triangle") for s in ALL_STRATEGY_NAMES]
+    names += [f"vertical_circle_{b}{s}" for b in ("", "balanced_") for s in ALL_STRATEGY_NAMES]
     return names
 
 
@@ -371,6 +415,10 @@ def get_scene(name: str) -> Scene:
             return thesis_sim_circle(model_error=error / 100)
     for kind in ("circle", "triangle"):
         prefix = f"bench_{kind}_"
-        if name.startswith(prefix) and name[len(prefix):] in STRATEGY_NAMES:
+        if name.startswith(prefix) and name[len(prefix):] in ALL_STRATEGY_NAMES:
             return bench(name[len(prefix):], kind)
+    for balanced in (True, False):
+        prefix = "vertical_circle_balanced_" if balanced else "vertical_circle_"
+        if name.startswith(prefix) and name[len(prefix):] in ALL_STRATEGY_NAMES:
+            return vertical_circle(name[len(prefix):], balanced)
     raise ValueError(f"unknown scene {name!r}; `parcosim list` prints the {len(scene_names())} scenes")

@@ -17,18 +17,20 @@ process share one Python interpreter and its module cache.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 from controller.model import DEFAULT_EXTENT, DEFAULT_GRID_STEP
 from controller.position import PositionController as _Controller
 from controller.strategies import get_strategy
 from fmus.guarded import MIN_STEP, PRESET_VALUE, GuardedSlave, refuse_absurd, require_finite
+from fmus.parts import declare_counter_masses, with_counter_masses
 from plant import get_preset
 
 #: Start value meaning "the preset's value".
 INPUTS = ("q1", "q2", "dq1", "dq2", "ddq1", "ddq2", "x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
 OUTPUTS = ("tau1", "tau2", "i_ref1", "i_ref2")
 NUMERIC_PARAMETERS = ("lam", "m_star", "phi", "k1", "k2", "gamma1", "gamma2", "model_error", "kt1", "kt2",
-                      "grid_step", "x_min", "x_max", "y_min", "y_max", "T")
+                      "grid_step", "x_min", "x_max", "y_min", "y_max", "T", "gravity_x", "gravity_y")
 #: Most points a tabulated model's grid may have (the default 5 mm table has 2303, built in
 #: about 0.2 s; a point costs about 80 µs): building more would take fmi2ExitInitializationMode
 #: over the 10 s any call may take (docs/extremes.md).
@@ -58,7 +60,8 @@ class PositionController(GuardedSlave):
         d("i_ref2", "output", 0.0, "Current reference tau2/kt2 [A]")
         d("e1", "output", 0.0, "Control error, first component (rad or m)")
         d("e2", "output", 0.0, "Control error, second component (rad or m)")
-        d("strategy", "parameter", "TCx", "PDq, PDx, TCq, TCx, PDMDq, PDMDx, TCMDq, TCMDx (7.2.6)")
+        d("strategy", "parameter", "TCx", "PDq, PDx, TCq, TCx, PDMDq, PDMDx, TCMDq, TCMDx (7.2.6); SMCq, SMCx "
+          "(seed 001's sliding modes)")
         d("trajectory", "parameter", "circle", "Which table for joint space: 'circle' (Table 6) or 'triangle' (Table 7)")
         d("lam", "parameter", PRESET_VALUE, "lambda: kp = lam^2, kv = 2 lam (7.29-7.30) [rad/s]; -1: preset")
         d("m_star", "parameter", PRESET_VALUE, "PD inertia m* [kg m2 or kg]; -1: preset")
@@ -80,6 +83,9 @@ class PositionController(GuardedSlave):
         d("kt1", "parameter", PRESET_VALUE, "Torque constant of motor 1 [N m/A]; -1: Table 16")
         d("kt2", "parameter", PRESET_VALUE, "Torque constant of motor 2 [N m/A]; -1: Table 18")
         d("T", "parameter", 1e-3, "Sample time [s]; doStep sizes must equal it")
+        d("gravity_x", "parameter", 0.0, "Gravity the model assumes, world x [m/s2]")
+        d("gravity_y", "parameter", 0.0, "Gravity the model assumes, world y [m/s2]")
+        declare_counter_masses(self)
         self.controller = None
 
     def setup(self):
@@ -113,8 +119,9 @@ class PositionController(GuardedSlave):
         for name, value in zip(("kt1", "kt2"), kt):
             if not value > 0.0:
                 raise ValueError(f"parameter {name} = {value!r} must be > 0 (or -1 for the motor preset's)")
+        params = replace(get_preset(self.preset), gravity=(self.gravity_x, self.gravity_y, 0.0))
         self.controller = _Controller(
-            get_preset(self.preset), strategy, model=self.model, model_error=self.model_error,
+            with_counter_masses(self, params), strategy, model=self.model, model_error=self.model_error,
             grid_step=self.grid_step, extent=(self.x_min, self.x_max, self.y_min, self.y_max),
             kt=kt, T=self.T, cache=bool(self.cache), table_fallback=bool(self.table_fallback))
 
