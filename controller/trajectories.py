@@ -189,20 +189,23 @@ def thesis_circle(cycles=2):
     )
 
 
-def circle(cycles=8):
+def circle(cycles=8, frequency=1.0):
     """Bench circle (7.23): x = -0.05 sin 2 pi t, y = 0.158 - 0.05 cos 2 pi t, then a sudden stop.
 
     That is phi = -pi/2 - 2 pi t (clockwise) around (0, 0.158). After ``cycles`` periods
     of 1 s (8 in the thesis) the reference holds the last point (0, 0.108). The
     mechanism starts at rest at x_1 = (-0.002, 0.108) (7.28), 2 mm from the
-    reference's first point.
+    reference's first point.  ``frequency`` [Hz] (the thesis: 1) runs the same circle
+    faster or slower: phi = -pi/2 - 2 pi frequency t, ``cycles`` periods of 1/frequency s.
     """
+    if not (math.isfinite(frequency) and frequency > 0.0):
+        raise ValueError(f"frequency = {frequency!r} Hz must be > 0")
     return CircleTrajectory(
         center=(0.0, 0.158),
         radius=0.05,
         initial_angle=-math.pi / 2,
-        angular_velocity=-2 * math.pi,
-        duration=float(cycles),
+        angular_velocity=-2 * math.pi * frequency,
+        duration=float(cycles) / frequency,
         stops=True,
         start_point=BENCH_START,
     )

@@ -37,6 +37,7 @@ class Trajectory(GuardedSlave):
         d("kind", "parameter", "circle", "'thesis_circle' (7.18), 'circle' (7.23), 'triangle' (7.24-7.27), 'hold'")
         d("cycles", "parameter", PRESET_CYCLES, "Cycles of circle/triangle (-1: thesis_circle 2, circle 8, triangle 2)")
         d("side_time", "parameter", 0.75, "Triangle: time per side [s]")
+        d("frequency", "parameter", 1.0, "circle: turns per second [Hz] (the thesis' 7.23: 1)")
         d("x_hold", "parameter", -0.002, "hold: the point held, x [m]")
         d("y_hold", "parameter", 0.108, "hold: the point held, y [m]")
         self.trajectory = None
@@ -48,8 +49,10 @@ class Trajectory(GuardedSlave):
 
     def setup(self):
         kwargs = {}
-        require_finite(side_time=self.side_time, x_hold=self.x_hold, y_hold=self.y_hold)   # used or not
-        refuse_absurd(side_time=self.side_time, x_hold=self.x_hold, y_hold=self.y_hold)
+        used_or_not = {"side_time": self.side_time, "x_hold": self.x_hold, "y_hold": self.y_hold,
+                       "frequency": self.frequency}
+        require_finite(**used_or_not)
+        refuse_absurd(**used_or_not)
         if self.kind == "hold":
             kwargs = {"x": self.x_hold, "y": self.y_hold}
         else:
@@ -57,6 +60,10 @@ class Trajectory(GuardedSlave):
                 if self.cycles < 1:
                     raise ValueError(f"parameter cycles = {self.cycles!r} must be >= 1 (or -1 for the default)")
                 kwargs["cycles"] = self.cycles
+            if self.kind == "circle" and self.frequency != 1.0:
+                if not self.frequency > 0.0:
+                    raise ValueError(f"parameter frequency = {self.frequency!r} Hz must be > 0")
+                kwargs["frequency"] = self.frequency
             if self.kind == "triangle":
                 if not self.side_time > 0.0:
                     raise ValueError(f"parameter side_time = {self.side_time!r} s must be > 0")
