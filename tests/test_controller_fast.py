@@ -19,7 +19,7 @@ import pytest
 from controller import fastlaw
 from controller.model import ExactModel, TabulatedModel
 from controller.position import PositionController
-from controller.strategies import STRATEGY_NAMES, get_strategy
+from controller.strategies import ALL_STRATEGY_NAMES, get_strategy
 from plant import fast5r, fivebar, get_preset
 from plant.parallel import inverse_dynamics_terms, mechanism_state
 
@@ -164,7 +164,7 @@ def region_cache(tmp_path_factory):
 
 
 @pytest.mark.parametrize("gamma", [None, (40.0, 25.0)])
-@pytest.mark.parametrize("name", STRATEGY_NAMES)
+@pytest.mark.parametrize("name", ALL_STRATEGY_NAMES)
 def test_compiled_law_equals_the_reference(name, gamma, region_cache, monkeypatch):
     monkeypatch.setenv("PARCOSIM_CACHE", str(region_cache))
     st = get_strategy(name, "triangle")
@@ -174,7 +174,7 @@ def test_compiled_law_equals_the_reference(name, gamma, region_cache, monkeypatc
     fast = PositionController(BENCH, st, kernel="fast", **args)
     ref = PositionController(BENCH, st, kernel="python", **args)
     assert fast.compiled and not ref.compiled
-    rng = np.random.default_rng(2 * STRATEGY_NAMES.index(name) + (gamma is not None))
+    rng = np.random.default_rng(2 * ALL_STRATEGY_NAMES.index(name) + (gamma is not None))
     refused = answered = 0
     for k in range(600):
         values = random_inputs(rng)
