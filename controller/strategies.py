@@ -18,8 +18,9 @@ Two more, not the thesis': ``SMCq`` and ``SMCx``, seed 001's sliding-mode law (s
 boundary layer it is computed torque with kv = lam + k/phi, kp = lam k/phi; outside, the
 feedback saturates at k.  It is not the unified law written differently (docs/controller.md,
 "Seed 001's sliding-mode law").  Their gains: lam = 60/s as TC; k/phi = 3 lam (a layer three
-times stiffer than TC, kp = 3 lam^2, kv = 4 lam), phi = 0.05 m/s (task) or 0.4 rad/s (joint),
-about the largest |s| of bench_circle_TCx/TCq, so the feedback saturates only on transients.
+times stiffer than TC, kp = 3 lam^2, kv = 4 lam), phi = 0.05 m/s (task) or 0.4 rad/s (joint):
+on the sliding line de = -lam e the layer is |e| < phi / lam, 0.83 mm or 6.7 mrad (0.8 mm at
+the 0.12 m proximal link).  Chosen so, not tuned on the results (docs/controller.md).
 """
 from __future__ import annotations
 

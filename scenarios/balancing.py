@@ -11,6 +11,7 @@ current.  Figures in docs/balanced.md::
 
     python -m scenarios.balancing [--strategies TCMDx TCx] [--frequencies 0.25 0.5 1 2]
                                   [--out docs]
+    python -m scenarios.balancing --scenes      # the 20 vertical scenes at 1 Hz, a markdown table
 
 writes ``balanced_speeds.csv``, ``balanced_speeds.png`` (tau_ef and RMS current against the
 circle's frequency) and ``balanced_circle.png`` (the 1 Hz scenes: path, torques, currents).
@@ -27,6 +28,8 @@ import numpy as np
 from motor import get_motor_preset
 
 from .run import run_scene
+from controller.strategies import ALL_STRATEGY_NAMES
+
 from .scenes import VERTICAL_COUNTER_MASSES, vertical_circle
 
 DEFAULT_FREQUENCIES = (0.25, 0.5, 0.75, 1.0, 1.25, 1.5, 2.0)
@@ -154,12 +157,30 @@ def plot_circle(strategy: str, path: Path) -> None:
     plt.close(fig)
 
 
+def scene_table(strategies=ALL_STRATEGY_NAMES) -> str:
+    """The scenes ``vertical_circle_<S>`` and ``vertical_circle_balanced_<S>`` as a markdown table."""
+    lines = ["| strategy | counter-masses | e_ef mm | tau_ef N m | peak tau1, tau2 N m | RMS i1, i2 A "
+             "| peak i A (window / run) | peak v V |", "|---|---|---|---|---|---|---|---|"]
+    for strategy in strategies:
+        for balanced in (False, True):
+            r, _ = measure(strategy, 1.0, balanced)
+            lines.append(f"| {strategy} | {'yes' if balanced else 'no'} | {r['e_ef_mm']:.3f} | {r['tau_ef_Nm']:.3f} "
+                         f"| {r['tau1_peak_Nm']:.2f}, {r['tau2_peak_Nm']:.2f} | {r['i1_rms_A']:.2f}, {r['i2_rms_A']:.2f} "
+                         f"| {r['i_peak_A']:.1f} / {r['i_peak_run_A']:.1f} | {r['v_peak_V']:.1f} |"
+                         + (f" {r['error']}" if r["error"] else ""))
+    return "\n".join(lines)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--strategies", nargs="+", default=list(DEFAULT_STRATEGIES))
     parser.add_argument("--frequencies", nargs="+", type=float, default=list(DEFAULT_FREQUENCIES))
     parser.add_argument("--out", default="docs")
+    parser.add_argument("--scenes", action="store_true", help="print the 1 Hz scenes' table and stop")
     args = parser.parse_args(argv)
+    if args.scenes:
+        print(scene_table())
+        return 0
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     rows = sweep(args.strategies, args.frequencies)
