@@ -31,16 +31,19 @@ from pathlib import Path
 
 import numpy as np
 
+from controller.strategies import STRATEGY_NAMES
 from fmus.ssp_run import SspRun
 
 from .metrics import scene_metrics
 from .package import export_package, package_scene
 from .run import run_scene
-from .scenes import Scene, get_scene, scene_names
+from .scenes import Scene, get_scene
 
 TOOLS = ("fmpy", "ecos", "libcosim")
-#: The scenes of the table: the thesis' simulation and the 16 bench scenes.
-TABLE_SCENES = tuple(n for n in scene_names() if not n.startswith("thesis_sim_circle_me"))
+#: The scenes of the table: the thesis' simulation and the 16 bench scenes of the thesis'
+#: strategies (any other scene of ``scene_names()`` runs when named).
+TABLE_SCENES = ("thesis_sim_circle",) + tuple(f"bench_{kind}_{s}" for kind in ("circle", "triangle")
+                                              for s in STRATEGY_NAMES)
 
 
 def short(scene: Scene, stop_time: float | None) -> Scene:
