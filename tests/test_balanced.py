@@ -14,7 +14,7 @@ from plant import ACCURATE, IntegratorSettings, PlantSimulator, get_preset
 from plant import fivebar
 from plant.serial import chain_dynamics
 from tests.support import lagrange5r as ref
-from tests.test_plant_dynamics import random_states, reference_params
+from tests.test_plant_dynamics import reference_params
 
 GRAVITY = (1.3, -9.81, 0.5)      # in-plane x and y parts, and a z part that must not matter
 COUNTER = (0.4, 0.2)             # kg on the proximal and on the distal links
@@ -78,22 +78,6 @@ def test_each_chain_is_the_balanced_rr_of_seed_001(preset):
             np.testing.assert_allclose(d.g, 0.0, atol=1e-15)
             np.testing.assert_allclose(d.v, 0.0, atol=1e-15)
             np.testing.assert_allclose(d.M, [[m11, m22], [m22, m22]], rtol=1e-13)
-
-
-@pytest.mark.parametrize("preset", ["thesis_sim", "bench"])
-def test_fast_kernel_equals_the_general_algorithm_with_counter_masses(preset):
-    from plant.fast5r import FastKernel
-    from plant.parallel import forward_dynamics
-
-    params = balanced(preset)
-    kernel = FastKernel(params)
-    mech, states = random_states(params, 10, seed=13)
-    rng = np.random.default_rng(14)
-    for q, dq in states:
-        u = rng.uniform(-0.3, 0.3, 2)
-        general = forward_dynamics(mech, q, dq, u, baumgarte=50.0)
-        fast = kernel.derivative(np.concatenate([q, dq]), u, 50.0)[7:]
-        np.testing.assert_allclose(fast, general, rtol=1e-11, atol=1e-11 * np.max(np.abs(general)))
 
 
 def torque_profile(t):

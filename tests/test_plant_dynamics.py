@@ -17,8 +17,11 @@ from tests.support import lagrange5r as ref
 PRESETS = ("thesis_sim", "bench")
 
 
-def variant(preset):
-    """The preset with an end-effector mass and in-plane gravity, so every term is exercised."""
+def variant(preset, balanced=False):
+    """The preset with an end-effector mass and in-plane gravity, so every term is exercised;
+    ``balanced``: with seed 001's counter-masses (0.4, 0.2) kg instead of the end-effector mass."""
+    if balanced:
+        return replace(get_preset(preset), gravity=(2.0, -9.81, 0.5)).with_counter_masses(0.4, 0.2)
     return replace(get_preset(preset), m0=0.04, gravity=(2.0, -9.81, 0.5))
 
 
@@ -71,9 +74,10 @@ def test_accelerations_equal_the_lagrange_formulation(preset):
                                    rtol=1e-10, atol=1e-10 * np.max(np.abs(ddq[:2])))
 
 
+@pytest.mark.parametrize("balanced", [False, True])
 @pytest.mark.parametrize("preset", PRESETS)
-def test_fast_kernel_equals_the_general_algorithm(preset):
-    params = variant(preset)
+def test_fast_kernel_equals_the_general_algorithm(preset, balanced):
+    params = variant(preset, balanced)
     kernel = FastKernel(params)
     mech, states = random_states(params, 20, seed=5)
     rng = np.random.default_rng(6)
