@@ -17,8 +17,12 @@ architecture 7.8-7.11) with scalars, compiled by numba:
   give theta'' = C x'' + e, and the projected dynamics a 2x2 system
   C^T M' C x'' = C^T (u' - v' - g' - M' e).
 
-``tests/test_fast5r.py`` checks every output against the general algorithm
-to round-off at random states of both presets.
+Counter-masses (seed 001) are absorbed into each chain's link mass, centre of mass and
+inertia (:func:`composite_link`), so the kernel itself does not see them.
+
+``tests/test_plant_dynamics.py`` checks the accelerations and the residual, and
+``tests/test_controller_fast.py`` :func:`inverse_terms`, against the general algorithm to
+round-off at random states of both presets (the accelerations with counter-masses too).
 """
 from __future__ import annotations
 

@@ -1,4 +1,6 @@
-"""FMI slave ``PositionController``: the unified law (thesis 7.21-7.22), eight strategies.
+"""FMI slave ``PositionController``: the unified law (thesis 7.21-7.22), eight strategies, and
+seed 001's sliding-mode law (SMCq, SMCx).  ``gravity_x``, ``gravity_y``, ``counter_mass1``,
+``counter_mass2`` describe the plant its model (Ĥ, ĥ of 5.74-5.77) is built for.
 
 Timing: ``doStep(t, h)`` reads the measurements and references set before it (the samples
 at t), computes the torques and current references and holds them as outputs; the master
