@@ -134,3 +134,19 @@ def test_trajectories_are_immutable_and_reject_negative_time():
         trajectory.radius = 0.1
     with pytest.raises(ValueError, match="time"):
         trajectory(-0.001)
+
+
+@pytest.mark.parametrize("frequency", [0.25, 1.5])
+def test_circle_at_another_frequency_is_the_same_circle_in_scaled_time(frequency):
+    """circle(frequency=f) at t is circle() at f t, with velocity x f and acceleration x f^2;
+    8 turns last 8/f s, then the same stop point."""
+    fast, slow = get_trajectory("circle", frequency=frequency), get_trajectory("circle")
+    for t in np.linspace(0.0, 7.9 / frequency, 37):
+        a, b = fast(t), slow(frequency * t)
+        np.testing.assert_allclose([a.x, a.y], [b.x, b.y], atol=1e-15)
+        np.testing.assert_allclose([a.dx, a.dy], [frequency * b.dx, frequency * b.dy], atol=1e-14)
+        np.testing.assert_allclose([a.ddx, a.ddy], [frequency ** 2 * b.ddx, frequency ** 2 * b.ddy], atol=1e-13)
+    assert fast.duration == pytest.approx(8.0 / frequency)
+    np.testing.assert_allclose(fast(9.0 / frequency)[:2], slow(9.0)[:2], atol=1e-15)
+    with pytest.raises(ValueError, match="frequency = 0.0 Hz must be > 0"):
+        get_trajectory("circle", frequency=0.0)
