@@ -264,11 +264,12 @@ class _Reader:
         if not (isinstance(chains_data, list) and chains_data):
             self.fail(("chains",), chains_data, "need at least one [[chains]] table")
         chains = tuple(self.chain(c, ("chains", i)) for i, c in enumerate(chains_data))
-        names = [info.name for c in chains for info in c.joints]
+        seen = set()
         for i, c in enumerate(chains):
             for j, info in enumerate(c.joints):
-                if names.count(info.name) > 1:
+                if info.name in seen:
                     self.fail(("chains", i, "links", j, "name"), info.name, "joint names must be unique")
+                seen.add(info.name)
         inputs = [info.input for c in chains for info in c.joints if info.actuated]
         if not inputs:
             self.fail(("chains",), "...", "no joint is actuated (set actuated = true on at least one link)")

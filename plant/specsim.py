@@ -128,7 +128,10 @@ class SpecSimulator:
         """Advance by dt with ``torques`` (one per actuated joint, :attr:`PlantSpec.inputs`
         order) held; the state is kept on error (:class:`PlantError`)."""
         torques = np.asarray(torques, dtype=float)
-        for name, value in zip(self.spec.inputs, torques):
+        if torques.shape != (len(self.spec.inputs),):
+            raise PlantError(f"{torques.size} torques given for the {len(self.spec.inputs)} inputs "
+                             f"{', '.join(self.spec.inputs)} at t = {self.time:.6g} s")
+        for name, value in zip(self.spec.inputs, torques.tolist()):
             if not math.isfinite(value):
                 raise PlantError(f"input {name} = {value!r} at t = {self.time:.6g} s is not finite")
         if not (math.isfinite(dt) and dt > 0.0):
