@@ -90,6 +90,8 @@ def _parser() -> argparse.ArgumentParser:
     ws = sub.add_parser("workspace", help="plot the workspace, singularity loci and the thesis' trajectories")
     ws.add_argument("mechanism", nargs="?", default="bench", help="a preset (thesis_sim, bench) or a SPEC.toml")
     ws.add_argument("--out", default="out/workspace", help="output directory (default: out/workspace)")
+    ws.add_argument("--circle", action="append", default=[], metavar="CX,CY,R",
+                    help="also check a 1 Hz circle like (7.23) around (CX, CY) of radius R [m] (repeatable)")
     sub.add_parser("identify-motor", help="identify DC motor parameters from u,i,omega data",
                    add_help=False)
     return parser
@@ -154,7 +156,10 @@ def _command(args) -> int:
             print(build_plant_fmu(args.spec, args.path))
         elif args.command == "workspace":
             from scenarios.workspace import plot_workspace
-            print(plot_workspace(args.mechanism, args.out).summary())
+            circles = [tuple(float(v) for v in c.split(",")) for c in args.circle]
+            if any(len(c) != 3 for c in circles):
+                raise ValueError(f"--circle {args.circle}: write CX,CY,R in metres")
+            print(plot_workspace(args.mechanism, args.out, circles=circles).summary())
         elif args.command == "build":
             from fmus.build import DEFAULT_OUT, build_all
             for path in build_all(args.out or DEFAULT_OUT):

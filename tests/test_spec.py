@@ -158,3 +158,18 @@ def test_every_shipped_spec_loads():
     assert {"thesis_sim_5r", "bench_5r", "rr", "rr_counter_masses", "rr_balanced", "balanced_5r", "delta3"} <= set(names)
     for name in names:
         assert plant_spec.load(name).name == name
+
+
+def test_build_plant_cli_names_the_bad_line(tmp_path):
+    import subprocess
+    import sys
+    bad = tmp_path / "bad.toml"
+    bad.write_text(plant_spec.load("thesis_sim_5r").text.replace("mass = 0.171", "mass = -0.171", 1))
+    out = subprocess.run([sys.executable, "-m", "parcosim", "build-plant", str(bad), str(tmp_path / "x.fmu")],
+                         capture_output=True, text=True, timeout=300)
+    assert out.returncode == 2 and out.stderr.count("\n") == 1
+    assert f"{bad}, line 32: chains[0].links[1].mass = -0.171: must be >= 0" in out.stderr
+    assert not (tmp_path / "x.fmu").exists()
+    serial = subprocess.run([sys.executable, "-m", "parcosim", "build-plant", "rr", str(tmp_path / "x.fmu")],
+                            capture_output=True, text=True, timeout=300)
+    assert serial.returncode == 2 and "serial chain" in serial.stderr
