@@ -102,3 +102,25 @@ def test_balanced_5r_has_no_gravity_load_and_stays_at_rest():
 def test_assembly_out_of_reach_is_refused():
     with pytest.raises(AssemblyError, match="cannot close the loop"):
         SpecSimulator(plant_spec.load("thesis_sim_5r"), (0.0, 0.4, 0.0))
+
+
+def test_spec_fmu_state_restores_bit_for_bit(bench_fmu):
+    fmu = FmuInstance(bench_fmu, {"x0": START[0], "y0": START[1]})
+    for i in range(5):
+        fmu.step(1e-3, tau1=0.02, tau2=-0.01)
+    state = fmu.fmu.getFMUstate()
+    blob = fmu.fmu.serializeFMUstate(state)
+
+    def run():
+        for i in range(5):
+            fmu.step(1e-3, tau1=0.02, tau2=-0.01)
+        return fmu.get("x"), fmu.get("y"), fmu.get("dq1_elbow")
+
+    first = run()
+    fmu.fmu.setFMUstate(state)
+    fmu.time = 5e-3
+    assert run() == first
+    fmu.fmu.setFMUstate(fmu.fmu.deSerializeFMUstate(blob))
+    fmu.time = 5e-3
+    assert run() == first
+    fmu.close()
