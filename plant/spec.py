@@ -271,6 +271,13 @@ class _Reader:
                     self.fail(("chains", i, "links", j, "name"), info.name, "joint names must be unique")
                 seen.add(info.name)
         inputs = [info.input for c in chains for info in c.joints if info.actuated]
+        taken = seen | {"x", "y", "z", "dx", "dy", "dz", "residual", "error"} | {f"d{n}" for n in seen}
+        for i, c in enumerate(chains):
+            for j, info in enumerate(c.joints):
+                if info.actuated and info.input in taken:
+                    self.fail(("chains", i, "links", j, "input"), info.input,
+                              "the torque input's name is taken (by another input or an output)")
+                taken.add(info.input)
         if not inputs:
             self.fail(("chains",), "...", "no joint is actuated (set actuated = true on at least one link)")
         common = dict(name=name, description=str(data.get("description", "")), gravity=gravity, chains=chains,

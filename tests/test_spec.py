@@ -127,6 +127,7 @@ mass = 0.2
     ('joint', 'joint', None, "", ""),   # unchanged: loads
     ('gravity = [0.0, -9.81, 0.0]', 'gravity = [0.0, "down", 0.0]', 2, "gravity", "down"),
     ('actuated = true', 'actuated = "yes"', 9, "chains[0].links[0].actuated", "yes"),
+    ('name = "q2"', 'name = "q2"\nactuated = true\ninput = "tau1"', 16, "chains[0].links[1].input", "tau1"),
 ])
 def test_a_bad_value_is_named_with_its_line_key_and_value(old, new, line, key, value):
     text = GOOD.replace(old, new)
