@@ -392,10 +392,8 @@ def _find_line(lines, path: tuple) -> int | None:
             resolved = []
             for depth, name in enumerate(names):
                 key = tuple(resolved) + (name,)
-                if depth == len(names) - 1 and header.group(1):
+                if depth == len(names) - 1 and header.group(1):    # one more table of this array
                     counters[key] = counters.get(key, -1) + 1
-                    for other in [k for k in counters if len(k) > len(key) and k[:len(key)] == key]:
-                        del counters[other]
                 resolved.append(name)
                 if key in counters:
                     resolved.append(counters[key])

@@ -118,7 +118,6 @@ class SpecSimulator:
         self.y = np.concatenate([q, np.zeros_like(q)])
         self.time = 0.0
         self._h_next = None
-        self._U = self.mechanism.U
 
     def derivative(self, y, u_star):
         n = y.size // 2

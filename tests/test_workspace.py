@@ -1,6 +1,5 @@
 """The workspace figure (scenarios/workspace.py): loci, refusals, the CLI."""
 import json
-import math
 import subprocess
 import sys
 
