@@ -124,3 +124,10 @@ def test_spec_fmu_state_restores_bit_for_bit(bench_fmu):
     fmu.time = 5e-3
     assert run() == first
     fmu.close()
+
+
+def test_spec_fmu_refuses_substeps_it_cannot_take_in_time(bench_fmu):
+    fmu = FmuInstance(bench_fmu, {"substeps": 10000})
+    error = fmu.refused_step()
+    assert "substeps = 10000" in error and "allowed per call" in error
+    fmu.close()
