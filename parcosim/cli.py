@@ -16,6 +16,8 @@ Every subcommand is a thin shell over a documented Python call:
 ``parcosim export-ssp``  ``scenarios.package.export_package(get_scene(name), path, fmu_dir)``;
                        with ``--per-component`` ``fmus.ssp.export_ssp(get_scene(name).system, path, fmu_dir)``
 ``parcosim export-fmu``  ``fmus.export.export_fmu(get_scene(name).system, path)``
+``parcosim build-plant``  ``fmus.specfmu.build_plant_fmu(spec, path)`` (docs/spec.md)
+``parcosim workspace``  ``scenarios.workspace.plot_workspace(preset_or_spec, out_dir)`` (docs/workspace.md)
 =====================  ==============================================
 
 Errors end the command with exit status 2 and one readable line on stderr (an output
@@ -82,6 +84,14 @@ def _parser() -> argparse.ArgumentParser:
                        help="a scene name (default: bench_circle_TCMDx)")
     trade.add_argument("--quick", action="store_true", help="1 s and fewer settings (under a minute)")
     trade.add_argument("--out", default="out/trade", help="output directory (default: out/trade)")
+    plant = sub.add_parser("build-plant", help="build an FMU of a mechanism spec (TOML, docs/spec.md)")
+    plant.add_argument("spec", help="a SPEC.toml file or a shipped spec's name (plant/specs/)")
+    plant.add_argument("path", help="the .fmu file to write")
+    ws = sub.add_parser("workspace", help="plot the workspace, singularity loci and the thesis' trajectories")
+    ws.add_argument("mechanism", nargs="?", default="bench", help="a preset (thesis_sim, bench) or a SPEC.toml")
+    ws.add_argument("--out", default="out/workspace", help="output directory (default: out/workspace)")
+    ws.add_argument("--circle", action="append", default=[], metavar="CX,CY,R",
+                    help="also check a 1 Hz circle like (7.23) around (CX, CY) of radius R [m] (repeatable)")
     sub.add_parser("identify-motor", help="identify DC motor parameters from u,i,omega data",
                    add_help=False)
     return parser
@@ -142,6 +152,15 @@ def _command(args) -> int:
             print(export_fmu(_scene(args).system, args.path))
         elif args.command == "trade":
             return _trade(args)
+        elif args.command == "build-plant":
+            from fmus.specfmu import build_plant_fmu
+            print(build_plant_fmu(args.spec, args.path))
+        elif args.command == "workspace":
+            from scenarios.workspace import plot_workspace
+            circles = [tuple(float(v) for v in c.split(",")) for c in args.circle]
+            if any(len(c) != 3 for c in circles):
+                raise ValueError(f"--circle {args.circle}: write CX,CY,R in metres")
+            print(plot_workspace(args.mechanism, args.out, circles=circles).summary())
         elif args.command == "build":
             from fmus.build import DEFAULT_OUT, build_all
             for path in build_all(args.out or DEFAULT_OUT):

@@ -1,0 +1,98 @@
+"""FMI slave ``SpecPlant``: any translational parallel mechanism of a TOML spec
+(:mod:`plant.spec`), a thin adapter over :class:`plant.specsim.SpecSimulator`.
+
+``parcosim build-plant SPEC.toml OUT.fmu`` bundles the spec as the resource
+:data:`SPEC_RESOURCE`; the variables follow it: one torque input per actuated
+joint (its ``input`` name), every joint's angle and rate as outputs (its ``name``,
+``d<name>``), the platform's ``x, y, z, dx, dy, dz``, the loop-closure ``residual``
+and the start point ``x0, y0, z0`` as parameters (FiveBarPlant's interface,
+generalised).
+"""
+from __future__ import annotations
+
+import os
+
+from fmus.guarded import GuardedSlave, refuse_absurd, require_finite
+
+#: The spec inside the FMU's resources.
+SPEC_RESOURCE = "plant_spec.toml"
+
+
+class SpecPlant(GuardedSlave):
+    """A spec-built translational parallel mechanism (thesis ch. 4-5, forward dynamics 5.66)."""
+
+    author = "parcosim"
+    description = "Translational parallel mechanism from a TOML spec (Coutinho 2019, ch. 4-5): torques in, motion out"
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        from plant import IntegratorSettings
+        from plant.spec import load
+
+        self.spec = load(os.path.join(self.resources, SPEC_RESOURCE))
+        if not self.spec.is_parallel:
+            raise ValueError(f"{self.spec.source}: a serial chain (no [platform]) is no plant FMU")
+        d = self.declare
+        for k, _, info in self.spec.joints():
+            if info.actuated:
+                d(info.input, "input", 0.0, f"Torque (force) on joint {info.name}, about its axis [N m]")
+        for k, _, info in self.spec.joints():
+            kind = "actuated" if info.actuated else "passive"
+            d(info.name, "output", 0.0, f"Joint {info.name} ({kind}) [rad or m]")
+            d(f"d{info.name}", "output", 0.0, f"d {info.name}/dt [rad/s or m/s]")
+        for axis in "xyz":
+            d(axis, "output", 0.0, f"Platform (end effector) {axis} [m]")
+            d(f"d{axis}", "output", 0.0, f"d {axis}/dt [m/s]")
+        d("residual", "output", 0.0, "Norm of the loop-closure residual (5.18) [m]")
+        for axis, value in zip("xyz", self.spec.start):
+            d(f"{axis}0", "parameter", float(value), f"Start at rest with the platform's {axis} there [m]")
+        defaults = IntegratorSettings()
+        d("method", "parameter", defaults.method, "Integrator: 'rk4' (fixed step) or 'dopri5' (adaptive)")
+        d("substeps", "parameter", defaults.substeps, "RK4 steps per communication step")
+        d("rtol", "parameter", defaults.rtol, "Relative tolerance of dopri5")
+        d("atol", "parameter", defaults.atol, "Absolute tolerance of dopri5")
+        d("baumgarte", "parameter", defaults.baumgarte, "Baumgarte lambda of (5.66) [1/s]")
+        self.sim = None
+
+    def setup(self):
+        from plant import IntegratorSettings
+        from plant.specsim import SpecSimulator
+
+        numeric = {name: getattr(self, name) for name in ("x0", "y0", "z0", "rtol", "atol", "baumgarte")}
+        require_finite(**numeric)
+        refuse_absurd(**numeric)
+        settings = IntegratorSettings(method=self.method, substeps=self.substeps, rtol=self.rtol, atol=self.atol,
+                                      baumgarte=self.baumgarte, kernel="general")
+        sim = SpecSimulator(self.spec, (self.x0, self.y0, self.z0), settings)
+        if settings.method == "rk4":
+            self._refuse_slow_steps(sim)
+        self.sim = sim
+        self._publish()
+
+    def _refuse_slow_steps(self, sim):
+        """Refuse ``substeps`` whose doStep would take more than half of
+        :data:`fmus.parts.MAX_CALL_SECONDS`: 4 right-hand sides a substep, timed here."""
+        import time
+
+        from fmus.parts import MAX_CALL_SECONDS
+
+        zero = [0.0] * len(self.spec.inputs)
+        rhs = []
+        for _ in range(3):
+            start = time.perf_counter()
+            sim.derivative(sim.y, zero)
+            rhs.append(time.perf_counter() - start)
+        per_step = 4 * self.substeps * min(rhs)
+        if per_step > 0.5 * MAX_CALL_SECONDS:
+            raise ValueError(f"parameter substeps = {self.substeps!r}: a doStep would take about {per_step:.3g} s "
+                             f"(general kernel), more than the {0.5 * MAX_CALL_SECONDS:g} s allowed per call; use "
+                             f"substeps <= {max(1, int(0.5 * MAX_CALL_SECONDS / (4 * min(rhs))))} or dopri5")
+
+    def step(self, current_time, step_size):
+        self.sim.time = current_time
+        self.sim.step([getattr(self, name) for name in self.spec.inputs], step_size)
+        self._publish()
+
+    def _publish(self):
+        for name, value in self.sim.outputs().items():
+            setattr(self, name, float(value))
