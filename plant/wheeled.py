@@ -95,8 +95,9 @@ class FallenError(RuntimeError):
 
     def __init__(self, code: int, psi: float, time: float):
         self.code, self.psi, self.time = code, psi, time
-        super().__init__(f"the robot fell over ({kernel.CODES[code]}) at t = {time:.6g} s: "
-                         f"psi = {math.degrees(psi):.4g} deg at the last good state")
+        what = ("the state became non-finite" if code == kernel.NONFINITE
+                else f"the robot fell over ({kernel.CODES[code]})")
+        super().__init__(f"{what} at t = {time:.6g} s: psi = {math.degrees(psi):.4g} deg at the last good state")
 
 
 #: Default RK4 substeps per 1 ms communication step: 2 keeps the error below 1e-9 rad

@@ -13,6 +13,7 @@ from __future__ import annotations
 from controller.balance import ROUTES, BalanceController as _Controller
 from controller.balance import BalanceSettings, design_balance, get_route
 from fmus.guarded import MIN_STEP, GuardedSlave, refuse_absurd, require_finite
+from fmus.slaves.parcosim_wheeledpendulum import refuse_absurd_inputs
 
 ESTIMATES = ("theta_hat", "psi_hat", "phi_hat", "dtheta_hat", "dpsi_hat", "dphi_hat")
 
@@ -71,6 +72,7 @@ class BalanceController(GuardedSlave):
 
     def step(self, current_time, step_size):
         c = self.controller
+        refuse_absurd_inputs(current_time, enc_l=self.enc_l, enc_r=self.enc_r, gyro=self.gyro)
         self.v_l, self.v_r = c.sample(current_time, self.enc_l, self.enc_r, self.gyro)
         self.tau_l, self.tau_r = c.ideal_torques()
         self.x_d, self.y_d = c.reference(current_time)

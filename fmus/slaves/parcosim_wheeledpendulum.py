@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import fields
 
-from fmus.guarded import GuardedSlave, refuse_absurd, require_finite
+from fmus.guarded import ABSURD, GuardedSlave, refuse_absurd, require_finite
 
 #: (output, description) of the pendulum (docs/contract.md).
 OUTPUTS = (
@@ -80,7 +80,7 @@ class WheeledPendulum(GuardedSlave):
         require_finite(**{f"parameter {k}": v for k, v in {**values, **{n: getattr(self, n) for n, _ in INITIAL}}.items()})
         push = {name: float(getattr(self, name)) for name in ("push_torque", "push_start", "push_duration")}
         require_finite(**{f"parameter {k}": v for k, v in push.items()})
-        refuse_absurd(**values, **push)
+        refuse_absurd(**values, **push, **{name: float(getattr(self, name)) for name, _ in INITIAL})
         if self.push_duration < 0.0:
             raise ValueError(f"parameter push_duration = {self.push_duration!r} s must be >= 0")
         params = SEED.with_(**values)
@@ -96,6 +96,7 @@ class WheeledPendulum(GuardedSlave):
         from plant.wheeled import FallenError
 
         self.sim.time = current_time
+        refuse_absurd_inputs(current_time, tau_l=self.tau_l, tau_r=self.tau_r, tau_d=self.tau_d)
         tau_d = self.tau_d
         # the push acts over the steps that start inside its window (1e-9 s: rounding of t)
         if self.push_start - 1e-9 <= current_time < self.push_start + self.push_duration - 1e-9:
@@ -106,3 +107,11 @@ class WheeledPendulum(GuardedSlave):
             self.fallen = True
             raise
         self.publish()
+
+
+def refuse_absurd_inputs(time: float, **inputs) -> None:
+    """Raise ValueError naming the first input beyond :data:`fmus.guarded.ABSURD` (SI units):
+    no torque or sensor reading of the robot comes near it."""
+    for name, value in inputs.items():
+        if abs(value) > ABSURD:
+            raise ValueError(f"input {name} = {value!r} at t = {time:.6g} s is absurd: |{name}| must be <= {ABSURD:g}")
