@@ -155,15 +155,18 @@ def plot(sample_rows, battery, comparison, directory: Path) -> list:
     fig.tight_layout()
     fig.savefig(files[-1], dpi=110)
     plt.close(fig)
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    fig, axes = plt.subplots(1, 3, figsize=(13, 4))
     for model, outcome in comparison["runs"].items():
         c = outcome.columns
         axes[0].plot(c["x"], c["y"], label=model)
         axes[1].plot(c["t"], np.degrees(c["psi"]), lw=0.8, label=model)
     c = comparison["runs"]["exact"].columns
+    s = comparison["runs"]["seed"].columns
     axes[0].plot(c["x_d"], c["y_d"], "k--", lw=0.8, label="reference")
-    axes[0].set(xlabel="x [m]", ylabel="y [m]", title="pendulum_drive: axle path")
+    axes[0].set(xlabel="x [m]", ylabel="y [m]", title="pendulum_drive: axle path", aspect="equal", ylim=(-0.3, 0.3))
     axes[1].set(xlabel="t [s]", ylabel="psi [deg]", title="pitch")
+    axes[2].plot(c["t"], 1e3 * np.hypot(c["x"] - s["x"], c["y"] - s["y"]), lw=0.8, label="|axle exact - seed|")
+    axes[2].set(xlabel="t [s]", ylabel="mm", title="exact vs seed model")
     for ax in axes:
         ax.legend(fontsize=7)
         ax.grid(alpha=0.3)

@@ -151,3 +151,25 @@ def test_fidelity_switches_still_balance(fidelity):
         assert np.all(outcome.columns["phi"] == 0.0)
     if fidelity.electrics == "ideal":
         assert not any(c.model == "DCMotorDrive" for c in scene.system.components)
+
+
+def test_sample_time_quick_checks():
+    """The sweep's ends (docs/pendulum.md): balanced at 2 ms, fallen at 10 ms."""
+    from scenarios.pendulum_trade import sample_time_rows
+
+    slow, fast = sample_time_rows((10e-3, 2e-3))
+    assert not slow["completed"] and "fell over" in slow["error"]
+    assert fast["balanced"]
+
+
+def test_generic_commands_on_a_pendulum_scene(tmp_path, capsys):
+    from parcosim.cli import main
+
+    assert main(["export-ssp", "pendulum_balance", str(tmp_path / "p.ssp")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--per-component" in err[0]
+    assert main(["run", "pendulum_balance", "--drives-in-plant", "4", "--out", str(tmp_path / "d")]) == 2
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1
+    assert main(["trade", "pendulum_push", "--quick", "--out", str(tmp_path / "t")]) == 0
+    text = (tmp_path / "t" / "trade.md").read_text()
+    assert "| defaults |" in text and "| ideal electrics |" in text
