@@ -45,6 +45,9 @@ VOLTAGE_NOISE = 0.1
 BODY_TORQUE_NOISE = 1e-4
 GYRO_NOISE = 1e-3
 ELECTRICS = ("quasi_static", "ideal")
+#: Shortest sample time designed for [s]: below it the Riccati solvers take seconds (12 s at
+#: 1 us, measured) for a rate no robot's controller runs at; the balance is lost above 6 ms.
+MIN_SAMPLE_TIME = 1e-5
 ROUTES = ("hold", "forward_turn")
 
 
@@ -80,8 +83,8 @@ class BalanceSettings:
     motor_preset: str = "seed000"
 
     def validate(self) -> "BalanceSettings":
-        if not (math.isfinite(self.T) and 0.0 < self.T <= 1.0):
-            raise ValueError(f"parameter T = {self.T!r} s must be in (0, 1]")
+        if not (math.isfinite(self.T) and MIN_SAMPLE_TIME <= self.T <= 1.0):
+            raise ValueError(f"parameter T = {self.T!r} s must be in [{MIN_SAMPLE_TIME:g}, 1] s")
         if not (math.isfinite(self.v_battery) and self.v_battery > 0.0):
             raise ValueError(f"parameter v_battery = {self.v_battery!r} V must be > 0")
         if self.electrics not in ELECTRICS:
@@ -122,10 +125,25 @@ def voltage_model(settings: BalanceSettings, params=None):
 
 
 def design_balance(settings: BalanceSettings = BalanceSettings(), params=None) -> BalanceDesign:
-    """The LQR gain and the observer of the module docstring."""
+    """The LQR gain and the observer of the module docstring.
+
+    Raises
+    ------
+    ValueError
+        A bad setting (named), or a design python-control cannot solve (naming T).
+    """
+    s = settings.validate()
+    try:
+        return _design(s, params)
+    except (ValueError, TypeError, ArithmeticError, np.linalg.LinAlgError) as exc:   # ControlArgument: TypeError
+        raise ValueError(f"the balance design failed for T = {s.T!r} s, electrics = {s.electrics!r}, "
+                         f"friction = {s.friction!r}, yaw = {s.yaw!r}, encoder_counts = {s.encoder_counts!r}: "
+                         f"{exc}") from None
+
+
+def _design(s: BalanceSettings, params) -> BalanceDesign:
     import control
 
-    s = settings.validate()
     A, B = voltage_model(s, params)
     states = (0, 1, 2, 3, 4, 5) if s.yaw else (0, 1, 3, 4)
     A, B = A[np.ix_(states, states)], B[states, :]
