@@ -26,6 +26,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import control   # at import (an FMU's instantiation), not in the design: importing it takes 1-7 s
 import numpy as np
 
 from controller.trajectories import SMOOTHSTEP_COEFFICIENTS, _SMOOTHSTEP_DERIVATIVES, _polynomial
@@ -142,8 +143,6 @@ def design_balance(settings: BalanceSettings = BalanceSettings(), params=None) -
 
 
 def _design(s: BalanceSettings, params) -> BalanceDesign:
-    import control
-
     A, B = voltage_model(s, params)
     states = (0, 1, 2, 3, 4, 5) if s.yaw else (0, 1, 3, 4)
     A, B = A[np.ix_(states, states)], B[states, :]

@@ -143,7 +143,7 @@ class WheeledPendulum:
             self.y[kernel.STATE_NAMES.index(name)] = value
         if not yaw and self.y[kernel.DPHI] != 0.0:
             raise ValueError(f"initial dphi = {self.y[kernel.DPHI]!r} with the yaw locked (yaw = false) must be 0")
-        code = kernel.condition(self.prm[0], self.y)
+        code = kernel.state_condition(self.prm, self.y)
         if code != kernel.OK:
             raise ValueError(f"initial state: {kernel.CODES[code]} (psi0 = {self.y[kernel.PSI]!r} rad)")
         self.time = 0.0
@@ -153,7 +153,7 @@ class WheeledPendulum:
     def derivative(self, y, tau_l: float = 0.0, tau_r: float = 0.0, tau_d: float = 0.0) -> np.ndarray:
         """dy/dt at state y (layout of :mod:`plant.wheeled_kernel`)."""
         out = np.empty(kernel.N_STATE)
-        kernel.derivative(self.prm[0], np.asarray(y, dtype=float), float(tau_l), float(tau_r), float(tau_d), out)
+        kernel.rhs(self.prm, np.asarray(y, dtype=float), float(tau_l), float(tau_r), float(tau_d), out)
         return out
 
     def step(self, tau_l: float, tau_r: float, dt: float, tau_d: float = 0.0) -> None:

@@ -102,6 +102,20 @@ def condition(p, y):
 
 
 @njit(cache=True)
+def rhs(prm, y, tau_l, tau_r, tau_d, out):
+    """:func:`derivative` for the parameter array ``prm`` (shape (1,)): the entry point from
+    Python (a record passed from Python is compiled anew in every process, numba's cache
+    misses it; measured 1.5 s)."""
+    derivative(prm[0], y, tau_l, tau_r, tau_d, out)
+
+
+@njit(cache=True)
+def state_condition(prm, y):
+    """:func:`condition` for the parameter array ``prm`` (the entry point from Python)."""
+    return condition(prm[0], y)
+
+
+@njit(cache=True)
 def step(prm, y, tau_l, tau_r, tau_d, dt, substeps):
     """Advance y in place over dt by ``substeps`` RK4 steps, inputs held (zero-order hold).
 

@@ -12,8 +12,7 @@ from __future__ import annotations
 
 from controller.balance import ROUTES, BalanceController as _Controller
 from controller.balance import BalanceSettings, design_balance, get_route
-from fmus.guarded import MIN_STEP, GuardedSlave, refuse_absurd, require_finite
-from fmus.slaves.parcosim_wheeledpendulum import refuse_absurd_inputs
+from fmus.guarded import MIN_STEP, GuardedSlave, refuse_absurd, refuse_absurd_inputs, require_finite
 
 ESTIMATES = ("theta_hat", "psi_hat", "phi_hat", "dtheta_hat", "dpsi_hat", "dphi_hat")
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import fields
 
-from fmus.guarded import ABSURD, GuardedSlave, refuse_absurd, require_finite
+from fmus.guarded import GuardedSlave, refuse_absurd, refuse_absurd_inputs, require_finite
 
 #: (output, description) of the pendulum (docs/contract.md).
 OUTPUTS = (
@@ -107,11 +107,3 @@ class WheeledPendulum(GuardedSlave):
             self.fallen = True
             raise
         self.publish()
-
-
-def refuse_absurd_inputs(time: float, **inputs) -> None:
-    """Raise ValueError naming the first input beyond :data:`fmus.guarded.ABSURD` (SI units):
-    no torque or sensor reading of the robot comes near it."""
-    for name, value in inputs.items():
-        if abs(value) > ABSURD:
-            raise ValueError(f"input {name} = {value!r} at t = {time:.6g} s is absurd: |{name}| must be <= {ABSURD:g}")
