@@ -172,13 +172,11 @@ def _design(s: BalanceSettings, params) -> BalanceDesign:
 
 def _body_torque_column(params):
     """d x'/d tau_d at the upright: how a torque on the body drives the 6 states' derivatives."""
-    from plant.wheeled import SEED
+    from plant.wheeled import SEED, upright_mass_matrix
 
-    p = SEED if params is None else params
-    m11 = (2.0 * p.m + p.M) * p.R ** 2 + 2.0 * p.J_w
-    m12, m22 = p.M * p.R * p.L, p.M * p.L ** 2 + p.J_psi
+    pitch, _ = upright_mass_matrix(SEED if params is None else params)
     b = np.zeros(6)
-    b[3:5] = np.linalg.solve([[m11, m12], [m12, m22]], [0.0, 1.0])
+    b[3:5] = np.linalg.solve(pitch, [0.0, 1.0])
     return b
 
 

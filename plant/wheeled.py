@@ -196,6 +196,15 @@ class WheeledPendulum:
                 "gyro": dps, "energy": self.energy()}
 
 
+def upright_mass_matrix(p: WheeledParams):
+    """M(psi = 0) of (18): the 2x2 (theta, psi) block and M33."""
+    m11 = (2.0 * p.m + p.M) * p.R ** 2 + 2.0 * p.J_w
+    m12 = p.M * p.R * p.L
+    m22 = p.M * p.L ** 2 + p.J_psi
+    m33 = 0.5 * p.m * p.W ** 2 + p.J_phi + p.W ** 2 / (2.0 * p.R ** 2) * p.J_w
+    return np.array([[m11, m12], [m12, m22]]), m33
+
+
 def upright_linearisation(params: WheeledParams = SEED):
     """(A, B) of the pendulum linearised at the upright at rest, x' = A x + B u.
 
@@ -204,11 +213,8 @@ def upright_linearisation(params: WheeledParams = SEED):
     exact and the seed's models share it; yaw decouples from pitch.
     """
     p = params.validate()
-    m11 = (2.0 * p.m + p.M) * p.R ** 2 + 2.0 * p.J_w
-    m12 = p.M * p.R * p.L
-    m22 = p.M * p.L ** 2 + p.J_psi
-    m33 = 0.5 * p.m * p.W ** 2 + p.J_phi + p.W ** 2 / (2.0 * p.R ** 2) * p.J_w
-    inverse = np.linalg.inv(np.array([[m11, m12], [m12, m22]]))
+    pitch, m33 = upright_mass_matrix(p)
+    inverse = np.linalg.inv(pitch)
     A = np.zeros((6, 6))
     A[0:3, 3:6] = np.eye(3)
     A[3:5, 1] = inverse @ np.array([0.0, p.M * p.g * p.L])   # -G2 = M g L psi to first order

@@ -65,9 +65,7 @@ def full_coordinate_model():
     bias = constraints.diff(t).subs({a: 0 for a in qdd})   # A' q'
     pos = sp.symbols("q0:6")
     vel = sp.symbols("v0:6")
-    plain = {}
-    for q, v, a, b in zip(Q_FULL, qd, pos, vel):
-        plain[v] = b
+    plain = dict(zip(qd, vel))
     plain_q = dict(zip(Q_FULL, pos))
 
     def numeric(expr):
