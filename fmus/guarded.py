@@ -539,6 +539,14 @@ def refuse_absurd(**values) -> None:
             raise ValueError(f"parameter {name} = {value!r} is absurd: |{name}| must be <= {ABSURD:g} (SI units)")
 
 
+def refuse_absurd_inputs(time: float, **inputs) -> None:
+    """Raise ValueError naming the first input beyond :data:`ABSURD` (SI units), its value and
+    the time (the wheeled pendulum's torques and sensors: none comes near it)."""
+    for name, value in inputs.items():
+        if abs(value) > ABSURD:
+            raise ValueError(f"input {name} = {value!r} at t = {time:.6g} s is absurd: |{name}| must be <= {ABSURD:g}")
+
+
 def refuse_tiny(**values) -> None:
     """Raise ValueError naming the first parameter (that must be > 0) in (0, :data:`TINY`): the
     caller's own checks name 0 and negative values."""

@@ -190,7 +190,7 @@ def declare_motor(slave, suffix: str = "", default_preset: str = "motor1") -> No
     and ``b_design``, each name followed by ``suffix``."""
     d = slave.declare
     d(f"preset{suffix}", "parameter", default_preset,
-      "Motor parameters: 'motor1' (Table 16) or 'motor2' (Table 18)")
+      "Motor parameters: 'motor1' (Table 16), 'motor2' (Table 18) or 'seed000' (seed 000's motor)")
     for _, var, text in MOTOR_PARAMETERS:
         d(f"{var}{suffix}", "parameter", PRESET_VALUE, f"{text}; -1: the preset's value")
     d(f"b_design{suffix}", "parameter", PRESET_VALUE,

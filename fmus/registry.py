@@ -13,5 +13,7 @@ SLAVES = {
     "Derivator": "parcosim_derivator",
     "PositionController": "parcosim_positioncontroller",
     "ActuatedFiveBarPlant": "parcosim_actuatedfivebarplant",
+    "WheeledPendulum": "parcosim_wheeledpendulum",
+    "BalanceController": "parcosim_balancecontroller",
     # one line per FMU; keep this order (plant, drives, controller chain)
 }

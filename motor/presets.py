@@ -89,7 +89,15 @@ motor1 = MotorParams(R=1.101, L=0.667e-3, kt=5.598e-2, ke=5.138e-2,
 motor2 = MotorParams(R=0.829, L=0.667e-3, kt=5.666e-2, ke=5.200e-2,
                      b=2.039e-4, mu=4.992e-2, J_rotor=1.887e-4)
 
-MOTOR_PRESETS = {"motor1": motor1, "motor2": motor2}
+#: The motor of seed 000 (the wheeled pendulum): R_m, K_t = K_e, f_m and n = 1 from the seed;
+#: its inductance and rotor inertia are "negligible" there: L = 0 makes the drive's electrics
+#: quasi-static ((22): i = (V - K_e omega)/R_m), and J_rotor, which only the current-controller
+#: design reads, is a token 1e-9 kg m^2 (voltage mode never designs one).  f_m is the drive's
+#: viscous b on the motor speed relative to the body.  v_max 8 V: the seed gives no battery
+#: voltage, 8 V is our assumption (docs/pendulum.md).
+seed000 = MotorParams(R=6.69, L=0.0, kt=0.4, ke=0.4, b=0.0022, mu=0.0, J_rotor=1e-9, v_max=8.0)
+
+MOTOR_PRESETS = {"motor1": motor1, "motor2": motor2, "seed000": seed000}
 
 
 def get_motor_preset(name):
@@ -98,7 +106,7 @@ def get_motor_preset(name):
     Parameters
     ----------
     name : str
-        ``"motor1"`` or ``"motor2"``.
+        ``"motor1"``, ``"motor2"`` or ``"seed000"`` (the wheeled pendulum's motor).
 
     Returns
     -------

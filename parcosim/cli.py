@@ -12,7 +12,8 @@ Every subcommand is a thin shell over a documented Python call:
                        ``run_scene(drives_in_plant(get_scene(name), substeps=N), ...)``; with
                        ``--replace I=F.fmu`` ``run_scene(with_fmu_files(scene, {I: F}), ...)``
 ``parcosim report``    ``scenarios.report.write_report(out_dir, mode)``
-``parcosim trade``     ``scenarios.trade.run_trade(scene, quick, out_dir)``
+``parcosim trade``     ``scenarios.trade.run_trade(scene, quick, out_dir)``; for a pendulum scene
+                       ``scenarios.pendulum_trade.run_pendulum_trade(scene, quick, out_dir)``
 ``parcosim export-ssp``  ``scenarios.package.export_package(get_scene(name), path, fmu_dir)``;
                        with ``--per-component`` ``fmus.ssp.export_ssp(get_scene(name).system, path, fmu_dir)``
 ``parcosim export-fmu``  ``fmus.export.export_fmu(get_scene(name).system, path)``
@@ -232,8 +233,17 @@ def _run(args) -> int:
 
 
 def _trade(args) -> int:
+    from scenarios.pendulum import PENDULUM_SCENES
     from scenarios.trade import run_trade
 
+    if args.scene in PENDULUM_SCENES:   # the pendulum's own study (scenarios/pendulum_trade.py)
+        from scenarios.pendulum_trade import run_pendulum_trade
+
+        report = run_pendulum_trade(args.scene, quick=args.quick, out_dir=args.out,
+                                    progress=lambda line: print(line, file=sys.stderr, flush=True))
+        settings = ", ".join(f"{r['setting']} {r['wall_s']:.2f} s" for r in report["fidelity"])
+        print(f"{args.scene}: {settings} -> {args.out}/trade.md")
+        return 0
     trade = run_trade(args.scene, quick=args.quick, out_dir=args.out,
                       progress=lambda line: print(line, file=sys.stderr, flush=True))
     base = trade.row("defaults")

@@ -337,4 +337,8 @@ def warm_up(unzipped: dict, numba_cache) -> list:
     results are returned, not judged."""
     cases = [{"model": model, "kind": "warm-up", "seed": 0, "instance_name": "warm-up", "logging": False,
               "start_time": 0.0, "parameters": [], "ops": [["step", None, 1e-3]]} for model in unzipped]
-    return run_cases(cases, unzipped, numba_cache, case_timeout=10 * CASE_TIMEOUT)
+    # One worker per FMU: in one process every FMU imports the packages (plant, ...) from the
+    # first one's resources, and numba caches a kernel per source path, so each FMU's own
+    # copy would stay uncompiled for the workers that load that FMU first.
+    return [result for case in cases
+            for result in run_cases([case], unzipped, numba_cache, case_timeout=10 * CASE_TIMEOUT)]

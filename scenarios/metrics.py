@@ -36,7 +36,12 @@ loading and initialising the components, not in ``wall_s``), from result columns
     steady = t >= stop - STEADY_STATE_WINDOW - eps
     reached_stop = len(t) and t[-1] >= stop - eps
     simulated = float(t[-1]) if len(t) else 0.0
-    return {
+    extra = {}
+    if "psi" in columns:   # the wheeled pendulum's scenes
+        from .pendulum import pendulum_metrics
+
+        extra = pendulum_metrics(columns, scene.system.step)
+    return extra | {
         "scene": scene.name,
         "strategy": scene.strategy,
         "completed": bool(completed),

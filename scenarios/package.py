@@ -83,7 +83,9 @@ def package_scene(scene: Scene) -> Package:
                          "chain predicts the plant with a parcosim model of it, so the plant must be ours "
                          "(export the scene --per-component, or as one FMU with export-fmu)")
     if models.get(PLANT) not in ("FiveBarPlant", "ActuatedFiveBarPlant"):
-        raise ValueError(f"scene {scene.name}: a package needs a 5R plant instance named {PLANT!r}")
+        raise ValueError(f"scene {scene.name}: the default package (control chain + plant) is made for the 5R "
+                         f"plant (a FiveBarPlant named {PLANT!r}); export this scene with --per-component, "
+                         "or as one FMU with export-fmu")
     chain = scene.system
     if any(c.substeps != 1 for c in chain.components):
         raise ValueError(f"scene {scene.name}: multi-rate components cannot be packaged (substeps = 1 needed)")

@@ -375,7 +375,8 @@ def drives_in_plant(scene: Scene, **plant_parameters) -> Scene:
 
 
 #: Models whose discrete parts are designed for a sample time: their parameter ``T``.
-SAMPLE_TIME_MODELS = ("Derivator", "DCMotorDrive", "ActuatedFiveBarPlant", "PositionController", "CurrentObserver")
+SAMPLE_TIME_MODELS = ("Derivator", "DCMotorDrive", "ActuatedFiveBarPlant", "PositionController", "CurrentObserver",
+                      "BalanceController")
 
 
 def with_sample_time(scene: Scene, T: float) -> Scene:
@@ -412,7 +413,9 @@ def scene_names() -> list[str]:
     names = ["thesis_sim_circle", "thesis_sim_circle_me20", "thesis_sim_circle_me40"]
     names += [f"bench_{kind}_{s}" for kind in ("circle", "triangle") for s in ALL_STRATEGY_NAMES]
     names += [f"vertical_circle_{b}{s}" for b in ("", "balanced_") for s in ALL_STRATEGY_NAMES]
-    return names
+    from .pendulum import PENDULUM_SCENES
+
+    return names + list(PENDULUM_SCENES)
 
 
 def get_scene(name: str) -> Scene:
@@ -430,4 +433,8 @@ def get_scene(name: str) -> Scene:
         prefix = "vertical_circle_balanced_" if balanced else "vertical_circle_"
         if name.startswith(prefix) and name[len(prefix):] in ALL_STRATEGY_NAMES:
             return vertical_circle(name[len(prefix):], balanced)
+    from .pendulum import PENDULUM_SCENES, pendulum_scene
+
+    if name in PENDULUM_SCENES:
+        return pendulum_scene(name)
     raise ValueError(f"unknown scene {name!r}; `parcosim list` prints the {len(scene_names())} scenes")

@@ -410,6 +410,8 @@ def _good_inputs():
         "ActuatedFiveBarPlant": ({"preset": "bench", "x0": X1[0], "y0": X1[1]},
                                  {"i_ref1": 1.0, "i_ref2": -1.0, "i_hat1": 0.5, "i_hat2": -0.5, "v_ref1": 1.0,
                                   "v_ref2": 1.0}),
+        "WheeledPendulum": ({}, {"tau_l": 0.01, "tau_r": -0.01, "tau_d": 0.001}),
+        "BalanceController": ({}, {"enc_l": 0.01, "enc_r": 0.02, "gyro": 0.1}),
     }
 
 
@@ -471,10 +473,14 @@ def _variable_cases():
 #: a reference at 1e300 m is outside the workspace.
 REFUSED_HUGE_INPUTS = {("FiveBarPlant", "tau1"), ("FiveBarPlant", "tau2"), ("PositionController", "dq1"),
                        ("PositionController", "dq2"), ("PositionController", "x_d"), ("PositionController", "y_d"),
-                       ("Derivator", "q1"), ("Derivator", "q2")}
+                       ("Derivator", "q1"), ("Derivator", "q2"), ("WheeledPendulum", "tau_l"),
+                       ("WheeledPendulum", "tau_r"), ("WheeledPendulum", "tau_d"), ("BalanceController", "enc_l"),
+                       ("BalanceController", "enc_r"), ("BalanceController", "gyro")}
 #: Absurd integer parameters that are legitimate: a finer encoder, more cycles (a long run).
 ALLOWED_INTEGERS = {("FiveBarPlant", "encoder_counts", 2 ** 31 - 1), ("Trajectory", "cycles", 2 ** 31 - 1),
-                    ("ActuatedFiveBarPlant", "encoder_counts", 2 ** 31 - 1)}
+                    ("ActuatedFiveBarPlant", "encoder_counts", 2 ** 31 - 1),
+                    ("WheeledPendulum", "encoder_counts", 2 ** 31 - 1),
+                    ("BalanceController", "encoder_counts", 2 ** 31 - 1)}
 
 
 @pytest.mark.parametrize("model, name, causality, value", _variable_cases())

@@ -17,9 +17,16 @@ def test_presets_match_system_md():
 
 
 def test_unknown_preset_lists_valid_ones():
-    with pytest.raises(ValueError, match=r"'motor3'.*motor1, motor2"):
+    with pytest.raises(ValueError, match=r"'motor3'.*motor1, motor2, seed000"):
         get_motor_preset("motor3")
-    assert sorted(MOTOR_PRESETS) == ["motor1", "motor2"]
+    assert sorted(MOTOR_PRESETS) == ["motor1", "motor2", "seed000"]
+
+
+def test_seed000_preset_is_the_seed_motor():
+    """Seed 000's parameter list: R_m 6.69, K_t = K_e = 0.4, f_m 0.0022, L negligible; 8 V
+    battery (our assumption)."""
+    p = get_motor_preset("seed000")
+    assert (p.R, p.kt, p.ke, p.b, p.mu, p.L, p.v_max) == (6.69, 0.4, 0.4, 0.0022, 0.0, 0.0, 8.0)
 
 
 @pytest.mark.parametrize("name, value", [

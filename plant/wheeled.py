@@ -1,0 +1,225 @@
+"""The two-wheeled inverted pendulum of seed 000: parameters, simulator, linearisation.
+
+The physics is :mod:`plant.wheeled_kernel` (one compiled kernel, named layouts); this module
+holds the parameters (single source of truth, seed 000's values), the mutable state and
+the Python-facing refusals.  ``model="exact"`` applies the rolling constraints by
+Lagrange-d'Alembert; ``model="seed"`` is seed 000's equations (16)-(18) with its printed
+typos corrected but without the two nonholonomic terms (docs/pendulum.md).
+
+Conventions (docs/contract.md, SYSTEM.md section 7): theta is the mean wheel angle from the
+vertical (x' = R theta' cos phi), psi the pitch (0 upright, + leaning toward the heading),
+phi the yaw (CCW from +x); theta_l,r = theta -+ W/(2R) phi (10); the motors turn the wheels
+relative to the body: omega_l,r = theta_l,r' - psi'.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, fields, replace
+
+import numpy as np
+
+from . import wheeled_kernel as kernel
+
+MODELS = ("exact", "seed")
+
+
+@dataclass(frozen=True)
+class WheeledParams:
+    """Seed 000's mechanical parameters (SI), its values as defaults.
+
+    g gravity; m, R, J_w one wheel's mass, radius, spin inertia (m R^2/2); M, W, D, H the
+    body's mass, width, depth, height; L axle to body centre of mass (H/2); J_psi, J_phi the
+    body's pitch and yaw inertias (M L^2/3, M (W^2 + D^2)/12).
+    """
+
+    g: float = 9.8
+    m: float = 0.03
+    R: float = 0.04
+    J_w: float = 0.03 * 0.04 ** 2 / 2.0
+    M: float = 0.6
+    W: float = 0.14
+    D: float = 0.04
+    H: float = 0.144
+    L: float = 0.144 / 2.0
+    J_psi: float = 0.6 * (0.144 / 2.0) ** 2 / 3.0
+    J_phi: float = 0.6 * (0.14 ** 2 + 0.04 ** 2) / 12.0
+
+    def validate(self) -> "WheeledParams":
+        """Raise ValueError naming the first non-finite or non-physical parameter: all
+        must be finite, R, M, W, L > 0 and the others >= 0."""
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value)):
+                raise ValueError(f"parameter {f.name} = {value!r} is not a finite number")
+            if f.name in ("R", "M", "W", "L") and not value > 0.0:
+                raise ValueError(f"parameter {f.name} = {value!r} must be > 0")
+            if value < 0.0:
+                raise ValueError(f"parameter {f.name} = {value!r} must be >= 0")
+        return self
+
+    def with_(self, **changes) -> "WheeledParams":
+        """A validated copy with some parameters replaced (ValueError for unknown names)."""
+        unknown = sorted(set(changes) - {f.name for f in fields(self)})
+        if unknown:
+            raise ValueError(f"unknown pendulum parameter(s) {unknown}")
+        return replace(self, **changes).validate()
+
+
+SEED = WheeledParams()
+
+
+def pack(params: WheeledParams, model: str = "exact", yaw: bool = True) -> np.ndarray:
+    """The kernel's parameter record (shape (1,), dtype :data:`plant.wheeled_kernel.PARAMS`)."""
+    if model not in MODELS:
+        raise ValueError(f"model = {model!r}; valid: {', '.join(MODELS)}")
+    record = np.zeros(1, dtype=kernel.PARAMS)
+    for name, value in asdict(params.validate()).items():
+        record[name] = value
+    record["nonholonomic"] = 1.0 if model == "exact" else 0.0
+    record["yaw"] = 1.0 if yaw else 0.0
+    return record
+
+
+class FallenError(RuntimeError):
+    """The robot fell over (or its state became non-finite) within a step.
+
+    Attributes
+    ----------
+    code : int
+        :data:`plant.wheeled_kernel.CODES` key.
+    psi : float
+        Pitch at the last good state [rad].
+    time : float
+        End of the substep where it happened [s].
+    """
+
+    def __init__(self, code: int, psi: float, time: float):
+        self.code, self.psi, self.time = code, psi, time
+        what = ("the state became non-finite" if code == kernel.NONFINITE
+                else f"the robot fell over ({kernel.CODES[code]})")
+        super().__init__(f"{what} at t = {time:.6g} s: psi = {math.degrees(psi):.4g} deg at the last good state")
+
+
+#: Default RK4 substeps per 1 ms communication step: 2 keeps the error below 1e-9 rad
+#: against a tight-tolerance solution (docs/pendulum.md, tests/test_wheeled.py).
+SUBSTEPS = 2
+MAX_SUBSTEPS = 10000
+
+
+class WheeledPendulum:
+    """The pendulum's state and its stepping (the FMU ``WheeledPendulum`` is a thin adapter).
+
+    Parameters
+    ----------
+    params : WheeledParams
+    model : {"exact", "seed"}
+    yaw : bool
+        False locks the yaw (a straight-line scene): phi' = 0, phi'' = 0.
+    initial : dict
+        Any of theta, psi, phi, x, y, dtheta, dpsi, dphi (default 0).
+    substeps : int
+        RK4 steps per communication step.
+    encoder_counts : int
+        Counts per revolution of the wheel encoders (quadrature).
+    """
+
+    def __init__(self, params: WheeledParams = SEED, model: str = "exact", yaw: bool = True,
+                 initial: dict | None = None, substeps: int = SUBSTEPS, encoder_counts: int = 4096):
+        self.params = params.validate()
+        self.model = model
+        self.prm = pack(params, model, yaw)
+        if not (isinstance(substeps, int) and 1 <= substeps <= MAX_SUBSTEPS):
+            raise ValueError(f"parameter substeps = {substeps!r} must be an integer in [1, {MAX_SUBSTEPS}]")
+        if not (isinstance(encoder_counts, int) and encoder_counts > 0):
+            raise ValueError(f"parameter encoder_counts = {encoder_counts!r} must be a positive integer")
+        self.substeps = substeps
+        self.count = 2.0 * math.pi / encoder_counts
+        self.y = np.zeros(kernel.N_STATE)
+        for name, value in (initial or {}).items():
+            if name not in kernel.STATE_NAMES:
+                raise ValueError(f"unknown initial state {name!r}; valid: {', '.join(kernel.STATE_NAMES)}")
+            if not math.isfinite(value):
+                raise ValueError(f"initial {name} = {value!r} is not finite")
+            self.y[kernel.STATE_NAMES.index(name)] = value
+        if not yaw and self.y[kernel.DPHI] != 0.0:
+            raise ValueError(f"initial dphi = {self.y[kernel.DPHI]!r} with the yaw locked (yaw = false) must be 0")
+        code = kernel.state_condition(self.prm, self.y)
+        if code != kernel.OK:
+            raise ValueError(f"initial state: {kernel.CODES[code]} (psi0 = {self.y[kernel.PSI]!r} rad)")
+        self.time = 0.0
+        self.fallen = False
+        kernel.step(self.prm, self.y.copy(), 0.0, 0.0, 0.0, 1e-3, 1)   # compile now, not in the first step
+
+    def derivative(self, y, tau_l: float = 0.0, tau_r: float = 0.0, tau_d: float = 0.0) -> np.ndarray:
+        """dy/dt at state y (layout of :mod:`plant.wheeled_kernel`)."""
+        out = np.empty(kernel.N_STATE)
+        kernel.rhs(self.prm, np.asarray(y, dtype=float), float(tau_l), float(tau_r), float(tau_d), out)
+        return out
+
+    def step(self, tau_l: float, tau_r: float, dt: float, tau_d: float = 0.0) -> None:
+        """Advance by dt with the torques held.
+
+        Raises
+        ------
+        ValueError
+            A non-finite torque or a step that is not finite and > 0 (naming it and the time).
+        FallenError
+            The robot fell within the step (:attr:`fallen` becomes True, the state stays the
+            last good one).
+        """
+        for name, value in (("tau_l", tau_l), ("tau_r", tau_r), ("tau_d", tau_d)):
+            if not math.isfinite(value):
+                raise ValueError(f"input {name} = {value!r} at t = {self.time:.6g} s is not finite")
+        if not (math.isfinite(dt) and dt > 0.0):
+            raise ValueError(f"step size {dt!r} at t = {self.time:.6g} s must be > 0")
+        code, substep = kernel.step(self.prm, self.y, float(tau_l), float(tau_r), float(tau_d), float(dt),
+                                    self.substeps)
+        if code != kernel.OK:
+            self.fallen = True
+            raise FallenError(code, float(self.y[kernel.PSI]), self.time + dt * substep / self.substeps)
+        self.time += dt
+
+    def energy(self) -> float:
+        """Kinetic plus potential energy [J]."""
+        return kernel.energy(self.prm, self.y)
+
+    def outputs(self) -> dict:
+        """The WheeledPendulum outputs (docs/contract.md), as Python floats."""
+        th, ps, ph, x, y, dth, dps, dph = self.y.tolist()
+        half = self.params.W / (2.0 * self.params.R)
+        enc_l = th - half * ph - ps
+        enc_r = th + half * ph - ps
+        count = self.count
+        return {"theta": th, "psi": ps, "phi": ph, "dtheta": dth, "dpsi": dps, "dphi": dph, "x": x, "y": y,
+                "omega_l": dth - half * dph - dps, "omega_r": dth + half * dph - dps,
+                "enc_l": count * math.floor(enc_l / count + 0.5), "enc_r": count * math.floor(enc_r / count + 0.5),
+                "gyro": dps, "energy": self.energy()}
+
+
+def upright_mass_matrix(p: WheeledParams):
+    """M(psi = 0) of (18): the 2x2 (theta, psi) block and M33."""
+    m11 = (2.0 * p.m + p.M) * p.R ** 2 + 2.0 * p.J_w
+    m12 = p.M * p.R * p.L
+    m22 = p.M * p.L ** 2 + p.J_psi
+    m33 = 0.5 * p.m * p.W ** 2 + p.J_phi + p.W ** 2 / (2.0 * p.R ** 2) * p.J_w
+    return np.array([[m11, m12], [m12, m22]]), m33
+
+
+def upright_linearisation(params: WheeledParams = SEED):
+    """(A, B) of the pendulum linearised at the upright at rest, x' = A x + B u.
+
+    State x = (theta, psi, phi, theta', psi', phi'), input u = (tau_l, tau_r) [N m].  The
+    velocity-quadratic terms, the nonholonomic ones included, vanish to first order, so the
+    exact and the seed's models share it; yaw decouples from pitch.
+    """
+    p = params.validate()
+    pitch, m33 = upright_mass_matrix(p)
+    inverse = np.linalg.inv(pitch)
+    A = np.zeros((6, 6))
+    A[0:3, 3:6] = np.eye(3)
+    A[3:5, 1] = inverse @ np.array([0.0, p.M * p.g * p.L])   # -G2 = M g L psi to first order
+    E = np.array([[1.0, 1.0], [-1.0, -1.0]])                   # (20), theta and psi rows
+    B = np.zeros((6, 2))
+    B[3:5, :] = inverse @ E
+    B[5, :] = np.array([-1.0, 1.0]) * p.W / (2.0 * p.R) / m33
+    return A, B

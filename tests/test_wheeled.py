@@ -1,0 +1,127 @@
+"""The wheeled pendulum's simulator: accuracy, energy, linearisation, falling, refusals."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from plant import wheeled_kernel as K
+from plant.wheeled import SEED, FallenError, WheeledPendulum, upright_linearisation
+
+START = dict(psi=0.1, dphi=1.0, dtheta=2.0)
+
+
+def torques(k):
+    return 0.05 * math.sin(7e-3 * k), 0.04 * math.cos(5e-3 * k)
+
+
+def test_default_integrator_within_1e_9_rad_of_a_tight_solution():
+    """150 steps of 1 ms with held torques while it turns and falls to about -50 degrees."""
+    sim = WheeledPendulum(initial=START)
+    ref = WheeledPendulum(initial=START)
+    y = sim.y.copy()
+    worst = 0.0
+    for k in range(150):
+        sim.step(*torques(k), 1e-3)
+        sol = solve_ivp(lambda _, z: ref.derivative(z, *torques(k)), (0.0, 1e-3), y, method="DOP853",
+                        rtol=1e-13, atol=1e-14)
+        y = sol.y[:, -1]
+        worst = max(worst, float(np.max(np.abs(sim.y[:3] - y[:3]))))
+    assert abs(sim.y[K.PSI]) > 0.5, "the run should be a large motion"
+    assert worst <= 1e-9, f"largest angle error {worst:.3g} rad"
+
+
+@pytest.mark.parametrize("model", ["exact", "seed"])
+def test_energy_conserved_without_inputs(model):
+    """Rolling constraints do no work; the seed's missing terms are gyroscopic (no power) too."""
+    sim = WheeledPendulum(model=model, initial=dict(psi=0.05, dtheta=3.0, dphi=4.0, dpsi=-0.5), substeps=4)
+    e0 = sim.energy()
+    drift = 0.0
+    for _ in range(200):
+        sim.step(0.0, 0.0, 1e-3)
+        drift = max(drift, abs(sim.energy() - e0))
+    assert abs(sim.y[K.PSI]) > 0.3 and abs(sim.y[K.DPHI]) > 1.0
+    assert drift <= 1e-10 * abs(e0), f"energy drift {drift:.3g} J of {e0:.3g} J"
+
+
+def test_energy_balance_with_motor_torques():
+    """With torques, dE/dt = tau_l omega_l + tau_r omega_r (the motors' power)."""
+    sim = WheeledPendulum(initial=dict(psi=0.05, dtheta=1.0, dphi=2.0), substeps=8)
+    work = 0.0
+    e0 = sim.energy()
+    for k in range(100):
+        tl, tr = torques(k)
+        before = sim.outputs()
+        sim.step(tl, tr, 1e-4)
+        after = sim.outputs()
+        work += 1e-4 * 0.5 * (tl * (before["omega_l"] + after["omega_l"]) + tr * (before["omega_r"] + after["omega_r"]))
+    assert sim.energy() - e0 == pytest.approx(work, rel=1e-5)
+
+
+def test_linearisation_matches_finite_differences():
+    A, B = upright_linearisation()
+    sim = WheeledPendulum()
+    order = [K.THETA, K.PSI, K.PHI, K.DTHETA, K.DPSI, K.DPHI]
+
+    def f(x, u):
+        y = np.zeros(K.N_STATE)
+        y[order] = x
+        return sim.derivative(y, *u)[order]
+
+    eps = 1e-6
+    A_fd = np.column_stack([(f(eps * e, (0, 0)) - f(-eps * e, (0, 0))) / (2 * eps) for e in np.eye(6)])
+    B_fd = np.column_stack([(f(np.zeros(6), eps * e) - f(np.zeros(6), -eps * e)) / (2 * eps) for e in np.eye(2)])
+    np.testing.assert_allclose(A, A_fd, rtol=1e-7, atol=1e-7)
+    np.testing.assert_allclose(B, B_fd, rtol=1e-7, atol=1e-7)
+    assert np.max(np.linalg.eigvals(A).real) > 5.0, "upright is unstable"
+
+
+def test_fall_is_reported_with_psi_and_time_and_keeps_the_state():
+    sim = WheeledPendulum(initial=dict(psi=0.2))
+    with pytest.raises(FallenError) as caught:
+        for _ in range(2000):
+            sim.step(0.0, 0.0, 1e-3)
+    err = caught.value
+    assert err.code == K.FALLEN_PITCH and sim.fallen
+    assert 0.1 < err.time < 2.0 and "psi = " in str(err) and f"t = {err.time:.6g} s" in str(err)
+    assert np.all(np.isfinite(sim.y)) and abs(sim.y[K.PSI]) < 0.5 * math.pi
+    assert sim.time < err.time <= sim.time + 1e-3
+
+
+def test_body_touching_the_floor_is_a_fall():
+    """A body deeper than twice the wheel radius hits the floor before 90 degrees."""
+    sim = WheeledPendulum(SEED.with_(D=0.2), initial=dict(psi=0.3))
+    with pytest.raises(FallenError) as caught:
+        for _ in range(2000):
+            sim.step(0.0, 0.0, 1e-3)
+    assert caught.value.code == K.FALLEN_FLOOR
+    touch = math.asin(SEED.R / 0.1)   # R = (D/2) sin psi: about 23.6 degrees
+    assert touch - 0.05 < abs(caught.value.psi) <= touch
+
+
+def test_yaw_locked_keeps_heading():
+    sim = WheeledPendulum(yaw=False, initial=dict(psi=0.05))
+    for _ in range(100):
+        sim.step(0.01, -0.01, 1e-3)
+    assert sim.y[K.PHI] == 0.0 and sim.y[K.DPHI] == 0.0 and sim.y[K.Y] == 0.0
+
+
+@pytest.mark.parametrize("call, text", [
+    (lambda s: s.step(float("nan"), 0.0, 1e-3), "input tau_l = nan at t = 0 s"),
+    (lambda s: s.step(0.0, 0.0, -1.0), "step size -1.0 at t = 0 s"),
+])
+def test_bad_input_named(call, text):
+    sim = WheeledPendulum()
+    with pytest.raises(ValueError, match=text.replace("(", r"\(")):
+        call(sim)
+
+
+def test_bad_parameters_named():
+    with pytest.raises(ValueError, match="parameter M = -1"):
+        WheeledPendulum(SEED.with_(M=-1.0))
+    with pytest.raises(ValueError, match="initial state: pitch beyond 90"):
+        WheeledPendulum(initial=dict(psi=2.0))
+    with pytest.raises(ValueError, match="model = 'other'"):
+        WheeledPendulum(model="other")

@@ -1,0 +1,175 @@
+"""The WheeledPendulum and BalanceController FMUs, the balance design and the pendulum scenes."""
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from fmpy.fmi1 import FMICallException
+from fmpy.validation import validate_fmu
+
+from controller.balance import BalanceSettings, design_balance
+from fmus.slaves.parcosim_wheeledpendulum import OUTPUTS
+from plant.wheeled import SEED, WheeledPendulum, upright_linearisation
+from scenarios.pendulum import BALANCED_DEG, PendulumFidelity, pendulum_scene
+from scenarios.run import run_scene
+from tests.fmi_support import FmuInstance
+
+NAMES = [name for name, _ in OUTPUTS]
+
+
+@pytest.mark.parametrize("model", ["WheeledPendulum", "BalanceController"])
+def test_fmpy_validate(built_fmus, model):
+    assert validate_fmu(str(built_fmus[model])) == []
+
+
+def test_plant_fmu_equals_in_process_to_the_last_bit(built_fmus):
+    start = {"psi0": 0.1, "dphi0": 1.0, "dtheta0": 2.0}
+    fmu = FmuInstance(built_fmus["WheeledPendulum"], start)
+    sim = WheeledPendulum(initial={"psi": 0.1, "dphi": 1.0, "dtheta": 2.0})
+    for k in range(100):
+        tl, tr = 0.05 * math.sin(7e-3 * k), 0.04 * math.cos(5e-3 * k)
+        fmu.step(1e-3, tau_l=tl, tau_r=tr)
+        sim.step(tl, tr, 1e-3)
+        expected = sim.outputs()
+        assert [fmu.get(n) for n in NAMES] == [expected[n] for n in NAMES], k
+    fmu.close()
+
+
+def test_fall_is_fmi2discard_naming_psi_and_time(built_fmus):
+    fmu = FmuInstance(built_fmus["WheeledPendulum"], {"psi0": 0.3})
+    assert not fmu.get("fallen")
+    with pytest.raises(FMICallException) as caught:
+        for _ in range(3000):
+            fmu.step(1e-3)
+    assert caught.value.status == 2, "fmi2Discard"
+    message = fmu.get("error")
+    assert "fell over" in message and "psi = " in message and "t = " in message
+    assert fmu.get("fallen") == 1
+    assert all(math.isfinite(fmu.get(n)) for n in NAMES) and abs(fmu.get("psi")) < 0.5 * math.pi
+    fmu.close()
+
+
+@pytest.mark.parametrize("parameters, expected", [
+    ({"M": -0.6}, "parameter M = -0.6"),
+    ({"model": "lagrange"}, "model = 'lagrange'"),
+    ({"psi0": 2.0}, "pitch beyond 90 degrees"),
+    ({"g": float("nan")}, "parameter g = nan"),
+])
+def test_bad_plant_parameters_refused_by_name(built_fmus, parameters, expected):
+    fmu = FmuInstance(built_fmus["WheeledPendulum"], parameters)
+    assert expected in fmu.refused_step(1e-3)
+    fmu.close()
+
+
+def test_nan_torque_refused_naming_variable_value_time(built_fmus):
+    fmu = FmuInstance(built_fmus["WheeledPendulum"])
+    fmu.step(1e-3)
+    message = fmu.refused_step(1e-3, tau_r=float("nan"))
+    assert "tau_r = nan" in message and "t = 0.001" in message
+    fmu.close()
+
+
+def test_linearisation_matches_finite_differences_of_the_fmu_step():
+    """One 1 ms step of the plant slave from perturbed upright states = the ZOH discretisation
+    of the analytic linearisation (to the finite difference's own error)."""
+    import control
+
+    from fmus.instances import InProcessInstance
+
+    A, B = upright_linearisation()
+    sys_d = control.c2d(control.ss(A, B, np.eye(6), np.zeros((6, 2))), 1e-3)
+    names = ["theta", "psi", "phi", "dtheta", "dpsi", "dphi"]
+    eps = 1e-6
+
+    def step(start, torques):
+        instance = InProcessInstance("WheeledPendulum", "p")
+        instance.enter_initialization({f"{n}0": v for n, v in zip(names, start)}, 0.0)
+        instance.exit_initialization()
+        slave = instance.slave
+        slave.tau_l, slave.tau_r = torques
+        assert slave.do_step(0.0, 1e-3)
+        return np.array([getattr(slave, n) for n in names])
+
+    zero = np.zeros(6)
+    Ad = np.column_stack([(step(eps * e, (0, 0)) - step(-eps * e, (0, 0))) / (2 * eps) for e in np.eye(6)])
+    Bd = np.column_stack([(step(zero, eps * e) - step(zero, -eps * e)) / (2 * eps) for e in np.eye(2)])
+    np.testing.assert_allclose(Ad, sys_d.A, rtol=1e-6, atol=1e-8)
+    np.testing.assert_allclose(Bd, sys_d.B, rtol=1e-6, atol=1e-8)
+
+
+def test_design_closed_loop_and_observer_poles():
+    d = design_balance()
+    poles = np.linalg.eigvals(d.Ad - d.Bd @ d.K)
+    np.testing.assert_allclose(np.sort_complex(poles), np.sort_complex(d.closed_loop_poles), atol=1e-12)
+    assert np.max(np.abs(d.closed_loop_poles)) < 1.0 and np.max(np.abs(d.observer_poles)) < 1.0
+    assert np.max(np.abs(np.linalg.eigvals(d.Ad))) > 1.0, "the open loop is unstable"
+    # the controller needs the observer: psi is not among what it measures
+    assert not any(np.array_equal(row, np.eye(6)[1]) for row in d.C)
+    locked = design_balance(BalanceSettings(yaw=False))
+    assert locked.K.shape == (2, 4) and np.allclose(locked.K[0], locked.K[1])
+
+
+def test_balance_scene_recovers_from_5_degrees_and_fmus_equal_in_process(built_fmus):
+    scene = pendulum_scene("pendulum_balance")
+    a = run_scene(scene)
+    m = a.metrics
+    assert m["completed"] and m["last_second_pitch_deg"] <= BALANCED_DEG
+    assert m["peak_pitch_deg"] == pytest.approx(5.0, abs=0.2)
+    # the observer found the 5 degree tilt it never measured
+    t, psi, psi_hat = a.columns["t"], a.columns["psi"], a.columns["psi_hat"]
+    late = t > 1.0
+    assert np.max(np.abs(psi_hat[late] - psi[late])) < math.radians(0.2)
+    short = replace(scene, system=replace(scene.system, stop_time=0.5))
+    fmu_dir = next(iter(built_fmus.values())).parent
+    b, c = run_scene(short, mode="fmu", fmu_dir=fmu_dir), run_scene(short)
+    assert all(np.array_equal(b.columns[k], c.columns[k]) for k in c.columns)
+
+
+def test_push_and_drive_scenes():
+    push = run_scene("pendulum_push").metrics
+    assert push["completed"] and 1.0 < push["peak_pitch_deg"] < 15.0 and push["last_second_pitch_deg"] < BALANCED_DEG
+    drive = run_scene("pendulum_drive").metrics
+    assert drive["completed"] and drive["final_position_error_mm"] < 20.0
+    assert drive["final_yaw_deg"] == pytest.approx(90.0, abs=1.0)
+
+
+def test_falling_run_reports_completed_false():
+    outcome = run_scene(pendulum_scene("pendulum_balance", v_battery=0.3))
+    assert outcome.metrics["completed"] is False
+    assert "fell over" in outcome.metrics["error"] and "psi = " in outcome.metrics["error"]
+
+
+@pytest.mark.parametrize("fidelity", [PendulumFidelity(yaw=False), PendulumFidelity(electrics="ideal"),
+                                      PendulumFidelity(friction=False), PendulumFidelity(model="seed")])
+def test_fidelity_switches_still_balance(fidelity):
+    scene = pendulum_scene("pendulum_balance", fidelity)
+    outcome = run_scene(scene)
+    assert outcome.metrics["completed"] and outcome.metrics["last_second_pitch_deg"] <= BALANCED_DEG
+    if not fidelity.yaw:
+        assert np.all(outcome.columns["phi"] == 0.0)
+    if fidelity.electrics == "ideal":
+        assert not any(c.model == "DCMotorDrive" for c in scene.system.components)
+
+
+def test_sample_time_quick_checks():
+    """The sweep's ends (docs/pendulum.md): balanced at 2 ms, fallen at 10 ms."""
+    from scenarios.pendulum_trade import sample_time_rows
+
+    slow, fast = sample_time_rows((10e-3, 2e-3))
+    assert not slow["completed"] and "fell over" in slow["error"]
+    assert fast["balanced"]
+
+
+def test_generic_commands_on_a_pendulum_scene(tmp_path, capsys):
+    from parcosim.cli import main
+
+    assert main(["export-ssp", "pendulum_balance", str(tmp_path / "p.ssp")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--per-component" in err[0]
+    assert main(["run", "pendulum_balance", "--drives-in-plant", "4", "--out", str(tmp_path / "d")]) == 2
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1
+    assert main(["trade", "pendulum_push", "--quick", "--out", str(tmp_path / "t")]) == 0
+    text = (tmp_path / "t" / "trade.md").read_text()
+    assert "| defaults |" in text and "| ideal electrics |" in text
