@@ -77,8 +77,12 @@ noise is 1.5 rad/s^2 rms (< phi/10; 50 Hz gives 2.4), for a lag of
 1 Hz of the thesis' circle).
 """
 
+import math
+
 import numpy as np
 from scipy import signal
+
+from . import fastderivator
 
 SAMPLE_TIME = 1e-3
 """Sample time of the bench's controller, s (thesis 7.2.10)."""
@@ -202,10 +206,11 @@ class Derivator:
         a, b, c_acc, d_acc = _differentiator_ss(self.acceleration_sos, T, upstream=velocity_chain)
         c_vel = np.zeros_like(c_acc)
         c_vel[:, : velocity_chain[0].shape[0]] = velocity_chain[2]
-        # One product per step: [dq; ddq; next state] = [[C, D], [A, B]] @ [state; q].
+        # One product per step: [dq; ddq; next state] = [[C, D], [A, B]] @ [state; q]
+        # (controller.fastderivator, which holds it with the state in one array).
         self._step_matrix = np.block([[c_vel, velocity_chain[3]], [c_acc, d_acc], [a, b]])
         self._rest_state_per_unit_angle = np.linalg.solve(np.eye(a.shape[0]) - a, b)
-        self._state_and_input = None
+        self.buf = None
 
     def reset(self, q0):
         """Start at rest at the angles ``q0`` (one per channel): both estimates are zero.
@@ -216,27 +221,41 @@ class Derivator:
             Initial angles, rad; their number sets the number of channels.
         """
         q0 = np.atleast_1d(np.asarray(q0, dtype=float))
-        self._state_and_input = np.vstack([self._rest_state_per_unit_angle * q0[None, :], q0[None, :]])
+        self.start_at_first_sample(q0.size)
+        fastderivator.reset(self.buf, q0)
 
-    def step(self, q):
+    def start_at_first_sample(self, channels):
+        """Start at rest at the angles of the first :meth:`step` (``channels`` of them)."""
+        self.buf = fastderivator.pack(self._step_matrix, self._rest_state_per_unit_angle, int(channels))
+        self._out = np.empty((2, int(channels)))
+
+    def step(self, q, limit=math.inf):
         """Take the angles of the current sample and return the estimates.
 
         Parameters
         ----------
         q : array_like
             Angles q_k, rad, one per channel.
+        limit : float
+            Largest |q| accepted, rad.
 
         Returns
         -------
         dq, ddq : numpy.ndarray
-            Velocity (rad/s) and acceleration (rad/s^2) estimates at sample k.
+            Velocity (rad/s) and acceleration (rad/s^2) estimates at sample k; when not
+            finite, the state is not advanced.
+
+        Raises
+        ------
+        ValueError
+            An angle not finite or beyond ``limit`` (the state is not advanced).
         """
-        if self._state_and_input is None:
+        if self.buf is None:
             raise RuntimeError("Derivator.step called before reset(q0)")
-        self._state_and_input[-1] = q
-        outputs = self._step_matrix @ self._state_and_input
-        self._state_and_input[:-1] = outputs[2:]
-        return outputs[0], outputs[1]
+        q = np.ascontiguousarray(q, dtype=np.float64)
+        if fastderivator.derivator_step(self.buf, q, float(limit), self._out) == fastderivator.BAD_INPUT:
+            raise ValueError(f"angles q = {q.tolist()!r} rad must be finite with |q| <= {limit:g}")
+        return self._out[0].copy(), self._out[1].copy()
 
     def frequency_response(self, f):
         """Frequency responses of the velocity and acceleration estimates.
