@@ -312,3 +312,28 @@ def law_step(buf, q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy
             f0, f1 = H00 * ax + H01 * ay + h0, H01 * ax + H11 * ay + h1
             tau1, tau2 = J00 * f0 + J10 * f1, J01 * f0 + J11 * f1
     return (tau1, tau2, tau1 / buf[B_KT], tau2 / buf[B_KT + 1], buf[S_E], buf[S_E + 1], OK)
+
+
+#: Status of :func:`law_io` when the law's outputs are not finite (the state is restored).
+NONFINITE_OUTPUT = 2.0
+
+
+@njit(cache=True, error_model="numpy")
+def law_io(buf, x, h):
+    """PositionController in the compiled scene loop (fmus.compiled):
+    x = [q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d | tau1, tau2, i_ref1, i_ref2, e1, e2].
+
+    Returns :data:`OK`, :data:`REFUSED` (nothing changed: the Python controller takes the
+    sample, to raise its message or to use the exact model off the table) or
+    :data:`NONFINITE_OUTPUT` (the slave refuses; the state is put back).
+    """
+    saved = buf[STATE].copy()
+    r = law_step(buf, x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8], x[9], x[10], x[11], h)
+    if r[6] != OK:
+        return REFUSED
+    if not math.isfinite(r[0] + r[1] + r[2] + r[3] + r[4] + r[5]):
+        buf[STATE] = saved
+        return NONFINITE_OUTPUT
+    for k in range(6):
+        x[12 + k] = r[k]
+    return OK

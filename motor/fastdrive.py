@@ -125,19 +125,36 @@ def _commit_voltage(d, c, v, e, sampled, phase):
 
 
 @njit(cache=True)
+def peek_voltage(d, c, i_ref, v_ref, i_hat, h):
+    """(status, v, e, sampled, phase): :func:`sample_voltage` without changing anything;
+    :func:`commit_step` keeps it (a plant that integrates the current, fmus.compiled)."""
+    if not (math.isfinite(i_ref) and math.isfinite(v_ref) and math.isfinite(i_hat)):
+        return NONFINITE_INPUT, 0.0, 0.0, False, 0.0
+    if h != d[D_H]:
+        return UNPREPARED_STEP, 0.0, 0.0, False, 0.0
+    v, e, sampled, phase = _voltage(d, c, i_ref, v_ref, i_hat)
+    return OK, v, e, sampled, phase
+
+
+@njit(cache=True)
+def commit_step(d, c, v, e, sampled, phase, i):
+    """Keep the sample of :func:`peek_voltage` and the current i at the step's end."""
+    _commit_voltage(d, c, v, e, sampled, phase)
+    d[D_I] = i
+    d[D_V] = v
+
+
+@njit(cache=True)
 def sample_voltage(d, c, i_ref, v_ref, i_hat, h):
     """(status, v): the voltage held over the next step of length h (Drive.sample_voltage).
 
     Current mode: a new controller sample at the start of each period T, else the held
     voltage; voltage mode: v_ref saturated.  Advances the controller and the phase.
     """
-    if not (math.isfinite(i_ref) and math.isfinite(v_ref) and math.isfinite(i_hat)):
-        return NONFINITE_INPUT, 0.0
-    if h != d[D_H]:
-        return UNPREPARED_STEP, 0.0
-    v, e, sampled, phase = _voltage(d, c, i_ref, v_ref, i_hat)
-    _commit_voltage(d, c, v, e, sampled, phase)
-    return OK, v
+    status, v, e, sampled, phase = peek_voltage(d, c, i_ref, v_ref, i_hat, h)
+    if status == OK:
+        _commit_voltage(d, c, v, e, sampled, phase)
+    return status, v
 
 
 @njit(cache=True)
@@ -160,9 +177,7 @@ def drive_step(d, c, i_ref, v_ref, omega, i_hat, h):
     tau = shaft_torque(d, current, omega)
     if not (math.isfinite(i) and math.isfinite(tau)):
         return DIVERGED, tau, v, i
-    _commit_voltage(d, c, v, e, sampled, phase)
-    d[D_I] = i
-    d[D_V] = v
+    commit_step(d, c, v, e, sampled, phase, i)
     return OK, tau, v, i
 
 
