@@ -96,3 +96,33 @@ def test_generated_source_follows_the_stepping_order():
     positions = [source.index(f"# {name} (") for name in result.order]
     assert positions == sorted(positions)
     assert compiled.ADAPTERS.keys() >= {c.model for c in scene.system.components}
+
+
+def test_python_finishes_a_declined_step_from_the_declining_member_and_sub_step():
+    calls = []
+
+    class Instance:
+        def __init__(self, name):
+            self.name = name
+
+        def set_inputs(self, values):
+            pass
+
+        def do_step(self, t, h):
+            calls.append((self.name, t, h))
+
+        def get_outputs(self):
+            return []
+
+    a, b, c, d = (Instance(n) for n in "abcd")
+
+    class Stepper:
+        system = System((), (), (), stop_time=1.0, step=1.0)
+        values = []
+        groups = [(1, [(a, [], [])]), (2, [(b, [], []), (c, [], [])]), (1, [(d, [], [])])]
+        time = 0.0
+
+    stepper = Stepper()
+    compiled._finish_step_in_python(stepper, 1, 1, 0, 3.0)   # c declined in the first of b, c's two sub-steps
+    assert calls == [("c", 3.0, 0.5), ("b", 3.5, 0.5), ("c", 3.5, 0.5), ("d", 3.0, 1.0)]
+    assert stepper.time == 4.0
