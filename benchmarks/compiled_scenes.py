@@ -6,7 +6,8 @@
 For each scene: ``run_scene(scene, mode="inprocess")`` then ``mode="compiled"``; prints the
 largest end-effector path difference between them [m], the relative difference of e_ef, the
 steps the compiled loop handed to Python, the compile (or cache-load) time and both real-time
-factors (wall time of the stepping; on a loaded machine compare within a row).  With
+factors, by wall time and by the CPU time of the stepping thread (on a loaded machine compare
+within a row; the CPU-time figures are the steadier ones).  With
 ``--drives-in-plant N`` every scene with drives also runs with them inside the plant.
 """
 from __future__ import annotations
@@ -38,6 +39,7 @@ def compare(scene) -> dict:
             "identical": all(np.array_equal(a[k], b[k], equal_nan=True) for k in a),
             "python_steps": fast.metrics.get("python_steps"), "compile_s": fast.metrics.get("compile_s", math.nan),
             "rtf_inprocess": slow.metrics["realtime_factor"], "rtf_compiled": fast.metrics["realtime_factor"],
+            "cpu_inprocess": slow.metrics["realtime_factor_cpu"], "cpu_compiled": fast.metrics["realtime_factor_cpu"],
             "error": fast.metrics.get("error"), "same_error": slow.metrics.get("error") == fast.metrics.get("error")}
 
 
@@ -52,14 +54,15 @@ def main(argv=None) -> int:
                    if any(c.model == "DCMotorDrive" for c in s.system.components)]
     print(f"load average before: {'/'.join(f'{v:.2f}' for v in os.getloadavg())}")
     print("| scene | bit-identical | path diff [m] | e_ef rel. diff | steps in Python | compile_s | "
-          "RTF in process | RTF compiled | ratio |")
-    print("|---|---|---:|---:|---:|---:|---:|---:|---:|")
+          "RTF in process | RTF compiled | ratio | RTF in process, CPU | RTF compiled, CPU | ratio, CPU |")
+    print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for scene in scenes:
         r = compare(scene)
         name = scene.name + (" (drives in plant)" if "drives integrated" in scene.description else "")
         print(f"| {name} | {'yes' if r['identical'] else 'no'} | {r['path_m']:.3g} | {r['e_ef_rel']:.3g} | "
               f"{r['python_steps']} | {r['compile_s']:.2f} | {r['rtf_inprocess']:.0f}x | {r['rtf_compiled']:.0f}x | "
-              f"{r['rtf_compiled'] / r['rtf_inprocess']:.1f} |", flush=True)
+              f"{r['rtf_compiled'] / r['rtf_inprocess']:.1f} | {r['cpu_inprocess']:.0f}x | {r['cpu_compiled']:.0f}x | "
+              f"{r['cpu_compiled'] / r['cpu_inprocess']:.1f} |", flush=True)
     print(f"load average after: {'/'.join(f'{v:.2f}' for v in os.getloadavg())}")
     return 0
 

@@ -295,7 +295,7 @@ def run_compiled(system, instances, order, progress, interrupt, result_of):
     run(*args, values.copy(), data[:1].copy(), 0, 0, 0.0, h)    # compile or load numba's cache
     compile_s = _time.perf_counter() - compile_start
     init_s = compile_start - init_start
-    start = _time.perf_counter()
+    start, cpu_start = _time.perf_counter(), _time.thread_time()
     error, interrupted, done, t = None, False, 0, 0.0
     chunk = max(1, steps // 100)
     python_steps = 0
@@ -327,5 +327,6 @@ def run_compiled(system, instances, order, progress, interrupt, result_of):
     except KeyboardInterrupt:
         interrupted = True
     wall = _time.perf_counter() - start
-    extra = {"compile_s": compile_s, "python_steps": python_steps, "source": plan.source}
+    extra = {"compile_s": compile_s, "python_steps": python_steps, "source": plan.source,
+             "cpu_s": _time.thread_time() - cpu_start}
     return result_of(data[:done + 1], error, interrupted, wall, init_s, extra)

@@ -95,6 +95,9 @@ class Result(RecordedRun):
     error: str | None = None
     stop_time: float = 0.0
     init_s: float = 0.0   # loading, instantiating and initialising (tables, numba compilation)
+    #: ``cpu_s``: CPU time of this thread in the stepping (steadier than wall_s on a shared
+    #: machine); ``retried``; compiled mode: ``compile_s``, ``python_steps``, ``source``,
+    #: or ``fallback``.
     extra: dict = field(default_factory=dict)
     interrupted: bool = False   # stopped by KeyboardInterrupt (SIGINT); ``error`` says when
 
@@ -420,9 +423,11 @@ def _run(system, instances, order, mode, coupling, progress, loading_s=0.0, retr
     data = np.full((steps + 1, len(system.record)), np.nan)
     error, rows, interrupted = None, 0, False
     init_start = start = _time.perf_counter()
+    cpu_start = _time.thread_time()
     try:
         stepper.initialize(0.0)
         start = _time.perf_counter()
+        cpu_start = _time.thread_time()
         data[0] = stepper.row()
         rows = 1
         report_every = max(1, steps // 100)
@@ -438,6 +443,7 @@ def _run(system, instances, order, mode, coupling, progress, loading_s=0.0, retr
         error = exc
     except KeyboardInterrupt:
         interrupted = True
-    wall = _time.perf_counter() - start
+    wall, cpu = _time.perf_counter() - start, _time.thread_time() - cpu_start
+    extra = {"cpu_s": cpu, **({"retried": retried} if retry_substeps is not None else {})}
     return _result(system, data[:rows], order, mode, coupling, error, interrupted, wall,
-                   loading_s + (start - init_start), {"retried": retried} if retry_substeps is not None else {})
+                   loading_s + (start - init_start), extra)

@@ -174,7 +174,9 @@ def run_scene(scene, mode: str = "inprocess", out_dir=None, coupling: str = "gau
     loop, or loading it from the cache; not in ``wall_s``) and ``python_steps`` (steps a
     kernel handed to the Python path), or ``fallback`` (why it ran in process instead);
     ``mode`` in the metrics is the mode that ran.  ``peak_rss_mb`` is the process's peak
-    resident memory so far (:func:`peak_rss_mb`).
+    resident memory so far (:func:`peak_rss_mb`); ``cpu_s`` the CPU time of the stepping thread
+    and ``realtime_factor_cpu`` = simulated time / ``cpu_s`` (on a machine shared with other
+    jobs, steadier than the wall-time ``realtime_factor``).
 
     Returns the :class:`Outcome` also when a component stopped the run early
     (``outcome.result.error``); the files then hold what was recorded.
@@ -188,6 +190,10 @@ def run_scene(scene, mode: str = "inprocess", out_dir=None, coupling: str = "gau
     metrics = scene_metrics(scene, columns, result.wall_s, result.completed, result.init_s)
     metrics.update({"mode": result.mode, "coupling": coupling, "order": list(result.order),
                     "peak_rss_mb": peak_rss_mb()})
+    cpu = result.extra.get("cpu_s")
+    if cpu:
+        metrics["cpu_s"] = cpu
+        metrics["realtime_factor_cpu"] = metrics["simulated_s"] / cpu
     if "compile_s" in result.extra:
         metrics["compile_s"] = result.extra["compile_s"]
         metrics["python_steps"] = result.extra["python_steps"]
