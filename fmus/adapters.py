@@ -53,27 +53,32 @@ class DerivatorAdapter(Adapter):
 
 @register
 class PositionControllerAdapter(Adapter):
-    """:func:`controller.fastlaw.law_io` (PD and tabulated strategies).
-
-    The exact model's law (:class:`controller.model.ExactModel`) is not compiled: its
-    samples are declined, so the Python path takes the controller and the rest of every
-    step (``python_steps`` = the steps; the speed of ``mode="inprocess"``).
-    """
+    """:func:`controller.fastlaw.law_io`; for the exact model :func:`controller.fastlaw.exact_state`,
+    :func:`plant.fast5r.inverse_terms` and :func:`controller.fastlaw.law_terms_io` (the calls of
+    ``PositionController._compiled_step``)."""
 
     model = "PositionController"
     inputs = ("q1", "q2", "dq1", "dq2", "ddq1", "ddq2", "x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
     outputs = ("tau1", "tau2", "i_ref1", "i_ref2", "e1", "e2")
-    modules = ("controller.fastlaw",)
+    modules = ("controller.fastlaw", "plant.fast5r")
 
     def __init__(self, name, slave, h):
         super().__init__(name, slave, h)
-        self.compiled = slave.controller.compiled
-        self.arrays = [slave.controller._buf]
+        c = slave.controller
+        if not c.compiled:
+            raise NotCompilable(f"component {name}: the controller's kernel {c.kernel!r} is not compiled")
+        self.exact = c.model_kind == "exact"
+        self.arrays = [c._buf] + ([c.model._p, c._q, c._dq, c._terms] if self.exact else [])
 
     def emit(self, arrays, x, t, h):
-        if not self.compiled:
-            return ["st = 1   # the exact model's law runs in Python"]
-        return [f"st = int(fastlaw.law_io({arrays[0]}, {x}, {h}))"]
+        if not self.exact:
+            return [f"st = int(fastlaw.law_io({arrays[0]}, {x}, {h}))"]
+        buf, p, q, dq, terms = arrays
+        return [f"if fastlaw.exact_state({buf}, {x}[0], {x}[1], {x}[2], {x}[3], {q}, {dq}):",
+                f"    fast5r.inverse_terms({p}, {q}, {dq}, {terms})",
+                f"    st = int(fastlaw.law_terms_io({buf}, {x}, {h}, {terms}))",
+                "else:",
+                "    st = 1"]
 
 
 @register

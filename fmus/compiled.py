@@ -21,8 +21,8 @@ Refusals: a kernel that cannot do exactly what the Python model would (a refused
 a diverged step, a controller sample off its table) returns a non-zero status without
 changing anything; the loop stops there, and the rest of that step runs in Python through
 the same slave objects (:meth:`Adapter.to_python` first), which raise the refusal's
-message or take the sample (e.g. the exact model off the table); then the compiled loop
-goes on from the next step.
+message or take the sample (e.g. the exact model where the table has a hole); then the
+compiled loop goes on from the next step.
 
 A model without an adapter, a component given as an FMU file, Jacobi coupling, retried
 steps or an adapter that declines its settings (:class:`NotCompilable`) make the run fall

@@ -1,8 +1,8 @@
 """The compiled mode (fmus.compiled): the same rows as in process, refusals, fall-backs.
 
-Compiles two loops at most (the bench wiring, shared by every bench scene, and the bench with
-its drives in the plant); numba caches them on disk (fmus.compiled.cache_dir), so a second
-test run loads them.
+Compiles three loops at most (the bench wiring, shared by every bench scene; the bench with its
+drives in the plant; the thesis scenes' wiring, with the exact model); numba caches them on disk
+(fmus.compiled.cache_dir), so a second test run loads them.
 """
 import math
 from dataclasses import replace
@@ -33,9 +33,11 @@ def _same_rows(a, b):
         assert np.array_equal(a[name], b[name], equal_nan=True), name
 
 
-@pytest.mark.parametrize("drives_inside", [False, True], ids=["bench", "drives_in_plant"])
-def test_compiled_rows_are_the_in_process_rows(drives_inside):
-    scene = _short(get_scene("bench_circle_TCMDx"), 1.5)
+@pytest.mark.parametrize("name, drives_inside", [("bench_circle_TCMDx", False), ("bench_circle_TCMDx", True),
+                                                 ("thesis_sim_circle_me20", False)],
+                         ids=["bench", "drives_in_plant", "thesis_exact_model"])
+def test_compiled_rows_are_the_in_process_rows(name, drives_inside):
+    scene = _short(get_scene(name), 1.5)
     if drives_inside:
         scene = drives_in_plant(scene, substeps=2)
     fast = simulate(scene.system, mode="compiled")
