@@ -222,15 +222,27 @@ class Derivator:
         """
         q0 = np.atleast_1d(np.asarray(q0, dtype=float))
         self.start_at_first_sample(q0.size)
-        fastderivator.reset(self.buf, q0)
+        self._rest_at(q0)
 
     def start_at_first_sample(self, channels):
         """Start at rest at the angles of the first :meth:`step` (``channels`` of them)."""
         self.buf = fastderivator.pack(self._step_matrix, self._rest_state_per_unit_angle, int(channels))
-        self._out = np.empty((2, int(channels)))
+        self._matrix, self._state = fastderivator.views(self.buf)
+
+    def _rest_at(self, q0):
+        """At rest at q0 (as :func:`controller.fastderivator.reset`)."""
+        self._state[:-1] = self._rest_state_per_unit_angle * q0[None, :]
+        self._state[-1] = q0
+        self.buf[fastderivator.V_STARTED] = 1.0
 
     def step(self, q, limit=math.inf):
         """Take the angles of the current sample and return the estimates.
+
+        The product of :func:`controller.fastderivator.derivator_step` (which the compiled
+        loop runs on the same array) in numpy: the same BLAS call, the same bits.  Numpy
+        here, not the kernel: a Derivator FMU would compile the kernel's ``np.dot`` in its
+        first call (over 20 s in a fresh process on a loaded machine), against any FMI
+        call's 10 s (``fmus.parts.MAX_CALL_SECONDS``).
 
         Parameters
         ----------
@@ -252,10 +264,16 @@ class Derivator:
         """
         if self.buf is None:
             raise RuntimeError("Derivator.step called before reset(q0)")
-        q = np.ascontiguousarray(q, dtype=np.float64)
-        if fastderivator.derivator_step(self.buf, q, float(limit), self._out) == fastderivator.BAD_INPUT:
+        q = np.asarray(q, dtype=float)
+        if not (np.all(np.isfinite(q)) and np.all(np.abs(q) <= limit)):
             raise ValueError(f"angles q = {q.tolist()!r} rad must be finite with |q| <= {limit:g}")
-        return self._out[0].copy(), self._out[1].copy()
+        if self.buf[fastderivator.V_STARTED] == 0.0:
+            self._rest_at(q)
+        self._state[-1] = q
+        outputs = self._matrix @ self._state
+        if np.all(np.isfinite(outputs[:2])):
+            self._state[:-1] = outputs[2:]
+        return outputs[0], outputs[1]
 
     def frequency_response(self, f):
         """Frequency responses of the velocity and acceleration estimates.

@@ -55,6 +55,14 @@ def pack(step_matrix: np.ndarray, rest_per_unit_angle: np.ndarray, channels: int
     return buf
 
 
+def views(buf: np.ndarray):
+    """The step matrix, shape (2 + n, n + 1), and the state with the newest input, shape
+    (n + 1, m): views into ``buf``."""
+    n, m = int(buf[V_STATES]), int(buf[V_CHANNELS])
+    rest, state, end = _offsets(n, m)
+    return buf[V_MATRIX:rest].reshape(2 + n, n + 1), buf[state:end].reshape(n + 1, m)
+
+
 @njit(cache=True)
 def reset(buf, q0):
     """At rest at the angles q0 (one per channel): both estimates zero."""

@@ -259,9 +259,9 @@ EXACT_STATE_SIGNATURE = types.boolean(float64[::1], *([float64] * 4), float64[::
 _COMPILE_LOCK = threading.Lock()
 
 
-def compile_law():
+def compile_law(exact: bool = False):
     """Compile :func:`law_step` (or load it from numba's cache) for :data:`LAW_SIGNATURE` only
-    (and :func:`law_terms_step`, :func:`exact_state` for theirs).
+    (with ``exact``, also :func:`law_terms_step` and :func:`exact_state` for theirs).
 
     Called by the first controller that uses it (~3 s the first time, ~0.5 s from the cache).
     Afterwards the dispatcher compiles nothing more: ints or bools passed by a caller are
@@ -269,8 +269,9 @@ def compile_law():
     Thread-safe: a second thread waits for the first one's compilation.
     """
     with _COMPILE_LOCK:
-        for function, signature in ((law_step, LAW_SIGNATURE), (law_terms_step, LAW_TERMS_SIGNATURE),
-                                    (exact_state, EXACT_STATE_SIGNATURE)):
+        functions = ((law_step, LAW_SIGNATURE),) + (((law_terms_step, LAW_TERMS_SIGNATURE),
+                                                      (exact_state, EXACT_STATE_SIGNATURE)) if exact else ())
+        for function, signature in functions:
             if not function.signatures:
                 function.compile(signature.args)
                 function.disable_compile()

@@ -165,7 +165,7 @@ class PositionController:
         self._buf = fastlaw.pack(self.kin, self.band, strategy.space, self.model if self.compiled else None,
                                  self.kp, self.kv, strategy.phi, strategy.gamma, strategy.m_star, self.kt)
         if self.compiled:
-            fastlaw.compile_law()
+            fastlaw.compile_law(exact=self.model_kind == "exact")
         # The exact model's law: the pose's thesis coordinates and the model's terms (5.74-5.77).
         self._q, self._dq, self._terms = np.empty(7), np.empty(7), np.empty(INVERSE_SIZE)
         self.reset()

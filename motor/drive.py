@@ -100,6 +100,10 @@ class Drive:
         self._controller_buf = (self.controller.buf if self.controller is not None
                                 else fastdrive.new_controller(0.0, 0.0, 0.0, 0.0, p.v_max))
         self.reset()
+        # Compile the step kernels (or load numba's cache) now, on copies: the construction
+        # (an FMU's initialisation), not the first step, pays for it.
+        fastdrive.drive_step(self.buf.copy(), self._controller_buf.copy(), 0.0, 0.0, 0.0, 0.0, math.nan)
+        fastdrive.sample_voltage(self.buf.copy(), self._controller_buf.copy(), 0.0, 0.0, 0.0, math.nan)
 
     i = property(lambda self: float(self.buf[fastdrive.D_I]),
                  lambda self, value: self.buf.__setitem__(fastdrive.D_I, value),

@@ -49,6 +49,7 @@ class CurrentObserver:
         self.buf[fastdrive.O_KE] = params.ke
         self.buf[fastdrive.O_H] = math.nan     # no step prepared
         self.reset()
+        fastdrive.observer_estimate(self.buf.copy(), 0.0, 0.0, math.nan)   # compile now, not in a step
 
     i_hat = property(lambda self: float(self.buf[fastdrive.O_I_HAT]), doc="The last estimate [A].")
 
