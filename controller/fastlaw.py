@@ -212,6 +212,23 @@ def _component(buf, i, e, de, dde, ddr_d, h):
 
 
 @njit(cache=True, error_model="numpy")
+def _measured(buf, q1, q2, dq1, dq2):
+    """(ok, x, y, dx, dy, (a, b, c, d, det), J) of the measurement (:meth:`Kinematics.task_state`):
+    J_X = [[a, b], [c, d]], its determinant, J = -J_X^-1 J_Theta; ok False without assembly or
+    for a singular J_X."""
+    l0, l11, l12, l21, l22 = buf[B_L0], buf[B_L11], buf[B_L12], buf[B_L21], buf[B_L22]
+    ok, x, y = _forward(l0, l11, l12, l21, l22, q1, q2)
+    if not ok:
+        return False, 0.0, 0.0, 0.0, 0.0, (0.0, 0.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0)
+    a, b, c, d, t1, t2 = _jacobians(l0, l11, l21, x, y, q1, q2)
+    det = a * d - b * c
+    if det == 0.0:
+        return False, 0.0, 0.0, 0.0, 0.0, (0.0, 0.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0)
+    J00, J01, J10, J11 = -d * t1 / det, b * t2 / det, c * t1 / det, -a * t2 / det
+    return True, x, y, J00 * dq1 + J01 * dq2, J10 * dq1 + J11 * dq2, (a, b, c, d, det), (J00, J01, J10, J11)
+
+
+@njit(cache=True, error_model="numpy")
 def _link_rates(l1, l2, p1, p2, dx, dy):
     """:func:`controller.kinematics._link_rates`: l1 w1 n(p1) + l2 w2 n(p2) = (dx, dy)."""
     m00, m01 = -l1 * math.sin(p1), -l2 * math.sin(p2)
@@ -227,15 +244,9 @@ def exact_state(buf, q1, q2, dq1, dq2, q, dq):
     :meth:`Kinematics.task_state` of the measurement).  False where those would raise (no
     assembly, a singular J_X, out of reach): the law then refuses the sample."""
     l0, l11, l12, l21, l22 = buf[B_L0], buf[B_L11], buf[B_L12], buf[B_L21], buf[B_L22]
-    ok, x, y = _forward(l0, l11, l12, l21, l22, q1, q2)
+    ok, x, y, dx, dy, _, _ = _measured(buf, q1, q2, dq1, dq2)
     if not ok:
         return False
-    a, b, c, d, t1, t2 = _jacobians(l0, l11, l21, x, y, q1, q2)
-    det = a * d - b * c
-    if det == 0.0:
-        return False
-    dx = (-d * t1 / det) * dq1 + (b * t2 / det) * dq2
-    dy = (c * t1 / det) * dq1 + (-a * t2 / det) * dq2
     ok1, p11, p12 = _chain_ik(l11, l12, x - l0, y, 1.0)
     ok2, p21, p22 = _chain_ik(l21, l22, x + l0, y, -1.0)
     if not (ok1 and ok2):
@@ -316,16 +327,11 @@ def _law(buf, q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d, 
     if margin < buf[B_BAND]:
         return refused
     # Measured task state (Kinematics.task_state).
-    ok, x, y = _forward(l0, l11, l12, l21, l22, q1, q2)
+    ok, x, y, dx, dy, jac, J = _measured(buf, q1, q2, dq1, dq2)
     if not ok:
         return refused
-    a, b, c, d, t1, t2 = _jacobians(l0, l11, l21, x, y, q1, q2)
-    det = a * d - b * c
-    if det == 0.0:
-        return refused
-    J00, J01, J10, J11 = -d * t1 / det, b * t2 / det, c * t1 / det, -a * t2 / det
-    dx = J00 * dq1 + J01 * dq2
-    dy = J10 * dq1 + J11 * dq2
+    a, b, c, d, det = jac
+    J00, J01, J10, J11 = J
     r1, r2 = _bias_rhs(l0, l11, l21, x, y, q1, q2, dx, dy, dq1, dq2)
     beta0, beta1 = -(d * r1 - b * r2) / det, -(-c * r1 + a * r2) / det
     ddx = J00 * ddq1 + J01 * ddq2 + beta0
