@@ -77,8 +77,12 @@ noise is 1.5 rad/s^2 rms (< phi/10; 50 Hz gives 2.4), for a lag of
 1 Hz of the thesis' circle).
 """
 
+import math
+
 import numpy as np
 from scipy import signal
+
+from . import fastderivator
 
 SAMPLE_TIME = 1e-3
 """Sample time of the bench's controller, s (thesis 7.2.10)."""
@@ -202,10 +206,11 @@ class Derivator:
         a, b, c_acc, d_acc = _differentiator_ss(self.acceleration_sos, T, upstream=velocity_chain)
         c_vel = np.zeros_like(c_acc)
         c_vel[:, : velocity_chain[0].shape[0]] = velocity_chain[2]
-        # One product per step: [dq; ddq; next state] = [[C, D], [A, B]] @ [state; q].
+        # One product per step: [dq; ddq; next state] = [[C, D], [A, B]] @ [state; q]
+        # (controller.fastderivator, which holds it with the state in one array).
         self._step_matrix = np.block([[c_vel, velocity_chain[3]], [c_acc, d_acc], [a, b]])
         self._rest_state_per_unit_angle = np.linalg.solve(np.eye(a.shape[0]) - a, b)
-        self._state_and_input = None
+        self.buf = None
 
     def reset(self, q0):
         """Start at rest at the angles ``q0`` (one per channel): both estimates are zero.
@@ -216,26 +221,58 @@ class Derivator:
             Initial angles, rad; their number sets the number of channels.
         """
         q0 = np.atleast_1d(np.asarray(q0, dtype=float))
-        self._state_and_input = np.vstack([self._rest_state_per_unit_angle * q0[None, :], q0[None, :]])
+        self.start_at_first_sample(q0.size)
+        self._rest_at(q0)
 
-    def step(self, q):
+    def start_at_first_sample(self, channels):
+        """Start at rest at the angles of the first :meth:`step` (``channels`` of them)."""
+        self.buf = fastderivator.pack(self._step_matrix, self._rest_state_per_unit_angle, int(channels))
+        self._matrix, self._state = fastderivator.views(self.buf)
+
+    def _rest_at(self, q0):
+        """At rest at q0 (as :func:`controller.fastderivator.reset`)."""
+        self._state[:-1] = self._rest_state_per_unit_angle * q0[None, :]
+        self._state[-1] = q0
+        self.buf[fastderivator.V_STARTED] = 1.0
+
+    def step(self, q, limit=math.inf):
         """Take the angles of the current sample and return the estimates.
+
+        The product of :func:`controller.fastderivator.derivator_step` (which the compiled
+        loop runs on the same array) in numpy: the same BLAS call, the same bits.  Numpy
+        here, not the kernel: a Derivator FMU would compile the kernel's ``np.dot`` in its
+        first call (over 20 s in a fresh process on a loaded machine), against any FMI
+        call's 10 s (``fmus.parts.MAX_CALL_SECONDS``).
 
         Parameters
         ----------
         q : array_like
             Angles q_k, rad, one per channel.
+        limit : float
+            Largest |q| accepted, rad.
 
         Returns
         -------
         dq, ddq : numpy.ndarray
-            Velocity (rad/s) and acceleration (rad/s^2) estimates at sample k.
+            Velocity (rad/s) and acceleration (rad/s^2) estimates at sample k; when not
+            finite, the state is not advanced.
+
+        Raises
+        ------
+        ValueError
+            An angle not finite or beyond ``limit`` (the state is not advanced).
         """
-        if self._state_and_input is None:
+        if self.buf is None:
             raise RuntimeError("Derivator.step called before reset(q0)")
-        self._state_and_input[-1] = q
-        outputs = self._step_matrix @ self._state_and_input
-        self._state_and_input[:-1] = outputs[2:]
+        q = np.asarray(q, dtype=float)
+        if not (np.all(np.isfinite(q)) and np.all(np.abs(q) <= limit)):
+            raise ValueError(f"angles q = {q.tolist()!r} rad must be finite with |q| <= {limit:g}")
+        if self.buf[fastderivator.V_STARTED] == 0.0:
+            self._rest_at(q)
+        self._state[-1] = q
+        outputs = self._matrix @ self._state
+        if np.all(np.isfinite(outputs[:2])):
+            self._state[:-1] = outputs[2:]
         return outputs[0], outputs[1]
 
     def frequency_response(self, f):

@@ -1,4 +1,4 @@
-"""The position controller's law (7.21-7.22) compiled with numba: PD and the tabulated model.
+"""The position controller's law (7.21-7.22) compiled with numba: PD, the tabulated and the exact model.
 
 :meth:`controller.position.PositionController.step` spends ~20 µs per sample in Python
 (scalar kinematics, the numpy bilinear interpolation, the law).  :func:`law_step` does the
@@ -39,7 +39,7 @@ from numba import float64, njit, types
 B_L0, B_L11, B_L12, B_L21, B_L22 = 0, 1, 2, 3, 4     # geometry, m
 B_BAND = 5                                           # near-singular band of the reference
 B_SPACE = 6                                          # 0: joint space (q), 1: task space (x)
-B_MODEL = 7                                          # 0: PD (Ĥ = m*·1, ĥ = 0), 1: tabulated
+B_MODEL = 7                                          # 0: PD (Ĥ = m*·1, ĥ = 0), 1: tabulated, 2: exact
 B_KP, B_KV, B_PHI = 8, 9, 10
 B_ADAPT = 11                                         # 1: adaptive gain (6.66)
 B_GAMMA = 12                                         # gamma1, gamma2
@@ -54,7 +54,7 @@ B_LAW = 32                                           # 0: unified law (7.21-7.22
 B_TABLE = 33
 
 SPACE_Q, SPACE_X = 0.0, 1.0
-MODEL_PD, MODEL_TABULATED = 0.0, 1.0
+MODEL_PD, MODEL_TABULATED, MODEL_EXACT = 0.0, 1.0, 2.0
 OK, REFUSED = 0.0, 1.0
 LAW_UNIFIED, LAW_SEED = 0.0, 1.0
 
@@ -67,15 +67,17 @@ def pack(kin, band, space, model, kp, kv, phi, gamma, m_star, kt, law="unified")
     kin : controller.kinematics.Kinematics
     band : float
     space : {"q", "x"}
-    model : TabulatedModel or None
-        None: the PD law.
+    model : TabulatedModel, ExactModel or None
+        None: the PD law; an ExactModel: the terms come from the caller
+        (:func:`law_terms_step`).
     kp, kv, phi, m_star : float
     gamma : tuple or None
     kt : (float, float)
     law : {"unified", "seed001"}
         :attr:`controller.strategies.Strategy.law`.
     """
-    if model is None:
+    exact = model is not None and model.kind == "exact"
+    if model is None or exact:
         n_table = 0
     else:
         table = np.ascontiguousarray(model.table, dtype=np.float64)
@@ -84,7 +86,7 @@ def pack(kin, band, space, model, kp, kv, phi, gamma, m_star, kt, law="unified")
     buf[B_L0:B_L22 + 1] = (kin.l0, kin.l11, kin.l12, kin.l21, kin.l22)
     buf[B_BAND] = band
     buf[B_SPACE] = SPACE_X if space == "x" else SPACE_Q
-    buf[B_MODEL] = MODEL_PD if model is None else MODEL_TABULATED
+    buf[B_MODEL] = MODEL_PD if model is None else (MODEL_EXACT if exact else MODEL_TABULATED)
     buf[B_KP], buf[B_KV], buf[B_PHI] = kp, kv, phi
     if gamma is not None:
         buf[B_ADAPT] = 1.0
@@ -92,7 +94,7 @@ def pack(kin, band, space, model, kp, kv, phi, gamma, m_star, kt, law="unified")
     buf[B_MSTAR] = m_star
     buf[B_KT:B_KT + 2] = kt
     buf[B_LAW] = LAW_SEED if law == "seed001" else LAW_UNIFIED
-    if model is not None:
+    if n_table:
         buf[B_TX0], buf[B_TY0], buf[B_TINV] = model._x0, model._y0, model._inv
         buf[B_TNX], buf[B_TNY] = model._nx, model._ny
         buf[B_TABLE:] = table.ravel()
@@ -226,8 +228,58 @@ def _component(buf, i, e, de, dde, ddr_d, h):
     return ddr_d + feedback + buf[S_INTEGRAL + i]                         # (7.21)
 
 
+@njit(cache=True, error_model="numpy")
+def _measured(buf, q1, q2, dq1, dq2):
+    """(ok, x, y, dx, dy, (a, b, c, d, det), J) of the measurement (:meth:`Kinematics.task_state`):
+    J_X = [[a, b], [c, d]], its determinant, J = -J_X^-1 J_Theta; ok False without assembly or
+    for a singular J_X."""
+    l0, l11, l12, l21, l22 = buf[B_L0], buf[B_L11], buf[B_L12], buf[B_L21], buf[B_L22]
+    ok, x, y = _forward(l0, l11, l12, l21, l22, q1, q2)
+    if not ok:
+        return False, 0.0, 0.0, 0.0, 0.0, (0.0, 0.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0)
+    a, b, c, d, t1, t2 = _jacobians(l0, l11, l21, x, y, q1, q2)
+    det = a * d - b * c
+    if det == 0.0:
+        return False, 0.0, 0.0, 0.0, 0.0, (0.0, 0.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0)
+    J00, J01, J10, J11 = -d * t1 / det, b * t2 / det, c * t1 / det, -a * t2 / det
+    return True, x, y, J00 * dq1 + J01 * dq2, J10 * dq1 + J11 * dq2, (a, b, c, d, det), (J00, J01, J10, J11)
+
+
+@njit(cache=True, error_model="numpy")
+def _link_rates(l1, l2, p1, p2, dx, dy):
+    """:func:`controller.kinematics._link_rates`: l1 w1 n(p1) + l2 w2 n(p2) = (dx, dy)."""
+    m00, m01 = -l1 * math.sin(p1), -l2 * math.sin(p2)
+    m10, m11 = l1 * math.cos(p1), l2 * math.cos(p2)
+    det = m00 * m11 - m01 * m10
+    return (m11 * dx - m01 * dy) / det, (-m10 * dx + m00 * dy) / det
+
+
+@njit(cache=True, error_model="numpy")
+def exact_state(buf, q1, q2, dq1, dq2, q, dq):
+    """The thesis coordinates q (7.12) and dq = C dq# (5.56) of the measured pose, where the
+    exact model evaluates its terms (:meth:`controller.model.ExactModel.full_state` at the
+    :meth:`Kinematics.task_state` of the measurement).  False where those would raise (no
+    assembly, a singular J_X, out of reach): the law then refuses the sample."""
+    l0, l11, l12, l21, l22 = buf[B_L0], buf[B_L11], buf[B_L12], buf[B_L21], buf[B_L22]
+    ok, x, y, dx, dy, _, _ = _measured(buf, q1, q2, dq1, dq2)
+    if not ok:
+        return False
+    ok1, p11, p12 = _chain_ik(l11, l12, x - l0, y, 1.0)
+    ok2, p21, p22 = _chain_ik(l21, l22, x + l0, y, -1.0)
+    if not (ok1 and ok2):
+        return False
+    q[0], q[1], q[2], q[3], q[4], q[5], q[6] = x, y, 0.0, p11, p12 - p11, math.pi - p21, p21 - p22
+    w11, w12 = _link_rates(l11, l12, p11, p12, dx, dy)
+    w21, w22 = _link_rates(l21, l22, p21, p22, dx, dy)
+    dq[0], dq[1], dq[2], dq[3], dq[4], dq[5], dq[6] = dx, dy, 0.0, w11, w12 - w11, -w21, w21 - w22
+    return True
+
+
 #: The one signature of :func:`law_step` (:func:`compile_law`).
 LAW_SIGNATURE = types.UniTuple(float64, 7)(float64[::1], *([float64] * 13))
+#: ... of :func:`law_terms_step` and :func:`exact_state` (the exact model).
+LAW_TERMS_SIGNATURE = types.UniTuple(float64, 7)(float64[::1], *([float64] * 13), float64[::1])
+EXACT_STATE_SIGNATURE = types.boolean(float64[::1], *([float64] * 4), float64[::1], float64[::1])
 
 
 #: Serialises :func:`compile_law`: two controllers initialised at once from two threads
@@ -235,8 +287,9 @@ LAW_SIGNATURE = types.UniTuple(float64, 7)(float64[::1], *([float64] * 13))
 _COMPILE_LOCK = threading.Lock()
 
 
-def compile_law():
-    """Compile :func:`law_step` (or load it from numba's cache) for :data:`LAW_SIGNATURE` only.
+def compile_law(exact: bool = False):
+    """Compile :func:`law_step` (or load it from numba's cache) for :data:`LAW_SIGNATURE` only
+    (with ``exact``, also :func:`law_terms_step` and :func:`exact_state` for theirs).
 
     Called by the first controller that uses it (~3 s the first time, ~0.5 s from the cache).
     Afterwards the dispatcher compiles nothing more: ints or bools passed by a caller are
@@ -244,9 +297,16 @@ def compile_law():
     Thread-safe: a second thread waits for the first one's compilation.
     """
     with _COMPILE_LOCK:
-        if not law_step.signatures:
-            law_step.compile(LAW_SIGNATURE.args)
-            law_step.disable_compile()
+        functions = ((law_step, LAW_SIGNATURE),) + (((law_terms_step, LAW_TERMS_SIGNATURE),
+                                                      (exact_state, EXACT_STATE_SIGNATURE)) if exact else ())
+        for function, signature in functions:
+            if not function.signatures:
+                function.compile(signature.args)
+                function.disable_compile()
+
+
+#: No model terms (PD and tabulated laws).
+_NO_TERMS = np.zeros(0)
 
 
 @njit(cache=True, error_model="numpy")
@@ -256,6 +316,18 @@ def law_step(buf, q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy
     status 0 (:data:`OK`): outputs valid, state advanced; 1 (:data:`REFUSED`): the Python
     reference would raise; state untouched, outputs 0.
     """
+    return _law(buf, q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d, h, _NO_TERMS)
+
+
+@njit(cache=True, error_model="numpy")
+def law_terms_step(buf, q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d, h, terms):
+    """:func:`law_step` of the exact model: ``terms`` are ``plant.fast5r.inverse_terms`` (layout
+    INVERSE_*: M_M, v_M, g_M, Z) at the measured pose's :func:`exact_state`."""
+    return _law(buf, q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d, h, terms)
+
+
+@njit(cache=True, error_model="numpy")
+def _law(buf, q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d, h, terms):
     refused = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, REFUSED)
     if not (math.isfinite(q1) and math.isfinite(q2) and math.isfinite(dq1) and math.isfinite(dq2)
             and math.isfinite(ddq1) and math.isfinite(ddq2) and math.isfinite(x_d) and math.isfinite(y_d)
@@ -272,16 +344,11 @@ def law_step(buf, q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy
     if margin < buf[B_BAND]:
         return refused
     # Measured task state (Kinematics.task_state).
-    ok, x, y = _forward(l0, l11, l12, l21, l22, q1, q2)
+    ok, x, y, dx, dy, jac, J = _measured(buf, q1, q2, dq1, dq2)
     if not ok:
         return refused
-    a, b, c, d, t1, t2 = _jacobians(l0, l11, l21, x, y, q1, q2)
-    det = a * d - b * c
-    if det == 0.0:
-        return refused
-    J00, J01, J10, J11 = -d * t1 / det, b * t2 / det, c * t1 / det, -a * t2 / det
-    dx = J00 * dq1 + J01 * dq2
-    dy = J10 * dq1 + J11 * dq2
+    a, b, c, d, det = jac
+    J00, J01, J10, J11 = J
     r1, r2 = _bias_rhs(l0, l11, l21, x, y, q1, q2, dx, dy, dq1, dq2)
     beta0, beta1 = -(d * r1 - b * r2) / det, -(-c * r1 + a * r2) / det
     ddx = J00 * ddq1 + J01 * ddq2 + beta0
@@ -302,30 +369,77 @@ def law_step(buf, q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy
         rddq1 = -(ra * ddx_d + rb * ddy_d + rr1) / rt1
         rddq2 = -(rc * ddx_d + rdd * ddy_d + rr2) / rt2
         rd = (p11, p21, rdq1, rdq2, rddq1, rddq2)
-    tabulated = buf[B_MODEL] == MODEL_TABULATED
+    kind = buf[B_MODEL]
     m = np.empty(11)
-    if tabulated and not _interpolate(buf, x, y, m):                    # TabulatedModel.terms
+    if kind == MODEL_TABULATED and not _interpolate(buf, x, y, m):      # TabulatedModel.terms
         return refused
     # The state changes from here on: no refusal below.
     a0 = _component(buf, 0, rd[0] - r[0], rd[2] - r[2], rd[4] - r[4], rd[4], h)
     a1 = _component(buf, 1, rd[1] - r[1], rd[3] - r[3], rd[5] - r[5], rd[5], h)
-    if not tabulated:                                                   # PD: Ĥ = m*·1, ĥ = 0
+    if kind == MODEL_PD:                                                # PD: Ĥ = m*·1, ĥ = 0
         u0, u1 = buf[B_MSTAR] * a0, buf[B_MSTAR] * a1
         if task:
             tau1, tau2 = J00 * u0 + J10 * u1, J01 * u0 + J11 * u1      # tau = J^T u'
         else:
             tau1, tau2 = u0, u1
     else:
-        H00, H01, H11 = m[0], m[1], m[2]
-        xx, yy, xy = dx * dx, dy * dy, dx * dy
-        h0 = m[3] * xx + m[5] * yy + m[7] * xy + m[9]
-        h1 = m[4] * xx + m[6] * yy + m[8] * xy + m[10]
+        if kind == MODEL_TABULATED:
+            H00, H01, H11 = m[0], m[1], m[2]
+            xx, yy, xy = dx * dx, dy * dy, dx * dy
+            h0 = m[3] * xx + m[5] * yy + m[7] * xy + m[9]
+            h1 = m[4] * xx + m[6] * yy + m[8] * xy + m[10]
+        else:                                                           # exact: M_M, v_M + g_M (5.74-5.77)
+            H00, H01, H11 = terms[0], terms[1], terms[3]
+            h0, h1 = terms[4] + terms[6], terms[5] + terms[7]
         if task:
             u0, u1 = H00 * a0 + H01 * a1 + h0, H01 * a0 + H11 * a1 + h1  # (7.21)
-            tau1, tau2 = J00 * u0 + J10 * u1, J01 * u0 + J11 * u1
+            if kind == MODEL_EXACT:                                     # u' = Z^T u* (5.72)
+                z00, z01, z10, z11 = terms[8], terms[9], terms[10], terms[11]
+                det = z00 * z11 - z01 * z10
+                us0 = (z11 * u0 - z10 * u1) / det
+                us1 = (-z01 * u0 + z00 * u1) / det
+                tau1, tau2 = us0, -us1                                  # tau2 = -u*_theta21
+            else:
+                tau1, tau2 = J00 * u0 + J10 * u1, J01 * u0 + J11 * u1
         else:                                                           # u' = J^T (H (J a + beta) + h)
             ax = J00 * a0 + J01 * a1 + beta0
             ay = J10 * a0 + J11 * a1 + beta1
             f0, f1 = H00 * ax + H01 * ay + h0, H01 * ax + H11 * ay + h1
             tau1, tau2 = J00 * f0 + J10 * f1, J01 * f0 + J11 * f1
     return (tau1, tau2, tau1 / buf[B_KT], tau2 / buf[B_KT + 1], buf[S_E], buf[S_E + 1], OK)
+
+
+#: Status of :func:`law_io` when the law's outputs are not finite (the state is restored).
+NONFINITE_OUTPUT = 2.0
+
+
+@njit(cache=True, error_model="numpy")
+def law_io(buf, x, h):
+    """PositionController in the compiled scene loop (fmus.compiled):
+    x = [q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d | tau1, tau2, i_ref1, i_ref2, e1, e2].
+
+    Returns :data:`OK`, :data:`REFUSED` (nothing changed: the Python controller takes the
+    sample, to raise its message or to use the exact model off the table) or
+    :data:`NONFINITE_OUTPUT` (the slave refuses; the state is put back).
+    """
+    return _io(buf, x, h, _NO_TERMS)
+
+
+@njit(cache=True, error_model="numpy")
+def law_terms_io(buf, x, h, terms):
+    """:func:`law_io` of the exact model, its ``terms`` as :func:`law_terms_step`."""
+    return _io(buf, x, h, terms)
+
+
+@njit(cache=True, error_model="numpy")
+def _io(buf, x, h, terms):
+    saved = buf[STATE].copy()
+    r = _law(buf, x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8], x[9], x[10], x[11], h, terms)
+    if r[6] != OK:
+        return REFUSED
+    if not math.isfinite(r[0] + r[1] + r[2] + r[3] + r[4] + r[5]):
+        buf[STATE] = saved
+        return NONFINITE_OUTPUT
+    for k in range(6):
+        x[12 + k] = r[k]
+    return OK

@@ -30,10 +30,11 @@ gain of (6.66) is optional (``Strategy.gamma``).  Seed 001's sliding-mode law
 by s = de + lam e, u' = Ĥ (ddr_d + lam de + k sat(s/phi)) + ĥ, with no integral.
 
 Speed (``kernel``): :meth:`PositionController.step_reference` is the readable law in Python
-(~20 µs a sample).  With ``kernel="fast"`` (default) PD and tabulated strategies run the same
-sample compiled (:func:`controller.fastlaw.law_step`, ~2 µs) and fall back to the reference
-only to raise its refusals; the exact model is the Python law over the compiled inverse
-dynamics of :func:`plant.fast5r.inverse_terms`.  ``kernel="python"`` always runs the reference;
+(~20 µs a sample).  With ``kernel="fast"`` (default) every strategy runs the same sample
+compiled (:func:`controller.fastlaw.law_step`, ~2 µs; the exact model's terms from
+:func:`plant.fast5r.inverse_terms` at :func:`controller.fastlaw.exact_state`, passed to
+:func:`controller.fastlaw.law_terms_step`) and falls back to the reference only to raise
+its refusals (or to use the exact model off the table).  ``kernel="python"`` always runs the reference;
 ``kernel="general"`` also evaluates the exact model with the general numpy algorithm
 (:func:`plant.parallel.inverse_dynamics_terms`, ~2 ms).
 """
@@ -41,7 +42,10 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from motor.presets import get_motor_preset
+from plant.fast5r import INVERSE_SIZE, inverse_terms
 from plant import fivebar
 from plant.presets import FiveBarParams
 
@@ -53,7 +57,7 @@ from .strategies import Strategy
 
 SAMPLE_TIME = 1e-3
 MODEL_KINDS = ("exact", "tabulated")
-#: "fast": compiled law (PD, tabulated) and compiled exact model; "python": the reference law
+#: "fast": compiled law (PD, tabulated, exact) and compiled exact model; "python": the reference law
 #: in Python (exact model compiled); "general": the reference law with the general exact model.
 KERNELS = ("fast", "python", "general")
 MEASUREMENTS = ("q1", "q2", "dq1", "dq2", "ddq1", "ddq2")
@@ -157,14 +161,16 @@ class PositionController:
                           and table_fallback else None)
         self.fallbacks = 0
         self.kernel = kernel
-        self.compiled = kernel == "fast" and self.model_kind != "exact"
+        self.compiled = kernel == "fast"
         # Constants, state and table of the compiled law in one array; the reference keeps its
         # state in the same place (fastlaw.STATE), so both paths can be mixed.
         self._buf = fastlaw.pack(self.kin, self.band, strategy.space, self.model if self.compiled else None,
                                  self.kp, self.kv, strategy.phi, strategy.gamma, strategy.m_star, self.kt,
                                  strategy.law)
         if self.compiled:
-            fastlaw.compile_law()
+            fastlaw.compile_law(exact=self.model_kind == "exact")
+        # The exact model's law: the pose's thesis coordinates and the model's terms (5.74-5.77).
+        self._q, self._dq, self._terms = np.empty(7), np.empty(7), np.empty(INVERSE_SIZE)
         self.reset()
 
     def reset(self):
@@ -204,17 +210,30 @@ class PositionController:
         :attr:`compiled`.
         """
         if self.compiled:
-            r = law_step(self._buf, q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d,
-                         self.T if dt is None else dt)
+            r = self._compiled_step(q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d,
+                                    self.T if dt is None else dt)
             if r[6] == 0.0:
                 return r[:4]
         return self.step_reference(t, q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d, dt)
 
+    def _compiled_step(self, q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d, h):
+        """The compiled sample (:func:`controller.fastlaw.law_step`, or for the exact model
+        :func:`~controller.fastlaw.exact_state`, :func:`plant.fast5r.inverse_terms` and
+        :func:`~controller.fastlaw.law_terms_step`); status r[6] != 0: refused, nothing changed."""
+        if self.model_kind != "exact":
+            return law_step(self._buf, q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d, h)
+        q1, q2, dq1, dq2 = float(q1), float(q2), float(dq1), float(dq2)
+        if not fastlaw.exact_state(self._buf, q1, q2, dq1, dq2, self._q, self._dq):
+            return (0.0,) * 6 + (fastlaw.REFUSED,)
+        inverse_terms(self.model._p, self._q, self._dq, self._terms)
+        return fastlaw.law_terms_step(self._buf, q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d,
+                                      h, self._terms)
+
     def step_with_errors(self, t, q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d, dt=None):
         """:meth:`step` and the errors: (tau1, tau2, i_ref1, i_ref2, e1, e2)."""
         if self.compiled:
-            r = law_step(self._buf, q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d,
-                         self.T if dt is None else dt)
+            r = self._compiled_step(q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d,
+                                    self.T if dt is None else dt)
             if r[6] == 0.0:
                 return r[:6]
         out = self.step_reference(t, q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d, dt)

@@ -11,14 +11,18 @@ returning a :class:`ReferenceSample` ``(x, y, dx, dy, ddx, ddy)`` in the world f
   at least this long.
 
 Kinds (:func:`get_trajectory`): ``thesis_circle``, ``circle``, ``triangle``, ``hold``.
-Evaluation is scalar and uses ``math`` only (a few microseconds per call).
+Evaluation is one compiled call (:func:`controller.fasttrajectory.sample`) on the array each
+trajectory packs itself into (``buf``).
 """
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 from typing import NamedTuple
 
 import numpy as np
+
+from . import fasttrajectory as _fast
 
 BENCH_START = (-0.002, 0.108)
 """Vertex x_1 of the triangle and the bench's initial position at rest, m (7.24, 7.28)."""
@@ -43,17 +47,12 @@ class ReferenceSample(NamedTuple):
     ddy: float
 
 
-def _check_time(t):
-    if not t >= 0.0:
+def _evaluate(buf, t):
+    """The :class:`ReferenceSample` of the packed trajectory ``buf`` at ``t`` (s)."""
+    status, *values = _fast.sample(buf, float(t))
+    if status != _fast.OK:
         raise ValueError(f"trajectory time must be >= 0 s, got {t}")
-
-
-def _polynomial(coefficients, tau):
-    """Horner evaluation of a polynomial given in ascending powers."""
-    value = 0.0
-    for coefficient in reversed(coefficients):
-        value = value * tau + coefficient
-    return value
+    return ReferenceSample(*values)
 
 
 @dataclass(frozen=True)
@@ -88,19 +87,19 @@ class CircleTrajectory:
     stops: bool
     start_point: tuple
 
+    @cached_property
+    def buf(self):
+        """This trajectory packed for :func:`controller.fasttrajectory.sample`."""
+        buf = np.zeros(_fast.T_STOPS + 1)
+        buf[_fast.T_KIND] = _fast.KIND_CIRCLE
+        buf[_fast.T_CX:_fast.T_CY + 1] = self.center
+        buf[_fast.T_RADIUS], buf[_fast.T_PHI0], buf[_fast.T_OMEGA] = self.radius, self.initial_angle, self.angular_velocity
+        buf[_fast.T_DURATION], buf[_fast.T_STOPS] = self.duration, 1.0 if self.stops else 0.0
+        return buf
+
     def __call__(self, t):
         """Reference at time ``t`` (s), a :class:`ReferenceSample`."""
-        _check_time(t)
-        moving = not (self.stops and t >= self.duration)
-        angle = self.initial_angle + self.angular_velocity * (t if moving else self.duration)
-        cosine, sine = math.cos(angle), math.sin(angle)
-        x = self.center[0] + self.radius * cosine
-        y = self.center[1] + self.radius * sine
-        if not moving:
-            return ReferenceSample(x, y, 0.0, 0.0, 0.0, 0.0)
-        speed = self.radius * self.angular_velocity
-        centripetal = self.radius * self.angular_velocity**2
-        return ReferenceSample(x, y, -speed * sine, speed * cosine, -centripetal * cosine, -centripetal * sine)
+        return _evaluate(self.buf, t)
 
 
 @dataclass(frozen=True)
@@ -135,22 +134,22 @@ class PolygonTrajectory:
         """Time to travel all sides ``cycles`` times, s."""
         return self.cycles * len(self.vertices) * self.side_time
 
+    @cached_property
+    def buf(self):
+        """This trajectory packed for :func:`controller.fasttrajectory.sample`."""
+        points = np.asarray(self.vertices, dtype=float).ravel()
+        buf = np.zeros(_fast.T_POINTS + points.size)
+        buf[_fast.T_KIND] = _fast.KIND_POLYGON
+        buf[_fast.T_SIDE_TIME], buf[_fast.T_CYCLES], buf[_fast.T_VERTICES] = self.side_time, self.cycles, len(self.vertices)
+        buf[_fast.T_POSITION:_fast.T_VELOCITY] = SMOOTHSTEP_COEFFICIENTS
+        buf[_fast.T_VELOCITY:_fast.T_ACCELERATION] = _SMOOTHSTEP_DERIVATIVES[0]
+        buf[_fast.T_ACCELERATION:_fast.T_POINTS] = _SMOOTHSTEP_DERIVATIVES[1]
+        buf[_fast.T_POINTS:] = points
+        return buf
+
     def __call__(self, t):
         """Reference at time ``t`` (s), a :class:`ReferenceSample`."""
-        _check_time(t)
-        if t >= self.duration:
-            return ReferenceSample(*self.start_point, 0.0, 0.0, 0.0, 0.0)
-        side = min(math.floor(t / self.side_time), self.cycles * len(self.vertices) - 1)
-        tau = t / self.side_time - side
-        x0, y0 = self.vertices[side % len(self.vertices)]
-        x1, y1 = self.vertices[(side + 1) % len(self.vertices)]
-        position = _polynomial(SMOOTHSTEP_COEFFICIENTS, tau)
-        velocity = _polynomial(_SMOOTHSTEP_DERIVATIVES[0], tau) / self.side_time
-        acceleration = _polynomial(_SMOOTHSTEP_DERIVATIVES[1], tau) / self.side_time**2
-        dx, dy = x1 - x0, y1 - y0
-        return ReferenceSample(
-            x0 + dx * position, y0 + dy * position, dx * velocity, dy * velocity, dx * acceleration, dy * acceleration
-        )
+        return _evaluate(self.buf, t)
 
 
 @dataclass(frozen=True)
@@ -165,10 +164,17 @@ class HoldTrajectory:
         """The held point."""
         return self.point
 
+    @cached_property
+    def buf(self):
+        """This trajectory packed for :func:`controller.fasttrajectory.sample`."""
+        buf = np.zeros(_fast.T_HOLD_Y + 1)
+        buf[_fast.T_KIND] = _fast.KIND_HOLD
+        buf[_fast.T_HOLD_X:_fast.T_HOLD_Y + 1] = self.point
+        return buf
+
     def __call__(self, t):
         """Reference at time ``t`` (s): the held point at rest."""
-        _check_time(t)
-        return ReferenceSample(*self.point, 0.0, 0.0, 0.0, 0.0)
+        return _evaluate(self.buf, t)
 
 
 def thesis_circle(cycles=2):

@@ -32,9 +32,10 @@ from .wrapper import install_wrapper
 
 #: Slave module and class of each system role.
 ROLES = {"loop": ("parcosim_closedloop", "ClosedLoop"), "chain": ("parcosim_controlchain", "ControlChain")}
-#: The ``fmus`` modules a system FMU needs beyond the slave base: the in-process master.
+#: The ``fmus`` modules a system FMU needs beyond the slave base: the in-process master (and
+#: its compiled mode, which the master imports when asked for it).
 SYSTEM_MODULES = ("embedded.py", "foreign.py", "instances.py", "master.py", "registry.py", "stepper.py", "system.py",
-                  "systemslave.py")
+                  "systemslave.py", "compiled.py", "adapters.py")
 
 
 def build_system_fmu(role: str, system: System, path, plant: str = "plant") -> Path:

@@ -58,7 +58,7 @@ from .instances import CoSimulationError, InProcessInstance, _FmuInstance
 from .stepper import Stepper
 from .system import System, split_signal
 
-MODES = ("fmu", "inprocess")
+MODES = ("fmu", "inprocess", "compiled")
 COUPLINGS = ("gauss-seidel", "jacobi")
 #: Up to this many components in one feedback loop the order is optimal (exhaustive);
 #: larger loops keep the system's listing order where the samples allow.
@@ -95,6 +95,9 @@ class Result(RecordedRun):
     error: str | None = None
     stop_time: float = 0.0
     init_s: float = 0.0   # loading, instantiating and initialising (tables, numba compilation)
+    #: ``cpu_s``: CPU time of this thread in the stepping (steadier than wall_s on a shared
+    #: machine); ``retried``; compiled mode: ``compile_s``, ``python_steps``, ``source``,
+    #: or ``fallback``.
     extra: dict = field(default_factory=dict)
     interrupted: bool = False   # stopped by KeyboardInterrupt (SIGINT); ``error`` says when
 
@@ -264,9 +267,12 @@ def simulate(system: System, mode: str = "inprocess", coupling: str = "gauss-sei
     Parameters
     ----------
     system : System
-    mode : {"inprocess", "fmu"}
-        Slave objects called directly, or the built FMUs through fmpy (built into
-        ``fmu_dir``, default ``fmus/build``, when missing or older than the sources).
+    mode : {"inprocess", "fmu", "compiled"}
+        Slave objects called directly, the built FMUs through fmpy (built into
+        ``fmu_dir``, default ``fmus/build``, when missing or older than the sources), or the
+        slave objects' compiled kernels in one generated, compiled loop (:mod:`fmus.compiled`:
+        the same rows as in process; ``Result.extra["compile_s"]``; systems it does not
+        cover fall back to in process with a warning, ``Result.extra["fallback"]``).
     coupling : {"gauss-seidel", "jacobi"}
     progress : callable, optional
         Called as ``progress(fraction)`` about a hundred times during the run.
@@ -323,8 +329,30 @@ def deferred_sigint():
 
 
 def _simulate(system, mode, coupling, fmu_dir, progress, retry_substeps, interrupt) -> Result:
+    fallback = None
+    if mode == "compiled":
+        from .compiled import NotCompilable, check_compilable
+
+        try:
+            check_compilable(system, coupling, retry_substeps)
+        except NotCompilable as exc:
+            fallback = str(exc)
+    if fallback is None and mode == "compiled":
+        try:
+            return _simulate_with(system, mode, coupling, fmu_dir, progress, retry_substeps, interrupt)
+        except NotCompilable as exc:
+            fallback = str(exc)
+    if fallback is not None:
+        warnings.warn(f"compiled mode: {fallback}; running in process instead", stacklevel=3)
+        result = _simulate_with(system, "inprocess", coupling, fmu_dir, progress, retry_substeps, interrupt)
+        result.extra["fallback"] = fallback
+        return result
+    return _simulate_with(system, mode, coupling, fmu_dir, progress, retry_substeps, interrupt)
+
+
+def _simulate_with(system, mode, coupling, fmu_dir, progress, retry_substeps, interrupt) -> Result:
     loading = _time.perf_counter()
-    instances = _instantiate(system, mode, fmu_dir)
+    instances = _instantiate(system, "inprocess" if mode == "compiled" else mode, fmu_dir)
     loading_s = _time.perf_counter() - loading
     try:
         from .foreign import without_missing_parameters
@@ -336,9 +364,35 @@ def _simulate(system, mode, coupling, fmu_dir, progress, retry_substeps, interru
         variables = {n: inst.variables for n, inst in instances.items()}
         order = (stepping_order(system, variables) if coupling == "gauss-seidel"
                  else tuple(c.name for c in system.components))
+        if mode == "compiled":
+            from .compiled import run_compiled
+
+            def result_of(data, error, interrupted, wall, init_s, extra):
+                return _result(system, data, order, mode, coupling, error, interrupted, wall,
+                               loading_s + init_s, extra)
+
+            return run_compiled(system, instances, order, progress, interrupt, result_of)
         return _run(system, instances, order, mode, coupling, progress, loading_s, retry_substeps, interrupt)
     finally:
         _close(instances)
+
+
+def _result(system, data, order, mode, coupling, error, interrupted, wall, init_s, extra) -> Result:
+    """The :class:`Result` of rows ``data``, stopped by ``error`` (a CoSimulationError) or not."""
+    h, rows = system.step, len(data)
+    last = max(rows - 1, 0) * h     # the last row's time: where the run stopped
+    message = None
+    if error is not None:
+        message = (str(error) if error.time == error.time
+                   else f"{error.instance}: {error.message} at t = {last:.6g} s")
+        if INTERRUPTED_MARK in error.message:
+            interrupted = True
+            message = f"interrupted at t = {last:.6g} s ({error.instance}: {error.message})"
+    elif interrupted:
+        message = f"interrupted at t = {last:.6g} s"
+    return Result(time=np.arange(rows) * h, signals={s: data[:, j] for j, s in enumerate(system.record)},
+                  order=tuple(order), mode=mode, coupling=coupling, wall_s=wall, error=message,
+                  stop_time=system.stop_time, init_s=init_s, extra=extra, interrupted=interrupted)
 
 
 def _retrying_step(stepper: Stepper, substeps: int, retried: list) -> None:
@@ -367,11 +421,13 @@ def _run(system, instances, order, mode, coupling, progress, loading_s=0.0, retr
     advance = stepper.step if retry_substeps is None else lambda: _retrying_step(stepper, retry_substeps, retried)
     h, steps = system.step, system.steps
     data = np.full((steps + 1, len(system.record)), np.nan)
-    error, done, rows, interrupted = None, 0, 0, False
+    error, rows, interrupted = None, 0, False
     init_start = start = _time.perf_counter()
+    cpu_start = _time.thread_time()
     try:
         stepper.initialize(0.0)
         start = _time.perf_counter()
+        cpu_start = _time.thread_time()
         data[0] = stepper.row()
         rows = 1
         report_every = max(1, steps // 100)
@@ -380,21 +436,14 @@ def _run(system, instances, order, mode, coupling, progress, loading_s=0.0, retr
                 raise KeyboardInterrupt
             advance()
             data[k + 1] = stepper.row()
-            done = k + 1
-            rows = done + 1
-            if progress is not None and done % report_every == 0:
-                progress(done / steps)
+            rows = k + 2
+            if progress is not None and (k + 1) % report_every == 0:
+                progress((k + 1) / steps)
     except CoSimulationError as exc:
-        error = str(exc) if exc.time == exc.time else f"{exc.instance}: {exc.message} at t = {done * h:.6g} s"
-        if INTERRUPTED_MARK in exc.message:
-            interrupted = True
-            error = f"interrupted at t = {done * h:.6g} s ({exc.instance}: {exc.message})"
+        error = exc
     except KeyboardInterrupt:
         interrupted = True
-        error = f"interrupted at t = {done * h:.6g} s"
-    wall = _time.perf_counter() - start
-    data = data[:rows]
-    return Result(time=np.arange(rows) * h, signals={s: data[:, j] for j, s in enumerate(system.record)},
-                  order=tuple(order), mode=mode, coupling=coupling, wall_s=wall, error=error,
-                  stop_time=system.stop_time, init_s=loading_s + (start - init_start),
-                  extra={"retried": retried} if retry_substeps is not None else {}, interrupted=interrupted)
+    wall, cpu = _time.perf_counter() - start, _time.thread_time() - cpu_start
+    extra = {"cpu_s": cpu, **({"retried": retried} if retry_substeps is not None else {})}
+    return _result(system, data[:rows], order, mode, coupling, error, interrupted, wall,
+                   loading_s + (start - init_start), extra)

@@ -54,6 +54,8 @@ class Stepper:
             feeds[split_signal(conn.target)[0]].append(conn)
         sources = [c.source for c in system.connections]
         plan = []
+        #: Instance name -> (its connected inputs, the outputs it produces), as bound.
+        self.io_names = {}
         for name in self.order:
             inst = instances[name]
             in_vars = [inst.variables[split_signal(c.target)[1]] for c in feeds[name]]
@@ -62,6 +64,7 @@ class Stepper:
                         if split_signal(s)[0] == name and inst.variables[split_signal(s)[1]].causality == "output"]
             produced = list(dict.fromkeys(produced))
             inst.bind(in_vars, [inst.variables[split_signal(s)[1]] for s in produced])
+            self.io_names[name] = ([v.name for v in in_vars], [split_signal(s)[1] for s in produced])
             plan.append((inst, in_slots, [self._slot(s) for s in produced], system.component(name).substeps))
         record_inputs = [s for s in system.record if s not in self.slots]
         if record_inputs:

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import control
 import numpy as np
 
-from motor import _checks
+from motor import _checks, fastdrive
 
 #: Closed-loop poles chosen in the thesis (section 7.2.10); the fourth is the plant zero.
 THESIS_POLES = (0.0, 0.6, 0.7)
@@ -193,13 +193,16 @@ class CurrentController:
     def __init__(self, design, v_max):
         self.design = design
         self.v_max = _checks.positive("v_max", v_max)
+        # Coefficients and state in one array, stepped by motor.fastdrive.
+        self.buf = fastdrive.new_controller(design.alpha, design.beta, design.gamma, design.delta, self.v_max)
         self.reset()
 
     def reset(self, v0=0.0):
         """Restart from a steady voltage ``v0`` with zero error (bumpless start)."""
         v0 = min(max(_checks.finite("v0", v0), -self.v_max), self.v_max)
-        self._u1 = self._u2 = v0
-        self._e1 = self._e2 = 0.0
+        b = self.buf
+        b[fastdrive.C_U1] = b[fastdrive.C_U2] = v0
+        b[fastdrive.C_E1] = b[fastdrive.C_E2] = 0.0
 
     def update(self, i_ref, i_meas):
         """One controller sample: voltage to hold over the next period.
@@ -216,11 +219,4 @@ class CurrentController:
         float
             Saturated voltage [V].
         """
-        d = self.design
-        e = i_ref - i_meas
-        v = ((1.0 + d.delta) * self._u1 - d.delta * self._u2
-             + d.alpha * e + d.beta * self._e1 + d.gamma * self._e2)
-        v = min(max(v, -self.v_max), self.v_max)
-        self._u2, self._u1 = self._u1, v
-        self._e2, self._e1 = self._e1, e
-        return v
+        return fastdrive.controller_update(self.buf, float(i_ref), float(i_meas))

@@ -6,10 +6,11 @@ inputs held over each step (zero-order hold).
 
 import math
 
-from motor import _checks
+import numpy as np
+
+from motor import _checks, fastdrive
 from motor.current_controller import THESIS_POLES, THESIS_T, CurrentController, design_current_controller
-from motor.electrics import (ELECTRICAL_METHODS, advance_current, electrical_step_coefficients,
-                             mean_current_coefficients, shaft_torque)
+from motor.electrics import ELECTRICAL_METHODS, electrical_step_coefficients, mean_current_coefficients
 
 #: Names accepted for ``Drive(mode=...)``.
 DRIVE_MODES = ("current", "voltage")
@@ -18,6 +19,15 @@ TORQUE_OUTPUTS = ("end", "mean")
 
 # Relative tolerance used to decide that h divides T.
 _PHASE_TOL = 1e-6
+
+
+def _floats(*values):
+    """The values as floats (the kernels' one signature); a value that is not a number
+    becomes NaN, which the kernel refuses and the caller names with its original value."""
+    try:
+        return tuple(float(v) for v in values)
+    except (TypeError, ValueError):
+        return tuple(v if isinstance(v, float) else math.nan for v in values)
 
 
 def _design(params, T, poles):
@@ -80,7 +90,27 @@ class Drive:
         self._h = None
         self._coefficients = None
         self._mean = None
+        # Constants and state of the per-step arithmetic (motor.fastdrive's layout).
+        p = params
+        self.buf = np.zeros(fastdrive.DRIVE_SIZE)
+        self.buf[fastdrive.D_CURRENT_MODE] = 1.0 if self.mode == "current" else 0.0
+        self.buf[fastdrive.D_MEAN_TORQUE] = 1.0 if self.torque_output == "mean" else 0.0
+        self.buf[fastdrive.D_KE:fastdrive.D_T + 1] = (p.ke, p.kt, p.b, p.mu, p.omega_eps, p.v_max, self.T)
+        self.buf[fastdrive.D_H] = math.nan     # no step prepared (prepare_step)
+        self._controller_buf = (self.controller.buf if self.controller is not None
+                                else fastdrive.new_controller(0.0, 0.0, 0.0, 0.0, p.v_max))
         self.reset()
+        # Compile the step kernels (or load numba's cache) now, on copies: the construction
+        # (an FMU's initialisation), not the first step, pays for it.
+        fastdrive.drive_step(self.buf.copy(), self._controller_buf.copy(), 0.0, 0.0, 0.0, 0.0, math.nan)
+        fastdrive.sample_voltage(self.buf.copy(), self._controller_buf.copy(), 0.0, 0.0, 0.0, math.nan)
+
+    i = property(lambda self: float(self.buf[fastdrive.D_I]),
+                 lambda self, value: self.buf.__setitem__(fastdrive.D_I, value),
+                 doc="Armature current [A].")
+    v = property(lambda self: float(self.buf[fastdrive.D_V]),
+                 lambda self, value: self.buf.__setitem__(fastdrive.D_V, value),
+                 doc="Voltage applied over the last step [V].")
 
     def reset(self, i0=0.0, v0=0.0):
         """Set the armature current ``i0`` [A] and the last applied voltage ``v0`` [V] (saturated).
@@ -91,7 +121,7 @@ class Drive:
         v_max = self.params.v_max
         self.i = _checks.finite("i0", i0)
         self.v = min(max(_checks.finite("v0", v0), -v_max), v_max)
-        self._phase = 0.0
+        self.buf[fastdrive.D_PHASE] = 0.0
         if self.controller is not None:
             self.controller.reset(self.v)
 
@@ -110,26 +140,31 @@ class Drive:
 
     def torque(self, omega):
         """Shaft torque [N m] for the present current at speed ``omega`` (B.2)."""
-        return shaft_torque(self.i, _checks.finite("omega", omega), self.params)
+        return fastdrive.shaft_torque(self.buf, self.i, _checks.finite("omega", omega))
 
-    def _step_coefficients(self, h):
+    def prepare_step(self, h):
+        """Check the step length h and compute its coefficients (kept until h changes).
+
+        Raises
+        ------
+        ValueError
+            h not finite and > 0, or, in current mode, h not dividing T.
+        """
+        h = _checks.positive("h", h)
         if h != self._h:
+            if self.mode == "current":
+                n = self.T / h
+                if n < 1.0 - _PHASE_TOL or abs(n - round(n)) > _PHASE_TOL * n:
+                    raise ValueError(f"in current mode the step h must divide the controller period "
+                                     f"T={self.T!r}; got h={h!r}")
             self._coefficients = electrical_step_coefficients(self.params.R, self.params.L, h, self.method)
             self._mean = mean_current_coefficients(self.params.R, self.params.L, h, self.method)
+            b = self.buf
+            b[fastdrive.D_A], b[fastdrive.D_G] = self._coefficients
+            b[fastdrive.D_WI], b[fastdrive.D_WU] = self._mean
+            b[fastdrive.D_PHASE_STEP] = h / self.T
+            b[fastdrive.D_H] = h
             self._h = h
-        return self._coefficients
-
-    def _controller_voltage(self, i_ref, i_hat, h):
-        """Controller output for this step: a new sample at period starts, else the held one."""
-        n = self.T / h
-        if n < 1.0 - _PHASE_TOL or abs(n - round(n)) > _PHASE_TOL * n:
-            raise ValueError(f"in current mode the step h must divide the controller period "
-                             f"T={self.T!r}; got h={h!r}")
-        v = self.controller.update(i_ref, i_hat) if self._phase == 0.0 else self.v
-        self._phase += h / self.T
-        if self._phase > 1.0 - _PHASE_TOL:
-            self._phase = 0.0
-        return v
 
     def sample_voltage(self, i_ref, v_ref, i_hat, h):
         """The voltage applied over the next step of length h [V].
@@ -146,13 +181,20 @@ class Drive:
         ValueError
             Naming the input, for a NaN/inf input or a bad step length.
         """
-        i_ref = _checks.finite("i_ref", i_ref)
-        v_ref = _checks.finite("v_ref", v_ref)
-        i_hat = _checks.finite("i_hat", i_hat)
-        h = _checks.positive("h", h)
-        if self.mode == "current":
-            return self._controller_voltage(i_ref, i_hat, h)
-        return min(max(v_ref, -self.params.v_max), self.params.v_max)
+        args = _floats(i_ref, v_ref, i_hat, h)
+        status, v = fastdrive.sample_voltage(self.buf, self._controller_buf, *args)
+        if status == fastdrive.UNPREPARED_STEP:
+            self.prepare_step(h)
+            status, v = fastdrive.sample_voltage(self.buf, self._controller_buf, *args)
+        if status != fastdrive.OK:
+            self._refuse(status, i_ref, v_ref, i_hat)
+        return v
+
+    def _refuse(self, status, i_ref, v_ref, i_hat, omega=0.0):
+        """Raise the message of a refusal of :mod:`motor.fastdrive` (nothing was changed)."""
+        for name, value in (("omega", omega), ("i_ref", i_ref), ("v_ref", v_ref), ("i_hat", i_hat)):
+            _checks.finite(name, value)
+        raise RuntimeError(f"motor.fastdrive refused a step with status {status} that the Python checks accept")
 
     def step(self, i_ref, v_ref, omega, i_hat, h):
         """Advance the drive by one step with inputs held over it.
@@ -185,20 +227,15 @@ class Drive:
         ValueError
             Naming the input, for a NaN/inf input or a bad step length.
         """
-        omega = _checks.finite("omega", omega)
-        v = self.sample_voltage(i_ref, v_ref, i_hat, h)
-        coefficients = self._step_coefficients(h)
-        if self.torque_output == "mean":
-            w_i, w_u = self._mean
-            current = w_i * self.i + w_u * (v - self.params.ke * omega)
-        i = advance_current(self.i, v, omega, self.params.ke, coefficients)
-        if self.torque_output == "end":
-            current = i
-        tau = shaft_torque(current, omega, self.params)
-        if not (math.isfinite(i) and math.isfinite(tau)):
+        args = _floats(i_ref, v_ref, omega, i_hat, h)
+        status, tau, v, i = fastdrive.drive_step(self.buf, self._controller_buf, *args)
+        if status == fastdrive.UNPREPARED_STEP:
+            self.prepare_step(h)
+            status, tau, v, i = fastdrive.drive_step(self.buf, self._controller_buf, *args)
+        if status == fastdrive.DIVERGED:
             raise ValueError(self._diverged(i, tau, h))
-        self.i = i
-        self.v = v
+        if status != fastdrive.OK:
+            self._refuse(status, i_ref, v_ref, i_hat, omega)
         return tau, v, i
 
     def _diverged(self, i, tau, h):

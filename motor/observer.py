@@ -4,8 +4,12 @@ The bench has no current sensor; the current controller is closed on an
 estimate (thesis 7.2.4).
 """
 
-from motor import _checks
-from motor.electrics import advance_current, electrical_step_coefficients
+import math
+
+import numpy as np
+
+from motor import _checks, fastdrive
+from motor.electrics import electrical_step_coefficients
 
 #: Names accepted for ``CurrentObserver(kind=...)``.
 OBSERVER_KINDS = ("static", "dynamic")
@@ -39,13 +43,31 @@ class CurrentObserver:
         self.kind = _checks.choice("kind", kind, OBSERVER_KINDS)
         self._method = "quasi_static" if kind == "static" else "exact"
         self._h = None
-        self._coefficients = None
+        # Constants and state of the per-step arithmetic (motor.fastdrive's layout).
+        self.buf = np.zeros(fastdrive.OBSERVER_SIZE)
+        self.buf[fastdrive.O_STATIC] = 1.0 if kind == "static" else 0.0
+        self.buf[fastdrive.O_KE] = params.ke
+        self.buf[fastdrive.O_H] = math.nan     # no step prepared
         self.reset()
+        fastdrive.observer_estimate(self.buf.copy(), 0.0, 0.0, math.nan)   # compile now, not in a step
+
+    i_hat = property(lambda self: float(self.buf[fastdrive.O_I_HAT]), doc="The last estimate [A].")
 
     def reset(self, i0=0.0, omega0=None):
         """Set the estimate ``i0`` [A]; ``omega0`` [rad/s] is the speed of the previous call."""
-        self.i_hat = _checks.finite("i0", i0)
-        self._omega_prev = None if omega0 is None else _checks.finite("omega0", omega0)
+        b = self.buf
+        b[fastdrive.O_I_HAT] = _checks.finite("i0", i0)
+        b[fastdrive.O_HAS_PREV] = 0.0 if omega0 is None else 1.0
+        b[fastdrive.O_OMEGA_PREV] = 0.0 if omega0 is None else _checks.finite("omega0", omega0)
+
+    def prepare_step(self, h):
+        """Check the step length h and compute its coefficients (kept until h changes)."""
+        h = _checks.positive("h", h)
+        if h != self._h:
+            a, g = electrical_step_coefficients(self.params.R, self.params.L, h, self._method)
+            self.buf[fastdrive.O_A], self.buf[fastdrive.O_G] = a, g
+            self.buf[fastdrive.O_H] = h
+            self._h = h
 
     def estimate(self, v, omega, h):
         """Current estimate at the end of a step.
@@ -69,13 +91,17 @@ class CurrentObserver:
         ValueError
             Naming the input, for a NaN/inf input or h <= 0.
         """
-        v = _checks.finite("v", v)
-        omega = _checks.finite("omega", omega)
-        h = _checks.positive("h", h)
-        if h != self._h:
-            self._coefficients = electrical_step_coefficients(self.params.R, self.params.L, h, self._method)
-            self._h = h
-        omega_held = omega if self.kind == "static" or self._omega_prev is None else self._omega_prev
-        self.i_hat = advance_current(self.i_hat, v, omega_held, self.params.ke, self._coefficients)
-        self._omega_prev = omega
-        return self.i_hat
+        try:
+            args = float(v), float(omega), float(h)
+        except (TypeError, ValueError):
+            args = math.nan, math.nan, math.nan
+        status, i_hat = fastdrive.observer_estimate(self.buf, *args)
+        if status == fastdrive.UNPREPARED_STEP:
+            _checks.finite("v", v)
+            _checks.finite("omega", omega)
+            self.prepare_step(h)
+            status, i_hat = fastdrive.observer_estimate(self.buf, *args)
+        if status == fastdrive.NONFINITE_INPUT:
+            _checks.finite("v", v)
+            _checks.finite("omega", omega)
+        return i_hat

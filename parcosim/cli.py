@@ -8,7 +8,8 @@ Every subcommand is a thin shell over a documented Python call:
 ``parcosim build``     ``fmus.build.build_all(out_dir)``
 ``parcosim identify-motor``  ``motor.cli.identify_main(argv)``
 ``parcosim list``      ``scenarios.scenes.scene_names()``
-``parcosim run``       ``scenarios.run.run_scene(name, mode, out_dir)``; with ``--drives-in-plant N``
+``parcosim run``       ``scenarios.run.run_scene(name, mode, out_dir)`` (mode inprocess, fmu or
+                       compiled); with ``--drives-in-plant N``
                        ``run_scene(drives_in_plant(get_scene(name), substeps=N), ...)``; with
                        ``--replace I=F.fmu`` ``run_scene(with_fmu_files(scene, {I: F}), ...)``
 ``parcosim report``    ``scenarios.report.write_report(out_dir, mode)``
@@ -49,8 +50,9 @@ def _parser() -> argparse.ArgumentParser:
     sub.add_parser("list", help="print the scenes")
     run = sub.add_parser("run", help="run a scene: result.csv, metrics.json and plots")
     run.add_argument("scene", help="a scene name (see `parcosim list`)")
-    run.add_argument("--mode", choices=("inprocess", "fmu"), default="inprocess",
-                     help="slaves in process (default) or the built FMUs through fmpy")
+    run.add_argument("--mode", choices=("inprocess", "fmu", "compiled"), default="inprocess",
+                     help="slaves in process (default), the built FMUs through fmpy, or the whole step loop "
+                          "compiled (docs/benchmarks.md; falls back to in process with a warning)")
     run.add_argument("--coupling", choices=("gauss-seidel", "jacobi"), default="gauss-seidel")
     run.add_argument("--out", default=None, help="output directory (default: out/SCENE)")
     run.add_argument("--fmu-dir", default=None, help="where the FMUs are (built when missing or stale)")
@@ -227,8 +229,10 @@ def _run(args) -> int:
     if outcome.result.error:
         print(f"parcosim: {outcome.result.error} (recorded so far: {out})", file=sys.stderr)
         return 1
-    print(f"{scene.name} [{args.mode}]: e_ef {m['e_ef_mm']:.4g} mm, tau_ef {m['tau_ef_Nm']:.4g} N m, "
-          f"e_ss {m['e_ss_mm']:.4g} mm, {m['wall_s']:.2f} s wall ({m['realtime_factor']:.1f}x real time) -> {out}")
+    compiled = f", compiled in {m['compile_s']:.2f} s" if "compile_s" in m else ""
+    print(f"{scene.name} [{m['mode']}]: e_ef {m['e_ef_mm']:.4g} mm, tau_ef {m['tau_ef_Nm']:.4g} N m, "
+          f"e_ss {m['e_ss_mm']:.4g} mm, {m['wall_s']:.2f} s wall ({m['realtime_factor']:.1f}x real time"
+          f"{compiled}) -> {out}")
     return 0
 
 

@@ -425,3 +425,79 @@ class FastKernel:
     def residual(self, y):
         residual(self.p, y, self._res)
         return self._res.copy()
+
+
+# --- the compiled scene's calls (fmus.compiled) ------------------------------------------------
+#: Status codes of :func:`plant_io` and :func:`actuated_io`; on a refusal the state is unchanged.
+OK, NONFINITE_INPUT, NONFINITE_STATE, DIVERGED, SINGULAR = 0, 1, 2, 3, 4
+#: Layout of the settings array of :func:`plant_io`: Baumgarte lambda, RK4 steps per step,
+#: one encoder count [rad], the largest residual and the smallest singularity measure accepted
+#: (plant.simulator.RESIDUAL_STOP, SINGULAR_STOP).
+S_LAMBDA, S_SUBSTEPS, S_COUNT, S_RESIDUAL_STOP, S_SINGULAR_STOP, SETTINGS_SIZE = 0, 1, 2, 3, 4, 5
+#: Entries of x after the inputs: the FiveBarPlant outputs (fmus.parts.PLANT_OUTPUTS order).
+PLANT_OUTPUT_COUNT = 11
+
+
+@njit(cache=True)
+def _accept(s, out):
+    """The status of a step whose :func:`report` is ``out`` (PlantSimulator.accept's checks)."""
+    if out[REPORT_FINITE] != 1.0:
+        return NONFINITE_STATE
+    if not out[REPORT_RESIDUAL] <= s[S_RESIDUAL_STOP]:
+        return DIVERGED
+    for k in range(3):
+        if abs(out[REPORT_MEASURES + k]) < s[S_SINGULAR_STOP]:
+            return SINGULAR
+    return OK
+
+
+@njit(cache=True)
+def _publish(out, x, first):
+    """The plant's outputs from the report ``out`` into x[first:first + 11]."""
+    for k in range(10):
+        x[first + k] = out[REPORT_OUTPUTS + k]
+    x[first + 10] = out[REPORT_RESIDUAL]
+
+
+@njit(cache=True)
+def plant_io(p, y, s, x, dt):
+    """FiveBarPlant with RK4, no projection: x = [tau1, tau2 | the 11 plant outputs].
+
+    The state y (14) is replaced by the new one only when the step is accepted.
+    """
+    tau1, tau2 = x[0], x[1]
+    if not (math.isfinite(tau1) and math.isfinite(tau2)):
+        return NONFINITE_INPUT
+    out = np.empty(REPORT_SIZE)
+    z = actuated_step(p, NO_MOTORS, y, NO_VOLTAGES, tau1, -tau2, s[S_LAMBDA], dt, int(s[S_SUBSTEPS]),
+                      s[S_COUNT], out)
+    status = _accept(s, out)
+    if status == OK:
+        y[:] = z
+        _publish(out, x, 2)
+    return status
+
+
+@njit(cache=True)
+def actuated_io(p, s, motors, z, voltages, x, first, dt):
+    """ActuatedFiveBarPlant's integration with the drives' ``voltages`` held: z = [q, dq, currents].
+
+    On acceptance z is replaced and x[first:first + 11] gets the plant's outputs;
+    x[first + 11 + n] the shaft torque of motor n at the new current and joint speed (B.2).
+    Refused, nothing changed: a non-finite state or current, divergence, a singular pose.
+    """
+    out = np.empty(REPORT_SIZE)
+    w = actuated_step(p, motors, z, voltages, 0.0, 0.0, s[S_LAMBDA], dt, int(s[S_SUBSTEPS]), s[S_COUNT], out)
+    for n in range(motors.shape[0]):
+        if not math.isfinite(w[14 + n]):
+            return NONFINITE_STATE
+    status = _accept(s, out)
+    if status == OK:
+        z[:] = w
+        _publish(out, x, first)
+        for n in range(motors.shape[0]):
+            joint = int(motors[n, 0])
+            omega = w[10] if joint == 0 else -w[12]
+            x[first + 11 + n] = (motors[n, 3] * w[14 + n] - motors[n, 5] * omega
+                                 - motors[n, 6] * math.tanh(omega / motors[n, 7]))
+    return status

@@ -331,14 +331,13 @@ def cases_for(model: str, unzip_dir, seeds, wrapper: bool = False, kinds=None) -
 
 
 def warm_up(unzipped: dict, numba_cache) -> list:
-    """Instantiate, initialise and step each FMU once in a worker, filling the shared numba
-    cache: the first initialisation with an empty cache compiles the kernels (3-11 s on two
-    shared cores), the one call allowed over :data:`CALL_LIMIT` (docs/extremes.md).  The
+    """Instantiate, initialise and step each FMU once, each in its own worker, filling the
+    shared numba cache: the first initialisation with an empty cache compiles the kernels
+    (3-14 s on two shared cores), the one call allowed over :data:`CALL_LIMIT`
+    (docs/extremes.md).  One worker per FMU because FMUs in one process share its module
+    cache: a second FMU would run the first one's copy of ``plant``/``motor``, and numba's
+    cache is per source file, so its own copy, which its cases load, would stay cold.  The
     results are returned, not judged."""
     cases = [{"model": model, "kind": "warm-up", "seed": 0, "instance_name": "warm-up", "logging": False,
               "start_time": 0.0, "parameters": [], "ops": [["step", None, 1e-3]]} for model in unzipped]
-    # One worker per FMU: in one process every FMU imports the packages (plant, ...) from the
-    # first one's resources, and numba caches a kernel per source path, so each FMU's own
-    # copy would stay uncompiled for the workers that load that FMU first.
-    return [result for case in cases
-            for result in run_cases([case], unzipped, numba_cache, case_timeout=10 * CASE_TIMEOUT)]
+    return run_cases(cases, unzipped, numba_cache, batch=1, case_timeout=10 * CASE_TIMEOUT)

@@ -1,6 +1,6 @@
 """Run a scene and write what a user looks at: ``result.csv``, ``metrics.json``, plots.
 
-``parcosim run SCENE [--mode fmu|inprocess] [--out DIR]`` is :func:`run_scene`::
+``parcosim run SCENE [--mode fmu|inprocess|compiled] [--out DIR]`` is :func:`run_scene`::
 
     from scenarios.run import run_scene
     outcome = run_scene("bench_circle_TCMDx", mode="inprocess", out_dir="out/tcmdx")
@@ -47,6 +47,16 @@ def result_columns(scene: Scene, result: Result) -> dict:
     columns = {"t": result.time}
     columns.update({name: result[signal] for name, signal in scene.columns.items()})
     return columns
+
+
+def peak_rss_mb() -> float:
+    """The process's peak resident set size so far [MB] (``getrusage`` ru_maxrss: the peak of the
+    whole process since it started, not of one run; on Linux in KiB, on macOS in bytes)."""
+    import resource
+    import sys
+
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return peak / (1024.0 * 1024.0) if sys.platform == "darwin" else peak / 1024.0
 
 
 def _json_safe(value):
@@ -160,7 +170,13 @@ def run_scene(scene, mode: str = "inprocess", out_dir=None, coupling: str = "gau
 
     ``retry_substeps`` (:func:`fmus.master.simulate`): a refused step is retried from the
     saved FMU states in that many sub-steps; ``metrics["retried_steps"]`` lists them as
-    [time, instance].
+    [time, instance].  ``mode="compiled"`` adds ``compile_s`` (generating and compiling the
+    loop, or loading it from the cache; not in ``wall_s``) and ``python_steps`` (steps a
+    kernel handed to the Python path), or ``fallback`` (why it ran in process instead);
+    ``mode`` in the metrics is the mode that ran.  ``peak_rss_mb`` is the process's peak
+    resident memory so far (:func:`peak_rss_mb`); ``cpu_s`` the CPU time of the stepping thread
+    and ``realtime_factor_cpu`` = simulated time / ``cpu_s`` (on a machine shared with other
+    jobs, steadier than the wall-time ``realtime_factor``).
 
     Returns the :class:`Outcome` also when a component stopped the run early
     (``outcome.result.error``); the files then hold what was recorded.
@@ -172,7 +188,17 @@ def run_scene(scene, mode: str = "inprocess", out_dir=None, coupling: str = "gau
                       retry_substeps=retry_substeps)
     columns = result_columns(scene, result)
     metrics = scene_metrics(scene, columns, result.wall_s, result.completed, result.init_s)
-    metrics.update({"mode": mode, "coupling": coupling, "order": list(result.order)})
+    metrics.update({"mode": result.mode, "coupling": coupling, "order": list(result.order),
+                    "peak_rss_mb": peak_rss_mb()})
+    cpu = result.extra.get("cpu_s")
+    if cpu:
+        metrics["cpu_s"] = cpu
+        metrics["realtime_factor_cpu"] = metrics["simulated_s"] / cpu
+    if "compile_s" in result.extra:
+        metrics["compile_s"] = result.extra["compile_s"]
+        metrics["python_steps"] = result.extra["python_steps"]
+    if "fallback" in result.extra:
+        metrics["fallback"] = result.extra["fallback"]
     if result.error:
         metrics["error"] = result.error
     if result.interrupted:

@@ -52,7 +52,6 @@ class Derivator(GuardedSlave):
         d("q1_0", "parameter", 0.0, "Start angle of q1 when start_from_input is false [rad]")
         d("q2_0", "parameter", 0.0, "Start angle of q2 when start_from_input is false [rad]")
         self.derivator = None
-        self._started = False
 
     def setup(self):
         require_finite(fc_vel=self.fc_vel, fc_acc=self.fc_acc, T=self.T, q1_0=self.q1_0, q2_0=self.q2_0)
@@ -75,8 +74,9 @@ class Derivator(GuardedSlave):
         except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
             raise ValueError(f"parameters fc_vel = {self.fc_vel!r} Hz, fc_acc = {self.fc_acc!r} Hz, T = {self.T!r} s: "
                              f"the filter design failed ({exc})") from None
-        self._started = not self.start_from_input
-        if self._started:
+        if self.start_from_input:
+            self.derivator.start_at_first_sample(2)
+        else:
             self.derivator.reset([self.q1_0, self.q2_0])
 
     def accepted_steps(self):
@@ -93,10 +93,7 @@ class Derivator(GuardedSlave):
             if abs(value) > ABSURD:
                 raise ValueError(f"input {name} = {value!r} rad at t = {current_time:.6g} s is absurd: "
                                  f"|{name}| must be <= {ABSURD:g} rad")
-        if not self._started:
-            self.derivator.reset([self.q1, self.q2])
-            self._started = True
-        dq, ddq = self.derivator.step([self.q1, self.q2])
+        dq, ddq = self.derivator.step([self.q1, self.q2], ABSURD)
         estimates = (float(dq[0]), float(dq[1]), float(ddq[0]), float(ddq[1]))
         if not all(math.isfinite(v) for v in estimates):
             raise ValueError(f"the estimates (dq1, dq2, ddq1, ddq2) = {estimates!r} at t = {current_time:.6g} s "

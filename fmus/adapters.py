@@ -1,0 +1,242 @@
+"""The compiled adapters of parcosim's models (:mod:`fmus.compiled`).
+
+One class per model, registered by :func:`fmus.compiled.register`: which of the slave's
+variables the kernel's I/O array ``x`` holds (inputs first), the model arrays the kernel
+steps (taken from the initialised slave's model objects, so the compiled loop and the
+Python path step the same state), and the source line that calls the kernel.  A new model
+adds its class here (or in its own module imported by this one); the generator does not
+change.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .compiled import Adapter, NotCompilable, register
+from .guarded import ABSURD
+from .parts import PLANT_OUTPUTS
+
+_PLANT_OUTPUTS = tuple(name for name, _ in PLANT_OUTPUTS)
+
+
+@register
+class TrajectoryAdapter(Adapter):
+    """:func:`controller.fasttrajectory.trajectory_io`: the reference at the step's end."""
+
+    model = "Trajectory"
+    outputs = ("x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d", "x_start", "y_start")
+    modules = ("controller.fasttrajectory",)
+
+    def __init__(self, name, slave, h):
+        super().__init__(name, slave, h)
+        self.arrays = [slave.trajectory.buf]
+
+    def emit(self, arrays, x, t, h):
+        return [f"st = fasttrajectory.trajectory_io({arrays[0]}, {x}, {t}, {h})"]
+
+
+@register
+class DerivatorAdapter(Adapter):
+    """:func:`controller.fastderivator.derivator_io`, inputs limited to |q| <= ABSURD as the slave."""
+
+    model = "Derivator"
+    inputs = ("q1", "q2")
+    outputs = ("dq1", "dq2", "ddq1", "ddq2")
+    modules = ("controller.fastderivator",)
+
+    def __init__(self, name, slave, h):
+        super().__init__(name, slave, h)
+        self.arrays = [slave.derivator.buf]
+
+    def emit(self, arrays, x, t, h):
+        return [f"st = fastderivator.derivator_io({arrays[0]}, {x}, {ABSURD!r})"]
+
+
+@register
+class PositionControllerAdapter(Adapter):
+    """:func:`controller.fastlaw.law_io`; for the exact model :func:`controller.fastlaw.exact_state`,
+    :func:`plant.fast5r.inverse_terms` and :func:`controller.fastlaw.law_terms_io` (the calls of
+    ``PositionController._compiled_step``)."""
+
+    model = "PositionController"
+    inputs = ("q1", "q2", "dq1", "dq2", "ddq1", "ddq2", "x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
+    outputs = ("tau1", "tau2", "i_ref1", "i_ref2", "e1", "e2")
+    modules = ("controller.fastlaw", "plant.fast5r")
+
+    def __init__(self, name, slave, h):
+        super().__init__(name, slave, h)
+        c = slave.controller
+        if not c.compiled:
+            raise NotCompilable(f"component {name}: the controller's kernel {c.kernel!r} is not compiled")
+        self.exact = c.model_kind == "exact"
+        self.arrays = [c._buf] + ([c.model._p, c._q, c._dq, c._terms] if self.exact else [])
+
+    def emit(self, arrays, x, t, h):
+        if not self.exact:
+            return [f"st = int(fastlaw.law_io({arrays[0]}, {x}, {h}))"]
+        buf, p, q, dq, terms = arrays
+        return [f"if fastlaw.exact_state({buf}, {x}[0], {x}[1], {x}[2], {x}[3], {q}, {dq}):",
+                f"    fast5r.inverse_terms({p}, {q}, {dq}, {terms})",
+                f"    st = int(fastlaw.law_terms_io({buf}, {x}, {h}, {terms}))",
+                "else:",
+                "    st = 1"]
+
+
+@register
+class CurrentObserverAdapter(Adapter):
+    """:func:`motor.fastdrive.observer_io`."""
+
+    model = "CurrentObserver"
+    inputs = ("v", "omega")
+    outputs = ("i_hat",)
+    modules = ("motor.fastdrive",)
+
+    def __init__(self, name, slave, h):
+        super().__init__(name, slave, h)
+        slave.observer.prepare_step(h)
+        self.arrays = [slave.observer.buf]
+
+    def emit(self, arrays, x, t, h):
+        return [f"st = fastdrive.observer_io({arrays[0]}, {x}, {h})"]
+
+
+def _prepared(name, drive, h):
+    try:
+        drive.prepare_step(h)
+    except ValueError as exc:
+        raise NotCompilable(f"component {name}: {exc}") from None
+    return [drive.buf, drive._controller_buf]
+
+
+@register
+class DCMotorDriveAdapter(Adapter):
+    """:func:`motor.fastdrive.drive_io`."""
+
+    model = "DCMotorDrive"
+    inputs = ("i_ref", "v_ref", "omega", "i_hat")
+    outputs = ("tau", "v", "i")
+    modules = ("motor.fastdrive",)
+
+    def __init__(self, name, slave, h):
+        super().__init__(name, slave, h)
+        self.arrays = _prepared(name, slave.drive, h)
+
+    def emit(self, arrays, x, t, h):
+        return [f"st = fastdrive.drive_io({arrays[0]}, {arrays[1]}, {x}, {h})"]
+
+
+def _plant_settings(name, sim, h) -> np.ndarray:
+    """The settings array of :func:`plant.fast5r.plant_io` for ``sim`` at step h, or NotCompilable."""
+    from plant import fast5r
+    from plant.simulator import RESIDUAL_STOP, SINGULAR_STOP, PlantError
+
+    s = sim.settings
+    if s.method != "rk4" or s.kernel != "fast" or s.project:
+        raise NotCompilable(f"component {name}: the plant's settings method={s.method!r}, kernel={s.kernel!r}, "
+                            f"project={s.project!r} are not compiled (rk4, fast, no projection are)")
+    try:
+        sim.check_step(h)
+    except PlantError as exc:
+        raise NotCompilable(f"component {name}: {exc}") from None
+    settings = np.empty(fast5r.SETTINGS_SIZE)
+    settings[fast5r.S_LAMBDA], settings[fast5r.S_SUBSTEPS], settings[fast5r.S_COUNT] = \
+        s.baumgarte, s.substeps, sim.count
+    settings[fast5r.S_RESIDUAL_STOP], settings[fast5r.S_SINGULAR_STOP] = RESIDUAL_STOP, SINGULAR_STOP
+    return settings
+
+
+class _PlantState(Adapter):
+    """The plant's state lives in ``self.state`` while compiled (the simulator replaces its
+    array every step): copied to and from the simulator around a Python step."""
+
+    def _sim(self):
+        raise NotImplementedError
+
+    def to_python(self):
+        sim = self._sim()
+        sim.y = self.state[:14].copy()
+        sim._last = None
+
+    def from_python(self):
+        self.state[:14] = self._sim().y
+
+
+@register
+class FiveBarPlantAdapter(_PlantState):
+    """:func:`plant.fast5r.plant_io`."""
+
+    model = "FiveBarPlant"
+    inputs = ("tau1", "tau2")
+    outputs = _PLANT_OUTPUTS
+    modules = ("plant.fast5r",)
+
+    def __init__(self, name, slave, h):
+        super().__init__(name, slave, h)
+        if slave.idle_steps:
+            raise NotCompilable(f"component {name}: idle steps (a model inside a controller)")
+        sim = slave.sim
+        self.state = sim.y.copy()
+        self.arrays = [sim._fast.p, self.state, _plant_settings(name, sim, h)]
+
+    def _sim(self):
+        return self.slave.sim
+
+    def emit(self, arrays, x, t, h):
+        return [f"st = fast5r.plant_io({arrays[0]}, {arrays[1]}, {arrays[2]}, {x}, {h})"]
+
+
+@register
+class ActuatedFiveBarPlantAdapter(_PlantState):
+    """Each drive's :func:`motor.fastdrive.peek_voltage`, then :func:`plant.fast5r.actuated_io`,
+    then :func:`motor.fastdrive.commit_step`: nothing changes unless the whole step is accepted."""
+
+    model = "ActuatedFiveBarPlant"
+    inputs = ("i_ref1", "i_hat1", "v_ref1", "i_ref2", "i_hat2", "v_ref2")
+    outputs = _PLANT_OUTPUTS + ("tau1", "tau2", "v1", "v2", "i1", "i2")
+    modules = ("motor.fastdrive", "plant.fast5r")
+
+    def __init__(self, name, slave, h):
+        from plant.simulator import PlantError
+
+        super().__init__(name, slave, h)
+        a = slave.actuated
+        if slave.idle_steps:
+            raise NotCompilable(f"component {name}: idle steps (a model inside a controller)")
+        if [j for j, _ in a.drives] != [1, 2]:
+            raise NotCompilable(f"component {name}: drives on joints {[j for j, _ in a.drives]} (1 and 2 are compiled)")
+        settings = _plant_settings(name, a.plant, h)
+        try:
+            a._check_rk4_stability(h, a.plant.settings.substeps)
+        except PlantError as exc:
+            raise NotCompilable(f"component {name}: {exc}") from None
+        self.state = a.state()
+        self.arrays = [a.plant._fast.p, settings, a._motors, self.state, np.zeros(2)]
+        for n, (_, drive) in enumerate(a.drives):
+            self.arrays += _prepared(name, drive, h)
+
+    def _sim(self):
+        return self.slave.actuated.plant
+
+    def from_python(self):
+        super().from_python()
+        for n, (_, drive) in enumerate(self.slave.actuated.drives):
+            self.state[14 + n] = drive.i
+
+    def emit(self, arrays, x, t, h):
+        p, s, motors, z, volts, d1, c1, d2, c2 = arrays
+        first = len(self.inputs)
+        return [
+            f"st, v1, e1, s1, p1 = fastdrive.peek_voltage({d1}, {c1}, {x}[0], {x}[2], {x}[1], {h})",
+            "if st == 0:",
+            f"    st, v2, e2, s2, p2 = fastdrive.peek_voltage({d2}, {c2}, {x}[3], {x}[5], {x}[4], {h})",
+            "if st == 0:",
+            f"    {volts}[0] = v1",
+            f"    {volts}[1] = v2",
+            f"    st = fast5r.actuated_io({p}, {s}, {motors}, {z}, {volts}, {x}, {first}, {h})",
+            "if st == 0:",
+            f"    fastdrive.commit_step({d1}, {c1}, v1, e1, s1, p1, {z}[14])",
+            f"    fastdrive.commit_step({d2}, {c2}, v2, e2, s2, p2, {z}[15])",
+            f"    {x}[{first + 13}] = v1",
+            f"    {x}[{first + 14}] = v2",
+            f"    {x}[{first + 15}] = {z}[14]",
+            f"    {x}[{first + 16}] = {z}[15]",
+        ]

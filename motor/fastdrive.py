@@ -1,0 +1,222 @@
+"""Compiled per-step arithmetic of the DC drive and the current observer (4.162, B.2, app. C, 7.20).
+
+Design-time work stays in Python (:mod:`motor.current_controller` places the poles with
+python-control, :mod:`motor.electrics` computes the step coefficients (a, g) and the mean
+weights for a step length); what runs every step is here, compiled with numba, and called
+by :class:`motor.Drive`, :class:`motor.CurrentController`, :class:`motor.CurrentObserver`
+(so by the FMU slaves, the in-process master and the reference) and by the compiled scene
+loop (:mod:`fmus.compiled`).
+
+Each model keeps its constants and its state in one float64 array with the named layout
+below.  A kernel returns a status first: :data:`OK`, or a refusal code, in which case it
+has changed NOTHING and the Python caller raises the message (naming the input, its value
+and the time).  Every expression is written in the order of the Python it replaced, so the
+results are bit-identical to it (``tests/test_fastdrive.py``).
+
+This module calls no compiled function of another file, so numba's on-disk cache
+(``cache=True``, invalidated by this file's modification time only) cannot go stale.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+# --- status codes ------------------------------------------------------------------------
+OK = 0
+#: An input is NaN or infinite.
+NONFINITE_INPUT = 1
+#: The step length is not the one the coefficients were computed for (Python prepares it).
+UNPREPARED_STEP = 2
+#: The current or torque after the step is not finite.
+DIVERGED = 3
+
+# --- layout of a current controller's array (CurrentController, K(z) of C.5) ----------------
+C_ALPHA, C_BETA, C_GAMMA, C_DELTA, C_VMAX = 0, 1, 2, 3, 4
+#: State: the last two saturated outputs u and errors e.
+C_U1, C_U2, C_E1, C_E2 = 5, 6, 7, 8
+CONTROLLER_SIZE = 9
+
+# --- layout of a drive's array (Drive) -------------------------------------------------------
+D_CURRENT_MODE = 0       # 1: current mode (K(z) on i_ref, i_hat), 0: voltage mode (v_ref)
+D_MEAN_TORQUE = 1        # 1: torque_output "mean", 0: "end"
+D_KE, D_KT, D_B, D_MU, D_OMEGA_EPS, D_VMAX, D_T = 2, 3, 4, 5, 6, 7, 8
+#: The step length h the coefficients are for, a and g of i(t+h) = a i + g (v - ke omega),
+#: the mean weights w_i, w_u (motor.electrics), and h / T.
+D_H, D_A, D_G, D_WI, D_WU, D_PHASE_STEP = 9, 10, 11, 12, 13, 14
+#: State: armature current i [A], last applied voltage v [V], controller phase (fraction of T).
+D_I, D_V, D_PHASE = 15, 16, 17
+DRIVE_SIZE = 18
+
+#: Relative tolerance deciding that a controller period is over (motor.drive._PHASE_TOL).
+PHASE_TOL = 1e-6
+
+# --- layout of an observer's array (CurrentObserver) ----------------------------------------
+O_STATIC = 0             # 1: static kind (7.20), 0: dynamic
+O_KE, O_H, O_A, O_G = 1, 2, 3, 4
+#: State: the estimate, the speed of the previous call and whether there was one.
+O_I_HAT, O_OMEGA_PREV, O_HAS_PREV = 5, 6, 7
+OBSERVER_SIZE = 8
+
+
+def new_controller(alpha, beta, gamma, delta, v_max) -> np.ndarray:
+    """A current controller's array, state zero."""
+    c = np.zeros(CONTROLLER_SIZE)
+    c[C_ALPHA], c[C_BETA], c[C_GAMMA], c[C_DELTA], c[C_VMAX] = alpha, beta, gamma, delta, v_max
+    return c
+
+
+@njit(cache=True)
+def _saturate(v, v_max):
+    return min(max(v, -v_max), v_max)
+
+
+@njit(cache=True)
+def _controller_output(c, e):
+    """K(z) as the anti-windup difference equation (app. C): the saturated voltage for error e."""
+    v = ((1.0 + c[C_DELTA]) * c[C_U1] - c[C_DELTA] * c[C_U2]
+         + c[C_ALPHA] * e + c[C_BETA] * c[C_E1] + c[C_GAMMA] * c[C_E2])
+    return _saturate(v, c[C_VMAX])
+
+
+@njit(cache=True)
+def _controller_commit(c, v, e):
+    c[C_U2] = c[C_U1]
+    c[C_U1] = v
+    c[C_E2] = c[C_E1]
+    c[C_E1] = e
+
+
+@njit(cache=True)
+def controller_update(c, i_ref, i_meas):
+    """One sample of K(z): the voltage to hold over the next period (state advanced)."""
+    e = i_ref - i_meas
+    v = _controller_output(c, e)
+    _controller_commit(c, v, e)
+    return v
+
+
+@njit(cache=True)
+def shaft_torque(d, i, omega):
+    """kt i - b omega - mu tanh(omega / omega_eps) (B.2, B.3; motor.electrics.shaft_torque)."""
+    return d[D_KT] * i - d[D_B] * omega - d[D_MU] * math.tanh(omega / d[D_OMEGA_EPS])
+
+
+@njit(cache=True)
+def _voltage(d, c, i_ref, v_ref, i_hat):
+    """(v, e, sampled, next phase) of this step, nothing changed."""
+    if d[D_CURRENT_MODE] == 0.0:
+        return _saturate(v_ref, d[D_VMAX]), 0.0, False, d[D_PHASE]
+    sampled = d[D_PHASE] == 0.0
+    e = i_ref - i_hat
+    v = _controller_output(c, e) if sampled else d[D_V]
+    phase = d[D_PHASE] + d[D_PHASE_STEP]
+    if phase > 1.0 - PHASE_TOL:
+        phase = 0.0
+    return v, e, sampled, phase
+
+
+@njit(cache=True)
+def _commit_voltage(d, c, v, e, sampled, phase):
+    if sampled:
+        _controller_commit(c, v, e)
+    d[D_PHASE] = phase
+
+
+@njit(cache=True)
+def peek_voltage(d, c, i_ref, v_ref, i_hat, h):
+    """(status, v, e, sampled, phase): :func:`sample_voltage` without changing anything;
+    :func:`commit_step` keeps it (a plant that integrates the current, fmus.compiled)."""
+    if not (math.isfinite(i_ref) and math.isfinite(v_ref) and math.isfinite(i_hat)):
+        return NONFINITE_INPUT, 0.0, 0.0, False, 0.0
+    if h != d[D_H]:
+        return UNPREPARED_STEP, 0.0, 0.0, False, 0.0
+    v, e, sampled, phase = _voltage(d, c, i_ref, v_ref, i_hat)
+    return OK, v, e, sampled, phase
+
+
+@njit(cache=True)
+def commit_step(d, c, v, e, sampled, phase, i):
+    """Keep the sample of :func:`peek_voltage` and the current i at the step's end."""
+    _commit_voltage(d, c, v, e, sampled, phase)
+    d[D_I] = i
+    d[D_V] = v
+
+
+@njit(cache=True)
+def sample_voltage(d, c, i_ref, v_ref, i_hat, h):
+    """(status, v): the voltage held over the next step of length h (Drive.sample_voltage).
+
+    Current mode: a new controller sample at the start of each period T, else the held
+    voltage; voltage mode: v_ref saturated.  Advances the controller and the phase.
+    """
+    status, v, e, sampled, phase = peek_voltage(d, c, i_ref, v_ref, i_hat, h)
+    if status == OK:
+        _commit_voltage(d, c, v, e, sampled, phase)
+    return status, v
+
+
+@njit(cache=True)
+def drive_step(d, c, i_ref, v_ref, omega, i_hat, h):
+    """(status, tau, v, i): one step of the drive with inputs held (Drive.step).
+
+    Refused (nothing changed): a non-finite input, a step h the coefficients were not
+    prepared for, a non-finite current or torque after the step.
+    """
+    if not (math.isfinite(omega) and math.isfinite(i_ref) and math.isfinite(v_ref) and math.isfinite(i_hat)):
+        return NONFINITE_INPUT, 0.0, 0.0, 0.0
+    if h != d[D_H]:
+        return UNPREPARED_STEP, 0.0, 0.0, 0.0
+    v, e, sampled, phase = _voltage(d, c, i_ref, v_ref, i_hat)
+    u = v - d[D_KE] * omega
+    i = d[D_A] * d[D_I] + d[D_G] * u                       # (4.162) over the step
+    current = i
+    if d[D_MEAN_TORQUE] != 0.0:
+        current = d[D_WI] * d[D_I] + d[D_WU] * u            # mean current over the step
+    tau = shaft_torque(d, current, omega)
+    if not (math.isfinite(i) and math.isfinite(tau)):
+        return DIVERGED, tau, v, i
+    commit_step(d, c, v, e, sampled, phase, i)
+    return OK, tau, v, i
+
+
+@njit(cache=True)
+def observer_estimate(o, v, omega, h):
+    """(status, i_hat): the current estimate at the end of a step (CurrentObserver.estimate).
+
+    Refused (nothing changed): a non-finite input, an unprepared h, or a non-finite
+    estimate (returned, not kept).
+    """
+    if not (math.isfinite(v) and math.isfinite(omega)):
+        return NONFINITE_INPUT, 0.0
+    if h != o[O_H]:
+        return UNPREPARED_STEP, 0.0
+    omega_held = omega if o[O_STATIC] != 0.0 or o[O_HAS_PREV] == 0.0 else o[O_OMEGA_PREV]
+    i_hat = o[O_A] * o[O_I_HAT] + o[O_G] * (v - o[O_KE] * omega_held)
+    if not math.isfinite(i_hat):
+        return DIVERGED, i_hat
+    o[O_I_HAT] = i_hat
+    o[O_OMEGA_PREV] = omega
+    o[O_HAS_PREV] = 1.0
+    return OK, i_hat
+
+
+# --- the compiled scene's calls (fmus.compiled): inputs x[:n_in], outputs after them ----------
+
+@njit(cache=True)
+def drive_io(d, c, x, h):
+    """DCMotorDrive: x = [i_ref, v_ref, omega, i_hat | tau, v, i]."""
+    status, tau, v, i = drive_step(d, c, x[0], x[1], x[2], x[3], h)
+    if status == OK:
+        x[4], x[5], x[6] = tau, v, i
+    return status
+
+
+@njit(cache=True)
+def observer_io(o, x, h):
+    """CurrentObserver: x = [v, omega | i_hat]."""
+    status, i_hat = observer_estimate(o, x[0], x[1], h)
+    if status == OK:
+        x[2] = i_hat
+    return status

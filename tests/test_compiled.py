@@ -1,0 +1,130 @@
+"""The compiled mode (fmus.compiled): the same rows as in process, refusals, fall-backs.
+
+Compiles three loops at most (the bench wiring, shared by every bench scene; the bench with its
+drives in the plant; the thesis scenes' wiring, with the exact model); numba caches them on disk
+(fmus.compiled.cache_dir), so a second test run loads them.
+"""
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from fmus import compiled
+from fmus.master import simulate
+from fmus.system import Component, System
+from scenarios.run import run_scene
+from scenarios.scenes import drives_in_plant, get_scene
+
+
+def _short(scene, stop_time):
+    return replace(scene, system=replace(scene.system, stop_time=stop_time))
+
+
+def _with(scene, instance, **parameters):
+    components = tuple(replace(c, parameters={**c.parameters, **parameters}) if c.name == instance else c
+                       for c in scene.system.components)
+    return replace(scene, system=replace(scene.system, components=components))
+
+
+def _same_rows(a, b):
+    assert a.signals.keys() == b.signals.keys()
+    for name in a.signals:
+        assert np.array_equal(a[name], b[name], equal_nan=True), name
+
+
+@pytest.mark.parametrize("name, drives_inside", [("bench_circle_TCMDx", False), ("bench_circle_TCMDx", True),
+                                                 ("thesis_sim_circle_me20", False)],
+                         ids=["bench", "drives_in_plant", "thesis_exact_model"])
+def test_compiled_rows_are_the_in_process_rows(name, drives_inside):
+    scene = _short(get_scene(name), 1.5)
+    if drives_inside:
+        scene = drives_in_plant(scene, substeps=2)
+    fast = simulate(scene.system, mode="compiled")
+    slow = simulate(scene.system, mode="inprocess")
+    assert fast.error is None and fast.mode == "compiled" and "fallback" not in fast.extra
+    assert fast.extra["python_steps"] == 0
+    _same_rows(fast, slow)
+    assert len(fast.time) == 1501
+
+
+def test_a_sample_off_the_table_is_taken_by_python_and_the_loop_goes_on():
+    # The controller's table covers only x <= 0.02 m: on the rest of the circle the compiled
+    # law declines and the Python controller evaluates the exact model there (table_fallback).
+    scene = _with(_short(get_scene("bench_circle_TCx"), 1.2), "ctrl", x_max=0.02)
+    fast = simulate(scene.system, mode="compiled")
+    slow = simulate(scene.system, mode="inprocess")
+    assert fast.error is None
+    assert 100 < fast.extra["python_steps"] < 1200
+    _same_rows(fast, slow)
+
+
+def test_a_refusal_stops_at_the_same_step_with_the_same_message():
+    scene = _with(_short(get_scene("bench_circle_TCx"), 1.2), "ctrl", x_max=0.02, table_fallback=False)
+    fast = run_scene(scene, mode="compiled")
+    slow = run_scene(scene, mode="inprocess")
+    assert "outside the tabulated region" in slow.result.error
+    assert fast.result.error == slow.result.error
+    assert fast.metrics["completed"] is False
+    assert 10 < len(fast.result.time) < 1201 and len(fast.result.time) == len(slow.result.time)
+    _same_rows(fast.result, slow.result)
+
+
+def test_foreign_fmus_jacobi_and_retries_fall_back_with_a_reason():
+    system = System((Component("drive1", "/tmp/supplier_drive.fmu"),), (), (), stop_time=0.01)
+    with pytest.raises(compiled.NotCompilable, match=r"drive1 is an FMU file \(supplier_drive.fmu\)"):
+        compiled.check_compilable(system, "gauss-seidel", None)
+    scene = _short(get_scene("thesis_sim_circle"), 0.01)
+    with pytest.raises(compiled.NotCompilable, match="Gauss-Seidel only"):
+        compiled.check_compilable(scene.system, "jacobi", None)
+    with pytest.raises(compiled.NotCompilable, match="retry_substeps"):
+        compiled.check_compilable(scene.system, "gauss-seidel", 4)
+    with pytest.warns(UserWarning, match="compiled mode: coupling 'jacobi'.*running in process instead"):
+        result = simulate(scene.system, mode="compiled", coupling="jacobi")
+    assert result.mode == "inprocess" and "Gauss-Seidel only" in result.extra["fallback"]
+
+
+def test_metrics_report_compile_time_and_peak_memory():
+    outcome = run_scene(_short(get_scene("bench_circle_PDq"), 0.2), mode="compiled")
+    m = outcome.metrics
+    assert m["mode"] == "compiled" and m["compile_s"] > 0.0 and m["python_steps"] == 0
+    assert m["peak_rss_mb"] > 10.0 and math.isfinite(m["realtime_factor"])
+
+
+def test_generated_source_follows_the_stepping_order():
+    scene = _short(get_scene("bench_circle_PDq"), 0.01)
+    result = simulate(scene.system, mode="compiled")
+    source = result.extra["source"]
+    positions = [source.index(f"# {name} (") for name in result.order]
+    assert positions == sorted(positions)
+    assert compiled.ADAPTERS.keys() >= {c.model for c in scene.system.components}
+
+
+def test_python_finishes_a_declined_step_from_the_declining_member_and_sub_step():
+    calls = []
+
+    class Instance:
+        def __init__(self, name):
+            self.name = name
+
+        def set_inputs(self, values):
+            pass
+
+        def do_step(self, t, h):
+            calls.append((self.name, t, h))
+
+        def get_outputs(self):
+            return []
+
+    a, b, c, d = (Instance(n) for n in "abcd")
+
+    class Stepper:
+        system = System((), (), (), stop_time=1.0, step=1.0)
+        values = []
+        groups = [(1, [(a, [], [])]), (2, [(b, [], []), (c, [], [])]), (1, [(d, [], [])])]
+        time = 0.0
+
+    stepper = Stepper()
+    compiled._finish_step_in_python(stepper, 1, 1, 0, 3.0)   # c declined in the first of b, c's two sub-steps
+    assert calls == [("c", 3.0, 0.5), ("b", 3.5, 0.5), ("c", 3.5, 0.5), ("d", 3.0, 1.0)]
+    assert stepper.time == 4.0
