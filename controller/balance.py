@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 import control   # at import (an FMU's instantiation), not in the design: importing it takes 1-7 s
 import numpy as np
 
-from controller.trajectories import SMOOTHSTEP_COEFFICIENTS, _SMOOTHSTEP_DERIVATIVES, _polynomial
+from controller.trajectories import smoothstep
 
 #: Bryson's rule: the largest acceptable excursion of each state, (theta [rad], psi [rad],
 #: phi [rad], theta' [rad/s], psi' [rad/s], phi' [rad/s]); Q = diag(1/scale^2).
@@ -206,7 +206,8 @@ def _smooth(t, window):
     if t >= end:
         return 1.0, 0.0
     tau = (t - start) / (end - start)
-    return _polynomial(SMOOTHSTEP_COEFFICIENTS, tau), _polynomial(_SMOOTHSTEP_DERIVATIVES[0], tau) / (end - start)
+    s, ds = smoothstep(tau)
+    return s, ds / (end - start)
 
 
 def get_route(name: str) -> Route:

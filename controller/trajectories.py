@@ -36,6 +36,16 @@ _SMOOTHSTEP_DERIVATIVES = tuple(
 """Ascending coefficients of s'(tau) and s''(tau), differentiated from (7.27)."""
 
 
+def smoothstep(tau: float) -> tuple[float, float]:
+    """(s(tau), s'(tau)) of (7.27) for 0 <= tau <= 1, by Horner's rule."""
+    value = slope = 0.0
+    for coefficient in reversed(SMOOTHSTEP_COEFFICIENTS):
+        value = value * tau + coefficient
+    for coefficient in reversed(_SMOOTHSTEP_DERIVATIVES[0]):
+        slope = slope * tau + coefficient
+    return value, slope
+
+
 class ReferenceSample(NamedTuple):
     """Reference position, velocity and acceleration of the end effector at one instant."""
 
