@@ -226,6 +226,8 @@ def compile_law():
     converted to float64 instead of triggering a compilation per type combination.
     Thread-safe: a second thread waits for the first one's compilation.
     """
+    if not hasattr(law_step, "signatures"):
+        return                  # NUMBA_DISABLE_JIT=1 (the mutation campaign): plain Python
     with _COMPILE_LOCK:
         if not law_step.signatures:
             law_step.compile(LAW_SIGNATURE.args)
