@@ -80,7 +80,7 @@ LAW = {
 }
 SAMPLE = 300
 SEED = 18
-TIMEOUT = 240.0
+TIMEOUT = 180.0
 EXCLUDED_OPERATORS = ("_RShift", "_LShift", "_BitOr", "_BitAnd", "_BitXor")
 
 
