@@ -161,8 +161,8 @@ def initialise(workdir: Path, sample: int, seed: int):
 
 def _restore_sources(workdir: Path):
     """A campaign killed mid-mutant leaves that mutant on disk: put the file under mutation
-    (``WORKDIR/current``) back from git; files edited by hand are never touched."""
-    marker = workdir / "current"
+    (``WORKDIR/current.<worktree>``) back from git; files edited by hand are never touched."""
+    marker = workdir / f"current.{ROOT.name}"
     if marker.exists():
         source = marker.read_text().strip()
         subprocess.run(["git", "checkout", "--", source], cwd=ROOT, check=True)
@@ -180,7 +180,7 @@ def execute(workdir: Path, only=None):
         if subprocess.run(["git", "diff", "--quiet", "--", source], cwd=ROOT).returncode:
             raise SystemExit(f"{source} differs from git: run the campaign in a clean detached worktree")
         print(f"== {source}", flush=True)
-        (workdir / "current").write_text(source)
+        (workdir / f"current.{ROOT.name}").write_text(source)
         subprocess.run(["cosmic-ray", "exec", str(_config(workdir, source)), str(_session(workdir, source))],
                        cwd=ROOT, env=env, check=False)
         _restore_sources(workdir)
