@@ -94,8 +94,9 @@ def test_adaptive_gain_follows_6_66_on_a_known_sequence(kernel):
     """(6.66) by hand, phi = 20, gamma = 5, k0 = 200: outside the layer k grows by gamma
     while s keeps its sign; inside it k holds while s keeps its sign and drops by gamma at
     each crossing; the first sample (s[-1] = 0) keeps k."""
-    s = [30.0, 30.0, 10.0, -10.0, -5.0, 5.0, 25.0, -25.0, -25.0, -19.0, -20.0, 20.0, 20.0]
-    expected = [200, 205, 205, 200, 200, 195, 200, 195, 200, 200, 205, 200, 205]   # |s| = phi: ">="
+    s = [30.0, 30.0, 10.0, -10.0, -5.0, 5.0, 25.0, -25.0, -25.0, -19.0, -20.0, 20.0, 20.0, 0.0, 5.0]
+    # |s| = phi: ">=" grows; sinal(0) = 0: s = 0 (and the sample after it) keeps k.
+    expected = [200, 205, 205, 200, 200, 195, 200, 195, 200, 200, 205, 200, 205, 205, 205]
     gains, integrals = _adaptive_run(kernel, s, 200.0, 5.0, 20.0)
     assert gains == expected
     # The integral of (7.21) with the rectangle rule, each sample with its updated gain.
