@@ -52,3 +52,18 @@ def test_model_error_scales_inertia_and_quadratic_terms():
     assert np.allclose(b, np.array(a) * (1 + e), rtol=1e-12)
     with pytest.raises(ValueError, match="model_error = -1.5"):
         perturbed_params(BENCH, -1.5)
+
+
+@pytest.mark.parametrize("step", [0.0, -0.005, float("nan"), float("inf")])
+def test_grid_step_must_be_positive_and_finite(step):
+    with pytest.raises(ValueError, match=r"grid step = .* m must be > 0"):
+        TabulatedModel(BENCH, step, REGION, cache=False)
+
+
+def test_table_is_cached_where_parcosim_cache_says(tmp_path, monkeypatch):
+    """``$PARCOSIM_CACHE`` (docs/controller.md): the table is written there and read back."""
+    monkeypatch.setenv("PARCOSIM_CACHE", str(tmp_path))
+    built = TabulatedModel(BENCH, 0.01, REGION)
+    assert [p.suffix for p in tmp_path.iterdir()] == [".npz"] and built.build_seconds > 0.0
+    loaded = TabulatedModel(BENCH, 0.01, REGION)
+    assert loaded.build_seconds == 0.0 and np.array_equal(loaded.table, built.table, equal_nan=True)
