@@ -51,7 +51,7 @@ TARGETS = {
     "plant/serial.py": ("test_serial",) + _PLANT,
     "plant/parallel.py": _PLANT,
     "plant/fivebar.py": ("test_fivebar", "test_plant_dynamics", "test_controller_kinematics"),
-    "plant/fast5r.py": _PLANT,
+    "plant/fast5r.py": _PLANT + ("test_controller_model",),     # inverse_terms: ExactModel's kernel
     "plant/simulator.py": ("test_plant_dynamics", "test_fmu_plant"),
     "plant/integrators.py": ("test_plant_dynamics",),
     "plant/correction.py": ("test_correction",),

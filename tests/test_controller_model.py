@@ -116,3 +116,28 @@ def test_default_cache_dir_is_under_the_home_cache(tmp_path, monkeypatch):
     assert cache_dir() == tmp_path / ".cache" / "parcosim"
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
     assert cache_dir() == tmp_path / "xdg" / "parcosim"
+
+
+@pytest.mark.parametrize("kernel", ["fast", "general"])
+def test_velocity_terms_are_passive(kernel):
+    """With no gravity (the bench is horizontal) the kinetic energy T = ½ ẋᵀ H ẋ changes only
+    by the power of the efforts, so ẋᵀ h(x, ẋ) = ½ ẋᵀ Ḣ ẋ (the skew symmetry of Ḣ - 2C).
+    Ḣ by central differences of H along ẋ; checked at random poses and velocities."""
+    model = ExactModel(BENCH, kernel=kernel)
+    rng = np.random.default_rng(18)
+    checked = 0
+    while checked < 8:
+        x, y = rng.uniform(-0.04, 0.04), rng.uniform(0.12, 0.2)
+        if model.kin.margin(x, y) < 0.2:
+            continue
+        v = rng.normal(0.0, 0.3, 2)
+        H00, H01, H11, h0, h1 = model.terms(x, y, *v)
+        delta = 1e-6
+
+        def H(s):
+            a, b, c, _, _ = model.terms(x + s * v[0], y + s * v[1], 0.0, 0.0)
+            return np.array([[a, b], [b, c]])
+
+        dH = (H(delta) - H(-delta)) / (2 * delta)
+        assert v @ np.array([h0, h1]) == pytest.approx(0.5 * v @ dH @ v, rel=1e-6, abs=1e-12)
+        checked += 1
