@@ -2,7 +2,7 @@
 
     python -m benchmarks.mutation [--workdir out/mutation] [--sample 300] [--seed 18]
     python -m benchmarks.mutation --report                # figures and survivors so far
-    python -m benchmarks.mutation --retest survived       # re-run the survivors (after a new test)
+    python -m benchmarks.mutation --retest survived       # re-run the survivors only (after new tests)
 
 Resumable: each source file is one cosmic-ray session (``WORKDIR/<file>.sqlite``); a run
 executes the pending mutants only, so an interrupted campaign goes on where it stopped.
@@ -88,15 +88,19 @@ def _session(workdir: Path, source: str) -> Path:
     return workdir / (source.replace("/", "__").removesuffix(".py") + ".sqlite")
 
 
-def _config(workdir: Path, source: str) -> Path:
+def _test_command(source: str) -> str:
     tests = " ".join(f"tests/{name}.py" for name in TARGETS[source])
+    return f"{sys.executable} -m pytest -x -q -p no:cacheprovider -o addopts= {tests}"
+
+
+def _config(workdir: Path, source: str) -> Path:
     path = workdir / (source.replace("/", "__").removesuffix(".py") + ".toml")
     path.write_text(
         "[cosmic-ray]\n"
         f'module-path = "{source}"\n'
         f"timeout = {TIMEOUT}\n"
         "excluded-modules = []\n"
-        f'test-command = "{sys.executable} -m pytest -x -q -p no:cacheprovider -o addopts= {tests}"\n'
+        f'test-command = "{_test_command(source)}"\n'
         "[cosmic-ray.distributor]\n"
         'name = "local"\n')
     return path
@@ -186,16 +190,38 @@ def execute(workdir: Path, only=None):
         _restore_sources(workdir)
 
 
-def retest(workdir: Path, outcome: str):
-    """Forget the results with this test outcome (e.g. ``survived``) so the next run repeats them."""
+def retest(workdir: Path, outcome: str, only=None):
+    """Run again the mutants whose result has this test outcome (e.g. ``survived``, after new
+    tests) and record the new result; the pending mutants are left alone.  A mutant whose
+    line no longer reads as it did (the code was changed or removed) keeps its result and is
+    listed as such."""
+    from cosmic_ray.mutating import mutate_and_test
     from cosmic_ray.work_db import WorkDB, use_db
-    from sqlalchemy import delete
 
-    from cosmic_ray.work_db import WorkResultStorage
+    os.environ.update(NUMBA_DISABLE_JIT="1", PYTHONPATH=str(ROOT))
+    os.chdir(ROOT)
+    _restore_sources(workdir)
     for source in TARGETS:
+        if only and source not in only:
+            continue
+        lines = (ROOT / source).read_text().splitlines()
         with use_db(str(_session(workdir, source)), WorkDB.Mode.open) as db:
-            with db._session_maker.begin() as session:
-                session.execute(delete(WorkResultStorage).where(WorkResultStorage.test_outcome == outcome))
+            for item, result in db.completed_work_items:
+                if result.test_outcome != outcome:
+                    continue
+                mutation = item.mutations[0]
+                removed = [line[1:] for line in (result.diff or "").splitlines()
+                           if line.startswith("-") and not line.startswith("---")]
+                line_now = lines[mutation.start_pos[0] - 1] if mutation.start_pos[0] <= len(lines) else ""
+                if not removed or removed[0].strip() != line_now.strip():
+                    print(f"{source}:{mutation.start_pos[0]} job {item.job_id}: the line changed, not re-run",
+                          flush=True)
+                    continue
+                (workdir / f"current.{ROOT.name}").write_text(source)
+                new = mutate_and_test(item.mutations, _test_command(source), TIMEOUT)
+                _restore_sources(workdir)
+                db.set_result(item.job_id, new)
+                print(f"{source}:{mutation.start_pos[0]} job {item.job_id}: {new.test_outcome}", flush=True)
 
 
 def report(workdir: Path) -> dict:
@@ -259,7 +285,7 @@ def main(argv=None):
     parser.add_argument("--seed", type=int, default=SEED)
     parser.add_argument("--only", nargs="*", help="run these source files only")
     parser.add_argument("--report", action="store_true", help="print the figures, run nothing")
-    parser.add_argument("--retest", metavar="OUTCOME", help="forget results with this outcome, then run")
+    parser.add_argument("--retest", metavar="OUTCOME", help="run again the mutants with this outcome only")
     args = parser.parse_args(argv)
     if args.report:
         data = report(args.workdir)
@@ -268,8 +294,9 @@ def main(argv=None):
         return 0
     initialise(args.workdir, args.sample, args.seed)
     if args.retest:
-        retest(args.workdir, args.retest)
-    execute(args.workdir, args.only)
+        retest(args.workdir, args.retest, args.only)
+    else:
+        execute(args.workdir, args.only)
     print_report(report(args.workdir))
     return 0
 
