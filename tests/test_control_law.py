@@ -142,3 +142,19 @@ def test_sliding_term_removes_the_steady_error_of_a_constant_disturbance(kernel)
     assert e_pd == pytest.approx(-d / (st.m_star * st.lam ** 2), rel=1e-6)
     e_md = _double_integrator_error(kernel, "PDMDq")
     assert np.all(np.abs(e_md) < 1e-5 * np.abs(e_pd))
+
+
+@pytest.mark.parametrize("kernel", KERNELS)
+def test_step_with_errors_returns_both_errors_6_5(kernel):
+    """e = q_d - q (6.5) of each joint, from the compiled and from the Python path."""
+    qr = _reference_angles()
+    q = (qr[0] + 0.01, qr[1] - 0.02)
+    ctrl = PositionController(BENCH, get_strategy("PDq"), kernel=kernel)
+    out = ctrl.step_with_errors(0.0, *q, 0.0, 0.0, 0.0, 0.0, X_REF, Y_REF, 0.0, 0.0, 0.0, 0.0)
+    assert out[4:] == pytest.approx((-0.01, 0.02), abs=1e-12)
+
+
+@pytest.mark.parametrize("T", [0.0, -1e-3, float("nan")])
+def test_sample_time_must_be_positive(T):
+    with pytest.raises(ValueError, match=r"T = .* s must be > 0"):
+        PositionController(BENCH, get_strategy("PDq"), T=T)
