@@ -158,3 +158,9 @@ def test_step_with_errors_returns_both_errors_6_5(kernel):
 def test_sample_time_must_be_positive(T):
     with pytest.raises(ValueError, match=r"T = .* s must be > 0"):
         PositionController(BENCH, get_strategy("PDq"), T=T)
+
+
+def test_pd_strategy_needs_a_positive_m_star():
+    """u' = m* (...) (7.21, PD): m* = 0 would command no torque at all."""
+    with pytest.raises(ValueError, match=r"m_star = 0.0 must be > 0 for the PD strategy PDq"):
+        PositionController(BENCH, get_strategy("PDq").with_(m_star=0.0))
