@@ -296,6 +296,8 @@ def compile_law(exact: bool = False):
     converted to float64 instead of triggering a compilation per type combination.
     Thread-safe: a second thread waits for the first one's compilation.
     """
+    if not hasattr(law_step, "signatures"):
+        return                  # NUMBA_DISABLE_JIT=1 (the mutation campaign): plain Python
     with _COMPILE_LOCK:
         functions = ((law_step, LAW_SIGNATURE),) + (((law_terms_step, LAW_TERMS_SIGNATURE),
                                                       (exact_state, EXACT_STATE_SIGNATURE)) if exact else ())

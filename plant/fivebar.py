@@ -266,8 +266,3 @@ def thesis_coordinates(params: FiveBarParams, x: float, y: float) -> np.ndarray:
     th21 = math.pi - p21
     th22 = (math.pi - p22) - th21
     return np.array([x, y, 0.0, p11, p12 - p11, th21, th22])
-
-
-def passive_world_angles(q) -> tuple[float, float]:
-    """Absolute world angles of the distal links from the thesis' q."""
-    return q[TH11] + q[TH12], math.pi - (q[TH21] + q[TH22])

@@ -50,11 +50,13 @@ def closed_loop_error(name, dt, duration=0.12):
 @pytest.mark.parametrize("name", ["TCx", "TCq"])
 def test_computed_torque_error_obeys_the_linear_error_ode_up_to_the_hold(name):
     """Exact model, ideal actuators: the error follows ë + kv ė + kp e = 0 (6.12, δ' = 0);
-    the deviation comes from the 1 ms zero-order hold only: O(h), 4x smaller at h/4."""
+    the deviation comes from the 1 ms zero-order hold only: O(h), 4x smaller at h/4.
+    Measured: 4.02 % of the peak error at 1 ms and a ratio of 4.015 (TCx and TCq); the bounds
+    leave 12 % on the first and 5 % on the second (the O(h^2) rest moves it by 0.4 %)."""
     dev_1ms, peak = closed_loop_error(name, 1e-3)
     dev_quarter, _ = closed_loop_error(name, 2.5e-4)
-    assert dev_1ms < 0.06 * peak
-    assert 3.0 < dev_1ms / dev_quarter < 5.0
+    assert dev_1ms < 0.045 * peak
+    assert 3.8 < dev_1ms / dev_quarter < 4.2
 
 
 def test_task_space_torque_from_z_equals_jacobian_transpose():

@@ -13,6 +13,7 @@ import math
 import re
 from dataclasses import replace
 
+import numba
 import numpy as np
 import pytest
 
@@ -239,6 +240,7 @@ def test_step_with_errors_returns_the_errors():
         0.0, ang[0], ang[2], 0, 0, 0, 0, x + 1e-3, y, 0, 0, 0, 0)
 
 
+@pytest.mark.skipif(numba.config.DISABLE_JIT, reason="NUMBA_DISABLE_JIT=1: nothing is compiled")
 def test_law_is_compiled_once_for_float_arguments():
     """Ints from a caller are converted to float64: no compilation per type combination."""
     ctrl = PositionController(BENCH, get_strategy("PDq"))

@@ -1,10 +1,12 @@
 """The tabulated model (7.2.5) against the exact one; model error scaling."""
 import math
+import time
 
 import numpy as np
 import pytest
 
-from controller.model import ExactModel, ModelRangeError, TabulatedModel, perturbed_params, tabulation_error
+from controller.model import (ExactModel, ModelRangeError, TabulatedModel, cache_dir, perturbed_params,
+                              tabulation_error)
 from plant import fivebar, get_preset
 
 BENCH = get_preset("bench")
@@ -52,3 +54,90 @@ def test_model_error_scales_inertia_and_quadratic_terms():
     assert np.allclose(b, np.array(a) * (1 + e), rtol=1e-12)
     with pytest.raises(ValueError, match="model_error = -1.5"):
         perturbed_params(BENCH, -1.5)
+
+
+@pytest.mark.parametrize("step", [0.0, -0.005, float("nan"), float("inf")])
+def test_grid_step_must_be_positive_and_finite(step):
+    with pytest.raises(ValueError, match=r"grid step = .* m must be > 0"):
+        TabulatedModel(BENCH, step, REGION, cache=False)
+
+
+def test_table_is_cached_where_parcosim_cache_says(tmp_path, monkeypatch):
+    """``$PARCOSIM_CACHE`` (docs/controller.md): the table is written there and read back."""
+    monkeypatch.setenv("PARCOSIM_CACHE", str(tmp_path))
+    built = TabulatedModel(BENCH, 0.01, REGION)
+    assert [p.suffix for p in tmp_path.iterdir()] == [".npz"] and built.build_seconds > 0.0
+    loaded = TabulatedModel(BENCH, 0.01, REGION)
+    assert loaded.build_seconds == 0.0 and np.array_equal(loaded.table, built.table, equal_nan=True)
+
+
+def test_near_singular_grid_points_are_left_out(tmp_path, monkeypatch):
+    """Near a singularity H and h grow without bound (det J -> 0): a grid point whose margin
+    (plant.fivebar.singularity, sines of the elbow and distal-link angles) is below the band
+    must not enter the table; every other point of the workspace must."""
+    monkeypatch.setenv("PARCOSIM_CACHE", str(tmp_path))
+    tab = TabulatedModel(BENCH, 0.01, (-0.02, 0.02, 0.0, 0.06))
+    band = fivebar.NEAR_SINGULAR_MARGIN
+    near = 0
+    for iy, y in enumerate(tab.ys):
+        for ix, x in enumerate(tab.xs):
+            try:
+                margin = fivebar.singularity(BENCH, x, y).margin
+            except fivebar.KinematicsError:
+                assert not tab.valid[iy, ix]
+                continue
+            assert tab.valid[iy, ix] == (margin >= band), (x, y, margin)
+            near += margin < band
+    assert near > 0
+
+
+@pytest.mark.parametrize("dx, dy", [(1e-6, 0.0), (0.025, 0.0), (0.0, 1e-6), (0.0, 0.025)])
+def test_points_beyond_the_far_edges_are_outside(dx, dy, tmp_path, monkeypatch):
+    monkeypatch.setenv("PARCOSIM_CACHE", str(tmp_path))
+    tab = TabulatedModel(BENCH, 0.01, REGION)
+    x = (REGION[1] + dx) if dx else 0.0
+    y = (REGION[3] + dy) if dy else 0.16
+    with pytest.raises(ModelRangeError, match="outside the tabulated region"):
+        tab.terms(x, y, 0.0, 0.0)
+
+
+def test_build_time_is_a_wall_time(tmp_path, monkeypatch):
+    monkeypatch.setenv("PARCOSIM_CACHE", str(tmp_path))
+    start = time.perf_counter()
+    tab = TabulatedModel(BENCH, 0.01, REGION)
+    assert 0.0 < tab.build_seconds <= time.perf_counter() - start
+
+
+def test_default_cache_dir_is_under_the_home_cache(tmp_path, monkeypatch):
+    """cache_dir (docs/controller.md): $PARCOSIM_CACHE, else $XDG_CACHE_HOME/parcosim, else ~/.cache/parcosim."""
+    monkeypatch.delenv("PARCOSIM_CACHE", raising=False)
+    monkeypatch.delenv("XDG_CACHE_HOME", raising=False)
+    monkeypatch.setenv("HOME", str(tmp_path))
+    assert cache_dir() == tmp_path / ".cache" / "parcosim"
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert cache_dir() == tmp_path / "xdg" / "parcosim"
+
+
+@pytest.mark.parametrize("kernel", ["fast", "general"])
+def test_velocity_terms_are_passive(kernel):
+    """With no gravity (the bench is horizontal) the kinetic energy T = ½ ẋᵀ H ẋ changes only
+    by the power of the efforts, so ẋᵀ h(x, ẋ) = ½ ẋᵀ Ḣ ẋ (the skew symmetry of Ḣ - 2C).
+    Ḣ by central differences of H along ẋ; checked at random poses and velocities."""
+    model = ExactModel(BENCH, kernel=kernel)
+    rng = np.random.default_rng(18)
+    checked = 0
+    while checked < 8:
+        x, y = rng.uniform(-0.04, 0.04), rng.uniform(0.12, 0.2)
+        if model.kin.margin(x, y) < 0.2:
+            continue
+        v = rng.normal(0.0, 0.3, 2)
+        H00, H01, H11, h0, h1 = model.terms(x, y, *v)
+        delta = 1e-6
+
+        def H(s):
+            a, b, c, _, _ = model.terms(x + s * v[0], y + s * v[1], 0.0, 0.0)
+            return np.array([[a, b], [b, c]])
+
+        dH = (H(delta) - H(-delta)) / (2 * delta)
+        assert v @ np.array([h0, h1]) == pytest.approx(0.5 * v @ dH @ v, rel=1e-6, abs=1e-12)
+        checked += 1

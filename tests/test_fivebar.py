@@ -102,3 +102,22 @@ def test_workspace_map_has_a_near_singular_band():
 def test_unreachable_point_is_named():
     with pytest.raises(KinematicsError, match=r"x=0\.5.*outside the workspace"):
         inverse_kinematics(get_preset("bench"), 0.5, 0.1)
+
+
+def test_no_assembly_when_the_elbows_are_farther_apart_than_the_distal_links_reach():
+    """q1 = 0, q2 = pi: elbows at (+-(l0 + l1), 0), 0.34 m apart; two distal links of 0.16 m
+    cannot close the loop (002 eq. 7-11)."""
+    with pytest.raises(KinematicsError, match="no assembly"):
+        direct_kinematics(get_preset("bench"), 0.0, math.pi)
+
+
+def test_workspace_map_covers_the_reach():
+    """The grid spans the documented square [-l0 - reach, l0 + reach] x [-reach, reach]; the
+    highest reachable point of the equal-chain thesis_sim is (0, sqrt((l1 + l2)^2 - l0^2))."""
+    p, step = get_preset("thesis_sim"), 0.007          # not a divisor of the extent: the end is not a grid point
+    ws = workspace_map(p, step=step)
+    reach = p.chain1.l1 + p.chain1.l2
+    assert ws.x[0] == -p.l0 - reach and abs(ws.x[-1] - (p.l0 + reach)) < step / 2
+    assert ws.y[0] == -reach and abs(ws.y[-1] - reach) < step / 2
+    top = max(ws.y[iy] for iy, ix in np.argwhere(ws.status != ws.OUTSIDE))
+    assert math.sqrt(reach ** 2 - p.l0 ** 2) - step < top <= math.sqrt(reach ** 2 - p.l0 ** 2)

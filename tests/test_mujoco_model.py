@@ -8,10 +8,9 @@ trajectories only to the accuracy MuJoCo's soft ``connect`` closure allows
 import sys
 from pathlib import Path
 
+import mujoco  # in the test extra: a missing MuJoCo is a failure, not a skip
 import numpy as np
 import pytest
-
-mujoco = pytest.importorskip("mujoco")
 
 # Repository root on the path so that `tests.support` and `benchmarks` import under any pytest invocation.
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))

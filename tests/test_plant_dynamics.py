@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from plant import ACCURATE, IntegratorSettings, PlantError, PlantSimulator, get_preset
-from plant import fivebar
+from plant import fast5r, fivebar
 from plant.fast5r import FastKernel
 from plant.parallel import forward_dynamics, inverse_dynamics, inverse_dynamics_terms, mechanism_state
 from tests.support import lagrange5r as ref
@@ -211,3 +211,18 @@ def test_running_into_a_singularity_stops_with_time_and_place():
         for _ in range(5000):
             sim.step(0.05, 0.0, 1e-3)
     assert np.all(np.isfinite(sim.y))
+
+
+def test_compiled_report_measures_are_the_singularity_sines():
+    """The step report's pose measures (what stops a run at a singular pose) are |sin| of the
+    elbow angles and of the angle between the distal links, as plant.fivebar.singularity
+    computes them from the inverse kinematics (002 eq. 1-6)."""
+    params = get_preset("bench")
+    p = fast5r.pack_params(params)
+    _, states = random_states(params, 10, seed=18)
+    out = np.empty(fast5r.REPORT_SIZE)
+    for q, dq in states:
+        fast5r.report(p, np.concatenate([q, dq]), 1e-3, out)
+        s = fivebar.singularity(params, q[0], q[1])
+        measures = out[fast5r.REPORT_MEASURES:fast5r.REPORT_MEASURES + 3]
+        assert np.allclose(np.abs(measures), np.abs([s.serial1, s.serial2, s.parallel]), rtol=0, atol=1e-12)

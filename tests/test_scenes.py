@@ -11,6 +11,7 @@ from scenarios import scenes
 from scenarios.metrics import rms_norm
 from scenarios.run import run_scene
 from scenarios.scenes import Scene, get_scene, scene_names
+from scenarios.regression import STORED as STORED_METRICS
 
 
 def _shortened(name, stop_time):
@@ -53,13 +54,18 @@ def test_metrics_are_the_thesis_formulas():
     assert outcome.metrics["tau_ef_Nm"] > 0.0
 
 
-def test_thesis_sim_circle_exact_model_tracks_within_a_millimetre():
+def test_thesis_sim_circle_exact_model_tracks_to_the_hold_error():
+    """Exact model, ideal actuators: only the 1 ms hold is left, e_ef = 0.00572 mm measured;
+    the bound is 15 % above it (the stored metrics of test_regression pin it to 1e-6; this
+    bound keeps the claim if someone rewrites them).  Model error costs accuracy (thesis
+    figures 18-23), monotonically: me20 0.264 mm (46x), me40 0.452 mm (79x); asserted 30x
+    and 50x, so that the plant no longer seeing the model error fails by far."""
     outcome = run_scene("thesis_sim_circle")
     assert outcome.result.error is None
-    assert outcome.metrics["e_ef_mm"] < 1.0
-    # model error costs accuracy (thesis figures 18-23)
-    worse = run_scene("thesis_sim_circle_me40")
-    assert worse.metrics["e_ef_mm"] > 2 * outcome.metrics["e_ef_mm"]
+    assert outcome.metrics["e_ef_mm"] < 0.0066
+    me20 = run_scene("thesis_sim_circle_me20").metrics["e_ef_mm"]
+    me40 = run_scene("thesis_sim_circle_me40").metrics["e_ef_mm"]
+    assert 30 * outcome.metrics["e_ef_mm"] < me20 < me40 and me40 > 50 * outcome.metrics["e_ef_mm"]
 
 
 def test_run_command_writes_the_contract_files(tmp_path, monkeypatch):
@@ -127,7 +133,9 @@ def test_reduced_fidelity_scenes_track(switches):
     scene = replace(scene, system=replace(scene.system, stop_time=1.5), window=(1.0, 1.5))
     outcome = run_scene(scene)
     assert outcome.result.error is None
-    assert outcome.metrics["e_ef_mm"] < 5.0
+    # Full fidelity: 0.618 mm over this window; measured 0.229 (ideal electrics) to 0.636 mm
+    # (no link inertias, m0 = 0.05 kg).  Leaving out an effect may not cost more than 30 %.
+    assert outcome.metrics["e_ef_mm"] < 1.3 * 0.618
 
 
 def test_export_ssp_command(tmp_path, built_fmus, capsys):
@@ -174,7 +182,10 @@ def test_run_command_with_the_drives_in_the_plant(tmp_path, capsys):
     out = tmp_path / "in_plant"
     assert main(["run", "bench_triangle_PDx", "--drives-in-plant", "8", "--out", str(out)]) == 0
     metrics = json.loads((out / "metrics.json").read_text())
-    assert metrics["completed"] and 0.0 < metrics["e_ef_mm"] < 5.0
+    # The drives' integration inside the plant changes e_ef by 0.1 % (0.6506 against the
+    # separate drives' 0.6500 mm, tests/data/scene_metrics.json); 1 % asserted.
+    separate = json.loads(STORED_METRICS.read_text())["scenes"]["bench_triangle_PDx"]["e_ef_mm"]
+    assert metrics["completed"] and metrics["e_ef_mm"] == pytest.approx(separate, rel=0.01)
     header = (out / "result.csv").read_text().splitlines()[0].split(",")
     assert {"i1", "i2", "v1", "v2"} <= set(header)
     capsys.readouterr()

@@ -1,0 +1,305 @@
+"""Mutation campaign (cosmic-ray) on the model code: plant/, motor/, controller/, fmus/slaves/.
+
+    python -m benchmarks.mutation [--workdir out/mutation] [--sample 300] [--seed 18]
+    python -m benchmarks.mutation --report                # figures and survivors so far
+    python -m benchmarks.mutation --retest survived       # re-run the survivors only (after new tests)
+
+Resumable: each source file is one cosmic-ray session (``WORKDIR/<file>.sqlite``); a run
+executes the pending mutants only, so an interrupted campaign goes on where it stopped.
+Run it in a detached worktree (it edits the source files in place, one mutant at a time):
+
+    git worktree add --detach /work/wt18run issue18a
+    cd /work/wt18run && nohup env PYTHONPATH=$PWD python -m benchmarks.mutation > out/mutation.log 2>&1 &
+
+What runs (docs/mutation.md):
+
+* every mutant of the control law (:data:`LAW`: the sliding variable (7.22), the integral of
+  (7.21), the adaptive gain (6.66), sat and sign, in the Python reference and the numba kernel);
+* a seeded sample of :data:`SAMPLE` others, drawn uniformly from all other mutants of
+  :data:`TARGETS`; the rest are marked ``skipped`` in their session.
+
+``NUMBA_DISABLE_JIT=1`` makes the numba kernels plain Python, so their mutants run (and are
+killed or not) like any other code.  Each mutant runs only the test modules of its file
+(:data:`TARGETS`), stopping at the first failure.  Replacements by a bitwise operator
+(``>> << | & ^``) are left out: on the float operands of this code they raise TypeError at the
+first call, which tells nothing about the tests.
+"""
+from __future__ import annotations
+
+import argparse
+import ast
+import json
+import os
+import random
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+_CTRL = ("test_control_law", "test_controller", "test_controller_fast")
+_PLANT = ("test_plant_dynamics", "test_fivebar", "test_reference_lagrange")
+#: Source file -> the test modules that exercise it (run in this order, -x).
+TARGETS = {
+    "controller/fastlaw.py": _CTRL,
+    "controller/position.py": _CTRL + ("test_fmu_controller",),
+    "controller/strategies.py": ("test_thesis_tables", "test_control_law", "test_controller"),
+    "controller/kinematics.py": ("test_controller_kinematics", "test_controller"),
+    "controller/model.py": ("test_controller_model", "test_controller"),
+    "controller/derivators.py": ("test_derivators",),
+    "controller/trajectories.py": ("test_trajectories", "test_thesis_tables"),
+    "plant/serial.py": ("test_serial",) + _PLANT,
+    "plant/parallel.py": _PLANT,
+    "plant/fivebar.py": ("test_fivebar", "test_plant_dynamics", "test_controller_kinematics"),
+    "plant/fast5r.py": _PLANT + ("test_controller_model",),     # inverse_terms: ExactModel's kernel
+    "plant/simulator.py": ("test_plant_dynamics", "test_fmu_plant"),
+    "plant/integrators.py": ("test_plant_dynamics",),
+    "plant/correction.py": ("test_correction",),
+    "plant/actuated.py": ("test_actuated",),
+    "plant/presets.py": ("test_thesis_tables", "test_plant_dynamics"),
+    "motor/electrics.py": ("test_motor_electrics", "test_motor_current_control"),
+    "motor/current_controller.py": ("test_motor_current_control",),
+    "motor/drive.py": ("test_motor_current_control", "test_motor_electrics", "test_fmu_motor"),
+    "motor/observer.py": ("test_motor_observer",),
+    "motor/identification.py": ("test_motor_identification",),
+    "motor/presets.py": ("test_thesis_tables", "test_motor_presets"),
+    "motor/_checks.py": ("test_motor_electrics", "test_motor_current_control"),
+    "fmus/slaves/parcosim_positioncontroller.py": ("test_fmu_controller",),
+    "fmus/slaves/parcosim_dcmotordrive.py": ("test_fmu_motor",),
+    "fmus/slaves/parcosim_currentobserver.py": ("test_fmu_motor",),
+    "fmus/slaves/parcosim_fivebarplant.py": ("test_fmu_plant",),
+    "fmus/slaves/parcosim_derivator.py": ("test_fmu_controller",),
+    "fmus/slaves/parcosim_trajectory.py": ("test_fmu_controller",),
+    "fmus/slaves/parcosim_actuatedfivebarplant.py": ("test_actuated",),
+}
+#: The control law, whose every mutant runs: functions by name; "f:for" is the for loops in f
+#: (step_reference's loop over the two components is the law; the rest is checks and torques).
+LAW = {
+    "controller/fastlaw.py": ("_component", "_sat", "_sign"),
+    "controller/position.py": ("sat", "_sign", "step_reference:for"),
+}
+SAMPLE = 300
+SEED = 18
+TIMEOUT = 180.0
+EXCLUDED_OPERATORS = ("_RShift", "_LShift", "_BitOr", "_BitAnd", "_BitXor")
+
+
+def _session(workdir: Path, source: str) -> Path:
+    return workdir / (source.replace("/", "__").removesuffix(".py") + ".sqlite")
+
+
+def _test_command(source: str) -> str:
+    tests = " ".join(f"tests/{name}.py" for name in TARGETS[source])
+    return f"{sys.executable} -m pytest -x -q -p no:cacheprovider -o addopts= {tests}"
+
+
+def _config(workdir: Path, source: str) -> Path:
+    path = workdir / (source.replace("/", "__").removesuffix(".py") + ".toml")
+    path.write_text(
+        "[cosmic-ray]\n"
+        f'module-path = "{source}"\n'
+        f"timeout = {TIMEOUT}\n"
+        "excluded-modules = []\n"
+        f'test-command = "{_test_command(source)}"\n'
+        "[cosmic-ray.distributor]\n"
+        'name = "local"\n')
+    return path
+
+
+def _law_lines(source: str) -> set[int]:
+    """Line numbers of the functions of :data:`LAW` in source."""
+    tree = ast.parse((ROOT / source).read_text())
+    lines = set()
+    for node in ast.walk(tree):
+        if not isinstance(node, ast.FunctionDef):
+            continue
+        if node.name in LAW.get(source, ()):
+            lines.update(range(node.lineno, node.end_lineno + 1))
+        elif f"{node.name}:for" in LAW.get(source, ()):
+            for loop in ast.walk(node):
+                if isinstance(loop, ast.For):
+                    lines.update(range(loop.lineno, loop.end_lineno + 1))
+    return lines
+
+
+def _is_law(source, mutation, law_lines) -> bool:
+    return mutation.start_pos[0] in law_lines.get(source, ())
+
+
+def initialise(workdir: Path, sample: int, seed: int):
+    """Create the sessions that do not exist yet, then draw the sample once (marker file)."""
+    from cosmic_ray.work_db import WorkDB, use_db
+    from cosmic_ray.work_item import WorkerOutcome, WorkResult
+
+    workdir.mkdir(parents=True, exist_ok=True)
+    for source in TARGETS:
+        if not _session(workdir, source).exists():
+            subprocess.run(["cosmic-ray", "init", str(_config(workdir, source)), str(_session(workdir, source))],
+                           cwd=ROOT, check=True)
+        else:
+            _config(workdir, source)
+    marker = workdir / "sample.json"
+    if marker.exists():
+        return
+    law_lines = {source: _law_lines(source) for source in LAW}
+    pool, skipped = [], {source: [] for source in TARGETS}
+    for source in TARGETS:
+        with use_db(str(_session(workdir, source)), WorkDB.Mode.open) as db:
+            for item in db.work_items:
+                mutation = item.mutations[0]
+                if mutation.operator_name.endswith(EXCLUDED_OPERATORS):
+                    skipped[source].append(item.job_id)
+                elif not _is_law(source, mutation, law_lines):
+                    pool.append((source, item.job_id))
+    pool.sort()
+    chosen = set(random.Random(seed).sample(pool, min(sample, len(pool))))
+    for source, job in pool:
+        if (source, job) not in chosen:
+            skipped[source].append(job)
+    for source, jobs in skipped.items():
+        with use_db(str(_session(workdir, source)), WorkDB.Mode.open) as db:
+            db.set_multiple_results(jobs, WorkResult(worker_outcome=WorkerOutcome.SKIPPED))
+    marker.write_text(json.dumps({"seed": seed, "sample": sample, "pool": len(pool),
+                                  "sampled": sorted(f"{s}:{j}" for s, j in chosen)}, indent=1))
+
+
+def _restore_sources(workdir: Path):
+    """A campaign killed mid-mutant leaves that mutant on disk: put the file under mutation
+    (``WORKDIR/current.<worktree>``) back from git; files edited by hand are never touched."""
+    marker = workdir / f"current.{ROOT.name}"
+    if marker.exists():
+        source = marker.read_text().strip()
+        subprocess.run(["git", "checkout", "--", source], cwd=ROOT, check=True)
+        marker.unlink()
+
+
+def execute(workdir: Path, only=None):
+    """Run the pending mutants, control law first."""
+    env = dict(os.environ, NUMBA_DISABLE_JIT="1", PYTHONPATH=str(ROOT))
+    order = list(LAW) + [s for s in TARGETS if s not in LAW]
+    _restore_sources(workdir)
+    for source in order:
+        if only and source not in only:
+            continue
+        if subprocess.run(["git", "diff", "--quiet", "--", source], cwd=ROOT).returncode:
+            raise SystemExit(f"{source} differs from git: run the campaign in a clean detached worktree")
+        print(f"== {source}", flush=True)
+        (workdir / f"current.{ROOT.name}").write_text(source)
+        subprocess.run(["cosmic-ray", "exec", str(_config(workdir, source)), str(_session(workdir, source))],
+                       cwd=ROOT, env=env, check=False)
+        _restore_sources(workdir)
+
+
+def retest(workdir: Path, outcome: str, only=None):
+    """Run again the mutants whose result has this test outcome (e.g. ``survived``, after new
+    tests) and record the new result; the pending mutants are left alone.  A mutant whose
+    line no longer reads as it did (the code was changed or removed) keeps its result and is
+    listed as such."""
+    from cosmic_ray.mutating import mutate_and_test
+    from cosmic_ray.work_db import WorkDB, use_db
+
+    os.environ.update(NUMBA_DISABLE_JIT="1", PYTHONPATH=str(ROOT))
+    os.chdir(ROOT)
+    _restore_sources(workdir)
+    for source in TARGETS:
+        if only and source not in only:
+            continue
+        lines = (ROOT / source).read_text().splitlines()
+        with use_db(str(_session(workdir, source)), WorkDB.Mode.open) as db:
+            for item, result in db.completed_work_items:
+                if result.test_outcome != outcome:
+                    continue
+                mutation = item.mutations[0]
+                removed = [line[1:] for line in (result.diff or "").splitlines()
+                           if line.startswith("-") and not line.startswith("---")]
+                line_now = lines[mutation.start_pos[0] - 1] if mutation.start_pos[0] <= len(lines) else ""
+                if not removed or removed[0].strip() != line_now.strip():
+                    print(f"{source}:{mutation.start_pos[0]} job {item.job_id}: the line changed, not re-run",
+                          flush=True)
+                    continue
+                (workdir / f"current.{ROOT.name}").write_text(source)
+                new = mutate_and_test(item.mutations, _test_command(source), TIMEOUT)
+                _restore_sources(workdir)
+                db.set_result(item.job_id, new)
+                print(f"{source}:{mutation.start_pos[0]} job {item.job_id}: {new.test_outcome}", flush=True)
+
+
+def report(workdir: Path) -> dict:
+    """Counts per file and outcome, and the survivors with their diffs."""
+    from cosmic_ray.work_db import WorkDB, use_db
+
+    law_lines = {source: _law_lines(source) for source in LAW}
+    rows, survivors = {}, []
+    for source in TARGETS:
+        path = _session(workdir, source)
+        if not path.exists():
+            continue
+        counts = {"mutants": 0, "law": 0, "skipped": 0, "pending": 0, "killed": 0, "timeout": 0,
+                  "survived": 0, "incompetent": 0}
+        with use_db(str(path), WorkDB.Mode.open) as db:
+            results = dict(db.results)
+            for item in db.work_items:
+                counts["mutants"] += 1
+                mutation = item.mutations[0]
+                law = _is_law(source, mutation, law_lines)
+                result = results.get(item.job_id)
+                if result is None:
+                    counts["pending"] += 1
+                elif result.worker_outcome == "skipped":
+                    counts["skipped"] += 1
+                    continue
+                else:
+                    outcome = result.test_outcome
+                    if outcome == "killed" and result.output == "timeout":
+                        outcome = "timeout"
+                    counts[outcome] += 1
+                    if outcome == "survived":
+                        survivors.append({"file": source, "line": mutation.start_pos[0], "job": item.job_id,
+                                          "operator": mutation.operator_name, "law": law,
+                                          "diff": result.diff})
+                counts["law"] += law
+        rows[source] = counts
+    return {"files": rows, "survivors": survivors}
+
+
+def print_report(data: dict):
+    keys = ("mutants", "skipped", "pending", "killed", "timeout", "survived", "incompetent")
+    print(f"{'file':46s}" + "".join(f"{k:>12s}" for k in keys))
+    total = dict.fromkeys(keys, 0)
+    for source, counts in data["files"].items():
+        print(f"{source:46s}" + "".join(f"{counts[k]:12d}" for k in keys))
+        for k in keys:
+            total[k] += counts[k]
+    print(f"{'total':46s}" + "".join(f"{total[k]:12d}" for k in keys))
+    print(f"\n{len(data['survivors'])} survivors:")
+    for s in data["survivors"]:
+        diff = "\n".join(line for line in (s["diff"] or "").splitlines()
+                         if line.startswith(("+", "-")) and not line.startswith(("+++", "---")))
+        print(f"- {s['file']}:{s['line']} {s['operator']}{' (law)' if s['law'] else ''} job {s['job']}\n{diff}")
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--workdir", type=Path, default=ROOT / "out" / "mutation")
+    parser.add_argument("--sample", type=int, default=SAMPLE)
+    parser.add_argument("--seed", type=int, default=SEED)
+    parser.add_argument("--only", nargs="*", help="run these source files only")
+    parser.add_argument("--report", action="store_true", help="print the figures, run nothing")
+    parser.add_argument("--retest", metavar="OUTCOME", help="run again the mutants with this outcome only")
+    args = parser.parse_args(argv)
+    if args.report:
+        data = report(args.workdir)
+        print_report(data)
+        (args.workdir / "report.json").write_text(json.dumps(data, indent=1))
+        return 0
+    initialise(args.workdir, args.sample, args.seed)
+    if args.retest:
+        retest(args.workdir, args.retest, args.only)
+    else:
+        execute(args.workdir, args.only)
+    print_report(report(args.workdir))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
