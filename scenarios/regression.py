@@ -40,7 +40,7 @@ MD_PAIRS = (("PDq", "PDMDq"), ("PDx", "PDMDx"), ("TCq", "TCMDq"), ("TCx", "TCMDx
 
 
 def regression_scenes() -> list[str]:
-    """thesis_sim_circle and the 16 bench scenes."""
+    """thesis_sim_circle and the bench scenes (the thesis' 16 and the 4 of seed 001's SMC law)."""
     return ["thesis_sim_circle"] + [n for n in scene_names() if n.startswith("bench_")]
 
 

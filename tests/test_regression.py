@@ -1,9 +1,9 @@
-"""Full-length runs of the 16 bench scenes and thesis_sim_circle: stored metrics and the thesis' claims.
+"""Full-length runs of the bench scenes (the thesis' 16 and seed 001's SMC) and thesis_sim_circle: stored metrics and the thesis' claims.
 
 The stored metrics (tests/data/scene_metrics.json, written by ``python -m scenarios.regression
 --write``) catch any change of a closed loop's result; the tolerance is argued in
 :mod:`scenarios.regression` and docs/testing.md.  The claims are the thesis' own (7.2.11,
-Tables 9-12), asserted on the live runs, not on the stored file.  17 runs, ~1 min.
+Tables 9-12), asserted on the live runs, not on the stored file.  21 runs, ~1 min.
 """
 import functools
 
