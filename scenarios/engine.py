@@ -86,7 +86,7 @@ def open_client(scheduler: str | None = None, workers: int | None = None, proces
     n = default_workers() if workers is None else workers
     if not (isinstance(n, int) and n >= 1):
         raise ValueError(f"workers = {workers!r} must be an integer >= 1")
-    with LocalCluster(n_workers=n, threads_per_worker=1, processes=processes, dashboard_address=None,
+    with LocalCluster(n_workers=n, threads_per_worker=1, processes=processes, dashboard_address=":0",
                       silence_logs=40) as cluster, Client(cluster) as client:
         yield client
 
