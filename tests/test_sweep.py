@@ -39,7 +39,7 @@ def _same(a: float, b: float) -> bool:
 
 
 def test_zero_uncertainty_is_the_nominal_run_bit_for_bit(client):
-    sweep = run_sweep(SCENE, 2, 0.0, client=client)
+    sweep = run_sweep(SCENE, 1, 0.0, client=client)
     nominal = run_scene(SCENE, plots=False).metrics
     assert math.isfinite(nominal["e_ef_mm"]) and math.isfinite(nominal["e_ss_mm"])
     for row in sweep.rows:
