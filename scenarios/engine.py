@@ -118,6 +118,14 @@ def run_tasks(tasks, client=None, scheduler=None, workers=None, on_result=None, 
             return run_tasks(tasks, client=own, on_result=on_result, progress=progress)
     from distributed import as_completed
 
+    from fmus.foreign import is_fmu_file
+
+    fmu_models = sorted({c.model for t in tasks if t.mode == "fmu" for c in t.scene.system.components
+                         if not is_fmu_file(c.model)})
+    if fmu_models:     # build stale FMUs once here, not in every worker at the same time
+        from fmus.build import ensure_built
+
+        ensure_built(fmu_models)
     futures = {client.submit(run_task, t, key=f"{t.key}-{os.urandom(4).hex()}", pure=False): t for t in tasks}
     results = {}
     try:
