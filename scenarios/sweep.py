@@ -129,8 +129,10 @@ def _parse(row: dict) -> dict:
     return out
 
 
-def read_rows(path: Path, header: list) -> list:
-    """The whole rows of an existing sweep.csv (a torn last line is cut off the file).
+def read_rows(path: Path, header: list, repair: bool = False) -> list:
+    """The whole rows of an existing sweep.csv, without a torn last line; ``repair``: also cut
+    that line off the file (only the sweep that continues the file may: a reader of a file
+    being written would cut a row in the making).
 
     Raises
     ------
@@ -141,13 +143,15 @@ def read_rows(path: Path, header: list) -> list:
     if not raw:
         return []
     end = raw.rfind(b"\n") + 1
-    if end < len(raw):        # the process writing the last row was killed mid-write
+    if end < len(raw) and repair:        # the process writing the last row was killed mid-write
         with open(path, "r+b") as f:
             f.truncate(end)
-        raw = raw[:end]
+    raw = raw[:end]
     lines = raw.decode("utf-8").splitlines()
-    if not lines or next(csv.reader([lines[0]])) != header:
-        found = next(csv.reader([lines[0]])) if lines else []
+    if not lines:             # killed while writing the header
+        return []
+    found = next(csv.reader([lines[0]]))
+    if found != header:
         raise ValueError(f"{path}: header {found} is not this sweep's {header}")
     return [_parse(dict(zip(header, values))) for values in csv.reader(lines[1:])]
 
@@ -284,7 +288,7 @@ def run_sweep(scene, samples: int, uncertainty: float, seed: int = 0, distributi
         if settings_path.exists():
             _check_settings(settings_path, settings)
         if csv_path.exists():
-            for row in read_rows(csv_path, header):
+            for row in read_rows(csv_path, header, repair=True):
                 done.setdefault(row["sample"], row)
         files += [write_json(settings_path, settings), csv_path]
         appender = _Appender(csv_path, header)

@@ -204,6 +204,9 @@ def test_an_interrupted_sweep_computes_only_what_is_missing(client, tmp_path):
     whole = csv.read_bytes()
     with open(csv, "ab") as f:            # a row torn by a killed process
         f.write(b"3,0.0499,0.12")
+    torn = csv.read_bytes()
+    header = whole.decode().splitlines()[0].split(",")
+    assert len(read_rows(csv, header)) == 3 and csv.read_bytes() == torn   # a reader leaves the file alone
     second = run_sweep(SCENE, 5, 0.3, stop_time=SHORT, out_dir=out, client=client, plots=False)
     assert second.computed == [3, 4]
     assert csv.read_bytes().startswith(whole) and csv.read_text().count("\n") == 6
