@@ -210,6 +210,9 @@ def test_an_interrupted_sweep_computes_only_what_is_missing(client, tmp_path):
     second = run_sweep(SCENE, 5, 0.3, stop_time=SHORT, out_dir=out, client=client, plots=False)
     assert second.computed == [3, 4]
     assert csv.read_bytes().startswith(whole) and csv.read_text().count("\n") == 6
+    on_disk = sorted(read_rows(csv, header), key=lambda r: r["sample"])
+    assert [r["sample"] for r in on_disk] == [0, 1, 2, 3, 4]
+    assert all(_same(a[k], b[k]) for a, b in zip(on_disk, second.rows) for k in second.parameters + list(METRICS))
     fresh = run_sweep(SCENE, 5, 0.3, stop_time=SHORT, out_dir=tmp_path / "fresh", client=client, plots=False)
     for a, b in zip(second.rows, fresh.rows):
         assert all(_same(a[k], b[k]) for k in second.parameters + list(METRICS))
