@@ -71,7 +71,8 @@ def _parser() -> argparse.ArgumentParser:
     sweep.add_argument("scene", help="a scene name (see `parcosim list`)")
     sweep.add_argument("--samples", type=int, required=True, metavar="N", help="number of samples")
     sweep.add_argument("--uncertainty", type=float, required=True, metavar="U",
-                       help="relative uncertainty of the physical parameters (0.2: +-20 %%)")
+                       help="uncertainty: 0.2 = masses, inertias, motor constants, friction +-20 %%; "
+                            "lengths U/100, encoder zero U x 10 mrad (docs/sweeps.md)")
     sweep.add_argument("--seed", type=int, default=0, metavar="S", help="random seed (default 0)")
     sweep.add_argument("--distribution", choices=("uniform", "normal"), default=None,
                        help="uniform factor in [1-U, 1+U] (default) or normal, sigma U, truncated at 3 sigma")
