@@ -116,10 +116,11 @@ def build_plant(slave):
         params.chain1.J_rotor if slave.J_rotor1 == PRESET_VALUE else slave.J_rotor1,
         params.chain2.J_rotor if slave.J_rotor2 == PRESET_VALUE else slave.J_rotor2,
     )
-    params = replace(params, m0=slave.m0, l0=slave.l0,
-                     gravity=(slave.gravity_x, slave.gravity_y, slave.gravity_z),
-                     chain1=_chain_overrides(params.chain1, slave, 1),
+    params = replace(params, chain1=_chain_overrides(params.chain1, slave, 1),
                      chain2=_chain_overrides(params.chain2, slave, 2))
+
+    params = replace(params, m0=slave.m0, l0=slave.l0,
+                     gravity=(slave.gravity_x, slave.gravity_y, slave.gravity_z))
     if not slave.link_inertias:
         params = replace(params, chain1=replace(params.chain1, Jz1=0.0, Jz2=0.0),
                          chain2=replace(params.chain2, Jz1=0.0, Jz2=0.0))
