@@ -12,6 +12,10 @@ Nothing is lost: a run that fails is a result carrying its error (``completed`` 
 worker by the scheduler (up to ``distributed.scheduler.allowed-failures`` times, then the
 task's result is the KilledWorker error).
 
+Worker processes start with the parent's ``sys.path`` minus the ``resources`` folders of FMUs
+the parent ran in process (:mod:`scenarios.worker_path`, a preload): they import the
+installed parcosim, never an FMU's bundled copy of it.
+
 Results are the same as a serial loop's, bit for bit: a task is a whole, deterministic run
 in one process, and nothing it computes depends on where or when it runs.
 """
@@ -86,8 +90,9 @@ def open_client(scheduler: str | None = None, workers: int | None = None, proces
     n = default_workers() if workers is None else workers
     if not (isinstance(n, int) and n >= 1):
         raise ValueError(f"workers = {workers!r} must be an integer >= 1")
+    preload = ["scenarios.worker_path"] if processes else []   # a clean sys.path in each worker process
     with LocalCluster(n_workers=n, threads_per_worker=1, processes=processes, dashboard_address=":0",
-                      silence_logs=40) as cluster, Client(cluster) as client:
+                      silence_logs=40, preload=preload) as cluster, Client(cluster) as client:
         yield client
 
 
