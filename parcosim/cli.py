@@ -12,12 +12,12 @@ Every subcommand is a thin shell over a documented Python call:
                        ``run_scene(drives_in_plant(get_scene(name), substeps=N), ...)``; with
                        ``--replace I=F.fmu`` ``run_scene(with_fmu_files(scene, {I: F}), ...)``
 ``parcosim report``    ``scenarios.report.write_report(out_dir, mode)``
-``parcosim sweep``     ``scenarios.sweep.run_sweep(scene, samples, uncertainty, seed, distribution,
-                       perturb, mode, out_dir, scheduler, workers)``
 ``parcosim trade``     ``scenarios.trade.run_trade(scene, quick, out_dir)``
 ``parcosim export-ssp``  ``scenarios.package.export_package(get_scene(name), path, fmu_dir)``;
                        with ``--per-component`` ``fmus.ssp.export_ssp(get_scene(name).system, path, fmu_dir)``
 ``parcosim export-fmu``  ``fmus.export.export_fmu(get_scene(name).system, path)``
+``parcosim sweep``     ``scenarios.sweep.run_sweep(scene, samples, uncertainty, seed, distribution,
+                       perturb, mode, out_dir, scheduler, workers)``
 =====================  ==============================================
 
 Errors end the command with exit status 2 and one readable line on stderr (an output
