@@ -6,6 +6,8 @@ Every subcommand is a thin shell over a documented Python call:
 ``parcosim``           ``parcosim run bench_circle_TCMDx`` (the default job)
 ``parcosim demo``      same, with ``--out`` and ``--preset``
 ``parcosim build``     ``fmus.build.build_all(out_dir)``
+``parcosim sweep``     ``scenarios.sweep.run_sweep(scene, samples, uncertainty, seed, distribution,
+                       perturb, mode, out_dir, scheduler, workers)``
 ``parcosim identify-motor``  ``motor.cli.identify_main(argv)``
 ``parcosim list``      ``scenarios.scenes.scene_names()``
 ``parcosim run``       ``scenarios.run.run_scene(name, mode, out_dir)``; with ``--drives-in-plant N``
@@ -16,8 +18,6 @@ Every subcommand is a thin shell over a documented Python call:
 ``parcosim export-ssp``  ``scenarios.package.export_package(get_scene(name), path, fmu_dir)``;
                        with ``--per-component`` ``fmus.ssp.export_ssp(get_scene(name).system, path, fmu_dir)``
 ``parcosim export-fmu``  ``fmus.export.export_fmu(get_scene(name).system, path)``
-``parcosim sweep``     ``scenarios.sweep.run_sweep(scene, samples, uncertainty, seed, distribution,
-                       perturb, mode, out_dir, scheduler, workers)``
 =====================  ==============================================
 
 Errors end the command with exit status 2 and one readable line on stderr (an output
