@@ -42,6 +42,26 @@ MOTOR_PARAMETERS = (
 #: MotorParams fields that must be > 0 (refused below :data:`fmus.guarded.TINY`).
 POSITIVE_MOTOR_FIELDS = frozenset({"R", "kt", "ke", "v_max", "omega_eps", "J_rotor"})
 
+#: The current-controller design's own motor parameters (MotorParams field, FMU variable): a
+#: drive whose motor differs from the one its controller was designed for (a model error,
+#: ``parcosim sweep``) keeps its design.  ``J_design`` is the design's only rotor inertia
+#: (:data:`MOTOR_PARAMETERS`); these default to the drive's own value.
+DESIGN_PARAMETERS = (("R", "R_design"), ("L", "L_design"), ("kt", "kt_design"), ("ke", "ke_design"),
+                     ("b", "b_design"))
+
+#: Per-chain mechanism parameters settable one by one (ChainParams field, description):
+#: FMU variables ``chain<k>_<field>`` for chain k = 1, 2 (Tables 3-5).
+CHAIN_PARAMETERS = (
+    ("l1", "Proximal link length [m], > 0"),
+    ("l2", "Distal link length [m], > 0"),
+    ("lg1", "Proximal link: centre of mass from its base joint [m]"),
+    ("lg2", "Distal link: centre of mass from its elbow joint [m]"),
+    ("m1", "Proximal link mass [kg]"),
+    ("m2", "Distal link mass [kg]"),
+    ("Jz1", "Proximal link inertia about its centre of mass [kg m2]"),
+    ("Jz2", "Distal link inertia about its centre of mass [kg m2]"),
+)
+
 
 # --- the plant -------------------------------------------------------------------------------
 
@@ -65,6 +85,11 @@ def declare_plant(slave) -> None:
     d("gravity_z", "parameter", 0.0, "Gravity, world z [m/s2] (no effect on the planar motion)")
     d("link_inertias", "parameter", True, "Links have their inertias Jz (false: point masses at the centres of mass)")
     d("encoder_counts", "parameter", 20000, "Encoder counts per revolution (quadrature)")
+    for k in (1, 2):
+        for field, text in CHAIN_PARAMETERS:
+            d(f"chain{k}_{field}", "parameter", PRESET_VALUE, f"Chain {k}: {text}; -1: the preset's value")
+        d(f"encoder_offset{k}", "parameter", 0.0,
+          f"Encoder {k} zero error: q{k}_enc reads q{k} + encoder_offset{k}, quantised [rad]")
     d("method", "parameter", defaults.method, "Integrator: 'rk4' (fixed step) or 'dopri5' (adaptive)")
     d("substeps", "parameter", defaults.substeps, "RK4 steps per communication step")
     d("rtol", "parameter", defaults.rtol, "Relative tolerance of dopri5")
@@ -111,6 +136,9 @@ def build_plant(slave):
         params.chain1.J_rotor if slave.J_rotor1 == PRESET_VALUE else slave.J_rotor1,
         params.chain2.J_rotor if slave.J_rotor2 == PRESET_VALUE else slave.J_rotor2,
     )
+    params = replace(params, chain1=_chain_overrides(params.chain1, slave, 1),
+                     chain2=_chain_overrides(params.chain2, slave, 2))
+
     params = replace(params, m0=slave.m0, l0=slave.l0,
                      gravity=(slave.gravity_x, slave.gravity_y, slave.gravity_z))
     params = with_counter_masses(slave, params)
@@ -121,9 +149,30 @@ def build_plant(slave):
         method=slave.method, substeps=slave.substeps, rtol=slave.rtol, atol=slave.atol,
         baumgarte=slave.baumgarte, project=bool(slave.project), kernel=slave.kernel,
     )
-    sim = PlantSimulator(params, slave.x0, slave.y0, settings, encoder_counts=slave.encoder_counts)
+    offsets = {f"encoder_offset{k}": getattr(slave, f"encoder_offset{k}") for k in (1, 2)}
+    require_finite(**offsets)
+    refuse_absurd(**offsets)
+    sim = PlantSimulator(params, slave.x0, slave.y0, settings, encoder_counts=slave.encoder_counts,
+                         encoder_offsets=tuple(offsets.values()))
     check_step_cost(sim)
     return sim
+
+
+def _chain_overrides(chain, slave, k: int):
+    """``chain`` with the slave's ``chain<k>_<field>`` parameters that are not PRESET_VALUE."""
+    changes = {}
+    for field, _ in CHAIN_PARAMETERS:
+        var = f"chain{k}_{field}"
+        value = float(getattr(slave, var))
+        if value == PRESET_VALUE:
+            continue
+        require_finite(**{var: value})
+        refuse_absurd(**{var: value})
+        if value < 0.0 or (field in ("l1", "l2") and value < TINY):
+            raise ValueError(f"parameter {var} = {value!r} must be {'> 0' if field in ('l1', 'l2') else '>= 0'} "
+                             "(or -1 for the preset's value)")
+        changes[field] = value
+    return replace(chain, **changes)
 
 
 #: Longest any FMI call of ours may take [s].  A plant whose doStep would take more than
@@ -187,14 +236,15 @@ def publish_plant(slave, sim) -> None:
 
 def declare_motor(slave, suffix: str = "", default_preset: str = "motor1") -> None:
     """A drive's motor parameters (Tables 16, 18): ``preset``, the :data:`MOTOR_PARAMETERS`
-    and ``b_design``, each name followed by ``suffix``."""
+    and the :data:`DESIGN_PARAMETERS`, each name followed by ``suffix``."""
     d = slave.declare
     d(f"preset{suffix}", "parameter", default_preset,
       "Motor parameters: 'motor1' (Table 16), 'motor2' (Table 18) or 'seed000' (seed 000's motor)")
     for _, var, text in MOTOR_PARAMETERS:
         d(f"{var}{suffix}", "parameter", PRESET_VALUE, f"{text}; -1: the preset's value")
-    d(f"b_design{suffix}", "parameter", PRESET_VALUE,
-      "Viscous friction assumed by the current-controller design only [N m s/rad], > 0; -1: b")
+    for field, var in DESIGN_PARAMETERS:
+        d(f"{var}{suffix}", "parameter", PRESET_VALUE,
+          f"{field} assumed by the current-controller design only (app. C), > 0; -1: the drive's {field}")
 
 
 def build_drive(slave, suffix: str = "", **options):
@@ -210,13 +260,16 @@ def build_drive(slave, suffix: str = "", **options):
     params = with_overrides(params, slave,
                             [(field, f"{var}{suffix}") for field, var, _ in MOTOR_PARAMETERS],
                             positive=POSITIVE_MOTOR_FIELDS)
-    design = None
-    b_design = getattr(slave, f"b_design{suffix}")
-    if b_design != PRESET_VALUE:
-        refuse_absurd(**{f"b_design{suffix}": b_design})
-        if not (math.isfinite(b_design) and b_design >= TINY):
-            raise ValueError(f"parameter b_design{suffix} = {b_design!r} must be > 0 (or -1: the value of b)")
-        design = params.with_(b=b_design)
+    changes = {}
+    for field, var in DESIGN_PARAMETERS:
+        value = getattr(slave, f"{var}{suffix}")
+        if value == PRESET_VALUE:
+            continue
+        refuse_absurd(**{f"{var}{suffix}": value})
+        if not (math.isfinite(value) and value >= TINY):
+            raise ValueError(f"parameter {var}{suffix} = {value!r} must be > 0 (or -1: the value of {field})")
+        changes[field] = value
+    design = params.with_(**changes) if changes else None
     return Drive(params, design_params=design, **options)
 
 

@@ -6,6 +6,8 @@ Every subcommand is a thin shell over a documented Python call:
 ``parcosim``           ``parcosim run bench_circle_TCMDx`` (the default job)
 ``parcosim demo``      same, with ``--out`` and ``--preset``
 ``parcosim build``     ``fmus.build.build_all(out_dir)``
+``parcosim sweep``     ``scenarios.sweep.run_sweep(scene, samples, uncertainty, seed, distribution,
+                       perturb, mode, out_dir, scheduler, workers)``
 ``parcosim identify-motor``  ``motor.cli.identify_main(argv)``
 ``parcosim list``      ``scenarios.scenes.scene_names()``
 ``parcosim run``       ``scenarios.run.run_scene(name, mode, out_dir)`` (mode inprocess, fmu or
@@ -65,6 +67,29 @@ def _parser() -> argparse.ArgumentParser:
     report = sub.add_parser("report", help="run the 16 bench scenes; markdown report beside the thesis' Tables 9-14")
     report.add_argument("--mode", choices=("inprocess", "fmu"), default="inprocess")
     report.add_argument("--out", default="out/report", help="output directory (default: out/report)")
+    report.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                        help="run the scenes on this dask scheduler (default: a local cluster)")
+    report.add_argument("--workers", type=int, default=None, metavar="K",
+                        help="local worker processes (default: one per core)")
+    sweep = sub.add_parser("sweep", help="Monte Carlo: N runs of a scene with its plant and drives perturbed "
+                                         "(dask.distributed; docs/sweeps.md)")
+    sweep.add_argument("scene", help="a scene name (see `parcosim list`)")
+    sweep.add_argument("--samples", type=int, required=True, metavar="N", help="number of samples")
+    sweep.add_argument("--uncertainty", type=float, required=True, metavar="U",
+                       help="uncertainty: 0.2 = masses, inertias, motor constants, friction +-20 %%; "
+                            "lengths U/100, encoder zero U x 10 mrad (docs/sweeps.md)")
+    sweep.add_argument("--seed", type=int, default=0, metavar="S", help="random seed (default 0)")
+    sweep.add_argument("--distribution", choices=("uniform", "normal"), default=None,
+                       help="uniform factor in [1-U, 1+U] (default) or normal, sigma U, truncated at 3 sigma")
+    sweep.add_argument("--perturb", default=None, metavar="FILE.toml", help="per-parameter uncertainties")
+    sweep.add_argument("--mode", choices=_modes(), default="inprocess")
+    sweep.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                       help="an existing dask scheduler, e.g. tcp://host:8786 (default: a local cluster)")
+    sweep.add_argument("--workers", type=int, default=None, metavar="K",
+                       help="local worker processes (default: one per core)")
+    sweep.add_argument("--stop-time", type=float, default=None, metavar="S",
+                       help="end every run at S seconds (quick checks; unreached metric windows give NaN)")
+    sweep.add_argument("--out", default=None, help="output directory (default: out/sweep_SCENE_U)")
     ssp = sub.add_parser("export-ssp", help="write a scene as an SSP 1.0 package for Jacobi masters "
                                             "(Ecos, libcosim, fmpy): control chain + plant")
     ssp.add_argument("scene", help="a scene name (see `parcosim list`)")
@@ -98,6 +123,12 @@ def _parser() -> argparse.ArgumentParser:
     sub.add_parser("identify-motor", help="identify DC motor parameters from u,i,omega data",
                    add_help=False)
     return parser
+
+
+def _modes() -> tuple:
+    from fmus.master import MODES
+
+    return MODES
 
 
 def _replace_option(parser) -> None:
@@ -140,7 +171,10 @@ def _command(args) -> int:
             return _run(args)
         elif args.command == "report":
             from scenarios.report import write_report
-            print(write_report(args.out, args.mode, progress=progress_bar("report")))
+            print(write_report(args.out, args.mode, progress=progress_bar("report"), scheduler=args.scheduler,
+                               workers=args.workers))
+        elif args.command == "sweep":
+            return _sweep(args)
         elif args.command == "export-ssp":
             if args.per_component:
                 from fmus.foreign import named_models
@@ -233,6 +267,21 @@ def _run(args) -> int:
     print(f"{scene.name} [{m['mode']}]: e_ef {m['e_ef_mm']:.4g} mm, tau_ef {m['tau_ef_Nm']:.4g} N m, "
           f"e_ss {m['e_ss_mm']:.4g} mm, {m['wall_s']:.2f} s wall ({m['realtime_factor']:.1f}x real time"
           f"{compiled}) -> {out}")
+    return 0
+
+
+def _sweep(args) -> int:
+    from scenarios.sweep import run_sweep
+
+    out = args.out or f"out/sweep_{args.scene}_U{args.uncertainty:g}"
+    sweep = run_sweep(args.scene, args.samples, args.uncertainty, seed=args.seed, distribution=args.distribution,
+                      perturb=args.perturb, mode=args.mode, out_dir=out, scheduler=args.scheduler,
+                      workers=args.workers, stop_time=args.stop_time, progress=progress_bar(f"sweep {args.scene}"))
+    s = sweep.summary
+    e = s["e_ef_mm"]
+    median = f"e_ef median {e['median']:.4g} mm (5-95 %: {e['p05']:.4g}-{e['p95']:.4g})" if e["n"] else "no e_ef"
+    print(f"{sweep.scene} U={args.uncertainty:g}: {s['samples']} samples ({len(sweep.computed)} run now), "
+          f"{s['completed']} completed, {s['failed']} failed; {median} -> {out}/sweep.csv")
     return 0
 
 

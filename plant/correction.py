@@ -79,7 +79,8 @@ def corrected_state(sim, measured: dict, step: float):
         if exact is not None and abs(exact - angles[j]) > EXACT_TOLERANCE:
             angles[j], changed = float(exact), True
         elif exact is None and reading is not None:
-            inside = _into_cell(angles[j], float(reading), sim.count)
+            offset = sim.encoder_offsets[j]    # the reading is of angle + offset
+            inside = _into_cell(angles[j] + offset, float(reading), sim.count) - offset
             if inside != angles[j]:
                 if measured.get(f"dq{j + 1}") is None:
                     rates[j] += VELOCITY_GAIN * (inside - angles[j]) / step

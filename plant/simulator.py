@@ -122,17 +122,23 @@ class PlantSimulator:
     settings : IntegratorSettings
     encoder_counts : int
         Counts per revolution of the encoders (quadrature: 4x the pulses).
+    encoder_offsets : (float, float)
+        Zero errors of the two encoders [rad]: ``q<k>_enc`` reads q_k + offset, quantised
+        (a robot homed slightly off; the controller does not know it).
     """
 
     def __init__(self, params: FiveBarParams, x0: float, y0: float,
                  settings: IntegratorSettings = IntegratorSettings(), encoder_counts: int = 20000,
-                 dx0: float = 0.0, dy0: float = 0.0):
+                 dx0: float = 0.0, dy0: float = 0.0, encoder_offsets=(0.0, 0.0)):
         self.params = params.validate()
         self.settings = settings.validate()
         if not (isinstance(encoder_counts, int) and encoder_counts > 0):
             raise ValueError(f"encoder_counts must be a positive integer, got {encoder_counts!r}")
         self.encoder_counts = encoder_counts
         self.count = 2.0 * math.pi / encoder_counts    # one encoder count [rad]
+        self.encoder_offsets = tuple(float(e) for e in encoder_offsets)
+        if len(self.encoder_offsets) != 2 or not all(math.isfinite(e) for e in self.encoder_offsets):
+            raise ValueError(f"encoder_offsets must be 2 finite numbers [rad], got {encoder_offsets!r}")
         self.mechanism = fivebar.build_mechanism(params)
         self.time = 0.0
         try:
@@ -300,19 +306,24 @@ class PlantSimulator:
         last = self._last
         if last is not None and last[0] is self.y and last[2] is not None:
             o = last[2][fast5r.REPORT_OUTPUTS:]
-            return {"q1": o[0], "q2": o[1], "dq1": o[2], "dq2": o[3], "x": o[4], "y": o[5], "dx": o[6], "dy": o[7],
-                    "q1_enc": o[8], "q2_enc": o[9], "residual": last[1]}
-        y = self.y.tolist()
-        q1, q2 = fivebar.world_angles(y[:7])
-        dq1, dq2 = fivebar.world_rates(y[7:])
+            out = {"q1": o[0], "q2": o[1], "dq1": o[2], "dq2": o[3], "x": o[4], "y": o[5], "dx": o[6], "dy": o[7],
+                   "q1_enc": o[8], "q2_enc": o[9], "residual": last[1]}
+        else:
+            y = self.y.tolist()
+            q1, q2 = fivebar.world_angles(y[:7])
+            dq1, dq2 = fivebar.world_rates(y[7:])
+            out = {"q1": q1, "q2": q2, "dq1": dq1, "dq2": dq2, "x": y[0], "y": y[1], "dx": y[7], "dy": y[8],
+                   "q1_enc": self._encoder(q1, 0.0), "q2_enc": self._encoder(q2, 0.0),
+                   "residual": self.residual_norm()}
+        if self.encoder_offsets != (0.0, 0.0):   # the compiled report quantises q without offset
+            out["q1_enc"] = self._encoder(out["q1"], self.encoder_offsets[0])
+            out["q2_enc"] = self._encoder(out["q2"], self.encoder_offsets[1])
+        return out
+
+    def _encoder(self, q: float, offset: float) -> float:
+        """The encoder's reading of the angle ``q`` with a zero error ``offset`` [rad]."""
         count = self.count
-        return {
-            "q1": q1, "q2": q2, "dq1": dq1, "dq2": dq2,
-            "x": y[0], "y": y[1], "dx": y[7], "dy": y[8],
-            "q1_enc": count * math.floor(q1 / count + 0.5),
-            "q2_enc": count * math.floor(q2 / count + 0.5),
-            "residual": self.residual_norm(),
-        }
+        return count * math.floor((q + offset) / count + 0.5)
 
     def residual_norm(self) -> float:
         """Euclidean norm of the position constraint residual q̄(q) [m] (5.18)."""

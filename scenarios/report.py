@@ -1,7 +1,8 @@
 """The thesis reproduction report: the 16 bench scenes beside the thesis' bench (Tables 9-14).
 
 ``parcosim report [--mode fmu|inprocess] [--out DIR]`` is :func:`write_report`: it runs
-``bench_circle_<S>`` and ``bench_triangle_<S>`` for the eight strategies, keeps each run's
+``bench_circle_<S>`` and ``bench_triangle_<S>`` for the eight strategies, each a task on
+dask.distributed (:mod:`scenarios.engine`, a local cluster by default), keeps each run's
 files under ``DIR/<scene>/``, and writes ``DIR/report.md`` and ``DIR/report.png``.  Every
 number in the report is computed from the runs of that call; the thesis' numbers are the
 published bench results (Tables 9-14), quoted, never used to tune anything.
@@ -14,7 +15,8 @@ from pathlib import Path
 
 from controller.strategies import STRATEGY_NAMES
 
-from .run import _json_safe, run_scene
+from .run import _json_safe
+from .scenes import get_scene
 
 #: Thesis Tables 9-10 and 13-14 (bench): strategy -> (e_ef mm, tau_ef N m, e_ss_x, e_ss_y, e_ss mm).
 THESIS_BENCH = {
@@ -47,19 +49,24 @@ def bench_scene_names() -> list:
     return [f"bench_{kind}_{s}" for kind in KINDS for s in order]
 
 
-def run_bench(out_dir, mode="inprocess", progress=None) -> dict:
-    """Run the 16 bench scenes; return scene name -> metrics (each run's files in out_dir/<scene>)."""
-    names = bench_scene_names()
-    metrics = {}
-    for i, name in enumerate(names):
-        def step_progress(fraction, i=i):
-            if progress is not None:
-                progress((i + fraction) / len(names))
-        outcome = run_scene(name, mode=mode, out_dir=Path(out_dir) / name, progress=step_progress)
-        metrics[name] = outcome.metrics
-    if progress is not None:
-        progress(1.0)
-    return metrics
+def run_bench(out_dir, mode="inprocess", progress=None, scenes=None, stop_time=None, client=None,
+              scheduler=None, workers=None, processes=True) -> dict:
+    """Run the bench scenes (default the 16 of :func:`bench_scene_names`) as tasks of
+    :mod:`scenarios.engine`; return scene name -> metrics, in the scenes' order.
+
+    Each run's files go to ``out_dir/<scene>`` (written by the worker).  ``stop_time`` ends
+    every run early (quick checks); ``client``, ``scheduler``, ``workers``, ``processes``
+    choose the cluster (:func:`scenarios.engine.open_client`).
+    """
+    from .engine import Task, run_tasks
+    from .sweep import with_stop_time
+
+    names = bench_scene_names() if scenes is None else list(scenes)
+    tasks = [Task(name, with_stop_time(get_scene(name), stop_time), mode, str(Path(out_dir) / name), plots=True)
+             for name in names]
+    metrics = run_tasks(tasks, client=client, scheduler=scheduler, workers=workers, progress=progress,
+                        processes=processes)
+    return {name: metrics[name] for name in names}
 
 
 def _f(value, spec=".3f") -> str:
@@ -197,11 +204,12 @@ def plot_report(metrics: dict, path: Path) -> Path:
     return path
 
 
-def write_report(out_dir="out/report", mode="inprocess", progress=None) -> Path:
-    """Run the 16 bench scenes and write ``report.md``, ``report.png`` and ``metrics.json``."""
+def write_report(out_dir="out/report", mode="inprocess", progress=None, scheduler=None, workers=None) -> Path:
+    """Run the 16 bench scenes (on a dask cluster: :func:`run_bench`) and write ``report.md``,
+    ``report.png`` and ``metrics.json``."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    metrics = run_bench(out, mode=mode, progress=progress)
+    metrics = run_bench(out, mode=mode, progress=progress, scheduler=scheduler, workers=workers)
     (out / "metrics.json").write_text(json.dumps(_json_safe(metrics), indent=2) + "\n")
     plot_report(metrics, out / "report.png")
     path = out / "report.md"
