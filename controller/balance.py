@@ -243,6 +243,7 @@ class BalanceController:
         self.buf = fastbalance.pack(design, route, R, W, self.torque_per_volt, SMOOTHSTEP_COEFFICIENTS,
                                     SMOOTHSTEP_SLOPE_COEFFICIENTS)
         self.io = np.zeros(fastbalance.IO_SIZE)
+        fastbalance.balance_io(self.buf.copy(), self.io.copy(), 0.0, math.inf)   # compile now, not in a step
 
     @property
     def x_hat(self):
