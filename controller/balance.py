@@ -29,7 +29,8 @@ from dataclasses import dataclass, field
 import control   # at import (an FMU's instantiation), not in the design: importing it takes 1-7 s
 import numpy as np
 
-from controller.trajectories import smoothstep
+from controller import fastbalance
+from controller.trajectories import SMOOTHSTEP_COEFFICIENTS, SMOOTHSTEP_SLOPE_COEFFICIENTS, smoothstep
 
 #: Bryson's rule: the largest acceptable excursion of each state, (theta [rad], psi [rad],
 #: phi [rad], theta' [rad/s], psi' [rad/s], phi' [rad/s]); Q = diag(1/scale^2).
@@ -222,6 +223,9 @@ def get_route(name: str) -> Route:
 class BalanceController:
     """The sampled controller: observer, LQR, saturation (see the module docstring).
 
+    Each sample is :func:`controller.fastbalance.balance_io` on :attr:`buf` (the arithmetic the
+    FMU and the compiled loop run too); :attr:`io` holds the last sample's inputs and outputs.
+
     Parameters
     ----------
     design : BalanceDesign
@@ -231,47 +235,45 @@ class BalanceController:
     """
 
     def __init__(self, design: BalanceDesign, route: Route = Route(), R: float = 0.04, W: float = 0.14):
-        self.design, self.route, self.R, self.W = design, route, R, W
-        self.x_hat = None
-        self.u = np.zeros(2)
         from motor import get_motor_preset
 
+        self.design, self.route, self.R, self.W = design, route, R, W
         motor = get_motor_preset(design.settings.motor_preset)
         self.torque_per_volt = motor.kt / motor.R
+        self.buf = fastbalance.pack(design, route, R, W, self.torque_per_volt, SMOOTHSTEP_COEFFICIENTS,
+                                    SMOOTHSTEP_SLOPE_COEFFICIENTS)
+        self.io = np.zeros(fastbalance.IO_SIZE)
+        fastbalance.balance_io(self.buf.copy(), self.io.copy(), 0.0, math.inf)   # compile now, not in a step
+
+    @property
+    def x_hat(self):
+        """The observer's estimate for the next sample (kept states), None before the first sample."""
+        if self.buf[fastbalance.B_STARTED] == 0.0:
+            return None
+        return self.buf[fastbalance.B_X_HAT:fastbalance.B_X_HAT + len(self.design.states)].copy()
+
+    @property
+    def u(self) -> np.ndarray:
+        """The last saturated voltages (v_l, v_r) [V]."""
+        return self.buf[fastbalance.B_U:fastbalance.B_U + 2].copy()
 
     def sample(self, t: float, enc_l: float, enc_r: float, gyro: float):
         """Read the sensors at time t; return the saturated voltages (v_l, v_r) held over the sample."""
         for name, value in (("enc_l", enc_l), ("enc_r", enc_r), ("gyro", gyro)):
             if not math.isfinite(value):
                 raise ValueError(f"input {name} = {value!r} at t = {t:.6g} s is not finite")
-        d = self.design
-        yaw = d.settings.yaw
-        y = [0.5 * (enc_l + enc_r), gyro] + ([self.R / self.W * (enc_r - enc_l)] if yaw else [])
-        y = np.array(y)
-        if self.x_hat is None:   # start: theta - psi from the encoders, at rest, psi unknown (0)
-            full = np.array([y[0], 0.0, y[2] if yaw else 0.0, 0.0, gyro, 0.0])
-            self.x_hat = full[list(d.states)]
-        self.x_hat = self.x_hat + d.Lo @ (y - d.C @ self.x_hat)
-        th, ph, dth, dph, _, _ = self.route.sample(t, self.R)
-        ref = np.array([th, 0.0, ph, dth, 0.0, dph])[list(d.states)]
-        v_max = d.settings.v_battery
-        u = np.clip(-d.K @ (self.x_hat - ref), -v_max, v_max)
-        self.x_hat = d.Ad @ self.x_hat + d.Bd @ u
-        self.u = u
-        return float(u[0]), float(u[1])
+        self.io[:3] = enc_l, enc_r, gyro
+        fastbalance.balance_io(self.buf, self.io, float(t), math.inf)
+        return float(self.io[fastbalance.O_V]), float(self.io[fastbalance.O_V + 1])
 
     def ideal_torques(self) -> tuple:
         """(K_t/R_m) (v_l, v_r): the wheel torques of ideal drives for the last voltages [N m]."""
-        gain = self.torque_per_volt
-        return float(gain * self.u[0]), float(gain * self.u[1])
+        return float(self.io[fastbalance.O_TAU]), float(self.io[fastbalance.O_TAU + 1])
 
     def estimate(self) -> dict:
         """The observer's prediction for the next sample: theta, psi, phi and rates."""
-        full = dict.fromkeys(("theta", "psi", "phi", "dtheta", "dpsi", "dphi"), 0.0)
-        names = list(full)
-        for value, i in zip(self.x_hat if self.x_hat is not None else [], self.design.states):
-            full[names[i]] = float(value)
-        return full
+        names = ("theta", "psi", "phi", "dtheta", "dpsi", "dphi")
+        return {name: float(self.io[fastbalance.O_HAT + i]) for i, name in enumerate(names)}
 
     def reference(self, t: float) -> tuple:
         """(x_d, y_d), the reference axle position at time t [m]."""

@@ -34,6 +34,8 @@ _SMOOTHSTEP_DERIVATIVES = tuple(
     tuple(float(c) for c in np.polynomial.polynomial.polyder(SMOOTHSTEP_COEFFICIENTS, order)) for order in (1, 2)
 )
 """Ascending coefficients of s'(tau) and s''(tau), differentiated from (7.27)."""
+#: The coefficients of s'(tau), ascending (:mod:`controller.fastbalance` evaluates them too).
+SMOOTHSTEP_SLOPE_COEFFICIENTS = _SMOOTHSTEP_DERIVATIVES[0]
 
 
 def smoothstep(tau: float) -> tuple[float, float]:
@@ -41,7 +43,7 @@ def smoothstep(tau: float) -> tuple[float, float]:
     value = slope = 0.0
     for coefficient in reversed(SMOOTHSTEP_COEFFICIENTS):
         value = value * tau + coefficient
-    for coefficient in reversed(_SMOOTHSTEP_DERIVATIVES[0]):
+    for coefficient in reversed(SMOOTHSTEP_SLOPE_COEFFICIENTS):
         slope = slope * tau + coefficient
     return value, slope
 

@@ -11,6 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from controller import fastbalance
+from plant import wheeled_kernel as kernel
+
 from .compiled import Adapter, NotCompilable, register
 from .guarded import ABSURD
 from .parts import PLANT_OUTPUTS
@@ -240,3 +243,43 @@ class ActuatedFiveBarPlantAdapter(_PlantState):
             f"    {x}[{first + 15}] = {z}[14]",
             f"    {x}[{first + 16}] = {z}[15]",
         ]
+
+
+@register
+class BalanceControllerAdapter(Adapter):
+    """:func:`controller.fastbalance.balance_io`, inputs limited to |x| <= ABSURD as the slave."""
+
+    model = "BalanceController"
+    inputs, outputs = fastbalance.INPUTS, fastbalance.OUTPUTS
+    modules = ("controller.fastbalance",)
+
+    def __init__(self, name, slave, h):
+        super().__init__(name, slave, h)
+        self.arrays = [slave.controller.buf]
+
+    def emit(self, arrays, x, t, h):
+        return [f"st = fastbalance.balance_io({arrays[0]}, {x}, {t}, {ABSURD!r})"]
+
+
+@register
+class WheeledPendulumAdapter(Adapter):
+    """:func:`plant.wheeled_kernel.pendulum_io` on the simulator's own state array (the kernel
+    changes it only when the whole step is accepted: a fall is re-run by the Python path)."""
+
+    model = "WheeledPendulum"
+    inputs = ("tau_l", "tau_r", "tau_d")
+    outputs = kernel.OUTPUT_NAMES
+    modules = ("plant.wheeled_kernel",)
+
+    def __init__(self, name, slave, h):
+        super().__init__(name, slave, h)
+        sim = slave.sim
+        settings = np.empty(kernel.SETTINGS_SIZE)
+        settings[kernel.S_SUBSTEPS], settings[kernel.S_COUNT], settings[kernel.S_LIMIT] = \
+            sim.substeps, sim.count, ABSURD
+        settings[kernel.S_PUSH_TORQUE], settings[kernel.S_PUSH_START], settings[kernel.S_PUSH_DURATION] = \
+            slave.push_torque, slave.push_start, slave.push_duration
+        self.arrays = [sim.prm, sim.y, settings]
+
+    def emit(self, arrays, x, t, h):
+        return [f"st = wheeled_kernel.pendulum_io({arrays[0]}, {arrays[1]}, {arrays[2]}, {x}, {t}, {h})"]

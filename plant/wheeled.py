@@ -184,16 +184,10 @@ class WheeledPendulum:
         return kernel.energy(self.prm, self.y)
 
     def outputs(self) -> dict:
-        """The WheeledPendulum outputs (docs/contract.md), as Python floats."""
-        th, ps, ph, x, y, dth, dps, dph = self.y.tolist()
-        half = self.params.W / (2.0 * self.params.R)
-        enc_l = th - half * ph - ps
-        enc_r = th + half * ph - ps
-        count = self.count
-        return {"theta": th, "psi": ps, "phi": ph, "dtheta": dth, "dpsi": dps, "dphi": dph, "x": x, "y": y,
-                "omega_l": dth - half * dph - dps, "omega_r": dth + half * dph - dps,
-                "enc_l": count * math.floor(enc_l / count + 0.5), "enc_r": count * math.floor(enc_r / count + 0.5),
-                "gyro": dps, "energy": self.energy()}
+        """The WheeledPendulum outputs (docs/contract.md), as Python floats (:func:`plant.wheeled_kernel.sensors`)."""
+        out = np.empty(len(kernel.OUTPUT_NAMES))
+        kernel.sensors(self.prm, self.y, self.count, out, 0)
+        return dict(zip(kernel.OUTPUT_NAMES, out.tolist()))
 
 
 def upright_mass_matrix(p: WheeledParams):

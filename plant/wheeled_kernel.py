@@ -164,3 +164,62 @@ def energy(prm, y):
     t2 = p.J_w * dth * dth + 0.5 * p.J_psi * dps * dps + 0.5 * (p.J_phi + W * W / (2.0 * R * R) * p.J_w) * dph * dph
     u = 2.0 * p.m * p.g * R + mb * p.g * (R + L * c)
     return t1 + t2 + u
+
+
+#: The sensors and outputs of :func:`sensors`, in order (the ``WheeledPendulum`` FMU's outputs).
+OUTPUT_NAMES = ("theta", "psi", "phi", "dtheta", "dpsi", "dphi", "x", "y", "omega_l", "omega_r", "enc_l", "enc_r",
+                "gyro", "energy")
+#: Layout of the settings array of :func:`pendulum_io`: RK4 substeps, encoder count [rad],
+#: push torque [N m], push start and duration [s], input limit.
+S_SUBSTEPS, S_COUNT, S_PUSH_TORQUE, S_PUSH_START, S_PUSH_DURATION, S_LIMIT = range(6)
+SETTINGS_SIZE = 6
+#: :func:`pendulum_io`'s code for an input that is not finite or beyond the limit.
+REFUSED_INPUT = 4
+
+
+@njit(cache=True)
+def sensors(prm, y, count, out, first):
+    """out[first:first + 14] = :data:`OUTPUT_NAMES` of the state y: the encoders read
+    theta_l,r - psi (10) quantised to ``count`` [rad], the gyro psi'."""
+    p = prm[0]
+    half = p.W / (2.0 * p.R)
+    enc_l = y[THETA] - half * y[PHI] - y[PSI]
+    enc_r = y[THETA] + half * y[PHI] - y[PSI]
+    out[first + 0] = y[THETA]
+    out[first + 1] = y[PSI]
+    out[first + 2] = y[PHI]
+    out[first + 3] = y[DTHETA]
+    out[first + 4] = y[DPSI]
+    out[first + 5] = y[DPHI]
+    out[first + 6] = y[X]
+    out[first + 7] = y[Y]
+    out[first + 8] = y[DTHETA] - half * y[DPHI] - y[DPSI]
+    out[first + 9] = y[DTHETA] + half * y[DPHI] - y[DPSI]
+    out[first + 10] = count * math.floor(enc_l / count + 0.5)
+    out[first + 11] = count * math.floor(enc_r / count + 0.5)
+    out[first + 12] = y[DPSI]
+    out[first + 13] = energy(prm, y)
+
+
+@njit(cache=True)
+def pendulum_io(prm, y, settings, x, t, dt):
+    """One communication step of the ``WheeledPendulum`` FMU from t over dt: torques
+    (tau_l, tau_r, tau_d) from x[0:3], the push added over the steps starting in its window
+    (1e-9 s: rounding of t), then :func:`step` and :func:`sensors` into x[3:17].
+
+    Returns the code of :func:`step` (nothing changed unless :data:`OK`), or
+    :data:`REFUSED_INPUT` for an input that is not finite or beyond the limit.
+    """
+    limit = settings[S_LIMIT]
+    for i in range(3):
+        if not abs(x[i]) <= limit:
+            return REFUSED_INPUT
+    tau_d = x[2]
+    start = settings[S_PUSH_START]
+    if start - 1e-9 <= t < start + settings[S_PUSH_DURATION] - 1e-9:
+        tau_d += settings[S_PUSH_TORQUE]
+    code, _ = step(prm, y, x[0], x[1], tau_d, dt, int(settings[S_SUBSTEPS]))
+    if code != OK:
+        return code
+    sensors(prm, y, settings[S_COUNT], x, 3)
+    return OK

@@ -128,3 +128,27 @@ def test_python_finishes_a_declined_step_from_the_declining_member_and_sub_step(
     compiled._finish_step_in_python(stepper, 1, 1, 0, 3.0)   # c declined in the first of b, c's two sub-steps
     assert calls == [("c", 3.0, 0.5), ("b", 3.5, 0.5), ("c", 3.5, 0.5), ("d", 3.0, 1.0)]
     assert stepper.time == 4.0
+
+
+@pytest.mark.parametrize("name", ["pendulum_balance", "pendulum_push"])
+def test_the_pendulum_scenes_compiled_are_the_in_process_rows(name):
+    # One compiled loop: both scenes share the wiring (the push is a plant parameter).
+    scene = get_scene(name)
+    fast = simulate(scene.system, mode="compiled")
+    slow = simulate(scene.system, mode="inprocess")
+    assert fast.error is None and fast.mode == "compiled" and fast.extra["python_steps"] == 0
+    _same_rows(fast, slow)
+    assert len(fast.time) == 5001
+
+
+def test_a_pendulum_falling_in_the_compiled_loop_stops_with_the_in_process_message():
+    # At 0.5 V the drives cannot catch the 5 degree release: the robot falls near t = 0.56 s.
+    scene = _with(_with(get_scene("pendulum_balance"), "ctrl", v_battery=0.5), "drive_l", v_max=0.5)
+    scene = _with(_short(scene, 1.0), "drive_r", v_max=0.5)
+    fast = run_scene(scene, mode="compiled")
+    slow = run_scene(scene, mode="inprocess")
+    assert "the robot fell over (pitch beyond 90 degrees)" in slow.result.error
+    assert fast.result.error == slow.result.error and fast.metrics["mode"] == "compiled"
+    assert fast.metrics["completed"] is False and fast.metrics["python_steps"] == 0
+    assert 100 < len(fast.result.time) < 1001
+    _same_rows(fast.result, slow.result)

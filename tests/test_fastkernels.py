@@ -57,3 +57,32 @@ def test_trajectory_refuses_negative_time_and_is_continuous_at_its_end(trajector
         trajectory(-0.001)
     before, after = trajectory(trajectory.duration - 1e-9), trajectory(trajectory.duration)
     assert math.hypot(before.x - after.x, before.y - after.y) < 1e-6
+
+
+@pytest.mark.parametrize("yaw", [True, False])
+def test_balance_kernel_is_the_observer_and_lqr_written_with_numpy(yaw):
+    # The matrix form of controller/balance.py's docstring, evaluated independently with numpy.
+    from controller import fastbalance
+    from controller.balance import BalanceController, BalanceSettings, design_balance, get_route
+
+    design = design_balance(BalanceSettings(yaw=yaw, v_battery=2.0))
+    controller = BalanceController(design, get_route("forward_turn"))
+    rng = np.random.default_rng(4)
+    x_hat, states = None, list(design.states)
+    for k in range(400):
+        t = 0.02 * k
+        enc_l, enc_r, gyro = rng.normal(0.0, 0.05, 3) + (0.3 * t, 0.35 * t, 0.0)
+        y = np.array([0.5 * (enc_l + enc_r), gyro] + ([0.04 / 0.14 * (enc_r - enc_l)] if yaw else []))
+        if x_hat is None:
+            x_hat = np.array([y[0], 0.0, y[2] if yaw else 0.0, 0.0, gyro, 0.0])[states]
+        x_hat = x_hat + design.Lo @ (y - design.C @ x_hat)
+        th, ph, dth, dph, x_d, _ = controller.route.sample(t, 0.04)
+        u = np.clip(-design.K @ (x_hat - np.array([th, 0.0, ph, dth, 0.0, dph])[states]), -2.0, 2.0)
+        x_hat = design.Ad @ x_hat + design.Bd @ u
+        assert controller.sample(t, enc_l, enc_r, gyro) == pytest.approx(tuple(u), rel=1e-12, abs=1e-12)
+        np.testing.assert_allclose(controller.x_hat, x_hat, rtol=1e-12, atol=1e-12)
+        assert controller.io[fastbalance.O_REF] == x_d
+    saved = controller.buf.copy()
+    io = np.array([0.1, float("nan"), 0.0] + [0.0] * len(fastbalance.OUTPUTS))
+    assert fastbalance.balance_io(controller.buf, io, 8.0, 1e6) == fastbalance.REFUSED
+    assert np.array_equal(controller.buf, saved)

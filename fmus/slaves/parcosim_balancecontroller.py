@@ -12,9 +12,10 @@ from __future__ import annotations
 
 from controller.balance import ROUTES, BalanceController as _Controller
 from controller.balance import BalanceSettings, design_balance, get_route
+from controller.fastbalance import INPUTS, OUTPUTS
 from fmus.guarded import MIN_STEP, GuardedSlave, refuse_absurd, refuse_absurd_inputs, require_finite
 
-ESTIMATES = ("theta_hat", "psi_hat", "phi_hat", "dtheta_hat", "dpsi_hat", "dphi_hat")
+ESTIMATES = OUTPUTS[6:]
 
 
 class BalanceController(GuardedSlave):
@@ -72,8 +73,6 @@ class BalanceController(GuardedSlave):
     def step(self, current_time, step_size):
         c = self.controller
         refuse_absurd_inputs(current_time, enc_l=self.enc_l, enc_r=self.enc_r, gyro=self.gyro)
-        self.v_l, self.v_r = c.sample(current_time, self.enc_l, self.enc_r, self.gyro)
-        self.tau_l, self.tau_r = c.ideal_torques()
-        self.x_d, self.y_d = c.reference(current_time)
-        for name, value in c.estimate().items():
-            setattr(self, f"{name}_hat", value)
+        c.sample(current_time, self.enc_l, self.enc_r, self.gyro)
+        for name, value in zip(OUTPUTS, c.io[len(INPUTS):].tolist()):
+            setattr(self, name, value)
