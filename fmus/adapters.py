@@ -144,6 +144,7 @@ def _plant_settings(name, sim, h) -> np.ndarray:
     settings[fast5r.S_LAMBDA], settings[fast5r.S_SUBSTEPS], settings[fast5r.S_COUNT] = \
         s.baumgarte, s.substeps, sim.count
     settings[fast5r.S_RESIDUAL_STOP], settings[fast5r.S_SINGULAR_STOP] = RESIDUAL_STOP, SINGULAR_STOP
+    settings[fast5r.S_OFFSET1], settings[fast5r.S_OFFSET2] = sim.encoder_offsets
     return settings
 
 

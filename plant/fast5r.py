@@ -432,8 +432,9 @@ class FastKernel:
 OK, NONFINITE_INPUT, NONFINITE_STATE, DIVERGED, SINGULAR = 0, 1, 2, 3, 4
 #: Layout of the settings array of :func:`plant_io`: Baumgarte lambda, RK4 steps per step,
 #: one encoder count [rad], the largest residual and the smallest singularity measure accepted
-#: (plant.simulator.RESIDUAL_STOP, SINGULAR_STOP).
-S_LAMBDA, S_SUBSTEPS, S_COUNT, S_RESIDUAL_STOP, S_SINGULAR_STOP, SETTINGS_SIZE = 0, 1, 2, 3, 4, 5
+#: (plant.simulator.RESIDUAL_STOP, SINGULAR_STOP), the two encoders' zero errors [rad]
+#: (PlantSimulator.encoder_offsets).
+S_LAMBDA, S_SUBSTEPS, S_COUNT, S_RESIDUAL_STOP, S_SINGULAR_STOP, S_OFFSET1, S_OFFSET2, SETTINGS_SIZE = range(8)
 #: Entries of x after the inputs: the FiveBarPlant outputs (fmus.parts.PLANT_OUTPUTS order).
 PLANT_OUTPUT_COUNT = 11
 
@@ -452,11 +453,17 @@ def _accept(s, out):
 
 
 @njit(cache=True)
-def _publish(out, x, first):
-    """The plant's outputs from the report ``out`` into x[first:first + 11]."""
+def _publish(out, s, x, first):
+    """The plant's outputs from the report ``out`` into x[first:first + 11]; the encoders read
+    q + their zero error, quantised (PlantSimulator._encoder: the report quantises q alone)."""
     for k in range(10):
         x[first + k] = out[REPORT_OUTPUTS + k]
     x[first + 10] = out[REPORT_RESIDUAL]
+    count = s[S_COUNT]
+    for k in range(2):
+        offset = s[S_OFFSET1 + k]
+        if offset != 0.0:
+            x[first + 8 + k] = count * math.floor((x[first + k] + offset) / count + 0.5)
 
 
 @njit(cache=True)
@@ -474,7 +481,7 @@ def plant_io(p, y, s, x, dt):
     status = _accept(s, out)
     if status == OK:
         y[:] = z
-        _publish(out, x, 2)
+        _publish(out, s, x, 2)
     return status
 
 
@@ -494,7 +501,7 @@ def actuated_io(p, s, motors, z, voltages, x, first, dt):
     status = _accept(s, out)
     if status == OK:
         z[:] = w
-        _publish(out, x, first)
+        _publish(out, s, x, first)
         for n in range(motors.shape[0]):
             joint = int(motors[n, 0])
             omega = w[10] if joint == 0 else -w[12]

@@ -48,6 +48,23 @@ def test_compiled_rows_are_the_in_process_rows(name, drives_inside):
     assert len(fast.time) == 1501
 
 
+def test_every_parameter_a_sweep_perturbs_reaches_the_compiled_loop():
+    """A sweep's robot (scenarios.perturb: chain geometry and inertia, encoder zero errors,
+    motor constants with the nominal current-controller design) runs the same rows compiled
+    as in process: an adapter that left a parameter to the Python path would differ here."""
+    from scenarios.perturb import draw, perturbable, perturbed, uncertainties
+
+    base = _short(get_scene("bench_circle_TCMDq"), 1.0)
+    parameters = perturbable(base)
+    values = draw(parameters, uncertainties(parameters, 0.4), 0, 1)
+    assert any(name.endswith("encoder_offset1") for name in values)
+    scene = perturbed(base, parameters, values)
+    fast = simulate(scene.system, mode="compiled")
+    slow = simulate(scene.system, mode="inprocess")
+    assert fast.error is None and fast.extra["python_steps"] == 0
+    _same_rows(fast, slow)
+
+
 def test_a_sample_off_the_table_is_taken_by_python_and_the_loop_goes_on():
     # The controller's table covers only x <= 0.02 m: on the rest of the circle the compiled
     # law declines and the Python controller evaluates the exact model there (table_fallback).
