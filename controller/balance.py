@@ -274,7 +274,3 @@ class BalanceController:
         """The observer's prediction for the next sample: theta, psi, phi and rates."""
         names = ("theta", "psi", "phi", "dtheta", "dpsi", "dphi")
         return {name: float(self.io[fastbalance.O_HAT + i]) for i, name in enumerate(names)}
-
-    def reference(self, t: float) -> tuple:
-        """(x_d, y_d), the reference axle position at time t [m]."""
-        return self.route.sample(t, self.R)[4:]

@@ -154,7 +154,7 @@ class PolygonTrajectory:
         buf[_fast.T_KIND] = _fast.KIND_POLYGON
         buf[_fast.T_SIDE_TIME], buf[_fast.T_CYCLES], buf[_fast.T_VERTICES] = self.side_time, self.cycles, len(self.vertices)
         buf[_fast.T_POSITION:_fast.T_VELOCITY] = SMOOTHSTEP_COEFFICIENTS
-        buf[_fast.T_VELOCITY:_fast.T_ACCELERATION] = _SMOOTHSTEP_DERIVATIVES[0]
+        buf[_fast.T_VELOCITY:_fast.T_ACCELERATION] = SMOOTHSTEP_SLOPE_COEFFICIENTS
         buf[_fast.T_ACCELERATION:_fast.T_POINTS] = _SMOOTHSTEP_DERIVATIVES[1]
         buf[_fast.T_POINTS:] = points
         return buf
