@@ -265,13 +265,14 @@ class Derivator:
         if self.buf is None:
             raise RuntimeError("Derivator.step called before reset(q0)")
         q = np.asarray(q, dtype=float)
-        if not (np.all(np.isfinite(q)) and np.all(np.abs(q) <= limit)):
+        # Checked on Python floats: numpy's reductions cost more than the product for 2 angles.
+        if not all(math.isfinite(v) and abs(v) <= limit for v in q.tolist()):
             raise ValueError(f"angles q = {q.tolist()!r} rad must be finite with |q| <= {limit:g}")
         if self.buf[fastderivator.V_STARTED] == 0.0:
             self._rest_at(q)
         self._state[-1] = q
         outputs = self._matrix @ self._state
-        if np.all(np.isfinite(outputs[:2])):
+        if np.isfinite(outputs[:2]).all():
             self._state[:-1] = outputs[2:]
         return outputs[0], outputs[1]
 

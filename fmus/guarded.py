@@ -96,6 +96,9 @@ class GuardedSlave(Fmi2Slave):
 
     #: Outputs are samples at the step's start, held over the step (see above).
     sampled = False
+    #: The step size the last :meth:`check_step_size` accepted (derived, not FMU state: its
+    #: mangled name keeps it out of :func:`fmus.fmustate.model_state`).
+    __accepted_step = None
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -355,6 +358,7 @@ class GuardedSlave(Fmi2Slave):
         self._start_time = float(start_time)
 
     def exit_initialization_mode(self):
+        self.__accepted_step = None
         self._initialised = True
         self._next_time, self._last_step = self._start_time, None
         try:
@@ -372,6 +376,26 @@ class GuardedSlave(Fmi2Slave):
         self._terminated = True
 
     def do_step(self, current_time: float, step_size: float) -> bool:
+        if self._ready and not self._terminated:   # initialised, nothing refused: the usual case
+            try:
+                if current_time != self._next_time:   # equal: the check passes (the usual case)
+                    self._check_communication_point(current_time)
+                # The step-size rule depends on h and fixed parameters alone (and on t through
+                # t + h <= MAX_TIME): an h accepted since initialisation is not checked again.
+                if step_size != self.__accepted_step or not current_time + step_size <= MAX_TIME:
+                    self.check_step_size(current_time, step_size)
+                    self.__accepted_step = step_size
+                self.step(current_time, step_size)
+                self._next_time, self._last_step = current_time + step_size, step_size
+                return True
+            except KeyboardInterrupt:
+                self._refuse(f"step {INTERRUPTED_MARK} at t = {current_time!r} s", current_time)
+                self._ready = False
+                return False
+            except Exception as exc:  # noqa: BLE001
+                self._refuse(str(exc), current_time)
+                self._ready = False
+                return False
         if self._terminated:
             self._refuse(f"doStep from t = {current_time!r} s after fmi2Terminate refused", repeat=True)
             return False
@@ -385,21 +409,7 @@ class GuardedSlave(Fmi2Slave):
                              "(fmi2SetFMUstate) to go on", current_time, repeat=True, keep_error=True)
             else:
                 self._refuse(self.error or "initialisation refused", current_time, repeat=True)
-            return False
-        try:
-            self._check_communication_point(current_time)
-            self.check_step_size(current_time, step_size)
-            self.step(current_time, step_size)
-            self._next_time, self._last_step = current_time + step_size, step_size
-            return True
-        except KeyboardInterrupt:
-            self._refuse(f"step {INTERRUPTED_MARK} at t = {current_time!r} s", current_time)
-            self._ready = False
-            return False
-        except Exception as exc:  # noqa: BLE001
-            self._refuse(str(exc), current_time)
-            self._ready = False
-            return False
+        return False
 
     def _check_communication_point(self, current_time: float) -> None:
         """Raise ValueError unless ``current_time`` is the last point plus the last step, to

@@ -221,6 +221,7 @@ class InProcessInstance:
         self.name = name
         self.slave = cls(instance_name=name)
         self.variables = slave_variables(self.slave)
+        self._inputs, self._outputs = [], []   # until bind
 
     def enter_initialization(self, parameters: dict, start_time: float) -> None:
         """Set up the experiment, enter initialisation mode and set ``parameters``."""
@@ -250,17 +251,28 @@ class InProcessInstance:
         # What the slave's setters and getters do, with the names looked up once:
         # attributes set to the values, outputs read back as Python values of their type.
         self._inputs = [(v.name, _CONVERT[v.type]) for v in inputs]
+        names = [v.name for v in inputs]
+        cls = type(self.slave)
+        if all(v.type == "Real" for v in inputs) and not any(hasattr(getattr(cls, n, None), "__set__") for n in names):
+            # Real inputs held as plain instance attributes: one dict update does the setattrs.
+            attributes = vars(self.slave)
+            self.set_inputs = lambda values: attributes.update(zip(names, map(float, values)))
+        else:
+            vars(self).pop("set_inputs", None)
+        self._outputs = list(outputs)
         converters = [_CONVERT[v.type] for v in outputs]
         getter = operator.attrgetter(*[v.name for v in outputs]) if outputs else None
+        slave = self.slave
+        # Closures bound per instance shadow the methods below (which say what they do).
         if not outputs:
-            self._read = lambda slave: []
+            self.get_outputs = lambda: []
         elif len(outputs) == 1:
             convert = converters[0]
-            self._read = lambda slave: [convert(getter(slave))]
+            self.get_outputs = lambda: [convert(getter(slave))]
         elif all(c is float for c in converters):
-            self._read = lambda slave: [float(v) for v in getter(slave)]
+            self.get_outputs = lambda: list(map(float, getter(slave)))
         else:
-            self._read = lambda slave: [c(v) for c, v in zip(converters, getter(slave))]
+            self.get_outputs = lambda: [c(v) for c, v in zip(converters, getter(slave))]
 
     def set_inputs(self, values: list) -> None:
         slave = self.slave
@@ -268,7 +280,7 @@ class InProcessInstance:
             setattr(slave, name, convert(value))
 
     def get_outputs(self) -> list:
-        return self._read(self.slave)
+        return [_CONVERT[v.type](getattr(self.slave, v.name)) for v in self._outputs]
 
     def do_step(self, t: float, h: float) -> None:
         try:

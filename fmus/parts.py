@@ -228,8 +228,7 @@ def correct_plant(sim, snapshot, measured: dict, redo, step: float) -> bool:
 
 def publish_plant(slave, sim) -> None:
     """Copy the plant's outputs to the slave's variables."""
-    for name, value in sim.outputs().items():
-        setattr(slave, name, float(value))
+    vars(slave).update((name, float(value)) for name, value in sim.outputs().items())
 
 
 # --- a drive ---------------------------------------------------------------------------------

@@ -10,7 +10,26 @@ with it; an FMU that contains a system (:mod:`fmus.embedded`) steps it in its
 """
 from __future__ import annotations
 
+import operator
+
 from .system import System, split_signal
+
+
+def _gatherer(slots):
+    """``values -> tuple of values[i] for i in slots`` (one C call: operator.itemgetter)."""
+    if len(slots) == 1:
+        slot = slots[0]
+        return lambda values: (values[slot],)
+    return operator.itemgetter(*slots) if slots else (lambda values: ())
+
+
+def _span(slots) -> slice:
+    """The slice of ``slots``, consecutive by construction (:class:`Stepper` numbers each
+    instance's outputs together)."""
+    first = slots[0] if slots else 0
+    if list(slots) != list(range(first, first + len(slots))):
+        raise AssertionError(f"output slots {slots} are not consecutive")
+    return slice(first, first + len(slots))
 
 
 def rate_groups(plan) -> list:
@@ -53,6 +72,14 @@ class Stepper:
         for conn in system.connections:
             feeds[split_signal(conn.target)[0]].append(conn)
         sources = [c.source for c in system.connections]
+        produced = {}
+        for name in self.order:
+            inst = instances[name]
+            signals = [s for s in sources + list(system.record)
+                       if split_signal(s)[0] == name and inst.variables[split_signal(s)[1]].causality == "output"]
+            produced[name] = list(dict.fromkeys(signals))
+            for signal in produced[name]:   # slots of the outputs first: each instance's are one slice
+                self._slot(signal)
         plan = []
         #: Instance name -> (its connected inputs, the outputs it produces), as bound.
         self.io_names = {}
@@ -60,18 +87,19 @@ class Stepper:
             inst = instances[name]
             in_vars = [inst.variables[split_signal(c.target)[1]] for c in feeds[name]]
             in_slots = [self._slot(c.source) for c in feeds[name]]
-            produced = [s for s in sources + list(system.record)
-                        if split_signal(s)[0] == name and inst.variables[split_signal(s)[1]].causality == "output"]
-            produced = list(dict.fromkeys(produced))
-            inst.bind(in_vars, [inst.variables[split_signal(s)[1]] for s in produced])
-            self.io_names[name] = ([v.name for v in in_vars], [split_signal(s)[1] for s in produced])
-            plan.append((inst, in_slots, [self._slot(s) for s in produced], system.component(name).substeps))
+            inst.bind(in_vars, [inst.variables[split_signal(s)[1]] for s in produced[name]])
+            self.io_names[name] = ([v.name for v in in_vars], [split_signal(s)[1] for s in produced[name]])
+            plan.append((inst, in_slots, [self.slots[s] for s in produced[name]], system.component(name).substeps))
         record_inputs = [s for s in system.record if s not in self.slots]
         if record_inputs:
             raise ValueError(f"recorded signals must be outputs or connected inputs: {record_inputs}")
         self.record_slots = [self.slots[s] for s in system.record]
+        self._record = _gatherer(self.record_slots)
         self.plan = plan
         self.groups = rate_groups(plan)
+        #: Per group of one rate: (instance, its inputs' gatherer or None, its outputs' slice).
+        self._exchanges = [[(inst, _gatherer(ins) if ins else None, _span(outs)) for inst, ins, outs in members]
+                           for _, members in self.groups]
         self.values = [0.0] * len(self.slots)
         self.time = 0.0
 
@@ -140,10 +168,9 @@ class Stepper:
         self.values[:] = state["values"]
         self.time = state["time"]
 
-    def row(self) -> list:
+    def row(self) -> tuple:
         """The recorded signals' present values, in ``system.record`` order."""
-        values = self.values
-        return [values[i] for i in self.record_slots]
+        return self._record(self.values)
 
     def value(self, signal: str) -> float:
         """The present value of a connected or recorded ``signal``."""
@@ -167,14 +194,13 @@ class Stepper:
             groups = rate_groups([(inst, ins, outs, n * split.get(by_instance[id(inst)], 1))
                                   for inst, ins, outs, n in self.plan])
         held = values[:] if jacobi else values
-        for substeps, members in groups:
+        for (substeps, members), exchanges in zip(groups, self._exchanges):
             if substeps == 1:
-                inst, in_slots, out_slots = members[0]
-                if in_slots:
-                    inst.set_inputs([held[i] for i in in_slots])
+                inst, gather, outputs = exchanges[0]
+                if gather is not None:
+                    inst.set_inputs(gather(held))
                 inst.do_step(t, h)
-                for i, v in zip(out_slots, inst.get_outputs()):
-                    values[i] = v
+                values[outputs] = inst.get_outputs()
                 continue
             # Components of one rate step together, exchanging values at every
             # sub-step; what they read from outside the group is held.

@@ -259,12 +259,13 @@ def actuated_rk4(p, motors, y, v, u1, u2, lam, dt, substeps):
 #: the position residual (5.18); the three singularity measures of
 #: ``plant.simulator.PlantSimulator`` (sin theta12, sin theta22, sin(phi12 - phi22)); then the
 #: plant's outputs q1, q2, dq1, dq2, x, y, dx, dy, q1_enc, q2_enc (world convention,
-#: ``plant.fivebar.world_angles``/``world_rates``).
+#: ``plant.fivebar.world_angles``/``world_rates``; encoder k reads q_k + its zero error
+#: ``offset<k>``, quantised to ``count``: ``PlantSimulator.encoder_offsets``).
 REPORT_FINITE, REPORT_RESIDUAL, REPORT_MEASURES, REPORT_OUTPUTS, REPORT_SIZE = 0, 1, 2, 5, 15
 
 
 @njit(cache=True)
-def report(p, y, count, out):
+def report(p, y, count, offset1, offset2, out):
     """What the simulator checks and publishes after a step, for the state y (layout above)."""
     finite = True
     for i in range(y.size):
@@ -281,15 +282,15 @@ def report(p, y, count, out):
     o = REPORT_OUTPUTS
     out[o], out[o + 1], out[o + 2], out[o + 3] = q1, q2, y[10], -y[12]
     out[o + 4], out[o + 5], out[o + 6], out[o + 7] = y[0], y[1], y[7], y[8]
-    out[o + 8] = count * math.floor(q1 / count + 0.5)
-    out[o + 9] = count * math.floor(q2 / count + 0.5)
+    out[o + 8] = count * math.floor((q1 + offset1) / count + 0.5)
+    out[o + 9] = count * math.floor((q2 + offset2) / count + 0.5)
 
 
 @njit(cache=True)
-def actuated_step(p, motors, y, v, u1, u2, lam, dt, substeps, count, out):
+def actuated_step(p, motors, y, v, u1, u2, lam, dt, substeps, count, offset1, offset2, out):
     """:func:`actuated_rk4`, then :func:`report` of the new plant state into ``out``; returns z."""
     z = actuated_rk4(p, motors, y, v, u1, u2, lam, dt, substeps)
-    report(p, z[:14], count, out)
+    report(p, z[:14], count, offset1, offset2, out)
     return z
 
 
@@ -408,11 +409,13 @@ class FastKernel:
                    float(baumgarte), out)
         return out
 
-    def step(self, y, u1, u2, baumgarte, dt, substeps, count, motors=NO_MOTORS, voltages=NO_VOLTAGES):
-        """RK4 over dt and the report of the new state: (z, report as a list, :data:`REPORT_SIZE`)."""
+    def step(self, y, u1, u2, baumgarte, dt, substeps, count, offsets=(0.0, 0.0), motors=NO_MOTORS,
+             voltages=NO_VOLTAGES):
+        """RK4 over dt and the report of the new state: (z, report as a list, :data:`REPORT_SIZE`);
+        ``offsets`` are the encoders' zero errors [rad]."""
         out = np.empty(REPORT_SIZE)
         z = actuated_step(self.p, motors, y, voltages, float(u1), float(u2), float(baumgarte), float(dt),
-                          int(substeps), float(count), out)
+                          int(substeps), float(count), float(offsets[0]), float(offsets[1]), out)
         return z, out.tolist()
 
     def project(self, y, iterations=3):
@@ -453,17 +456,11 @@ def _accept(s, out):
 
 
 @njit(cache=True)
-def _publish(out, s, x, first):
-    """The plant's outputs from the report ``out`` into x[first:first + 11]; the encoders read
-    q + their zero error, quantised (PlantSimulator._encoder: the report quantises q alone)."""
+def _publish(out, x, first):
+    """The plant's outputs from the report ``out`` into x[first:first + 11]."""
     for k in range(10):
         x[first + k] = out[REPORT_OUTPUTS + k]
     x[first + 10] = out[REPORT_RESIDUAL]
-    count = s[S_COUNT]
-    for k in range(2):
-        offset = s[S_OFFSET1 + k]
-        if offset != 0.0:
-            x[first + 8 + k] = count * math.floor((x[first + k] + offset) / count + 0.5)
 
 
 @njit(cache=True)
@@ -477,11 +474,11 @@ def plant_io(p, y, s, x, dt):
         return NONFINITE_INPUT
     out = np.empty(REPORT_SIZE)
     z = actuated_step(p, NO_MOTORS, y, NO_VOLTAGES, tau1, -tau2, s[S_LAMBDA], dt, int(s[S_SUBSTEPS]),
-                      s[S_COUNT], out)
+                      s[S_COUNT], s[S_OFFSET1], s[S_OFFSET2], out)
     status = _accept(s, out)
     if status == OK:
         y[:] = z
-        _publish(out, s, x, 2)
+        _publish(out, x, 2)
     return status
 
 
@@ -494,14 +491,15 @@ def actuated_io(p, s, motors, z, voltages, x, first, dt):
     Refused, nothing changed: a non-finite state or current, divergence, a singular pose.
     """
     out = np.empty(REPORT_SIZE)
-    w = actuated_step(p, motors, z, voltages, 0.0, 0.0, s[S_LAMBDA], dt, int(s[S_SUBSTEPS]), s[S_COUNT], out)
+    w = actuated_step(p, motors, z, voltages, 0.0, 0.0, s[S_LAMBDA], dt, int(s[S_SUBSTEPS]), s[S_COUNT],
+                      s[S_OFFSET1], s[S_OFFSET2], out)
     for n in range(motors.shape[0]):
         if not math.isfinite(w[14 + n]):
             return NONFINITE_STATE
     status = _accept(s, out)
     if status == OK:
         z[:] = w
-        _publish(out, s, x, first)
+        _publish(out, x, first)
         for n in range(motors.shape[0]):
             joint = int(motors[n, 0])
             omega = w[10] if joint == 0 else -w[12]

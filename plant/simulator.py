@@ -158,7 +158,8 @@ class PlantSimulator:
             self._fast = fast5r.FastKernel(params)
             # Compile the step now (numba: seconds in a fresh process, e.g. a just-extracted
             # FMU), so that initialisation, not the first step, pays for it.
-            self._fast.step(self.y, 0.0, 0.0, self.settings.baumgarte, 1e-3, 1, self.count)
+            self._fast.step(self.y, 0.0, 0.0, self.settings.baumgarte, 1e-3, 1, self.count,
+                            self.encoder_offsets)
 
     # --- derivatives -----------------------------------------------------------
     def derivative(self, y, u_star):
@@ -182,12 +183,13 @@ class PlantSimulator:
             if not math.isfinite(value):
                 raise PlantError(f"input {name} = {value!r} at t = {self.time:.6g} s is not finite")
         self.check_step(dt)
-        u_star = fivebar.thesis_torques(tau1, tau2)
 
         def held():
             return f"tau1 = {tau1!r}, tau2 = {tau2!r} N m held"
 
-        y, report = self.integrate(self.y, dt, u_star[0], u_star[1], held, lambda z: self.derivative(z, u_star))
+        # u* on (theta11, theta21) is (tau1, -tau2) (fivebar.thesis_torques, without its array)
+        y, report = self.integrate(self.y, dt, tau1, -tau2, held,
+                                   lambda z: self.derivative(z, fivebar.thesis_torques(tau1, tau2)))
         self.accept(y, dt, held, report)
 
     def integrate(self, z, dt: float, u1: float, u2: float, held, derivative,
@@ -205,7 +207,8 @@ class PlantSimulator:
         s = self.settings
         try:
             if s.method == "rk4" and self._fast is not None and not s.project:
-                return self._fast.step(z, u1, u2, s.baumgarte, dt, s.substeps, self.count, motors, voltages)
+                return self._fast.step(z, u1, u2, s.baumgarte, dt, s.substeps, self.count, self.encoder_offsets,
+                                       motors, voltages)
             if s.method == "rk4" and self._fast is not None:
                 return fast5r.actuated_rk4(self._fast.p, motors, z, voltages, float(u1), float(u2),
                                            float(s.baumgarte), float(dt), int(s.substeps)), None
@@ -313,11 +316,8 @@ class PlantSimulator:
             q1, q2 = fivebar.world_angles(y[:7])
             dq1, dq2 = fivebar.world_rates(y[7:])
             out = {"q1": q1, "q2": q2, "dq1": dq1, "dq2": dq2, "x": y[0], "y": y[1], "dx": y[7], "dy": y[8],
-                   "q1_enc": self._encoder(q1, 0.0), "q2_enc": self._encoder(q2, 0.0),
-                   "residual": self.residual_norm()}
-        if self.encoder_offsets != (0.0, 0.0):   # the compiled report quantises q without offset
-            out["q1_enc"] = self._encoder(out["q1"], self.encoder_offsets[0])
-            out["q2_enc"] = self._encoder(out["q2"], self.encoder_offsets[1])
+                   "q1_enc": self._encoder(q1, self.encoder_offsets[0]),
+                   "q2_enc": self._encoder(q2, self.encoder_offsets[1]), "residual": self.residual_norm()}
         return out
 
     def _encoder(self, q: float, offset: float) -> float:

@@ -170,15 +170,17 @@ def test_the_reference_of_an_in_plant_scene_points_to_its_original():
 
 def test_compiled_report_equals_the_python_checks_and_outputs():
     """plant.fast5r.report must give exactly what PlantSimulator computes in Python for the
-    same state: the residual, the singularity measures and every output."""
-    sim = PlantSimulator(get_preset("bench"), *START, IntegratorSettings(project=True))   # Python path
+    same state: the residual, the singularity measures and every output, the encoders with their
+    zero errors (off whole counts, of both signs)."""
+    sim = PlantSimulator(get_preset("bench"), *START, IntegratorSettings(project=True),   # Python path
+                         encoder_offsets=(2.37e-3, -4.61e-3))
     rng = np.random.default_rng(3)
     for _ in range(20):
         sim.y = sim.y.copy()
         sim.y[7:] += rng.normal(scale=0.2, size=7)
         sim.y[3:7] += rng.normal(scale=1e-4, size=4)        # off the constraints: a residual to report
         out = np.empty(fast5r.REPORT_SIZE)
-        fast5r.report(fast5r.pack_params(sim.params), sim.y, sim.count, out)
+        fast5r.report(fast5r.pack_params(sim.params), sim.y, sim.count, *sim.encoder_offsets, out)
         report = out.tolist()
         expected = sim.outputs()
         assert report[fast5r.REPORT_FINITE] == 1.0
@@ -189,7 +191,7 @@ def test_compiled_report_equals_the_python_checks_and_outputs():
         assert report[fast5r.REPORT_OUTPUTS:] == [expected[n] for n in names]
     z = sim.y.copy()
     z[8] = np.nan
-    fast5r.report(fast5r.pack_params(sim.params), z, sim.count, out)
+    fast5r.report(fast5r.pack_params(sim.params), z, sim.count, 0.0, 0.0, out)
     assert out[fast5r.REPORT_FINITE] == 0.0
 
 

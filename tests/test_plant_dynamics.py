@@ -222,7 +222,7 @@ def test_compiled_report_measures_are_the_singularity_sines():
     _, states = random_states(params, 10, seed=18)
     out = np.empty(fast5r.REPORT_SIZE)
     for q, dq in states:
-        fast5r.report(p, np.concatenate([q, dq]), 1e-3, out)
+        fast5r.report(p, np.concatenate([q, dq]), 1e-3, 0.0, 0.0, out)
         s = fivebar.singularity(params, q[0], q[1])
         measures = out[fast5r.REPORT_MEASURES:fast5r.REPORT_MEASURES + 3]
         assert np.allclose(np.abs(measures), np.abs([s.serial1, s.serial2, s.parallel]), rtol=0, atol=1e-12)

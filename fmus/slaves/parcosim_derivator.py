@@ -86,6 +86,18 @@ class Derivator(GuardedSlave):
         self.check_sample_time(current_time, step_size, self.T, divides=False)
 
     def step(self, current_time, step_size):
+        q1, q2 = self.q1, self.q2
+        if not (abs(q1) <= ABSURD and abs(q2) <= ABSURD):   # NaN fails too: named below
+            self._refuse_inputs(current_time)
+        dq, ddq = self.derivator.step([q1, q2], ABSURD)
+        estimates = (float(dq[0]), float(dq[1]), float(ddq[0]), float(ddq[1]))
+        if not all(map(math.isfinite, estimates)):
+            raise ValueError(f"the estimates (dq1, dq2, ddq1, ddq2) = {estimates!r} at t = {current_time:.6g} s "
+                             f"are not finite (inputs q1 = {self.q1!r}, q2 = {self.q2!r} rad)")
+        self.dq1, self.dq2, self.ddq1, self.ddq2 = estimates
+
+    def _refuse_inputs(self, current_time):
+        """Raise ValueError naming the first input that is not finite or is absurd."""
         for name in ("q1", "q2"):
             value = getattr(self, name)
             if not math.isfinite(value):
@@ -93,9 +105,3 @@ class Derivator(GuardedSlave):
             if abs(value) > ABSURD:
                 raise ValueError(f"input {name} = {value!r} rad at t = {current_time:.6g} s is absurd: "
                                  f"|{name}| must be <= {ABSURD:g} rad")
-        dq, ddq = self.derivator.step([self.q1, self.q2], ABSURD)
-        estimates = (float(dq[0]), float(dq[1]), float(ddq[0]), float(ddq[1]))
-        if not all(math.isfinite(v) for v in estimates):
-            raise ValueError(f"the estimates (dq1, dq2, ddq1, ddq2) = {estimates!r} at t = {current_time:.6g} s "
-                             f"are not finite (inputs q1 = {self.q1!r}, q2 = {self.q2!r} rad)")
-        self.dq1, self.dq2, self.ddq1, self.ddq2 = estimates

@@ -79,6 +79,4 @@ class Trajectory(GuardedSlave):
         self._publish(current_time + step_size)
 
     def _publish(self, t):
-        sample = self.trajectory(t)
-        for name, value in zip(OUTPUTS, sample):
-            setattr(self, name, float(value))
+        vars(self).update(zip(OUTPUTS, map(float, self.trajectory(t))))
