@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import json
 import math
+import operator
 import os
 import sys
 
@@ -115,6 +116,8 @@ class GuardedSlave(Fmi2Slave):
         self._start_time = 0.0       # of fmi2SetupExperiment
         self._next_time = None       # the communication point the next doStep must start at
         self._last_step = None
+        # value-reference lists resolved by get_real/set_real (derived: not FMU state)
+        self.__readers, self.__writers = {}, {}
         _drop_duplicate_path_entries()
 
     # --- declaration -----------------------------------------------------------------
@@ -238,23 +241,37 @@ class GuardedSlave(Fmi2Slave):
         return fmustate.from_bytes(cls.__name__, data)
 
     # --- FMI callbacks -------------------------------------------------------------------
-    # get_real/set_real are on every step's path: pythonfmu's versions cost ~1 µs a
-    # variable in type checks and lambdas, these look the name up directly.
+    # get_real/set_real are on every step's path: pythonfmu's versions cost ~1 µs a variable in
+    # type checks and lambdas.  These resolve a list of value references once (names, checks)
+    # into one attrgetter or one dict update, cached by the list once initialised
+    # (:data:`_CACHED_VR_LISTS` of them: an importer moves the same few lists every step).
     def get_real(self, vrs):
-        names = self._real_names()
-        try:
-            return [float(getattr(self, names[vr])) for vr in vrs]
-        except KeyError:
-            self._refuse_get(vrs, Real)
+        key = tuple(vrs)
+        read = self.__readers.get(key)
+        if read is None:
+            names = self._real_names()
+            try:
+                chosen = [names[vr] for vr in key]
+            except (KeyError, TypeError):
+                self._refuse_get(vrs, Real)
+            read = _reader(chosen)
+            if self._initialised:
+                _remember(self.__readers, key, read)
+        return read(self)
 
     def set_real(self, vrs, values):
-        names = self._settable(Real)
-        try:
-            pairs = [(names[vr], value) for vr, value in zip(vrs, values)]
-        except KeyError:
-            self._refuse_set(vrs, values, Real)
-        for name, value in pairs:
-            setattr(self, name, value)
+        key = (tuple(vrs), self._initialised)
+        write = self.__writers.get(key)
+        if write is None:
+            names = self._settable(Real)
+            try:
+                targets = [names[vr] for vr in key[0]]
+            except (KeyError, TypeError):
+                self._refuse_set(vrs, values, Real)
+            write = _writer(type(self), targets)
+            if self._initialised:
+                _remember(self.__writers, key, write)
+        write(self, values)
 
     def get_integer(self, vrs):
         return self._get(vrs, Integer, int)
@@ -453,6 +470,36 @@ class GuardedSlave(Fmi2Slave):
 
 #: Start value of a numeric parameter meaning "the preset's value".
 PRESET_VALUE = -1.0
+
+#: How many value-reference lists a slave's get_real/set_real remember (resolved names).
+_CACHED_VR_LISTS = 32
+
+
+def _remember(cache: dict, key, value) -> None:
+    """``cache[key] = value`` unless the cache is full (a careless importer's endless lists)."""
+    if len(cache) < _CACHED_VR_LISTS:
+        cache[key] = value
+
+
+def _reader(names: list):
+    """``slave -> [float(slave.<name>) for name in names]`` in one attrgetter call."""
+    if len(names) == 1:
+        name = names[0]
+        return lambda slave: [float(getattr(slave, name))]
+    getter = operator.attrgetter(*names) if names else (lambda slave: ())
+    return lambda slave: list(map(float, getter(slave)))
+
+
+def _writer(cls, names: list):
+    """``(slave, values) -> the attributes names set to values``: one dict update when they are
+    plain instance attributes (every parcosim variable), else setattr one by one."""
+    if any(hasattr(getattr(cls, name, None), "__set__") for name in names):
+        def write(slave, values):
+            for name, value in zip(names, values):
+                setattr(slave, name, value)
+        return write
+    return lambda slave, values: vars(slave).update(zip(names, values))
+
 
 #: A numeric parameter beyond this magnitude (SI units) is refused as absurd: no quantity of
 #: the robot, its drives or its controller comes near it, and beyond it the models' products
