@@ -106,7 +106,8 @@ def run_case(system, mode, fmu_dir, classes=None) -> dict:
         step_s = cpu_s = result.wall_s / max(steps, 1)
     return {"total_s": total, "wall_s": result.wall_s, "setup_s": total - result.wall_s,
             "us_per_step": 1e6 * step_s, "cpu_us_per_step": 1e6 * cpu_s,
-            "rtf": system.stop_time / result.wall_s, "order": result.order, "result": result}
+            "rtf": system.stop_time / result.wall_s, "order": result.order, "result": result,
+            "load": os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")}
 
 
 @contextmanager
@@ -227,7 +228,7 @@ def breakdown(system, mode, fmu_dir, classes=None) -> dict:
             per[name]["python_do_step"] = float("nan")
     accounted = sum(v[m] for v in per.values() for m in METHODS)
     return {"components": per, "us_per_step": run["us_per_step"],
-            "rest_us": run["us_per_step"] - accounted, "order": run["order"]}
+            "rest_us": run["us_per_step"] - accounted, "order": run["order"], "load": run["load"]}
 
 
 # --- reporting ----------------------------------------------------------------------------
@@ -284,7 +285,7 @@ def report(scene_name, system, runs, breakdowns, info_before, info_after, overhe
         out.append(f"load average (1/5/15 min): before {la0[0]:.2f}/{la0[1]:.2f}/{la0[2]:.2f}, "
                    f"after {la1[0]:.2f}/{la1[1]:.2f}/{la1[2]:.2f}")
     out += ["", "| case | wall [s] | real-time factor | µs/step | µs/step, best round | µs/step, CPU time "
-            "| setup [s] | goal |", "|---|---:|---:|---:|---:|---:|---:|---|"]
+            "| setup [s] | load (1 min) | goal |", "|---|---:|---:|---:|---:|---:|---:|---:|---|"]
     for key, label, mode, floor in CASES:
         m = med[key]
         goal = ""
@@ -292,8 +293,9 @@ def report(scene_name, system, runs, breakdowns, info_before, info_after, overhe
             g = GOAL_RTF[mode]
             goal = f">= {g:g}x: {'met' if m['rtf'] >= g else 'not met'}"
         best = min(r["us_per_step"] for r in runs[key])
+        load = statistics.median(r["load"] for r in runs[key])
         out.append(f"| {label} | {m['wall_s']:.2f} | {m['rtf']:.1f}x | {m['us_per_step']:.0f} | {best:.0f} | "
-                   f"{m['cpu_us_per_step']:.0f} | {m['setup_s']:.2f} | {goal} |")
+                   f"{m['cpu_us_per_step']:.0f} | {m['setup_s']:.2f} | {load:.1f} | {goal} |")
     us = {k: med[k]["us_per_step"] for k in med}
     best = {k: min(r["us_per_step"] for r in rs) for k, rs in runs.items()}
     rows = (("our compute through FMUs (FMUs - FMU floor)", "fmu", "floor_fmu"),
@@ -303,6 +305,10 @@ def report(scene_name, system, runs, breakdowns, info_before, info_after, overhe
     out += ["", "| µs per step | medians | best rounds |", "|---|---:|---:|"]
     for label, a, b in rows:
         out.append(f"| {label} | {us[a] - us[b]:.0f} | {best[a] - best[b]:.0f} |")
+    cpu = {k: statistics.median(r["cpu_us_per_step"] for r in rs) for k, rs in runs.items()}
+    for label, a, b in (("FMUs / FMU floor (goal <= 1.3)", "fmu", "floor_fmu"),
+                        ("in-process / in-process floor", "inprocess", "floor_inprocess")):
+        out.append(f"| {label}, ratio (CPU time: {cpu[a] / cpu[b]:.2f}) | {us[a] / us[b]:.2f} | {best[a] / best[b]:.2f} |")
     out.append(f"| share of the FMU step that is our compute | {100 * (us['fmu'] - us['floor_fmu']) / us['fmu']:.0f} % "
                f"| {100 * (best['fmu'] - best['floor_fmu']) / best['fmu']:.0f} % |")
     for key in ("fmu", "inprocess"):
@@ -343,6 +349,63 @@ def report(scene_name, system, runs, breakdowns, info_before, info_after, overhe
     return "\n".join(out)
 
 
+def measure(system, repeats: int, fmu_dir=None, with_breakdown: bool = True, keys=None):
+    """Every case of :data:`CASES` (or those of ``keys``) on ``system``: a warm-up, then
+    ``repeats`` interleaved rounds.
+
+    Returns (runs, timed, timer overhead, machine before, machine after): ``runs[key]`` the
+    :func:`run_case` of each round, ``timed[key]`` the :func:`breakdown` of each round (empty
+    without ``with_breakdown``).
+    """
+    from fmus.build import ensure_built
+
+    cases = [c for c in CASES if keys is None or c[0] in keys]
+    floor_system = passthrough.passthrough_system(system)
+    models = sorted({c.model for c in system.components})
+    tmp = Path(tempfile.mkdtemp(prefix="parcosim_bench_master_"))
+    try:
+        floor_dir = tmp / "fmus"
+        if any(floor and mode == "fmu" for _, _, mode, floor in cases):
+            print(f"building {len(models)} pass-through FMUs ...", file=sys.stderr)
+            passthrough.build_fmus(models, floor_dir)
+        classes = passthrough.load_classes(models, tmp / "src")
+        if any(mode == "fmu" and not floor for _, _, mode, floor in cases):
+            ensure_built(models, fmu_dir)   # build now if missing or stale, not in a timed run
+
+        def case(key, stop=None, timed=False):
+            _, _, mode, floor = next(c for c in CASES if c[0] == key)
+            s = floor_system if floor else system
+            if stop is not None:
+                s = replace(s, stop_time=stop)
+            run = breakdown if timed else run_case
+            return run(s, mode, floor_dir if floor else fmu_dir, classes if floor else None)
+
+        print("warm-up ...", file=sys.stderr)
+        warm = {key: case(key, WARMUP_STOP_TIME) for key, *_ in cases}
+        for key in ("inprocess", "fmu"):
+            if key in warm and f"floor_{key}" in warm and warm[f"floor_{key}"]["order"] != warm[key]["order"]:
+                raise RuntimeError(f"the floor steps in another order: {warm['floor_' + key]['order']} "
+                                   f"vs {warm[key]['order']}")
+        overhead = timer_overhead()
+
+        info_before = machine()
+        runs = {key: [] for key, *_ in cases}
+        timed = {key: [] for key, *_ in cases}
+        for r in range(repeats):
+            for key, *_ in cases:
+                runs[key].append(case(key))
+            if with_breakdown:
+                for key in TIMED_CASES:
+                    if key in timed:
+                        timed[key].append(case(key, timed=True))
+            print(f"round {r + 1}/{repeats}: " + ", ".join(
+                f"{k} {runs[k][-1]['us_per_step']:.0f} µs" for k in runs), file=sys.stderr)
+        info_after = machine()
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return runs, timed, overhead, info_before, info_after
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--scene", default="bench_circle_TCMDx", help="scene name (default bench_circle_TCMDx)")
@@ -358,7 +421,6 @@ def main(argv=None) -> int:
     if args.repeats < 1:
         ap.error("--repeats must be >= 1")
 
-    from fmus.build import ensure_built
     from scenarios.scenes import drives_in_plant, get_scene
 
     scene = get_scene(args.scene)
@@ -368,48 +430,8 @@ def main(argv=None) -> int:
     system = scene.system
     if args.quick:
         system = replace(system, stop_time=min(system.stop_time, QUICK_STOP_TIME))
-    floor_system = passthrough.passthrough_system(system)
-    models = sorted({c.model for c in system.components})
-
-    tmp = Path(tempfile.mkdtemp(prefix="parcosim_bench_master_"))
-    try:
-        print(f"building {len(models)} pass-through FMUs ...", file=sys.stderr)
-        floor_dir = tmp / "fmus"
-        passthrough.build_fmus(models, floor_dir)
-        classes = passthrough.load_classes(models, tmp / "src")
-        ensure_built(models, args.fmu_dir)   # build now if missing or stale, not in a timed run
-
-        def case(key, stop=None, timed=False):
-            _, _, mode, floor = next(c for c in CASES if c[0] == key)
-            s = floor_system if floor else system
-            if stop is not None:
-                s = replace(s, stop_time=stop)
-            run = breakdown if timed else run_case
-            return run(s, mode, floor_dir if floor else args.fmu_dir, classes if floor else None)
-
-        print("warm-up ...", file=sys.stderr)
-        warm = {key: case(key, WARMUP_STOP_TIME) for key, *_ in CASES}
-        for key in ("inprocess", "fmu"):
-            if warm[f"floor_{key}"]["order"] != warm[key]["order"]:
-                raise RuntimeError(f"the floor steps in another order: {warm['floor_' + key]['order']} "
-                                   f"vs {warm[key]['order']}")
-        overhead = timer_overhead()
-
-        info_before = machine()
-        runs = {key: [] for key, *_ in CASES}
-        timed = {key: [] for key, *_ in CASES}
-        for r in range(args.repeats):
-            for key, *_ in CASES:
-                runs[key].append(case(key))
-            if not args.no_breakdown:
-                for key in TIMED_CASES:
-                    timed[key].append(case(key, timed=True))
-            print(f"round {r + 1}/{args.repeats}: " + ", ".join(
-                f"{k} {runs[k][-1]['us_per_step']:.0f} µs" for k in runs), file=sys.stderr)
-        info_after = machine()
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
-
+    runs, timed, overhead, info_before, info_after = measure(system, args.repeats, args.fmu_dir,
+                                                             not args.no_breakdown)
     breakdowns = {} if args.no_breakdown else {k: _median_breakdown(v) for k, v in timed.items() if v}
     print(report(args.scene, system, runs, breakdowns, info_before, info_after, overhead))
     if args.json is not None:

@@ -272,7 +272,7 @@ class Derivator:
             self._rest_at(q)
         self._state[-1] = q
         outputs = self._matrix @ self._state
-        if np.isfinite(outputs[:2]).all():
+        if all(map(math.isfinite, outputs[:2].ravel().tolist())):
             self._state[:-1] = outputs[2:]
         return outputs[0], outputs[1]
 
