@@ -244,7 +244,8 @@ class GuardedSlave(Fmi2Slave):
     # get_real/set_real are on every step's path: pythonfmu's versions cost ~1 µs a variable in
     # type checks and lambdas.  These resolve a list of value references once (names, checks)
     # into one attrgetter or one dict update, cached by the list once initialised
-    # (:data:`_CACHED_VR_LISTS` of them: an importer moves the same few lists every step).
+    # (:data:`_CACHED_VR_LISTS` of them: an importer moves the same few lists every step).  A
+    # list cached then holds inputs only, which any later set may change.
     def get_real(self, vrs):
         key = tuple(vrs)
         read = self.__readers.get(key)
@@ -260,12 +261,12 @@ class GuardedSlave(Fmi2Slave):
         return read(self)
 
     def set_real(self, vrs, values):
-        key = (tuple(vrs), self._initialised)
+        key = tuple(vrs)
         write = self.__writers.get(key)
         if write is None:
             names = self._settable(Real)
             try:
-                targets = [names[vr] for vr in key[0]]
+                targets = [names[vr] for vr in key]
             except (KeyError, TypeError):
                 self._refuse_set(vrs, values, Real)
             write = _writer(type(self), targets)
@@ -483,6 +484,8 @@ def _remember(cache: dict, key, value) -> None:
 
 def _reader(names: list):
     """``slave -> [float(slave.<name>) for name in names]`` in one attrgetter call."""
+    if any("." in name for name in names):   # "ctrl.lam" of a system FMU: a flat attribute,
+        return lambda slave: [float(getattr(slave, name)) for name in names]   # not attrgetter's path
     if len(names) == 1:
         name = names[0]
         return lambda slave: [float(getattr(slave, name))]

@@ -52,7 +52,9 @@ _CTYPES = {"Real": ctypes.c_double, "Integer": ctypes.c_int, "Boolean": ctypes.c
 
 class _Batch:
     """The value references of some variables, grouped by type, with preallocated ctypes
-    arrays: one FMI call per type moves all their values (in the variables' order)."""
+    arrays: one FMI call per type moves all their values (in the variables' order).  The
+    arguments are ctypes objects already (the count a ``c_size_t``), as :func:`_step_calls`'
+    functions, which declare no argument types, need them."""
 
     def __init__(self, variables: list, dll, verb: str):
         self.n = len(variables)
@@ -62,11 +64,36 @@ class _Batch:
             if positions:
                 vrs = (ctypes.c_uint * len(positions))(*[variables[k].vr for k in positions])
                 values = (_CTYPES[kind] * len(positions))()
-                self.groups.append((getattr(dll, f"fmi2{verb}{kind}"), vrs, values, len(positions), positions,
-                                    _CONVERT[kind]))
+                self.groups.append((getattr(dll, f"fmi2{verb}{kind}"), vrs, values, ctypes.c_size_t(len(positions)),
+                                    positions, _CONVERT[kind]))
         # All Real, in order (every parcosim FMU): no regrouping on the step's path.
         self.plain = len(self.groups) == 1 and self.groups[0][4] == list(range(self.n)) and \
             self.groups[0][5] is float
+
+
+_double, _TRUE = ctypes.c_double, ctypes.c_int(1)
+
+
+def _step_calls(dll):
+    """The library whose ``fmi2DoStep``, ``fmi2Set*`` and ``fmi2Get*`` the step path calls.
+
+    For an FMU whose binary is parcosim's FMI wrapper (it exports ``WRAPPER_SYMBOL``; its
+    functions hold no lock and call this interpreter's slave under the GIL), the same library
+    through ``ctypes.PyDLL``: called with the GIL held (no release and re-acquisition around
+    each call) and without fmpy's argument types (the callers pass ctypes objects): about
+    15 % of a step of the bench scene through the FMUs.  Any other FMU: fmpy's library as it
+    loaded it (``ctypes.CDLL``, the GIL released during the call).
+    """
+    from .guarded import WRAPPER_SYMBOL
+
+    if not hasattr(dll, WRAPPER_SYMBOL):
+        return dll
+    direct = ctypes.PyDLL(dll._name)
+    for kind in _CTYPES:
+        for verb in ("Set", "Get"):
+            getattr(direct, f"fmi2{verb}{kind}").restype = ctypes.c_int
+    direct.fmi2DoStep.restype = ctypes.c_int
+    return direct
 
 
 class _FmuInstance:
@@ -100,8 +127,9 @@ class _FmuInstance:
         self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
         self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
         self._fmu.instantiate(callbacks=self._callbacks, loggingOn=True)
-        self._component = self._fmu.component
-        self._do_step = self._fmu.dll.fmi2DoStep
+        self._component = ctypes.c_void_p(self._fmu.component)
+        self._calls = _step_calls(self._fmu.dll)
+        self._do_step = self._calls.fmi2DoStep
 
     def _log(self, component, instance, status, category, message):
         self.messages.append(message.decode(errors="replace") if isinstance(message, bytes) else str(message))
@@ -136,8 +164,8 @@ class _FmuInstance:
 
     def bind(self, inputs: list, outputs: list) -> None:
         """The :class:`Variable` lists that :meth:`set_inputs` and :meth:`get_outputs` move."""
-        self._inputs = _Batch(inputs, self._fmu.dll, "Set")
-        self._outputs = _Batch(outputs, self._fmu.dll, "Get")
+        self._inputs = _Batch(inputs, self._calls, "Set")
+        self._outputs = _Batch(outputs, self._calls, "Get")
 
     def set_inputs(self, values: list) -> None:
         batch = self._inputs
@@ -163,7 +191,7 @@ class _FmuInstance:
         return values
 
     def do_step(self, t: float, h: float) -> None:
-        if self._do_step(self._component, t, h, 1) > 1:
+        if self._do_step(self._component, _double(t), _double(h), _TRUE) > 1:
             raise CoSimulationError(self.name, t, self._error_output() or self._last_message() or "fmi2DoStep refused")
 
     def _error_output(self) -> str:
@@ -261,7 +289,13 @@ class InProcessInstance:
             vars(self).pop("set_inputs", None)
         self._outputs = list(outputs)
         converters = [_CONVERT[v.type] for v in outputs]
-        getter = operator.attrgetter(*[v.name for v in outputs]) if outputs else None
+        out_names = [v.name for v in outputs]
+        if any("." in n for n in out_names):   # "ctrl.lam" of a system slave: flat attributes, not paths
+            getter = lambda slave: tuple(getattr(slave, n) for n in out_names)   # noqa: E731
+            if len(out_names) == 1:
+                getter = lambda slave: getattr(slave, out_names[0])   # noqa: E731
+        else:
+            getter = operator.attrgetter(*out_names) if outputs else None
         slave = self.slave
         # Closures bound per instance shadow the methods below (which say what they do).
         if not outputs:

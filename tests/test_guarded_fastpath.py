@@ -1,0 +1,74 @@
+"""The short cuts of :class:`fmus.guarded.GuardedSlave`'s step path keep its refusals (issue 16).
+
+``do_step`` checks a step size once and skips the check while the same h comes again;
+``get_real``/``set_real`` resolve a list of value references once and cache it after
+initialisation.  Each test takes a case where a cached answer would be wrong.
+"""
+from __future__ import annotations
+
+import pytest
+from pythonfmu import Real
+
+from fmus.guarded import MAX_TIME, FmiError
+from tests.test_extremes import make_slave, slave_class
+
+
+def _vr(slave, name):
+    return next(v.value_reference for v in slave.vars.values() if v.name == name)
+
+
+def test_an_accepted_step_size_is_refused_when_the_step_ends_after_max_time():
+    slave = slave_class("Trajectory")(instance_name="traj")
+    start = MAX_TIME - 1.5e-3
+    slave.setup_experiment(start, None, None)
+    slave.enter_initialization_mode()
+    slave.exit_initialization_mode()
+    assert slave.do_step(start, 1e-3)
+    # The same h again, but now t + h > MAX_TIME: the cached acceptance must not let it through.
+    assert slave.do_step(start + 1e-3, 1e-3) is False
+    assert "ends after" in slave.error
+
+
+def test_another_step_size_is_checked_again():
+    slave = make_slave("Derivator")            # h must equal its sample time T = 1 ms
+    assert slave.do_step(0.0, 1e-3)
+    assert slave.do_step(1e-3, 1e-3)
+    assert slave.do_step(2e-3, 2e-3) is False
+    assert "does not equal the sample time" in slave.error
+
+
+def test_a_communication_point_off_the_last_step_is_refused():
+    slave = make_slave("Derivator")
+    assert slave.do_step(0.0, 1e-3)
+    assert slave.do_step(1e-3 + 1e-6, 1e-3) is False
+    assert "does not follow the last one" in slave.error
+
+
+def test_a_parameter_set_before_initialisation_is_refused_after_it_with_the_same_list():
+    slave = slave_class("DCMotorDrive")(instance_name="drive")
+    slave.setup_experiment(0.0, None, None)
+    slave.enter_initialization_mode()
+    vrs = [_vr(slave, "omega0"), _vr(slave, "i_ref")]
+    slave.set_real(vrs, [0.0, 0.5])
+    slave.exit_initialization_mode()
+    with pytest.raises(FmiError, match="parameter omega0 = 2.0 refused after initialisation"):
+        slave.set_real(vrs, [2.0, 0.7])
+    assert slave.omega0 == 0.0 and slave.i_ref == 0.5     # nothing was set
+    slave.set_real(vrs[1:], [0.7])                         # the input alone: accepted, and cached
+    slave.set_real(vrs[1:], [0.9])
+    assert slave.i_ref == 0.9
+    with pytest.raises(FmiError, match="tau is an output"):
+        slave.set_real([_vr(slave, "tau")], [1.0])
+
+
+def test_reads_of_many_lists_are_right_and_the_cache_stays_bounded():
+    slave = make_slave("FiveBarPlant")
+    reals = [v for v in slave.vars.values() if isinstance(v, Real)]
+    assert len(reals) > 40
+    for v in reals:                                   # more single lists than the cache holds
+        assert slave.get_real([v.value_reference]) == [float(getattr(slave, v.name))]
+    every = [v.value_reference for v in reals]
+    assert slave.get_real(every) == [float(getattr(slave, v.name)) for v in reals]
+    assert len(slave._GuardedSlave__readers) <= 32
+    with pytest.raises(FmiError, match="value reference 99999 is no variable"):
+        slave.get_real([every[0], 99999])
