@@ -271,7 +271,7 @@ class Derivator:
         if self.buf[fastderivator.V_STARTED] == 0.0:
             self._rest_at(q)
         self._state[-1] = q
-        outputs = self._matrix @ self._state
+        outputs = np.dot(self._matrix, self._state)   # np.dot: the BLAS call of `@`, less overhead
         if all(map(math.isfinite, outputs[:2].ravel().tolist())):
             self._state[:-1] = outputs[2:]
         return outputs[0], outputs[1]

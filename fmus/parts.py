@@ -228,7 +228,7 @@ def correct_plant(sim, snapshot, measured: dict, redo, step: float) -> bool:
 
 def publish_plant(slave, sim) -> None:
     """Copy the plant's outputs to the slave's variables."""
-    vars(slave).update((name, float(value)) for name, value in sim.outputs().items())
+    vars(slave).update(sim.outputs())   # Python floats already (PlantSimulator.outputs)
 
 
 # --- a drive ---------------------------------------------------------------------------------

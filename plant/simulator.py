@@ -179,9 +179,9 @@ class PlantSimulator:
         that fails or diverges (non-finite state, or loop-closure residual above
         :data:`RESIDUAL_STOP`; the message gives the torques held), a singular pose.
         """
-        for name, value in (("tau1", tau1), ("tau2", tau2)):
-            if not math.isfinite(value):
-                raise PlantError(f"input {name} = {value!r} at t = {self.time:.6g} s is not finite")
+        if not (math.isfinite(tau1) and math.isfinite(tau2)):
+            name, value = ("tau1", tau1) if not math.isfinite(tau1) else ("tau2", tau2)
+            raise PlantError(f"input {name} = {value!r} at t = {self.time:.6g} s is not finite")
         self.check_step(dt)
 
         def held():
