@@ -4,8 +4,9 @@ Canudas de Wit, Olsson, Åström, Lischinsky (IEEE TAC 1995), with the paper's e
 mass, σ0 = 1e5 N/m, σ1 = √1e5 N s/m, σ2 = 0.4 N s/m, Fc = 1 N, Fs = 1.5 N, vs = 0.001 m/s.
 The oracle is the paper's ODE (1)-(4) written here again with numpy and integrated by scipy's
 LSODA at rtol 1e-8: it shares no code with motor/friction.py.  Our model is stepped the way the
-drive steps it: the speed held over a step h, the bristle state solved exactly
-(:func:`motor.friction.advance`), the mass integrated with the step's mean friction.
+drive steps it (:func:`scenarios.friction_demo.push`): the speed held over a step h, the bristle
+state solved exactly (:func:`motor.friction.advance`), the mass integrated with the step's mean
+friction.
 """
 from __future__ import annotations
 
@@ -13,12 +14,11 @@ import math
 
 import numpy as np
 import pytest
-from numba import njit
 from scipy.integrate import solve_ivp
 
 from motor import friction as fr
+from scenarios.friction_demo import PAPER, RAMP, SINE, SPRING, push
 
-PAPER = {"Fc": 1.0, "Fs": 1.5, "omega_s": 1e-3, "sigma0": 1e5, "sigma1": math.sqrt(1e5), "sigma2": 0.4}
 MASS = 1.0
 H = 1e-5          # the stepped model's step: c = h σ1 / m = 3e-3, far inside the coupling's band
 
@@ -39,38 +39,15 @@ def reference(force, t_end, times):
     return sol.sol(times)
 
 
-@njit(cache=False)
-def _stepped(f, kind, a, b, h, n):
-    """x, v, z after each step; force kind 0: a t (ramp), 1: a sin(b t), 2: spring a (b t - x)."""
-    x = v = z = 0.0
-    out = np.empty((n, 3))
-    for i in range(n):
-        t = (i + 0.5) * h
-        if kind == 0:
-            force = a * t
-        elif kind == 1:
-            force = a * math.sin(b * t)
-        else:
-            force = a * (b * t - (x + 0.5 * h * v))
-        z_new, _, f_mean = fr.advance(f, z, v, h)
-        acc = (force - f_mean) / MASS
-        x += h * v + 0.5 * h * h * acc
-        v += h * acc
-        z = z_new
-        out[i, 0], out[i, 1], out[i, 2] = x, v, z
-    return out
-
-
 def stepped(kind, a, b, t_end):
-    n = int(round(t_end / H))
-    return _stepped(fr.new_lugre(fr.LuGre(**PAPER)), kind, a, b, H, n), (np.arange(n) + 1) * H
+    return push(kind, a, b, t_end, h=H, mass=MASS)
 
 
 def test_presliding_is_an_elastic_displacement_with_hysteresis():
     """A force below Fc (0.5 N sin πt) moves the mass by about F/σ0 and no more; the way back
     differs from the way out (hysteresis) and the displacement returns to ~0 with the force."""
     amplitude = 0.5
-    out, t = stepped(1, amplitude, math.pi, 2.0)
+    out, t = stepped(SINE, amplitude, math.pi, 2.0)
     x = out[:, 0]
     ref = reference(lambda s, _: amplitude * math.sin(math.pi * s), 2.0, t[::100])
     peak = amplitude / PAPER["sigma0"]
@@ -86,7 +63,7 @@ def test_break_away_force_is_fs_for_a_slow_ramp_and_falls_with_the_rate():
     lower the force at break-away (the rate dependence the paper reproduces)."""
     forces = []
     for rate in (0.1, 1.0, 10.0):
-        out, t = stepped(0, rate, 0.0, 2.0 / rate)
+        out, t = stepped(RAMP, rate, 0.0, 2.0 / rate)
         k = int(np.argmax(out[:, 1] > PAPER["omega_s"]))
         forces.append(rate * t[k])
         if rate == 1.0:
@@ -107,7 +84,7 @@ def test_stick_slip_on_a_spring_pulled_at_0_1_m_s():
     """k = 2 N/m pulled at 0.1 m/s: the mass sticks until the spring reaches ~Fs, slips, sticks
     again — periodically; the oracle gives the same slip times."""
     k, pull = 2.0, 0.1
-    out, t = stepped(2, k, pull, 15.0)
+    out, t = stepped(SPRING, k, pull, 15.0)
     slips = _slips(out[:, 1])
     assert len(slips) >= 2
     spring = k * (pull * t - out[:, 0])
@@ -121,7 +98,7 @@ def test_stick_slip_on_a_spring_pulled_at_0_1_m_s():
 def test_steady_sliding_above_the_critical_pull_speed():
     """At 0.5 m/s the same spring-mass slides steadily: the speed's oscillation dies out."""
     k, pull = 2.0, 0.5
-    out, t = stepped(2, k, pull, 30.0)
+    out, t = stepped(SPRING, k, pull, 30.0)
     v = out[:, 1]
     late = v[t > 25.0]
     assert late.min() > 0.9 * pull and late.max() < 1.1 * pull
