@@ -21,8 +21,8 @@ process share one Python interpreter and its module cache.
 from __future__ import annotations
 
 from fmus.guarded import MIN_STEP, PRESET_VALUE, TINY, GuardedSlave, refuse_absurd
-from fmus.parts import (PLANT_OUTPUTS, CurrentLoopSteps, build_drive, build_plant, correct_plant, declare_motor,
-                        declare_plant, publish_plant)
+from fmus.parts import (PLANT_OUTPUTS, CurrentLoopSteps, build_drive, build_plant, correct_plant, declare_drive_options,
+                        declare_motor, declare_plant, publish_plant)
 from plant.actuated import ActuatedPlant
 
 OUTPUTS = tuple(name for name, _ in PLANT_OUTPUTS) + ("tau1", "tau2", "v1", "v2", "i1", "i2")
@@ -45,12 +45,13 @@ class ActuatedFiveBarPlant(CurrentLoopSteps, GuardedSlave):
                                          "(current mode) [A]")
             d(f"v_ref{j}", "input", 0.0, f"Drive {j}: commanded voltage, saturated at +-v_max (voltage mode) [V]")
         for j in JOINTS:
-            d(f"tau{j}", "output", 0.0, f"Drive {j}: shaft torque kt i - b omega - mu sign(omega) at the step end [N m]")
+            d(f"tau{j}", "output", 0.0, f"Drive {j}: shaft torque kt i - friction (B.2 or LuGre) at the step end [N m]")
             d(f"v{j}", "output", 0.0, f"Drive {j}: voltage applied over the step just taken [V]")
             d(f"i{j}", "output", 0.0, f"Drive {j}: armature current at the step end [A]")
         declare_plant(self)
         for j in JOINTS:
             declare_motor(self, j, default_preset=f"motor{j}")
+            declare_drive_options(self, j)
         d("mode", "parameter", "current",
           "Both drives: 'current' (controller K(z) on i_ref, i_hat) or 'voltage' (v_ref applied)")
         d("T", "parameter", 1e-3, "Current-controller sample time [s]; in current mode the step must divide it")
@@ -93,20 +94,23 @@ class ActuatedFiveBarPlant(CurrentLoopSteps, GuardedSlave):
 
     # --- a model of the plant inside a controller (fmus.embedded.ChainCore) -------------
     def snapshot(self):
-        """The state before the next step (mechanism and currents), for :meth:`correct`."""
+        """The state before the next step (mechanism, currents, LuGre bristles), for :meth:`correct`."""
         a = self.actuated
-        return a.plant.y, a.plant.time, a.currents
+        return a.plant.y, a.plant.time, a.currents, [None if f is None else f.copy() for f in a.bristles]
 
     def correct(self, snapshot, measured: dict, step_size: float) -> bool:
         """Redo the last step (taken from ``snapshot``, with the voltages it held) from the
         state the ``measured`` outputs allow; the currents, unmeasured, restart from the
         snapshot's.  False, nothing changed, when the outputs agreed."""
         a = self.actuated
-        y, time, currents = snapshot
+        y, time, currents, bristles = snapshot
 
         def redo():
             for (_, drive), i in zip(a.drives, currents):
                 drive.i = i
+            for f, saved in zip(a.bristles, bristles):
+                if f is not None:
+                    f[:] = saved
             a.advance([drive.v for _, drive in a.drives], step_size)
 
         if not correct_plant(a.plant, (y, time), measured, redo, step_size):
