@@ -126,7 +126,9 @@ def _prepared(name, drive, h):
 
 @register
 class DCMotorDriveAdapter(Adapter):
-    """:func:`motor.fastdrive.drive_io`."""
+    """:func:`motor.fastdrive.drive_io`; with LuGre friction :func:`motor.friction.friction_peek`,
+    :func:`motor.fastdrive.drive_io_friction`, then :func:`motor.friction.friction_commit`
+    (the calls of ``Drive._step``)."""
 
     model = "DCMotorDrive"
     inputs = ("i_ref", "v_ref", "omega", "i_hat")
@@ -135,10 +137,21 @@ class DCMotorDriveAdapter(Adapter):
 
     def __init__(self, name, slave, h):
         super().__init__(name, slave, h)
-        self.arrays = _prepared(name, slave.drive, h)
+        drive = slave.drive
+        self.arrays = _prepared(name, drive, h)
+        if drive.lugre is not None:
+            self.arrays.append(drive.lugre)
+            self.modules = ("motor.fastdrive", "motor.friction")
 
     def emit(self, arrays, x, t, h):
-        return [f"st = fastdrive.drive_io({arrays[0]}, {arrays[1]}, {x}, {h})"]
+        if len(arrays) == 2:
+            return [f"st = fastdrive.drive_io({arrays[0]}, {arrays[1]}, {x}, {h})"]
+        d, c, f = arrays
+        return [f"st, z, f_end, f_mean = friction.friction_peek({f}, {x}[2], {h})",
+                "if st == 0:",
+                f"    st = fastdrive.drive_io_friction({d}, {c}, {x}, {h}, f_end, f_mean)",
+                "if st == 0:",
+                f"    friction.friction_commit({f}, z)"]
 
 
 def _plant_settings(name, sim, h) -> np.ndarray:

@@ -35,12 +35,28 @@ MOTOR_PARAMETERS = (
     ("mu", "mu", "Coulomb friction torque [N m], >= 0"),
     ("v_max", "v_max", "Supply voltage: the driver saturates at +-v_max [V], > 0"),
     ("omega_eps", "omega_eps", "Width of the regularised sign mu*tanh(omega/omega_eps) [rad/s], > 0"),
+    ("mu_s", "mu_s", "LuGre break-away torque Fs (friction 'lugre') [N m], >= mu"),
+    ("omega_s", "omega_s", "LuGre Stribeck speed (friction 'lugre') [rad/s], > 0"),
+    ("sigma0", "sigma0", "LuGre bristle stiffness (friction 'lugre') [N m/rad], > 0"),
+    ("sigma1", "sigma1", "LuGre bristle damping (friction 'lugre') [N m s/rad], >= 0"),
     ("J_rotor", "J_design", "Rotor inertia assumed by the current-controller design G_I(s) (B.10) only "
                             "[kg m2], > 0; the plant integrates the real rotor inertia"),
 )
 
 #: MotorParams fields that must be > 0 (refused below :data:`fmus.guarded.TINY`).
-POSITIVE_MOTOR_FIELDS = frozenset({"R", "kt", "ke", "v_max", "omega_eps", "J_rotor"})
+POSITIVE_MOTOR_FIELDS = frozenset({"R", "kt", "ke", "v_max", "omega_eps", "J_rotor", "omega_s", "sigma0"})
+
+#: A drive's options beyond its motor (FMU variable, start value, description): its friction
+#: model and the bench's imperfections (:class:`motor.Drive`; all off by default).
+DRIVE_OPTIONS = (
+    ("friction", "tanh", "Shaft friction: 'tanh' (mu tanh(omega/omega_eps) + b omega, B.2) or 'lugre' "
+                         "(LuGre with stiction: mu, mu_s, omega_s, sigma0, sigma1, b; motor/friction.py)"),
+    ("pwm_counts", 0, "PWM resolution: the applied voltage is a multiple of v_max/pwm_counts (0: ideal)"),
+    ("current_offset", 0.0, "Offset of the current the current loop reads (current mode) [A]"),
+    ("current_noise", 0.0, "Standard deviation of a Gaussian noise on the current the current loop reads [A]"),
+    ("noise_seed", 0, "Seed of that noise: sample k's noise is a function of (noise_seed, noise_instance, k)"),
+    ("noise_instance", 0, "Instance of that noise (give each drive its own)"),
+)
 
 #: The current-controller design's own motor parameters (MotorParams field, FMU variable): a
 #: drive whose motor differs from the one its controller was designed for (a model error,
@@ -247,9 +263,15 @@ def declare_motor(slave, suffix: str = "", default_preset: str = "motor1") -> No
           f"{field} assumed by the current-controller design only (app. C), > 0; -1: the drive's {field}")
 
 
+def declare_drive_options(slave, suffix: str = "") -> None:
+    """A drive's :data:`DRIVE_OPTIONS`, each name followed by ``suffix``."""
+    for name, start, text in DRIVE_OPTIONS:
+        slave.declare(f"{name}{suffix}", "parameter", start, text)
+
+
 def build_drive(slave, suffix: str = "", **options):
-    """The :class:`motor.Drive` of the slave's motor parameters with ``suffix``; ``options``
-    (mode, method, T, torque_output) go to the Drive."""
+    """The :class:`motor.Drive` of the slave's motor parameters and :data:`DRIVE_OPTIONS`
+    with ``suffix``; ``options`` (mode, method, T, torque_output) go to the Drive."""
     from motor import Drive, get_motor_preset
 
     preset = getattr(slave, f"preset{suffix}")
@@ -270,7 +292,14 @@ def build_drive(slave, suffix: str = "", **options):
             raise ValueError(f"parameter {var}{suffix} = {value!r} must be > 0 (or -1: the value of {field})")
         changes[field] = value
     design = params.with_(**changes) if changes else None
-    return Drive(params, design_params=design, **options)
+    values = {name: getattr(slave, f"{name}{suffix}") for name, _, _ in DRIVE_OPTIONS}
+    refuse_absurd(**{f"{name}{suffix}": values[name] for name in ("current_offset", "current_noise")})
+    try:
+        return Drive(params, design_params=design, **options, **values)
+    except ValueError as exc:
+        if suffix:
+            raise ValueError(f"drive {suffix}: {exc}") from None
+        raise
 
 
 class CurrentLoopSteps:

@@ -52,3 +52,14 @@ def choice(name, value, options):
     if value not in options:
         raise ValueError(f"{name} must be one of {', '.join(map(repr, options))}; got {value!r}")
     return value
+
+
+def count(name, value, limit=2 ** 31):
+    """Return ``value`` as an int if it is a whole number in [0, limit), else raise ValueError."""
+    try:
+        n = int(value)
+    except (TypeError, ValueError, OverflowError):
+        raise ValueError(f"{name} must be a whole number >= 0, got {value!r}") from None
+    if n != value or isinstance(value, bool) or not 0 <= n < limit:
+        raise ValueError(f"{name} must be a whole number in [0, {limit}), got {value!r}")
+    return n

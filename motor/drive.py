@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from motor import _checks, fastdrive
+from motor import _checks, fastdrive, friction as lugre
 from motor.current_controller import THESIS_POLES, THESIS_T, CurrentController, design_current_controller
 from motor.electrics import ELECTRICAL_METHODS, electrical_step_coefficients, mean_current_coefficients
 
@@ -16,6 +16,11 @@ from motor.electrics import ELECTRICAL_METHODS, electrical_step_coefficients, me
 DRIVE_MODES = ("current", "voltage")
 #: Names accepted for ``Drive(torque_output=...)``.
 TORQUE_OUTPUTS = ("end", "mean")
+#: Names accepted for ``Drive(friction=...)``: the regularised Coulomb + viscous friction of
+#: B.2, or the LuGre model with stiction (:mod:`motor.friction`).
+FRICTION_MODELS = ("tanh", "lugre")
+#: Largest noise seed (a double holds integers exactly up to 2**53).
+MAX_SEED = 2 ** 53
 
 # Relative tolerance used to decide that h divides T.
 _PHASE_TOL = 1e-6
@@ -69,17 +74,40 @@ class Drive:
         Parameters the current controller is designed for (default ``params``): a
         controller tuned for the real motor can drive a model without some effect (e.g.
         b = 0, which would put the design's cancelled zero on z = 1).
+    friction : {"tanh", "lugre"}
+        Shaft friction: ``"tanh"``, mu tanh(omega/omega_eps) + b omega (B.2); ``"lugre"``,
+        the LuGre model with stiction (:mod:`motor.friction`; Fc = mu, Fs = mu_s,
+        ωs = omega_s, σ0 = sigma0, σ1 = sigma1, σ2 = b of ``params``), its bristle state
+        solved exactly over each step with omega held.
+    pwm_counts : int
+        PWM resolution: the applied voltage is the nearest multiple of v_max / pwm_counts
+        (0: ideal).  The controller keeps its own unquantised output.
+    current_offset, current_noise : float
+        Offset [A] and standard deviation [A] of a Gaussian noise added to the current the
+        loop reads (``i_hat``) at each controller sample (current mode; 0: exact).
+    noise_seed, noise_instance : int
+        The noise of sample k is :func:`motor.fastdrive.gaussian` (noise_seed,
+        noise_instance, k): give each drive of a system its own instance.
 
     Raises
     ------
     ValueError
-        Unknown mode or method, bad T or poles, or current mode with L = 0.
+        Unknown mode, method or friction, bad T or poles, current mode with L = 0, or a bad
+        imperfection or LuGre parameter (named, with its value).
     """
 
     def __init__(self, params, mode="current", method="exact", T=THESIS_T, poles=THESIS_POLES,
-                 torque_output="end", design_params=None):
+                 torque_output="end", design_params=None, friction="tanh", pwm_counts=0, current_offset=0.0,
+                 current_noise=0.0, noise_seed=0, noise_instance=0):
         params.validate()
         self.params = params
+        self.friction = _checks.choice("friction", friction, FRICTION_MODELS)
+        self.lugre = lugre.new_lugre(lugre.LuGre.of_motor(params)) if friction == "lugre" else None
+        pwm_counts = _checks.count("pwm_counts", pwm_counts)
+        seed = _checks.count("noise_seed", noise_seed, MAX_SEED)
+        instance = _checks.count("noise_instance", noise_instance, MAX_SEED)
+        offset = _checks.finite("current_offset", current_offset)
+        noise = _checks.non_negative("current_noise", current_noise)
         self.torque_output = _checks.choice("torque_output", torque_output, TORQUE_OUTPUTS)
         self.mode = _checks.choice("mode", mode, DRIVE_MODES)
         self.method = _checks.choice("method", method, ELECTRICAL_METHODS)
@@ -97,6 +125,8 @@ class Drive:
         self.buf[fastdrive.D_MEAN_TORQUE] = 1.0 if self.torque_output == "mean" else 0.0
         self.buf[fastdrive.D_KE:fastdrive.D_T + 1] = (p.ke, p.kt, p.b, p.mu, p.omega_eps, p.v_max, self.T)
         self.buf[fastdrive.D_H] = math.nan     # no step prepared (prepare_step)
+        self.buf[fastdrive.D_PWM_QUANTUM] = p.v_max / pwm_counts if pwm_counts else 0.0
+        self.buf[fastdrive.D_I_OFFSET:fastdrive.D_NOISE_INSTANCE + 1] = (offset, noise, seed, instance)
         self._controller_buf = (self.controller.buf if self.controller is not None
                                 else fastdrive.new_controller(0.0, 0.0, 0.0, 0.0, p.v_max))
         self.reset()
@@ -104,6 +134,10 @@ class Drive:
         # (an FMU's initialisation), not the first step, pays for it.
         fastdrive.drive_step(self.buf.copy(), self._controller_buf.copy(), 0.0, 0.0, 0.0, 0.0, math.nan)
         fastdrive.sample_voltage(self.buf.copy(), self._controller_buf.copy(), 0.0, 0.0, 0.0, math.nan)
+        if self.lugre is not None:
+            lugre.friction_peek(self.lugre, 0.0, 1.0)
+            fastdrive.drive_step_friction(self.buf.copy(), self._controller_buf.copy(), 0.0, 0.0, 0.0, 0.0,
+                                          math.nan, 0.0, 0.0)
 
     i = property(lambda self: float(self.buf[fastdrive.D_I]),
                  lambda self, value: self.buf.__setitem__(fastdrive.D_I, value),
@@ -122,6 +156,9 @@ class Drive:
         self.i = _checks.finite("i0", i0)
         self.v = min(max(_checks.finite("v0", v0), -v_max), v_max)
         self.buf[fastdrive.D_PHASE] = 0.0
+        self.buf[fastdrive.D_SAMPLE] = 0.0
+        if self.lugre is not None:
+            self.lugre[lugre.F_Z] = 0.0
         if self.controller is not None:
             self.controller.reset(self.v)
 
@@ -137,10 +174,21 @@ class Drive:
         omega0 = _checks.finite("omega0", omega0)
         i0 = _checks.finite("i0", i0)
         self.reset(i0, self.params.R * i0 + self.params.ke * omega0)
+        if self.lugre is not None:     # sliding steadily: the bristles at their steady deflection
+            self.lugre[lugre.F_Z] = lugre.steady_deflection(self.lugre, omega0)
+
+    @property
+    def z(self):
+        """The LuGre bristle deflection [rad] (0 with the tanh friction)."""
+        return 0.0 if self.lugre is None else float(self.lugre[lugre.F_Z])
 
     def torque(self, omega):
-        """Shaft torque [N m] for the present current at speed ``omega`` (B.2)."""
-        return fastdrive.shaft_torque(self.buf, self.i, _checks.finite("omega", omega))
+        """Shaft torque [N m] for the present current at speed ``omega`` (B.2, or kt i minus
+        the LuGre friction (4) at the present deflection)."""
+        omega = _checks.finite("omega", omega)
+        if self.lugre is not None:
+            return self.params.kt * self.i - lugre.friction_force(self.lugre, self.lugre[lugre.F_Z], omega)
+        return fastdrive.shaft_torque(self.buf, self.i, omega)
 
     def prepare_step(self, h):
         """Check the step length h and compute its coefficients (kept until h changes).
@@ -228,15 +276,27 @@ class Drive:
             Naming the input, for a NaN/inf input or a bad step length.
         """
         args = _floats(i_ref, v_ref, omega, i_hat, h)
-        status, tau, v, i = fastdrive.drive_step(self.buf, self._controller_buf, *args)
+        status, tau, v, i = self._step(args)
         if status == fastdrive.UNPREPARED_STEP:
             self.prepare_step(h)
-            status, tau, v, i = fastdrive.drive_step(self.buf, self._controller_buf, *args)
+            status, tau, v, i = self._step(args)
         if status == fastdrive.DIVERGED:
             raise ValueError(self._diverged(i, tau, h))
         if status != fastdrive.OK:
             self._refuse(status, i_ref, v_ref, i_hat, omega)
         return tau, v, i
+
+    def _step(self, args):
+        """The kernel's (status, tau, v, i); with LuGre friction its bristles advance too
+        (kept only when the drive's step is)."""
+        if self.lugre is None:
+            return fastdrive.drive_step(self.buf, self._controller_buf, *args)
+        omega, h = args[2], args[4]
+        _, z, f_end, f_mean = lugre.friction_peek(self.lugre, omega, h if h > 0.0 else 1.0)
+        result = fastdrive.drive_step_friction(self.buf, self._controller_buf, *args, f_end, f_mean)
+        if result[0] == fastdrive.OK:
+            lugre.friction_commit(self.lugre, z)
+        return result
 
     def _diverged(self, i, tau, h):
         """Why the current or torque of a step is not finite."""

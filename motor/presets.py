@@ -35,6 +35,17 @@ class MotorParams:
     omega_eps : float
         Width [rad/s] of the regularised sign in the Coulomb friction,
         mu*tanh(omega/omega_eps); see :func:`motor.electrics.coulomb_friction`.
+    mu_s : float
+        Break-away (static) friction torque [N m], >= 0, of the LuGre friction
+        (:mod:`motor.friction`, the drive's ``friction="lugre"``: Fs of (3), which needs
+        mu_s >= mu > 0); 0 (the default) means "not given".
+    omega_s : float
+        Stribeck speed [rad/s], > 0 (LuGre (3)).
+    sigma0 : float
+        Bristle stiffness [N m/rad], > 0 (LuGre (1), (4)).
+    sigma1 : float
+        Bristle damping [N m s/rad], >= 0 (LuGre (4)).  The drive's coupling to the plant
+        at a step h is stable for sigma0 h / 2 < sigma1 < 2 J / h (docs/friction.md).
 
     Raises
     ------
@@ -51,6 +62,10 @@ class MotorParams:
     J_rotor: float
     v_max: float = 24.0
     omega_eps: float = 0.5
+    mu_s: float = 0.0
+    omega_s: float = 0.1
+    sigma0: float = 100.0
+    sigma1: float = 0.15
 
     def __post_init__(self):
         self.validate()
@@ -58,10 +73,10 @@ class MotorParams:
     def validate(self):
         """Raise ValueError naming the first non-physical parameter and its value.
 
-        NaN/inf are rejected everywhere; R, kt, ke, J_rotor, v_max, omega_eps
-        must be > 0; L, b, mu must be >= 0.
+        NaN/inf are rejected everywhere; R, kt, ke, J_rotor, v_max, omega_eps, omega_s,
+        sigma0 must be > 0; L, b, mu, mu_s, sigma1 must be >= 0.
         """
-        strict = ("R", "kt", "ke", "J_rotor", "v_max", "omega_eps")
+        strict = ("R", "kt", "ke", "J_rotor", "v_max", "omega_eps", "omega_s", "sigma0")
         for f in fields(self):
             check = _checks.positive if f.name in strict else _checks.non_negative
             check(f.name, getattr(self, f.name))
@@ -81,13 +96,21 @@ class MotorParams:
         return replace(self, **changes)
 
 
+#: LuGre friction of the thesis motors (the thesis identifies mu and b only, app. D): the
+#: break-away torque 1.25 mu, the Stribeck speed 0.1 rad/s, the bristles 100 N m/rad (the
+#: presliding deflection at break-away mu_s / sigma0 ~ 0.6 mrad, two encoder counts) damped
+#: by 0.15 N m s/rad, inside the 1 ms coupling's stability band sigma0 h / 2 < sigma1 <
+#: 2 J / h for any inertia above the rotors' (docs/friction.md argues each value).
+STICTION_RATIO = 1.25
+_LUGRE = {"omega_s": 0.1, "sigma0": 100.0, "sigma1": 0.15}
+
 #: Motor 1, thesis Table 16 (from appendix D, data of Table 15).
 motor1 = MotorParams(R=1.101, L=0.667e-3, kt=5.598e-2, ke=5.138e-2,
-                     b=1.226e-4, mu=4.357e-2, J_rotor=1.469e-4)
+                     b=1.226e-4, mu=4.357e-2, J_rotor=1.469e-4, mu_s=STICTION_RATIO * 4.357e-2, **_LUGRE)
 
 #: Motor 2, thesis Table 18 (from appendix D, data of Table 17).
 motor2 = MotorParams(R=0.829, L=0.667e-3, kt=5.666e-2, ke=5.200e-2,
-                     b=2.039e-4, mu=4.992e-2, J_rotor=1.887e-4)
+                     b=2.039e-4, mu=4.992e-2, J_rotor=1.887e-4, mu_s=STICTION_RATIO * 4.992e-2, **_LUGRE)
 
 #: The motor of seed 000 (the wheeled pendulum): R_m, K_t = K_e, f_m and n = 1 from the seed;
 #: its inductance and rotor inertia are "negligible" there: L = 0 makes the drive's electrics

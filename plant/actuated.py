@@ -55,6 +55,9 @@ class ActuatedPlant:
         if any(j not in (1, 2) for j in joints) or len(set(joints)) != len(joints):
             raise ValueError(f"drive joints must be 1 and/or 2, each at most once, got {joints}")
         for j, d in self.drives:
+            if d.friction != "tanh":
+                raise ValueError(f"drive on joint {j}: friction = {d.friction!r} is not integrated inside the plant "
+                                 f"(only 'tanh'); run the drive as a separate DCMotorDrive")
             if not d.params.L > 0.0:
                 raise ValueError(f"drive on joint {j}: L = {d.params.L!r} H has no armature current to integrate "
                                  f"(use a separate drive with method 'quasi_static')")

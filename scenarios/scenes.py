@@ -63,6 +63,8 @@ class Scene:
 
 
 ELECTRICS = ("full", "euler", "quasi_static", "ideal")
+#: The drives' friction models (:data:`motor.drive.FRICTION_MODELS`).
+FRICTIONS = ("tanh", "lugre")
 #: The drives hand the plant their torque averaged over the step: chosen from the
 #: speed/accuracy front (docs/trade.md: same cost, peak deviation from the monolithic
 #: reference 9.3e-5 -> 3.5e-5 m on bench_circle_TCMDx).
@@ -110,6 +112,21 @@ class Fidelity:
     delay_steps : int
         Computation delay: the controller's commands (torques, current references) are
         applied this many 1 ms samples after they were computed (the bench twin: 1).
+    friction : {"tanh", "lugre"}
+        The drives' dry friction: the regularised Coulomb mu tanh(ω/omega_eps) of B.2, or the
+        LuGre model with stiction (motor/friction.py, the motor presets' mu_s, omega_s,
+        sigma0, sigma1; docs/friction.md).  "lugre" needs ``coulomb``.
+    pwm_counts : int
+        The drives' PWM resolution: applied voltages are multiples of v_max / pwm_counts
+        (0: ideal).
+    current_offset, current_noise : float
+        Offset [A] and standard deviation [A] of a Gaussian noise on the current each drive's
+        current loop reads (the observed i_hat on the bench; docs/friction.md).
+    noise_seed : int
+        The noise's seed; drive j draws instance j: sample k's noise is a function of
+        (noise_seed, j, k) only.
+    drive_parameters : tuple of (str, value) pairs
+        More DCMotorDrive parameters set on both drives (e.g. (("mu_s", 0.06),)).
     """
 
     electrics: str = "full"
@@ -125,10 +142,35 @@ class Fidelity:
     counter_masses: tuple = (0.0, 0.0)
     model_gravity: bool = False
     delay_steps: int = 0
+    friction: str = "tanh"
+    pwm_counts: int = 0
+    current_offset: float = 0.0
+    current_noise: float = 0.0
+    noise_seed: int = 0
+    drive_parameters: tuple = ()
 
     def __post_init__(self):
         if self.electrics not in ELECTRICS:
             raise ValueError(f"electrics = {self.electrics!r}; valid: {', '.join(ELECTRICS)}")
+        if self.friction not in FRICTIONS:
+            raise ValueError(f"friction = {self.friction!r}; valid: {', '.join(FRICTIONS)}")
+        if self.friction == "lugre" and not self.coulomb:
+            raise ValueError("friction = 'lugre' models the dry friction that coulomb = False removes")
+        drive_effects = {k: getattr(self, k) for k in ("pwm_counts", "current_offset", "current_noise", "noise_seed")}
+        if self.electrics == "ideal" and (self.friction != "tanh" or self.drive_parameters
+                                          or any(drive_effects.values())):
+            raise ValueError("electrics = 'ideal' has no drives for friction, pwm_counts, current_offset, "
+                             "current_noise, noise_seed or drive_parameters")
+
+    def drive_options(self) -> dict:
+        """The DCMotorDrive parameters these effects set (the same for both drives, but
+        ``noise_instance``, which :func:`bench` sets to the drive's number)."""
+        options = {} if self.friction == "tanh" else {"friction": self.friction}
+        for name, off in (("pwm_counts", 0), ("current_offset", 0.0), ("current_noise", 0.0), ("noise_seed", 0)):
+            if getattr(self, name) != off:
+                options[name] = getattr(self, name)
+        options.update(dict(self.drive_parameters))
+        return options
 
 
 def _connect(pairs):
@@ -216,6 +258,9 @@ def bench(strategy: str, kind: str = "circle", model: str = "tabulated",
             if not f.viscous:   # the current loop stays designed for the real motor's b
                 drive["b"] = 0.0
                 drive["b_design"] = get_motor_preset(f"motor{j}").b
+            drive.update(f.drive_options())
+            if f.current_noise:
+                drive["noise_instance"] = int(j)
             components.append(Component(f"drive{j}", "DCMotorDrive", drive))
     components.append(Component("plant", "FiveBarPlant", plant))
     angle = "_enc" if f.encoder else ""

@@ -21,8 +21,8 @@ process share one Python interpreter and its module cache.
 from __future__ import annotations
 
 from fmus.guarded import MIN_STEP, PRESET_VALUE, TINY, GuardedSlave, refuse_absurd
-from fmus.parts import (PLANT_OUTPUTS, CurrentLoopSteps, build_drive, build_plant, correct_plant, declare_motor,
-                        declare_plant, publish_plant)
+from fmus.parts import (PLANT_OUTPUTS, CurrentLoopSteps, build_drive, build_plant, correct_plant, declare_drive_options,
+                        declare_motor, declare_plant, publish_plant)
 from plant.actuated import ActuatedPlant
 
 OUTPUTS = tuple(name for name, _ in PLANT_OUTPUTS) + ("tau1", "tau2", "v1", "v2", "i1", "i2")
@@ -51,6 +51,7 @@ class ActuatedFiveBarPlant(CurrentLoopSteps, GuardedSlave):
         declare_plant(self)
         for j in JOINTS:
             declare_motor(self, j, default_preset=f"motor{j}")
+            declare_drive_options(self, j)
         d("mode", "parameter", "current",
           "Both drives: 'current' (controller K(z) on i_ref, i_hat) or 'voltage' (v_ref applied)")
         d("T", "parameter", 1e-3, "Current-controller sample time [s]; in current mode the step must divide it")

@@ -13,7 +13,7 @@ process share one Python interpreter and its module cache.
 from __future__ import annotations
 
 from fmus.guarded import MIN_STEP, GuardedSlave, refuse_absurd
-from fmus.parts import CurrentLoopSteps, build_drive, declare_motor
+from fmus.parts import CurrentLoopSteps, build_drive, declare_drive_options, declare_motor
 
 OUTPUTS = ("tau", "v", "i")
 
@@ -32,10 +32,11 @@ class DCMotorDrive(CurrentLoopSteps, GuardedSlave):
         d("v_ref", "input", 0.0, "Commanded voltage, applied over the step, saturated at +-v_max (voltage mode) [V]")
         d("omega", "input", 0.0, "Shaft speed, held over the step [rad/s]")
         d("i_hat", "input", 0.0, "Observed (or measured) current at the step start (current mode) [A]")
-        d("tau", "output", 0.0, "Shaft torque kt i - b omega - mu sign(omega) at the step end [N m]")
+        d("tau", "output", 0.0, "Shaft torque kt i - friction (B.2 or LuGre) at the step end [N m]")
         d("v", "output", 0.0, "Voltage applied over the step just taken [V]")
         d("i", "output", 0.0, "Armature current at the step end [A]")
         declare_motor(self)
+        declare_drive_options(self)
         d("mode", "parameter", "current", "'current' (controller K(z) on i_ref, i_hat) or 'voltage' (v_ref applied)")
         d("method", "parameter", "exact",
           "Electrical integration over a step: 'exact' (analytic), 'euler' (explicit) or 'quasi_static' (L = 0)")
