@@ -41,8 +41,9 @@ MD_PAIRS = (("PDq", "PDMDq"), ("PDx", "PDMDx"), ("TCq", "TCMDq"), ("TCx", "TCMDx
 
 
 def regression_scenes() -> list[str]:
-    """thesis_sim_circle and the bench scenes (the thesis' 16 and the 4 of seed 001's SMC law)."""
-    return ["thesis_sim_circle"] + [n for n in scene_names() if n.startswith("bench_")]
+    """thesis_sim_circle and the bench scenes (the thesis' 16 and the 4 of seed 001's SMC law);
+    not the bench twin's, whose calibration changes when it is refitted (docs/twin.md)."""
+    return ["thesis_sim_circle"] + [n for n in scene_names() if n.startswith("bench_") and not n.startswith("bench_real_")]
 
 
 def _start_offset(scene, dx):

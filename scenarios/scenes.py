@@ -8,7 +8,8 @@ actuators, exact measurements); the bench scenes have the whole chain.
 Names (:func:`scene_names`): ``thesis_sim_circle`` (model error 0 %) and
 ``thesis_sim_circle_me20`` / ``_me40`` (20 %, 40 %, thesis figures 12-23);
 ``bench_circle_<S>`` and ``bench_triangle_<S>`` for the eight strategies S of 7.2.6 and seed
-001's two (SMCq, SMCx); ``vertical_circle_<S>`` and ``vertical_circle_balanced_<S>``: the bench
+001's two (SMCq, SMCx); ``bench_real_circle_<S>``, ``bench_real_triangle_<S>``: the bench twin
+(:mod:`scenarios.twin`, the eight strategies); ``vertical_circle_<S>`` and ``vertical_circle_balanced_<S>``: the bench
 in a vertical plane, without and with counter-masses (:func:`vertical_circle`, docs/balanced.md).
 
 Copy a builder (:func:`thesis_sim_circle`, :func:`bench`) to make your own scene; every
@@ -468,6 +469,9 @@ def scene_names() -> list[str]:
     names += [f"bench_{kind}_{s}" for kind in ("circle", "triangle") for s in ALL_STRATEGY_NAMES]
     names += [f"vertical_circle_{b}{s}" for b in ("", "balanced_") for s in ALL_STRATEGY_NAMES]
     from .pendulum import PENDULUM_SCENES
+    from .twin import twin_scene_names
+
+    names += twin_scene_names()
 
     return names + list(PENDULUM_SCENES)
 
@@ -483,6 +487,11 @@ def get_scene(name: str) -> Scene:
         prefix = f"bench_{kind}_"
         if name.startswith(prefix) and name[len(prefix):] in ALL_STRATEGY_NAMES:
             return bench(name[len(prefix):], kind)
+    if name in scene_names() and name.startswith("bench_real_"):
+        from .twin import bench_real
+
+        kind, strategy = name[len("bench_real_"):].split("_")
+        return bench_real(strategy, kind)
     for balanced in (True, False):
         prefix = "vertical_circle_balanced_" if balanced else "vertical_circle_"
         if name.startswith(prefix) and name[len(prefix):] in ALL_STRATEGY_NAMES:
