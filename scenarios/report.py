@@ -177,7 +177,7 @@ def _reading(kind, ours, md_lowers) -> list:
                "(the thesis: in all but PDq on the circle and TCx on the triangle). Ours are of the "
                "order of one encoder count (2π/20000 rad, 0.04 mm at the 0.12 m arm); the bench's are "
                "up to 50 times larger — likely stick-slip friction, which our regularised Coulomb law "
-               "cannot hold the mechanism with.")
+               "cannot hold the mechanism with (the bench twin, docs/twin.md, adds stiction).")
     return out
 
 
