@@ -2,6 +2,7 @@
 
     python benchmarks/lugre_stability.py            # the map on one inertia, then bench scenes
     python benchmarks/lugre_stability.py --no-scenes
+    python benchmarks/lugre_stability.py --effect   # the 16 bench scenes, tanh vs LuGre friction
 
 **The map.** A ``motor.Drive`` with ``friction="lugre"`` and ``torque_output="mean"`` (as in
 the bench scenes), its current loop holding i = 0, drives a rigid inertia J the way the master
@@ -60,7 +61,9 @@ def stability_map(inertias=(motor1.J_rotor, 3e-4, 1e-3), sigma0s=(10.0, 30.0, 10
 
 
 def scene_rows(strategies=("PDq", "TCMDq"), pairs=((100.0, 0.15), (100.0, 0.02), (1000.0, 0.15), (100.0, 0.6))):
-    """Rows (strategy, σ0, σ1, e_ef_mm, completed) of the circle scenes with LuGre drives."""
+    """Rows (strategy, σ0, σ1, e_ef_mm, e_ss_mm, chatter, completed) of the circle scenes with
+    LuGre drives; chatter: the RMS step-to-step change of drive 1's shaft torque over the last
+    0.5 s (at rest after the stop) [N m]."""
     from scenarios.run import run_scene
     from scenarios.scenes import Fidelity, bench
 
@@ -68,15 +71,41 @@ def scene_rows(strategies=("PDq", "TCMDq"), pairs=((100.0, 0.15), (100.0, 0.02),
     for s in strategies:
         for s0, s1 in pairs:
             f = Fidelity(friction="lugre", drive_parameters=(("sigma0", s0), ("sigma1", s1)))
-            m = run_scene(bench(s, "circle", fidelity=f), mode="compiled", plots=False).metrics
-            rows.append((s, s0, s1, m["e_ef_mm"], m["completed"] and "error" not in m))
+            o = run_scene(bench(s, "circle", fidelity=f), mode="compiled", plots=False)
+            m, t = o.metrics, np.asarray(o.columns["t"])
+            tau = np.asarray(o.columns["tau1_shaft"])[t > t[-1] - 0.5]
+            chatter = float(np.sqrt(np.mean(np.diff(tau) ** 2)))
+            rows.append((s, s0, s1, m["e_ef_mm"], m["e_ss_mm"], chatter, m["completed"] and "error" not in m))
+    return rows
+
+
+def effect_rows():
+    """Rows (scene, metrics with tanh friction, metrics with LuGre) of the 16 bench scenes."""
+    from controller.strategies import STRATEGY_NAMES
+    from scenarios.run import run_scene
+    from scenarios.scenes import Fidelity, bench
+
+    rows = []
+    for kind in ("circle", "triangle"):
+        for s in STRATEGY_NAMES:
+            pair = [run_scene(bench(s, kind, fidelity=Fidelity(friction=f)), mode="compiled", plots=False).metrics
+                    for f in ("tanh", "lugre")]
+            rows.append((f"bench_{kind}_{s}", *pair))
     return rows
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--no-scenes", action="store_true", help="only the one-inertia map")
+    parser.add_argument("--effect", action="store_true", help="only the 16 bench scenes, tanh vs LuGre")
     args = parser.parse_args(argv)
+    if args.effect:
+        print("| scene | e_ef mm tanh | e_ef mm LuGre | tau_ef N m tanh | tau_ef N m LuGre | e_ss mm tanh | e_ss mm LuGre |")
+        print("|---|---|---|---|---|---|---|")
+        for name, a, b in effect_rows():
+            print(f"| {name} | {a['e_ef_mm']:.3f} | {b['e_ef_mm']:.3f} | {a['tau_ef_Nm']:.4f} | {b['tau_ef_Nm']:.4f} "
+                  f"| {a['e_ss_mm']:.3f} | {b['e_ss_mm']:.3f} |")
+        return
     rows = stability_map()
     print("| J [kg m2] | sigma0 [N m/rad] | sigma1 [N m s/rad] | RMS / kick | stable | predicted |")
     print("|---|---|---|---|---|---|")
@@ -85,10 +114,10 @@ def main(argv=None):
     agree = sum(stable == predicted for *_, stable, predicted in rows)
     print(f"\nmeasured == predicted in {agree} of {len(rows)} cases")
     if not args.no_scenes:
-        print("\n| strategy | sigma0 | sigma1 | e_ef mm | completed |")
-        print("|---|---|---|---|---|")
-        for s, s0, s1, e, ok in scene_rows():
-            print(f"| {s} | {s0:g} | {s1:g} | {e:.4g} | {ok} |")
+        print("\n| strategy | sigma0 | sigma1 | e_ef mm | e_ss mm | torque chatter at rest [N m] | completed |")
+        print("|---|---|---|---|---|---|---|")
+        for s, s0, s1, e, ess, chatter, ok in scene_rows():
+            print(f"| {s} | {s0:g} | {s1:g} | {e:.4g} | {ess:.3g} | {chatter:.2g} | {ok} |")
 
 
 if __name__ == "__main__":

@@ -243,6 +243,10 @@ class ActuatedFiveBarPlantAdapter(_PlantState):
         self.arrays = [a.plant._fast.p, settings, a._motors, self.state, np.zeros(2)]
         for n, (_, drive) in enumerate(a.drives):
             self.arrays += _prepared(name, drive, h)
+        self.lugre = [f is not None for f in a.bristles]
+        self.arrays += [f for f in a.bristles if f is not None]
+        if any(self.lugre):
+            self.modules = self.modules + ("motor.friction",)
 
     def _sim(self):
         return self.slave.actuated.plant
@@ -253,16 +257,28 @@ class ActuatedFiveBarPlantAdapter(_PlantState):
             self.state[14 + n] = drive.i
 
     def emit(self, arrays, x, t, h):
-        p, s, motors, z, volts, d1, c1, d2, c2 = arrays
+        p, s, motors, z, volts, d1, c1, d2, c2 = arrays[:9]
+        bristles = dict(zip([n for n, on in enumerate(self.lugre) if on], arrays[9:]))
         first = len(self.inputs)
-        return [
+        lines = [
             f"st, v1, e1, s1, p1 = fastdrive.peek_voltage({d1}, {c1}, {x}[0], {x}[2], {x}[1], {h})",
             "if st == 0:",
             f"    st, v2, e2, s2, p2 = fastdrive.peek_voltage({d2}, {c2}, {x}[3], {x}[5], {x}[4], {h})",
             "if st == 0:",
             f"    {volts}[0] = v1",
             f"    {volts}[1] = v2",
-            f"    st = fast5r.actuated_io({p}, {s}, {motors}, {z}, {volts}, {x}, {first}, {h})",
+        ]
+        if not bristles:
+            lines.append(f"    st = fast5r.actuated_io({p}, {s}, {motors}, {z}, {volts}, {x}, {first}, {h})")
+        else:   # ActuatedPlant.held_friction: joint 1's speed z[10], joint 2's -z[12] (world)
+            speed = {0: f"{z}[10]", 1: f"-{z}[12]"}
+            for n, f in bristles.items():
+                lines.append(f"    _, b{n}, _, m{n} = friction.friction_peek({f}, {speed[n]}, {h})")
+            u1 = "-m0" if 0 in bristles else "0.0"
+            u2 = "m1" if 1 in bristles else "0.0"
+            lines.append(f"    st = fast5r.actuated_io_held({p}, {s}, {motors}, {z}, {volts}, {x}, {first}, {h}, "
+                         f"{u1}, {u2})")
+        lines += [
             "if st == 0:",
             f"    fastdrive.commit_step({d1}, {c1}, v1, e1, s1, p1, {z}[14])",
             f"    fastdrive.commit_step({d2}, {c2}, v2, e2, s2, p2, {z}[15])",
@@ -271,6 +287,11 @@ class ActuatedFiveBarPlantAdapter(_PlantState):
             f"    {x}[{first + 15}] = {z}[14]",
             f"    {x}[{first + 16}] = {z}[15]",
         ]
+        for n, f in bristles.items():   # ActuatedPlant.shaft_torques: minus the bristles' torque
+            lines += [f"    friction.friction_commit({f}, b{n})",
+                      f"    {x}[{first + 11 + n}] = {x}[{first + 11 + n}] - friction.friction_force({f}, b{n}, "
+                      f"{speed[n]})"]
+        return lines
 
 
 @register

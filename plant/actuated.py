@@ -16,7 +16,11 @@ plant holds the drive's torque.  :class:`ActuatedPlant` removes that coupling: t
   (:meth:`motor.Drive.sample_voltage`).
 
 What stays discrete is the drives' own: each controller samples i_ref and i_hat at the
-step's start (zero-order hold), as in the separate drive.  The plant's integrator settings
+step's start (zero-order hold), as in the separate drive.  So does a drive's LuGre friction
+(``friction="lugre"``, :mod:`motor.friction`): its bristle state advances over the step with
+the joint speed at the step's start held, exactly as in the separate drive, and the plant
+holds the bristles' mean torque σ0 z + σ1 dz/dt over the step; the viscous part σ2 ω = b ω
+stays in the ODE (docs/friction.md: the same coupling, the same stability band).  The plant's integrator settings
 (:class:`plant.IntegratorSettings`: RK4 and its substeps, or dopri5 and its tolerances) apply
 to the whole state, and its refusals (residual, singular pose) to the mechanical part.
 The monolithic reference (``scenarios/reference.py``) integrates this same
@@ -28,7 +32,7 @@ import math
 
 import numpy as np
 
-from motor import armature_current_rate, shaft_torque
+from motor import armature_current_rate, friction, shaft_torque
 
 from . import fast5r, fivebar
 from .simulator import RK4_REAL_STABILITY, PlantError, PlantSimulator
@@ -55,14 +59,16 @@ class ActuatedPlant:
         if any(j not in (1, 2) for j in joints) or len(set(joints)) != len(joints):
             raise ValueError(f"drive joints must be 1 and/or 2, each at most once, got {joints}")
         for j, d in self.drives:
-            if d.friction != "tanh":
-                raise ValueError(f"drive on joint {j}: friction = {d.friction!r} is not integrated inside the plant "
-                                 f"(only 'tanh'); run the drive as a separate DCMotorDrive")
             if not d.params.L > 0.0:
                 raise ValueError(f"drive on joint {j}: L = {d.params.L!r} H has no armature current to integrate "
                                  f"(use a separate drive with method 'quasi_static')")
-        self._motors = np.array([[j - 1, d.params.R, d.params.L, d.params.kt, d.params.ke, d.params.b, d.params.mu,
-                                  d.params.omega_eps] for j, d in self.drives]).reshape(-1, fast5r.MOTOR_COLUMNS)
+        # A LuGre drive: no tanh term in the ODE (mu = 0 there), its bristles (sigma2 = 0: b stays
+        # in the ODE) in a friction array of its own, None for a tanh drive.
+        self._shaft = [d.params.with_(mu=0.0) if d.lugre is not None else d.params for _, d in self.drives]
+        self.bristles = [friction.new_lugre(friction.LuGre.of_motor(d.params.with_(b=0.0)), d.z)
+                         if d.lugre is not None else None for _, d in self.drives]
+        self._motors = np.array([[j - 1, p.R, p.L, p.kt, p.ke, p.b, p.mu, p.omega_eps]
+                                 for (j, _), p in zip(self.drives, self._shaft)]).reshape(-1, fast5r.MOTOR_COLUMNS)
         self._stable_for = None     # the step RK4 was last found stable for
 
     @property
@@ -91,7 +97,7 @@ class ActuatedPlant:
         dz = np.empty(len(z))
         for n, (j, drive) in enumerate(self.drives):
             omega = rates[j - 1] if omega_held is None else omega_held[n]
-            tau[j - 1] += shaft_torque(z[14 + n], omega, drive.params)
+            tau[j - 1] += shaft_torque(z[14 + n], omega, self._shaft[n])
             dz[14 + n] = armature_current_rate(z[14 + n], voltages[n], omega, drive.params)
         dz[:14] = self.plant.derivative(y, fivebar.thesis_torques(tau[0], tau[1]))
         return dz
@@ -125,7 +131,10 @@ class ActuatedPlant:
         def held():
             return ", ".join(f"v{j} = {v!r} V" for (j, _), v in zip(self.drives, voltages)) + " held"
 
-        z, report = plant.integrate(self.state(), dt, 0.0, 0.0, held, lambda w: self.derivative(w, voltages),
+        external, bristles = self.held_friction(dt)
+        u_star = fivebar.thesis_torques(*external) if any(b is not None for b in bristles) else (0.0, 0.0)
+        z, report = plant.integrate(self.state(), dt, u_star[0], u_star[1], held,
+                                    lambda w: self.derivative(w, voltages, external),
                                     self._motors, np.array(voltages, dtype=float))
         currents = z[14:].tolist()
         if not all(math.isfinite(i) for i in currents):
@@ -134,6 +143,23 @@ class ActuatedPlant:
         plant.accept(z[:14], dt, held, report)
         for (_, d), i, v in zip(self.drives, currents, voltages):
             d.i, d.v = i, v
+        for f, b in zip(self.bristles, bristles):
+            if f is not None:
+                friction.friction_commit(f, b)
+
+    def held_friction(self, dt: float):
+        """(world torques on (q1, q2), new bristle deflections): minus each LuGre drive's mean
+        bristle torque over the next dt with the joint speed held (:func:`motor.friction.advance`)."""
+        rates = fivebar.world_rates(self.plant.y[7:])
+        external, bristles = [0.0, 0.0], []
+        for (j, _), f in zip(self.drives, self.bristles):
+            if f is None:
+                bristles.append(None)
+                continue
+            _, z, _, f_mean = friction.friction_peek(f, rates[j - 1], dt)
+            external[j - 1] -= f_mean
+            bristles.append(z)
+        return external, bristles
 
     def _check_rk4_stability(self, dt, substeps):
         """Refuse RK4 sub-steps beyond the stability of an electrical pole -R/L."""
@@ -150,4 +176,10 @@ class ActuatedPlant:
     def shaft_torques(self) -> list:
         """Each drive's shaft torque at the present current and joint speed [N m] (B.2)."""
         rates = fivebar.world_rates(self.plant.y[7:])
-        return [shaft_torque(d.i, rates[j - 1], d.params) for j, d in self.drives]
+        torques = []
+        for (j, d), params, f in zip(self.drives, self._shaft, self.bristles):
+            tau = shaft_torque(d.i, rates[j - 1], params)
+            if f is not None:
+                tau -= friction.friction_force(f, f[friction.F_Z], rates[j - 1])
+            torques.append(tau)
+        return torques

@@ -493,8 +493,15 @@ def actuated_io(p, s, motors, z, voltages, x, first, dt):
     x[first + 11 + n] the shaft torque of motor n at the new current and joint speed (B.2).
     Refused, nothing changed: a non-finite state or current, divergence, a singular pose.
     """
+    return actuated_io_held(p, s, motors, z, voltages, x, first, dt, 0.0, 0.0)
+
+
+@njit(cache=True)
+def actuated_io_held(p, s, motors, z, voltages, x, first, dt, u1, u2):
+    """:func:`actuated_io` with efforts (u1, u2) on theta11, theta21 held besides the motors'
+    (the drives' LuGre bristle torques, ``plant.actuated.ActuatedPlant.held_friction``)."""
     out = np.empty(REPORT_SIZE)
-    w = actuated_step(p, motors, z, voltages, 0.0, 0.0, s[S_LAMBDA], dt, int(s[S_SUBSTEPS]), s[S_COUNT], out)
+    w = actuated_step(p, motors, z, voltages, u1, u2, s[S_LAMBDA], dt, int(s[S_SUBSTEPS]), s[S_COUNT], out)
     for n in range(motors.shape[0]):
         if not math.isfinite(w[14 + n]):
             return NONFINITE_STATE

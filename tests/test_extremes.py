@@ -481,6 +481,12 @@ ALLOWED_INTEGERS = {("FiveBarPlant", "encoder_counts", 2 ** 31 - 1), ("Trajector
                     ("ActuatedFiveBarPlant", "encoder_counts", 2 ** 31 - 1),
                     ("WheeledPendulum", "encoder_counts", 2 ** 31 - 1),
                     ("BalanceController", "encoder_counts", 2 ** 31 - 1)}
+#: The drives' PWM resolution (0: ideal; a huge count is nearly ideal) and noise seed and
+#: instance (any whole number >= 0), docs/friction.md.
+ALLOWED_INTEGERS |= {(model, f"{name}{suffix}", value)
+                     for model, suffixes in (("DCMotorDrive", ("",)), ("ActuatedFiveBarPlant", ("1", "2")))
+                     for suffix in suffixes for name in ("pwm_counts", "noise_seed", "noise_instance")
+                     for value in (0, 2 ** 31 - 1)}
 
 
 @pytest.mark.parametrize("model, name, causality, value", _variable_cases())

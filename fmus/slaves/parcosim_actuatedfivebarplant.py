@@ -94,20 +94,23 @@ class ActuatedFiveBarPlant(CurrentLoopSteps, GuardedSlave):
 
     # --- a model of the plant inside a controller (fmus.embedded.ChainCore) -------------
     def snapshot(self):
-        """The state before the next step (mechanism and currents), for :meth:`correct`."""
+        """The state before the next step (mechanism, currents, LuGre bristles), for :meth:`correct`."""
         a = self.actuated
-        return a.plant.y, a.plant.time, a.currents
+        return a.plant.y, a.plant.time, a.currents, [None if f is None else f.copy() for f in a.bristles]
 
     def correct(self, snapshot, measured: dict, step_size: float) -> bool:
         """Redo the last step (taken from ``snapshot``, with the voltages it held) from the
         state the ``measured`` outputs allow; the currents, unmeasured, restart from the
         snapshot's.  False, nothing changed, when the outputs agreed."""
         a = self.actuated
-        y, time, currents = snapshot
+        y, time, currents, bristles = snapshot
 
         def redo():
             for (_, drive), i in zip(a.drives, currents):
                 drive.i = i
+            for f, saved in zip(a.bristles, bristles):
+                if f is not None:
+                    f[:] = saved
             a.advance([drive.v for _, drive in a.drives], step_size)
 
         if not correct_plant(a.plant, (y, time), measured, redo, step_size):
