@@ -296,14 +296,16 @@ def build_drive(slave, suffix: str = "", **options):
     refuse_absurd(**{f"{name}{suffix}": values[name] for name in ("current_offset", "current_noise")})
     try:
         return Drive(params, design_params=design, **options, **values)
-    except ValueError as exc:    # named as the slave's variables: with the suffix
-        message = str(exc)
+    except ValueError as exc:
+        if not suffix:
+            raise
+        message = str(exc)      # named as the slave's variables: with the suffix
         for name, _, _ in DRIVE_OPTIONS:
             if message.startswith(f"{name} "):
                 message = f"{name}{suffix}{message[len(name):]}"
         for field in ("mu_s", "mu", "b"):
             message = message.replace(f"({field})", f"({field}{suffix})")
-        raise ValueError(f"parameter {message}") from None
+        raise ValueError(message) from None
 
 
 class CurrentLoopSteps:

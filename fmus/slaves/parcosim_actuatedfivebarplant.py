@@ -45,7 +45,7 @@ class ActuatedFiveBarPlant(CurrentLoopSteps, GuardedSlave):
                                          "(current mode) [A]")
             d(f"v_ref{j}", "input", 0.0, f"Drive {j}: commanded voltage, saturated at +-v_max (voltage mode) [V]")
         for j in JOINTS:
-            d(f"tau{j}", "output", 0.0, f"Drive {j}: shaft torque kt i - b omega - mu sign(omega) at the step end [N m]")
+            d(f"tau{j}", "output", 0.0, f"Drive {j}: shaft torque kt i - friction (B.2 or LuGre) at the step end [N m]")
             d(f"v{j}", "output", 0.0, f"Drive {j}: voltage applied over the step just taken [V]")
             d(f"i{j}", "output", 0.0, f"Drive {j}: armature current at the step end [A]")
         declare_plant(self)
