@@ -162,7 +162,7 @@ def test_instance_name_that_is_not_utf8_is_decoded_with_replacement(drive):
         fmu.free()
     """)
     assert result["ok"] and result["step"] == 2
-    assert result["error"].startswith("initialisation refused: parameter mode must be one of")
+    assert result["error"].startswith("initialisation refused: mode must be one of")
     assert "\ufffd\ufffd" not in result["error"]   # the name is in the log line, not in error
 
 
