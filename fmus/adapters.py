@@ -72,16 +72,30 @@ class PositionControllerAdapter(Adapter):
             raise NotCompilable(f"component {name}: the controller's kernel {c.kernel!r} is not compiled")
         self.exact = c.model_kind == "exact"
         self.arrays = [c._buf] + ([c.model._p, c._q, c._dq, c._terms] if self.exact else [])
+        self.delays = len(slave.delayed)
+        if self.delays:
+            self.arrays.append(slave.delayed)
 
     def emit(self, arrays, x, t, h):
         if not self.exact:
-            return [f"st = int(fastlaw.law_io({arrays[0]}, {x}, {h}))"]
-        buf, p, q, dq, terms = arrays
-        return [f"if fastlaw.exact_state({buf}, {x}[0], {x}[1], {x}[2], {x}[3], {q}, {dq}):",
-                f"    fast5r.inverse_terms({p}, {q}, {dq}, {terms})",
-                f"    st = int(fastlaw.law_terms_io({buf}, {x}, {h}, {terms}))",
-                "else:",
-                "    st = 1"]
+            lines = [f"st = int(fastlaw.law_io({arrays[0]}, {x}, {h}))"]
+        else:
+            buf, p, q, dq, terms = arrays[:5]
+            lines = [f"if fastlaw.exact_state({buf}, {x}[0], {x}[1], {x}[2], {x}[3], {q}, {dq}):",
+                     f"    fast5r.inverse_terms({p}, {q}, {dq}, {terms})",
+                     f"    st = int(fastlaw.law_terms_io({buf}, {x}, {h}, {terms}))",
+                     "else:",
+                     "    st = 1"]
+        if self.delays:    # the slave's delay(): apply the oldest commands, queue the new ones
+            first, n = len(self.inputs), self.delays
+            lines += ["if st == 0:",
+                      "    for c in range(4):",
+                      f"        fresh = {x}[{first} + c]",
+                      f"        {x}[{first} + c] = {arrays[-1]}[0, c]",
+                      f"        for m in range({n - 1}):",
+                      f"            {arrays[-1]}[m, c] = {arrays[-1]}[m + 1, c]",
+                      f"        {arrays[-1]}[{n - 1}, c] = fresh"]
+        return lines
 
 
 @register

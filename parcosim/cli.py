@@ -33,6 +33,7 @@ rows recorded so far and metrics with ``"completed": false``, prints one line an
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import warnings
 
@@ -264,8 +265,10 @@ def _run(args) -> int:
         print(f"parcosim: {outcome.result.error} (recorded so far: {out})", file=sys.stderr)
         return 1
     compiled = f", compiled in {m['compile_s']:.2f} s" if "compile_s" in m else ""
+    settled = (f" (settled {m['t_settle_s']:.2f} s after the stop)" if m.get("settled")
+               else " (not settled)" if math.isfinite(m.get("e_ss_mm", math.nan)) else "")
     print(f"{scene.name} [{m['mode']}]: e_ef {m['e_ef_mm']:.4g} mm, tau_ef {m['tau_ef_Nm']:.4g} N m, "
-          f"e_ss {m['e_ss_mm']:.4g} mm, {m['wall_s']:.2f} s wall ({m['realtime_factor']:.1f}x real time"
+          f"e_ss {m['e_ss_mm']:.4g} mm{settled}, {m['wall_s']:.2f} s wall ({m['realtime_factor']:.1f}x real time"
           f"{compiled}) -> {out}")
     return 0
 

@@ -29,6 +29,7 @@ from .scenes import Scene
 
 #: Metrics of a task that did not produce any (NaN where a number belongs).
 _NO_METRICS = {"e_ef_mm": float("nan"), "tau_ef_Nm": float("nan"), "e_ss_mm": float("nan"),
+               "e_ss_1s_mm": float("nan"), "t_settle_s": float("nan"), "settled": False,
                "completed": False, "wall_s": float("nan")}
 
 

@@ -15,8 +15,8 @@ scene, bit for bit ``parcosim run SCENE`` with the same mode.
 Files in DIR:
 
 * ``sweep.csv``: one row per sample, in completion order: ``sample``, one column per
-  perturbed parameter (its value), ``e_ef_mm``, ``tau_ef_Nm``, ``e_ss_mm``, ``completed``,
-  ``error``, ``wall_s``.  Each row is appended and flushed to disk as its run finishes, in one
+  perturbed parameter (its value), ``e_ef_mm``, ``tau_ef_Nm``, ``e_ss_mm`` (once settled),
+  ``e_ss_1s_mm``, ``t_settle_s`` (:mod:`scenarios.metrics`), ``completed``, ``error``, ``wall_s``.  Each row is appended and flushed to disk as its run finishes, in one
   write: a sweep killed at any point leaves every finished row whole (a torn last line, if
   any, is dropped when the sweep starts again).
 * ``sweep.json``: the sweep's settings.  Started again with the same DIR and settings, the
@@ -46,7 +46,8 @@ from .run import atomic_write, check_writable, write_json
 from .scenes import Scene, get_scene
 
 #: The metrics of a sweep row, then the bookkeeping columns.
-METRICS = ("e_ef_mm", "tau_ef_Nm", "e_ss_mm")
+#: e_ss_mm: once settled; t_settle_s NaN (empty in the summary's n) when a run did not settle.
+METRICS = ("e_ef_mm", "tau_ef_Nm", "e_ss_mm", "e_ss_1s_mm", "t_settle_s")
 TAIL = ("completed", "error", "wall_s")
 #: Settings that must match to continue a sweep in the same directory.
 _SETTINGS = ("scene", "uncertainty", "seed", "distribution", "perturb", "mode", "stop_time", "parameters")

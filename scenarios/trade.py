@@ -196,8 +196,9 @@ def _controller_setting(**parameters):
 
 
 def _bench_origin(scene: Scene):
-    """(strategy, kind, model) of a bench scene, or None for any other scene."""
-    if not scene.name.startswith("bench_") or not _has(scene, "traj", "ctrl"):
+    """(strategy, kind, model) of a bench scene, or None for any other scene (the twin's
+    ``bench_real_*`` too: rebuilding it from switches would drop its calibrated effects)."""
+    if not scene.name.startswith("bench_") or scene.name.startswith("bench_real_") or not _has(scene, "traj", "ctrl"):
         return None
     kind = scene.system.component("traj").parameters.get("kind")
     model = scene.system.component("ctrl").parameters.get("model", "tabulated")

@@ -487,6 +487,8 @@ ALLOWED_INTEGERS |= {(model, f"{name}{suffix}", value)
                      for model, suffixes in (("DCMotorDrive", ("",)), ("ActuatedFiveBarPlant", ("1", "2")))
                      for suffix in suffixes for name in ("pwm_counts", "noise_seed", "noise_instance")
                      for value in (0, 2 ** 31 - 1)}
+#: No computation delay (the default; docs/twin.md); 2**31 - 1 samples are refused (at most 100).
+ALLOWED_INTEGERS.add(("PositionController", "delay_steps", 0))
 
 
 @pytest.mark.parametrize("model, name, causality, value", _variable_cases())

@@ -5,7 +5,12 @@ seed 001's sliding-mode law (SMCq, SMCx).  ``gravity_x``, ``gravity_y``, ``count
 Timing: ``doStep(t, h)`` reads the measurements and references set before it (the samples
 at t), computes the torques and current references and holds them as outputs; the master
 applies them to the drives/plant over [t, t + h].  Outputs change only in ``doStep``: no
-direct feedthrough.  ``h`` is the integration step of the sliding term.
+direct feedthrough.  ``h`` is the integration step of the sliding term.  ``delay_steps`` = n > 0
+models a computation delay (docs/twin.md: on the bench of 7.2.1 a Raspberry Pi 2 reads the
+encoders at a sample and computes the law; the thesis does not say when the commands reach
+the driver, the twin assumes at the next sample): the outputs ``tau1``,
+``tau2``, ``i_ref1``, ``i_ref2`` of ``doStep(t)`` are those computed n samples earlier (zero
+before), ``e1``, ``e2`` stay the present errors.
 
 Numeric parameters ``lam``, ``m_star``, ``phi``, ``k1``, ``k2``, ``kt1``, ``kt2`` start at -1,
 meaning "the strategy preset's value" (Tables 6-8; ``trajectory`` picks Table 6 or 7 for
@@ -21,6 +26,8 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+import numpy as np
+
 from controller.model import DEFAULT_EXTENT, DEFAULT_GRID_STEP
 from controller.position import PositionController as _Controller
 from controller.strategies import get_strategy
@@ -33,6 +40,8 @@ INPUTS = ("q1", "q2", "dq1", "dq2", "ddq1", "ddq2", "x_d", "y_d", "dx_d", "dy_d"
 OUTPUTS = ("tau1", "tau2", "i_ref1", "i_ref2")
 NUMERIC_PARAMETERS = ("lam", "m_star", "phi", "k1", "k2", "gamma1", "gamma2", "model_error", "kt1", "kt2",
                       "grid_step", "x_min", "x_max", "y_min", "y_max", "T", "gravity_x", "gravity_y")
+#: Most samples of computation delay ``delay_steps`` (the bench's is one: docs/twin.md).
+MAX_DELAY_STEPS = 100
 #: Most points a tabulated model's grid may have (the default 5 mm table has 2303, built in
 #: about 0.2 s; a point costs about 80 µs): building more would take fmi2ExitInitializationMode
 #: over the 10 s any call may take (docs/extremes.md).
@@ -87,8 +96,11 @@ class PositionController(GuardedSlave):
         d("T", "parameter", 1e-3, "Sample time [s]; doStep sizes must equal it")
         d("gravity_x", "parameter", 0.0, "Gravity the model assumes, world x [m/s2]")
         d("gravity_y", "parameter", 0.0, "Gravity the model assumes, world y [m/s2]")
+        d("delay_steps", "parameter", 0, "Computation delay: tau1, tau2, i_ref1, i_ref2 are applied this many "
+          f"samples after they were computed (0-{MAX_DELAY_STEPS}; the bench: 1)")
         declare_counter_masses(self)
         self.controller = None
+        self.delayed = np.zeros((0, len(OUTPUTS)))
 
     def setup(self):
         strategy = get_strategy(self.strategy, self.trajectory)
@@ -116,6 +128,11 @@ class PositionController(GuardedSlave):
             changes["gamma"] = (self.gamma1, self.gamma2)
         strategy = strategy.with_(**changes)
         self._check_table()
+        if not (isinstance(self.delay_steps, int) and 0 <= self.delay_steps <= MAX_DELAY_STEPS):
+            raise ValueError(f"parameter delay_steps = {self.delay_steps!r} must be an integer in [0, {MAX_DELAY_STEPS}]")
+        # The commands computed but not yet applied, oldest first (changed in place: the
+        # compiled loop shares the array).
+        self.delayed = np.zeros((self.delay_steps, len(OUTPUTS)))
         from controller.position import default_kt
         kt = tuple(d if v == PRESET_VALUE else v for v, d in zip((self.kt1, self.kt2), default_kt()))
         for name, value in zip(("kt1", "kt2"), kt):
@@ -157,5 +174,16 @@ class PositionController(GuardedSlave):
             name = max(INPUTS, key=lambda n: abs(getattr(self, n)))
             raise ValueError(f"the law's outputs (tau1, tau2, i_ref1, i_ref2, e1, e2) = {tuple(out)!r} at "
                              f"t = {current_time:.6g} s are not finite; largest input: {name} = {getattr(self, name)!r}")
+        if len(self.delayed):
+            out = (*delay(self.delayed, out[:4]), *out[4:])
         self.tau1, self.tau2, self.i_ref1, self.i_ref2, self.e1, self.e2 = out
         self.model_fallbacks = self.controller.fallbacks
+
+
+def delay(delayed: np.ndarray, commands) -> tuple:
+    """The oldest row of ``delayed`` (the commands to apply now); ``commands`` appended as the
+    newest, in place (the compiled loop's ``PositionControllerAdapter`` does the same)."""
+    applied = tuple(float(v) for v in delayed[0])
+    delayed[:-1] = delayed[1:]
+    delayed[-1] = commands
+    return applied
