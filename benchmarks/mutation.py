@@ -28,9 +28,11 @@ from __future__ import annotations
 
 import argparse
 import ast
+import hashlib
 import json
 import os
 import random
+import sqlite3
 import subprocess
 import sys
 from pathlib import Path
@@ -39,6 +41,7 @@ ROOT = Path(__file__).resolve().parent.parent
 
 _CTRL = ("test_control_law", "test_controller", "test_controller_fast")
 _PLANT = ("test_plant_dynamics", "test_fivebar", "test_reference_lagrange")
+_WHEELED = ("test_wheeled", "test_wheeled_derivation", "test_wheeled_fmu")
 #: Source file -> the test modules that exercise it (run in this order, -x).
 TARGETS = {
     "controller/fastlaw.py": _CTRL,
@@ -71,6 +74,18 @@ TARGETS = {
     "fmus/slaves/parcosim_derivator.py": ("test_fmu_controller",),
     "fmus/slaves/parcosim_trajectory.py": ("test_fmu_controller",),
     "fmus/slaves/parcosim_actuatedfivebarplant.py": ("test_actuated",),
+    "controller/balance.py": ("test_wheeled_fmu", "test_fastkernels", "test_wheeled"),
+    "controller/fastbalance.py": ("test_fastkernels", "test_wheeled_fmu"),
+    "controller/fastderivator.py": ("test_fastkernels", "test_derivators"),
+    "controller/fasttrajectory.py": ("test_fastkernels", "test_trajectories"),
+    "plant/spec.py": ("test_spec", "test_spec_plant", "test_workspace"),
+    "plant/specsim.py": ("test_spec_plant", "test_spec", "test_workspace"),
+    "plant/wheeled.py": _WHEELED,
+    "plant/wheeled_kernel.py": _WHEELED,
+    "motor/fastdrive.py": ("test_fastkernels", "test_motor_current_control"),
+    "fmus/slaves/parcosim_balancecontroller.py": ("test_wheeled_fmu",),
+    "fmus/slaves/parcosim_specplant.py": ("test_spec_plant",),
+    "fmus/slaves/parcosim_wheeledpendulum.py": ("test_wheeled_fmu",),
 }
 #: The control law, whose every mutant runs: functions by name; "f:for" is the for loops in f
 #: (step_reference's loop over the two components is the law; the rest is checks and torques).
@@ -126,41 +141,97 @@ def _is_law(source, mutation, law_lines) -> bool:
     return mutation.start_pos[0] in law_lines.get(source, ())
 
 
+def _digest(source: str) -> str:
+    return hashlib.sha256((ROOT / source).read_bytes()).hexdigest()
+
+
+def _init_sessions(workdir: Path) -> set:
+    """Create the session of every source file that has none, and create again the session of
+    every file that changed since its session was made (cosmic-ray names a mutant by module,
+    operator and occurrence: an edit makes the old names point elsewhere).  The files' digests
+    are kept in ``WORKDIR/sources.json``.  Returns the files whose session was (re)created."""
+    manifest_path = workdir / "sources.json"
+    manifest = json.loads(manifest_path.read_text()) if manifest_path.exists() else {}
+    created = set()
+    for source in TARGETS:
+        session, digest = _session(workdir, source), _digest(source)
+        config = _config(workdir, source)
+        if session.exists() and manifest.get(source) == digest:
+            continue
+        if session.exists():
+            print(f"{source} changed since its session was made: initialised again", flush=True)
+            session.unlink()
+        subprocess.run(["cosmic-ray", "init", str(config), str(session)], cwd=ROOT, check=True,
+                       stdout=subprocess.DEVNULL)
+        manifest[source] = digest
+        created.add(source)
+    manifest_path.write_text(json.dumps(manifest, indent=1, sort_keys=True))
+    return created
+
+
+def _quotas(pools: dict, sample: int) -> dict:
+    """Largest-remainder share of ``sample`` per file, proportional to the file's pool."""
+    total = sum(len(jobs) for jobs in pools.values())
+    exact = {source: sample * len(jobs) / total for source, jobs in pools.items()}
+    quotas = {source: int(value) for source, value in exact.items()}
+    by_remainder = sorted(exact, key=lambda source: (quotas[source] - exact[source], source))
+    for source in by_remainder[:sample - sum(quotas.values())]:
+        quotas[source] += 1
+    return quotas
+
+
 def initialise(workdir: Path, sample: int, seed: int):
-    """Create the sessions that do not exist yet, then draw the sample once (marker file)."""
+    """Create the sessions that are missing or stale, then draw the sample.
+
+    The sample is stratified by file with the same rate everywhere: file f gets its
+    largest-remainder share of ``sample`` in proportion to its pool (the mutants that are
+    neither the law nor a bitwise operator).  A file whose session was kept keeps the mutants
+    it already had in the sample (a uniform draw), trimmed or topped up to its share by a
+    seeded uniform draw (``random.Random(f"{seed}:{file}")``); a new session draws its share
+    afresh.  Every mutant of the pool thus has the same chance, and a source change costs only
+    the changed files' results.  The draw is in ``WORKDIR/sample.json``."""
     from cosmic_ray.work_db import WorkDB, use_db
     from cosmic_ray.work_item import WorkerOutcome, WorkResult
 
     workdir.mkdir(parents=True, exist_ok=True)
-    for source in TARGETS:
-        if not _session(workdir, source).exists():
-            subprocess.run(["cosmic-ray", "init", str(_config(workdir, source)), str(_session(workdir, source))],
-                           cwd=ROOT, check=True)
-        else:
-            _config(workdir, source)
+    created = _init_sessions(workdir)
     marker = workdir / "sample.json"
-    if marker.exists():
+    if marker.exists() and not created and json.loads(marker.read_text()).get("sample") == sample:
         return
     law_lines = {source: _law_lines(source) for source in LAW}
-    pool, skipped = [], {source: [] for source in TARGETS}
+    pools, excluded, in_sample = {}, {}, {}
     for source in TARGETS:
         with use_db(str(_session(workdir, source)), WorkDB.Mode.open) as db:
+            skipped = {job for job, result in db.results if result.worker_outcome == "skipped"}
+            pools[source], excluded[source] = [], []
             for item in db.work_items:
                 mutation = item.mutations[0]
                 if mutation.operator_name.endswith(EXCLUDED_OPERATORS):
-                    skipped[source].append(item.job_id)
+                    excluded[source].append(item.job_id)
                 elif not _is_law(source, mutation, law_lines):
-                    pool.append((source, item.job_id))
-    pool.sort()
-    chosen = set(random.Random(seed).sample(pool, min(sample, len(pool))))
-    for source, job in pool:
-        if (source, job) not in chosen:
-            skipped[source].append(job)
-    for source, jobs in skipped.items():
+                    pools[source].append(item.job_id)
+            pools[source].sort()
+            in_sample[source] = [] if source in created else [job for job in pools[source] if job not in skipped]
+    quotas = _quotas(pools, sample)
+    drawn = {}
+    for source, pool in pools.items():
+        rng = random.Random(f"{seed}:{source}")
+        kept = in_sample[source]
+        if len(kept) > quotas[source]:
+            kept = sorted(rng.sample(kept, quotas[source]))
+        rest = sorted(set(pool) - set(kept))
+        drawn[source] = sorted(kept + rng.sample(rest, quotas[source] - len(kept)))
+        unsampled = sorted(set(pool) - set(drawn[source]))
         with use_db(str(_session(workdir, source)), WorkDB.Mode.open) as db:
-            db.set_multiple_results(jobs, WorkResult(worker_outcome=WorkerOutcome.SKIPPED))
-    marker.write_text(json.dumps({"seed": seed, "sample": sample, "pool": len(pool),
-                                  "sampled": sorted(f"{s}:{j}" for s, j in chosen)}, indent=1))
+            db.set_multiple_results(excluded[source] + unsampled,
+                                    WorkResult(worker_outcome=WorkerOutcome.SKIPPED))
+        with sqlite3.connect(_session(workdir, source)) as con:     # newly drawn: pending again
+            con.executemany("DELETE FROM work_results WHERE job_id = ? AND worker_outcome = 'SKIPPED'",
+                            [(job,) for job in drawn[source]])
+    marker.write_text(json.dumps({
+        "seed": seed, "sample": sample, "pool": sum(map(len, pools.values())),
+        "files": {source: {"pool": len(pools[source]), "quota": quotas[source]} for source in pools},
+        "sampled": sorted(f"{source}:{job}" for source, jobs in drawn.items() for job in jobs)}, indent=1))
 
 
 def _restore_sources(workdir: Path):
