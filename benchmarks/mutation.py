@@ -39,7 +39,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 
-_CTRL = ("test_control_law", "test_controller", "test_controller_fast")
+_CTRL = ("test_control_law", "test_seed_law", "test_controller", "test_controller_fast")
 _PLANT = ("test_plant_dynamics", "test_fivebar", "test_reference_lagrange")
 _WHEELED = ("test_wheeled", "test_wheeled_derivation", "test_wheeled_fmu")
 #: Source file -> the test modules that exercise it (run in this order, -x).
