@@ -12,6 +12,7 @@ import math
 import numpy as np
 import pytest
 
+from controller import fastlaw
 from controller.position import PositionController
 from controller.strategies import get_strategy
 from plant import fivebar, get_preset
@@ -62,16 +63,41 @@ def test_sliding_variable_is_7_22_in_task_space(kernel):
     q = (qr[0] + 0.005, qr[1] + 0.004)
     dq, ddq = (0.2, 0.1), (1.0, 2.0)
     s0, _, _ = _s_after_one_sample(kernel, "PDMDx", q, dq, ddq)
-    h = 1e-6
+    delta = np.array([0.7, -0.3])
+    s1, _, _ = _s_after_one_sample(kernel, "PDMDx", q, dq, tuple(np.add(ddq, delta)))
+    assert np.allclose(s1 - s0, -_jacobian_by_differences(q) @ delta, rtol=1e-6, atol=1e-9)
+
+
+def _jacobian_by_differences(q, h=1e-6):
+    """∂(x, y)/∂(q1, q2) by central differences of the plant's forward kinematics (7.1-7.16)."""
     J = np.empty((2, 2))
     for j in (0, 1):
         plus, minus = list(q), list(q)
         plus[j] += h
         minus[j] -= h
         J[:, j] = (fivebar.direct_kinematics(BENCH, *plus) - fivebar.direct_kinematics(BENCH, *minus))[:2] / (2 * h)
-    delta = np.array([0.7, -0.3])
-    s1, _, _ = _s_after_one_sample(kernel, "PDMDx", q, dq, tuple(np.add(ddq, delta)))
-    assert np.allclose(s1 - s0, -J @ delta, rtol=1e-6, atol=1e-9)
+    return J
+
+
+def test_compiled_loop_entry_reads_its_inputs_in_the_documented_order():
+    """The compiled scene loop calls the law as ``law_io(buf, x, h)`` with
+    x = [q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d | tau1, tau2, ...].
+    PDx has k = 0, Ĥ = m*·1, ĥ = 0, so τ = Jᵀ m* (ẍ_d + kv ė + kp e) (7.21): a change δ of the
+    reference acceleration (ẍ_d, ÿ_d) changes τ by m* Jᵀ δ, whatever the output slots hold."""
+    qr = _reference_angles()
+    q = (qr[0] + 0.005, qr[1] + 0.004)
+
+    def torques(ddx_d, ddy_d):
+        ctrl = PositionController(BENCH, get_strategy("PDx"), kernel="fast")
+        x = np.full(18, 7.0)                            # output slots: stale values from a last sample
+        x[:12] = (*q, 0.2, 0.1, 1.0, 2.0, X_REF, Y_REF, 0.0, 0.0, ddx_d, ddy_d)
+        assert fastlaw.law_io(ctrl._buf, x, 1e-3) == fastlaw.OK
+        return x[12:14].copy(), ctrl.strategy.m_star
+
+    tau0, m_star = torques(0.0, 0.0)
+    delta = np.array([0.3, -0.4])
+    tau1, _ = torques(*delta)
+    assert np.allclose(tau1 - tau0, m_star * _jacobian_by_differences(q).T @ delta, rtol=1e-6, atol=1e-12)
 
 
 def _adaptive_run(kernel, s_sequence, k0, gamma, phi):
