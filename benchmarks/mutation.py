@@ -96,6 +96,7 @@ LAW = {
 SAMPLE = 300
 SEED = 18
 TIMEOUT = 180.0
+GROUP_KEYS = ("mutants", "ran", "killed", "timeout", "survived", "incompetent", "pending")
 EXCLUDED_OPERATORS = ("_RShift", "_LShift", "_BitOr", "_BitAnd", "_BitXor")
 
 
@@ -261,9 +262,10 @@ def execute(workdir: Path, only=None):
         _restore_sources(workdir)
 
 
-def retest(workdir: Path, outcome: str, only=None):
+def retest(workdir: Path, outcome: str, only=None, jobs=None):
     """Run again the mutants whose result has this test outcome (e.g. ``survived``, after new
-    tests) and record the new result; the pending mutants are left alone.  A mutant whose
+    tests) and record the new result; the pending mutants are left alone; ``jobs``: these job
+    ids only (e.g. not the survivors already argued equivalent).  A mutant whose
     line no longer reads as it did (the code was changed or removed) keeps its result and is
     listed as such."""
     from cosmic_ray.mutating import mutate_and_test
@@ -278,7 +280,7 @@ def retest(workdir: Path, outcome: str, only=None):
         lines = (ROOT / source).read_text().splitlines()
         with use_db(str(_session(workdir, source)), WorkDB.Mode.open) as db:
             for item, result in db.completed_work_items:
-                if result.test_outcome != outcome:
+                if result.test_outcome != outcome or (jobs and item.job_id not in jobs):
                     continue
                 mutation = item.mutations[0]
                 removed = [line[1:] for line in (result.diff or "").splitlines()
@@ -301,6 +303,8 @@ def report(workdir: Path) -> dict:
 
     law_lines = {source: _law_lines(source) for source in LAW}
     rows, survivors = {}, []
+    groups = {f"control law, {source}": dict.fromkeys(GROUP_KEYS, 0) for source in LAW}
+    groups["seeded sample of the other mutants"] = dict.fromkeys(GROUP_KEYS, 0)
     for source in TARGETS:
         path = _session(workdir, source)
         if not path.exists():
@@ -316,6 +320,7 @@ def report(workdir: Path) -> dict:
                 result = results.get(item.job_id)
                 if result is None:
                     counts["pending"] += 1
+                    groups[f"control law, {source}" if law else "seeded sample of the other mutants"]["pending"] += 1
                 elif result.worker_outcome == "skipped":
                     counts["skipped"] += 1
                     continue
@@ -324,13 +329,18 @@ def report(workdir: Path) -> dict:
                     if outcome == "killed" and result.output == "timeout":
                         outcome = "timeout"
                     counts[outcome] += 1
+                    group = groups[f"control law, {source}" if law else "seeded sample of the other mutants"]
+                    group[outcome] += 1
+                    group["ran"] += 1
                     if outcome == "survived":
                         survivors.append({"file": source, "line": mutation.start_pos[0], "job": item.job_id,
                                           "operator": mutation.operator_name, "law": law,
                                           "diff": result.diff})
                 counts["law"] += law
         rows[source] = counts
-    return {"files": rows, "survivors": survivors}
+    for group in groups.values():
+        group["mutants"] = group["ran"] + group["pending"]
+    return {"files": rows, "groups": groups, "survivors": survivors}
 
 
 def print_report(data: dict):
@@ -342,6 +352,9 @@ def print_report(data: dict):
         for k in keys:
             total[k] += counts[k]
     print(f"{'total':46s}" + "".join(f"{total[k]:12d}" for k in keys))
+    print(f"\n{'group':46s}" + "".join(f"{k:>12s}" for k in GROUP_KEYS))
+    for name, counts in data["groups"].items():
+        print(f"{name:46s}" + "".join(f"{counts[k]:12d}" for k in GROUP_KEYS))
     print(f"\n{len(data['survivors'])} survivors:")
     for s in data["survivors"]:
         diff = "\n".join(line for line in (s["diff"] or "").splitlines()
@@ -357,6 +370,7 @@ def main(argv=None):
     parser.add_argument("--only", nargs="*", help="run these source files only")
     parser.add_argument("--report", action="store_true", help="print the figures, run nothing")
     parser.add_argument("--retest", metavar="OUTCOME", help="run again the mutants with this outcome only")
+    parser.add_argument("--job", nargs="*", help="with --retest: these job ids only")
     args = parser.parse_args(argv)
     if args.report:
         data = report(args.workdir)
@@ -365,7 +379,7 @@ def main(argv=None):
         return 0
     initialise(args.workdir, args.sample, args.seed)
     if args.retest:
-        retest(args.workdir, args.retest, args.only)
+        retest(args.workdir, args.retest, args.only, args.job)
     else:
         execute(args.workdir, args.only)
     print_report(report(args.workdir))
