@@ -190,3 +190,15 @@ def test_pd_strategy_needs_a_positive_m_star():
     """u' = m* (...) (7.21, PD): m* = 0 would command no torque at all."""
     with pytest.raises(ValueError, match=r"m_star = 0.0 must be > 0 for the PD strategy PDq"):
         PositionController(BENCH, get_strategy("PDq").with_(m_star=0.0))
+
+
+@pytest.mark.parametrize("kernel", KERNELS)
+def test_exact_model_law_refuses_a_pose_without_assembly_naming_it(kernel):
+    """q1 = 0, q2 = pi puts the elbows at (±(l0 + l11), 0), 0.34 m apart, farther than the two
+    distal links (2 × 0.16 m) reach (002 eq. 7-11): there is no end effector, so no task state
+    and no model terms.  The sample is refused with the measured angles and the time."""
+    ctrl = PositionController(BENCH, get_strategy("TCx"), model="exact", kernel=kernel)
+    elbow_gap = 2 * BENCH.l0 + BENCH.chain1.l1 + BENCH.chain2.l1
+    assert elbow_gap > BENCH.chain1.l2 + BENCH.chain2.l2
+    with pytest.raises(ValueError, match=r"measured \(q1, q2\) = \(0\.0, 3\.14159.*\) rad at t = 0\.25 s"):
+        ctrl.step(0.25, 0.0, math.pi, 0.0, 0.0, 0.0, 0.0, X_REF, Y_REF, 0.0, 0.0, 0.0, 0.0)
