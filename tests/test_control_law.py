@@ -7,6 +7,8 @@ disturbance, the integral of k sat(s/phi) (7.21) removes the steady error that t
 keeps (e = -d / (m* kp)).  Every test runs both the compiled kernel (controller/fastlaw.py)
 and the Python reference (controller/position.py).
 """
+import dataclasses
+import json
 import math
 
 import numpy as np
@@ -14,7 +16,7 @@ import pytest
 
 from controller import fastlaw
 from controller.position import PositionController
-from controller.strategies import get_strategy
+from controller.strategies import Strategy, get_strategy
 from plant import fivebar, get_preset
 
 BENCH = get_preset("bench")
@@ -29,8 +31,9 @@ def _reference_angles():
 
 
 def _s_after_one_sample(kernel, name, q, dq, ddq):
-    """s of a fresh controller holding (X_REF, Y_REF) at rest, for the measured q, dq, ddq."""
-    ctrl = PositionController(BENCH, get_strategy(name), kernel=kernel)
+    """s of a fresh controller holding (X_REF, Y_REF) at rest, for the measured q, dq, ddq
+    (name: a strategy's name or the strategy itself)."""
+    ctrl = PositionController(BENCH, get_strategy(name) if isinstance(name, str) else name, kernel=kernel)
     ctrl.step(0.0, *q, *dq, *ddq, X_REF, Y_REF, 0.0, 0.0, 0.0, 0.0)
     return np.array(ctrl.s), np.array(ctrl.e), ctrl
 
@@ -54,17 +57,26 @@ def test_sliding_variable_is_7_22_in_joint_space(kernel):
     assert np.allclose(s2 - s0, (-kv * d, 0.0), rtol=1e-9, atol=1e-9)
 
 
+def _strategy_read_from_a_file(name):
+    """The strategy as a scene file would give it: every field through JSON (its strings are
+    new objects, equal to the literals "x", "q" but not the same objects)."""
+    fields = json.loads(json.dumps(dataclasses.asdict(get_strategy(name))))
+    return Strategy(**{key: tuple(v) if isinstance(v, list) else v for key, v in fields.items()})
+
+
+@pytest.mark.parametrize("source", ["preset", "file"])
 @pytest.mark.parametrize("kernel", KERNELS)
-def test_sliding_variable_is_7_22_in_task_space(kernel):
+def test_sliding_variable_is_7_22_in_task_space(kernel, source):
     """Task space: r = x = FK(q) and ẍ = J q̈ + β, so changing q̈ by δ changes s by -J δ.
     J here is a central difference of the plant's forward kinematics (7.1-7.16), not the
-    controller's analytic Jacobian."""
+    controller's analytic Jacobian.  The same for the strategy read from a file."""
+    strategy = get_strategy("PDMDx") if source == "preset" else _strategy_read_from_a_file("PDMDx")
     qr = _reference_angles()
     q = (qr[0] + 0.005, qr[1] + 0.004)
     dq, ddq = (0.2, 0.1), (1.0, 2.0)
-    s0, _, _ = _s_after_one_sample(kernel, "PDMDx", q, dq, ddq)
+    s0, _, _ = _s_after_one_sample(kernel, strategy, q, dq, ddq)
     delta = np.array([0.7, -0.3])
-    s1, _, _ = _s_after_one_sample(kernel, "PDMDx", q, dq, tuple(np.add(ddq, delta)))
+    s1, _, _ = _s_after_one_sample(kernel, strategy, q, dq, tuple(np.add(ddq, delta)))
     assert np.allclose(s1 - s0, -_jacobian_by_differences(q) @ delta, rtol=1e-6, atol=1e-9)
 
 
