@@ -144,9 +144,12 @@ def test_adaptive_gain_follows_6_66_on_a_known_sequence(kernel):
 
 @pytest.mark.parametrize("kernel", KERNELS)
 def test_adaptive_gain_stays_positive_through_zero(kernel):
-    """|k + gamma sign(s[k]) sign(s[k-1])| (6.66): a crossing with k < gamma reflects k at zero."""
-    gains, _ = _adaptive_run(kernel, [1.0, -1.0, 1.0, -1.0], 3.0, 5.0, 20.0)
-    assert gains == [3.0, 2.0, 3.0, 2.0]
+    """|k + gamma sign(s[k]) sign(s[k-1])| (6.66): a crossing with k < gamma reflects k at zero
+    (1 - 5 → 4, 4 - 5 → 1); the integral of (7.21) takes every gain, k = 1 included."""
+    s = [1.0, -1.0, 1.0, -1.0]
+    gains, integrals = _adaptive_run(kernel, s, 1.0, 5.0, 20.0)
+    assert gains == [1.0, 4.0, 1.0, 4.0]
+    assert integrals == pytest.approx(np.cumsum(1e-3 * np.array(gains) * np.array(s) / 20.0), rel=1e-12)
 
 
 def _double_integrator_error(kernel, name, duration=1.5, mass_ratio=1.3, disturbance=(-2e-3, 1.5e-3)):
