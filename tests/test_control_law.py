@@ -217,3 +217,33 @@ def test_exact_model_law_refuses_a_pose_without_assembly_naming_it(kernel):
     assert elbow_gap > BENCH.chain1.l2 + BENCH.chain2.l2
     with pytest.raises(ValueError, match=r"measured \(q1, q2\) = \(0\.0, 3\.14159.*\) rad at t = 0\.25 s"):
         ctrl.step(0.25, 0.0, math.pi, 0.0, 0.0, 0.0, 0.0, X_REF, Y_REF, 0.0, 0.0, 0.0, 0.0)
+
+
+def _potential_energy(params, q1, q2):
+    """V = -Σ m g·r over the links' centres of mass (lg from the proximal joint) and the end
+    effector, from the plant's kinematics (elbows, tip) only."""
+    g = np.array(params.gravity[:2])
+    a = fivebar.elbows(params, q1, q2)
+    tip = fivebar.direct_kinematics(params, q1, q2)[:2]
+    v = -params.m0 * g @ tip
+    for chain, base, elbow in zip((params.chain1, params.chain2), fivebar.bases(params), a):
+        v -= chain.m1 * g @ (base + chain.lg1 / chain.l1 * (elbow - base))
+        v -= chain.m2 * g @ (elbow + chain.lg2 / chain.l2 * (tip - elbow))
+    return v
+
+
+@pytest.mark.parametrize("kernel", KERNELS)
+def test_exact_model_law_holds_the_robot_against_gravity(kernel):
+    """The bench upright (g = -9.81 m/s² along y, as the vertical scenes): at rest on its
+    reference (e = ė = ë = 0, r̈_d = 0), TCq commands u' = ĥ = the gravity term (7.21), which by
+    virtual work is ∂V/∂q, V the potential energy of links and end effector (central
+    differences of the kinematics, not the model's g_M)."""
+    params = dataclasses.replace(BENCH, gravity=(0.0, -9.81, 0.0))
+    q = _reference_angles()
+    ctrl = PositionController(params, get_strategy("TCq"), model="exact", kernel=kernel)
+    tau = ctrl.step(0.0, *q, 0.0, 0.0, 0.0, 0.0, X_REF, Y_REF, 0.0, 0.0, 0.0, 0.0)[:2]
+    h = 1e-6
+    grad = [(_potential_energy(params, *np.add(q, d)) - _potential_energy(params, *np.subtract(q, d))) / (2 * h)
+            for d in ((h, 0.0), (0.0, h))]
+    assert abs(grad[0]) > 0.05 and abs(grad[1]) > 0.05            # gravity loads both joints
+    assert np.allclose(tau, grad, rtol=1e-6, atol=1e-9)
