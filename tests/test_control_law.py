@@ -8,7 +8,6 @@ keeps (e = -d / (m* kp)).  Every test runs both the compiled kernel (controller/
 and the Python reference (controller/position.py).
 """
 import dataclasses
-import json
 import math
 
 import numpy as np
@@ -16,8 +15,9 @@ import pytest
 
 from controller import fastlaw
 from controller.position import PositionController
-from controller.strategies import Strategy, get_strategy
+from controller.strategies import get_strategy
 from plant import fivebar, get_preset
+from tests.support.strategies import strategy_read_from_a_file
 
 BENCH = get_preset("bench")
 KERNELS = ("fast", "python")
@@ -57,20 +57,13 @@ def test_sliding_variable_is_7_22_in_joint_space(kernel):
     assert np.allclose(s2 - s0, (-kv * d, 0.0), rtol=1e-9, atol=1e-9)
 
 
-def _strategy_read_from_a_file(name):
-    """The strategy as a scene file would give it: every field through JSON (its strings are
-    new objects, equal to the literals "x", "q" but not the same objects)."""
-    fields = json.loads(json.dumps(dataclasses.asdict(get_strategy(name))))
-    return Strategy(**{key: tuple(v) if isinstance(v, list) else v for key, v in fields.items()})
-
-
 @pytest.mark.parametrize("source", ["preset", "file"])
 @pytest.mark.parametrize("kernel", KERNELS)
 def test_sliding_variable_is_7_22_in_task_space(kernel, source):
     """Task space: r = x = FK(q) and ẍ = J q̈ + β, so changing q̈ by δ changes s by -J δ.
     J here is a central difference of the plant's forward kinematics (7.1-7.16), not the
     controller's analytic Jacobian.  The same for the strategy read from a file."""
-    strategy = get_strategy("PDMDx") if source == "preset" else _strategy_read_from_a_file("PDMDx")
+    strategy = get_strategy("PDMDx") if source == "preset" else strategy_read_from_a_file("PDMDx")
     qr = _reference_angles()
     q = (qr[0] + 0.005, qr[1] + 0.004)
     dq, ddq = (0.2, 0.1), (1.0, 2.0)
@@ -232,15 +225,16 @@ def _potential_energy(params, q1, q2):
     return v
 
 
+@pytest.mark.parametrize("name", ["TCq", "TCx"])
 @pytest.mark.parametrize("kernel", KERNELS)
-def test_exact_model_law_holds_the_robot_against_gravity(kernel):
+def test_exact_model_law_holds_the_robot_against_gravity(kernel, name):
     """The bench upright (g = -9.81 m/s² along y, as the vertical scenes): at rest on its
-    reference (e = ė = ë = 0, r̈_d = 0), TCq commands u' = ĥ = the gravity term (7.21), which by
-    virtual work is ∂V/∂q, V the potential energy of links and end effector (central
-    differences of the kinematics, not the model's g_M)."""
+    reference (e = ė = ë = 0, r̈_d = 0), TC commands u' = ĥ = the gravity term (7.21), in
+    either space, which by virtual work is τ = ∂V/∂q, V the potential energy of links and end
+    effector (central differences of the kinematics, not the model's g_M)."""
     params = dataclasses.replace(BENCH, gravity=(0.0, -9.81, 0.0))
     q = _reference_angles()
-    ctrl = PositionController(params, get_strategy("TCq"), model="exact", kernel=kernel)
+    ctrl = PositionController(params, get_strategy(name), model="exact", kernel=kernel)
     tau = ctrl.step(0.0, *q, 0.0, 0.0, 0.0, 0.0, X_REF, Y_REF, 0.0, 0.0, 0.0, 0.0)[:2]
     h = 1e-6
     grad = [(_potential_energy(params, *np.add(q, d)) - _potential_energy(params, *np.subtract(q, d))) / (2 * h)
