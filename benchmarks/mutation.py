@@ -54,7 +54,7 @@ TARGETS = {
     "plant/serial.py": ("test_serial",) + _PLANT,
     "plant/parallel.py": _PLANT,
     "plant/fivebar.py": ("test_fivebar", "test_plant_dynamics", "test_controller_kinematics"),
-    "plant/fast5r.py": _PLANT + ("test_controller_model",),     # inverse_terms: ExactModel's kernel
+    "plant/fast5r.py": _PLANT + ("test_controller_model", "test_compiled"),  # ExactModel's kernel; the scene loop
     "plant/simulator.py": ("test_plant_dynamics", "test_fmu_plant"),
     "plant/integrators.py": ("test_plant_dynamics",),
     "plant/correction.py": ("test_correction",),
@@ -62,7 +62,7 @@ TARGETS = {
     "plant/presets.py": ("test_thesis_tables", "test_balanced", "test_plant_dynamics"),   # counter_offsets: seed 001 (64)
     "motor/electrics.py": ("test_motor_electrics", "test_motor_current_control"),
     "motor/current_controller.py": ("test_motor_current_control",),
-    "motor/drive.py": ("test_motor_current_control", "test_motor_electrics", "test_fmu_motor"),
+    "motor/drive.py": ("test_motor_current_control", "test_motor_electrics", "test_fmu_motor", "test_actuated"),
     "motor/observer.py": ("test_motor_observer",),
     "motor/identification.py": ("test_motor_identification",),
     "motor/presets.py": ("test_thesis_tables", "test_motor_presets"),
