@@ -244,3 +244,19 @@ def test_compiled_report_encoders_read_the_nearest_count(counts):
         for reading, q in zip(enc, (angles[0], angles[2])):
             assert abs(reading / count - round(reading / count)) < 1e-9
             assert abs(reading - q) <= count / 2 + 1e-12
+
+
+def test_baumgarte_too_stiff_for_rk4_is_refused_naming_lambda_h():
+    """RK4's real stability limit is λh = 2.785 (|1 - z + z²/2 - z³/6 + z⁴/24| = 1); the plant
+    refuses the Baumgarte damping λ once λh passes 2, and says which λh it got: λ = 3000 /s
+    with two substeps of a 1 ms step is λh = 1.5 (taken), with one it is 3 (refused)."""
+    from plant.simulator import BAUMGARTE_RK4_LIMIT
+
+    z = -2.785293563405282
+    assert abs(1 + z + z ** 2 / 2 + z ** 3 / 6 + z ** 4 / 24) == pytest.approx(1.0, abs=1e-12)
+    assert BAUMGARTE_RK4_LIMIT == 2.0
+    bench = get_preset("bench")
+    PlantSimulator(bench, 0.0, 0.108, settings=IntegratorSettings(baumgarte=3000.0, substeps=2)).step(0.0, 0.0, 1e-3)
+    sim = PlantSimulator(bench, 0.0, 0.108, settings=IntegratorSettings(baumgarte=3000.0, substeps=1))
+    with pytest.raises(PlantError, match=r"baumgarte \* h = 3 > 2, RK4 no longer damps"):
+        sim.step(0.0, 0.0, 1e-3)
