@@ -260,3 +260,11 @@ def test_baumgarte_too_stiff_for_rk4_is_refused_naming_lambda_h():
     sim = PlantSimulator(bench, 0.0, 0.108, settings=IntegratorSettings(baumgarte=3000.0, substeps=1))
     with pytest.raises(PlantError, match=r"baumgarte \* h = 3 > 2, RK4 no longer damps"):
         sim.step(0.0, 0.0, 1e-3)
+
+
+@pytest.mark.parametrize("name", ["rtol", "atol"])
+@pytest.mark.parametrize("value", [0.0, -1e-9, float("nan")])
+def test_adaptive_tolerances_must_be_positive(name, value):
+    """dopri5's error control divides by atol + rtol |y|: a tolerance <= 0 or NaN is refused."""
+    with pytest.raises(ValueError, match=rf"{name} must be > 0, got {value!r}"):
+        IntegratorSettings(method="dopri5", **{name: value}).validate()
