@@ -2,14 +2,15 @@
 
     python -m benchmarks.mutation [--workdir out/mutation] [--sample 300] [--seed 18]
     python -m benchmarks.mutation --report                # figures and survivors so far
-    python -m benchmarks.mutation --retest survived       # re-run the survivors only (after new tests)
+    python -m benchmarks.mutation --retest survived [--job ID ...]   # re-run survivors (after new tests)
 
 Resumable: each source file is one cosmic-ray session (``WORKDIR/<file>.sqlite``); a run
-executes the pending mutants only, so an interrupted campaign goes on where it stopped.
+executes the pending mutants only, so an interrupted campaign goes on where it stopped; a
+file that changed since its session was made gets a new one (digests in ``sources.json``).
 Run it in a detached worktree (it edits the source files in place, one mutant at a time):
 
-    git worktree add --detach /work/wt18run issue18a
-    cd /work/wt18run && nohup env PYTHONPATH=$PWD python -m benchmarks.mutation > out/mutation.log 2>&1 &
+    git worktree add --detach /work/wtDrun mutation18
+    cd /work/wtDrun && nohup nice -n 10 env PYTHONPATH=$PWD python -m benchmarks.mutation > out/mutation.log 2>&1 &
 
 What runs (docs/mutation.md):
 
