@@ -2,14 +2,15 @@
 
     python -m benchmarks.mutation [--workdir out/mutation] [--sample 300] [--seed 18]
     python -m benchmarks.mutation --report                # figures and survivors so far
-    python -m benchmarks.mutation --retest survived       # re-run the survivors only (after new tests)
+    python -m benchmarks.mutation --retest survived [--job ID ...]   # re-run survivors (after new tests)
 
 Resumable: each source file is one cosmic-ray session (``WORKDIR/<file>.sqlite``); a run
-executes the pending mutants only, so an interrupted campaign goes on where it stopped.
+executes the pending mutants only, so an interrupted campaign goes on where it stopped; a
+file that changed since its session was made gets a new one (digests in ``sources.json``).
 Run it in a detached worktree (it edits the source files in place, one mutant at a time):
 
-    git worktree add --detach /work/wt18run issue18a
-    cd /work/wt18run && nohup env PYTHONPATH=$PWD python -m benchmarks.mutation > out/mutation.log 2>&1 &
+    git worktree add --detach /work/wtDrun mutation18
+    cd /work/wtDrun && nohup nice -n 10 env PYTHONPATH=$PWD python -m benchmarks.mutation > out/mutation.log 2>&1 &
 
 What runs (docs/mutation.md):
 
@@ -28,17 +29,20 @@ from __future__ import annotations
 
 import argparse
 import ast
+import hashlib
 import json
 import os
 import random
+import sqlite3
 import subprocess
 import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 
-_CTRL = ("test_control_law", "test_controller", "test_controller_fast")
+_CTRL = ("test_control_law", "test_seed_law", "test_controller", "test_controller_fast")
 _PLANT = ("test_plant_dynamics", "test_fivebar", "test_reference_lagrange")
+_WHEELED = ("test_wheeled", "test_wheeled_derivation", "test_wheeled_fmu")
 #: Source file -> the test modules that exercise it (run in this order, -x).
 TARGETS = {
     "controller/fastlaw.py": _CTRL,
@@ -51,15 +55,15 @@ TARGETS = {
     "plant/serial.py": ("test_serial",) + _PLANT,
     "plant/parallel.py": _PLANT,
     "plant/fivebar.py": ("test_fivebar", "test_plant_dynamics", "test_controller_kinematics"),
-    "plant/fast5r.py": _PLANT + ("test_controller_model",),     # inverse_terms: ExactModel's kernel
+    "plant/fast5r.py": _PLANT + ("test_controller_model", "test_compiled"),  # ExactModel's kernel; the scene loop
     "plant/simulator.py": ("test_plant_dynamics", "test_fmu_plant"),
     "plant/integrators.py": ("test_plant_dynamics",),
     "plant/correction.py": ("test_correction",),
     "plant/actuated.py": ("test_actuated",),
-    "plant/presets.py": ("test_thesis_tables", "test_plant_dynamics"),
+    "plant/presets.py": ("test_thesis_tables", "test_balanced", "test_plant_dynamics"),   # counter_offsets: seed 001 (64)
     "motor/electrics.py": ("test_motor_electrics", "test_motor_current_control"),
     "motor/current_controller.py": ("test_motor_current_control",),
-    "motor/drive.py": ("test_motor_current_control", "test_motor_electrics", "test_fmu_motor"),
+    "motor/drive.py": ("test_motor_current_control", "test_motor_electrics", "test_fmu_motor", "test_actuated"),
     "motor/observer.py": ("test_motor_observer",),
     "motor/identification.py": ("test_motor_identification",),
     "motor/presets.py": ("test_thesis_tables", "test_motor_presets"),
@@ -71,6 +75,18 @@ TARGETS = {
     "fmus/slaves/parcosim_derivator.py": ("test_fmu_controller",),
     "fmus/slaves/parcosim_trajectory.py": ("test_fmu_controller",),
     "fmus/slaves/parcosim_actuatedfivebarplant.py": ("test_actuated",),
+    "controller/balance.py": ("test_wheeled_fmu", "test_fastkernels", "test_wheeled"),
+    "controller/fastbalance.py": ("test_fastkernels", "test_wheeled_fmu"),
+    "controller/fastderivator.py": ("test_fastkernels", "test_derivators", "test_compiled"),   # derivator_step: the scene loop
+    "controller/fasttrajectory.py": ("test_fastkernels", "test_trajectories", "test_compiled"),
+    "plant/spec.py": ("test_spec", "test_spec_plant", "test_workspace"),
+    "plant/specsim.py": ("test_spec_plant", "test_spec", "test_workspace"),
+    "plant/wheeled.py": _WHEELED,
+    "plant/wheeled_kernel.py": _WHEELED,
+    "motor/fastdrive.py": ("test_fastkernels", "test_motor_current_control", "test_compiled"),
+    "fmus/slaves/parcosim_balancecontroller.py": ("test_wheeled_fmu",),
+    "fmus/slaves/parcosim_specplant.py": ("test_spec_plant",),
+    "fmus/slaves/parcosim_wheeledpendulum.py": ("test_wheeled_fmu",),
 }
 #: The control law, whose every mutant runs: functions by name; "f:for" is the for loops in f
 #: (step_reference's loop over the two components is the law; the rest is checks and torques).
@@ -81,6 +97,7 @@ LAW = {
 SAMPLE = 300
 SEED = 18
 TIMEOUT = 180.0
+GROUP_KEYS = ("mutants", "ran", "killed", "timeout", "survived", "incompetent", "pending")
 EXCLUDED_OPERATORS = ("_RShift", "_LShift", "_BitOr", "_BitAnd", "_BitXor")
 
 
@@ -126,41 +143,97 @@ def _is_law(source, mutation, law_lines) -> bool:
     return mutation.start_pos[0] in law_lines.get(source, ())
 
 
+def _digest(source: str) -> str:
+    return hashlib.sha256((ROOT / source).read_bytes()).hexdigest()
+
+
+def _init_sessions(workdir: Path) -> set:
+    """Create the session of every source file that has none, and create again the session of
+    every file that changed since its session was made (cosmic-ray names a mutant by module,
+    operator and occurrence: an edit makes the old names point elsewhere).  The files' digests
+    are kept in ``WORKDIR/sources.json``.  Returns the files whose session was (re)created."""
+    manifest_path = workdir / "sources.json"
+    manifest = json.loads(manifest_path.read_text()) if manifest_path.exists() else {}
+    created = set()
+    for source in TARGETS:
+        session, digest = _session(workdir, source), _digest(source)
+        config = _config(workdir, source)
+        if session.exists() and manifest.get(source) == digest:
+            continue
+        if session.exists():
+            print(f"{source} changed since its session was made: initialised again", flush=True)
+            session.unlink()
+        subprocess.run(["cosmic-ray", "init", str(config), str(session)], cwd=ROOT, check=True,
+                       stdout=subprocess.DEVNULL)
+        manifest[source] = digest
+        created.add(source)
+    manifest_path.write_text(json.dumps(manifest, indent=1, sort_keys=True))
+    return created
+
+
+def _quotas(pools: dict, sample: int) -> dict:
+    """Largest-remainder share of ``sample`` per file, proportional to the file's pool."""
+    total = sum(len(jobs) for jobs in pools.values())
+    exact = {source: sample * len(jobs) / total for source, jobs in pools.items()}
+    quotas = {source: int(value) for source, value in exact.items()}
+    by_remainder = sorted(exact, key=lambda source: (quotas[source] - exact[source], source))
+    for source in by_remainder[:sample - sum(quotas.values())]:
+        quotas[source] += 1
+    return quotas
+
+
 def initialise(workdir: Path, sample: int, seed: int):
-    """Create the sessions that do not exist yet, then draw the sample once (marker file)."""
+    """Create the sessions that are missing or stale, then draw the sample.
+
+    The sample is stratified by file with the same rate everywhere: file f gets its
+    largest-remainder share of ``sample`` in proportion to its pool (the mutants that are
+    neither the law nor a bitwise operator).  A file whose session was kept keeps the mutants
+    it already had in the sample (a uniform draw), trimmed or topped up to its share by a
+    seeded uniform draw (``random.Random(f"{seed}:{file}")``); a new session draws its share
+    afresh.  Every mutant of the pool thus has the same chance, and a source change costs only
+    the changed files' results.  The draw is in ``WORKDIR/sample.json``."""
     from cosmic_ray.work_db import WorkDB, use_db
     from cosmic_ray.work_item import WorkerOutcome, WorkResult
 
     workdir.mkdir(parents=True, exist_ok=True)
-    for source in TARGETS:
-        if not _session(workdir, source).exists():
-            subprocess.run(["cosmic-ray", "init", str(_config(workdir, source)), str(_session(workdir, source))],
-                           cwd=ROOT, check=True)
-        else:
-            _config(workdir, source)
+    created = _init_sessions(workdir)
     marker = workdir / "sample.json"
-    if marker.exists():
+    if marker.exists() and not created and json.loads(marker.read_text()).get("sample") == sample:
         return
     law_lines = {source: _law_lines(source) for source in LAW}
-    pool, skipped = [], {source: [] for source in TARGETS}
+    pools, excluded, in_sample = {}, {}, {}
     for source in TARGETS:
         with use_db(str(_session(workdir, source)), WorkDB.Mode.open) as db:
+            skipped = {job for job, result in db.results if result.worker_outcome == "skipped"}
+            pools[source], excluded[source] = [], []
             for item in db.work_items:
                 mutation = item.mutations[0]
                 if mutation.operator_name.endswith(EXCLUDED_OPERATORS):
-                    skipped[source].append(item.job_id)
+                    excluded[source].append(item.job_id)
                 elif not _is_law(source, mutation, law_lines):
-                    pool.append((source, item.job_id))
-    pool.sort()
-    chosen = set(random.Random(seed).sample(pool, min(sample, len(pool))))
-    for source, job in pool:
-        if (source, job) not in chosen:
-            skipped[source].append(job)
-    for source, jobs in skipped.items():
+                    pools[source].append(item.job_id)
+            pools[source].sort()
+            in_sample[source] = [] if source in created else [job for job in pools[source] if job not in skipped]
+    quotas = _quotas(pools, sample)
+    drawn = {}
+    for source, pool in pools.items():
+        rng = random.Random(f"{seed}:{source}")
+        kept = in_sample[source]
+        if len(kept) > quotas[source]:
+            kept = sorted(rng.sample(kept, quotas[source]))
+        rest = sorted(set(pool) - set(kept))
+        drawn[source] = sorted(kept + rng.sample(rest, quotas[source] - len(kept)))
+        unsampled = sorted(set(pool) - set(drawn[source]))
         with use_db(str(_session(workdir, source)), WorkDB.Mode.open) as db:
-            db.set_multiple_results(jobs, WorkResult(worker_outcome=WorkerOutcome.SKIPPED))
-    marker.write_text(json.dumps({"seed": seed, "sample": sample, "pool": len(pool),
-                                  "sampled": sorted(f"{s}:{j}" for s, j in chosen)}, indent=1))
+            db.set_multiple_results(excluded[source] + unsampled,
+                                    WorkResult(worker_outcome=WorkerOutcome.SKIPPED))
+        with sqlite3.connect(_session(workdir, source)) as con:     # newly drawn: pending again
+            con.executemany("DELETE FROM work_results WHERE job_id = ? AND worker_outcome = 'SKIPPED'",
+                            [(job,) for job in drawn[source]])
+    marker.write_text(json.dumps({
+        "seed": seed, "sample": sample, "pool": sum(map(len, pools.values())),
+        "files": {source: {"pool": len(pools[source]), "quota": quotas[source]} for source in pools},
+        "sampled": sorted(f"{source}:{job}" for source, jobs in drawn.items() for job in jobs)}, indent=1))
 
 
 def _restore_sources(workdir: Path):
@@ -190,9 +263,10 @@ def execute(workdir: Path, only=None):
         _restore_sources(workdir)
 
 
-def retest(workdir: Path, outcome: str, only=None):
+def retest(workdir: Path, outcome: str, only=None, jobs=None):
     """Run again the mutants whose result has this test outcome (e.g. ``survived``, after new
-    tests) and record the new result; the pending mutants are left alone.  A mutant whose
+    tests) and record the new result; the pending mutants are left alone; ``jobs``: these job
+    ids only (e.g. not the survivors already argued equivalent).  A mutant whose
     line no longer reads as it did (the code was changed or removed) keeps its result and is
     listed as such."""
     from cosmic_ray.mutating import mutate_and_test
@@ -207,7 +281,7 @@ def retest(workdir: Path, outcome: str, only=None):
         lines = (ROOT / source).read_text().splitlines()
         with use_db(str(_session(workdir, source)), WorkDB.Mode.open) as db:
             for item, result in db.completed_work_items:
-                if result.test_outcome != outcome:
+                if result.test_outcome != outcome or (jobs and item.job_id not in jobs):
                     continue
                 mutation = item.mutations[0]
                 removed = [line[1:] for line in (result.diff or "").splitlines()
@@ -230,6 +304,8 @@ def report(workdir: Path) -> dict:
 
     law_lines = {source: _law_lines(source) for source in LAW}
     rows, survivors = {}, []
+    groups = {f"control law, {source}": dict.fromkeys(GROUP_KEYS, 0) for source in LAW}
+    groups["seeded sample of the other mutants"] = dict.fromkeys(GROUP_KEYS, 0)
     for source in TARGETS:
         path = _session(workdir, source)
         if not path.exists():
@@ -245,6 +321,7 @@ def report(workdir: Path) -> dict:
                 result = results.get(item.job_id)
                 if result is None:
                     counts["pending"] += 1
+                    groups[f"control law, {source}" if law else "seeded sample of the other mutants"]["pending"] += 1
                 elif result.worker_outcome == "skipped":
                     counts["skipped"] += 1
                     continue
@@ -253,13 +330,18 @@ def report(workdir: Path) -> dict:
                     if outcome == "killed" and result.output == "timeout":
                         outcome = "timeout"
                     counts[outcome] += 1
+                    group = groups[f"control law, {source}" if law else "seeded sample of the other mutants"]
+                    group[outcome] += 1
+                    group["ran"] += 1
                     if outcome == "survived":
                         survivors.append({"file": source, "line": mutation.start_pos[0], "job": item.job_id,
                                           "operator": mutation.operator_name, "law": law,
                                           "diff": result.diff})
                 counts["law"] += law
         rows[source] = counts
-    return {"files": rows, "survivors": survivors}
+    for group in groups.values():
+        group["mutants"] = group["ran"] + group["pending"]
+    return {"files": rows, "groups": groups, "survivors": survivors}
 
 
 def print_report(data: dict):
@@ -271,6 +353,9 @@ def print_report(data: dict):
         for k in keys:
             total[k] += counts[k]
     print(f"{'total':46s}" + "".join(f"{total[k]:12d}" for k in keys))
+    print(f"\n{'group':46s}" + "".join(f"{k:>12s}" for k in GROUP_KEYS))
+    for name, counts in data["groups"].items():
+        print(f"{name:46s}" + "".join(f"{counts[k]:12d}" for k in GROUP_KEYS))
     print(f"\n{len(data['survivors'])} survivors:")
     for s in data["survivors"]:
         diff = "\n".join(line for line in (s["diff"] or "").splitlines()
@@ -286,6 +371,7 @@ def main(argv=None):
     parser.add_argument("--only", nargs="*", help="run these source files only")
     parser.add_argument("--report", action="store_true", help="print the figures, run nothing")
     parser.add_argument("--retest", metavar="OUTCOME", help="run again the mutants with this outcome only")
+    parser.add_argument("--job", nargs="*", help="with --retest: these job ids only")
     args = parser.parse_args(argv)
     if args.report:
         data = report(args.workdir)
@@ -294,7 +380,7 @@ def main(argv=None):
         return 0
     initialise(args.workdir, args.sample, args.seed)
     if args.retest:
-        retest(args.workdir, args.retest, args.only)
+        retest(args.workdir, args.retest, args.only, args.job)
     else:
         execute(args.workdir, args.only)
     print_report(report(args.workdir))

@@ -72,7 +72,9 @@ def pack(params: WheeledParams, model: str = "exact", yaw: bool = True) -> np.nd
     """The kernel's parameter record (shape (1,), dtype :data:`plant.wheeled_kernel.PARAMS`)."""
     if model not in MODELS:
         raise ValueError(f"model = {model!r}; valid: {', '.join(MODELS)}")
-    record = np.zeros(1, dtype=kernel.PARAMS)
+    # a recarray: its element reads p.R in plain Python too (NUMBA_DISABLE_JIT, the mutation
+    # campaign); numba types it as the same record array
+    record = np.zeros(1, dtype=kernel.PARAMS).view(np.recarray)
     for name, value in asdict(params.validate()).items():
         record[name] = value
     record["nonholonomic"] = 1.0 if model == "exact" else 0.0

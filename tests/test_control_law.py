@@ -7,14 +7,17 @@ disturbance, the integral of k sat(s/phi) (7.21) removes the steady error that t
 keeps (e = -d / (m* kp)).  Every test runs both the compiled kernel (controller/fastlaw.py)
 and the Python reference (controller/position.py).
 """
+import dataclasses
 import math
 
 import numpy as np
 import pytest
 
+from controller import fastlaw
 from controller.position import PositionController
 from controller.strategies import get_strategy
 from plant import fivebar, get_preset
+from tests.support.strategies import strategy_read_from_a_file
 
 BENCH = get_preset("bench")
 KERNELS = ("fast", "python")
@@ -28,8 +31,9 @@ def _reference_angles():
 
 
 def _s_after_one_sample(kernel, name, q, dq, ddq):
-    """s of a fresh controller holding (X_REF, Y_REF) at rest, for the measured q, dq, ddq."""
-    ctrl = PositionController(BENCH, get_strategy(name), kernel=kernel)
+    """s of a fresh controller holding (X_REF, Y_REF) at rest, for the measured q, dq, ddq
+    (name: a strategy's name or the strategy itself)."""
+    ctrl = PositionController(BENCH, get_strategy(name) if isinstance(name, str) else name, kernel=kernel)
     ctrl.step(0.0, *q, *dq, *ddq, X_REF, Y_REF, 0.0, 0.0, 0.0, 0.0)
     return np.array(ctrl.s), np.array(ctrl.e), ctrl
 
@@ -53,25 +57,52 @@ def test_sliding_variable_is_7_22_in_joint_space(kernel):
     assert np.allclose(s2 - s0, (-kv * d, 0.0), rtol=1e-9, atol=1e-9)
 
 
+@pytest.mark.parametrize("source", ["preset", "file"])
 @pytest.mark.parametrize("kernel", KERNELS)
-def test_sliding_variable_is_7_22_in_task_space(kernel):
+def test_sliding_variable_is_7_22_in_task_space(kernel, source):
     """Task space: r = x = FK(q) and ẍ = J q̈ + β, so changing q̈ by δ changes s by -J δ.
     J here is a central difference of the plant's forward kinematics (7.1-7.16), not the
-    controller's analytic Jacobian."""
+    controller's analytic Jacobian.  The same for the strategy read from a file."""
+    strategy = get_strategy("PDMDx") if source == "preset" else strategy_read_from_a_file("PDMDx")
     qr = _reference_angles()
     q = (qr[0] + 0.005, qr[1] + 0.004)
     dq, ddq = (0.2, 0.1), (1.0, 2.0)
-    s0, _, _ = _s_after_one_sample(kernel, "PDMDx", q, dq, ddq)
-    h = 1e-6
+    s0, _, _ = _s_after_one_sample(kernel, strategy, q, dq, ddq)
+    delta = np.array([0.7, -0.3])
+    s1, _, _ = _s_after_one_sample(kernel, strategy, q, dq, tuple(np.add(ddq, delta)))
+    assert np.allclose(s1 - s0, -_jacobian_by_differences(q) @ delta, rtol=1e-6, atol=1e-9)
+
+
+def _jacobian_by_differences(q, h=1e-6):
+    """∂(x, y)/∂(q1, q2) by central differences of the plant's forward kinematics (7.1-7.16)."""
     J = np.empty((2, 2))
     for j in (0, 1):
         plus, minus = list(q), list(q)
         plus[j] += h
         minus[j] -= h
         J[:, j] = (fivebar.direct_kinematics(BENCH, *plus) - fivebar.direct_kinematics(BENCH, *minus))[:2] / (2 * h)
-    delta = np.array([0.7, -0.3])
-    s1, _, _ = _s_after_one_sample(kernel, "PDMDx", q, dq, tuple(np.add(ddq, delta)))
-    assert np.allclose(s1 - s0, -J @ delta, rtol=1e-6, atol=1e-9)
+    return J
+
+
+def test_compiled_loop_entry_reads_its_inputs_in_the_documented_order():
+    """The compiled scene loop calls the law as ``law_io(buf, x, h)`` with
+    x = [q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d | tau1, tau2, ...].
+    PDx has k = 0, Ĥ = m*·1, ĥ = 0, so τ = Jᵀ m* (ẍ_d + kv ė + kp e) (7.21): a change δ of the
+    reference acceleration (ẍ_d, ÿ_d) changes τ by m* Jᵀ δ, whatever the output slots hold."""
+    qr = _reference_angles()
+    q = (qr[0] + 0.005, qr[1] + 0.004)
+
+    def torques(ddx_d, ddy_d):
+        ctrl = PositionController(BENCH, get_strategy("PDx"), kernel="fast")
+        x = np.full(18, 7.0)                            # output slots: stale values from a last sample
+        x[:12] = (*q, 0.2, 0.1, 1.0, 2.0, X_REF, Y_REF, 0.0, 0.0, ddx_d, ddy_d)
+        assert fastlaw.law_io(ctrl._buf, x, 1e-3) == fastlaw.OK
+        return x[12:14].copy(), ctrl.strategy.m_star
+
+    tau0, m_star = torques(0.0, 0.0)
+    delta = np.array([0.3, -0.4])
+    tau1, _ = torques(*delta)
+    assert np.allclose(tau1 - tau0, m_star * _jacobian_by_differences(q).T @ delta, rtol=1e-6, atol=1e-12)
 
 
 def _adaptive_run(kernel, s_sequence, k0, gamma, phi):
@@ -106,9 +137,12 @@ def test_adaptive_gain_follows_6_66_on_a_known_sequence(kernel):
 
 @pytest.mark.parametrize("kernel", KERNELS)
 def test_adaptive_gain_stays_positive_through_zero(kernel):
-    """|k + gamma sign(s[k]) sign(s[k-1])| (6.66): a crossing with k < gamma reflects k at zero."""
-    gains, _ = _adaptive_run(kernel, [1.0, -1.0, 1.0, -1.0], 3.0, 5.0, 20.0)
-    assert gains == [3.0, 2.0, 3.0, 2.0]
+    """|k + gamma sign(s[k]) sign(s[k-1])| (6.66): a crossing with k < gamma reflects k at zero
+    (1 - 5 → 4, 4 - 5 → 1); the integral of (7.21) takes every gain, k = 1 included."""
+    s = [1.0, -1.0, 1.0, -1.0]
+    gains, integrals = _adaptive_run(kernel, s, 1.0, 5.0, 20.0)
+    assert gains == [1.0, 4.0, 1.0, 4.0]
+    assert integrals == pytest.approx(np.cumsum(1e-3 * np.array(gains) * np.array(s) / 20.0), rel=1e-12)
 
 
 def _double_integrator_error(kernel, name, duration=1.5, mass_ratio=1.3, disturbance=(-2e-3, 1.5e-3)):
@@ -164,3 +198,46 @@ def test_pd_strategy_needs_a_positive_m_star():
     """u' = m* (...) (7.21, PD): m* = 0 would command no torque at all."""
     with pytest.raises(ValueError, match=r"m_star = 0.0 must be > 0 for the PD strategy PDq"):
         PositionController(BENCH, get_strategy("PDq").with_(m_star=0.0))
+
+
+@pytest.mark.parametrize("kernel", KERNELS)
+def test_exact_model_law_refuses_a_pose_without_assembly_naming_it(kernel):
+    """q1 = 0, q2 = pi puts the elbows at (±(l0 + l11), 0), 0.34 m apart, farther than the two
+    distal links (2 × 0.16 m) reach (002 eq. 7-11): there is no end effector, so no task state
+    and no model terms.  The sample is refused with the measured angles and the time."""
+    ctrl = PositionController(BENCH, get_strategy("TCx"), model="exact", kernel=kernel)
+    elbow_gap = 2 * BENCH.l0 + BENCH.chain1.l1 + BENCH.chain2.l1
+    assert elbow_gap > BENCH.chain1.l2 + BENCH.chain2.l2
+    with pytest.raises(ValueError, match=r"measured \(q1, q2\) = \(0\.0, 3\.14159.*\) rad at t = 0\.25 s"):
+        ctrl.step(0.25, 0.0, math.pi, 0.0, 0.0, 0.0, 0.0, X_REF, Y_REF, 0.0, 0.0, 0.0, 0.0)
+
+
+def _potential_energy(params, q1, q2):
+    """V = -Σ m g·r over the links' centres of mass (lg from the proximal joint) and the end
+    effector, from the plant's kinematics (elbows, tip) only."""
+    g = np.array(params.gravity[:2])
+    a = fivebar.elbows(params, q1, q2)
+    tip = fivebar.direct_kinematics(params, q1, q2)[:2]
+    v = -params.m0 * g @ tip
+    for chain, base, elbow in zip((params.chain1, params.chain2), fivebar.bases(params), a):
+        v -= chain.m1 * g @ (base + chain.lg1 / chain.l1 * (elbow - base))
+        v -= chain.m2 * g @ (elbow + chain.lg2 / chain.l2 * (tip - elbow))
+    return v
+
+
+@pytest.mark.parametrize("name", ["TCq", "TCx"])
+@pytest.mark.parametrize("kernel", KERNELS)
+def test_exact_model_law_holds_the_robot_against_gravity(kernel, name):
+    """The bench upright (g = -9.81 m/s² along y, as the vertical scenes): at rest on its
+    reference (e = ė = ë = 0, r̈_d = 0), TC commands u' = ĥ = the gravity term (7.21), in
+    either space, which by virtual work is τ = ∂V/∂q, V the potential energy of links and end
+    effector (central differences of the kinematics, not the model's g_M)."""
+    params = dataclasses.replace(BENCH, gravity=(0.0, -9.81, 0.0))
+    q = _reference_angles()
+    ctrl = PositionController(params, get_strategy(name), model="exact", kernel=kernel)
+    tau = ctrl.step(0.0, *q, 0.0, 0.0, 0.0, 0.0, X_REF, Y_REF, 0.0, 0.0, 0.0, 0.0)[:2]
+    h = 1e-6
+    grad = [(_potential_energy(params, *np.add(q, d)) - _potential_energy(params, *np.subtract(q, d))) / (2 * h)
+            for d in ((h, 0.0), (0.0, h))]
+    assert abs(grad[0]) > 0.05 and abs(grad[1]) > 0.05            # gravity loads both joints
+    assert np.allclose(tau, grad, rtol=1e-6, atol=1e-9)

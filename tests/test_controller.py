@@ -10,6 +10,7 @@ from controller.strategies import STRATEGY_NAMES, get_strategy
 from controller.trajectories import circle, hold
 from plant import IntegratorSettings, PlantSimulator, fivebar, get_preset
 from plant.parallel import inverse_dynamics_terms, mechanism_state
+from tests.support.strategies import strategy_read_from_a_file
 
 BENCH = get_preset("bench")
 
@@ -95,11 +96,15 @@ def test_k_zero_is_computed_torque(space, model, tmp_path, monkeypatch):
     assert a == b
 
 
+@pytest.mark.parametrize("source", ["preset", "file"])
+@pytest.mark.parametrize("kernel", ["fast", "python"])
 @pytest.mark.parametrize("space", ["q", "x"])
-def test_computed_torque_is_the_inverse_dynamics_of_the_commanded_acceleration(space):
-    """TC with the exact model: tau = inverse dynamics (5.74) of ddr_d + kv ė + kp e."""
+def test_computed_torque_is_the_inverse_dynamics_of_the_commanded_acceleration(space, kernel, source):
+    """TC with the exact model: tau = inverse dynamics (5.74) of ddr_d + kv ė + kp e; both
+    implementations of the law, the strategy as a preset and as read from a file."""
     meas, ref = sample_inputs()
-    ctrl = PositionController(BENCH, get_strategy(f"TC{space}"), model="exact")
+    strategy = get_strategy(f"TC{space}") if source == "preset" else strategy_read_from_a_file(f"TC{space}")
+    ctrl = PositionController(BENCH, strategy, model="exact", kernel=kernel)
     tau1, tau2, i1, i2 = ctrl.step(0.0, *meas, *ref)
     kin = ctrl.kin
     x, y, dx, dy, _, _, J, beta = kin.task_state(*meas)

@@ -141,3 +141,22 @@ def test_velocity_terms_are_passive(kernel):
         dH = (H(delta) - H(-delta)) / (2 * delta)
         assert v @ np.array([h0, h1]) == pytest.approx(0.5 * v @ dH @ v, rel=1e-6, abs=1e-12)
         checked += 1
+
+
+def test_tabulation_error_checks_h_in_directions_all_around(monkeypatch):
+    """ĥ's velocity part is a quadratic form in (dx, dy): its table error depends on the
+    direction, so :func:`tabulation_error` draws |v| = 1 m/s in a direction uniform on the
+    circle (its docstring), not from one sector where the error could be smaller."""
+    seen = []
+    exact_terms = ExactModel.terms
+
+    def recording(self, x, y, dx, dy):
+        seen.append((dx, dy))
+        return exact_terms(self, x, y, dx, dy)
+
+    monkeypatch.setattr(ExactModel, "terms", recording)
+    tabulation_error(TabulatedModel(BENCH, 0.01, REGION, cache=False), samples=40)
+    v = np.array(seen)
+    assert len(v) == 40 and np.allclose(np.hypot(v[:, 0], v[:, 1]), 1.0, rtol=1e-12)
+    quadrants = {(bool(dx > 0), bool(dy > 0)) for dx, dy in v}
+    assert len(quadrants) == 4

@@ -138,3 +138,16 @@ def test_controller_fmu_refuses_bad_input(built_fmus):
     message = fmu.refused_step(1e-3, **dict(good, q1=ang[0], q2=ang[2], x_d=0.0, y_d=0.25))
     assert "outside the tabulated region" in message and "t = 0 s" in message
     fmu.close()
+
+
+@pytest.mark.parametrize("model, parameters, message", [
+    ("Trajectory", {"kind": "circle", "frequency": 0.0}, "parameter frequency = 0.0 Hz must be > 0"),
+    ("Derivator", {"fc_vel": 500.0}, "parameter fc_vel = 500.0 Hz must be below 1/(2T) = 500 Hz"),
+    ("PositionController", {"T": 5e-10}, "parameter T = 5e-10 s must be >= 1e-09 s"),
+])
+def test_parameters_on_the_edge_are_refused(built_fmus, model, parameters, message):
+    """The bounds themselves: a circle at 0 Hz does not move, a filter at the Nyquist
+    frequency 1/(2T) (T = 1 ms) has no discrete counterpart, a sample time below the
+    shortest step cannot be taken."""
+    fmu = FmuInstance(built_fmus[model], parameters)
+    assert message in fmu.refused_step(1e-3)

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from motor import Drive, coulomb_friction, electrical_step_coefficients, motor1, motor2
+from motor import Drive, armature_current_rate, coulomb_friction, electrical_step_coefficients, motor1, motor2
 
 H = 1e-3
 
@@ -138,3 +138,25 @@ def test_mean_current_coefficients_are_the_step_average():
         assert w_i * i0 + w_u * u == pytest.approx(0.5 * (i0 + i1), rel=1e-14)
     assert mean_current_coefficients(R, 0.667e-3, 1e-3, "quasi_static") == (0.0, 1.0 / R)
     assert mean_current_coefficients(R, 0.0, 1e-3, "exact") == (0.0, 1.0 / R)
+
+
+@pytest.mark.parametrize("params", [motor1, motor2])
+def test_armature_current_rate_gives_the_rl_circuit_exponential(params):
+    """L di/dt = v - R i - ke omega (4.162) at constant v and omega is the RL circuit:
+    i(t) = i_ss + (i0 - i_ss) exp(-R t / L), i_ss = (v - ke omega) / R.  Integrated with
+    classical RK4 (600 steps over three time constants, error ~1e-10) from i0 = -0.2 A."""
+    v, omega, i0 = 6.0, 40.0, -0.2
+    i_ss, tau = (v - params.ke * omega) / params.R, params.L / params.R
+    n, t_end = 600, 3.0 * tau
+    h, i = t_end / n, i0
+
+    def rate(current):
+        return armature_current_rate(current, v, omega, params)
+
+    for _ in range(n):
+        k1 = rate(i)
+        k2 = rate(i + 0.5 * h * k1)
+        k3 = rate(i + 0.5 * h * k2)
+        k4 = rate(i + h * k3)
+        i += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    assert i == pytest.approx(i_ss + (i0 - i_ss) * math.exp(-3.0), rel=1e-7)

@@ -90,9 +90,10 @@ def test_recovers_known_parameters_from_noisy_synthetic_data():
 
 
 @pytest.mark.parametrize("kwargs, message", [
-    (dict(u=[1, 2, math.nan], i=[1, 1, 1], omega=[1, 2, 3]), r"u\[2\] must be a finite number, got nan"),
+    (dict(u=[1, math.nan, math.inf], i=[1, 1, 1], omega=[1, 2, 3]), r"u\[1\] must be a finite number, got nan"),
     (dict(u=[1, 2, 3], i=[1, 1], omega=[1, 2, 3]), "same length"),
     (dict(u=[1, 2, 3], i=[1, 1, 1], omega=[1, 0, 3]), r"omega\[1\] must be > 0"),
+    (dict(u=[1, 2, 3], i=[1, 1, 1], omega=[1, 2, -3]), r"omega\[2\] must be > 0"),    # (D.3): speeds > 0
     (dict(u=[1, 1, 1], i=[1, 1, 1], omega=[2, 2, 2]), "normal equations are singular"),
     (dict(u=[1, 2], i=[1, 1.1], omega=[1, 2], kt_over_ke=-1), "kt_over_ke must be > 0, got -1"),
     (dict(u=[1, 2], i=[1, 1.1], omega=[1, 2], settling_time=0), "settling_time must be > 0, got 0"),

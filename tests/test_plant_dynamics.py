@@ -226,3 +226,45 @@ def test_compiled_report_measures_are_the_singularity_sines():
         s = fivebar.singularity(params, q[0], q[1])
         measures = out[fast5r.REPORT_MEASURES:fast5r.REPORT_MEASURES + 3]
         assert np.allclose(np.abs(measures), np.abs([s.serial1, s.serial2, s.parallel]), rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("counts", [7, 4096])
+def test_compiled_report_encoders_read_the_nearest_count(counts):
+    """An encoder of N counts per turn reads the multiple of 2π/N nearest to the actuated
+    angle (inverse kinematics of the pose): |enc - q| ≤ count/2.  N = 7 makes a count 0.9 rad,
+    so rounding down or up by half a count cannot pass."""
+    bench = get_preset("bench")
+    kernel = FastKernel(bench)
+    count = 2 * math.pi / counts
+    out = np.empty(fast5r.REPORT_SIZE)
+    for x, y in ((0.0, 0.108), (0.03, 0.15), (-0.04, 0.2), (0.05, 0.12), (-0.01, 0.17)):
+        angles = fivebar.inverse_kinematics(bench, x, y)
+        fast5r.report(kernel.p, PlantSimulator(bench, x, y).y, count, out)
+        enc = out[fast5r.REPORT_OUTPUTS + 8:fast5r.REPORT_OUTPUTS + 10]
+        for reading, q in zip(enc, (angles[0], angles[2])):
+            assert abs(reading / count - round(reading / count)) < 1e-9
+            assert abs(reading - q) <= count / 2 + 1e-12
+
+
+def test_baumgarte_too_stiff_for_rk4_is_refused_naming_lambda_h():
+    """RK4's real stability limit is λh = 2.785 (|1 - z + z²/2 - z³/6 + z⁴/24| = 1); the plant
+    refuses the Baumgarte damping λ once λh passes 2, and says which λh it got: λ = 3000 /s
+    with two substeps of a 1 ms step is λh = 1.5 (taken), with one it is 3 (refused)."""
+    from plant.simulator import BAUMGARTE_RK4_LIMIT
+
+    z = -2.785293563405282
+    assert abs(1 + z + z ** 2 / 2 + z ** 3 / 6 + z ** 4 / 24) == pytest.approx(1.0, abs=1e-12)
+    assert BAUMGARTE_RK4_LIMIT == 2.0
+    bench = get_preset("bench")
+    PlantSimulator(bench, 0.0, 0.108, settings=IntegratorSettings(baumgarte=3000.0, substeps=2)).step(0.0, 0.0, 1e-3)
+    sim = PlantSimulator(bench, 0.0, 0.108, settings=IntegratorSettings(baumgarte=3000.0, substeps=1))
+    with pytest.raises(PlantError, match=r"baumgarte \* h = 3 > 2, RK4 no longer damps"):
+        sim.step(0.0, 0.0, 1e-3)
+
+
+@pytest.mark.parametrize("name", ["rtol", "atol"])
+@pytest.mark.parametrize("value", [0.0, -1e-9, float("nan")])
+def test_adaptive_tolerances_must_be_positive(name, value):
+    """dopri5's error control divides by atol + rtol |y|: a tolerance <= 0 or NaN is refused."""
+    with pytest.raises(ValueError, match=rf"{name} must be > 0, got {value!r}"):
+        IntegratorSettings(method="dopri5", **{name: value}).validate()

@@ -1,5 +1,9 @@
 """Seed 001's sliding-mode law (section 1.2; strategies SMCq, SMCx): its closed loop against
-the analytic sliding dynamics, and its relation to computed torque (docs/controller.md)."""
+the analytic sliding dynamics, and its relation to computed torque (docs/controller.md).
+
+Both implementations are run against these properties, the compiled law (``kernel="fast"``,
+controller/fastlaw.py) and the Python reference (``kernel="python"``, controller/position.py);
+nothing compares one with the other."""
 import math
 
 import numpy as np
@@ -21,12 +25,15 @@ def analytic_s(s0, k, phi, t):
     return np.where(t < reach, s0 - math.copysign(k, s0) * t, inside * np.exp(-(k / phi) * (t - reach)))
 
 
-def sliding_deviation(name, dt, duration=0.06):
+KERNELS = ("fast", "python")
+
+
+def sliding_deviation(name, dt, kernel="fast", duration=0.06):
     """Exact model, ideal actuators (torques held over dt), the bench started 2 mm off the circle:
     the largest deviation of the measured s = de + lam e from :func:`analytic_s`, and max |s|."""
     trajectory = circle()
     sim = PlantSimulator(BENCH, *trajectory.start_point, settings=IntegratorSettings(substeps=4))
-    ctrl = PositionController(BENCH, get_strategy(name), model="exact")
+    ctrl = PositionController(BENCH, get_strategy(name), model="exact", kernel=kernel)
     st = ctrl.strategy
     measured, times = [], []
     n = int(round(duration / dt))
@@ -47,20 +54,22 @@ def sliding_deviation(name, dt, duration=0.06):
     return worst, peak, measured
 
 
+@pytest.mark.parametrize("kernel", KERNELS)
 @pytest.mark.parametrize("name", ["SMCx", "SMCq"])
-def test_sliding_variable_reaches_the_layer_at_rate_k_then_decays(name):
+def test_sliding_variable_reaches_the_layer_at_rate_k_then_decays(name, kernel):
     """With the exact model the law makes ds/dt = -k sat(s/phi) for s = de + lam e; the
     deviation comes from the 1 ms zero-order hold only: O(h), 3-5x smaller at h/4."""
-    dev_1ms, peak, measured = sliding_deviation(name, 1e-3)
-    dev_quarter, _, _ = sliding_deviation(name, 2.5e-4)
+    dev_1ms, peak, measured = sliding_deviation(name, 1e-3, kernel)
+    dev_quarter, _, _ = sliding_deviation(name, 2.5e-4, kernel)
     st = get_strategy(name)
     assert np.abs(measured[0]).max() > 1.5 * st.phi      # the start is outside the layer: both phases seen
     assert dev_1ms < 0.1 * peak
     assert 3.0 < dev_1ms / dev_quarter < 5.0
 
 
+@pytest.mark.parametrize("kernel", KERNELS)
 @pytest.mark.parametrize("space", ["q", "x"])
-def test_inside_its_layer_with_k_equal_lam_phi_it_is_computed_torque(space):
+def test_inside_its_layer_with_k_equal_lam_phi_it_is_computed_torque(space, kernel):
     """Inside |s| < phi the law is u' = H (ddr_d + (lam + k/phi) de + (lam k/phi) e) + h: with
     k = lam phi, kv = 2 lam and kp = lam^2, i.e. TC with the same lam (7.21, k = 0)."""
     tc = get_strategy(f"TC{space}")
@@ -71,8 +80,8 @@ def test_inside_its_layer_with_k_equal_lam_phi_it_is_computed_torque(space):
         a = fivebar.inverse_kinematics(BENCH, x, y)
         measured = (a[0] + rng.normal(scale=0.01), a[2] + rng.normal(scale=0.01), *rng.normal(size=2), 0.0, 0.0)
         reference = (x, y, *rng.normal(scale=0.2, size=2), *rng.normal(size=2))
-        u_tc = PositionController(BENCH, tc, model="exact").step(0.0, *measured, *reference)
-        u_smc = PositionController(BENCH, smc, model="exact").step(0.0, *measured, *reference)
+        u_tc = PositionController(BENCH, tc, model="exact", kernel=kernel).step(0.0, *measured, *reference)
+        u_smc = PositionController(BENCH, smc, model="exact", kernel=kernel).step(0.0, *measured, *reference)
         np.testing.assert_allclose(u_smc, u_tc, rtol=1e-9, atol=1e-12)
 
 

@@ -125,3 +125,21 @@ def test_bad_parameters_named():
         WheeledPendulum(initial=dict(psi=2.0))
     with pytest.raises(ValueError, match="model = 'other'"):
         WheeledPendulum(model="other")
+
+
+def test_balance_design_body_torque_column_is_the_plant_s_response():
+    """The observer's process noise enters as a body torque through d x'/d tau_d at the
+    upright (controller.balance); the plant's own derivative (seed 000 (18)-(20), exact
+    model) gives that column: the accelerations per N m of tau_d, nothing on the angles."""
+    from controller.balance import _body_torque_column
+    from plant.wheeled import pack
+
+    prm = pack(SEED)
+    y, out = np.zeros(K.N_STATE), np.zeros(K.N_STATE)
+    rates = []
+    for tau_d in (1.0, -1.0):
+        K.derivative(prm[0], y, 0.0, 0.0, tau_d, out)
+        rates.append(out[[K.THETA, K.PSI, K.PHI, K.DTHETA, K.DPSI, K.DPHI]].copy())
+    column = (rates[0] - rates[1]) / 2.0
+    assert abs(column[4]) > 0.0                   # a body torque tilts the body
+    np.testing.assert_allclose(_body_torque_column(None), column, rtol=1e-12, atol=1e-15)

@@ -173,3 +173,14 @@ def test_generic_commands_on_a_pendulum_scene(tmp_path, capsys):
     assert main(["trade", "pendulum_push", "--quick", "--out", str(tmp_path / "t")]) == 0
     text = (tmp_path / "t" / "trade.md").read_text()
     assert "| defaults |" in text and "| ideal electrics |" in text
+
+
+@pytest.mark.parametrize("T", [0.5e-5, 1.5, float("nan")])
+def test_balance_sample_time_out_of_range_is_refused(T):
+    """The balance controller's T must lie in [MIN_SAMPLE_TIME, 1] s, both ends."""
+    from controller.balance import MIN_SAMPLE_TIME, BalanceSettings
+
+    assert MIN_SAMPLE_TIME == 1e-5
+    with pytest.raises(ValueError, match=r"parameter T = .* s must be in \[1e-05, 1\] s"):
+        BalanceSettings(T=T).validate()
+    BalanceSettings(T=MIN_SAMPLE_TIME).validate()
