@@ -228,22 +228,23 @@ def test_compiled_report_measures_are_the_singularity_sines():
         assert np.allclose(np.abs(measures), np.abs([s.serial1, s.serial2, s.parallel]), rtol=0, atol=1e-12)
 
 
+@pytest.mark.parametrize("offsets", [(0.0, 0.0), (0.31, -0.17)])
 @pytest.mark.parametrize("counts", [7, 4096])
-def test_compiled_report_encoders_read_the_nearest_count(counts):
-    """An encoder of N counts per turn reads the multiple of 2π/N nearest to the actuated
-    angle (inverse kinematics of the pose): |enc - q| ≤ count/2.  N = 7 makes a count 0.9 rad,
-    so rounding down or up by half a count cannot pass."""
+def test_compiled_report_encoders_read_the_nearest_count(counts, offsets):
+    """An encoder of N counts per turn with zero error o reads the multiple of 2π/N nearest to
+    the actuated angle plus o (inverse kinematics of the pose): |enc - (q + o)| ≤ count/2.
+    N = 7 makes a count 0.9 rad, so rounding down or up by half a count cannot pass."""
     bench = get_preset("bench")
     kernel = FastKernel(bench)
     count = 2 * math.pi / counts
     out = np.empty(fast5r.REPORT_SIZE)
     for x, y in ((0.0, 0.108), (0.03, 0.15), (-0.04, 0.2), (0.05, 0.12), (-0.01, 0.17)):
         angles = fivebar.inverse_kinematics(bench, x, y)
-        fast5r.report(kernel.p, PlantSimulator(bench, x, y).y, count, out)
+        fast5r.report(kernel.p, PlantSimulator(bench, x, y).y, count, *offsets, out)
         enc = out[fast5r.REPORT_OUTPUTS + 8:fast5r.REPORT_OUTPUTS + 10]
-        for reading, q in zip(enc, (angles[0], angles[2])):
+        for reading, q, offset in zip(enc, (angles[0], angles[2]), offsets):
             assert abs(reading / count - round(reading / count)) < 1e-9
-            assert abs(reading - q) <= count / 2 + 1e-12
+            assert abs(reading - (q + offset)) <= count / 2 + 1e-12
 
 
 def test_baumgarte_too_stiff_for_rk4_is_refused_naming_lambda_h():
