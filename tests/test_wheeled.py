@@ -8,7 +8,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from plant import wheeled_kernel as K
-from plant.wheeled import SEED, FallenError, WheeledPendulum, upright_linearisation
+from plant.wheeled import MAX_SUBSTEPS, SEED, FallenError, WheeledPendulum, upright_linearisation
 
 START = dict(psi=0.1, dphi=1.0, dtheta=2.0)
 
@@ -143,3 +143,48 @@ def test_balance_design_body_torque_column_is_the_plant_s_response():
     column = (rates[0] - rates[1]) / 2.0
     assert abs(column[4]) > 0.0                   # a body torque tilts the body
     np.testing.assert_allclose(_body_torque_column(None), column, rtol=1e-12, atol=1e-15)
+
+
+@pytest.mark.parametrize("counts", [7, 2048])
+def test_encoders_read_the_count_nearest_to_the_wheel_relative_to_the_body(counts):
+    """A wheel encoder measures its wheel's angle relative to the body: θ ∓ (W/2R) φ − ψ
+    (seed 000 (10): θ_l,r = θ ∓ (W/2R) φ, the encoder's stator turns with the body).  It reads
+    the multiple of 2π/N nearest to that angle; N = 7 makes a count 0.9 rad, so rounding down
+    or up by half a count cannot pass."""
+    from plant.wheeled import pack
+
+    prm = pack(SEED)
+    count = 2 * math.pi / counts
+    half = SEED.W / (2 * SEED.R)
+    out = np.empty(len(K.OUTPUT_NAMES))
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        y = np.zeros(K.N_STATE)
+        y[[K.THETA, K.PSI, K.PHI]] = rng.uniform(-3.0, 3.0, 3)
+        K.sensors(prm, y, count, out, 0)
+        relative = (y[K.THETA] - half * y[K.PHI] - y[K.PSI], y[K.THETA] + half * y[K.PHI] - y[K.PSI])
+        for name, angle in zip(("enc_l", "enc_r"), relative):
+            reading = out[K.OUTPUT_NAMES.index(name)]
+            assert abs(reading / count - round(reading / count)) < 1e-9
+            assert abs(reading - angle) <= count / 2 + 1e-12
+
+
+@pytest.mark.parametrize("counts", [1, 7, 4096])
+def test_pendulum_encoders_have_counts_per_turn(counts):
+    """``encoder_counts`` N is counts per wheel turn: a turning wheel's readings are multiples
+    of 2π/N and within half a count of the relative angle (N = 1 is a legal, coarse encoder)."""
+    pendulum = WheeledPendulum(initial={"theta": 2.9, "psi": 0.05, "phi": 0.4}, encoder_counts=counts)
+    count = 2 * math.pi / counts
+    out = pendulum.outputs()
+    half = SEED.W / (2 * SEED.R)
+    relative = {"enc_l": 2.9 - half * 0.4 - 0.05, "enc_r": 2.9 + half * 0.4 - 0.05}
+    for name, angle in relative.items():
+        assert abs(out[name] / count - round(out[name] / count)) < 1e-9
+        assert abs(out[name] - angle) <= count / 2 + 1e-12
+
+
+@pytest.mark.parametrize("substeps", [0, MAX_SUBSTEPS + 1])
+def test_pendulum_substeps_beyond_their_bounds_are_refused(substeps):
+    with pytest.raises(ValueError, match=f"substeps = {substeps}"):
+        WheeledPendulum(substeps=substeps)
+    WheeledPendulum(substeps=MAX_SUBSTEPS)        # the bound itself is allowed
