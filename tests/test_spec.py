@@ -174,3 +174,21 @@ def test_build_plant_cli_names_the_bad_line(tmp_path):
     serial = subprocess.run([sys.executable, "-m", "parcosim", "build-plant", "rr", str(tmp_path / "x.fmu")],
                             capture_output=True, text=True, timeout=300)
     assert serial.returncode == 2 and "serial chain" in serial.stderr
+
+
+def test_gravity_and_chain_names_default_as_the_format_says():
+    """docs/spec.md: gravity defaults to 0 (no gravity terms at any pose, (57)-(63) with g = 0)
+    and a chain without a name is ``chain<i>`` counted from 1."""
+    text = GOOD.replace('gravity = [0.0, -9.81, 0.0]\n', "").replace('name = "c"\n', "")
+    spec = plant_spec.loads(text, source="t.toml")
+    assert spec.chains[0].name == "chain1"
+    assert tuple(spec.gravity) == (0.0, 0.0, 0.0)
+    for q, dq in random_states(5):
+        assert np.max(np.abs(serial_terms(spec, q, dq).g)) == 0.0
+
+
+def test_repeated_independent_axes_are_refused_naming_the_entry():
+    text = (plant_spec.SPEC_DIR / "bench_5r.toml").read_text()
+    assert 'independent = ["x", "y"]' in text
+    with pytest.raises(ValueError, match=r"platform\.independent.*distinct"):
+        plant_spec.loads(text.replace('independent = ["x", "y"]', 'independent = ["x", "x"]'), source="b.toml")
