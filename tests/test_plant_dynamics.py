@@ -269,3 +269,27 @@ def test_adaptive_tolerances_must_be_positive(name, value):
     """dopri5's error control divides by atol + rtol |y|: a tolerance <= 0 or NaN is refused."""
     with pytest.raises(ValueError, match=rf"{name} must be > 0, got {value!r}"):
         IntegratorSettings(method="dopri5", **{name: value}).validate()
+
+
+def test_projection_makes_the_link_rates_satisfy_the_velocity_constraints():
+    """After ``project`` (Newton on the loop residual (5.18), then dq = C dq#) the state moves
+    along the constraint manifold: the residual's time derivative, by finite differences of
+    the residual along the state's own rates, is zero for any end-effector velocity."""
+    bench = get_preset("bench")
+    kernel = FastKernel(bench)
+    rng = np.random.default_rng(3)
+    res0, res1 = np.empty(6), np.empty(6)
+    for x, y in ((0.0, 0.15), (0.03, 0.19), (-0.04, 0.13)):
+        state = PlantSimulator(bench, x, y).y.copy()
+        state[3:7] += rng.normal(0.0, 1e-4, 4)          # off the manifold
+        state[7:9] = rng.normal(0.0, 0.3, 2)            # end-effector velocity [m/s]
+        state[10:14] = rng.normal(0.0, 5.0, 4)          # link rates, inconsistent
+        z = kernel.project(state)
+        eps = 1e-7
+        moved = z.copy()
+        moved[0:2] += eps * z[7:9]
+        moved[3:7] += eps * z[10:14]
+        fast5r.residual(kernel.p, z, res0)
+        fast5r.residual(kernel.p, moved, res1)
+        assert np.max(np.abs(res0)) < 1e-12
+        assert np.max(np.abs(res1 - res0)) / eps < 1e-5 * np.max(np.abs(z[7:9]))
