@@ -184,3 +184,12 @@ def test_balance_sample_time_out_of_range_is_refused(T):
     with pytest.raises(ValueError, match=r"parameter T = .* s must be in \[1e-05, 1\] s"):
         BalanceSettings(T=T).validate()
     BalanceSettings(T=MIN_SAMPLE_TIME).validate()
+
+
+def test_balance_controller_commands_nothing_before_its_first_sample(built_fmus):
+    """A Jacobi master (Ecos, libcosim, fmpy's SSP runner) feeds the drives the controller's
+    outputs as they are after initialisation, before the controller has sampled anything: at
+    rest those must be no voltage and no torque, else the first step kicks the pendulum."""
+    fmu = FmuInstance(built_fmus["BalanceController"], {})
+    assert [fmu.get(n) for n in ("v_l", "v_r", "tau_l", "tau_r")] == [0.0, 0.0, 0.0, 0.0]
+    fmu.close()
