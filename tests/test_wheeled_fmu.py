@@ -193,3 +193,20 @@ def test_balance_controller_commands_nothing_before_its_first_sample(built_fmus)
     fmu = FmuInstance(built_fmus["BalanceController"], {})
     assert [fmu.get(n) for n in ("v_l", "v_r", "tau_l", "tau_r")] == [0.0, 0.0, 0.0, 0.0]
     fmu.close()
+
+
+def test_ideal_torques_are_the_stalled_motors_torques_per_wheel():
+    """Each wheel's ideal torque is what its motor gives at stall for its own voltage: with
+    L = 0 and ω = 0, (4.162) leaves i = v / R and τ = kt i (seed 000's quasi-static drive).
+    Asymmetric encoders make the two voltages differ, so swapped or lost outputs show."""
+    from controller.balance import BalanceController
+    from motor import get_motor_preset
+
+    design = design_balance(BalanceSettings())
+    motor = get_motor_preset(design.settings.motor_preset)
+    controller = BalanceController(design)
+    for t, (enc_l, enc_r, gyro) in enumerate([(0.01, -0.02, 0.1), (0.02, -0.03, -0.05), (0.0, 0.04, 0.2)]):
+        v_l, v_r = controller.sample(1e-3 * t, enc_l, enc_r, gyro)
+        assert abs(v_l - v_r) > 1e-3
+        for v, tau in zip((v_l, v_r), controller.ideal_torques()):
+            assert tau == pytest.approx(motor.kt * (v / motor.R), rel=1e-15, abs=0.0)
