@@ -29,6 +29,7 @@ from pathlib import Path
 
 from controller.strategies import STRATEGY_NAMES
 from motor import get_motor_preset
+from motor.presets import STICTION_RATIO, motor1
 
 from .scenes import Fidelity, Scene, bench
 
@@ -77,8 +78,8 @@ class Twin:
     """One value of each of :data:`PARAMETERS` (the twin's calibration)."""
 
     friction_scale: float = 1.0
-    stiction_ratio: float = 1.25
-    stribeck_speed: float = 0.1
+    stiction_ratio: float = STICTION_RATIO          # the motor presets' LuGre defaults
+    stribeck_speed: float = motor1.omega_s
     current_offset: float = 0.0
     current_noise: float = 0.0
     model_error: float = 0.0
