@@ -133,11 +133,24 @@ def _unit(x):
 
 
 @njit(cache=True)
+def _key(seed, instance, step):
+    """SplitMix64 chained over (seed, instance, step), integers >= 0."""
+    return _splitmix64(_splitmix64(_splitmix64(np.uint64(seed)) ^ np.uint64(instance)) ^ np.uint64(step))
+
+
+@njit(cache=True)
+def uniform(seed, instance, step):
+    """A uniform sample in (0, 1] that depends only on (seed, instance, step), integers >= 0
+    (the first uniform :func:`gaussian` draws for the same three)."""
+    return _unit(_key(seed, instance, step))
+
+
+@njit(cache=True)
 def gaussian(seed, instance, step):
     """A standard normal sample that depends only on (seed, instance, step), integers >= 0:
     SplitMix64 hashes them, Box-Muller turns two 53-bit uniforms into the sample.  No state:
     a rerun, or a restored FMU state, draws the same noise."""
-    key = _splitmix64(_splitmix64(_splitmix64(np.uint64(seed)) ^ np.uint64(instance)) ^ np.uint64(step))
+    key = _key(seed, instance, step)
     u1 = _unit(key)
     u2 = _unit(_splitmix64(key))
     return math.sqrt(-2.0 * math.log(u1)) * math.cos(2.0 * math.pi * u2)

@@ -10,14 +10,16 @@
 * PWM voltage resolution of :data:`PWM_COUNTS` steps of the 24 V supply;
 * current-sensing noise (``current_noise``, Gaussian, a stateless function of (seed, drive,
   sample)) and offset (``current_offset``) on the current each drive's loop reads;
-* the controller's model inertias ``1 + model_error`` times the plant's (the CAD estimates
-  of Tables 4-5 against the real links).
+* the real links' masses and inertias ``1 + inertia_error`` times the CAD estimates of
+  Tables 4-5, which the controller's model keeps (the plant is what differs from the tables);
+* each encoder's zero at a random phase within one count (uniform, a function of (seed,
+  encoder)): where the count edges fall relative to the true zero differs from run to run.
 
 The six numbers in :data:`PARAMETERS` (name -> bounds, unit, meaning) are the twin's only
 free parameters, the same for all eight strategies.  Their one source of truth is
 :data:`TWIN_FILE` (``scenarios/bench_twin.toml``), written by the fit
 (``python -m scenarios.twin_fit``, :mod:`scenarios.twin_fit`) and read here by the scenes.
-The noise seeds are fixed in this module before any fit: :data:`FIT_SEEDS` for the fit,
+The noise seeds (current noise and encoder phase) are fixed in this module before any fit: :data:`FIT_SEEDS` for the fit,
 :data:`SPREAD_SEEDS` for the spread the report shows; a scene uses ``SPREAD_SEEDS[0]``.
 """
 from __future__ import annotations
@@ -29,6 +31,7 @@ from pathlib import Path
 
 from controller.strategies import STRATEGY_NAMES
 from motor import get_motor_preset
+from motor.fastdrive import uniform
 from motor.presets import STICTION_RATIO, motor1
 
 from .scenes import Fidelity, Scene, bench
@@ -69,7 +72,7 @@ PARAMETERS = {
     "stribeck_speed": Bound(0.01, 1.0, "rad/s", "Stribeck speed (LuGre ωs)"),
     "current_offset": Bound(-0.3, 0.3, "A", "offset of the current each drive's loop reads"),
     "current_noise": Bound(0.0, 0.3, "A", "standard deviation of the noise on that current"),
-    "model_error": Bound(-0.4, 0.4, "1", "the controller model's inertias / the plant's, minus 1"),
+    "inertia_error": Bound(-0.3, 1.0, "1", "the real links' masses and inertias / Tables 4-5's, minus 1"),
 }
 
 
@@ -82,7 +85,7 @@ class Twin:
     stribeck_speed: float = motor1.omega_s
     current_offset: float = 0.0
     current_noise: float = 0.0
-    model_error: float = 0.0
+    inertia_error: float = 0.0
 
     def __post_init__(self):
         for name, bound in PARAMETERS.items():
@@ -154,14 +157,43 @@ def twin_fidelity(twin: Twin, seed: int) -> Fidelity:
     """The bench's effects of ``twin`` with noise seed ``seed`` (drive friction levels:
     :func:`bench_real`)."""
     return Fidelity(delay_steps=DELAY_STEPS, friction="lugre", pwm_counts=PWM_COUNTS,
-                    current_offset=twin.current_offset, current_noise=twin.current_noise, noise_seed=seed,
-                    model_error=twin.model_error)
+                    current_offset=twin.current_offset, current_noise=twin.current_noise, noise_seed=seed)
+
+
+#: The plant's link parameters ``inertia_error`` scales (masses and inertias of both links of
+#: both chains; the rotors are the motor identification's, Tables 16 and 18, not CAD).
+LINK_INERTIAS = ("m1", "m2", "Jz1", "Jz2")
+#: Encoder resolution of the bench plant [counts per revolution] (Table 5; FiveBarPlant's default).
+ENCODER_COUNTS = 20000
+#: The encoders' phase draws use instances ENCODER_STREAM + k, apart from the drives' noise (1, 2).
+ENCODER_STREAM = 1 << 32
+
+
+def encoder_phase(seed: int, k: int) -> float:
+    """Encoder ``k``'s zero error [rad] for noise seed ``seed``: uniform in [-1/2, 1/2) of one
+    count, a function of (seed, k) only (:func:`motor.fastdrive.uniform`)."""
+    return (uniform(seed, ENCODER_STREAM + k, 0) - 0.5) * 2.0 * math.pi / ENCODER_COUNTS
+
+
+def twin_plant(parameters: dict, twin: Twin, seed: int) -> dict:
+    """The bench plant's ``parameters`` with the twin's links (``inertia_error``, from the
+    preset's Tables 4-5 values) and each encoder's phase (:func:`encoder_phase`)."""
+    from plant import get_preset
+
+    params = get_preset(parameters["preset"])
+    out = dict(parameters)
+    for k, chain in ((1, params.chain1), (2, params.chain2)):
+        for name in LINK_INERTIAS:
+            out[f"chain{k}_{name}"] = getattr(chain, name) * (1.0 + twin.inertia_error)
+        out[f"encoder_offset{k}"] = encoder_phase(seed, k)
+    return out
 
 
 def bench_real(strategy: str, kind: str = "circle", twin: Twin | None = None, seed: int | None = None) -> Scene:
     """The twin scene ``bench_real_<kind>_<strategy>``: :func:`scenarios.scenes.bench` with
-    :func:`twin_fidelity` and each drive's LuGre levels (its own μ times ``friction_scale``,
-    break-away ``stiction_ratio`` times that, Stribeck speed ``stribeck_speed``).  ``twin``
+    :func:`twin_fidelity`, each drive's LuGre levels (its own μ times ``friction_scale``,
+    break-away ``stiction_ratio`` times that, Stribeck speed ``stribeck_speed``) and the plant
+    of :func:`twin_plant`.  ``twin``
     defaults to :func:`load_twin`, ``seed`` to ``SPREAD_SEEDS[0]``."""
     if strategy not in STRATEGY_NAMES:
         raise ValueError(f"strategy = {strategy!r}; the twin has the thesis' eight: {', '.join(STRATEGY_NAMES)}")
@@ -176,13 +208,15 @@ def bench_real(strategy: str, kind: str = "circle", twin: Twin | None = None, se
             mu = twin.friction_scale * get_motor_preset(c.parameters["preset"]).mu
             c = replace(c, parameters={**c.parameters, "mu": mu, "mu_s": twin.stiction_ratio * mu,
                                        "omega_s": twin.stribeck_speed})
+        elif c.model == "FiveBarPlant":
+            c = replace(c, parameters=twin_plant(c.parameters, twin, seed))
         components.append(c)
     values = ", ".join(f"{k} {v:.4g}" for k, v in twin.values().items())
     system = replace(scene.system, components=tuple(components), stop_time=scene.reference_end + TWIN_SETTLE_TIME)
     return replace(scene, name=f"bench_real_{kind}_{strategy}", system=system,
                    description=f"Bench twin (docs/twin.md), {kind} trajectory, strategy {strategy}: the bench scene with "
-                               f"a {DELAY_STEPS}-sample delay, {PWM_COUNTS}-step PWM, LuGre friction, current noise "
-                               f"seed {seed}; {values}")
+                               f"a {DELAY_STEPS}-sample delay, {PWM_COUNTS}-step PWM, LuGre friction, noise and "
+                               f"encoder-phase seed {seed}; {values}")
 
 
 def twin_scene_names() -> list[str]:

@@ -1,10 +1,11 @@
 """Calibrate the bench twin on the thesis' circle, then predict the triangle without refitting.
 
-    python -m scenarios.twin_fit fit [--maxfev N]     # fit on Tables 9, 11, 13; writes scenarios/bench_twin.toml
+    python -m scenarios.twin_fit fit [--points 64 --starts 4 --maxfev 120 --workers 2]
+                                                      # fit on Tables 9, 11, 13; writes scenarios/bench_twin.toml
     python -m scenarios.twin_fit report [--out docs]  # runs the 16 twin scenes x 5 seeds; docs/twin.md, twin.png
     python -m scenarios.twin_fit                      # both
 
-or in Python: ``fit(maxfev=...)`` then ``write_twin_report(out_dir)``.
+or in Python: ``fit(points=..., starts=...)`` then ``write_twin_report(out_dir)``.
 
 The fit reads only the circle's published numbers (:data:`scenarios.report.THESIS_BENCH`
 ``["circle"]``: Tables 9 and 13; :data:`scenarios.report.THESIS_MD_CHANGE` ``["circle"]``:
@@ -13,9 +14,12 @@ per strategy e_ef, τ_ef and (weight :data:`E_SS_WEIGHT`) e_ss, per sliding-mode
 Table 11's ratios (1 + change/100) of e_ef and τ_ef.  Log-ratios weigh a factor of 2 the
 same on 0.04 mm as on 3 mm.  Ours are the means over the noise seeds
 :data:`scenarios.twin.FIT_SEEDS`, fixed before the fit, so the loss is a deterministic
-function of the six parameters; Nelder-Mead (scipy) searches the box of
-:data:`scenarios.twin.PARAMETERS`, scaled to [0, 1]^6, from :data:`START` (the identified
-motors with the LuGre presets: the plain bench plus delay and PWM).  Every run is in
+function of the six parameters.  The search is global, then local, in the box of
+:data:`scenarios.twin.PARAMETERS` scaled to [0, 1]^6: the loss at :data:`START` (the
+identified motors with the LuGre presets: the plain bench plus delay and PWM) and at
+scrambled Sobol points (:func:`screen`), then bounded Nelder-Mead (scipy) from the best few
+(:func:`descend`); stick-slip makes the loss rough at small scales, so one descent from
+one start stops in the first dip it finds.  Every run is in
 ``mode="compiled"``.  The triangle's tables are read only by the report, after the fit.
 """
 from __future__ import annotations
@@ -48,6 +52,10 @@ E_SS_WEIGHT = 0.5
 #: effector): below it a log-ratio measures noise.
 E_FLOOR_MM = 0.01
 METRICS = ("e_ef_mm", "tau_ef_Nm", "e_ss_mm")
+#: Seed of the fit's scrambled Sobol points (fixed, like the noise seeds, before fitting).
+SOBOL_SEED = 2019
+#: First simplex of each descent: steps of this fraction of each parameter's range.
+SIMPLEX_STEP = 0.1
 
 
 def run_twin(twin: Twin, kind: str, seeds=SPREAD_SEEDS, strategies=ORDER) -> dict:
@@ -102,34 +110,93 @@ def _from_unit(u) -> Twin:
     return Twin(**{n: float(b.low + x * (b.high - b.low)) for x, (n, b) in zip(u, PARAMETERS.items())})
 
 
-def fit(maxfev: int = 150, start: Twin = START, seeds=FIT_SEEDS, path: Path = TWIN_FILE, log=print) -> Twin:
-    """Fit the twin's parameters on the circle (module docstring); write ``path``; return the twin."""
+def evaluate(u, seeds=FIT_SEEDS) -> tuple:
+    """(loss, twin) at the point ``u`` of the unit box (:func:`loss` of the eight circle runs,
+    seed means).  Module level so that worker processes can run it."""
+    twin = _from_unit(u)
+    return loss(mean_metrics(run_twin(twin, "circle", seeds))), twin
+
+
+def screen(points: int = 64, seeds=FIT_SEEDS, workers: int = 1, log=print) -> list:
+    """[(loss, twin)] of :data:`START` and ``points`` scrambled Sobol points of the unit box
+    (seed :data:`SOBOL_SEED`, fixed), best first: the global part of :func:`fit`."""
+    from scipy.stats import qmc
+
+    units = [_to_unit(START)] + list(qmc.Sobol(len(PARAMETERS), scramble=True, seed=SOBOL_SEED).random(points))
+    results = _map(evaluate, units, seeds, workers)
+    for i, (value, twin) in enumerate(results):
+        log(f"screen {i:4d} loss {value:.5f}  " + _text(twin))
+    return sorted(results, key=lambda item: item[0])
+
+
+def descend(start: Twin, maxfev: int, seeds=FIT_SEEDS, log=print) -> tuple:
+    """(best loss, twin, evaluations, scipy's message): bounded Nelder-Mead in the unit box
+    from ``start``, first simplex of steps :data:`SIMPLEX_STEP` (the local part of :func:`fit`)."""
     from scipy.optimize import minimize
 
     history = []
-    t0 = time.perf_counter()
 
     def objective(u):
-        twin = _from_unit(u)
-        value = loss(mean_metrics(run_twin(twin, "circle", seeds)))
+        value, twin = evaluate(u, seeds)
         history.append((value, twin))
-        log(f"{len(history):4d} loss {value:.5f}  " + "  ".join(f"{k} {v:.4g}" for k, v in twin.values().items()))
+        log(f"  descend {len(history):4d} loss {value:.5f}  " + _text(twin))
         return value
 
     u0 = _to_unit(start)
-    simplex = [u0] + [np.clip(u0 + 0.2 * np.eye(len(u0))[i] * (1 if u0[i] < 0.8 else -1), 0, 1)
+    simplex = [u0] + [np.clip(u0 + SIMPLEX_STEP * np.eye(len(u0))[i] * (1 if u0[i] < 1 - SIMPLEX_STEP else -1), 0, 1)
                       for i in range(len(u0))]
     result = minimize(objective, u0, method="Nelder-Mead", bounds=[(0.0, 1.0)] * len(u0),
-                      options={"maxfev": maxfev, "initial_simplex": np.array(simplex), "xatol": 0.005,
+                      options={"maxfev": maxfev, "initial_simplex": np.array(simplex), "xatol": 0.002,
                                "fatol": 1e-4})
     best_loss, best = min(history, key=lambda item: item[0])
+    return best_loss, best, len(history), result.message
+
+
+def _descend_task(start, maxfev, seeds):
+    return descend(start, maxfev, seeds, log=lambda text: print(text, flush=True))
+
+
+def fit(points: int = 64, starts: int = 4, maxfev: int = 120, seeds=FIT_SEEDS, workers: int = 2,
+        path: Path = TWIN_FILE, log=print) -> Twin:
+    """Fit the twin's parameters on the circle (module docstring): :func:`screen` ``points``
+    Sobol points, then :func:`descend` (at most ``maxfev`` evaluations) from the ``starts`` best;
+    write the best twin of all to ``path``; return it.  ``workers`` processes share the work."""
+    t0 = time.perf_counter()
+    screened = screen(points, seeds, workers, log)
+    starts_from = [twin for _, twin in screened[:starts]]
+    descents = _map(_descend_task, starts_from, (maxfev, seeds), workers, star=True)
+    for i, (value, twin, n, message) in enumerate(descents):
+        log(f"descent {i}: loss {screened[i][0]:.5f} -> {value:.5f} in {n} evaluations ({message})  " + _text(twin))
+    best_loss, best, _n, _m = min(descents, key=lambda item: item[0])
+    start_loss = next(value for value, twin in screened if twin == START)
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
                             text=True).stdout.strip()
-    write_twin(best, {"loss": best_loss, "start_loss": history[0][0], "evaluations": len(history),
-                      "optimizer": f"scipy Nelder-Mead, bounded, maxfev {maxfev}: {result.message}",
+    write_twin(best, {"loss": best_loss, "start_loss": start_loss,
+                      "evaluations": len(screened) + sum(d[2] for d in descents),
+                      "optimizer": f"{points} scrambled Sobol points (seed {SOBOL_SEED}) and the start, then bounded "
+                                   f"scipy Nelder-Mead (maxfev {maxfev}) from the {starts} best",
+                      "screen_best": [round(v, 5) for v, _ in screened[:starts]],
+                      "descent_losses": [round(d[0], 5) for d in descents],
                       "seeds": list(seeds), "tables": "circle: Tables 9, 11, 13 (scenarios.report)",
                       "wall_s": round(time.perf_counter() - t0, 1), "commit": commit}, path)
     return best
+
+
+def _text(twin: Twin) -> str:
+    return "  ".join(f"{k} {v:.4g}" for k, v in twin.values().items())
+
+
+def _map(function, items, extra, workers: int, star: bool = False) -> list:
+    """[function(item, *extra)] (``extra`` a tuple if ``star``, else one argument), in ``workers``
+    spawned processes when more than one (numba kernels load from their cache there)."""
+    extra = tuple(extra) if star else (extra,)
+    if workers <= 1:
+        return [function(item, *extra) for item in items]
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+        return list(pool.map(function, items, *[[e] * len(items) for e in extra]))
 
 
 def predict(twin: Twin | None = None, seeds=SPREAD_SEEDS) -> dict:
@@ -289,11 +356,14 @@ METHOD_FILE = ROOT / "docs" / "twin_method.md"
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("what", nargs="?", choices=("fit", "report", "all"), default="all")
-    parser.add_argument("--maxfev", type=int, default=150, help="most loss evaluations of the fit (default 150)")
+    parser.add_argument("--points", type=int, default=64, help="Sobol points screened (default 64)")
+    parser.add_argument("--starts", type=int, default=4, help="descents, from the best screened points (default 4)")
+    parser.add_argument("--maxfev", type=int, default=120, help="most evaluations of each descent (default 120)")
+    parser.add_argument("--workers", type=int, default=2, help="processes (default 2)")
     parser.add_argument("--out", default=str(ROOT / "docs"), help="where twin.md, twin.png go (default docs/)")
     args = parser.parse_args(argv)
     if args.what in ("fit", "all"):
-        twin = fit(args.maxfev)
+        twin = fit(args.points, args.starts, args.maxfev, workers=args.workers)
         print("fitted:", twin.values())
     if args.what in ("report", "all"):
         method = METHOD_FILE.read_text() if METHOD_FILE.exists() else ""
