@@ -263,12 +263,64 @@ def execute(workdir: Path, only=None):
         _restore_sources(workdir)
 
 
+def _changed_lines(diff: str) -> tuple:
+    """(removed lines, added lines) of a mutant's diff, stripped."""
+    lines = [line for line in (diff or "").splitlines() if not line.startswith(("---", "+++"))]
+    return (tuple(line[1:].strip() for line in lines if line.startswith("-")),
+            tuple(line[1:].strip() for line in lines if line.startswith("+")))
+
+
+def _relocated(mutation, diff: str):
+    """The mutation of the file as it is now that makes the change ``diff`` records, or None.
+
+    cosmic-ray names a mutant by operator and occurrence, which an edit elsewhere in the file
+    shifts: the mutant is found again by its text, the occurrence of its operator whose line
+    reads as the diff's removed line and whose mutation gives the same lines.  None when no
+    occurrence, or more than one, does (the code changed, or the line is repeated)."""
+    import attrs
+    import cosmic_ray.plugins
+    from cosmic_ray.ast import ast_nodes, get_ast_from_path
+    from cosmic_ray.mutating import mutate_code
+
+    wanted = _changed_lines(diff)
+    if not wanted[0]:
+        return None
+    operator = cosmic_ray.plugins.get_operator(mutation.operator_name)(**mutation.operator_args)
+    path = ROOT / mutation.module_path
+    code = path.read_text()
+    lines = code.split("\n")
+    positions = [(start, end) for node in ast_nodes(get_ast_from_path(path))
+                 for start, end in operator.mutation_positions(node)]
+    found = []
+    for occurrence, (start, end) in enumerate(positions):
+        if lines[start[0] - 1].strip() != wanted[0][0]:
+            continue
+        mutated = mutate_code(code, operator, occurrence)
+        changed = "\n".join(f"{op}{line}" for op, line in _line_changes(lines, mutated.split("\n")))
+        if _changed_lines(changed) == wanted:
+            found.append(attrs.evolve(mutation, occurrence=occurrence, start_pos=start, end_pos=end))
+    return found[0] if len(found) == 1 else None
+
+
+def _line_changes(before: list, after: list):
+    """("-", line) and ("+", line) pairs of a line diff."""
+    import difflib
+
+    for tag, i1, i2, j1, j2 in difflib.SequenceMatcher(a=before, b=after, autojunk=False).get_opcodes():
+        if tag != "equal":
+            yield from (("-", line) for line in before[i1:i2])
+            yield from (("+", line) for line in after[j1:j2])
+
+
 def retest(workdir: Path, outcome: str, only=None, jobs=None):
     """Run again the mutants whose result has this test outcome (e.g. ``survived``, after new
     tests) and record the new result; the pending mutants are left alone; ``jobs``: these job
-    ids only (e.g. not the survivors already argued equivalent).  A mutant whose
-    line no longer reads as it did (the code was changed or removed) keeps its result and is
-    listed as such."""
+    ids only (e.g. not the survivors already argued equivalent).
+
+    The sessions are used as they are, also for a file edited since its session was made
+    (which a campaign run would make again, dropping its results): each mutant is found again
+    in the file as it is now by its text (:func:`_relocated`).  A mutant whose line no longer
+    reads as it did (the code was changed or removed) keeps its result and is listed as such."""
     from cosmic_ray.mutating import mutate_and_test
     from cosmic_ray.work_db import WorkDB, use_db
 
@@ -278,24 +330,24 @@ def retest(workdir: Path, outcome: str, only=None, jobs=None):
     for source in TARGETS:
         if only and source not in only:
             continue
-        lines = (ROOT / source).read_text().splitlines()
-        with use_db(str(_session(workdir, source)), WorkDB.Mode.open) as db:
+        session = _session(workdir, source)
+        if not session.exists():
+            raise SystemExit(f"{source}: no session in {workdir}")
+        with use_db(str(session), WorkDB.Mode.open) as db:
             for item, result in db.completed_work_items:
                 if result.test_outcome != outcome or (jobs and item.job_id not in jobs):
                     continue
-                mutation = item.mutations[0]
-                removed = [line[1:] for line in (result.diff or "").splitlines()
-                           if line.startswith("-") and not line.startswith("---")]
-                line_now = lines[mutation.start_pos[0] - 1] if mutation.start_pos[0] <= len(lines) else ""
-                if not removed or removed[0].strip() != line_now.strip():
-                    print(f"{source}:{mutation.start_pos[0]} job {item.job_id}: the line changed, not re-run",
-                          flush=True)
+                line = item.mutations[0].start_pos[0]
+                mutation = _relocated(item.mutations[0], result.diff)
+                if mutation is None:
+                    print(f"{source}:{line} job {item.job_id}: the line changed, not re-run", flush=True)
                     continue
                 (workdir / f"current.{ROOT.name}").write_text(source)
-                new = mutate_and_test(item.mutations, _test_command(source), TIMEOUT)
+                new = mutate_and_test([mutation], _test_command(source), TIMEOUT)
                 _restore_sources(workdir)
                 db.set_result(item.job_id, new)
-                print(f"{source}:{mutation.start_pos[0]} job {item.job_id}: {new.test_outcome}", flush=True)
+                moved = f" (now line {mutation.start_pos[0]})" if mutation.start_pos[0] != line else ""
+                print(f"{source}:{line}{moved} job {item.job_id}: {new.test_outcome}", flush=True)
 
 
 def report(workdir: Path) -> dict:
@@ -378,10 +430,10 @@ def main(argv=None):
         print_report(data)
         (args.workdir / "report.json").write_text(json.dumps(data, indent=1))
         return 0
-    initialise(args.workdir, args.sample, args.seed)
-    if args.retest:
+    if args.retest:      # the sessions as they are: initialise would drop those of edited files
         retest(args.workdir, args.retest, args.only, args.job)
     else:
+        initialise(args.workdir, args.sample, args.seed)
         execute(args.workdir, args.only)
     print_report(report(args.workdir))
     return 0
