@@ -274,12 +274,14 @@ def _relocated(mutation, diff: str):
     """The mutation of the file as it is now that makes the change ``diff`` records, or None.
 
     cosmic-ray names a mutant by operator and occurrence, which an edit elsewhere in the file
-    shifts: the mutant is found again by its text, the occurrence of its operator whose line
-    reads as the diff's removed line and whose mutation gives the same lines.  None when no
-    occurrence, or more than one, does (the code changed, or the line is repeated)."""
+    shifts: the mutant is found again by its text, among the occurrences of its operator in the
+    same function whose line reads as the diff's removed line and whose mutation gives the same
+    lines: the recorded occurrence if it is one of them (an unchanged file), else the only
+    one.  None when none is, or several are (the code changed, or the line is repeated)."""
     import attrs
     import cosmic_ray.plugins
     from cosmic_ray.ast import ast_nodes, get_ast_from_path
+    from cosmic_ray.ast.ast_query import ASTQuery
     from cosmic_ray.mutating import mutate_code
 
     wanted = _changed_lines(diff)
@@ -289,17 +291,20 @@ def _relocated(mutation, diff: str):
     path = ROOT / mutation.module_path
     code = path.read_text()
     lines = code.split("\n")
-    positions = [(start, end) for node in ast_nodes(get_ast_from_path(path))
+    positions = [(node, start, end) for node in ast_nodes(get_ast_from_path(path))
                  for start, end in operator.mutation_positions(node)]
-    found = []
-    for occurrence, (start, end) in enumerate(positions):
-        if lines[start[0] - 1].strip() != wanted[0][0]:
+    found = {}
+    for occurrence, (node, start, end) in enumerate(positions):
+        if (lines[start[0] - 1].strip() != wanted[0][0]
+                or ASTQuery(node).get_definition_name() != mutation.definition_name):
             continue
         mutated = mutate_code(code, operator, occurrence)
         changed = "\n".join(f"{op}{line}" for op, line in _line_changes(lines, mutated.split("\n")))
         if _changed_lines(changed) == wanted:
-            found.append(attrs.evolve(mutation, occurrence=occurrence, start_pos=start, end_pos=end))
-    return found[0] if len(found) == 1 else None
+            found[occurrence] = attrs.evolve(mutation, occurrence=occurrence, start_pos=start, end_pos=end)
+    if mutation.occurrence in found:
+        return found[mutation.occurrence]
+    return next(iter(found.values())) if len(found) == 1 else None
 
 
 def _line_changes(before: list, after: list):
