@@ -264,10 +264,12 @@ def execute(workdir: Path, only=None):
 
 
 def _changed_lines(diff: str) -> tuple:
-    """(removed lines, added lines) of a mutant's diff, stripped."""
-    lines = [line for line in (diff or "").splitlines() if not line.startswith(("---", "+++"))]
-    return (tuple(line[1:].strip() for line in lines if line.startswith("-")),
-            tuple(line[1:].strip() for line in lines if line.startswith("+")))
+    """(removed lines, added lines) of a mutant's diff, stripped, blank ones left out (a
+    removed decorator takes the blank lines above it along)."""
+    lines = [line[0] + line[1:].strip() for line in (diff or "").splitlines()
+             if not line.startswith(("---", "+++")) and line[1:].strip()]
+    return (tuple(line[1:] for line in lines if line.startswith("-")),
+            tuple(line[1:] for line in lines if line.startswith("+")))
 
 
 def _relocated(mutation, diff: str):
