@@ -263,13 +263,17 @@ def execute(workdir: Path, only=None):
         _restore_sources(workdir)
 
 
-def _changed_lines(diff: str) -> tuple:
-    """(removed lines, added lines) of a mutant's diff, stripped, blank ones left out (a
-    removed decorator takes the blank lines above it along)."""
-    lines = [line[0] + line[1:].strip() for line in (diff or "").splitlines()
-             if not line.startswith(("---", "+++")) and line[1:].strip()]
-    return (tuple(line[1:] for line in lines if line.startswith("-")),
-            tuple(line[1:] for line in lines if line.startswith("+")))
+def _hunk(diff: str) -> tuple:
+    """The lines of a mutant's unified diff without its headers: context (" "), removed
+    ("-") and added ("+"), stripped, blank ones left out (a removed decorator takes the
+    blank lines above it along)."""
+    return tuple(line[0] + line[1:].strip() for line in (diff or "").splitlines()
+                 if line[:1] in " -+" and not line.startswith(("---", "+++")) and line[1:].strip())
+
+
+def _changed_lines(hunk: tuple) -> tuple:
+    """(removed lines, added lines) of a :func:`_hunk`."""
+    return (tuple(line[1:] for line in hunk if line[0] == "-"), tuple(line[1:] for line in hunk if line[0] == "+"))
 
 
 def _relocated(mutation, diff: str):
@@ -277,16 +281,21 @@ def _relocated(mutation, diff: str):
 
     cosmic-ray names a mutant by operator and occurrence, which an edit elsewhere in the file
     shifts: the mutant is found again by its text, among the occurrences of its operator in the
-    same function whose line reads as the diff's removed line and whose mutation gives the same
-    lines: the recorded occurrence if it is one of them (an unchanged file), else the only
-    one.  None when none is, or several are (the code changed, or the line is repeated)."""
+    same function whose line reads as the diff's first removed line and whose mutation
+    removes and adds the same lines.  Several such (a repeated line): those whose diff has
+    the same context lines too, then the recorded occurrence among them (an unchanged file).
+    None when no occurrence, or more than one, is left (the code changed, or the line and its
+    surroundings are repeated)."""
+    import difflib
+
     import attrs
     import cosmic_ray.plugins
     from cosmic_ray.ast import ast_nodes, get_ast_from_path
     from cosmic_ray.ast.ast_query import ASTQuery
     from cosmic_ray.mutating import mutate_code
 
-    wanted = _changed_lines(diff)
+    hunk = _hunk(diff)
+    wanted = _changed_lines(hunk)
     if not wanted[0]:
         return None
     operator = cosmic_ray.plugins.get_operator(mutation.operator_name)(**mutation.operator_args)
@@ -295,28 +304,22 @@ def _relocated(mutation, diff: str):
     lines = code.split("\n")
     positions = [(node, start, end) for node in ast_nodes(get_ast_from_path(path))
                  for start, end in operator.mutation_positions(node)]
-    found = {}
+    found, same_context = {}, {}
     for occurrence, (node, start, end) in enumerate(positions):
         if (lines[start[0] - 1].strip() != wanted[0][0]
                 or ASTQuery(node).get_definition_name() != mutation.definition_name):
             continue
-        mutated = mutate_code(code, operator, occurrence)
-        changed = "\n".join(f"{op}{line}" for op, line in _line_changes(lines, mutated.split("\n")))
-        if _changed_lines(changed) == wanted:
+        mutated = mutate_code(code, operator, occurrence).split("\n")
+        candidate = _hunk("\n".join(difflib.unified_diff(lines, mutated, lineterm="")))
+        if _changed_lines(candidate) == wanted:
             found[occurrence] = attrs.evolve(mutation, occurrence=occurrence, start_pos=start, end_pos=end)
-    if mutation.occurrence in found:
+            if candidate == hunk:
+                same_context[occurrence] = found[occurrence]
+    if len(found) > 1:
+        found = same_context
+    if len(found) > 1 and mutation.occurrence in found:
         return found[mutation.occurrence]
     return next(iter(found.values())) if len(found) == 1 else None
-
-
-def _line_changes(before: list, after: list):
-    """("-", line) and ("+", line) pairs of a line diff."""
-    import difflib
-
-    for tag, i1, i2, j1, j2 in difflib.SequenceMatcher(a=before, b=after, autojunk=False).get_opcodes():
-        if tag != "equal":
-            yield from (("-", line) for line in before[i1:i2])
-            yield from (("+", line) for line in after[j1:j2])
 
 
 def retest(workdir: Path, outcome: str, only=None, jobs=None):
