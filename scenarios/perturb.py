@@ -33,8 +33,8 @@ with ``xi`` uniform in [-1, 1] or standard normal truncated at +-3 (sigma = u_p)
     "drive*.mu_s" = 0.2            # a LuGre drive's break-away torque drawn on its own
 
 Draws are deterministic per (seed, sample, parameter name) (:func:`draw`): a sample's values
-do not depend on the number of samples, on the other parameters or on the order in which
-samples run.
+do not depend on the number of samples, on the other parameters (but a following ``mu_s`` on
+its ``mu``) or on the order in which samples run.
 """
 from __future__ import annotations
 
