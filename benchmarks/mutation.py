@@ -263,12 +263,74 @@ def execute(workdir: Path, only=None):
         _restore_sources(workdir)
 
 
+def _hunk(diff: str) -> tuple:
+    """The lines of a mutant's unified diff without its headers: context (" "), removed
+    ("-") and added ("+"), stripped, blank ones left out (a removed decorator takes the
+    blank lines above it along)."""
+    return tuple(line[0] + line[1:].strip() for line in (diff or "").splitlines()
+                 if line[:1] in " -+" and not line.startswith(("---", "+++")) and line[1:].strip())
+
+
+def _changed_lines(hunk: tuple) -> tuple:
+    """(removed lines, added lines) of a :func:`_hunk`."""
+    return (tuple(line[1:] for line in hunk if line[0] == "-"), tuple(line[1:] for line in hunk if line[0] == "+"))
+
+
+def _relocated(mutation, diff: str):
+    """The mutation of the file as it is now that makes the change ``diff`` records, or None.
+
+    cosmic-ray names a mutant by operator and occurrence, which an edit elsewhere in the file
+    shifts: the mutant is found again by its text, among the occurrences of its operator in the
+    same function whose line reads as the diff's first removed line and whose mutation
+    removes and adds the same lines.  Several such (a repeated line): those whose diff has
+    the same context lines too, then the recorded occurrence among them (an unchanged file).
+    None when no occurrence, or more than one, is left (the code changed, or the line and its
+    surroundings are repeated)."""
+    import difflib
+
+    import attrs
+    import cosmic_ray.plugins
+    from cosmic_ray.ast import ast_nodes, get_ast_from_path
+    from cosmic_ray.ast.ast_query import ASTQuery
+    from cosmic_ray.mutating import mutate_code
+
+    hunk = _hunk(diff)
+    wanted = _changed_lines(hunk)
+    if not wanted[0]:
+        return None
+    operator = cosmic_ray.plugins.get_operator(mutation.operator_name)(**mutation.operator_args)
+    path = ROOT / mutation.module_path
+    code = path.read_text()
+    lines = code.split("\n")
+    positions = [(node, start, end) for node in ast_nodes(get_ast_from_path(path))
+                 for start, end in operator.mutation_positions(node)]
+    found, same_context = {}, {}
+    for occurrence, (node, start, end) in enumerate(positions):
+        if (lines[start[0] - 1].strip() != wanted[0][0]
+                or ASTQuery(node).get_definition_name() != mutation.definition_name):
+            continue
+        mutated = mutate_code(code, operator, occurrence).split("\n")
+        candidate = _hunk("\n".join(difflib.unified_diff(lines, mutated, lineterm="")))
+        if _changed_lines(candidate) == wanted:
+            found[occurrence] = attrs.evolve(mutation, occurrence=occurrence, start_pos=start, end_pos=end)
+            if candidate == hunk:
+                same_context[occurrence] = found[occurrence]
+    if len(found) > 1:
+        found = same_context
+    if len(found) > 1 and mutation.occurrence in found:
+        return found[mutation.occurrence]
+    return next(iter(found.values())) if len(found) == 1 else None
+
+
 def retest(workdir: Path, outcome: str, only=None, jobs=None):
     """Run again the mutants whose result has this test outcome (e.g. ``survived``, after new
     tests) and record the new result; the pending mutants are left alone; ``jobs``: these job
-    ids only (e.g. not the survivors already argued equivalent).  A mutant whose
-    line no longer reads as it did (the code was changed or removed) keeps its result and is
-    listed as such."""
+    ids only (e.g. not the survivors already argued equivalent).
+
+    The sessions are used as they are, also for a file edited since its session was made
+    (which a campaign run would make again, dropping its results): each mutant is found again
+    in the file as it is now by its text (:func:`_relocated`).  A mutant whose line no longer
+    reads as it did (the code was changed or removed) keeps its result and is listed as such."""
     from cosmic_ray.mutating import mutate_and_test
     from cosmic_ray.work_db import WorkDB, use_db
 
@@ -278,24 +340,24 @@ def retest(workdir: Path, outcome: str, only=None, jobs=None):
     for source in TARGETS:
         if only and source not in only:
             continue
-        lines = (ROOT / source).read_text().splitlines()
-        with use_db(str(_session(workdir, source)), WorkDB.Mode.open) as db:
+        session = _session(workdir, source)
+        if not session.exists():
+            raise SystemExit(f"{source}: no session in {workdir}")
+        with use_db(str(session), WorkDB.Mode.open) as db:
             for item, result in db.completed_work_items:
                 if result.test_outcome != outcome or (jobs and item.job_id not in jobs):
                     continue
-                mutation = item.mutations[0]
-                removed = [line[1:] for line in (result.diff or "").splitlines()
-                           if line.startswith("-") and not line.startswith("---")]
-                line_now = lines[mutation.start_pos[0] - 1] if mutation.start_pos[0] <= len(lines) else ""
-                if not removed or removed[0].strip() != line_now.strip():
-                    print(f"{source}:{mutation.start_pos[0]} job {item.job_id}: the line changed, not re-run",
-                          flush=True)
+                line = item.mutations[0].start_pos[0]
+                mutation = _relocated(item.mutations[0], result.diff)
+                if mutation is None:
+                    print(f"{source}:{line} job {item.job_id}: the line changed, not re-run", flush=True)
                     continue
                 (workdir / f"current.{ROOT.name}").write_text(source)
-                new = mutate_and_test(item.mutations, _test_command(source), TIMEOUT)
+                new = mutate_and_test([mutation], _test_command(source), TIMEOUT)
                 _restore_sources(workdir)
                 db.set_result(item.job_id, new)
-                print(f"{source}:{mutation.start_pos[0]} job {item.job_id}: {new.test_outcome}", flush=True)
+                moved = f" (now line {mutation.start_pos[0]})" if mutation.start_pos[0] != line else ""
+                print(f"{source}:{line}{moved} job {item.job_id}: {new.test_outcome}", flush=True)
 
 
 def report(workdir: Path) -> dict:
@@ -378,10 +440,10 @@ def main(argv=None):
         print_report(data)
         (args.workdir / "report.json").write_text(json.dumps(data, indent=1))
         return 0
-    initialise(args.workdir, args.sample, args.seed)
-    if args.retest:
+    if args.retest:      # the sessions as they are: initialise would drop those of edited files
         retest(args.workdir, args.retest, args.only, args.job)
     else:
+        initialise(args.workdir, args.sample, args.seed)
         execute(args.workdir, args.only)
     print_report(report(args.workdir))
     return 0

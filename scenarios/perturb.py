@@ -10,8 +10,16 @@ current controllers, which stay designed for the nominal motor (``R_design``, ``
 Which parameters (:func:`perturbable`): per ``FiveBarPlant`` the base half-distance ``l0``,
 each chain's ``l1, l2, lg1, lg2, m1, m2, Jz1, Jz2``, the rotor inertias and, when the scene
 reads the encoders, the encoders' zero errors ``encoder_offset1/2``; per ``DCMotorDrive`` its
-``R, L, kt, ke, b, mu``.  Parameters whose nominal value is 0 (the thesis_sim rotors, a
-switched-off friction) stay 0.
+``R, L, kt, ke, b, mu``, and for a LuGre drive (``friction = "lugre"``) its break-away torque
+``mu_s``.  Parameters whose nominal value is 0 (the thesis_sim rotors, a switched-off friction)
+stay 0.
+
+A LuGre drive needs mu_s >= mu (docs/friction.md), which a draw of ``mu`` alone would break
+whenever it rose past the nominal ratio mu_s/mu (1.25 for the motor presets).  So ``mu_s``
+*follows* ``mu``: its value is its nominal times mu's relative change, the scene's break-away
+ratio kept in every sample.  Only a ``--perturb`` entry for ``mu_s`` itself gives it a draw of
+its own (its uncertainty; 0 holds it at its nominal): then a sample with mu above mu_s is the
+user's and the drive refuses it, naming both (a failed row).
 
 How much (:data:`WEIGHTS`): parameter p gets its own uncertainty ``u_p = U * weight``; a
 relative parameter is ``nominal * (1 + u_p * xi)``, an absolute one ``nominal + u_p * xi``,
@@ -22,10 +30,11 @@ with ``xi`` uniform in [-1, 1] or standard normal truncated at +-3 (sigma = u_p)
     [uncertainty]                  # parameter (or fnmatch pattern) -> its u_p; 0 keeps it nominal
     "plant.chain*_l?" = 0.01
     "drive*.mu" = 0.5
+    "drive*.mu_s" = 0.2            # a LuGre drive's break-away torque drawn on its own
 
 Draws are deterministic per (seed, sample, parameter name) (:func:`draw`): a sample's values
-do not depend on the number of samples, on the other parameters or on the order in which
-samples run.
+do not depend on the number of samples, on the other parameters (but a following ``mu_s`` on
+its ``mu``) or on the order in which samples run.
 """
 from __future__ import annotations
 
@@ -71,13 +80,16 @@ class Parameter:
     """One perturbable parameter of a scene.
 
     ``name`` is ``<instance>.<FMU parameter>`` (a column of sweep.csv); ``kind`` a key of
-    :data:`WEIGHTS`; ``absolute``: drawn as nominal + u xi (else nominal (1 + u xi)).
+    :data:`WEIGHTS`; ``absolute``: drawn as nominal + u xi (else nominal (1 + u xi));
+    ``follows``: the name of the parameter whose relative change this one takes when it has
+    no uncertainty of its own (u None, :func:`uncertainties`), "" for none.
     """
 
     name: str
     nominal: float
     kind: str
     absolute: bool = False
+    follows: str = ""
 
     @property
     def instance(self) -> str:
@@ -124,6 +136,9 @@ def perturbable(scene: Scene) -> list:
         motor = get_motor_preset(c.parameters.get("preset", "motor1"))
         for field, kind in _MOTOR:
             out.append(Parameter(f"{c.name}.{field}", _given(c, field, getattr(motor, field)), kind))
+        if c.parameters.get("friction", "tanh") == "lugre":     # mu_s >= mu: the ratio kept
+            out.append(Parameter(f"{c.name}.mu_s", _given(c, "mu_s", motor.mu_s), "friction",
+                                 follows=f"{c.name}.mu"))
     return [p for p in out if p.absolute or p.nominal != 0.0]
 
 
@@ -158,11 +173,12 @@ def load_perturb_file(path) -> dict:
 
 def uncertainties(parameters: list, U: float, overrides: dict | None = None) -> dict:
     """Parameter name -> its u_p: ``U * WEIGHTS[kind]``, or the last matching pattern of
-    ``overrides`` (fnmatch against the name).  A pattern that matches nothing is an error
-    (ValueError naming it): a typo must not silently leave a parameter nominal."""
+    ``overrides`` (fnmatch against the name).  A parameter that follows another (a LuGre
+    drive's ``mu_s``) has None unless a pattern matches it.  A pattern that matches nothing
+    is an error (ValueError naming it): a typo must not silently leave a parameter nominal."""
     if not (isinstance(U, (int, float)) and math.isfinite(U) and U >= 0.0):
         raise ValueError(f"uncertainty U = {U!r} must be a finite number >= 0")
-    result = {p.name: U * WEIGHTS[p.kind] for p in parameters}
+    result = {p.name: None if p.follows else U * WEIGHTS[p.kind] for p in parameters}
     for pattern, u in (overrides or {}).items():
         matched = [name for name in result if fnmatch.fnmatchcase(name, pattern)]
         if not matched:
@@ -189,17 +205,26 @@ def _xi(seed: int, sample: int, name: str, distribution: str) -> float:
 def draw(parameters: list, spread: dict, seed: int, sample: int, distribution: str = "uniform") -> dict:
     """Parameter name -> value of ``sample``: nominal (1 + u xi) or nominal + u xi.
 
-    A parameter with u = 0 keeps exactly its nominal value."""
+    A parameter with u = 0 keeps exactly its nominal value; one with u None takes the relative
+    change of the parameter it follows (which must be among ``parameters``)."""
     if distribution not in DISTRIBUTIONS:
         raise ValueError(f"distribution = {distribution!r}; valid: {', '.join(DISTRIBUTIONS)}")
     values = {}
     for p in parameters:
         u = spread[p.name]
+        if u is None:
+            continue
         if u == 0.0:
             values[p.name] = p.nominal
             continue
         xi = _xi(seed, sample, p.name, distribution)
         values[p.name] = p.nominal + u * xi if p.absolute else p.nominal * (1.0 + u * xi)
+    nominal = {p.name: p.nominal for p in parameters}
+    for p in parameters:
+        if spread[p.name] is None:
+            if p.follows not in values:
+                raise ValueError(f"parameter {p.name} follows {p.follows!r}, which is not drawn with it")
+            values[p.name] = p.nominal * (values[p.follows] / nominal[p.follows])
     return values
 
 

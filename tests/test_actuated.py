@@ -240,3 +240,58 @@ def test_a_bad_input_changes_nothing():
         a.step((2.0, float("nan")), (0.2, -0.2), (0.0, 0.0), 1e-3)
     assert np.array_equal(a.state(), state) and vars(controller) == before
     a.step((1.0, -1.0), (0.2, -0.2), (0.0, 0.0), 1e-3)            # and it steps on
+
+
+# --- idle steps: the plant as a model inside a control chain (fmus.embedded.ChainCore) --------
+
+def _actuated_slave(mode):
+    from fmus.instances import InProcessInstance
+
+    instance = InProcessInstance("ActuatedFiveBarPlant", "plant")
+    instance.initialize({"preset": "bench", "x0": START[0], "y0": START[1], "mode": mode, "substeps": 32}, 0.0)
+    return instance.slave
+
+
+def test_idle_steps_hold_zero_volts_as_the_real_plant_commanded_zero():
+    """ChainCore commands the real plant (voltage mode) 0 V over its first step and makes its
+    model idle for that step: the model's idle step must be the real plant's step, bit for bit,
+    whatever the model's current references say, so that the chain's prediction stays exact.
+    With both armatures shorted the state is the ODE of (5.66) and (4.162) at v = 0
+    (scipy's DOP853 of ActuatedPlant.derivative, an integrator independent of the step's
+    compiled RK4); the drives' controllers do not sample, and one idle step is all it takes."""
+    from scipy.integrate import solve_ivp
+
+    model, plant = _actuated_slave("current"), _actuated_slave("voltage")
+    h = 1e-3
+    for k in range(30):                                   # a motion with currents to short
+        model.i_ref1, model.i_ref2 = 3.0 * np.sin(40 * k * h), -2.0
+        model.i_hat1, model.i_hat2 = model.i1, model.i2
+        model.do_step(k * h, h)
+        plant.v_ref1, plant.v_ref2 = model.v1, model.v2    # the voltages the model's drives applied
+        plant.do_step(k * h, h)
+    assert np.array_equal(model.actuated.state(), plant.actuated.state())
+    z0 = model.actuated.state()
+    assert np.min(np.abs(z0[14:])) > 0.1 and abs(model.dq1) > 0.1   # currents and speed to short
+
+    controllers = [d.controller.buf.copy() for _, d in model.actuated.drives]
+    model.idle_steps = 1
+    model.i_ref1, model.i_ref2 = 5.0, 5.0                 # ignored while idle
+    model.do_step(30 * h, h)
+    plant.v_ref1 = plant.v_ref2 = 0.0
+    plant.do_step(30 * h, h)
+    assert model.idle_steps == 0
+    assert np.array_equal(model.actuated.state(), plant.actuated.state())
+    assert (model.v1, model.v2, model.i1, model.tau2) == (0.0, 0.0, plant.i1, plant.tau2)
+    assert all(np.array_equal(d.controller.buf, c) for (_, d), c in zip(model.actuated.drives, controllers))
+
+    exact = solve_ivp(lambda t, z: model.actuated.derivative(z, [0.0, 0.0]), (0.0, h), z0, method="DOP853",
+                      rtol=1e-12, atol=1e-14).y[:, -1]
+    z1 = model.actuated.state()
+    # RK4 at 32 sub-steps (R h / L = 0.05): 5.5e-8 A measured, 1.6e-5 A at 8 sub-steps (the h^4 ratio)
+    assert np.max(np.abs(z1[14:] - exact[14:])) < 1e-6 * np.max(np.abs(z0[14:]))
+    assert np.max(np.abs(z1[7:14] - exact[7:14])) < 1e-6 * np.max(np.abs(z0[7:14]))
+    assert np.max(np.abs(z1[14:] - z0[14:])) > 0.1        # the short changed the currents
+
+    model.i_hat1, model.i_hat2 = model.i1, model.i2
+    model.do_step(31 * h, h)                              # idle no more: the controllers sample 5 A
+    assert model.v1 > 0.0 and model.v2 > 0.0

@@ -38,12 +38,15 @@ def test_agreeing_measurements_change_nothing(moving):
     assert corrected_state(moving, {k: o[k] for k in ("q1", "q2", "dq1", "dq2")}, H) is None
 
 
-def test_a_reading_one_count_off_moves_the_angle_just_inside_its_cell(moving):
+@pytest.mark.parametrize("off", [1, -1], ids=["above", "below"])
+def test_a_reading_one_count_off_moves_the_angle_just_inside_its_cell(moving, off):
+    """The model's angle moves to the near edge of the measured cell (a margin inside), on
+    whichever side of it the angle lies: the least move the reading allows."""
     o, c = moving.outputs(), moving.count
-    z = corrected_state(moving, {"q1_enc": o["q1_enc"] + c, "q2_enc": o["q2_enc"]}, H)
+    z = corrected_state(moving, {"q1_enc": o["q1_enc"] + off * c, "q2_enc": o["q2_enc"]}, H)
     q1, q2 = fivebar.world_angles(z[:7])
-    assert math.floor(q1 / c + 0.5) * c == pytest.approx(o["q1_enc"] + c, abs=1e-15)
-    assert q1 == pytest.approx(o["q1_enc"] + c - (0.5 - CELL_MARGIN) * c, abs=1e-13)
+    assert math.floor(q1 / c + 0.5) * c == pytest.approx(o["q1_enc"] + off * c, abs=1e-15)
+    assert q1 == pytest.approx(o["q1_enc"] + off * c - off * (0.5 - CELL_MARGIN) * c, abs=1e-13)
     assert q2 == pytest.approx(o["q2"], abs=1e-13)          # inside its cell: left alone
     dq1, dq2 = fivebar.world_rates(z[7:])
     assert dq1 == pytest.approx(o["dq1"] + VELOCITY_GAIN * (q1 - o["q1"]) / H, rel=1e-9)

@@ -255,3 +255,50 @@ def test_report_engine_gives_the_serial_results(client, tmp_path):
         for key in ("e_ef_mm", "tau_ef_Nm", "e_ss_mm", "e_ss_x_mm", "e_ss_y_mm", "e_max_mm", "simulated_s"):
             assert _same(engine[name][key], serial[key]), (name, key)
         assert (tmp_path / name / "result.csv").exists() and (tmp_path / name / "path.png").exists()
+
+
+def _lugre_scene():
+    from scenarios.scenes import Fidelity, bench
+
+    return with_stop_time(bench("TCx", "triangle", fidelity=Fidelity(friction="lugre")), SHORT)
+
+
+def test_a_lugre_drive_s_break_away_follows_its_coulomb_torque():
+    """mu_s is a parameter of LuGre drives only; without an uncertainty of its own it takes
+    mu's relative change, so every sample keeps the preset's ratio mu_s/mu (1.25)."""
+    from motor import get_motor_preset
+
+    assert not any(p.name.endswith(".mu_s") for p in perturbable(get_scene(SCENE)))      # tanh drives
+    params = perturbable(_lugre_scene())
+    spread = uncertainties(params, 0.3)
+    assert spread["drive1.mu"] == 0.3 and spread["drive1.mu_s"] is None
+    for j in (1, 2):
+        preset = get_motor_preset(f"motor{j}")
+        for i in range(20):
+            v = draw(params, spread, 0, i)
+            assert v[f"drive{j}.mu_s"] / v[f"drive{j}.mu"] == pytest.approx(preset.mu_s / preset.mu, rel=1e-15)
+    own = uncertainties(params, 0.3, {"drive1.mu_s": 0.0})          # the user's mu_s: held
+    assert all(draw(params, own, 0, i)["drive1.mu_s"] == get_motor_preset("motor1").mu_s for i in range(5))
+    with pytest.raises(ValueError, match="drive1.mu_s follows 'drive1.mu', which is not drawn with it"):
+        draw([p for p in params if p.name != "drive1.mu"], spread, 0, 0)
+
+
+def test_a_lugre_sample_with_mu_past_the_preset_s_break_away_runs(client):
+    """A sample whose mu is drawn 27 % or more above the preset's (past the preset's mu_s =
+    1.25 mu) runs, with mu_s scaled by the same factor; the same sample with mu_s held by the
+    user (its own uncertainty 0) has mu > mu_s, which the drive refuses naming both."""
+    from motor import motor1
+
+    scene = _lugre_scene()
+    params = perturbable(scene)
+    ours = {"uncertainty": {"drive1.mu": 0.3}}
+    spread = uncertainties(params, 0.0, ours["uncertainty"])
+    seed = next(s for s in range(200) if draw(params, spread, s, 0)["drive1.mu"] > 1.27 * motor1.mu)
+    row = run_sweep(scene, 1, 0.0, seed=seed, perturb=ours, client=client).rows[0]
+    assert row["completed"], row["error"]
+    assert row["drive1.mu"] > 1.27 * motor1.mu > motor1.mu_s
+    assert row["drive1.mu_s"] / row["drive1.mu"] == pytest.approx(motor1.mu_s / motor1.mu, rel=1e-15)
+    held = {"uncertainty": {"drive1.mu": 0.3, "drive1.mu_s": 0.0}}
+    row = run_sweep(scene, 1, 0.0, seed=seed, perturb=held, client=client).rows[0]
+    assert not row["completed"] and row["drive1.mu_s"] == motor1.mu_s
+    assert "break-away torque Fs (mu_s)" in row["error"] and "Coulomb torque Fc (mu)" in row["error"], row["error"]
