@@ -175,3 +175,18 @@ def test_the_shipped_calibration_gives_the_reported_circle():
     for s, by_seed in runs.items():
         for key in ("e_ef_mm", "tau_ef_Nm"):
             assert by_seed[101][key] == pytest.approx(stored[s]["101"][key], rel=1e-3), (s, key)
+
+
+def test_margin_runs_raise_lambda_and_apply_the_delay():
+    """scenarios.twin_margin: the controller gets λ + 5 and the chosen delay.  At λ = 60 a 14 ms
+    delay costs ω τ ≈ 120 rad/s × 0.014 s ≈ 1.7 rad of phase at the loop's crossover (kv = 2λ),
+    more than its margin: the torque grows several-fold, which a delay not applied would not do."""
+    from scenarios.twin_margin import margin, with_controller
+
+    scene = with_controller(bench_real("TCq", "circle", Twin()), lam=65.0, delay_steps=3)
+    ctrl = scene.system.component("ctrl").parameters
+    assert ctrl["lam"] == 65.0 and ctrl["delay_steps"] == 3 and ctrl["strategy"] == "TCq"
+    rows = margin("circle", 5.0, delays=(1, 14), twin=Twin(), strategies=("TCq",))
+    assert [(r["delay"], r["lam"]) for r in rows] == [(1, 60.0), (14, 60.0)]
+    assert rows[1]["base"]["tau_ef_Nm"] > 5 * rows[0]["base"]["tau_ef_Nm"]
+    assert rows[0]["raised"]["e_ef_mm"] != rows[0]["base"]["e_ef_mm"]
