@@ -1,15 +1,16 @@
 """The bench twin's stability margin against the thesis' statement about the bench's.
 
-    python -m scenarios.twin_margin [--kind circle] [--extra 5] [--delays 1 3 6 10 14]
+    python -m scenarios.twin_margin [--kind circle] [--extra 5] [--delays 1 3 6 10 14] [--fc-vel 100]
 
-or in Python: ``margin(kind, extra, delays)``.
+or in Python: ``margin(kind, extra, delays, fc_vel=...)``.
 
 Section 7.2.12 of the thesis: "um aumento de 5 rad/s nos valores utilizados do parâmetro λ já
 seria o suficiente para comprometer a estabilidade do sistema em todas as estratégias de
 controle utilizadas" (raising λ of Tables 6-8 by 5 rad/s was found, on the bench, to
 compromise stability with every strategy).  This script runs each twin scene with its
 table's λ and with λ + ``extra``, for each computation delay in ``delays`` (the twin's is 1
-sample), in compiled mode, and prints e_ef, τ_ef and e_max of both: a twin with the bench's
+sample) and the derivator's velocity cut-off ``fc_vel`` (the thesis gives none; ours is
+100 Hz, docs/derivators.md), in compiled mode, and prints e_ef, τ_ef and e_max of both: a twin with the bench's
 margin would degrade at λ + 5; one that tracks better there has a wider margin than the bench.
 Figures: docs/twin.md ("Stability margin").
 """
@@ -29,17 +30,23 @@ from .twin_fit import ORDER
 THESIS_LAMBDA_STEP = 5.0
 
 
-def with_controller(scene, **parameters):
-    """``scene`` with the controller's parameters updated by ``parameters``."""
-    components = tuple(replace(c, parameters={**c.parameters, **parameters}) if c.name == "ctrl" else c
+def with_parameters(scene, name: str = "ctrl", **parameters):
+    """``scene`` with component ``name``'s parameters updated by ``parameters``."""
+    components = tuple(replace(c, parameters={**c.parameters, **parameters}) if c.name == name else c
                        for c in scene.system.components)
     return replace(scene, system=replace(scene.system, components=components))
 
 
+def with_controller(scene, **parameters):
+    """``scene`` with the controller's parameters updated by ``parameters``."""
+    return with_parameters(scene, "ctrl", **parameters)
+
+
 def margin(kind: str = "circle", extra: float = THESIS_LAMBDA_STEP, delays=(DELAY_STEPS,),
-           twin: Twin | None = None, strategies=ORDER) -> list[dict]:
+           twin: Twin | None = None, strategies=ORDER, fc_vel: float | None = None) -> list[dict]:
     """One row per (delay, strategy): the metrics of the twin scene at the table's λ
-    (``base``) and at λ + ``extra`` (``raised``), compiled mode, seed of the scenes."""
+    (``base``) and at λ + ``extra`` (``raised``), compiled mode, seed of the scenes;
+    ``fc_vel`` [Hz], if given, is the derivator's velocity cut-off."""
     if kind not in KINDS:
         raise ValueError(f"kind = {kind!r}; valid: {', '.join(KINDS)}")
     twin = load_twin() if twin is None else twin
@@ -48,6 +55,8 @@ def margin(kind: str = "circle", extra: float = THESIS_LAMBDA_STEP, delays=(DELA
         for s in strategies:
             lam = get_strategy(s, kind).lam
             scene = bench_real(s, kind, twin)
+            if fc_vel is not None:
+                scene = with_parameters(scene, "deriv", fc_vel=float(fc_vel))
             runs = {label: run_scene(with_controller(scene, lam=lam + step, delay_steps=int(delay)),
                                      mode="compiled", plots=False).metrics
                     for label, step in (("base", 0.0), ("raised", extra))}
@@ -72,8 +81,10 @@ def main(argv=None) -> int:
     parser.add_argument("--extra", type=float, default=THESIS_LAMBDA_STEP, help="λ step [rad/s] (default 5)")
     parser.add_argument("--delays", type=int, nargs="+", default=[DELAY_STEPS],
                         help=f"computation delays [samples] (default {DELAY_STEPS}, the twin's)")
+    parser.add_argument("--fc-vel", type=float, default=None,
+                        help="the derivator's velocity cut-off [Hz] (default: the scene's, 100)")
     args = parser.parse_args(argv)
-    print(render(margin(args.kind, args.extra, args.delays), args.extra), end="")
+    print(render(margin(args.kind, args.extra, args.delays, fc_vel=args.fc_vel), args.extra), end="")
     return 0
 
 

@@ -190,3 +190,8 @@ def test_margin_runs_raise_lambda_and_apply_the_delay():
     assert [(r["delay"], r["lam"]) for r in rows] == [(1, 60.0), (14, 60.0)]
     assert rows[1]["base"]["tau_ef_Nm"] > 5 * rows[0]["base"]["tau_ef_Nm"]
     assert rows[0]["raised"]["e_ef_mm"] != rows[0]["base"]["e_ef_mm"]
+    # fc_vel reaches the derivator: a 20 Hz Bessel velocity filter lags about as much as a
+    # 10 ms delay, which PDx's loop at λ = 75 does not survive (docs/twin.md)
+    slow = margin("circle", 5.0, twin=Twin(), strategies=("PDx",), fc_vel=20.0)[0]
+    plain = margin("circle", 5.0, twin=Twin(), strategies=("PDx",))[0]
+    assert slow["raised"]["tau_ef_Nm"] > 3 * plain["raised"]["tau_ef_Nm"]
