@@ -1,0 +1,123 @@
+"""Linear stability limits of the bench twin's joint loops, rigid or with a drive-link spring.
+
+    python benchmarks/twin_linear_margin.py [--inertia-error E] [--freqs 200 250 300 400 500]
+
+At the circle's start point (where the thesis, 7.2.12, places the TC laws' λ limit), each
+strategy family's loop linearised about rest: the plant's joint-space inertia (Tables 4-5,
+links times 1 + E, the rotors of Tables 16 and 18), torque held over each 1 ms sample and
+applied one sample late (the twin's delay), the derivator's velocity chain (backward
+difference (7.19) and the 100 Hz Bessel low-pass, controller.derivators), and the law
+τ = G (λ² e + 2λ ė) with G = m* (PDq), M̂ = Jᵀ Λ̂ J (TCq, TCx: the controller's model) or
+Jᵀ m*ₓ J (PDx).  Friction, quantisation and the sliding-mode terms are left out.  It prints
+the smallest λ whose closed loop has a pole on or outside the unit circle, rigid and with a
+spring of natural frequency f between each rotor and its link (encoder on the rotor, damping
+ratio ζ), beside the bench's limits (λ of Tables 6-8 plus 5 rad/s), and each family's
+velocity gain kv/J = 2 (λ+5) G / J at the bench's limit.  Figures: docs/twin.md.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+from dataclasses import replace
+
+import numpy as np
+from scipy.linalg import expm
+
+from controller.derivators import Derivator, _differentiator_ss
+from controller.kinematics import Kinematics
+from controller.model import ExactModel
+from controller.strategies import get_strategy
+from controller.trajectories import get_trajectory
+from plant import get_preset
+
+T = 1e-3
+LINKS = ("m1", "m2", "Jz1", "Jz2")
+
+
+def joint_inertia(params, x, y, J):
+    """Jᵀ Λ J: the joint-space inertia at (x, y) at rest (Λ from the inverse dynamics (5.74))."""
+    H00, H01, H11, *_ = ExactModel(params).terms(x, y, 0.0, 0.0)
+    return J.T @ np.array([[H00, H01], [H01, H11]]) @ J
+
+
+def setup(inertia_error: float):
+    params = get_preset("bench")
+    x, y = get_trajectory("circle").start_point
+    kin = Kinematics(params)
+    angles = kin.inverse(x, y)
+    J = np.array(kin.jacobian(x, y, angles[0], angles[2])).reshape(2, 2)
+    links = params.with_rotors(0.0, 0.0)
+    links = replace(links, **{c: replace(getattr(links, c), **{f: getattr(getattr(links, c), f) * (1 + inertia_error)
+                                                                for f in LINKS}) for c in ("chain1", "chain2")})
+    Jr = np.diag([params.chain1.J_rotor, params.chain2.J_rotor])
+    families = {"PDq": (get_strategy("PDq").m_star * np.eye(2), get_strategy("PDq").lam),
+                "TCq/TCx": (joint_inertia(params, x, y, J), get_strategy("TCq").lam),
+                "PDx": (J.T @ (get_strategy("PDx").m_star * np.eye(2)) @ J, get_strategy("PDx").lam)}
+    return (x, y), joint_inertia(links, x, y, J), Jr, families
+
+
+def plant(Ml, Jr, k=None, zeta=0.0):
+    """ZOH discretisation (Ad, Bd) and the rotor-angle output Cm; rigid if k is None."""
+    Z, I = np.zeros((2, 2)), np.eye(2)
+    if k is None:
+        A = np.block([[Z, I], [Z, Z]])
+        B = np.vstack([Z, np.linalg.inv(Ml + Jr)])
+        Cm = np.hstack([I, Z])
+    else:
+        reduced = np.diag(Jr) * np.diag(Ml) / (np.diag(Jr) + np.diag(Ml))
+        K, C = k * I, np.diag(2 * zeta * np.sqrt(k * reduced))
+        iJ, iM = np.linalg.inv(Jr), np.linalg.inv(Ml)
+        A = np.block([[Z, Z, I, Z], [Z, Z, Z, I], [-iJ @ K, iJ @ K, -iJ @ C, iJ @ C],
+                      [iM @ K, -iM @ K, iM @ C, -iM @ C]])
+        B = np.vstack([Z, Z, iJ, Z])
+        Cm = np.hstack([I, Z, Z, Z])
+    n = A.shape[0]
+    big = expm(np.block([[A, B], [np.zeros((2, n + 2))]]) * T)
+    return big[:n, :n], big[:n, n:], Cm
+
+
+def spectral_radius(Ad, Bd, Cm, G, lam, derivator):
+    """Closed loop on the state [plant, derivator, pending command]."""
+    va, vb, vc, vd = (np.kron(np.eye(2), m) for m in derivator)
+    n, nv = Ad.shape[0], va.shape[0]
+    M = np.zeros((n + nv + 2, n + nv + 2))
+    M[:n, :n], M[:n, n + nv:] = Ad, Bd
+    M[n:n + nv, :n], M[n:n + nv, n:n + nv] = vb @ Cm, va
+    M[n + nv:, :n] = -G @ (lam ** 2 * Cm + 2 * lam * vd @ Cm)
+    M[n + nv:, n:n + nv] = -G @ (2 * lam * vc)
+    return max(abs(np.linalg.eigvals(M)))
+
+
+def lambda_limit(Ad, Bd, Cm, G, derivator, lams=np.arange(5.0, 400.0, 1.0)):
+    """The smallest λ of ``lams`` with a closed-loop pole on or outside the unit circle."""
+    for lam in lams:
+        if spectral_radius(Ad, Bd, Cm, G, lam, derivator) >= 1.0:
+            return float(lam)
+    return math.inf
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--inertia-error", type=float, default=0.6376, help="links / Tables 4-5 - 1 (the fit's)")
+    parser.add_argument("--freqs", type=float, nargs="+", default=[200, 250, 300, 400, 500, 1000])
+    parser.add_argument("--zeta", type=float, nargs="+", default=[0.02, 0.1])
+    args = parser.parse_args(argv)
+    point, Ml, Jr, families = setup(args.inertia_error)
+    derivator = _differentiator_ss(Derivator().velocity_sos, T)
+    print(f"start point {point}, real joint inertia diag {np.diag(Ml + Jr).round(5)}")
+    for name, (G, lam) in families.items():
+        kv = 2 * (lam + 5) * np.diag(G) / np.diag(Ml + Jr)
+        print(f"{name}: G diag {np.diag(G).round(5)}, bench limit λ {lam + 5:g}, kv/J there {kv.round(1)} rad/s")
+    rigid = plant(Ml, Jr)
+    print("rigid:", {n: lambda_limit(*rigid, G, derivator) for n, (G, _) in families.items()})
+    for zeta in args.zeta:
+        for f in args.freqs:
+            k = (2 * math.pi * f) ** 2 / (1 / Jr[0, 0] + 1 / Ml[0, 0])
+            system = plant(Ml, Jr, k, zeta)
+            print(f"spring {f:g} Hz (k {k:.0f} N m/rad), zeta {zeta:g}:",
+                  {n: lambda_limit(*system, G, derivator) for n, (G, _) in families.items()})
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
