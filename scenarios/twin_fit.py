@@ -177,6 +177,7 @@ def fit(points: int = 64, starts: int = 4, maxfev: int = 120, seeds=FIT_SEEDS, w
                                    f"scipy Nelder-Mead (maxfev {maxfev}) from the {starts} best",
                       "screen_best": [round(v, 5) for v, _ in screened[:starts]],
                       "descent_losses": [round(d[0], 5) for d in descents],
+                      "descent_ends": [list(d[1].values().values()) for d in descents],
                       "seeds": list(seeds), "tables": "circle: Tables 9, 11, 13 (scenarios.report)",
                       "wall_s": round(time.perf_counter() - t0, 1), "commit": commit}, path)
     return best
@@ -231,7 +232,22 @@ def _spread(by_seed: dict, key: str) -> tuple:
     return float(np.mean(values)), float(np.min(values)), float(np.max(values))
 
 
-def render(runs: dict, twin: Twin, fit_info: dict, moved: dict | None = None) -> str:
+def descent_ends(fit_info: dict) -> list:
+    """[(loss, twin)] of the ends of the fit's descents (``[fit]`` ``descent_losses`` and
+    ``descent_ends``, parameters in :data:`scenarios.twin.PARAMETERS` order); [] if absent."""
+    ends = fit_info.get("descent_ends", [])
+    return [(loss_, Twin(**dict(zip(PARAMETERS, values)))) for loss_, values in zip(fit_info.get("descent_losses", []), ends)]
+
+
+def calibration_spread(fit_info: dict, seed: int = SPREAD_SEEDS[0]) -> list:
+    """[(loss, twin, kind -> strategy -> metrics)] for each end of the fit's descents, both
+    trajectories, noise seed ``seed``: how much the prediction depends on which of the nearly
+    equal circle fits is taken."""
+    return [(value, twin, {kind: {s: by_seed[seed] for s, by_seed in run_twin(twin, kind, (seed,)).items()}
+                           for kind in KINDS}) for value, twin in descent_ends(fit_info)]
+
+
+def render(runs: dict, twin: Twin, fit_info: dict, moved: dict | None = None, spread: list | None = None) -> str:
     """docs/twin.md from the runs of :func:`predict` (and of :func:`sensitivity`, ``moved``)."""
     seeds = list(next(iter(runs["circle"].values())))
     lines = ["# The bench twin: calibrated on the circle, the triangle predicted", "",
@@ -285,8 +301,28 @@ def render(runs: dict, twin: Twin, fit_info: dict, moved: dict | None = None) ->
                     cells.append(f"{_spread(runs[kind][s], key)[0]:.3f} [{low:.3f}–{high:.3f}]")
             lines.append(f"| {s} | " + " | ".join(cells) + " |")
         lines.append("")
+    if spread:
+        lines += _render_spread(spread)
     lines += _verdict(runs)
     return "\n".join(lines) + "\n"
+
+
+def _render_spread(spread: list) -> list:
+    lines = [f"## Calibration spread: the ends of the fit's {len(spread)} descents (seed {SPREAD_SEEDS[0]})", "",
+             "Each descent of the fit ended at a different point with a nearly equal circle loss; each point's "
+             "e_ef / bench, min–max over the points (the fitted twin is the first):", "",
+             "| descent end | loss | " + " | ".join(f"`{name}`" for name in PARAMETERS) + " |",
+             "|---|---|" + "---|" * len(PARAMETERS)]
+    for i, (value, twin, _) in enumerate(sorted(spread, key=lambda item: item[0])):
+        lines.append(f"| {i} | {value:.4f} | " + " | ".join(f"{v:.3g}" for v in twin.values().values()) + " |")
+    lines += ["", "| strategy | circle e_ef / bench | triangle e_ef / bench |", "|---|---|---|"]
+    for s in ORDER:
+        cells = []
+        for kind in KINDS:
+            ratios = [runs[kind][s]["e_ef_mm"] / THESIS_BENCH[kind][s][0] for _, _, runs in spread]
+            cells.append(f"{min(ratios):.2f}–{max(ratios):.2f}")
+        lines.append(f"| {s} | " + " | ".join(cells) + " |")
+    return lines + [""]
 
 
 def _verdict(runs: dict) -> list:
@@ -338,12 +374,13 @@ def write_twin_report(out_dir="docs", seeds=SPREAD_SEEDS, method_text: str = "")
     twin = load_twin()
     runs = predict(twin, seeds)
     moved = sensitivity(twin)
+    spread = calibration_spread(read_fit())
     slim = {kind: {s: {str(seed): {k: m.get(k) for k in (*METRICS, "settled", "t_settle_s", "e_ss_1s_mm", "completed")}
                        for seed, m in by_seed.items()} for s, by_seed in by_kind.items()}
             for kind, by_kind in runs.items()}
     (out / "twin_runs.json").write_text(json.dumps(slim, indent=1) + "\n")
     plot(runs, out / "twin.png")
-    text = render(runs, twin, read_fit(), moved) + "![twin beside the bench](twin.png)\n\n" + method_text
+    text = render(runs, twin, read_fit(), moved, spread) + "![twin beside the bench](twin.png)\n\n" + method_text
     path = out / "twin.md"
     path.write_text(text)
     return path

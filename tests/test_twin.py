@@ -157,6 +157,8 @@ def test_the_fit_reads_only_the_circle_and_finds_the_global_minimum(monkeypatch,
     best = twin_fit.fit(points=16, starts=2, maxfev=40, workers=1, path=tmp_path / "fit.toml", log=lambda line: None)
     assert set(kinds) == {"circle"}
     assert best.friction_scale == pytest.approx(3.5, abs=0.05)
+    ends = twin_fit.descent_ends(read_fit(tmp_path / "fit.toml"))    # what the report's spread reruns
+    assert len(ends) == 2 and min(ends, key=lambda end: end[0])[1] == best
     assert load_twin(tmp_path / "fit.toml") == best and read_fit(tmp_path / "fit.toml")["evaluations"] == len(kinds)
 
 
