@@ -10,8 +10,9 @@ controle utilizadas" (raising λ of Tables 6-8 by 5 rad/s was found, on the benc
 compromise stability with every strategy).  This script runs each twin scene with its
 table's λ and with λ + ``extra``, for each computation delay in ``delays`` (the twin's is 1
 sample) and the derivator's velocity cut-off ``fc_vel`` (the thesis gives none; ours is
-100 Hz, docs/derivators.md), in compiled mode, and prints e_ef, τ_ef and e_max of both: a twin with the bench's
-margin would degrade at λ + 5; one that tracks better there has a wider margin than the bench.
+100 Hz, docs/derivators.md), in compiled mode, and prints e_ef, τ_ef, e_max and the peak
+drive voltage of both: a twin with the bench's margin would degrade at λ + 5; one that tracks
+better there has a wider margin than the bench.
 Figures: docs/twin.md ("Stability margin").
 """
 from __future__ import annotations
@@ -19,6 +20,8 @@ from __future__ import annotations
 import argparse
 import sys
 from dataclasses import replace
+
+import numpy as np
 
 from controller.strategies import get_strategy
 
@@ -57,21 +60,31 @@ def margin(kind: str = "circle", extra: float = THESIS_LAMBDA_STEP, delays=(DELA
             scene = bench_real(s, kind, twin)
             if fc_vel is not None:
                 scene = with_parameters(scene, "deriv", fc_vel=float(fc_vel))
-            runs = {label: run_scene(with_controller(scene, lam=lam + step, delay_steps=int(delay)),
-                                     mode="compiled", plots=False).metrics
+            runs = {label: _run(with_controller(scene, lam=lam + step, delay_steps=int(delay)))
                     for label, step in (("base", 0.0), ("raised", extra))}
             rows.append({"delay": int(delay), "strategy": s, "lam": lam, **runs})
     return rows
 
 
+def _run(scene) -> dict:
+    """The scene's metrics, plus ``v_peak``: the largest drive voltage magnitude of the run [V]
+    (the circle's abrupt start asks the most of the drives, 7.2.12)."""
+    outcome = run_scene(scene, mode="compiled", plots=False)
+    signals = outcome.result.signals
+    peak = max(float(np.max(np.abs(signals[f"drive{j}.v"]))) for j in (1, 2))
+    return {**outcome.metrics, "v_peak": peak}
+
+
 def render(rows: list[dict], extra: float) -> str:
     """The rows as a markdown table (e_ef, τ_ef, e_max at λ and at λ + extra)."""
     lines = [f"| delay [samples] | strategy | λ | e_ef mm at λ | at λ+{extra:g} | τ_ef N m at λ | at λ+{extra:g} | "
-             f"e_max mm at λ | at λ+{extra:g} |", "|---|---|---|---|---|---|---|---|---|"]
+             f"e_max mm at λ | at λ+{extra:g} | peak drive V at λ | at λ+{extra:g} |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         b, h = r["base"], r["raised"]
         lines.append(f"| {r['delay']} | {r['strategy']} | {r['lam']:g} | {b['e_ef_mm']:.2f} | {h['e_ef_mm']:.2f} | "
-                     f"{b['tau_ef_Nm']:.3f} | {h['tau_ef_Nm']:.3f} | {b['e_max_mm']:.1f} | {h['e_max_mm']:.1f} |")
+                     f"{b['tau_ef_Nm']:.3f} | {h['tau_ef_Nm']:.3f} | {b['e_max_mm']:.1f} | {h['e_max_mm']:.1f} | "
+                     f"{b['v_peak']:.1f} | {h['v_peak']:.1f} |")
     return "\n".join(lines) + "\n"
 
 

@@ -192,6 +192,8 @@ def test_margin_runs_raise_lambda_and_apply_the_delay():
     assert [(r["delay"], r["lam"]) for r in rows] == [(1, 60.0), (14, 60.0)]
     assert rows[1]["base"]["tau_ef_Nm"] > 5 * rows[0]["base"]["tau_ef_Nm"]
     assert rows[0]["raised"]["e_ef_mm"] != rows[0]["base"]["e_ef_mm"]
+    # the drives' peak voltage: within the 24 V supply, and higher gains ask more of it at the start
+    assert 0.0 < rows[0]["base"]["v_peak"] < rows[0]["raised"]["v_peak"] <= 24.0
     # fc_vel reaches the derivator: a 20 Hz Bessel velocity filter lags about as much as a
     # 10 ms delay, which PDx's loop at λ = 75 does not survive (docs/twin.md)
     slow = margin("circle", 5.0, twin=Twin(), strategies=("PDx",), fc_vel=20.0)[0]
