@@ -83,7 +83,7 @@ CHAIN_PARAMETERS = (
 
 def declare_plant(slave) -> None:
     """The mechanism's outputs and parameters (thesis ch. 7.1, Tables 3-5)."""
-    from plant import IntegratorSettings
+    from plant import ENCODER_COUNTS, IntegratorSettings
 
     defaults = IntegratorSettings()
     d = slave.declare
@@ -100,7 +100,7 @@ def declare_plant(slave) -> None:
     d("gravity_y", "parameter", 0.0, "Gravity, world y [m/s2]")
     d("gravity_z", "parameter", 0.0, "Gravity, world z [m/s2] (no effect on the planar motion)")
     d("link_inertias", "parameter", True, "Links have their inertias Jz (false: point masses at the centres of mass)")
-    d("encoder_counts", "parameter", 20000, "Encoder counts per revolution (quadrature)")
+    d("encoder_counts", "parameter", ENCODER_COUNTS, "Encoder counts per revolution (quadrature)")
     for k in (1, 2):
         for field, text in CHAIN_PARAMETERS:
             d(f"chain{k}_{field}", "parameter", PRESET_VALUE, f"Chain {k}: {text}; -1: the preset's value")

@@ -107,6 +107,8 @@ class PlantError(RuntimeError):
 #: Below this singularity margin the step is refused: the mechanism is at a
 #: singular pose where its dynamics (5.66) lose rank.
 SINGULAR_STOP = 1e-3
+#: Encoder counts per revolution of the thesis' bench (Table 5: 5000 pulses, quadrature).
+ENCODER_COUNTS = 20000
 
 
 class PlantSimulator:
@@ -128,7 +130,7 @@ class PlantSimulator:
     """
 
     def __init__(self, params: FiveBarParams, x0: float, y0: float,
-                 settings: IntegratorSettings = IntegratorSettings(), encoder_counts: int = 20000,
+                 settings: IntegratorSettings = IntegratorSettings(), encoder_counts: int = ENCODER_COUNTS,
                  dx0: float = 0.0, dy0: float = 0.0, encoder_offsets=(0.0, 0.0)):
         self.params = params.validate()
         self.settings = settings.validate()

@@ -33,6 +33,7 @@ from controller.strategies import STRATEGY_NAMES
 from motor import get_motor_preset
 from motor.fastdrive import uniform
 from motor.presets import STICTION_RATIO, motor1
+from plant import ENCODER_COUNTS, get_preset
 
 from .scenes import Fidelity, Scene, bench
 
@@ -163,29 +164,26 @@ def twin_fidelity(twin: Twin, seed: int) -> Fidelity:
 #: The plant's link parameters ``inertia_error`` scales (masses and inertias of both links of
 #: both chains; the rotors are the motor identification's, Tables 16 and 18, not CAD).
 LINK_INERTIAS = ("m1", "m2", "Jz1", "Jz2")
-#: Encoder resolution of the bench plant [counts per revolution] (Table 5; FiveBarPlant's default).
-ENCODER_COUNTS = 20000
 #: The encoders' phase draws use instances ENCODER_STREAM + k, apart from the drives' noise (1, 2).
 ENCODER_STREAM = 1 << 32
 
 
-def encoder_phase(seed: int, k: int) -> float:
+def encoder_phase(seed: int, k: int, counts: int = ENCODER_COUNTS) -> float:
     """Encoder ``k``'s zero error [rad] for noise seed ``seed``: uniform in [-1/2, 1/2) of one
-    count, a function of (seed, k) only (:func:`motor.fastdrive.uniform`)."""
-    return (uniform(seed, ENCODER_STREAM + k, 0) - 0.5) * 2.0 * math.pi / ENCODER_COUNTS
+    count of a ``counts``-count encoder, a function of (seed, k) only
+    (:func:`motor.fastdrive.uniform`)."""
+    return (uniform(seed, ENCODER_STREAM + k, 0) - 0.5) * 2.0 * math.pi / counts
 
 
 def twin_plant(parameters: dict, twin: Twin, seed: int) -> dict:
     """The bench plant's ``parameters`` with the twin's links (``inertia_error``, from the
     preset's Tables 4-5 values) and each encoder's phase (:func:`encoder_phase`)."""
-    from plant import get_preset
-
     params = get_preset(parameters["preset"])
     out = dict(parameters)
     for k, chain in ((1, params.chain1), (2, params.chain2)):
         for name in LINK_INERTIAS:
             out[f"chain{k}_{name}"] = getattr(chain, name) * (1.0 + twin.inertia_error)
-        out[f"encoder_offset{k}"] = encoder_phase(seed, k)
+        out[f"encoder_offset{k}"] = encoder_phase(seed, k, parameters.get("encoder_counts", ENCODER_COUNTS))
     return out
 
 

@@ -25,6 +25,7 @@ import numpy as np
 
 from controller.strategies import get_strategy
 
+from .reference import with_parameters as with_system_parameters
 from .run import run_scene
 from .twin import DELAY_STEPS, KINDS, Twin, bench_real, load_twin
 from .twin_fit import ORDER
@@ -33,11 +34,10 @@ from .twin_fit import ORDER
 THESIS_LAMBDA_STEP = 5.0
 
 
-def with_parameters(scene, name: str = "ctrl", **parameters):
-    """``scene`` with component ``name``'s parameters updated by ``parameters``."""
-    components = tuple(replace(c, parameters={**c.parameters, **parameters}) if c.name == name else c
-                       for c in scene.system.components)
-    return replace(scene, system=replace(scene.system, components=components))
+def with_parameters(scene, name: str, **parameters):
+    """``scene`` with component ``name``'s parameters updated by ``parameters``
+    (:func:`scenarios.reference.with_parameters` on its system)."""
+    return replace(scene, system=with_system_parameters(scene.system, name, **parameters))
 
 
 def with_controller(scene, **parameters):

@@ -8,11 +8,11 @@ import pytest
 
 from fmus.master import simulate
 from motor import get_motor_preset
+from plant import ENCODER_COUNTS, get_preset
 from scenarios import twin_fit
 from scenarios.report import THESIS_BENCH, THESIS_MD_CHANGE
 from scenarios.scenes import get_scene, scene_names
-from plant import get_preset
-from scenarios.twin import (ENCODER_COUNTS, PARAMETERS, PWM_COUNTS, Twin, bench_real, encoder_phase, load_twin,
+from scenarios.twin import (PARAMETERS, PWM_COUNTS, Twin, bench_real, encoder_phase, load_twin,
                             read_fit, write_twin)
 
 
