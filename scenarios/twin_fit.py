@@ -188,16 +188,17 @@ def _text(twin: Twin) -> str:
 
 
 def _map(function, items, extra, workers: int, star: bool = False) -> list:
-    """[function(item, *extra)] (``extra`` a tuple if ``star``, else one argument), in ``workers``
-    spawned processes when more than one (numba kernels load from their cache there)."""
+    """[function(item, *extra)] (``extra`` a tuple if ``star``, else one argument), on a local
+    dask cluster of ``workers`` processes when more than one (:func:`scenarios.engine.open_client`,
+    the sweeps' and the report's; numba kernels load from their cache in each worker)."""
     extra = tuple(extra) if star else (extra,)
     if workers <= 1:
         return [function(item, *extra) for item in items]
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
+    from .engine import open_client
 
-    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-        return list(pool.map(function, items, *[[e] * len(items) for e in extra]))
+    with open_client(workers=workers) as client:
+        futures = client.map(function, items, *[[e] * len(items) for e in extra], pure=False)
+        return client.gather(futures)
 
 
 def predict(twin: Twin | None = None, seeds=SPREAD_SEEDS) -> dict:
