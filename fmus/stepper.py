@@ -44,6 +44,13 @@ def rate_groups(plan) -> list:
     return groups
 
 
+def _exchanges_of(groups) -> list:
+    """Per group of :func:`rate_groups`: [(instance, its inputs' gatherer or None, its outputs'
+    slice)] (a split step's groups differ from the plan's: it needs its own)."""
+    return [[(inst, _gatherer(ins) if ins else None, _span(outs)) for inst, ins, outs in members]
+            for _, members in groups]
+
+
 class Stepper:
     """Instances of ``system`` wired together, stepped in ``order``.
 
@@ -97,9 +104,7 @@ class Stepper:
         self._record = _gatherer(self.record_slots)
         self.plan = plan
         self.groups = rate_groups(plan)
-        #: Per group of one rate: (instance, its inputs' gatherer or None, its outputs' slice).
-        self._exchanges = [[(inst, _gatherer(ins) if ins else None, _span(outs)) for inst, ins, outs in members]
-                           for _, members in self.groups]
+        self._exchanges = _exchanges_of(self.groups)
         self.values = [0.0] * len(self.slots)
         self.time = 0.0
 
@@ -193,8 +198,9 @@ class Stepper:
             by_instance = {id(inst): name for name, inst in self.instances.items()}
             groups = rate_groups([(inst, ins, outs, n * split.get(by_instance[id(inst)], 1))
                                   for inst, ins, outs, n in self.plan])
+        exchanges_by_group = _exchanges_of(groups) if split else self._exchanges
         held = values[:] if jacobi else values
-        for (substeps, members), exchanges in zip(groups, self._exchanges):
+        for (substeps, members), exchanges in zip(groups, exchanges_by_group, strict=True):
             if substeps == 1:
                 inst, gather, outputs = exchanges[0]
                 if gather is not None:
