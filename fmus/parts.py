@@ -43,9 +43,6 @@ MOTOR_PARAMETERS = (
                             "[kg m2], > 0; the plant integrates the real rotor inertia"),
 )
 
-#: MotorParams fields that must be > 0 (refused below :data:`fmus.guarded.TINY`).
-POSITIVE_MOTOR_FIELDS = frozenset({"R", "kt", "ke", "v_max", "omega_eps", "J_rotor", "omega_s", "sigma0"})
-
 #: A drive's options beyond its motor (FMU variable, start value, description): its friction
 #: model and the bench's imperfections (:class:`motor.Drive`; all off by default).
 DRIVE_OPTIONS = (
@@ -272,6 +269,7 @@ def build_drive(slave, suffix: str = "", **options):
     """The :class:`motor.Drive` of the slave's motor parameters and :data:`DRIVE_OPTIONS`
     with ``suffix``; ``options`` (mode, method, T, torque_output) go to the Drive."""
     from motor import Drive, get_motor_preset
+    from motor.presets import POSITIVE_FIELDS
 
     preset = getattr(slave, f"preset{suffix}")
     try:
@@ -280,7 +278,7 @@ def build_drive(slave, suffix: str = "", **options):
         raise ValueError(f"parameter preset{suffix} = {preset!r}: {exc}") from None
     params = with_overrides(params, slave,
                             [(field, f"{var}{suffix}") for field, var, _ in MOTOR_PARAMETERS],
-                            positive=POSITIVE_MOTOR_FIELDS)
+                            positive=POSITIVE_FIELDS)   # refused below TINY
     changes = {}
     for field, var in DESIGN_PARAMETERS:
         value = getattr(slave, f"{var}{suffix}")

@@ -9,6 +9,10 @@ from dataclasses import dataclass, fields, replace
 from motor import _checks
 
 
+#: MotorParams fields that must be > 0 (the others must be >= 0).
+POSITIVE_FIELDS = frozenset({"R", "kt", "ke", "J_rotor", "v_max", "omega_eps", "omega_s", "sigma0"})
+
+
 @dataclass(frozen=True)
 class MotorParams:
     """Parameters of one brushed DC motor and its driver.
@@ -76,9 +80,8 @@ class MotorParams:
         NaN/inf are rejected everywhere; R, kt, ke, J_rotor, v_max, omega_eps, omega_s,
         sigma0 must be > 0; L, b, mu, mu_s, sigma1 must be >= 0.
         """
-        strict = ("R", "kt", "ke", "J_rotor", "v_max", "omega_eps", "omega_s", "sigma0")
         for f in fields(self):
-            check = _checks.positive if f.name in strict else _checks.non_negative
+            check = _checks.positive if f.name in POSITIVE_FIELDS else _checks.non_negative
             check(f.name, getattr(self, f.name))
 
     def with_(self, **changes):
@@ -97,20 +100,19 @@ class MotorParams:
 
 
 #: LuGre friction of the thesis motors (the thesis identifies mu and b only, app. D): the
-#: break-away torque 1.25 mu, the Stribeck speed 0.1 rad/s, the bristles 100 N m/rad (the
+#: break-away torque 1.25 mu, the Stribeck speed 0.1 rad/s, the bristles 100 N m/rad (MotorParams defaults; the
 #: presliding deflection at break-away mu_s / sigma0 ~ 0.6 mrad, two encoder counts) damped
 #: by 0.15 N m s/rad, inside the 1 ms coupling's stability band sigma0 h / 2 < sigma1 <
 #: 2 J / h for any inertia above the rotors' (docs/friction.md argues each value).
 STICTION_RATIO = 1.25
-_LUGRE = {"omega_s": 0.1, "sigma0": 100.0, "sigma1": 0.15}
 
 #: Motor 1, thesis Table 16 (from appendix D, data of Table 15).
 motor1 = MotorParams(R=1.101, L=0.667e-3, kt=5.598e-2, ke=5.138e-2,
-                     b=1.226e-4, mu=4.357e-2, J_rotor=1.469e-4, mu_s=STICTION_RATIO * 4.357e-2, **_LUGRE)
+                     b=1.226e-4, mu=4.357e-2, J_rotor=1.469e-4, mu_s=STICTION_RATIO * 4.357e-2)
 
 #: Motor 2, thesis Table 18 (from appendix D, data of Table 17).
 motor2 = MotorParams(R=0.829, L=0.667e-3, kt=5.666e-2, ke=5.200e-2,
-                     b=2.039e-4, mu=4.992e-2, J_rotor=1.887e-4, mu_s=STICTION_RATIO * 4.992e-2, **_LUGRE)
+                     b=2.039e-4, mu=4.992e-2, J_rotor=1.887e-4, mu_s=STICTION_RATIO * 4.992e-2)
 
 #: The motor of seed 000 (the wheeled pendulum): R_m, K_t = K_e, f_m and n = 1 from the seed;
 #: its inductance and rotor inertia are "negligible" there: L = 0 makes the drive's electrics
