@@ -40,20 +40,30 @@ def joint_inertia(params, x, y, J):
     return J.T @ np.array([[H00, H01], [H01, H11]]) @ J
 
 
-def setup(inertia_error: float):
-    params = get_preset("bench")
-    x, y = get_trajectory("circle").start_point
+def scaled_links(params, inertia_error: float):
+    """``params`` without rotors, its links' masses and inertias times 1 + ``inertia_error``."""
+    links = params.with_rotors(0.0, 0.0)
+    return replace(links, **{c: replace(getattr(links, c), **{f: getattr(getattr(links, c), f) * (1 + inertia_error)
+                                                               for f in LINKS}) for c in ("chain1", "chain2")})
+
+
+def loop_at(params, links, x, y):
+    """(the real joint inertia of the links, {family: (G, λ of Tables 6-8)}) at (x, y)."""
     kin = Kinematics(params)
     angles = kin.inverse(x, y)
     J = np.array(kin.jacobian(x, y, angles[0], angles[2])).reshape(2, 2)
-    links = params.with_rotors(0.0, 0.0)
-    links = replace(links, **{c: replace(getattr(links, c), **{f: getattr(getattr(links, c), f) * (1 + inertia_error)
-                                                                for f in LINKS}) for c in ("chain1", "chain2")})
-    Jr = np.diag([params.chain1.J_rotor, params.chain2.J_rotor])
     families = {"PDq": (get_strategy("PDq").m_star * np.eye(2), get_strategy("PDq").lam),
                 "TCq/TCx": (joint_inertia(params, x, y, J), get_strategy("TCq").lam),
                 "PDx": (J.T @ (get_strategy("PDx").m_star * np.eye(2)) @ J, get_strategy("PDx").lam)}
-    return (x, y), joint_inertia(links, x, y, J), Jr, families
+    return joint_inertia(links, x, y, J), families
+
+
+def setup(inertia_error: float):
+    params = get_preset("bench")
+    x, y = get_trajectory("circle").start_point
+    Ml, families = loop_at(params, scaled_links(params, inertia_error), x, y)
+    Jr = np.diag([params.chain1.J_rotor, params.chain2.J_rotor])
+    return (x, y), Ml, Jr, families
 
 
 def plant(Ml, Jr, k=None, zeta=0.0):
@@ -96,12 +106,61 @@ def lambda_limit(Ad, Bd, Cm, G, derivator, lams=np.arange(5.0, 400.0, 1.0)):
     return math.inf
 
 
+def delayed(Ad, Bd, Cm, delay: int):
+    """The plant with its input ``delay`` samples late in all (the twin's 1 is in the loop
+    already: ``delay - 1`` more held samples, a shift register on the state)."""
+    extra = 2 * (delay - 1)
+    if extra <= 0:
+        return Ad, Bd, Cm
+    n = Ad.shape[0]
+    A = np.zeros((n + extra, n + extra))
+    A[:n, :n], A[:n, n + extra - 2:] = Ad, Bd
+    for i in range(delay - 2):
+        A[n + 2 * (i + 1):n + 2 * (i + 2), n + 2 * i:n + 2 * (i + 1)] = np.eye(2)
+    B = np.zeros((n + extra, 2))
+    B[n:n + 2] = np.eye(2)
+    return A, B, np.hstack([Cm, np.zeros((2, extra))])
+
+
+def path_limits(kind: str, inertia_error: float, delay: int = 1, points: int = 24, fc_vel: float | None = None):
+    """{family: (smallest rigid λ limit over ``points`` points of trajectory ``kind``, where)}
+    with ``delay`` samples of computation delay in all and the derivator's velocity cut-off
+    ``fc_vel`` [Hz] (default: the derivator's)."""
+    params = get_preset("bench")
+    links = scaled_links(params, inertia_error)
+    Jr = np.diag([params.chain1.J_rotor, params.chain2.J_rotor])
+    derivator = _differentiator_ss((Derivator() if fc_vel is None else Derivator(fc_vel=fc_vel)).velocity_sos, T)
+    trajectory = get_trajectory(kind)
+    best = {}
+    for t in np.linspace(0.0, trajectory.duration, points, endpoint=False):
+        x, y = trajectory(t).x, trajectory(t).y
+        Ml, families = loop_at(params, links, x, y)
+        system = delayed(*plant(Ml, Jr), delay)
+        for name, (G, _lam) in families.items():
+            limit = lambda_limit(*system, G, derivator)
+            if name not in best or limit < best[name][0]:
+                best[name] = (limit, (round(float(x), 3), round(float(y), 3)))
+    return best
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--inertia-error", type=float, default=0.6376, help="links / Tables 4-5 - 1 (the fit's)")
     parser.add_argument("--freqs", type=float, nargs="+", default=[200, 250, 300, 400, 500, 1000])
     parser.add_argument("--zeta", type=float, nargs="+", default=[0.02, 0.1])
+    parser.add_argument("--path", action="store_true",
+                        help="rigid limits along the circle and the triangle (smallest over the path), "
+                             "for each --delays, instead of the springs at the start point")
+    parser.add_argument("--delays", type=int, nargs="+", default=[1], help="computation delays [samples] (--path)")
     args = parser.parse_args(argv)
+    if args.path:
+        for kind in ("circle", "triangle"):
+            for delay in args.delays:
+                limits = path_limits(kind, args.inertia_error, delay)
+                print(f"{kind}, inertia_error {args.inertia_error:g}, delay {delay}: " +
+                      ", ".join(f"{n} {lim:g} at {where}" for n, (lim, where) in limits.items()))
+        print("bench: circle PDq 40, TC 65, PDx 75 (λ of Tables 6, 8 + 5); triangle PDq < 30 (Table 7: 25)")
+        return 0
     point, Ml, Jr, families = setup(args.inertia_error)
     derivator = _differentiator_ss(Derivator().velocity_sos, T)
     print(f"start point {point}, real joint inertia diag {np.diag(Ml + Jr).round(5)}")
