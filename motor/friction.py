@@ -124,13 +124,25 @@ def stribeck(f, omega):
 @njit(cache=True)
 def bristle_rate(f, z, omega):
     """dz/dt = ω − σ0 |ω| z / G(ω) (1)."""
-    return omega - f[F_SIGMA0] * abs(omega) * z / stribeck(f, omega)
+    return _bristle_rate(f, z, omega, stribeck(f, omega))
+
+
+@njit(cache=True)
+def _bristle_rate(f, z, omega, g):
+    """(1) with G(ω) = ``g`` already evaluated."""
+    return omega - f[F_SIGMA0] * abs(omega) * z / g
 
 
 @njit(cache=True)
 def friction_force(f, z, omega):
     """F = σ0 z + σ1 dz/dt + σ2 ω (4) at deflection z and speed ω."""
-    return f[F_SIGMA0] * z + f[F_SIGMA1] * bristle_rate(f, z, omega) + f[F_SIGMA2] * omega
+    return _friction_force(f, z, omega, stribeck(f, omega))
+
+
+@njit(cache=True)
+def _friction_force(f, z, omega, g):
+    """(4) with G(ω) = ``g`` already evaluated."""
+    return f[F_SIGMA0] * z + f[F_SIGMA1] * _bristle_rate(f, z, omega, g) + f[F_SIGMA2] * omega
 
 
 @njit(cache=True)
@@ -157,11 +169,12 @@ def advance(f, z0, omega, h):
     ``z`` is the deflection at the step's end, ``F_end`` the friction (4) there, ``F_mean``
     the friction averaged over the step (σ0 mean z + σ1 (z − z0)/h + σ2 ω).
     """
-    x = f[F_SIGMA0] * abs(omega) / stribeck(f, omega) * h       # r h
+    g = stribeck(f, omega)                                      # once: the rate and F_end need it
+    x = f[F_SIGMA0] * abs(omega) / g * h                        # r h
     phi1, phi2 = _phi(x)
     z = z0 * math.exp(-x) + omega * h * phi1
     mean_z = z0 * phi1 + omega * h * phi2
-    f_end = friction_force(f, z, omega)
+    f_end = _friction_force(f, z, omega, g)
     f_mean = f[F_SIGMA0] * mean_z + f[F_SIGMA1] * (z - z0) / h + f[F_SIGMA2] * omega
     return z, f_end, f_mean
 
