@@ -36,6 +36,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from motor._checks import BadValue
+
 OK = 0
 #: The speed is NaN or infinite.
 NONFINITE_INPUT = 1
@@ -45,6 +47,9 @@ F_FC, F_FS, F_OMEGA_S, F_SIGMA0, F_SIGMA1, F_SIGMA2 = 0, 1, 2, 3, 4, 5
 #: ... and the state: the bristle deflection z [rad].
 F_Z = 6
 FRICTION_SIZE = 7
+
+#: The drive's names (:class:`motor.MotorParams`) of the parameters it calls otherwise.
+_DRIVE_NAMES = {"Fc": "mu", "Fs": "mu_s", "sigma2": "b"}
 
 # Below this r h, φ2 by its series (the closed form loses all digits to cancellation).
 _SERIES_BELOW = 1e-3
@@ -71,9 +76,10 @@ class LuGre:
 
     Raises
     ------
-    ValueError
-        Naming the first bad parameter and its value (with the drive's names for them:
-        Fc is the drive's ``mu``, Fs its ``mu_s``, σ2 its ``b``).
+    motor._checks.BadValue
+        Naming the first bad parameter and its value; its ``name`` is the drive's name for
+        the parameter (:class:`motor.MotorParams`: Fc is ``mu``, Fs ``mu_s``, σ2 ``b``), which
+        the message gives beside the paper's symbol.
     """
 
     Fc: float
@@ -84,19 +90,18 @@ class LuGre:
     sigma2: float
 
     def __post_init__(self):
-        names = {"Fc": "Fc (mu)", "Fs": "Fs (mu_s)", "sigma2": "sigma2 (b)"}
         for field in ("Fc", "Fs", "omega_s", "sigma0", "sigma1", "sigma2"):
-            value = getattr(self, field)
-            name = names.get(field, field)
+            value, name = getattr(self, field), _DRIVE_NAMES.get(field, field)
+            label = "LuGre friction: " + (f"{field} ({{name}})" if field in _DRIVE_NAMES else "{name}")
             if not isinstance(value, (int, float)) or not math.isfinite(value):
-                raise ValueError(f"LuGre friction: {name} = {value!r} must be a finite number")
+                raise BadValue(name, value, label + " = {value!r} must be a finite number")
             if field in ("Fc", "omega_s", "sigma0") and not value > 0.0:
-                raise ValueError(f"LuGre friction: {name} = {value!r} must be > 0")
+                raise BadValue(name, value, label + " = {value!r} must be > 0")
             if value < 0.0:
-                raise ValueError(f"LuGre friction: {name} = {value!r} must be >= 0")
+                raise BadValue(name, value, label + " = {value!r} must be >= 0")
         if self.Fs < self.Fc:
-            raise ValueError(f"LuGre friction: the break-away torque Fs (mu_s) = {self.Fs!r} must be >= "
-                             f"the Coulomb torque Fc (mu) = {self.Fc!r}")
+            raise BadValue("mu_s", self.Fs, "LuGre friction: the break-away torque Fs ({name}) = {value!r} must be "
+                           ">= the Coulomb torque Fc ({other}) = {other_value!r}", "mu", self.Fc)
 
     @classmethod
     def of_motor(cls, params) -> "LuGre":

@@ -348,3 +348,23 @@ def test_a_correction_redoes_the_bristles_from_the_snapshot():
     assert slave.correct(snapshot, measured, h)
     for (j, d), z0 in zip(slave.actuated.drives, deflections):
         assert d.z == _lugre_replay(d, z0, [start[j - 1]], h) != z0
+
+
+@pytest.mark.parametrize("parameters, name, value, words", [
+    ({"friction2": "lugre", "mu_s2": 0.001}, "mu_s2", 0.001,
+     "LuGre friction: the break-away torque Fs (mu_s2) = 0.001 must be >= the Coulomb torque Fc (mu2) = 0.0499"),
+    ({"friction1": "lugre", "mu1": 0.0}, "mu1", 0.0, "LuGre friction: Fc (mu1) = 0.0 must be > 0"),
+    ({"current_noise2": -1.0}, "current_noise2", -1.0, "current_noise2 must be >= 0, got -1.0"),
+    ({"friction1": "coulomb"}, "friction1", "coulomb", "friction1 must be one of 'tanh', 'lugre'; got 'coulomb'"),
+], ids=["mu_s2", "mu1", "current_noise2", "friction1"])
+def test_a_bad_drive_parameter_is_refused_by_its_fmu_name(parameters, name, value, words):
+    """The drives' refusals name the FMU's variables (suffix j), as fields and in the message."""
+    from fmus.parts import build_drive
+    from motor._checks import BadValue
+
+    slave = _actuated_slave("current", **parameters)
+    assert slave.actuated is None and f"initialisation refused: {words}" in slave.error
+    with pytest.raises(BadValue) as refusal:
+        build_drive(slave, name[-1], mode="current", T=1e-3)
+    assert (refusal.value.name, refusal.value.value) == (name, value)
+
