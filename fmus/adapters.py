@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from controller import fastbalance
+from motor.friction import F_Z
 from plant import wheeled_kernel as kernel
 
 from .compiled import Adapter, NotCompilable, register
@@ -243,8 +244,11 @@ class ActuatedFiveBarPlantAdapter(_PlantState):
         self.arrays = [a.plant._fast.p, settings, a._motors, self.state, np.zeros(2)]
         for n, (_, drive) in enumerate(a.drives):
             self.arrays += _prepared(name, drive, h)
-        self.lugre = [f is not None for f in a.bristles]
-        self.arrays += [f for f in a.bristles if f is not None]
+        # LuGre drives: the parameters without b (ActuatedPlant.lugre_models), then the drives'
+        # own arrays, which hold the bristle deflection
+        self.lugre = [f is not None for f in a.lugre_models]
+        self.arrays += [f for f in a.lugre_models if f is not None]
+        self.arrays += [d.lugre for (_, d), on in zip(a.drives, self.lugre) if on]
         if any(self.lugre):
             self.modules = self.modules + ("motor.friction",)
 
@@ -258,7 +262,8 @@ class ActuatedFiveBarPlantAdapter(_PlantState):
 
     def emit(self, arrays, x, t, h):
         p, s, motors, z, volts, d1, c1, d2, c2 = arrays[:9]
-        bristles = dict(zip([n for n, on in enumerate(self.lugre) if on], arrays[9:]))
+        lugre = [n for n, on in enumerate(self.lugre) if on]
+        bristles = dict(zip(lugre, zip(arrays[9:9 + len(lugre)], arrays[9 + len(lugre):])))   # n: (model, drive's)
         first = len(self.inputs)
         lines = [
             f"st, v1, e1, s1, p1 = fastdrive.peek_voltage({d1}, {c1}, {x}[0], {x}[2], {x}[1], {h})",
@@ -272,8 +277,8 @@ class ActuatedFiveBarPlantAdapter(_PlantState):
             lines.append(f"    st = fast5r.actuated_io({p}, {s}, {motors}, {z}, {volts}, {x}, {first}, {h})")
         else:   # ActuatedPlant.held_friction: joint 1's speed z[10], joint 2's -z[12] (world)
             speed = {0: f"{z}[10]", 1: f"-{z}[12]"}
-            for n, f in bristles.items():
-                lines.append(f"    _, b{n}, _, m{n} = friction.friction_peek({f}, {speed[n]}, {h})")
+            for n, (f, state) in bristles.items():
+                lines.append(f"    b{n}, _, m{n} = friction.advance({f}, {state}[{F_Z}], {speed[n]}, {h})")
             u1 = "-m0" if 0 in bristles else "0.0"
             u2 = "m1" if 1 in bristles else "0.0"
             lines.append(f"    st = fast5r.actuated_io_held({p}, {s}, {motors}, {z}, {volts}, {x}, {first}, {h}, "
@@ -287,8 +292,8 @@ class ActuatedFiveBarPlantAdapter(_PlantState):
             f"    {x}[{first + 15}] = {z}[14]",
             f"    {x}[{first + 16}] = {z}[15]",
         ]
-        for n, f in bristles.items():   # ActuatedPlant.shaft_torques: minus the bristles' torque
-            lines += [f"    friction.friction_commit({f}, b{n})",
+        for n, (f, state) in bristles.items():   # ActuatedPlant.shaft_torques: minus the bristles' torque
+            lines += [f"    friction.friction_commit({state}, b{n})",
                       f"    {x}[{first + 11 + n}] = {x}[{first + 11 + n}] - friction.friction_force({f}, b{n}, "
                       f"{speed[n]})"]
         return lines

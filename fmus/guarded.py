@@ -255,7 +255,7 @@ class GuardedSlave(Fmi2Slave):
                 chosen = [names[vr] for vr in key]
             except (KeyError, TypeError):
                 self._refuse_get(vrs, Real)
-            read = _reader(chosen)
+            read = attribute_reader(chosen)
             if self._initialised:
                 _remember(self.__readers, key, read)
         return read(self)
@@ -269,7 +269,7 @@ class GuardedSlave(Fmi2Slave):
                 targets = [names[vr] for vr in key]
             except (KeyError, TypeError):
                 self._refuse_set(vrs, values, Real)
-            write = _writer(type(self), targets)
+            write = attribute_writer(type(self), targets)
             if self._initialised:
                 _remember(self.__writers, key, write)
         write(self, values)
@@ -482,26 +482,48 @@ def _remember(cache: dict, key, value) -> None:
         cache[key] = value
 
 
-def _reader(names: list):
-    """``slave -> [float(slave.<name>) for name in names]`` in one attrgetter call."""
-    if any("." in name for name in names):   # "ctrl.lam" of a system FMU: a flat attribute,
-        return lambda slave: [float(getattr(slave, name)) for name in names]   # not attrgetter's path
+def attribute_reader(names: list, converters=None):
+    """``slave -> [convert(slave.<name>) for name in names]`` in one attrgetter call.
+
+    ``converters``: one callable per name (default: all ``float``, the FMI Reals).  The
+    slaves' :meth:`GuardedSlave.get_real` and the master's in-process instances
+    (:meth:`fmus.instances.InProcessInstance.bind`) read their variables with it.
+    """
+    converters = tuple(converters or (float,) * len(names))
+    if any("." in name for name in names):   # "ctrl.lam" of a system FMU: a flat attribute, not attrgetter's path
+        pairs = tuple(zip(converters, names))
+        return lambda slave: [convert(getattr(slave, name)) for convert, name in pairs]
     if len(names) == 1:
-        name = names[0]
-        return lambda slave: [float(getattr(slave, name))]
+        name, convert = names[0], converters[0]
+        return lambda slave: [convert(getattr(slave, name))]
     getter = operator.attrgetter(*names) if names else (lambda slave: ())
-    return lambda slave: list(map(float, getter(slave)))
+    if all(c is float for c in converters):
+        return lambda slave: list(map(float, getter(slave)))
+    return lambda slave: [convert(value) for convert, value in zip(converters, getter(slave))]
 
 
-def _writer(cls, names: list):
-    """``(slave, values) -> the attributes names set to values``: one dict update when they are
-    plain instance attributes (every parcosim variable), else setattr one by one."""
-    if any(hasattr(getattr(cls, name, None), "__set__") for name in names):
+def attribute_writer(cls, names: list, converters=None):
+    """``(slave, values) -> the attributes names set to values``, each converted by its
+    converter (``converters``, one per name; default: as given): one dict update when they
+    are plain instance attributes (every parcosim variable) converted alike, else setattr
+    one by one.  :meth:`GuardedSlave.set_real` and :meth:`fmus.instances.InProcessInstance.bind`
+    use it."""
+    if not any(hasattr(getattr(cls, name, None), "__set__") for name in names):
+        if converters is None:
+            return lambda slave, values: vars(slave).update(zip(names, values))
+        if all(c is float for c in converters):
+            return lambda slave, values: vars(slave).update(zip(names, map(float, values)))
+    if converters is None:
         def write(slave, values):
             for name, value in zip(names, values):
                 setattr(slave, name, value)
         return write
-    return lambda slave, values: vars(slave).update(zip(names, values))
+    pairs = tuple(zip(names, converters))
+
+    def write_converted(slave, values):
+        for (name, convert), value in zip(pairs, values):
+            setattr(slave, name, convert(value))
+    return write_converted
 
 
 #: A numeric parameter beyond this magnitude (SI units) is refused as absurd: no quantity of

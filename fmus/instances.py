@@ -10,8 +10,8 @@ parcosim slave object directly, as pythonfmu would; :class:`FmuInstance` calls a
 from __future__ import annotations
 
 import ctypes
+import functools
 import importlib
-import operator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -249,7 +249,6 @@ class InProcessInstance:
         self.name = name
         self.slave = cls(instance_name=name)
         self.variables = slave_variables(self.slave)
-        self._inputs, self._outputs = [], []   # until bind
 
     def enter_initialization(self, parameters: dict, start_time: float) -> None:
         """Set up the experiment, enter initialisation mode and set ``parameters``."""
@@ -276,45 +275,22 @@ class InProcessInstance:
 
     def bind(self, inputs: list, outputs: list) -> None:
         """The :class:`Variable` lists that :meth:`set_inputs` and :meth:`get_outputs` move."""
-        # What the slave's setters and getters do, with the names looked up once:
-        # attributes set to the values, outputs read back as Python values of their type.
-        self._inputs = [(v.name, _CONVERT[v.type]) for v in inputs]
-        names = [v.name for v in inputs]
-        cls = type(self.slave)
-        if all(v.type == "Real" for v in inputs) and not any(hasattr(getattr(cls, n, None), "__set__") for n in names):
-            # Real inputs held as plain instance attributes: one dict update does the setattrs.
-            attributes = vars(self.slave)
-            self.set_inputs = lambda values: attributes.update(zip(names, map(float, values)))
-        else:
-            vars(self).pop("set_inputs", None)
-        self._outputs = list(outputs)
-        converters = [_CONVERT[v.type] for v in outputs]
-        out_names = [v.name for v in outputs]
-        if any("." in n for n in out_names):   # "ctrl.lam" of a system slave: flat attributes, not paths
-            getter = lambda slave: tuple(getattr(slave, n) for n in out_names)   # noqa: E731
-            if len(out_names) == 1:
-                getter = lambda slave: getattr(slave, out_names[0])   # noqa: E731
-        else:
-            getter = operator.attrgetter(*out_names) if outputs else None
-        slave = self.slave
-        # Closures bound per instance shadow the methods below (which say what they do).
-        if not outputs:
-            self.get_outputs = lambda: []
-        elif len(outputs) == 1:
-            convert = converters[0]
-            self.get_outputs = lambda: [convert(getter(slave))]
-        elif all(c is float for c in converters):
-            self.get_outputs = lambda: list(map(float, getter(slave)))
-        else:
-            self.get_outputs = lambda: [c(v) for c, v in zip(converters, getter(slave))]
+        from .guarded import attribute_reader, attribute_writer
+
+        # What the slave's setters and getters do, with the names looked up once: attributes
+        # set to the values, outputs read back as Python values of their type.  Bound per
+        # instance, they shadow the methods below (no variables before bind).
+        write = attribute_writer(type(self.slave), [v.name for v in inputs], [_CONVERT[v.type] for v in inputs])
+        read = attribute_reader([v.name for v in outputs], [_CONVERT[v.type] for v in outputs])
+        self.set_inputs = functools.partial(write, self.slave)
+        self.get_outputs = functools.partial(read, self.slave)
 
     def set_inputs(self, values: list) -> None:
-        slave = self.slave
-        for (name, convert), value in zip(self._inputs, values):
-            setattr(slave, name, convert(value))
+        """Set the bound inputs to ``values``."""
 
     def get_outputs(self) -> list:
-        return [_CONVERT[v.type](getattr(self.slave, v.name)) for v in self._outputs]
+        """The bound outputs' values."""
+        return []
 
     def do_step(self, t: float, h: float) -> None:
         try:

@@ -269,6 +269,7 @@ def build_drive(slave, suffix: str = "", **options):
     """The :class:`motor.Drive` of the slave's motor parameters and :data:`DRIVE_OPTIONS`
     with ``suffix``; ``options`` (mode, method, T, torque_output) go to the Drive."""
     from motor import Drive, get_motor_preset
+    from motor._checks import BadValue
     from motor.presets import POSITIVE_FIELDS
 
     preset = getattr(slave, f"preset{suffix}")
@@ -293,16 +294,16 @@ def build_drive(slave, suffix: str = "", **options):
     refuse_absurd(**{f"{name}{suffix}": values[name] for name in ("current_offset", "current_noise")})
     try:
         return Drive(params, design_params=design, **options, **values)
-    except ValueError as exc:
-        if not suffix:
-            raise
-        message = str(exc)      # named as the slave's variables: with the suffix
-        for name, _, _ in DRIVE_OPTIONS:
-            if message.startswith(f"{name} "):
-                message = f"{name}{suffix}{message[len(name):]}"
-        for field in ("mu_s", "mu", "b"):
-            message = message.replace(f"({field})", f"({field}{suffix})")
-        raise ValueError(message) from None
+    except BadValue as exc:     # named as the slave's variable
+        raise exc.renamed(drive_variables(suffix)) from None
+
+
+def drive_variables(suffix: str = "") -> dict:
+    """The FMU variable of each name a :class:`motor.Drive` refuses a value by: its options
+    (:data:`DRIVE_OPTIONS`) and the :class:`motor.MotorParams` fields (:data:`MOTOR_PARAMETERS`),
+    followed by ``suffix``."""
+    return {**{name: f"{name}{suffix}" for name, _, _ in DRIVE_OPTIONS},
+            **{field: f"{var}{suffix}" for field, var, _ in MOTOR_PARAMETERS}}
 
 
 class CurrentLoopSteps:

@@ -179,8 +179,15 @@ class Drive:
 
     @property
     def z(self):
-        """The LuGre bristle deflection [rad] (0 with the tanh friction)."""
+        """The LuGre bristle deflection [rad] (0 with the tanh friction); set by a plant that
+        advances the bristles itself (:class:`plant.actuated.ActuatedPlant`)."""
         return 0.0 if self.lugre is None else float(self.lugre[lugre.F_Z])
+
+    @z.setter
+    def z(self, value):
+        if self.lugre is None:
+            raise ValueError(f"z = {value!r}: a drive with friction {self.friction!r} has no bristle deflection")
+        self.lugre[lugre.F_Z] = value
 
     def torque(self, omega):
         """Shaft torque [N m] for the present current at speed ``omega`` (B.2, or kt i minus

@@ -36,6 +36,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from motor._checks import BadValue
+
 OK = 0
 #: The speed is NaN or infinite.
 NONFINITE_INPUT = 1
@@ -45,6 +47,9 @@ F_FC, F_FS, F_OMEGA_S, F_SIGMA0, F_SIGMA1, F_SIGMA2 = 0, 1, 2, 3, 4, 5
 #: ... and the state: the bristle deflection z [rad].
 F_Z = 6
 FRICTION_SIZE = 7
+
+#: The drive's names (:class:`motor.MotorParams`) of the parameters it calls otherwise.
+_DRIVE_NAMES = {"Fc": "mu", "Fs": "mu_s", "sigma2": "b"}
 
 # Below this r h, φ2 by its series (the closed form loses all digits to cancellation).
 _SERIES_BELOW = 1e-3
@@ -71,9 +76,10 @@ class LuGre:
 
     Raises
     ------
-    ValueError
-        Naming the first bad parameter and its value (with the drive's names for them:
-        Fc is the drive's ``mu``, Fs its ``mu_s``, σ2 its ``b``).
+    motor._checks.BadValue
+        Naming the first bad parameter and its value; its ``name`` is the drive's name for
+        the parameter (:class:`motor.MotorParams`: Fc is ``mu``, Fs ``mu_s``, σ2 ``b``), which
+        the message gives beside the paper's symbol.
     """
 
     Fc: float
@@ -84,19 +90,18 @@ class LuGre:
     sigma2: float
 
     def __post_init__(self):
-        names = {"Fc": "Fc (mu)", "Fs": "Fs (mu_s)", "sigma2": "sigma2 (b)"}
         for field in ("Fc", "Fs", "omega_s", "sigma0", "sigma1", "sigma2"):
-            value = getattr(self, field)
-            name = names.get(field, field)
+            value, name = getattr(self, field), _DRIVE_NAMES.get(field, field)
+            label = "LuGre friction: " + (f"{field} ({{name}})" if field in _DRIVE_NAMES else "{name}")
             if not isinstance(value, (int, float)) or not math.isfinite(value):
-                raise ValueError(f"LuGre friction: {name} = {value!r} must be a finite number")
+                raise BadValue(name, value, label + " = {value!r} must be a finite number")
             if field in ("Fc", "omega_s", "sigma0") and not value > 0.0:
-                raise ValueError(f"LuGre friction: {name} = {value!r} must be > 0")
+                raise BadValue(name, value, label + " = {value!r} must be > 0")
             if value < 0.0:
-                raise ValueError(f"LuGre friction: {name} = {value!r} must be >= 0")
+                raise BadValue(name, value, label + " = {value!r} must be >= 0")
         if self.Fs < self.Fc:
-            raise ValueError(f"LuGre friction: the break-away torque Fs (mu_s) = {self.Fs!r} must be >= "
-                             f"the Coulomb torque Fc (mu) = {self.Fc!r}")
+            raise BadValue("mu_s", self.Fs, "LuGre friction: the break-away torque Fs ({name}) = {value!r} must be "
+                           ">= the Coulomb torque Fc ({other}) = {other_value!r}", "mu", self.Fc)
 
     @classmethod
     def of_motor(cls, params) -> "LuGre":
@@ -124,13 +129,25 @@ def stribeck(f, omega):
 @njit(cache=True)
 def bristle_rate(f, z, omega):
     """dz/dt = ω − σ0 |ω| z / G(ω) (1)."""
-    return omega - f[F_SIGMA0] * abs(omega) * z / stribeck(f, omega)
+    return _bristle_rate(f, z, omega, stribeck(f, omega))
+
+
+@njit(cache=True)
+def _bristle_rate(f, z, omega, g):
+    """(1) with G(ω) = ``g`` already evaluated."""
+    return omega - f[F_SIGMA0] * abs(omega) * z / g
 
 
 @njit(cache=True)
 def friction_force(f, z, omega):
     """F = σ0 z + σ1 dz/dt + σ2 ω (4) at deflection z and speed ω."""
-    return f[F_SIGMA0] * z + f[F_SIGMA1] * bristle_rate(f, z, omega) + f[F_SIGMA2] * omega
+    return _friction_force(f, z, omega, stribeck(f, omega))
+
+
+@njit(cache=True)
+def _friction_force(f, z, omega, g):
+    """(4) with G(ω) = ``g`` already evaluated."""
+    return f[F_SIGMA0] * z + f[F_SIGMA1] * _bristle_rate(f, z, omega, g) + f[F_SIGMA2] * omega
 
 
 @njit(cache=True)
@@ -157,11 +174,12 @@ def advance(f, z0, omega, h):
     ``z`` is the deflection at the step's end, ``F_end`` the friction (4) there, ``F_mean``
     the friction averaged over the step (σ0 mean z + σ1 (z − z0)/h + σ2 ω).
     """
-    x = f[F_SIGMA0] * abs(omega) / stribeck(f, omega) * h       # r h
+    g = stribeck(f, omega)                                      # once: the rate and F_end need it
+    x = f[F_SIGMA0] * abs(omega) / g * h                        # r h
     phi1, phi2 = _phi(x)
     z = z0 * math.exp(-x) + omega * h * phi1
     mean_z = z0 * phi1 + omega * h * phi2
-    f_end = friction_force(f, z, omega)
+    f_end = _friction_force(f, z, omega, g)
     f_mean = f[F_SIGMA0] * mean_z + f[F_SIGMA1] * (z - z0) / h + f[F_SIGMA2] * omega
     return z, f_end, f_mean
 

@@ -20,9 +20,11 @@ step's start (zero-order hold), as in the separate drive.  So does a drive's LuG
 (``friction="lugre"``, :mod:`motor.friction`): its bristle state advances over the step with
 the joint speed at the step's start held, exactly as in the separate drive, and the plant
 holds the bristles' mean torque σ0 z + σ1 dz/dt over the step; the viscous part σ2 ω = b ω
-stays in the ODE (docs/friction.md: the same coupling, the same stability band).  The plant's integrator settings
-(:class:`plant.IntegratorSettings`: RK4 and its substeps, or dopri5 and its tolerances) apply
-to the whole state, and its refusals (residual, singular pose) to the mechanical part.
+stays in the ODE (docs/friction.md: the same coupling, the same stability band).  The bristle
+deflection stays the drive's state (``drive.z``), like its current.  The plant's integrator
+settings (:class:`plant.IntegratorSettings`: RK4 and its substeps, or dopri5 and its
+tolerances) apply to the whole state, and its refusals (residual, singular pose) to the
+mechanical part.
 The monolithic reference (``scenarios/reference.py``) integrates this same
 :meth:`ActuatedPlant.derivative` with scipy's DOP853 at rtol 1e-10.
 """
@@ -48,8 +50,17 @@ class ActuatedPlant:
     drives : sequence of (int, motor.Drive)
         (joint, drive) pairs: the drive delivers the world torque tau_joint and turns at
         dq_joint, joint 1 or 2, each at most once.  Every drive needs L > 0 (an armature
-        current to integrate).  The drives keep their controllers, parameters, ``i``
-        (the current) and ``v`` (the last voltage); this class updates ``i`` and ``v``.
+        current to integrate).  The drives keep their controllers, parameters and state:
+        ``i`` (the current), ``v`` (the last voltage) and, with LuGre friction, the bristle
+        deflection ``z`` (in ``drive.lugre``); this class updates them after each accepted
+        step, so a drive reads as the drive inside the plant (``drive.z``, ``drive.torque``).
+
+    Attributes
+    ----------
+    lugre_models : list of (ndarray or None)
+        Per drive, the friction array (:func:`motor.friction.new_lugre`) of its LuGre
+        parameters with σ2 = 0 (b ω is in the ODE), None for a tanh drive.  Parameters only:
+        its deflection slot is NaN, the deflection is the drive's.
     """
 
     def __init__(self, plant: PlantSimulator, drives):
@@ -62,11 +73,11 @@ class ActuatedPlant:
             if not d.params.L > 0.0:
                 raise ValueError(f"drive on joint {j}: L = {d.params.L!r} H has no armature current to integrate "
                                  f"(use a separate drive with method 'quasi_static')")
-        # A LuGre drive: no tanh term in the ODE (mu = 0 there), its bristles (sigma2 = 0: b stays
-        # in the ODE) in a friction array of its own, None for a tanh drive.
+        # A LuGre drive: no tanh term in the ODE (mu = 0 there), its bristle torque from the
+        # drive's deflection and the parameters without b (b stays in the ODE).
         self._shaft = [d.params.with_(mu=0.0) if d.lugre is not None else d.params for _, d in self.drives]
-        self.bristles = [friction.new_lugre(friction.LuGre.of_motor(d.params.with_(b=0.0)), d.z)
-                         if d.lugre is not None else None for _, d in self.drives]
+        self.lugre_models = [friction.new_lugre(friction.LuGre.of_motor(d.params.with_(b=0.0)), math.nan)
+                             if d.lugre is not None else None for _, d in self.drives]
         self._motors = np.array([[j - 1, p.R, p.L, p.kt, p.ke, p.b, p.mu, p.omega_eps]
                                  for (j, _), p in zip(self.drives, self._shaft)]).reshape(-1, fast5r.MOTOR_COLUMNS)
         self._stable_for = None     # the step RK4 was last found stable for
@@ -141,22 +152,22 @@ class ActuatedPlant:
             raise PlantError(f"armature currents {currents} after the step from t = {plant.time:.6g} s "
                              f"({held()}) are not finite")
         plant.accept(z[:14], dt, held, report)
-        for (_, d), i, v in zip(self.drives, currents, voltages):
+        for (_, d), i, v, b in zip(self.drives, currents, voltages, bristles):
             d.i, d.v = i, v
-        for f, b in zip(self.bristles, bristles):
-            if f is not None:
-                friction.friction_commit(f, b)
+            if b is not None:
+                d.z = b
 
     def held_friction(self, dt: float):
         """(world torques on (q1, q2), new bristle deflections): minus each LuGre drive's mean
-        bristle torque over the next dt with the joint speed held (:func:`motor.friction.advance`)."""
+        bristle torque over the next dt from its deflection, the joint speed held
+        (:func:`motor.friction.advance`; the speed is finite: the plant accepts no other state)."""
         rates = fivebar.world_rates(self.plant.y[7:])
         external, bristles = [0.0, 0.0], []
-        for (j, _), f in zip(self.drives, self.bristles):
+        for (j, d), f in zip(self.drives, self.lugre_models):
             if f is None:
                 bristles.append(None)
                 continue
-            _, z, _, f_mean = friction.friction_peek(f, rates[j - 1], dt)
+            z, _, f_mean = friction.advance(f, d.z, rates[j - 1], dt)
             external[j - 1] -= f_mean
             bristles.append(z)
         return external, bristles
@@ -177,9 +188,9 @@ class ActuatedPlant:
         """Each drive's shaft torque at the present current and joint speed [N m] (B.2)."""
         rates = fivebar.world_rates(self.plant.y[7:])
         torques = []
-        for (j, d), params, f in zip(self.drives, self._shaft, self.bristles):
+        for (j, d), params, f in zip(self.drives, self._shaft, self.lugre_models):
             tau = shaft_torque(d.i, rates[j - 1], params)
             if f is not None:
-                tau -= friction.friction_force(f, f[friction.F_Z], rates[j - 1])
+                tau -= friction.friction_force(f, d.z, rates[j - 1])
             torques.append(tau)
         return torques

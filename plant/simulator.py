@@ -189,9 +189,8 @@ class PlantSimulator:
         def held():
             return f"tau1 = {tau1!r}, tau2 = {tau2!r} N m held"
 
-        # u* on (theta11, theta21) is (tau1, -tau2) (fivebar.thesis_torques, without its array)
-        y, report = self.integrate(self.y, dt, tau1, -tau2, held,
-                                   lambda z: self.derivative(z, fivebar.thesis_torques(tau1, tau2)))
+        u_star = fivebar.thesis_torques(tau1, tau2)     # once: held over every derivative call of the step
+        y, report = self.integrate(self.y, dt, u_star[0], u_star[1], held, lambda z: self.derivative(z, u_star))
         self.accept(y, dt, held, report)
 
     def integrate(self, z, dt: float, u1: float, u2: float, held, derivative,

@@ -24,6 +24,7 @@ from controller.strategies import ALL_STRATEGY_NAMES
 from controller.trajectories import get_trajectory
 from fmus.system import Component, Connection, System
 from motor import get_motor_preset
+from motor.drive import FRICTION_MODELS
 
 REFERENCE_SIGNALS = ("x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
 #: Time the bench scenes run on after the reference stops, for the steady-state error [s]:
@@ -64,8 +65,6 @@ class Scene:
 
 
 ELECTRICS = ("full", "euler", "quasi_static", "ideal")
-#: The drives' friction models (:data:`motor.drive.FRICTION_MODELS`).
-FRICTIONS = ("tanh", "lugre")
 #: The drives hand the plant their torque averaged over the step: chosen from the
 #: speed/accuracy front (docs/trade.md: same cost, peak deviation from the monolithic
 #: reference 9.3e-5 -> 3.5e-5 m on bench_circle_TCMDx).
@@ -153,13 +152,11 @@ class Fidelity:
     def __post_init__(self):
         if self.electrics not in ELECTRICS:
             raise ValueError(f"electrics = {self.electrics!r}; valid: {', '.join(ELECTRICS)}")
-        if self.friction not in FRICTIONS:
-            raise ValueError(f"friction = {self.friction!r}; valid: {', '.join(FRICTIONS)}")
+        if self.friction not in FRICTION_MODELS:
+            raise ValueError(f"friction = {self.friction!r}; valid: {', '.join(FRICTION_MODELS)}")
         if self.friction == "lugre" and not self.coulomb:
             raise ValueError("friction = 'lugre' models the dry friction that coulomb = False removes")
-        drive_effects = {k: getattr(self, k) for k in ("pwm_counts", "current_offset", "current_noise", "noise_seed")}
-        if self.electrics == "ideal" and (self.friction != "tanh" or self.drive_parameters
-                                          or any(drive_effects.values())):
+        if self.electrics == "ideal" and self.drive_options():
             raise ValueError("electrics = 'ideal' has no drives for friction, pwm_counts, current_offset, "
                              "current_noise, noise_seed or drive_parameters")
 

@@ -1,14 +1,15 @@
 """The plant with its drives inside (plant/actuated.py, the ActuatedFiveBarPlant FMU, drives_in_plant)."""
 from __future__ import annotations
 
+import copy
 from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from fmus.master import simulate
-from motor import Drive, get_motor_preset, shaft_torque
-from plant import IntegratorSettings, PlantError, PlantSimulator, fast5r, get_preset
+from motor import Drive, friction, get_motor_preset, shaft_torque
+from plant import IntegratorSettings, PlantError, PlantSimulator, fast5r, fivebar, get_preset
 from plant.actuated import ActuatedPlant
 from scenarios.reference import deviation, reference_run
 from scenarios.scenes import drives_in_plant, get_scene
@@ -230,6 +231,35 @@ def test_a_miswired_drive_is_refused_by_name():
         reference_run(scene)
 
 
+def _lugre_replay(drive, z, speeds, h):
+    """The deflection (1) reaches from z over steps of length h with these speeds held: the
+    drive's own LuGre model, its own array (motor.friction.advance)."""
+    f = friction.new_lugre(friction.LuGre.of_motor(drive.params))
+    for omega in speeds:
+        z = friction.advance(f, z, omega, h)[0]
+    return z
+
+
+def test_a_lugre_drive_reads_as_the_drive_inside_the_plant():
+    """The bristle deflection has one owner, the drive: after steps of the plant, each drive's
+    z is the deflection its speeds drove (1) to, and drive.torque (kt i minus (4) with
+    sigma2 = b) is the plant's shaft torque (kt i - b omega minus the bristles' torque)."""
+    sim = PlantSimulator(get_preset("bench"), *START, IntegratorSettings())
+    a = ActuatedPlant(sim, [(j, Drive(get_motor_preset(f"motor{j}"), friction="lugre")) for j in (1, 2)])
+    h, speeds = 1e-3, []
+    for k in range(40):
+        speeds.append(fivebar.world_rates(a.plant.y[7:]))
+        a.step((0.4 * np.sin(60 * k * h), -0.3), a.currents, (0.0, 0.0), h)
+    rates = fivebar.world_rates(a.plant.y[7:])
+    for (j, d), tau in zip(a.drives, a.shaft_torques()):
+        z = _lugre_replay(d, 0.0, [w[j - 1] for w in speeds], h)
+        assert abs(z) > 1e-4, "precondition: the bristles deflected"
+        assert d.z == z
+        assert d.torque(rates[j - 1]) == pytest.approx(tau, rel=1e-12)
+    with pytest.raises(ValueError, match="z = 0.001: a drive with friction 'tanh' has no bristle deflection"):
+        Drive(get_motor_preset("motor1")).z = 1e-3
+
+
 def test_a_bad_input_changes_nothing():
     """A NaN at drive 2's input is refused by name before drive 1's controller samples."""
     a = _actuated()
@@ -244,11 +274,12 @@ def test_a_bad_input_changes_nothing():
 
 # --- idle steps: the plant as a model inside a control chain (fmus.embedded.ChainCore) --------
 
-def _actuated_slave(mode):
+def _actuated_slave(mode, **parameters):
     from fmus.instances import InProcessInstance
 
     instance = InProcessInstance("ActuatedFiveBarPlant", "plant")
-    instance.initialize({"preset": "bench", "x0": START[0], "y0": START[1], "mode": mode, "substeps": 32}, 0.0)
+    instance.initialize({"preset": "bench", "x0": START[0], "y0": START[1], "mode": mode, "substeps": 32,
+                         **parameters}, 0.0)
     return instance.slave
 
 
@@ -295,3 +326,45 @@ def test_idle_steps_hold_zero_volts_as_the_real_plant_commanded_zero():
     model.i_hat1, model.i_hat2 = model.i1, model.i2
     model.do_step(31 * h, h)                              # idle no more: the controllers sample 5 A
     assert model.v1 > 0.0 and model.v2 > 0.0
+
+
+def test_a_correction_redoes_the_bristles_from_the_snapshot():
+    """A model of the plant corrected to a measurement (fmus.embedded.ChainCore) redoes its
+    last step from the snapshot taken before it: the drives' deflections too."""
+    from plant.correction import corrected_state
+
+    slave, h = _actuated_slave("current", friction1="lugre", friction2="lugre"), 1e-3
+    for k in range(30):
+        slave.i_ref1, slave.i_ref2 = 0.5 * np.sin(40 * k * h), -0.3
+        slave.i_hat1, slave.i_hat2 = slave.i1, slave.i2
+        slave.do_step(k * h, h)
+    snapshot = slave.snapshot()
+    y0, deflections = snapshot[0].copy(), snapshot[3]
+    slave.do_step(30 * h, h)
+    measured = {"q1": slave.q1 + 1e-4, "q2": slave.q2, "dq1": slave.dq1, "dq2": slave.dq2}
+    model = copy.deepcopy(slave.actuated.plant)
+    model.y = y0
+    start = fivebar.world_rates(corrected_state(model, measured, h)[7:])   # the redo's start speeds
+    assert slave.correct(snapshot, measured, h)
+    for (j, d), z0 in zip(slave.actuated.drives, deflections):
+        assert d.z == _lugre_replay(d, z0, [start[j - 1]], h) != z0
+
+
+@pytest.mark.parametrize("parameters, name, value, words", [
+    ({"friction2": "lugre", "mu_s2": 0.001}, "mu_s2", 0.001,
+     "LuGre friction: the break-away torque Fs (mu_s2) = 0.001 must be >= the Coulomb torque Fc (mu2) = 0.0499"),
+    ({"friction1": "lugre", "mu1": 0.0}, "mu1", 0.0, "LuGre friction: Fc (mu1) = 0.0 must be > 0"),
+    ({"current_noise2": -1.0}, "current_noise2", -1.0, "current_noise2 must be >= 0, got -1.0"),
+    ({"friction1": "coulomb"}, "friction1", "coulomb", "friction1 must be one of 'tanh', 'lugre'; got 'coulomb'"),
+], ids=["mu_s2", "mu1", "current_noise2", "friction1"])
+def test_a_bad_drive_parameter_is_refused_by_its_fmu_name(parameters, name, value, words):
+    """The drives' refusals name the FMU's variables (suffix j), as fields and in the message."""
+    from fmus.parts import build_drive
+    from motor._checks import BadValue
+
+    slave = _actuated_slave("current", **parameters)
+    assert slave.actuated is None and f"initialisation refused: {words}" in slave.error
+    with pytest.raises(BadValue) as refusal:
+        build_drive(slave, name[-1], mode="current", T=1e-3)
+    assert (refusal.value.name, refusal.value.value) == (name, value)
+

@@ -212,8 +212,11 @@ def test_fidelity_refuses_what_it_cannot_model():
 
     with pytest.raises(ValueError, match="friction = 'lugre' models the dry friction that coulomb = False"):
         Fidelity(friction="lugre", coulomb=False)
-    with pytest.raises(ValueError, match="electrics = 'ideal' has no drives"):
-        Fidelity(electrics="ideal", current_noise=0.1)
+    for effect in ({"current_noise": 0.1}, {"current_offset": -0.05}, {"pwm_counts": 960}, {"noise_seed": 4},
+                   {"friction": "lugre"}, {"drive_parameters": (("mu_s", 0.06),)}):
+        with pytest.raises(ValueError, match="electrics = 'ideal' has no drives"):
+            Fidelity(electrics="ideal", **effect)
+    assert Fidelity(electrics="ideal", current_noise=0.0, noise_seed=0).drive_options() == {}
     with pytest.raises(ValueError, match="friction = 'stribeck'"):
         Fidelity(friction="stribeck")
     assert Fidelity().drive_options() == {}

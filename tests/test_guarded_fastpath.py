@@ -72,3 +72,40 @@ def test_reads_of_many_lists_are_right_and_the_cache_stays_bounded():
     assert len(slave._GuardedSlave__readers) <= 32
     with pytest.raises(FmiError, match="value reference 99999 is no variable"):
         slave.get_real([every[0], 99999])
+
+
+def test_the_shared_accessors_convert_each_variable_and_respect_setters():
+    """attribute_reader/attribute_writer, the one implementation of GuardedSlave.get_real/set_real
+    and InProcessInstance.bind: each value converted by its own type, a system FMU's flat
+    "ctrl.lam" read as one attribute (not attrgetter's path), a property set through its setter."""
+    from fmus.guarded import attribute_reader, attribute_writer
+
+    class Model:
+        clamped = property(lambda self: self._clamped, lambda self, value: setattr(self, "_clamped", min(value, 1.0)))
+
+    model = Model()
+    setattr(model, "ctrl.lam", 40)
+    model.count, model.on, model.text = 3.0, 1, "ok"
+    read = attribute_reader(["ctrl.lam", "count", "on", "text"], [float, int, bool, str])
+    assert [(type(v), v) for v in read(model)] == [(float, 40.0), (int, 3), (bool, True), (str, "ok")]
+    assert [type(v) for v in attribute_reader(["count", "on"])(model)] == [float, float]
+    assert attribute_reader(["text"], [str])(model) == ["ok"] and attribute_reader(["count"])(model) == [3.0]
+    attribute_writer(Model, ["clamped"])(model, [0.5])
+    assert model.clamped == 0.5
+    attribute_writer(Model, ["count", "clamped"], [int, float])(model, [2.0, 5])
+    assert (type(model.count), model.count, model.clamped) == (int, 2, 1.0)
+    attribute_writer(Model, ["count", "on"], [float, float])(model, [7, True])
+    assert [(type(v), v) for v in (model.count, model.on)] == [(float, 7.0), (float, 1.0)]
+
+
+def test_an_in_process_instance_reads_outputs_of_every_type():
+    from fmus.instances import InProcessInstance
+
+    instance = InProcessInstance("DCMotorDrive", "drive")
+    instance.initialize({"T": -1e-3}, 0.0)                  # refused: the String output says why
+    v = instance.variables
+    instance.bind([v["i_ref"], v["omega"]], [v["tau"], v["error"]])
+    instance.set_inputs([1, 2.5])
+    assert (type(instance.slave.i_ref), instance.slave.omega) == (float, 2.5)
+    tau, error = instance.get_outputs()
+    assert type(tau) is float and isinstance(error, str) and error.startswith("initialisation refused: T must be > 0")

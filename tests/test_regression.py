@@ -19,6 +19,15 @@ def _metrics(name):
     return regression.measure(name)
 
 
+def test_the_stored_scenes_are_the_bench_scenes_without_the_twin():
+    """The twin's scenes (recalibrated when refitted) are left out by the twin's own list."""
+    from scenarios.scenes import scene_names
+    from scenarios.twin import twin_scene_names
+
+    bench = {n for n in scene_names() if n.startswith("bench_")} - set(twin_scene_names())
+    assert set(regression.regression_scenes()) == set(STORED) == bench | {"thesis_sim_circle"}
+
+
 @pytest.mark.parametrize("name", regression.regression_scenes())
 def test_full_run_matches_the_stored_metrics(name):
     now, stored = _metrics(name), STORED[name]

@@ -96,21 +96,20 @@ class ActuatedFiveBarPlant(CurrentLoopSteps, GuardedSlave):
     def snapshot(self):
         """The state before the next step (mechanism, currents, LuGre bristles), for :meth:`correct`."""
         a = self.actuated
-        return a.plant.y, a.plant.time, a.currents, [None if f is None else f.copy() for f in a.bristles]
+        return a.plant.y, a.plant.time, a.currents, [d.z for _, d in a.drives]
 
     def correct(self, snapshot, measured: dict, step_size: float) -> bool:
         """Redo the last step (taken from ``snapshot``, with the voltages it held) from the
         state the ``measured`` outputs allow; the currents, unmeasured, restart from the
         snapshot's.  False, nothing changed, when the outputs agreed."""
         a = self.actuated
-        y, time, currents, bristles = snapshot
+        y, time, currents, deflections = snapshot
 
         def redo():
-            for (_, drive), i in zip(a.drives, currents):
+            for (_, drive), i, z in zip(a.drives, currents, deflections):
                 drive.i = i
-            for f, saved in zip(a.bristles, bristles):
-                if f is not None:
-                    f[:] = saved
+                if drive.lugre is not None:
+                    drive.z = z
             a.advance([drive.v for _, drive in a.drives], step_size)
 
         if not correct_plant(a.plant, (y, time), measured, redo, step_size):
