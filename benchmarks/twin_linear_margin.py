@@ -1,6 +1,8 @@
 """Linear stability limits of the bench twin's joint loops, rigid or with a drive-link spring.
 
     python benchmarks/twin_linear_margin.py [--inertia-error E] [--freqs 200 250 300 400 500]
+    python benchmarks/twin_linear_margin.py --path [--inertia-error E] [--delays 1 2 3 4 6]
+    python benchmarks/twin_linear_margin.py --identify [--inertia-error 0]
 
 At the circle's start point (where the thesis, 7.2.12, places the TC laws' λ limit), each
 strategy family's loop linearised about rest: the plant's joint-space inertia (Tables 4-5,
@@ -12,7 +14,10 @@ Jᵀ m*ₓ J (PDx).  Friction, quantisation and the sliding-mode terms are left 
 the smallest λ whose closed loop has a pole on or outside the unit circle, rigid and with a
 spring of natural frequency f between each rotor and its link (encoder on the rotor, damping
 ratio ζ), beside the bench's limits (λ of Tables 6-8 plus 5 rad/s), and each family's
-velocity gain kv/J = 2 (λ+5) G / J at the bench's limit.  Figures: docs/twin.md.
+velocity gain kv/J = 2 (λ+5) G / J at the bench's limit.  ``--path``: the smallest rigid limit
+along each trajectory, with extra delays.  ``--identify``: the end-effector mass and velocity
+cut-off whose start-point limits best match the bench's edges (docs/twin.md: tried as a twin, rejected by the circle).
+Figures: docs/twin.md.
 """
 from __future__ import annotations
 
@@ -143,6 +148,36 @@ def path_limits(kind: str, inertia_error: float, delay: int = 1, points: int = 2
     return best
 
 
+#: The bench's edges (7.2.12: λ of Tables 6 and 8 plus 5 rad/s compromised stability).
+BENCH_EDGES = {"PDq": 40.0, "TCq/TCx": 65.0, "PDx": 75.0}
+
+
+def start_limits(inertia_error: float, m0: float, fc_vel: float, delay: int = 1) -> dict:
+    """{family: rigid λ limit at the circle's start} for links (1 + ``inertia_error``) times
+    Tables 4-5, an effector mass ``m0`` [kg] and the derivator's velocity cut-off ``fc_vel`` [Hz]."""
+    params = get_preset("bench")
+    x, y = get_trajectory("circle").start_point
+    Ml, families = loop_at(params, replace(scaled_links(params, inertia_error), m0=m0), x, y)
+    Jr = np.diag([params.chain1.J_rotor, params.chain2.J_rotor])
+    system = delayed(*plant(Ml, Jr), delay)
+    derivator = _differentiator_ss(Derivator(fc_vel=fc_vel).velocity_sos, T)
+    return {name: lambda_limit(*system, G, derivator) for name, (G, _lam) in families.items()}
+
+
+def identify_edges(inertia_error: float = 0.0, masses=np.arange(0.20, 0.501, 0.05),
+                   cutoffs=np.arange(9.0, 16.01, 1.0)) -> list:
+    """[(misfit, m0, fc_vel, limits)] over the grid, best first: misfit is the RMS log-ratio of
+    :func:`start_limits` to :data:`BENCH_EDGES` (the effector mass sets PDx's edge against the
+    others', the velocity filter's lag sets their level)."""
+    rows = []
+    for m0 in masses:
+        for fc in cutoffs:
+            limits = start_limits(inertia_error, float(m0), float(fc))
+            misfit = math.sqrt(np.mean([math.log(limits[n] / BENCH_EDGES[n]) ** 2 for n in BENCH_EDGES]))
+            rows.append((misfit, round(float(m0), 3), float(fc), limits))
+    return sorted(rows, key=lambda row: row[0])
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--inertia-error", type=float, default=0.6376, help="links / Tables 4-5 - 1 (the fit's)")
@@ -152,7 +187,14 @@ def main(argv=None) -> int:
                         help="rigid limits along the circle and the triangle (smallest over the path), "
                              "for each --delays, instead of the springs at the start point")
     parser.add_argument("--delays", type=int, nargs="+", default=[1], help="computation delays [samples] (--path)")
+    parser.add_argument("--identify", action="store_true",
+                        help="the effector mass and velocity cut-off whose start-point limits best match the "
+                             "bench's edges (PDq 40, TC 65, PDx 75), at --inertia-error")
     args = parser.parse_args(argv)
+    if args.identify:
+        for misfit, m0, fc, limits in identify_edges(args.inertia_error)[:8]:
+            print(f"m0 {m0:.2f} kg, fc_vel {fc:g} Hz: misfit {misfit:.4f}, limits {limits}")
+        return 0
     if args.path:
         for kind in ("circle", "triangle"):
             for delay in args.delays:

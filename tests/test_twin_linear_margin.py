@@ -1,7 +1,8 @@
 """The linear margin benchmark's building blocks (benchmarks/twin_linear_margin.py)."""
 import numpy as np
+import pytest
 
-from benchmarks.twin_linear_margin import delayed, lambda_limit, plant, setup
+from benchmarks.twin_linear_margin import delayed, identify_edges, lambda_limit, plant, setup, start_limits
 from controller.derivators import Derivator, _differentiator_ss
 
 
@@ -33,3 +34,25 @@ def test_more_delay_lowers_every_limit():
     for G, _lam in families.values():
         limits = [lambda_limit(*delayed(*plant(Ml, Jr), d), G, derivator) for d in (1, 3, 6)]
         assert limits[0] > limits[1] > limits[2]
+
+
+def test_effector_mass_lifts_pdx_and_the_filter_lowers_all():
+    """The identification's two levers act as argued (docs/twin.md): an effector mass adds to
+    the task-space inertia in every direction, so PDx's constant m* (set by the lightest task
+    direction) gains margin against PDq's; a slower velocity filter lowers every limit."""
+    light, heavy = start_limits(0.0, 0.0, 100.0), start_limits(0.0, 0.4, 100.0)
+    assert heavy["PDx"] / heavy["PDq"] > light["PDx"] / light["PDq"] + 0.5
+    slow = start_limits(0.0, 0.4, 11.0)
+    assert all(slow[n] < heavy[n] for n in heavy)
+
+
+
+def test_identification_ranks_by_the_misfit_to_the_bench_edges():
+    """identify_edges returns its grid best first, each misfit the RMS log-ratio of that
+    point's limits to the bench's edges (PDq 40, TC 65, PDx 75)."""
+    rows = identify_edges(0.0, masses=[0.0, 0.4], cutoffs=[11.0, 100.0])
+    assert [r[0] for r in rows] == sorted(r[0] for r in rows)
+    best = rows[0]
+    assert (best[1], best[2]) == (0.4, 11.0)
+    expected = np.sqrt(np.mean(np.log([best[3]["PDq"] / 40, best[3]["TCq/TCx"] / 65, best[3]["PDx"] / 75]) ** 2))
+    assert best[0] == pytest.approx(expected, rel=1e-12)
