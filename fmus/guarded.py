@@ -577,33 +577,46 @@ TINY = 1e-12
 
 
 def with_overrides(params, slave, names, positive=()):
-    """``params`` (a validated frozen dataclass with ``with_``) with the slave's parameters
-    that are not PRESET_VALUE replacing its fields.
+    """``params`` (a validated :class:`motor.MotorParams`) with the slave's parameters that
+    are not PRESET_VALUE replacing its fields.
 
-    ``names`` are (field, FMU variable) pairs.  A negative value other than
-    the sentinel is refused naming the variable; so is a value below :data:`TINY` of a
-    field in ``positive``; the dataclass's own validation names any other non-physical
-    value (as the FMU variable).
+    Parameters
+    ----------
+    params : motor.MotorParams
+        The preset's parameters.
+    slave : GuardedSlave
+        Holds one FMU variable per field named in ``names``.
+    names : dict
+        Field -> FMU variable (:func:`fmus.parts.motor_variables`).
+    positive : collection of str
+        Fields refused below :data:`TINY`.
+
+    Raises
+    ------
+    motor._checks.BadValue
+        Naming the FMU variable and its value, as fields and in the message
+        ``"parameter <variable> ..."``: a negative value other than the sentinel, or a
+        value the dataclass's own validation refuses (renamed from its field).
+    ValueError
+        For an absurd value, or one below :data:`TINY` of a field in ``positive``.
     """
+    from motor._checks import BadValue     # params is a MotorParams: motor is loaded
+
     changes = {}
-    for field, var in names:
+    for field, var in names.items():
         value = float(getattr(slave, var))
         if value == PRESET_VALUE:
             continue
         if value < 0.0:
-            raise ValueError(f"parameter {var} = {value!r} is negative (use -1 for the preset's value)")
+            raise BadValue(var, value, "parameter {name} = {value!r} is negative (use -1 for the preset's value)")
         refuse_absurd(**{var: value})
         if field in positive:
             refuse_tiny(**{var: value})
         changes[field] = value
     try:
         return params.with_(**changes)
-    except ValueError as exc:
-        message = str(exc)
-        for field, var in names:
-            if field != var and message.startswith(f"{field} "):
-                message = var + message[len(field):]
-        raise ValueError(f"parameter {message}") from None
+    except BadValue as exc:     # named as the slave's variable
+        raise exc.renamed(names, prefix="parameter ") from None
 
 
 def require_finite(**values) -> None:

@@ -277,9 +277,7 @@ def build_drive(slave, suffix: str = "", **options):
         params = get_motor_preset(preset)
     except ValueError as exc:
         raise ValueError(f"parameter preset{suffix} = {preset!r}: {exc}") from None
-    params = with_overrides(params, slave,
-                            [(field, f"{var}{suffix}") for field, var, _ in MOTOR_PARAMETERS],
-                            positive=POSITIVE_FIELDS)   # refused below TINY
+    params = with_overrides(params, slave, motor_variables(suffix), positive=POSITIVE_FIELDS)   # refused below TINY
     changes = {}
     for field, var in DESIGN_PARAMETERS:
         value = getattr(slave, f"{var}{suffix}")
@@ -298,12 +296,17 @@ def build_drive(slave, suffix: str = "", **options):
         raise exc.renamed(drive_variables(suffix)) from None
 
 
+def motor_variables(suffix: str = "") -> dict:
+    """The FMU variable of each :class:`motor.MotorParams` field settable one by one
+    (:data:`MOTOR_PARAMETERS`), followed by ``suffix``."""
+    return {field: f"{var}{suffix}" for field, var, _ in MOTOR_PARAMETERS}
+
+
 def drive_variables(suffix: str = "") -> dict:
     """The FMU variable of each name a :class:`motor.Drive` refuses a value by: its options
-    (:data:`DRIVE_OPTIONS`) and the :class:`motor.MotorParams` fields (:data:`MOTOR_PARAMETERS`),
+    (:data:`DRIVE_OPTIONS`) and the :class:`motor.MotorParams` fields (:func:`motor_variables`),
     followed by ``suffix``."""
-    return {**{name: f"{name}{suffix}" for name, _, _ in DRIVE_OPTIONS},
-            **{field: f"{var}{suffix}" for field, var, _ in MOTOR_PARAMETERS}}
+    return {**{name: f"{name}{suffix}" for name, _, _ in DRIVE_OPTIONS}, **motor_variables(suffix)}
 
 
 class CurrentLoopSteps:

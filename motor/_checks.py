@@ -27,9 +27,11 @@ class BadValue(ValueError):
         self.other, self.other_value = other, other_value
         super().__init__(template.format(name=name, value=value, other=other, other_value=other_value))
 
-    def renamed(self, names):
-        """The same refusal with each name ``n`` called ``names.get(n, n)``."""
-        return BadValue(names.get(self.name, self.name), self.value, self.template,
+    def renamed(self, names, prefix=""):
+        """The same refusal with each name ``n`` called ``names.get(n, n)``, its message
+        after the plain text ``prefix`` (e.g. ``"parameter "``)."""
+        template = prefix.replace("{", "{{").replace("}", "}}") + self.template
+        return BadValue(names.get(self.name, self.name), self.value, template,
                         names.get(self.other, self.other), self.other_value)
 
 

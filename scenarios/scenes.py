@@ -473,6 +473,16 @@ def scene_names() -> list[str]:
     return names + list(PENDULUM_SCENES)
 
 
+def _twin_scenes() -> dict:
+    """The twin's scene names (:func:`scenarios.twin.twin_scene_names`) -> (kind, strategy) of
+    :func:`scenarios.twin.bench_real`: its names run over KINDS, then its STRATEGY_NAMES."""
+    from itertools import product
+
+    from .twin import KINDS, STRATEGY_NAMES, twin_scene_names   # .twin imports this module
+
+    return dict(zip(twin_scene_names(), product(KINDS, STRATEGY_NAMES), strict=True))
+
+
 def get_scene(name: str) -> Scene:
     """The scene called ``name`` (see :func:`scene_names`)."""
     if name == "thesis_sim_circle":
@@ -484,10 +494,11 @@ def get_scene(name: str) -> Scene:
         prefix = f"bench_{kind}_"
         if name.startswith(prefix) and name[len(prefix):] in ALL_STRATEGY_NAMES:
             return bench(name[len(prefix):], kind)
-    if name in scene_names() and name.startswith("bench_real_"):
+    twin_scenes = _twin_scenes()
+    if name in twin_scenes:
         from .twin import bench_real
 
-        kind, strategy = name[len("bench_real_"):].split("_")
+        kind, strategy = twin_scenes[name]
         return bench_real(strategy, kind)
     for balanced in (True, False):
         prefix = "vertical_circle_balanced_" if balanced else "vertical_circle_"

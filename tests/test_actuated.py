@@ -368,3 +368,24 @@ def test_a_bad_drive_parameter_is_refused_by_its_fmu_name(parameters, name, valu
         build_drive(slave, name[-1], mode="current", T=1e-3)
     assert (refusal.value.name, refusal.value.value) == (name, value)
 
+
+
+@pytest.mark.parametrize("parameters, name, value, words", [
+    ({"J_design2": 0.0}, "J_design2", 0.0, "parameter J_design2 must be > 0, got 0.0"),
+    ({"kt1": float("inf")}, "kt1", float("inf"), "parameter kt1 must be a finite number, got inf"),
+    ({"omega_eps2": 0.0}, "omega_eps2", 0.0, "parameter omega_eps2 must be > 0, got 0.0"),
+    ({"mu_s1": -3.0}, "mu_s1", -3.0, "parameter mu_s1 = -3.0 is negative (use -1 for the preset's value)"),
+], ids=["J_design2", "kt1", "omega_eps2", "mu_s1"])
+def test_a_bad_motor_override_is_refused_by_its_fmu_name(parameters, name, value, words):
+    """A motor parameter the slave overrides (fmus.guarded.with_overrides) is refused by its FMU
+    variable, suffix j included, and its value, as fields and in the message: J_design2 is
+    MotorParams' J_rotor, kt1 and omega_eps2 its kt and omega_eps; mu_s1 is refused before
+    MotorParams sees it."""
+    from fmus.parts import build_drive
+    from motor._checks import BadValue
+
+    slave = _actuated_slave("current", **parameters)
+    assert slave.actuated is None and f"initialisation refused: {words} (t = 0 s)" in slave.error
+    with pytest.raises(BadValue) as refusal:
+        build_drive(slave, name[-1], mode="current", T=1e-3)
+    assert (refusal.value.name, refusal.value.value, str(refusal.value)) == (name, value, words)

@@ -28,6 +28,30 @@ def test_scene_names_cover_the_contract():
         get_scene("bench_circle_XYZ")
 
 
+def test_every_twin_scene_name_resolves_to_that_twin_scene():
+    from scenarios.twin import twin_scene_names
+
+    names = twin_scene_names()
+    assert len(set(names)) == 16 and set(names) <= set(scene_names())
+    for name in names:
+        scene = get_scene(name)
+        # bench_real names its scene from the (strategy, kind) it was given; LuGre drives
+        # tell the twin's scene from the bench scene underneath
+        assert scene.name == name, name
+        assert scene.system.component("drive1").parameters["friction"] == "lugre", name
+
+
+@pytest.mark.parametrize("name", ["bench_real_square_PDq", "bench_real_circle_SMCq", "bench_real_circle_pdq",
+                                  "bench_real_circle", "bench_real_circle_PDq_2", "bench_real_PDq_circle"])
+def test_a_near_miss_twin_scene_name_is_refused_clearly(name):
+    """Names near a twin scene's (an unknown kind, a strategy the twin lacks, wrong case, a
+    missing, extra or swapped part) get the unknown-scene error pointing at `parcosim list`."""
+    expected = f"unknown scene {name!r}; `parcosim list` prints the {len(scene_names())} scenes"
+    with pytest.raises(ValueError) as refusal:
+        get_scene(name)
+    assert str(refusal.value) == expected
+
+
 def test_ideal_actuator_scene_has_no_motors():
     models = {c.model for c in get_scene("thesis_sim_circle").system.components}
     assert models == {"Trajectory", "PositionController", "FiveBarPlant"}

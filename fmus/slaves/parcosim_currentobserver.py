@@ -54,7 +54,7 @@ class CurrentObserver(GuardedSlave):
         self.observer = None
 
     def setup(self):
-        params = with_overrides(get_motor_preset(self.preset), self, [(name, name) for name, _ in MOTOR_PARAMETERS],
+        params = with_overrides(get_motor_preset(self.preset), self, {name: name for name, _ in MOTOR_PARAMETERS},
                                 positive=("R", "ke"))
         require_finite(T=self.T)
         refuse_absurd(i0=self.i0, omega0=self.omega0, T=self.T)
