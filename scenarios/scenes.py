@@ -473,16 +473,6 @@ def scene_names() -> list[str]:
     return names + list(PENDULUM_SCENES)
 
 
-def _twin_scenes() -> dict:
-    """The twin's scene names (:func:`scenarios.twin.twin_scene_names`) -> (kind, strategy) of
-    :func:`scenarios.twin.bench_real`: its names run over KINDS, then its STRATEGY_NAMES."""
-    from itertools import product
-
-    from .twin import KINDS, STRATEGY_NAMES, twin_scene_names   # .twin imports this module
-
-    return dict(zip(twin_scene_names(), product(KINDS, STRATEGY_NAMES), strict=True))
-
-
 def get_scene(name: str) -> Scene:
     """The scene called ``name`` (see :func:`scene_names`)."""
     if name == "thesis_sim_circle":
@@ -494,11 +484,10 @@ def get_scene(name: str) -> Scene:
         prefix = f"bench_{kind}_"
         if name.startswith(prefix) and name[len(prefix):] in ALL_STRATEGY_NAMES:
             return bench(name[len(prefix):], kind)
-    twin_scenes = _twin_scenes()
-    if name in twin_scenes:
-        from .twin import bench_real
+    from .twin import bench_real, twin_scenes   # .twin imports this module
 
-        kind, strategy = twin_scenes[name]
+    if name in twin_scenes():
+        kind, strategy = twin_scenes()[name]
         return bench_real(strategy, kind)
     for balanced in (True, False):
         prefix = "vertical_circle_balanced_" if balanced else "vertical_circle_"

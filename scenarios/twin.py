@@ -217,5 +217,10 @@ def bench_real(strategy: str, kind: str = "circle", twin: Twin | None = None, se
                                f"encoder-phase seed {seed}; {values}")
 
 
+def twin_scenes() -> dict:
+    """The twin's scene names -> (kind, strategy) of :func:`bench_real`."""
+    return {f"bench_real_{kind}_{s}": (kind, s) for kind in KINDS for s in STRATEGY_NAMES}
+
+
 def twin_scene_names() -> list[str]:
-    return [f"bench_real_{kind}_{s}" for kind in KINDS for s in STRATEGY_NAMES]
+    return list(twin_scenes())
