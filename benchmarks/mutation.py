@@ -63,7 +63,11 @@ TARGETS = {
     "plant/presets.py": ("test_thesis_tables", "test_balanced", "test_plant_dynamics"),   # counter_offsets: seed 001 (64)
     "motor/electrics.py": ("test_motor_electrics", "test_motor_current_control"),
     "motor/current_controller.py": ("test_motor_current_control",),
-    "motor/drive.py": ("test_motor_current_control", "test_motor_electrics", "test_fmu_motor", "test_actuated"),
+    # LuGre drives step through test_friction and test_drive_twin; the Euler divergence hint through
+    # one test of test_extremes (the module as a whole expects numba's float behaviour)
+    "motor/drive.py": ("test_motor_current_control", "test_motor_electrics", "test_fmu_motor", "test_actuated",
+                       "test_friction", "test_drive_twin",
+                       "test_extremes::test_explicit_euler_drive_alone_refuses_a_non_finite_current"),
     "motor/observer.py": ("test_motor_observer",),
     "motor/identification.py": ("test_motor_identification",),
     "motor/presets.py": ("test_thesis_tables", "test_motor_presets"),
@@ -106,7 +110,8 @@ def _session(workdir: Path, source: str) -> Path:
 
 
 def _test_command(source: str) -> str:
-    tests = " ".join(f"tests/{name}.py" for name in TARGETS[source])
+    tests = " ".join(f"tests/{name}.py" if "::" not in name else "tests/{}.py::{}".format(*name.split("::"))
+                     for name in TARGETS[source])
     return f"{sys.executable} -m pytest -x -q -p no:cacheprovider -o addopts= {tests}"
 
 

@@ -96,8 +96,8 @@ def test_energy_balance_with_kt_equal_ke():
 def test_rk4_steps_beyond_the_electrical_pole_are_refused_by_name():
     a = _actuated(L=1e-5)
     state = a.state()
-    with pytest.raises(PlantError, match=r"drive on joint 1: RK4 steps of 0.001 s are unstable.*R h / L = 110.1.*"
-                                         r"substeps >= 56"):
+    with pytest.raises(PlantError, match=r"drive on joint 1: RK4 steps of 0.001 s are unstable.*R h / L = 110.1 > 2.785 "
+                                         r"\(L/R = 9.08e-06 s\).*substeps >= 56"):
         a.step((1.0, 1.0), (0.0, 0.0), (0.0, 0.0), 1e-3)
     assert np.array_equal(a.state(), state)
 
