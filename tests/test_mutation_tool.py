@@ -78,3 +78,22 @@ def test_a_changed_line_is_not_re_run(module):
     module.write_text(SOURCE.replace("    return a + b", "    return a + 2 * b"))
     assert mutation._relocated(*recorded[3]) is None                    # g's line changed
     assert mutation._relocated(*recorded[0]) == recorded[0][0]          # f's untouched
+
+
+def test_every_target_names_an_existing_test():
+    """A stale target (a renamed module or test) makes pytest error out, and cosmic-ray would
+    count every mutant of that source as killed: each target must exist."""
+    import ast
+    from pathlib import Path
+
+    root = Path(mutation.__file__).resolve().parents[1]
+    for source, targets in mutation.TARGETS.items():
+        assert (root / source).is_file(), source
+        for target in targets:
+            module, _, test = target.partition("::")
+            path = root / "tests" / f"{module}.py"
+            assert path.is_file(), (source, target)
+            if test:
+                names = {n.name for n in ast.walk(ast.parse(path.read_text())) if isinstance(n, ast.FunctionDef)}
+                assert test in names, (source, target)
+        assert mutation._test_command(source).count("tests/") == len(targets)
