@@ -72,6 +72,7 @@ TARGETS = {
     "motor/identification.py": ("test_motor_identification",),
     "motor/presets.py": ("test_thesis_tables", "test_motor_presets"),
     "motor/_checks.py": ("test_motor_electrics", "test_motor_current_control"),
+    "motor/friction.py": ("test_friction", "test_drive_twin"),     # LuGre (item 2 of issue 18), added after the campaign
     "fmus/slaves/parcosim_positioncontroller.py": ("test_fmu_controller",),
     "fmus/slaves/parcosim_dcmotordrive.py": ("test_fmu_motor",),
     "fmus/slaves/parcosim_currentobserver.py": ("test_fmu_motor",),
