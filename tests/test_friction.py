@@ -125,7 +125,13 @@ def test_exact_step_matches_the_ode_with_the_speed_held(omega, h):
     z, f_end, f_mean = fr.advance(f, z0, omega, h)
     assert z == pytest.approx(z_ref, rel=1e-8, abs=1e-15)
     assert f_mean == pytest.approx(mean_ref, rel=1e-7, abs=1e-13)
-    assert f_end == pytest.approx(fr.friction_force(f, z, omega), rel=1e-12)
+    # F at the step's end, (4) with (1) at z(h), written here again
+    g = model.Fc + (model.Fs - model.Fc) * math.exp(-(omega / model.omega_s) ** 2)
+    rate_ref = omega - model.sigma0 * abs(omega) * z_ref / g
+    end_ref = model.sigma0 * z_ref + model.sigma1 * rate_ref + model.sigma2 * omega
+    assert f_end == pytest.approx(end_ref, rel=1e-7, abs=1e-13)
+    assert fr.friction_force(f, z, omega) == f_end
+    assert fr.bristle_rate(f, z, omega) == pytest.approx(rate_ref, rel=1e-6, abs=1e-12)
 
 
 def test_static_map_is_the_stribeck_curve():
@@ -136,6 +142,9 @@ def test_static_map_is_the_stribeck_curve():
         z, f_end, _ = fr.advance(f, 0.0, v, 10.0)
         g = model.Fc + (model.Fs - model.Fc) * math.exp(-(v / model.omega_s) ** 2)
         assert f_end == pytest.approx(math.copysign(g, v) + model.sigma2 * v, rel=1e-9)
+        # the deflection it settles at, both directions: sign(ω) G(ω)/σ0
+        assert fr.steady_deflection(f, v) == pytest.approx(z, rel=1e-12)
+        assert fr.steady_deflection(f, v) == pytest.approx(math.copysign(g, v) / model.sigma0, rel=1e-12)
 
 
 @pytest.mark.parametrize("field, value, words", [
