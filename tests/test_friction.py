@@ -106,13 +106,14 @@ def test_steady_sliding_above_the_critical_pull_speed():
     assert np.ptp(late) < 0.1 * np.ptp(early)
 
 
-@pytest.mark.parametrize("omega, h", [(0.3, 1e-3), (-2.0, 1e-3), (1e-6, 1e-3), (5e-5, 1e-3), (0.0, 1e-3)])
-def test_exact_step_matches_the_ode_with_the_speed_held(omega, h):
+@pytest.mark.parametrize("omega, h, z0", [(0.3, 1e-3, 2e-4), (-2.0, 1e-3, 2e-4), (1e-6, 1e-3, 2e-4),
+                                           (5e-5, 1e-3, 2e-4), (0.0, 1e-3, 2e-4), (5e-4, 1e-3, 0.0)])
+def test_exact_step_matches_the_ode_with_the_speed_held(omega, h, z0):
     """advance(): z(h) and the step's mean friction against scipy on (1) with ω constant
-    (large, tiny r h: both branches of φ1, φ2)."""
+    (large, tiny r h: both branches of φ1, φ2; from z0 = 0 at r h = 7e-4 the mean deflection
+    is ω h φ2 alone, so φ2's series is seen to its first-order term)."""
     model = fr.LuGre(Fc=0.05, Fs=0.07, omega_s=0.1, sigma0=100.0, sigma1=0.15, sigma2=1e-4)
     f = fr.new_lugre(model)
-    z0 = 2e-4
 
     def rhs(t, s):
         z = s[0]
