@@ -159,3 +159,33 @@ def test_static_map_is_the_stribeck_curve():
 def test_bad_parameters_are_named(field, value, words):
     with pytest.raises(ValueError, match=words.replace("(", r"\(").replace(")", r"\)")):
         fr.LuGre(**{**PAPER, field: value})
+
+
+@pytest.mark.parametrize("x", [1e-9, 1e-6, 1e-4, 5e-4, 9.99e-4, 1e-3, 1.0001e-3, 2e-3, 1e-2, 0.1, 1.0, 10.0, 1e3])
+def test_phi_functions_match_a_50_digit_evaluation(x):
+    """φ1(x) = (1 − e^{−x})/x and φ2(x) = (x − 1 + e^{−x})/x² of the exact step, against
+    50-digit decimal arithmetic.  Below 1e-3 the series: its error is its first omitted term
+    (x⁴/120 of φ1, x⁴/720 of φ2 = 0.5) plus rounding; above, the closed forms: φ2's numerator
+    x + expm1(−x) ≈ x²/2 loses expm1's rounding eps·x, a relative 2 eps/x."""
+    from decimal import Decimal, localcontext
+
+    with localcontext() as ctx:
+        ctx.prec = 50
+        X = Decimal(x)
+        e = (-X).exp()
+        phi1_ref, phi2_ref = float((1 - e) / X), float((X - 1 + e) / (X * X))
+    phi1, phi2 = fr._phi(x)
+    eps = np.finfo(float).eps
+    series = x < 1e-3
+    assert abs(phi1 / phi1_ref - 1) <= (x ** 4 / 120 if series else 0.0) + 2 * eps
+    assert abs(phi2 / phi2_ref - 1) <= (x ** 4 / 360 if series else 2 * eps / x) + 2 * eps
+
+
+def test_parameters_cannot_change_after_validation():
+    """LuGre is validated once, at construction: an attribute set later would skip the checks
+    (e.g. Fs below Fc), so the dataclass is frozen."""
+    import dataclasses
+
+    model = fr.LuGre(**PAPER)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        model.Fs = 0.5
