@@ -34,9 +34,9 @@ from controller.model import ExactModel
 from controller.strategies import get_strategy
 from controller.trajectories import get_trajectory
 from plant import get_preset
+from scenarios.twin import LINK_INERTIAS
 
 T = 1e-3
-LINKS = ("m1", "m2", "Jz1", "Jz2")
 
 
 def joint_inertia(params, x, y, J):
@@ -49,7 +49,18 @@ def scaled_links(params, inertia_error: float):
     """``params`` without rotors, its links' masses and inertias times 1 + ``inertia_error``."""
     links = params.with_rotors(0.0, 0.0)
     return replace(links, **{c: replace(getattr(links, c), **{f: getattr(getattr(links, c), f) * (1 + inertia_error)
-                                                               for f in LINKS}) for c in ("chain1", "chain2")})
+                                                               for f in LINK_INERTIAS}) for c in ("chain1", "chain2")})
+
+
+def rotor_inertias(params):
+    """The rotors of Tables 16 and 18 as a diagonal matrix [kg m²]."""
+    return np.diag([params.chain1.J_rotor, params.chain2.J_rotor])
+
+
+def velocity_chain(fc_vel: float | None = None):
+    """The derivator's velocity chain ((7.19) and the Bessel low-pass) as a state-space model,
+    at cut-off ``fc_vel`` [Hz] (default: the derivator's)."""
+    return _differentiator_ss((Derivator() if fc_vel is None else Derivator(fc_vel=fc_vel)).velocity_sos, T)
 
 
 def loop_at(params, links, x, y):
@@ -67,7 +78,7 @@ def setup(inertia_error: float):
     params = get_preset("bench")
     x, y = get_trajectory("circle").start_point
     Ml, families = loop_at(params, scaled_links(params, inertia_error), x, y)
-    Jr = np.diag([params.chain1.J_rotor, params.chain2.J_rotor])
+    Jr = rotor_inertias(params)
     return (x, y), Ml, Jr, families
 
 
@@ -133,8 +144,8 @@ def path_limits(kind: str, inertia_error: float, delay: int = 1, points: int = 2
     ``fc_vel`` [Hz] (default: the derivator's)."""
     params = get_preset("bench")
     links = scaled_links(params, inertia_error)
-    Jr = np.diag([params.chain1.J_rotor, params.chain2.J_rotor])
-    derivator = _differentiator_ss((Derivator() if fc_vel is None else Derivator(fc_vel=fc_vel)).velocity_sos, T)
+    Jr = rotor_inertias(params)
+    derivator = velocity_chain(fc_vel)
     trajectory = get_trajectory(kind)
     best = {}
     for t in np.linspace(0.0, trajectory.duration, points, endpoint=False):
@@ -158,9 +169,9 @@ def start_limits(inertia_error: float, m0: float, fc_vel: float, delay: int = 1)
     params = get_preset("bench")
     x, y = get_trajectory("circle").start_point
     Ml, families = loop_at(params, replace(scaled_links(params, inertia_error), m0=m0), x, y)
-    Jr = np.diag([params.chain1.J_rotor, params.chain2.J_rotor])
+    Jr = rotor_inertias(params)
     system = delayed(*plant(Ml, Jr), delay)
-    derivator = _differentiator_ss(Derivator(fc_vel=fc_vel).velocity_sos, T)
+    derivator = velocity_chain(fc_vel)
     return {name: lambda_limit(*system, G, derivator) for name, (G, _lam) in families.items()}
 
 
@@ -204,7 +215,7 @@ def main(argv=None) -> int:
         print("bench: circle PDq 40, TC 65, PDx 75 (λ of Tables 6, 8 + 5); triangle PDq < 30 (Table 7: 25)")
         return 0
     point, Ml, Jr, families = setup(args.inertia_error)
-    derivator = _differentiator_ss(Derivator().velocity_sos, T)
+    derivator = velocity_chain()
     print(f"start point {point}, real joint inertia diag {np.diag(Ml + Jr).round(5)}")
     for name, (G, lam) in families.items():
         kv = 2 * (lam + 5) * np.diag(G) / np.diag(Ml + Jr)

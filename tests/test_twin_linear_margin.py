@@ -2,8 +2,7 @@
 import numpy as np
 import pytest
 
-from benchmarks.twin_linear_margin import delayed, identify_edges, lambda_limit, plant, setup, start_limits
-from controller.derivators import Derivator, _differentiator_ss
+from benchmarks.twin_linear_margin import delayed, identify_edges, lambda_limit, plant, setup, start_limits, velocity_chain
 
 
 def _impulse(Ad, Bd, Cm, steps=12):
@@ -30,7 +29,7 @@ def test_delay_shifts_the_response_by_whole_samples():
 def test_more_delay_lowers_every_limit():
     """Each family's rigid λ limit at the start point falls as the delay grows (phase lag)."""
     _point, Ml, Jr, families = setup(0.0)
-    derivator = _differentiator_ss(Derivator().velocity_sos, 1e-3)
+    derivator = velocity_chain()
     for G, _lam in families.values():
         limits = [lambda_limit(*delayed(*plant(Ml, Jr), d), G, derivator) for d in (1, 3, 6)]
         assert limits[0] > limits[1] > limits[2]
