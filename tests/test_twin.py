@@ -179,6 +179,16 @@ def test_the_shipped_calibration_gives_the_reported_circle():
             assert by_seed[101][key] == pytest.approx(stored[s]["101"][key], rel=1e-3), (s, key)
 
 
+def test_the_report_carries_the_method_text_as_written():
+    """docs/twin.md is the generated tables followed by docs/twin_method.md verbatim
+    (``python -m scenarios.twin_fit report``): a method text edited without the report, or a
+    report edited by hand below its tables, fails."""
+    report = (twin_fit.ROOT / "docs" / "twin.md").read_text(encoding="utf-8")
+    method = twin_fit.METHOD_FILE.read_text(encoding="utf-8")
+    assert method.startswith("## ") and report.endswith(method)
+    assert report.index(method) > report.index("## The prediction against the goals")
+
+
 def test_margin_runs_raise_lambda_and_apply_the_delay():
     """scenarios.twin_margin: the controller gets λ + 5 and the chosen delay.  At λ = 60 a 14 ms
     delay costs ω τ ≈ 120 rad/s × 0.014 s ≈ 1.7 rad of phase at the loop's crossover (kv = 2λ),
