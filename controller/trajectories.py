@@ -269,3 +269,53 @@ def get_trajectory(kind, **params):
     except (KeyError, TypeError):
         raise ValueError(f"unknown trajectory kind {kind!r}; valid kinds: {', '.join(TRAJECTORY_KINDS)}") from None
     return constructor(**params)
+
+
+#: ``cycles`` meaning "the kind's default" in :func:`from_parameters` (thesis_circle 2, circle 8,
+#: triangle 2): the Trajectory FMU's start value.
+PRESET_CYCLES = -1
+
+
+def from_parameters(kind, cycles=PRESET_CYCLES, side_time=0.75, frequency=1.0, x_hold=BENCH_START[0],
+                    y_hold=BENCH_START[1]):
+    """The trajectory of the Trajectory FMU's parameters (a scene's ``Trajectory`` component).
+
+    Parameters
+    ----------
+    kind : str
+        As :func:`get_trajectory`.
+    cycles : int
+        Rounds of circle and triangle; :data:`PRESET_CYCLES` for the kind's default.
+    side_time : float
+        Triangle: time per side [s].
+    frequency : float
+        Circle: turns per second [Hz].
+    x_hold, y_hold : float
+        Hold: the point [m].
+
+    Raises
+    ------
+    ValueError
+        Naming the parameter and its value: ``cycles`` < 1 (not the preset), a ``side_time`` or
+        ``frequency`` <= 0 where the kind uses it, an unknown ``kind``.
+    """
+    if kind == "hold":
+        kwargs = {"x": x_hold, "y": y_hold}
+    else:
+        kwargs = {}
+        if cycles != PRESET_CYCLES:
+            if cycles < 1:
+                raise ValueError(f"parameter cycles = {cycles!r} must be >= 1 (or -1 for the default)")
+            kwargs["cycles"] = cycles
+        if kind == "circle" and frequency != 1.0:
+            if not frequency > 0.0:
+                raise ValueError(f"parameter frequency = {frequency!r} Hz must be > 0")
+            kwargs["frequency"] = frequency
+        if kind == "triangle":
+            if not side_time > 0.0:
+                raise ValueError(f"parameter side_time = {side_time!r} s must be > 0")
+            kwargs["side_time"] = side_time
+    try:
+        return get_trajectory(kind, **kwargs)
+    except ValueError as exc:
+        raise ValueError(f"parameter kind: {exc}") from None

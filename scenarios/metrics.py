@@ -17,6 +17,10 @@ unsettled, a band much wider would call a slow creep settled.  When the run ends
 the end effector settles, ``settled`` is false, ``t_settle_s`` null, and ``e_ss_mm`` is
 the RMS over the last :data:`STEADY_STATE_WINDOW` s (the best the run can say).
 
+``e_contour_sides_mm`` (polygon references: the triangle's scenes) is, per side in travel
+order, the RMS distance of the end effector from the polygon's path while the reference
+travels that side (:func:`side_contour_errors`): where the error lies, as an xy plot shows it.
+
 ``e_ss_1s_mm`` keeps the earlier definition: the RMS over
 [stop + :data:`E_SS_1S` − :data:`STEADY_STATE_WINDOW`, stop + :data:`E_SS_1S`], 1 s after
 the reference stopped, whether settled or not.
@@ -26,6 +30,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
+from controller.trajectories import PolygonTrajectory, from_parameters
 
 from .scenes import STEADY_STATE_WINDOW, Scene
 
@@ -44,6 +50,41 @@ E_SS_1S = 1.0
 def rms_norm(a: np.ndarray, b: np.ndarray) -> float:
     """sqrt(mean(a² + b²)); NaN for no samples."""
     return math.sqrt(float(np.mean(a * a + b * b))) if len(a) else float("nan")
+
+
+def side_contour_errors(polygon: PolygonTrajectory, t, x, y) -> list:
+    """Per side of ``polygon``, in travel order, the RMS distance [m] of the end effector (x, y)
+    from the polygon's path over the samples while the reference travels that side.
+
+    A sample at t belongs to side k mod n when t is in [k T, (k + 1) T) (T the side time, n the
+    sides, k below cycles × n); its distance is to the nearest point of the closed path.  The
+    distance to the path, not to the reference point: the error an xy tracking plot shows, blind
+    to a lag along the path (the thesis says where its triangle's error lies from such plots,
+    7.2.12).  NaN for a side with no sample (a run that stopped early).
+    """
+    t, x, y = (np.asarray(a, dtype=float) for a in (t, x, y))
+    vertices = np.asarray(polygon.vertices, dtype=float)
+    n = len(vertices)
+    distance = np.full(len(t), np.inf)
+    for a, b in zip(vertices, np.roll(vertices, -1, axis=0)):
+        ab = b - a
+        along = np.clip(((x - a[0]) * ab[0] + (y - a[1]) * ab[1]) / (ab @ ab), 0.0, 1.0)
+        distance = np.minimum(distance, np.hypot(x - a[0] - along * ab[0], y - a[1] - along * ab[1]))
+    index = np.floor(t / polygon.side_time)
+    travelling = (t >= 0.0) & (index < polygon.cycles * n)
+    side = index.astype(int) % n
+    return [math.sqrt(float(np.mean(distance[travelling & (side == k)] ** 2)))
+            if np.any(travelling & (side == k)) else float("nan") for k in range(n)]
+
+
+def scene_polygon(scene: Scene) -> PolygonTrajectory | None:
+    """The polygon the scene's ``Trajectory`` component follows, or None (another kind, or no
+    such component)."""
+    for c in scene.system.components:
+        if c.model == "Trajectory":
+            trajectory = from_parameters(**c.parameters)
+            return trajectory if isinstance(trajectory, PolygonTrajectory) else None
+    return None
 
 
 def settling(t: np.ndarray, ex: np.ndarray, ey: np.ndarray, stop: float, band: float = SETTLE_BAND,
@@ -117,6 +158,9 @@ def scene_metrics(scene: Scene, columns: dict, wall_s: float, completed: bool, i
         from .pendulum import pendulum_metrics
 
         extra = pendulum_metrics(columns, scene.system.step)
+    polygon = scene_polygon(scene)
+    if polygon is not None:
+        extra["e_contour_sides_mm"] = [1e3 * e for e in side_contour_errors(polygon, t, columns["x"], columns["y"])]
     return extra | {
         "scene": scene.name,
         "strategy": scene.strategy,

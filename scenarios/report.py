@@ -38,6 +38,13 @@ THESIS_MD_CHANGE = {
     "circle": {"PDq": (-24.9, 6.87), "TCq": (-32.9, 17.5), "PDx": (-28.9, 8.77), "TCx": (-22.1, 23.1)},
     "triangle": {"PDq": (-4.20, 7.88), "TCq": (-11.5, 5.45), "PDx": (-9.64, -1.69), "TCx": (-25.5, -0.68)},
 }
+#: Where the bench's triangle error lies, as 7.2.12 reads its xy tracking plots (figures 67-102):
+#: sides (1: x_1 -> x_2, 2: x_2 -> x_3, 3: x_3 -> x_1) of the larger error: PDq and PDMDq I and
+#: III, the TC laws I ("TCMCq" in the text is TCMDq), PDx and PDMDx II.  The paragraph opens
+#: with "trajetória circular", but it names the triangle's sides and figures.
+THESIS_TRIANGLE_SIDES = {"PDq": (1, 3), "PDMDq": (1, 3), "TCq": (1,), "TCMDq": (1,),
+                         "PDx": (2,), "PDMDx": (2,), "TCx": (1,), "TCMDx": (1,)}
+SIDE_NAMES = ("I", "II", "III")
 PAIRS = (("PDq", "PDMDq"), ("TCq", "TCMDq"), ("PDx", "PDMDx"), ("TCx", "TCMDx"))
 KINDS = ("circle", "triangle")
 
@@ -125,6 +132,8 @@ def render(metrics: dict, mode: str) -> str:
             settle = _f(m.get("t_settle_s"), ".2f") if m.get("settled") else "not settled"
             lines.append(f"| {s} | {_f(m['e_ss_x_mm'], '+.3f')} | {_f(m['e_ss_y_mm'], '+.3f')} | "
                          f"{_f(m['e_ss_mm'])} | {settle} | {_f(m.get('e_ss_1s_mm'))} | {e:.3f} |")
+        if kind == "triangle":
+            lines += [""] + side_section({st: m.get("e_contour_sides_mm", [math.nan] * 3) for st, m in ours.items()})
         lines += ["", "### Reading", ""]
         lines += _reading(kind, ours, md_lowers)
         lines.append("")
@@ -133,6 +142,38 @@ def render(metrics: dict, mode: str) -> str:
         lines.append(f"| {name} | {m['completed']} | {m['simulated_s']:.3f} | {m['wall_s']:.2f} | "
                      f"{m['realtime_factor']:.1f} |")
     return "\n".join(lines) + "\n"
+
+
+def sides_hold(errors, sides) -> bool:
+    """Whether the sides ``sides`` (numbered from 1) carry the larger error: each of them above
+    every other side of ``errors`` (one value per side); False with a missing value."""
+    if not all(math.isfinite(e) for e in errors):
+        return False
+    named = [errors[k - 1] for k in sides]
+    rest = [e for k, e in enumerate(errors, start=1) if k not in sides]
+    return min(named) > max(rest, default=-math.inf)
+
+
+def side_section(contour: dict, heading: str = "###", note: str = "") -> list:
+    """The markdown section "where the triangle's error lies" under a ``heading`` (its level)
+    with ``note`` appended to the title: ``contour`` maps each strategy to its contour RMS per
+    side [mm] (``e_contour_sides_mm``), beside :data:`THESIS_TRIANGLE_SIDES`."""
+    lines = [f"{heading} Where the triangle's error lies: distance from the path per side (7.2.12){note}", "",
+             "RMS distance of the end effector from the triangle's path while the reference travels each "
+             "side (`e_contour_sides_mm`, scenarios/metrics.py), the error an xy plot shows; the thesis "
+             "names the sides of larger error from its plots (figures 67-102).", "",
+             "| strategy | side I mm | side II mm | side III mm | larger here | larger on the bench (7.2.12) | same |",
+             "|---|---|---|---|---|---|---|"]
+    agree = []
+    for s, claimed in THESIS_TRIANGLE_SIDES.items():
+        errors = contour[s]
+        ranked = sorted(range(len(errors)), key=lambda k: -errors[k] if math.isfinite(errors[k]) else math.inf)
+        ours = SIDE_NAMES[ranked[0]] if math.isfinite(errors[ranked[0]]) else "—"
+        same = sides_hold(errors, claimed)
+        agree.append(same)
+        lines.append(f"| {s} | " + " | ".join(_f(e, ".2f") for e in errors) + f" | {ours} | "
+                     f"{' and '.join(SIDE_NAMES[k - 1] for k in claimed)} | {'yes' if same else 'no'} |")
+    return lines + ["", f"The bench's sides of larger error hold here for {sum(agree)} of {len(agree)} strategies.", ""]
 
 
 def _reading(kind, ours, md_lowers) -> list:

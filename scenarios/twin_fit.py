@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .report import PAIRS, THESIS_BENCH, THESIS_MD_CHANGE
+from .report import PAIRS, THESIS_BENCH, THESIS_MD_CHANGE, side_section
 from .run import run_scene
 from .twin import (FIT_SEEDS, KINDS, PARAMETERS, SPREAD_SEEDS, TWIN_FILE, Twin, bench_real, load_twin, read_fit,
                    write_twin)
@@ -289,6 +289,9 @@ def render(runs: dict, twin: Twin, fit_info: dict, moved: dict | None = None, sp
             lines.append(f"| {pure} → {hybrid} | {100 * ours:+.1f} % | {THESIS_MD_CHANGE[kind][pure][0]:+.1f} % | "
                          f"{'yes' if every else 'no'} |")
         lines.append("")
+    contour = {s: np.mean([m["e_contour_sides_mm"] for m in runs["triangle"][s].values()], axis=0).tolist()
+               for s in ORDER}
+    lines += side_section(contour, "##", f", twin: mean over the {len(seeds)} seeds")
     if moved:
         lines += [f"## Sensitivity: friction_scale × (1 + step), step in {list(SENSITIVITY_STEPS)}, seed "
                   f"{SPREAD_SEEDS[0]}", "", "min–max over the steps, beside the fitted value:", "",
@@ -376,9 +379,9 @@ def write_twin_report(out_dir="docs", seeds=SPREAD_SEEDS, method_text: str = "")
     runs = predict(twin, seeds)
     moved = sensitivity(twin)
     spread = calibration_spread(read_fit())
-    slim = {kind: {s: {str(seed): {k: m.get(k) for k in (*METRICS, "settled", "t_settle_s", "e_ss_1s_mm", "completed")}
-                       for seed, m in by_seed.items()} for s, by_seed in by_kind.items()}
-            for kind, by_kind in runs.items()}
+    kept = (*METRICS, "settled", "t_settle_s", "e_ss_1s_mm", "completed", "e_contour_sides_mm")
+    slim = {kind: {s: {str(seed): {k: m[k] for k in kept if k in m} for seed, m in by_seed.items()}
+                   for s, by_seed in by_kind.items()} for kind, by_kind in runs.items()}
     (out / "twin_runs.json").write_text(json.dumps(slim, indent=1) + "\n")
     plot(runs, out / "twin.png")
     text = render(runs, twin, read_fit(), moved, spread) + "![twin beside the bench](twin.png)\n\n" + method_text

@@ -11,12 +11,10 @@ process share one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
-from controller.trajectories import get_trajectory
+from controller.trajectories import PRESET_CYCLES, from_parameters
 from fmus.guarded import GuardedSlave, refuse_absurd, require_finite
 
 OUTPUTS = ("x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
-#: Start value of ``cycles`` meaning "the kind's default" (thesis_circle 2, circle 8, triangle 2).
-PRESET_CYCLES = -1
 
 
 class Trajectory(GuardedSlave):
@@ -48,30 +46,11 @@ class Trajectory(GuardedSlave):
         self.start_time = float(start_time)
 
     def setup(self):
-        kwargs = {}
         used_or_not = {"side_time": self.side_time, "x_hold": self.x_hold, "y_hold": self.y_hold,
                        "frequency": self.frequency}
         require_finite(**used_or_not)
         refuse_absurd(**used_or_not)
-        if self.kind == "hold":
-            kwargs = {"x": self.x_hold, "y": self.y_hold}
-        else:
-            if self.cycles != PRESET_CYCLES:
-                if self.cycles < 1:
-                    raise ValueError(f"parameter cycles = {self.cycles!r} must be >= 1 (or -1 for the default)")
-                kwargs["cycles"] = self.cycles
-            if self.kind == "circle" and self.frequency != 1.0:
-                if not self.frequency > 0.0:
-                    raise ValueError(f"parameter frequency = {self.frequency!r} Hz must be > 0")
-                kwargs["frequency"] = self.frequency
-            if self.kind == "triangle":
-                if not self.side_time > 0.0:
-                    raise ValueError(f"parameter side_time = {self.side_time!r} s must be > 0")
-                kwargs["side_time"] = self.side_time
-        try:
-            self.trajectory = get_trajectory(self.kind, **kwargs)
-        except ValueError as exc:
-            raise ValueError(f"parameter kind: {exc}") from None
+        self.trajectory = from_parameters(self.kind, self.cycles, **used_or_not)
         self.x_start, self.y_start = (float(v) for v in self.trajectory.start_point)
         self._publish(self.start_time)
 
