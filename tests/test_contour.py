@@ -1,12 +1,12 @@
 """Where a polygon's error lies (scenarios.metrics.side_contour_errors): synthetic paths with a
 known distance from each side, a pure lag along the path, samples outside the sides' times,
-and the scenes' own polygon (scenarios.metrics.scene_polygon, controller.trajectories.from_parameters)."""
+and the scenes' own polygon (scenarios.metrics.scene_polygon)."""
 import math
 
 import numpy as np
 import pytest
 
-from controller.trajectories import PolygonTrajectory, from_parameters, triangle
+from controller.trajectories import PolygonTrajectory, triangle
 from scenarios.metrics import scene_polygon, side_contour_errors
 from scenarios.scenes import get_scene
 
@@ -71,17 +71,9 @@ def test_samples_are_assigned_by_the_time_the_reference_travels_each_side():
 
 
 def test_the_scene_polygon_is_its_trajectory_component_s():
-    """A triangle scene's polygon is the triangle of 7.24-7.27 (side time and cycles from its
-    component), a circle scene has none; from_parameters names a bad parameter."""
-    polygon = scene_polygon(get_scene("bench_triangle_TCq"))
-    assert polygon == triangle()
+    """A triangle scene's polygon is the triangle of 7.24-7.27, a circle scene has none."""
+    assert scene_polygon(get_scene("bench_triangle_TCq")) == triangle()
     assert scene_polygon(get_scene("bench_circle_TCq")) is None
-    assert from_parameters("triangle", 3, side_time=0.5) == triangle(side_time=0.5, cycles=3)
-    for kwargs, text in (({"cycles": 0}, "parameter cycles = 0"), ({"side_time": 0.0}, "parameter side_time = 0.0")):
-        with pytest.raises(ValueError, match=text):
-            from_parameters("triangle", **kwargs)
-    with pytest.raises(ValueError, match="parameter kind: unknown trajectory kind 'square'"):
-        from_parameters("square")
 
 
 def test_the_named_sides_must_each_exceed_every_other_side():

@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from controller.trajectories import TRAJECTORY_KINDS, ReferenceSample, get_trajectory
+from controller.trajectories import PRESET_CYCLES, TRAJECTORY_KINDS, ReferenceSample, from_parameters, get_trajectory
 
 STEP = 1e-6
 """Finite-difference step, s."""
@@ -126,6 +126,29 @@ def test_factory_passes_parameters_and_names_unknown_kinds():
     with pytest.raises(ValueError, match="unknown trajectory kind 'square'") as error:
         get_trajectory("square")
     assert all(kind in str(error.value) for kind in TRAJECTORY_KINDS)
+
+
+def test_fmu_parameters_give_the_kinds_trajectory_and_name_a_bad_one():
+    """from_parameters (the Trajectory FMU's parameters): the preset cycles keep each kind's
+    default (thesis_circle 2, circle 8, triangle 2 rounds); a parameter a kind does not use is
+    ignored, even when it would be refused; a used one below its range is refused by name."""
+    durations = {"thesis_circle": 2.0, "circle": 8.0, "triangle": 4.5}
+    unused = {"thesis_circle": {"side_time": -1.0, "frequency": -1.0}, "circle": {"side_time": -1.0},
+              "triangle": {"frequency": -1.0}}
+    for kind, duration in durations.items():
+        assert from_parameters(kind).duration == pytest.approx(duration)
+        assert from_parameters(kind, PRESET_CYCLES, **unused[kind]) == get_trajectory(kind)
+    assert from_parameters("circle", 3, frequency=2.0) == get_trajectory("circle", cycles=3, frequency=2.0)
+    assert from_parameters("triangle", 1, side_time=0.5) == get_trajectory("triangle", side_time=0.5, cycles=1)
+    assert from_parameters("hold", 0, x_hold=0.01, y_hold=0.2) == get_trajectory("hold", x=0.01, y=0.2)
+    assert from_parameters("hold").start_point == X1
+    for kind, kwargs, text in (("circle", {"cycles": 0}, "parameter cycles = 0 must be >= 1"),
+                               ("triangle", {"cycles": -2}, "parameter cycles = -2 must be >= 1"),
+                               ("circle", {"frequency": 0.0}, "parameter frequency = 0.0 Hz must be > 0"),
+                               ("triangle", {"side_time": 0.0}, "parameter side_time = 0.0 s must be > 0"),
+                               ("square", {}, "parameter kind: unknown trajectory kind 'square'")):
+        with pytest.raises(ValueError, match=text):
+            from_parameters(kind, **kwargs)
 
 
 def test_trajectories_are_immutable_and_reject_negative_time():
