@@ -55,6 +55,16 @@ def test_trajectory_fmu_matches_the_thesis_formulas(built_fmus, kind, steps):
     fmu.close()
 
 
+def test_trajectory_fmu_holds_the_bench_start_by_default(built_fmus):
+    """kind 'hold' with the default x_hold, y_hold holds x_1 = (-0.002, 0.108) m (7.28) at rest."""
+    fmu = FmuInstance(built_fmus["Trajectory"], {"kind": "hold"})
+    for _ in range(3):
+        fmu.step(1e-3)
+        assert [fmu.get(n) for n in ("x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d", "x_start", "y_start")] == \
+            [-0.002, 0.108, 0.0, 0.0, 0.0, 0.0, -0.002, 0.108]
+    fmu.close()
+
+
 def test_trajectory_fmu_refuses_unknown_kind(built_fmus):
     fmu = FmuInstance(built_fmus["Trajectory"], {"kind": "square"})
     assert "unknown trajectory kind 'square'" in fmu.refused_step(1e-3)

@@ -6,7 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from controller.trajectories import PRESET_CYCLES, TRAJECTORY_KINDS, ReferenceSample, from_parameters, get_trajectory
+from controller.trajectories import (PRESET_CYCLES, TRAJECTORY_KINDS, ReferenceSample, from_parameters,
+                                    get_trajectory, smoothstep)
 
 STEP = 1e-6
 """Finite-difference step, s."""
@@ -128,6 +129,21 @@ def test_factory_passes_parameters_and_names_unknown_kinds():
     assert all(kind in str(error.value) for kind in TRAJECTORY_KINDS)
 
 
+def test_smoothstep_is_the_polynomial_of_7_27_and_its_slope():
+    """smoothstep(τ) (Horner's rule, used by the balanced mechanisms' trajectory) against (7.27)
+    written out, s = 35τ⁴ − 84τ⁵ + 70τ⁶ − 20τ⁷, and its derivative term by term."""
+    for tau in (0.0, 0.1, 0.37, 0.5, 0.81, 1.0):
+        s = 35 * tau ** 4 - 84 * tau ** 5 + 70 * tau ** 6 - 20 * tau ** 7
+        ds = 140 * tau ** 3 - 420 * tau ** 4 + 420 * tau ** 5 - 140 * tau ** 6
+        assert smoothstep(tau) == pytest.approx((s, ds), rel=1e-12, abs=1e-15)
+
+
+def test_a_circle_turning_backwards_or_not_at_all_is_refused():
+    for frequency in (0.0, -1.0, math.inf):
+        with pytest.raises(ValueError, match=f"frequency = {frequency!r} Hz must be > 0"):
+            get_trajectory("circle", frequency=frequency)
+
+
 def test_fmu_parameters_give_the_kinds_trajectory_and_name_a_bad_one():
     """from_parameters (the Trajectory FMU's parameters): the preset cycles keep each kind's
     default (thesis_circle 2, circle 8, triangle 2 rounds); a parameter a kind does not use is
@@ -145,7 +161,9 @@ def test_fmu_parameters_give_the_kinds_trajectory_and_name_a_bad_one():
     for kind, kwargs, text in (("circle", {"cycles": 0}, "parameter cycles = 0 must be >= 1"),
                                ("triangle", {"cycles": -2}, "parameter cycles = -2 must be >= 1"),
                                ("circle", {"frequency": 0.0}, "parameter frequency = 0.0 Hz must be > 0"),
+                               ("circle", {"frequency": -2.0}, "parameter frequency = -2.0 Hz must be > 0"),
                                ("triangle", {"side_time": 0.0}, "parameter side_time = 0.0 s must be > 0"),
+                               ("triangle", {"side_time": -0.5}, "parameter side_time = -0.5 s must be > 0"),
                                ("square", {}, "parameter kind: unknown trajectory kind 'square'")):
         with pytest.raises(ValueError, match=text):
             from_parameters(kind, **kwargs)

@@ -11,7 +11,7 @@ process share one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
-from controller.trajectories import PRESET_CYCLES, from_parameters
+from controller.trajectories import BENCH_START, PRESET_CYCLES, from_parameters
 from fmus.guarded import GuardedSlave, refuse_absurd, require_finite
 
 OUTPUTS = ("x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
@@ -36,8 +36,8 @@ class Trajectory(GuardedSlave):
         d("cycles", "parameter", PRESET_CYCLES, "Cycles of circle/triangle (-1: thesis_circle 2, circle 8, triangle 2)")
         d("side_time", "parameter", 0.75, "Triangle: time per side [s]")
         d("frequency", "parameter", 1.0, "circle: turns per second [Hz] (the thesis' 7.23: 1)")
-        d("x_hold", "parameter", -0.002, "hold: the point held, x [m]")
-        d("y_hold", "parameter", 0.108, "hold: the point held, y [m]")
+        d("x_hold", "parameter", BENCH_START[0], "hold: the point held, x [m] (default x_1, 7.28)")
+        d("y_hold", "parameter", BENCH_START[1], "hold: the point held, y [m] (default x_1, 7.28)")
         self.trajectory = None
         self.start_time = 0.0
 
