@@ -7,7 +7,9 @@ return.  So:
 
 * parameters are validated in ``exit_initialization_mode``; a problem is
   logged (category ``logStatusError``) and remembered, and every later
-  ``do_step`` refuses with that message instead of stepping;
+  ``do_step`` refuses with that message instead of stepping (an output read in
+  Initialization Mode builds the model earlier to calculate it; a problem there leaves the
+  outputs at their start values with a warning, the refusal comes at initialisation);
 * ``do_step`` catches everything, logs "<instance>: <what> at t = <time>",
   keeps the outputs of the last good step and returns False (fmi2Discard);
 * log messages reach the importer only if it turned logging on, so the same
@@ -116,6 +118,10 @@ class GuardedSlave(Fmi2Slave):
         self._start_time = 0.0       # of fmi2SetupExperiment
         self._next_time = None       # the communication point the next doStep must start at
         self._last_step = None
+        # Before initialisation: setup() ran for a read of an output, and since then no parameter
+        # was set (the outputs read are current) / nothing at all was set (initialisation keeps it).
+        self._initial_outputs = self._built_for_exit = False
+        self._initial_warning = ""      # the last reason logged for outputs left at their start values
         # value-reference lists resolved by get_real/set_real (derived: not FMU state)
         self.__readers, self.__writers = {}, {}
         _drop_duplicate_path_entries()
@@ -258,6 +264,8 @@ class GuardedSlave(Fmi2Slave):
             read = attribute_reader(chosen)
             if self._initialised:
                 _remember(self.__readers, key, read)
+            else:
+                self._calculate_outputs_for(chosen)
         return read(self)
 
     def set_real(self, vrs, values):
@@ -272,6 +280,8 @@ class GuardedSlave(Fmi2Slave):
             write = attribute_writer(type(self), targets)
             if self._initialised:
                 _remember(self.__writers, key, write)
+            else:
+                self._parameters_set(targets)
         write(self, values)
 
     def get_integer(self, vrs):
@@ -300,6 +310,8 @@ class GuardedSlave(Fmi2Slave):
             chosen = []
         if len(chosen) != len(vrs) or not all(isinstance(v, kind) for v in chosen):
             self._refuse_get(vrs, kind)
+        if not self._initialised:
+            self._calculate_outputs_for([v.name for v in chosen])
         return [convert(v.getter()) for v in chosen]
 
     def _set(self, vrs, values, kind):
@@ -308,6 +320,55 @@ class GuardedSlave(Fmi2Slave):
             self._refuse_set(vrs, values, kind)
         for var, value in [(self.vars[vr], value) for vr, value in zip(vrs, values)]:
             var.setter(value)
+        if not self._initialised:
+            self._parameters_set([names[vr] for vr in vrs])
+
+    def _calculate_outputs_for(self, names) -> None:
+        """Before initialisation, a get of an output (initial="calculated") runs :meth:`setup`
+        with the present parameters and start time, once for each set of them, so a master
+        reading outputs in Initialization Mode (FMI 2.0, 4.2.4; libcosim does, docs/ssp_tools.md)
+        gets the values the FMU starts from, not placeholders; fmi2ExitInitializationMode then
+        keeps that setup.  Reading ``error`` builds nothing.
+
+        A setup refused here is not an error of the read: the outputs keep their start values and
+        the reason is logged (once, as a warning); fmi2ExitInitializationMode refuses the
+        initialisation with it, as without the read.  An fmi2Error here would end the run of a
+        tool that aborts on any error in Initialization Mode (libcosim on its worker threads,
+        measured: exit status -6) instead of stopping it at the first step with the reason."""
+        if self._initial_outputs or not any(name in self._calculated_names() for name in names):
+            return
+        try:
+            self.setup()
+        except Exception as exc:  # noqa: BLE001 - nothing may escape to pythonfmu
+            message = (f"{self.instance_name}: the outputs read in Initialization Mode keep their start values: "
+                       f"{exc}; fmi2ExitInitializationMode will refuse the initialisation")
+            if message != self._initial_warning:
+                self._initial_warning = message
+                self.log(message if self._wrapper_is_ours() else message.replace("%", "%%"), Fmi2Status.warning,
+                         category="logStatusWarning")
+            return
+        self._initial_outputs = self._built_for_exit = True
+
+    def _parameters_set(self, names) -> None:
+        """Before initialisation: outputs calculated earlier are stale once a parameter changes
+        (the models' initial outputs follow from parameters); initialisation builds again after
+        any set, an input's included."""
+        self._built_for_exit = False
+        if self._initial_outputs and any(name in self._names_of(Fmi2Causality.parameter) for name in names):
+            self._initial_outputs = False
+
+    def _calculated_names(self) -> frozenset:
+        return self._names_of(Fmi2Causality.output) - {"error"}
+
+    def _names_of(self, causality) -> frozenset:
+        try:
+            cache = self.__names
+        except AttributeError:
+            cache = self.__names = {}
+        names = cache.get(causality)
+        if names is None:
+            names = cache[causality] = frozenset(v.name for v in self.vars.values() if v.causality == causality)
+        return names
 
     def _real_names(self):
         try:
@@ -374,13 +435,15 @@ class GuardedSlave(Fmi2Slave):
 
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
         self._start_time = float(start_time)
+        self._initial_outputs = self._built_for_exit = False
 
     def exit_initialization_mode(self):
         self.__accepted_step = None
         self._initialised = True
         self._next_time, self._last_step = self._start_time, None
         try:
-            self.setup()
+            if not self._built_for_exit:   # a read in Initialization Mode ran it, nothing set since
+                self.setup()
             self._ready = True
             self.error = ""
         except KeyboardInterrupt:

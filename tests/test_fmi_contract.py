@@ -16,6 +16,7 @@ from pathlib import Path
 
 import pytest
 from pythonfmu import Boolean, Integer, Real, String
+from pythonfmu.enums import Fmi2Status
 
 from fmus.build import SLAVES
 from fmus.guarded import MIN_STEP, FmiError
@@ -352,3 +353,96 @@ def test_a_tunable_parameter_may_be_set_after_initialisation():
     assert slave.gain == 2.0
     with pytest.raises(FmiError, match="parameter fixed = 2.0 refused after initialisation"):
         slave.set_real([vr["fixed"]], [2.0])
+
+
+# --- outputs in Initialization Mode ----------------------------------------------------------------
+
+def _initializing(model, parameters=None):
+    """A slave in Initialization Mode with GOOD's parameters (and ``parameters``) set."""
+    slave = slave_class(model)(instance_name=model)
+    slave.setup_experiment(0.0, None, None)
+    slave.enter_initialization_mode()
+    set_variables(slave, {**GOOD[model][0], **(parameters or {})}, initialise=False)
+    return slave
+
+
+def _outputs(slave):
+    """Every output but ``error``, read through the FMI getters (name -> value)."""
+    out = {}
+    for kind, get in ((Real, slave.get_real), (Integer, slave.get_integer), (Boolean, slave.get_boolean),
+                      (String, slave.get_string)):
+        chosen = [v for v in variables(slave, "output", kind) if v.name != "error"]
+        out.update(zip((v.name for v in chosen), get([v.value_reference for v in chosen])))
+    return out
+
+
+@pytest.mark.parametrize("model", MODELS)
+def test_outputs_read_in_initialization_mode_are_those_it_starts_from(model, monkeypatch):
+    """FMI 2.0 (4.2.4): an output (initial="calculated") may be read in Initialization Mode and is
+    then calculated from what was set so far.  Read there, every output equals what the slave
+    publishes after fmi2ExitInitializationMode, which does not build the model a second time."""
+    slave = _initializing(model)
+    builds = []
+    setup = type(slave).setup
+    monkeypatch.setattr(type(slave), "setup", lambda self: (builds.append(model), setup(self))[1])
+    during = _outputs(slave)
+    slave.exit_initialization_mode()
+    assert slave.error == "" and builds == [model]
+    assert _outputs(slave) == during
+
+
+def test_outputs_in_initialization_mode_follow_the_parameters_set_after_a_read():
+    """Before the fix the plant read (0, 0), a pose it cannot take; a parameter set after a read
+    is taken by the next read (the trajectory's hold point) and by the initialisation."""
+    plant = _initializing("FiveBarPlant")
+    x, y = _outputs(plant)["x"], _outputs(plant)["y"]
+    assert (x, y) == (plant.x0, plant.y0) and (x, y) != (0.0, 0.0)
+    traj = _initializing("Trajectory", {"kind": "hold"})
+    assert (_outputs(traj)["x_d"], _outputs(traj)["y_d"]) == (-0.002, 0.108)
+    set_variables(traj, {"x_hold": 0.01, "y_hold": 0.2}, initialise=False)
+    assert (_outputs(traj)["x_d"], _outputs(traj)["y_d"]) == (0.01, 0.2)
+    traj.exit_initialization_mode()
+    assert (_outputs(traj)["x_d"], _outputs(traj)["y_d"], _outputs(traj)["x_start"]) == (0.01, 0.2, 0.01)
+
+
+def test_a_read_in_initialization_mode_with_a_bad_parameter_keeps_the_start_values_and_warns_once():
+    """A parameter the model refuses: the read is not an error (libcosim aborts on one while it
+    initialises): the outputs keep their start values, a warning names the parameter once for
+    repeated reads, and the initialisation is refused with it as without the read.  Mended, the
+    read gives the calculated values and the initialisation goes on."""
+    traj = _initializing("Trajectory", {"kind": "triangle", "side_time": -0.5})
+    logged = []
+    traj.log = lambda message, status, category: logged.append((message, status, category))
+    x_d = next(v.value_reference for v in traj.vars.values() if v.name == "x_d")
+    assert traj.get_real([x_d]) == traj.get_real([x_d]) == [0.0]
+    assert logged == [("Trajectory: the outputs read in Initialization Mode keep their start values: parameter "
+                       "side_time = -0.5 s must be > 0; fmi2ExitInitializationMode will refuse the initialisation",
+                       Fmi2Status.warning, "logStatusWarning")]
+    set_variables(traj, {"side_time": 0.5}, initialise=False)
+    assert traj.get_real([x_d]) == [-0.002]
+    traj.exit_initialization_mode()
+    assert traj.error == "" and traj.do_step(0.0, H)
+    refused = _initializing("Trajectory", {"kind": "triangle", "side_time": -0.5})
+    refused.get_real([x_d])
+    refused.exit_initialization_mode()
+    assert refused.error.startswith("initialisation refused: parameter side_time = -0.5 s must be > 0")
+    assert not refused.do_step(0.0, H)
+
+
+def test_after_a_read_an_input_set_rebuilds_at_initialisation_and_a_parameter_set_at_the_next_read(monkeypatch):
+    """The initial outputs follow from parameters: an input set after a read does not rebuild
+    the model for the next read, but initialisation builds again with it; a parameter set does
+    make the next read rebuild."""
+    plant = _initializing("FiveBarPlant")
+    builds = []
+    setup = type(plant).setup
+    monkeypatch.setattr(type(plant), "setup", lambda self: (builds.append(1), setup(self))[1])
+    _outputs(plant)
+    set_variables(plant, {"tau1": 0.01}, initialise=False)
+    _outputs(plant)
+    assert len(builds) == 1
+    set_variables(plant, {"x0": 0.0}, initialise=False)
+    assert _outputs(plant)["x"] == 0.0 and len(builds) == 2
+    set_variables(plant, {"tau2": 0.02}, initialise=False)
+    plant.exit_initialization_mode()
+    assert len(builds) == 3 and plant.error == ""

@@ -154,6 +154,7 @@ def test_fmu_parameters_give_the_kinds_trajectory_and_name_a_bad_one():
     for kind, duration in durations.items():
         assert from_parameters(kind).duration == pytest.approx(duration)
         assert from_parameters(kind, PRESET_CYCLES, **unused[kind]) == get_trajectory(kind)
+        assert from_parameters(kind, np.int64(PRESET_CYCLES)) == get_trajectory(kind)   # e.g. from a sweep's array
     assert from_parameters("circle", 3, frequency=2.0) == get_trajectory("circle", cycles=3, frequency=2.0)
     assert from_parameters("triangle", 1, side_time=0.5) == get_trajectory("triangle", side_time=0.5, cycles=1)
     assert from_parameters("hold", 0, x_hold=0.01, y_hold=0.2) == get_trajectory("hold", x=0.01, y=0.2)

@@ -39,11 +39,6 @@ class Trajectory(GuardedSlave):
         d("x_hold", "parameter", BENCH_START[0], "hold: the point held, x [m] (default x_1, 7.28)")
         d("y_hold", "parameter", BENCH_START[1], "hold: the point held, y [m] (default x_1, 7.28)")
         self.trajectory = None
-        self.start_time = 0.0
-
-    def setup_experiment(self, start_time, stop_time=None, tolerance=None):
-        super().setup_experiment(start_time, stop_time, tolerance)
-        self.start_time = float(start_time)
 
     def setup(self):
         used_or_not = {"side_time": self.side_time, "x_hold": self.x_hold, "y_hold": self.y_hold,
@@ -52,7 +47,7 @@ class Trajectory(GuardedSlave):
         refuse_absurd(**used_or_not)
         self.trajectory = from_parameters(self.kind, self.cycles, **used_or_not)
         self.x_start, self.y_start = (float(v) for v in self.trajectory.start_point)
-        self._publish(self.start_time)
+        self._publish(self._start_time)
 
     def step(self, current_time, step_size):
         self._publish(current_time + step_size)
