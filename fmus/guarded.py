@@ -361,38 +361,32 @@ class GuardedSlave(Fmi2Slave):
         return self._names_of(Fmi2Causality.output) - {"error"}
 
     def _names_of(self, causality) -> frozenset:
-        try:
-            cache = self.__names
-        except AttributeError:
-            cache = self.__names = {}
-        names = cache.get(causality)
-        if names is None:
-            names = cache[causality] = frozenset(v.name for v in self.vars.values() if v.causality == causality)
-        return names
+        return self._memo(("causality", causality), lambda: frozenset(
+            v.name for v in self.vars.values() if v.causality == causality))
 
     def _real_names(self):
+        return self._memo("real", lambda: {vr: v.name for vr, v in self.vars.items() if isinstance(v, Real)})
+
+    def _memo(self, key, compute):
+        """A value derived from the declared variables, computed once per instance and ``key``
+        (its mangled name keeps the cache out of the FMU state)."""
         try:
-            return self.__real_names
+            cache = self.__memo
         except AttributeError:
-            self.__real_names = {vr: v.name for vr, v in self.vars.items() if isinstance(v, Real)}
-            return self.__real_names
+            cache = self.__memo = {}
+        value = cache.get(key)
+        if value is None:
+            value = cache[key] = compute()
+        return value
 
     def _settable(self, kind) -> dict:
         """Value reference -> name of the variables of ``kind`` a set may change now: inputs,
         tunable parameters, and fixed parameters until initialisation."""
-        key = (kind, self._initialised)
-        try:
-            cache = self.__settable
-        except AttributeError:
-            cache = self.__settable = {}
-        names = cache.get(key)
-        if names is None:
-            names = cache[key] = {
-                vr: v.name for vr, v in self.vars.items()
-                if isinstance(v, kind) and (v.causality == Fmi2Causality.input or (
-                    v.causality == Fmi2Causality.parameter and (
-                        not self._initialised or v.variability == Fmi2Variability.tunable)))}
-        return names
+        return self._memo(("settable", kind, self._initialised), lambda: {
+            vr: v.name for vr, v in self.vars.items()
+            if isinstance(v, kind) and (v.causality == Fmi2Causality.input or (
+                v.causality == Fmi2Causality.parameter and (
+                    not self._initialised or v.variability == Fmi2Variability.tunable)))})
 
     def _now(self) -> str:
         if not self._initialised:
