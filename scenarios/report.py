@@ -157,7 +157,8 @@ def sides_hold(errors, sides) -> bool:
 def side_section(contour: dict, heading: str = "###", note: str = "") -> list:
     """The markdown section "where the triangle's error lies" under a ``heading`` (its level)
     with ``note`` appended to the title: ``contour`` maps each strategy to its contour RMS per
-    side [mm] (``e_contour_sides_mm``), beside :data:`THESIS_TRIANGLE_SIDES`."""
+    side [mm] (``e_contour_sides_mm``; NaN or None for a side a run did not reach), beside
+    :data:`THESIS_TRIANGLE_SIDES`."""
     lines = [f"{heading} Where the triangle's error lies: distance from the path per side (7.2.12){note}", "",
              "RMS distance of the end effector from the triangle's path while the reference travels each "
              "side (`e_contour_sides_mm`, scenarios/metrics.py), the error an xy plot shows; the thesis "
@@ -166,7 +167,7 @@ def side_section(contour: dict, heading: str = "###", note: str = "") -> list:
              "|---|---|---|---|---|---|---|"]
     agree = []
     for s, claimed in THESIS_TRIANGLE_SIDES.items():
-        errors = contour[s]
+        errors = [math.nan if e is None else float(e) for e in contour[s]]   # None: metrics read from JSON
         ranked = sorted(range(len(errors)), key=lambda k: -errors[k] if math.isfinite(errors[k]) else math.inf)
         ours = SIDE_NAMES[ranked[0]] if math.isfinite(errors[ranked[0]]) else "—"
         same = sides_hold(errors, claimed)

@@ -97,4 +97,6 @@ def test_the_side_table_reports_the_larger_side_and_the_count():
     assert "| PDq | 1.00 | 2.00 | 3.00 | III | I and III | no |" in text
     contour["PDx"] = [0.1, 0.5, 0.2]
     contour["PDq"] = [0.4, 0.1, 0.3]
-    assert "hold here for 2 of 8 strategies" in "\n".join(side_section(contour))
+    contour["TCq"] = [0.9, 0.1, None]                                    # a run that stopped on side II
+    text = "\n".join(side_section(contour))
+    assert "hold here for 2 of 8 strategies" in text and "| TCq | 0.90 | 0.10 | — | I | I | no |" in text
