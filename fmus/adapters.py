@@ -16,7 +16,7 @@ from motor.friction import F_Z
 from plant import wheeled_kernel as kernel
 
 from .compiled import Adapter, NotCompilable, register
-from .guarded import ABSURD
+from .refusals import ABSURD
 from .parts import PLANT_OUTPUTS
 
 _PLANT_OUTPUTS = tuple(name for name, _ in PLANT_OUTPUTS)

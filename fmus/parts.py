@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
-from fmus.guarded import PRESET_VALUE, TINY, refuse_absurd, require_finite, with_overrides
+from fmus.refusals import PRESET_VALUE, TINY, refuse_absurd, require_finite, with_overrides
 
 #: The plant's outputs (name, description).
 PLANT_OUTPUTS = (

@@ -47,7 +47,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fmus.guarded import PRESET_VALUE
+from fmus.refusals import PRESET_VALUE
 
 from .scenes import Scene
 

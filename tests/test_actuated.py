@@ -377,7 +377,7 @@ def test_a_bad_drive_parameter_is_refused_by_its_fmu_name(parameters, name, valu
     ({"mu_s1": -3.0}, "mu_s1", -3.0, "parameter mu_s1 = -3.0 is negative (use -1 for the preset's value)"),
 ], ids=["J_design2", "kt1", "omega_eps2", "mu_s1"])
 def test_a_bad_motor_override_is_refused_by_its_fmu_name(parameters, name, value, words):
-    """A motor parameter the slave overrides (fmus.guarded.with_overrides) is refused by its FMU
+    """A motor parameter the slave overrides (fmus.refusals.with_overrides) is refused by its FMU
     variable, suffix j included, and its value, as fields and in the message: J_design2 is
     MotorParams' J_rotor, kt1 and omega_eps2 its kt and omega_eps; mu_s1 is refused before
     MotorParams sees it."""

@@ -20,7 +20,8 @@ process share one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
-from fmus.guarded import MIN_STEP, PRESET_VALUE, TINY, GuardedSlave, refuse_absurd
+from fmus.guarded import MIN_STEP, GuardedSlave
+from fmus.refusals import PRESET_VALUE, TINY, refuse_absurd
 from fmus.parts import (PLANT_OUTPUTS, CurrentLoopSteps, build_drive, build_plant, correct_plant, declare_drive_options,
                         declare_motor, declare_plant, publish_plant)
 from plant.actuated import ActuatedPlant

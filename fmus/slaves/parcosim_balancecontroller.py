@@ -13,7 +13,8 @@ from __future__ import annotations
 from controller.balance import ROUTES, BalanceController as _Controller
 from controller.balance import BalanceSettings, design_balance, get_route
 from controller.fastbalance import INPUTS, OUTPUTS
-from fmus.guarded import MIN_STEP, GuardedSlave, refuse_absurd, refuse_absurd_inputs, require_finite
+from fmus.guarded import MIN_STEP, GuardedSlave
+from fmus.refusals import refuse_absurd, refuse_absurd_inputs, require_finite
 
 ESTIMATES = OUTPUTS[6:]
 

@@ -16,7 +16,8 @@ from __future__ import annotations
 
 import math
 
-from fmus.guarded import MIN_STEP, PRESET_VALUE, GuardedSlave, refuse_absurd, require_finite, with_overrides
+from fmus.guarded import MIN_STEP, GuardedSlave
+from fmus.refusals import PRESET_VALUE, refuse_absurd, require_finite, with_overrides
 from motor import CurrentObserver as _Observer
 from motor import get_motor_preset
 

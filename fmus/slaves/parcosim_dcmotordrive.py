@@ -12,7 +12,8 @@ process share one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
-from fmus.guarded import MIN_STEP, GuardedSlave, refuse_absurd
+from fmus.guarded import MIN_STEP, GuardedSlave
+from fmus.refusals import refuse_absurd
 from fmus.parts import CurrentLoopSteps, build_drive, declare_drive_options, declare_motor
 
 OUTPUTS = ("tau", "v", "i")

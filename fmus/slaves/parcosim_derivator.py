@@ -22,7 +22,8 @@ import numpy as np
 
 from controller.derivators import DEFAULT_FC_ACC, DEFAULT_FC_VEL, SAMPLE_TIME
 from controller.derivators import Derivator as _Derivator
-from fmus.guarded import ABSURD, MIN_STEP, GuardedSlave, refuse_absurd, require_finite
+from fmus.guarded import MIN_STEP, GuardedSlave
+from fmus.refusals import ABSURD, refuse_absurd, require_finite
 
 OUTPUTS = ("dq1", "dq2", "ddq1", "ddq2")
 #: Lowest fc T of a filter: below (fc T ~ 1e-9) the discretised Bessel filters are singular.

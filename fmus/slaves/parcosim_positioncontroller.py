@@ -31,7 +31,8 @@ import numpy as np
 from controller.model import DEFAULT_EXTENT, DEFAULT_GRID_STEP
 from controller.position import PositionController as _Controller
 from controller.strategies import get_strategy
-from fmus.guarded import MIN_STEP, PRESET_VALUE, GuardedSlave, refuse_absurd, require_finite
+from fmus.guarded import MIN_STEP, GuardedSlave
+from fmus.refusals import PRESET_VALUE, refuse_absurd, require_finite
 from fmus.parts import declare_counter_masses, with_counter_masses
 from plant import get_preset
 

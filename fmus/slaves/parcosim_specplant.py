@@ -12,7 +12,8 @@ from __future__ import annotations
 
 import os
 
-from fmus.guarded import GuardedSlave, refuse_absurd, require_finite
+from fmus.guarded import GuardedSlave
+from fmus.refusals import refuse_absurd, require_finite
 
 #: The spec inside the FMU's resources.
 SPEC_RESOURCE = "plant_spec.toml"

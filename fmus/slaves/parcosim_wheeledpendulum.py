@@ -11,7 +11,8 @@ from __future__ import annotations
 
 from dataclasses import fields
 
-from fmus.guarded import GuardedSlave, refuse_absurd, refuse_absurd_inputs, require_finite
+from fmus.guarded import GuardedSlave
+from fmus.refusals import refuse_absurd, refuse_absurd_inputs, require_finite
 
 #: (output, description) of the pendulum (docs/contract.md).
 OUTPUTS = (
