@@ -358,7 +358,7 @@ class GuardedSlave(Fmi2Slave):
             self._initial_outputs = False
 
     def _calculated_names(self) -> frozenset:
-        return self._names_of(Fmi2Causality.output) - {"error"}
+        return self._memo("calculated", lambda: self._names_of(Fmi2Causality.output) - {"error"})
 
     def _names_of(self, causality) -> frozenset:
         return self._memo(("causality", causality), lambda: frozenset(
@@ -526,7 +526,6 @@ class GuardedSlave(Fmi2Slave):
             return self.__wrapper_is_ours
 
 
-
 #: How many value-reference lists a slave's get_real/set_real remember (resolved names).
 _CACHED_VR_LISTS = 32
 
@@ -579,8 +578,6 @@ def attribute_writer(cls, names: list, converters=None):
         for (name, convert), value in zip(pairs, values):
             setattr(slave, name, convert(value))
     return write_converted
-
-
 
 
 #: Exported by parcosim's own FMI 2.0 wrapper (not by pythonfmu's binary).

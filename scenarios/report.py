@@ -168,8 +168,8 @@ def side_section(contour: dict, heading: str = "###", note: str = "") -> list:
     agree = []
     for s, claimed in THESIS_TRIANGLE_SIDES.items():
         errors = [math.nan if e is None else float(e) for e in contour[s]]   # None: metrics read from JSON
-        ranked = sorted(range(len(errors)), key=lambda k: -errors[k] if math.isfinite(errors[k]) else math.inf)
-        ours = SIDE_NAMES[ranked[0]] if math.isfinite(errors[ranked[0]]) else "—"
+        reached = [k for k, e in enumerate(errors) if math.isfinite(e)]
+        ours = SIDE_NAMES[max(reached, key=errors.__getitem__)] if reached else "—"
         same = sides_hold(errors, claimed)
         agree.append(same)
         lines.append(f"| {s} | " + " | ".join(_f(e, ".2f") for e in errors) + f" | {ours} | "

@@ -7,9 +7,10 @@ from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFr
 
 
 class FmuInstance:
-    """Instantiate, set parameters, initialise; then ``step`` and ``get``."""
+    """Instantiate, set parameters, initialise; then ``step`` and ``get``.  With
+    ``initialise=False`` the instance stays in Initialization Mode until :meth:`initialise`."""
 
-    def __init__(self, path, parameters=None, instance_name="instance"):
+    def __init__(self, path, parameters=None, instance_name="instance", initialise=True):
         self.md = read_model_description(str(path))
         self.vars = {v.name: v for v in self.md.modelVariables}
         self.dir = extract(str(path))
@@ -26,8 +27,13 @@ class FmuInstance:
         self.fmu.enterInitializationMode()
         for name, value in (parameters or {}).items():
             self.set(name, value)
-        self.fmu.exitInitializationMode()
         self.time = 0.0
+        if initialise:
+            self.initialise()
+
+    def initialise(self):
+        """fmi2ExitInitializationMode."""
+        self.fmu.exitInitializationMode()
 
     def _log(self, component, instance, status, category, message):
         self.messages.append(message.decode() if isinstance(message, bytes) else message)

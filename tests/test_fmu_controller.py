@@ -65,27 +65,15 @@ def test_trajectory_fmu_holds_the_bench_start_by_default(built_fmus):
     fmu.close()
 
 
-def test_trajectory_fmu_outputs_are_calculated_in_initialization_mode(built_fmus, tmp_path):
+def test_trajectory_fmu_outputs_are_calculated_in_initialization_mode(built_fmus):
     """Through fmpy: read in Initialization Mode, x_start and the reference are the hold point
     just set (FMI 2.0, 4.2.4: outputs are initial="calculated"), as after initialisation."""
-    from fmpy import extract, read_model_description
-    from fmpy.fmi2 import FMU2Slave
-
-    md = read_model_description(str(built_fmus["Trajectory"]))
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    fmu = FMU2Slave(guid=md.guid, unzipDirectory=extract(str(built_fmus["Trajectory"]), unzipdir=str(tmp_path)),
-                    modelIdentifier=md.coSimulation.modelIdentifier, instanceName="traj")
-    fmu.instantiate()
-    fmu.setupExperiment(startTime=0.0)
-    fmu.enterInitializationMode()
-    fmu.setString([vr["kind"]], ["hold"])
-    fmu.setReal([vr["x_hold"], vr["y_hold"]], [0.01, 0.2])
-    outputs = [vr[n] for n in ("x_start", "y_start", "x_d", "y_d")]
-    assert fmu.getReal(outputs) == [0.01, 0.2, 0.01, 0.2]
-    fmu.exitInitializationMode()
-    assert fmu.getReal(outputs) == [0.01, 0.2, 0.01, 0.2]
-    fmu.terminate()
-    fmu.freeInstance()
+    fmu = FmuInstance(built_fmus["Trajectory"], {"kind": "hold", "x_hold": 0.01, "y_hold": 0.2}, initialise=False)
+    outputs = ("x_start", "y_start", "x_d", "y_d")
+    assert [fmu.get(n) for n in outputs] == [0.01, 0.2, 0.01, 0.2]
+    fmu.initialise()
+    assert [fmu.get(n) for n in outputs] == [0.01, 0.2, 0.01, 0.2]
+    fmu.close()
 
 
 def test_trajectory_fmu_refuses_unknown_kind(built_fmus):
