@@ -317,7 +317,7 @@ class InProcessInstance:
 
     def deserialize_state(self, data: bytes):
         """The state of ``fmi2DeSerializeFMUstate`` (set it with :meth:`set_state`)."""
-        return self.slave._fmu_state_from_bytes(data)
+        return self.slave.deserialize_fmu_state(data)
 
     def close(self) -> None:
         self.slave.terminate()

@@ -198,31 +198,6 @@ def test_restoring_a_state_taken_before_a_refused_step_clears_the_refusal(backen
     inst.close()
 
 
-def test_a_state_of_another_model_or_not_a_state_is_refused():
-    from fmus.fmustate import from_bytes, to_bytes
-
-    data = to_bytes("DCMotorDrive", {"R": 1.0})
-    assert from_bytes("DCMotorDrive", data) == {"R": 1.0}
-    with pytest.raises(ValueError, match="state of 'DCMotorDrive' cannot be set in 'FiveBarPlant'"):
-        from_bytes("FiveBarPlant", data)
-    with pytest.raises(ValueError, match="not a serialised parcosim FMU state"):
-        from_bytes("FiveBarPlant", b'{"x": 1}')
-
-
-def test_a_serialised_state_cannot_name_other_code():
-    import os
-    import pickle
-
-    from fmus.fmustate import MAGIC, from_bytes
-
-    class Evil:
-        def __reduce__(self):
-            return os.system, ("true",)
-
-    with pytest.raises(pickle.UnpicklingError, match="cannot name posix.system"):
-        from_bytes("Trajectory", MAGIC + b"Trajectory\n" + pickle.dumps(Evil()))
-
-
 @pytest.mark.parametrize("model", ["FiveBarPlant", "DCMotorDrive", "CurrentObserver", "Derivator",
                                    "PositionController", "Trajectory", "ActuatedFiveBarPlant"])
 def test_every_fmu_declares_state_capabilities(model, built_fmus):

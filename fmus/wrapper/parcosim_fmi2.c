@@ -23,6 +23,9 @@
  *    set must be UTF-8, NULL arrays are refused: fmi2Error naming the variable;
  *  - the resources folder enters sys.path once per process, not once per instance; no
  *    Python reference is kept past fmi2FreeInstance;
+ *  - an FMU state pointer is set, serialised or freed only by the instance that issued it
+ *    (fmi2GetFMUstate or fmi2DeSerializeFMUstate); a parcosim slave reads serialised bytes
+ *    against its own instance (deserialize_fmu_state: data, never code; docs/state.md);
  *  - Python is initialised only if the host has not done it, every call takes the GIL
  *    with PyGILState_Ensure, and nothing is finalised at exit or unload.
  *
@@ -97,6 +100,7 @@ typedef struct {
 #define STATE_MAGIC 0x70636673u      /* "pcfs": a live FMU state of this wrapper */
 typedef struct {
     unsigned int magic;
+    const Instance *owner;           /* the instance that issued it: no other may set it */
     PyObject *state;
     PyObject *serialized;            /* bytes of the state, made by fmi2SerializedFMUstateSize */
 } State;
@@ -105,7 +109,7 @@ typedef struct {
 static PyObject *s_get_real, *s_get_integer, *s_get_boolean, *s_get_string;
 static PyObject *s_set_real, *s_set_integer, *s_set_boolean, *s_set_string;
 static PyObject *s_do_step, *s_setup_experiment, *s_enter_init, *s_exit_init, *s_terminate;
-static PyObject *s_get_fmu_state, *s_set_fmu_state, *s_to_bytes, *s_from_bytes;
+static PyObject *s_get_fmu_state, *s_set_fmu_state, *s_to_bytes, *s_from_bytes, *s_deserialize;
 static PyObject *s_msg, *s_category, *s_status, *s_vars, *s_name, *s_log_queue;
 static PyObject *c_fmi2slave, *c_real, *c_integer, *c_boolean, *c_string;
 static pthread_mutex_t init_lock = PTHREAD_MUTEX_INITIALIZER;
@@ -452,7 +456,7 @@ static int ensure_names(void)
     s_enter_init = intern("enter_initialization_mode"); s_exit_init = intern("exit_initialization_mode");
     s_terminate = intern("terminate"); s_get_fmu_state = intern("_get_fmu_state");
     s_set_fmu_state = intern("_set_fmu_state"); s_to_bytes = intern("_fmu_state_to_bytes");
-    s_from_bytes = intern("_fmu_state_from_bytes"); s_msg = intern("msg"); s_category = intern("category");
+    s_from_bytes = intern("_fmu_state_from_bytes"); s_deserialize = intern("deserialize_fmu_state"); s_msg = intern("msg"); s_category = intern("category");
     s_status = intern("status"); s_vars = intern("vars"); s_name = intern("name"); s_log_queue = intern("log_queue");
     if (PyErr_Occurred()) return -1;
     module = PyImport_ImportModule("pythonfmu.fmi2slave");
@@ -1149,9 +1153,12 @@ EXPORT fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueR
 static State *as_state(Instance *in, const char *fn, fmi2FMUstate s)
 {
     State *state = (State *)s;
-    if (state == NULL || state->magic != STATE_MAGIC) {
-        logf_(in, fmi2Error, "%s: %s (t = %.9g s)", fn,
-              state == NULL ? "the FMU state is NULL" : "not a live FMU state of this wrapper", in->time);
+    if (state == NULL || state->magic != STATE_MAGIC || state->owner != in) {
+        logf_(in, fmi2Error, "%s: %s (t = %.9g s); nothing was changed", fn,
+              state == NULL ? "the FMU state is NULL"
+              : state->magic != STATE_MAGIC ? "not a live FMU state of this wrapper"
+              : "the FMU state was issued by another instance (fmi2GetFMUstate or fmi2DeSerializeFMUstate of "
+                "this instance make the states it takes)", in->time);
         return NULL;
     }
     return state;
@@ -1175,6 +1182,7 @@ static fmi2Status store_state(Instance *in, const char *fn, fmi2FMUstate *FMUsta
         return fmi2Error;
     }
     state->magic = STATE_MAGIC;
+    state->owner = in;
     Py_XSETREF(state->state, value);
     Py_CLEAR(state->serialized);
     *FMUstate = state;
@@ -1317,7 +1325,11 @@ EXPORT fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serial
     }
     gil = PyGILState_Ensure();
     bytes = PyBytes_FromStringAndSize(serializedState, (Py_ssize_t)size);
-    if (bytes != NULL) value = PyObject_CallMethodOneArg(in->cls, s_from_bytes, bytes);
+    /* A parcosim slave reads the bytes against the instance (model, GUID, configuration, its own
+     * state's layout); any other pythonfmu slave as pythonfmu does, on its class. */
+    if (bytes != NULL)
+        value = PyObject_HasAttr(in->slave, s_deserialize) ? PyObject_CallMethodOneArg(in->slave, s_deserialize, bytes)
+                                                           : PyObject_CallMethodOneArg(in->cls, s_from_bytes, bytes);
     Py_XDECREF(bytes);
     if (value == NULL) status = failed(in, "fmi2DeSerializeFMUstate");
     else { drain_log(in); status = store_state(in, "fmi2DeSerializeFMUstate", FMUstate, value); }
