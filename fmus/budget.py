@@ -138,10 +138,10 @@ def bounded_integration(run, unit: float, known: int | None, what: str, current_
     :class:`plant.integrators.WorkLimitError` at them, its state unchanged; that becomes a
     :class:`CallLimitError` naming the step size, the time, the evaluations and the limit.
     """
-    from plant.integrators import WorkLimitError
-
     if known is not None and known * unit <= CALL_CPU_SECONDS and active() is None:
         return run(None)        # fits a whole call, and no system FMU shares it
+    from plant.integrators import WorkLimitError
+
     cause = f"step size h = {step_size!r} s at t = {current_time!r} s"
     with call_budget() as budget:
         if known is not None:

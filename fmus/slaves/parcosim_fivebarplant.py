@@ -37,11 +37,13 @@ class FiveBarPlant(GuardedSlave):
     def step(self, current_time, step_size):
         sim = self.sim
         sim.time = current_time
-        if self.idle_steps:
-            self._advance(0.0, 0.0, current_time, step_size)
-            self.idle_steps -= 1
+        tau1, tau2 = (0.0, 0.0) if self.idle_steps else (self.tau1, self.tau2)
+        if sim.settings.method == "rk4" and budget.active() is None:
+            sim.step(tau1, tau2, step_size)     # the usual case: its count fits a call (checked at initialisation)
         else:
-            self._advance(self.tau1, self.tau2, current_time, step_size)
+            self._advance(tau1, tau2, current_time, step_size)
+        if self.idle_steps:
+            self.idle_steps -= 1
         publish_plant(self, sim)
 
     def _advance(self, tau1, tau2, current_time, step_size):
