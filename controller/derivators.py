@@ -241,8 +241,8 @@ class Derivator:
         The product of :func:`controller.fastderivator.derivator_step` (which the compiled
         loop runs on the same array) in numpy: the same BLAS call, the same bits.  Numpy
         here, not the kernel: a Derivator FMU would compile the kernel's ``np.dot`` in its
-        first call (over 20 s in a fresh process on a loaded machine), against any FMI
-        call's 10 s (``fmus.parts.MAX_CALL_SECONDS``).
+        first call (over 20 s in a fresh process on a loaded machine), where an FMI call's
+        work is held to about a second (``fmus.budget``).
 
         Parameters
         ----------

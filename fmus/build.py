@@ -26,7 +26,7 @@ ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_OUT = ROOT / "fmus" / "build"
 BUNDLED_PACKAGES = ("plant", "motor", "controller")
 #: The modules of ``fmus`` the slaves import (the rest is the importer's side).
-BUNDLED_FMUS_MODULES = ("guarded.py", "fmustate.py", "stateformat.py", "parts.py", "refusals.py")
+BUNDLED_FMUS_MODULES = ("guarded.py", "fmustate.py", "stateformat.py", "parts.py", "refusals.py", "budget.py")
 
 #: Every parcosim FMU can save, restore and serialise its whole state (:mod:`fmus.fmustate`).
 STATE_OPTIONS = {"canGetAndSetFMUstate": "true", "canSerializeFMUstate": "true"}

@@ -27,6 +27,7 @@ import math
 
 from plant.correction import MEASURABLE
 
+from . import budget
 from .instances import _CONVERT, CoSimulationError, InProcessInstance
 from .master import stepping_order
 from .stepper import Stepper
@@ -129,6 +130,21 @@ def _steps_in(time: float, current_time: float, step_size: float, h: float, mult
     return n
 
 
+def inner_work(stepper: Stepper, extra=()) -> tuple:
+    """(inner doSteps, their least CPU [s]) of one communication step of ``stepper``'s system:
+    each component's sub-steps at :data:`fmus.budget.INNER_STEP` plus what its slave states it
+    charges for a step (``known_step_work()``: a plant's RK4 evaluations); an FMU-file
+    component, which bounds its own calls, at INNER_STEP.  ``extra``: instance names stepped once
+    more (a corrected model of the plant)."""
+    count, seconds = 0, 0.0
+    for name, (inst, _, _, substeps) in zip(stepper.order, stepper.plan):
+        known = getattr(getattr(inst, "slave", None), "known_step_work", None)
+        repeats = substeps + extra.count(name)
+        count += repeats
+        seconds += repeats * (budget.INNER_STEP + (known() if known is not None else 0.0))
+    return count, seconds
+
+
 # --- the whole loop ------------------------------------------------------------------------
 
 class LoopCore:
@@ -146,6 +162,14 @@ class LoopCore:
         """``step_size`` / h communication steps; refusals name the inner component."""
         for _ in range(_steps_in(self.stepper.time, current_time, step_size, self.system.step, True)):
             self.stepper.step()
+
+    def work_per_step(self) -> tuple:
+        """(inner doSteps, their least CPU [s]) of one communication step (:func:`inner_work`)."""
+        return inner_work(self.stepper)
+
+    def inner_steps(self) -> int:
+        """The inner doSteps of one communication step."""
+        return sum(entry[3] for entry in self.stepper.plan)
 
     def value(self, signal: str) -> float:
         return self.stepper.value(signal)
@@ -245,6 +269,15 @@ class ChainCore:
                 self.stepper.refresh(self.model)
         self._advance()
         self._time = current_time + h
+
+    def work_per_step(self) -> tuple:
+        """(inner doSteps, their least CPU [s]) of one step: the components' and the model's
+        corrected step (:func:`inner_work`)."""
+        return inner_work(self.stepper, extra=(self.plant,))
+
+    def inner_steps(self) -> int:
+        """The inner doSteps of one step, the model's corrected step included."""
+        return sum(entry[3] for entry in self.stepper.plan) + 1
 
     def state(self) -> dict:
         """The chain's state: the stepper's, the row and snapshot of the sample ahead, the

@@ -520,6 +520,7 @@ class GuardedSlave(Fmi2Slave):
         raise FmiError(f"{call}: value references {list(vrs)!r} refused ({self._now()})")
 
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
+        check_experiment_times(start_time, stop_time)
         self._start_time = float(start_time)
         self._initial_outputs = self._built_for_exit = False
 
@@ -616,6 +617,29 @@ class GuardedSlave(Fmi2Slave):
         except AttributeError:
             self.__wrapper_is_ours = wrapper_symbol_present(getattr(self, "resources", None), type(self).__name__)
             return self.__wrapper_is_ours
+
+
+#: A start time t0 is refused where t0 + TIME_RESOLUTION == t0: time could not advance there.
+TIME_RESOLUTION = 1e-6
+
+
+def check_experiment_times(start_time, stop_time=None) -> None:
+    """Refuse (:class:`FmiError`, nothing set) a ``fmi2SetupExperiment`` whose start time is not
+    finite or so large that t0 + :data:`TIME_RESOLUTION` == t0 (time would never advance), or
+    whose stop time, when defined (not None), is not finite or before the start.  The message
+    names the argument and its value (the wrapper adds the function and the time)."""
+    start = float(start_time)
+    if not math.isfinite(start):
+        raise FmiError(f"startTime = {start!r} s is not finite; nothing was set")
+    if start + TIME_RESOLUTION == start:
+        raise FmiError(f"startTime = {start!r} s is too large in magnitude: startTime + "
+                       f"{TIME_RESOLUTION:g} s == startTime, time could not advance; nothing was set")
+    if stop_time is None:
+        return
+    stop = float(stop_time)
+    if not (math.isfinite(stop) and stop >= start):
+        why = "is not finite" if not math.isfinite(stop) else f"is before startTime = {start!r} s"
+        raise FmiError(f"stopTime = {stop!r} s {why}; nothing was set")
 
 
 #: How many value-reference lists a slave's get_real/set_real remember (resolved names).

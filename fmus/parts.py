@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+from fmus import budget
 from fmus.refusals import PRESET_VALUE, TINY, refuse_absurd, require_finite, with_overrides
 
 #: The plant's outputs (name, description).
@@ -167,7 +168,8 @@ def build_plant(slave):
     refuse_absurd(**offsets)
     sim = PlantSimulator(params, slave.x0, slave.y0, settings, encoder_counts=slave.encoder_counts,
                          encoder_offsets=tuple(offsets.values()))
-    check_step_cost(sim)
+    budget.check_rk4_substeps(sim, f"parameters kernel = {settings.kernel!r}, substeps = {settings.substeps!r}",
+                              "kernel 'fast'")
     return sim
 
 
@@ -186,36 +188,6 @@ def _chain_overrides(chain, slave, k: int):
                              "(or -1 for the preset's value)")
         changes[field] = value
     return replace(chain, **changes)
-
-
-#: Longest any FMI call of ours may take [s].  A plant whose doStep would take more than
-#: half of it (a margin for slower machines) is refused at initialisation.
-MAX_CALL_SECONDS = 10.0
-
-
-def check_step_cost(sim) -> None:
-    """Refuse (ValueError naming ``kernel`` and ``substeps``) RK4 settings whose doStep
-    would take more than MAX_CALL_SECONDS / 2: substeps x 4 right-hand sides, each timed
-    here on the plant's start state (the best of three)."""
-    import time
-
-    from plant import fivebar
-
-    s = sim.settings
-    if s.method != "rk4":
-        return
-    u_star = fivebar.thesis_torques(0.0, 0.0)
-    best = math.inf
-    for _ in range(3):
-        start = time.perf_counter()
-        sim.derivative(sim.y, u_star)
-        best = min(best, time.perf_counter() - start)
-    estimate = 4 * s.substeps * best
-    if estimate > 0.5 * MAX_CALL_SECONDS:
-        most = max(1, int(0.5 * MAX_CALL_SECONDS / (4 * best)))
-        raise ValueError(f"parameters kernel = {s.kernel!r}, substeps = {s.substeps!r}: a doStep would take about "
-                         f"{estimate:.3g} s ({4 * best * 1e3:.3g} ms per RK4 substep), more than the "
-                         f"{0.5 * MAX_CALL_SECONDS:g} s allowed per call; use substeps <= {most} or kernel 'fast'")
 
 
 def correct_plant(sim, snapshot, measured: dict, redo, step: float) -> bool:

@@ -15,8 +15,11 @@ the stepper's values and time): after ``fmi2SetFMUstate`` the FMU's time is the 
 """
 from __future__ import annotations
 
+import math
+
 from pythonfmu import DefaultExperiment
 
+from fmus import budget
 from fmus.embedded import component_parameters, read_system, with_parameters
 from fmus.guarded import GuardedSlave
 
@@ -25,6 +28,8 @@ class SystemSlave(GuardedSlave):
     """Base of ``ClosedLoop`` and ``ControlChain``."""
 
     author = "parcosim"
+    #: A doStep may take any whole number of the system's communication steps (else exactly one).
+    takes_multiples = True
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -48,6 +53,36 @@ class SystemSlave(GuardedSlave):
         self.core = self.build(self.configured_system())
         self.core.initialize()
         self.publish()
+
+    def check_step_size(self, current_time, step_size):
+        """The base's rule, then the work limit (:mod:`fmus.budget`): the step's communication
+        steps times its components' inner steps must fit one call, refused before any is taken."""
+        super().check_step_size(current_time, step_size)
+        h = self.system.step
+        steps = round(step_size / h)
+        if steps < 1 or (steps > 1 and not self.takes_multiples) or self.core is None:
+            return          # a step size the core refuses, naming what it accepts
+        count, seconds = self.core.work_per_step()
+        if count == 0:
+            return
+        most = max(1, math.floor(budget.CALL_CPU_SECONDS / seconds))
+        with budget.call_budget() as left:
+            left.require(steps * count, seconds / count, f"inner steps of {type(self).__name__}'s system",
+                         f"step size h = {step_size!r} s at t = {current_time!r} s",
+                         f"{steps:.6g} of its steps h = {h!r} s, {count} component steps each; take steps of at "
+                         f"most {most * h:.6g} s ({most} of its steps)")
+
+    def step(self, current_time, step_size):
+        """The subclass's :meth:`advance` within the call's budget, its components' own
+        cost (:data:`fmus.budget.INNER_STEP` a doStep) spent first: they spend their
+        integrators' evaluations from what is left."""
+        with budget.call_budget() as left:
+            left.spend(round(step_size / self.system.step) * self.core.inner_steps() * budget.INNER_STEP)
+            self.advance(current_time, step_size)
+
+    def advance(self, current_time, step_size):
+        """Step the inner system from ``current_time`` over ``step_size`` and publish."""
+        raise NotImplementedError
 
     def model_state(self) -> dict:
         """The slave's own attributes with ``core`` replaced by the inner system's state."""

@@ -197,6 +197,16 @@ class Drive:
             return self.params.kt * self.i - lugre.friction_force(self.lugre, self.lugre[lugre.F_Z], omega)
         return fastdrive.shaft_torque(self.buf, self.i, omega)
 
+    def controller_state(self):
+        """A copy of the drive's per-step state (current, voltage, controller, phase) for
+        :meth:`restore_controller_state`: a plant that samples the voltage and then refuses
+        its step (:class:`plant.actuated.ActuatedPlant`) puts the drive back as it was."""
+        return self.buf.copy(), self._controller_buf.copy()
+
+    def restore_controller_state(self, state) -> None:
+        """Go back to ``state`` of :meth:`controller_state` (in place: the controller shares its array)."""
+        self.buf[:], self._controller_buf[:] = state
+
     def prepare_step(self, h):
         """Check the step length h and compute its coefficients (kept until h changes).
 

@@ -37,6 +37,7 @@ import numpy as np
 from motor import armature_current_rate, friction, shaft_torque
 
 from . import fast5r, fivebar
+from .integrators import WorkLimitError
 from .simulator import RK4_REAL_STABILITY, PlantError, PlantSimulator
 
 
@@ -113,13 +114,15 @@ class ActuatedPlant:
         dz[:14] = self.plant.derivative(y, fivebar.thesis_torques(tau[0], tau[1]))
         return dz
 
-    def step(self, i_ref, i_hat, v_ref, dt: float) -> None:
+    def step(self, i_ref, i_hat, v_ref, dt: float, max_evaluations: int | None = None) -> int:
         """Advance by dt: each drive samples its voltage (:meth:`motor.Drive.sample_voltage`
         with ``i_ref[n]``, ``i_hat[n]``, ``v_ref[n]``), held over the step, and the whole
-        state is integrated.  Refused, the state and the controllers kept: ValueError naming
-        the input with its joint (e.g. ``i_ref2``) when one is not finite; :class:`plant.PlantError`
-        for the plant's reasons, for RK4 steps beyond the stability of the electrical pole
-        (R h / L > 2.785), and for non-finite currents.
+        state is integrated; returns the right-hand-side evaluations taken.  Refused, the state
+        and the controllers kept: ValueError naming the input with its joint (e.g. ``i_ref2``)
+        when one is not finite; :class:`plant.PlantError` for the plant's reasons, for RK4 steps
+        beyond the stability of the electrical pole (R h / L > 2.785), and for non-finite
+        currents; :class:`plant.integrators.WorkLimitError` when dopri5 reaches
+        ``max_evaluations``.
         """
         plant = self.plant
         plant.check_step(dt)
@@ -130,13 +133,20 @@ class ActuatedPlant:
             for (j, _), value in zip(self.drives, values):   # all before any controller samples
                 if not math.isfinite(value):
                     raise ValueError(f"input {name}{j} = {value!r} is not finite")
+        # With a work limit (dopri5) the step may stop unfinished: the controllers go back too.
+        snapshots = None if max_evaluations is None else [d.controller_state() for _, d in self.drives]
         voltages = [d.sample_voltage(i_ref[n], v_ref[n], i_hat[n], dt) for n, (_, d) in enumerate(self.drives)]
-        self.advance(voltages, dt)
+        try:
+            return self.advance(voltages, dt, max_evaluations)
+        except WorkLimitError:
+            for (_, d), snapshot in zip(self.drives, snapshots):
+                d.restore_controller_state(snapshot)
+            raise
 
-    def advance(self, voltages, dt: float) -> None:
+    def advance(self, voltages, dt: float, max_evaluations: int | None = None) -> int:
         """Integrate the whole state over dt with the drives' ``voltages`` held (the part of
         :meth:`step` after the controllers sampled); each drive's ``v`` becomes its voltage.
-        Refused as :meth:`step`, the state kept."""
+        Returns the right-hand-side evaluations taken.  Refused as :meth:`step`, the state kept."""
         plant = self.plant
 
         def held():
@@ -144,9 +154,9 @@ class ActuatedPlant:
 
         external, bristles = self.held_friction(dt)
         u_star = fivebar.thesis_torques(*external) if any(b is not None for b in bristles) else (0.0, 0.0)
-        z, report = plant.integrate(self.state(), dt, u_star[0], u_star[1], held,
-                                    lambda w: self.derivative(w, voltages, external),
-                                    self._motors, np.array(voltages, dtype=float))
+        z, report, evaluations = plant.integrate(self.state(), dt, u_star[0], u_star[1], held,
+                                                 lambda w: self.derivative(w, voltages, external),
+                                                 self._motors, np.array(voltages, dtype=float), max_evaluations)
         currents = z[14:].tolist()
         if not all(math.isfinite(i) for i in currents):
             raise PlantError(f"armature currents {currents} after the step from t = {plant.time:.6g} s "
@@ -156,6 +166,7 @@ class ActuatedPlant:
             d.i, d.v = i, v
             if b is not None:
                 d.z = b
+        return evaluations
 
     def held_friction(self, dt: float):
         """(world torques on (q1, q2), new bristle deflections): minus each LuGre drive's mean

@@ -13,6 +13,25 @@ class IntegrationError(RuntimeError):
     """The integrator could not meet its tolerance or produced non-finite values."""
 
 
+class WorkLimitError(IntegrationError):
+    """An adaptive integration would need more right-hand-side evaluations than allowed.
+
+    Attributes
+    ----------
+    evaluations : int
+        Evaluations done when it stopped (the next step attempt would have exceeded the limit).
+    limit : int
+        The evaluations allowed.
+    reached : float
+        How far into the step the accepted internal steps got [s].
+    """
+
+    def __init__(self, evaluations: int, limit: int, reached: float):
+        self.evaluations, self.limit, self.reached = evaluations, limit, reached
+        super().__init__(f"{evaluations} right-hand-side evaluations reached t+{reached:.3g} s; the next internal "
+                         f"step would exceed the {limit} allowed")
+
+
 def rk4(f, y, dt: float, substeps: int = 1):
     """Classical fourth-order Runge-Kutta with ``substeps`` equal steps over dt."""
     h = dt / substeps
@@ -41,8 +60,13 @@ _DP_B4 = np.array([5179 / 57600, 0.0, 7571 / 16695, 393 / 640, -92097 / 339200, 
 _DP_ERR = _DP_B5 - _DP_B4
 
 
-def dopri5(f, y, dt: float, rtol: float, atol: float, h_start: float | None = None, max_steps: int = 100000):
+def dopri5(f, y, dt: float, rtol: float, atol: float, h_start: float | None = None, max_steps: int = 100000,
+           max_evaluations: int | None = None):
     """Adaptive Dormand-Prince 5(4) over exactly dt.
+
+    ``max_evaluations`` bounds the calls of ``f`` (None: unbounded): a step attempt (6 calls)
+    that would exceed it is not begun, :class:`WorkLimitError` is raised instead; ``y`` is
+    never modified, so the caller keeps its state.
 
     Returns
     -------
@@ -52,13 +76,20 @@ def dopri5(f, y, dt: float, rtol: float, atol: float, h_start: float | None = No
         The step-size suggestion for the next call (warm start).
     n_steps : int
         Accepted internal steps.
+    n_evaluations : int
+        Calls of ``f``.
     """
     t = 0.0
     h = min(dt, h_start) if h_start else dt
+    if max_evaluations is not None and max_evaluations < 7:    # not even one step attempt
+        raise WorkLimitError(0, max_evaluations, 0.0)
     k = np.empty((7, y.size))
     k[0] = f(y)
-    n_accepted = 0
+    n_accepted, n_evaluations = 0, 1
     for _ in range(max_steps):
+        if max_evaluations is not None and n_evaluations + 6 > max_evaluations:
+            raise WorkLimitError(n_evaluations, max_evaluations, t)
+        n_evaluations += 6
         last = t + h >= dt * (1.0 - 1e-12)
         if last:
             h = dt - t
@@ -78,7 +109,7 @@ def dopri5(f, y, dt: float, rtol: float, atol: float, h_start: float | None = No
             n_accepted += 1
             factor = 5.0 if err == 0.0 else min(5.0, 0.9 * err ** -0.2)
             if last:
-                return y, max(h * factor, 1e-12), n_accepted
+                return y, max(h * factor, 1e-12), n_accepted, n_evaluations
             h *= factor
         else:
             h *= max(0.2, 0.9 * err ** -0.2)

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import fast5r, fivebar
-from .integrators import IntegrationError, dopri5, rk4
+from .integrators import IntegrationError, WorkLimitError, dopri5, rk4
 from .parallel import left_inverse_solve, mechanism_state, forward_dynamics
 from .presets import FiveBarParams
 
@@ -173,13 +173,15 @@ class PlantSimulator:
         return np.concatenate([dq, ddq])
 
     # --- stepping ----------------------------------------------------------------
-    def step(self, tau1: float, tau2: float, dt: float) -> None:
-        """Advance by dt with the world torques held; the state is kept on error.
+    def step(self, tau1: float, tau2: float, dt: float, max_evaluations: int | None = None) -> int:
+        """Advance by dt with the world torques held; the state is kept on error.  Returns the
+        right-hand-side evaluations it took (:meth:`evaluations_per_step` with RK4).
 
         Refused (:class:`PlantError`, naming the cause): a non-finite torque or step, a
         Baumgarte lambda above :data:`BAUMGARTE_RK4_LIMIT` / h for the RK4 step h, an integration
         that fails or diverges (non-finite state, or loop-closure residual above
-        :data:`RESIDUAL_STOP`; the message gives the torques held), a singular pose.
+        :data:`RESIDUAL_STOP`; the message gives the torques held), a singular pose.  dopri5
+        stops at ``max_evaluations`` (None: unbounded) with :class:`plant.integrators.WorkLimitError`.
         """
         if not (math.isfinite(tau1) and math.isfinite(tau2)):
             name, value = ("tau1", tau1) if not math.isfinite(tau1) else ("tau2", tau2)
@@ -190,12 +192,20 @@ class PlantSimulator:
             return f"tau1 = {tau1!r}, tau2 = {tau2!r} N m held"
 
         u_star = fivebar.thesis_torques(tau1, tau2)     # once: held over every derivative call of the step
-        y, report = self.integrate(self.y, dt, u_star[0], u_star[1], held, lambda z: self.derivative(z, u_star))
+        y, report, evaluations = self.integrate(self.y, dt, u_star[0], u_star[1], held,
+                                                lambda z: self.derivative(z, u_star), max_evaluations=max_evaluations)
         self.accept(y, dt, held, report)
+        return evaluations
+
+    def evaluations_per_step(self) -> int | None:
+        """Right-hand-side evaluations of one step when known before it: 4 per RK4 substep;
+        None for dopri5 (adaptive)."""
+        return 4 * self.settings.substeps if self.settings.method == "rk4" else None
 
     def integrate(self, z, dt: float, u1: float, u2: float, held, derivative,
-                  motors=fast5r.NO_MOTORS, voltages=fast5r.NO_VOLTAGES):
-        """Integrate ``z`` over dt with the settings; return (z at the end, report or None).
+                  motors=fast5r.NO_MOTORS, voltages=fast5r.NO_VOLTAGES, max_evaluations: int | None = None):
+        """Integrate ``z`` over dt with the settings; return (z at the end, report or None,
+        the right-hand-side evaluations taken).
 
         ``z`` is the plant's state, followed by the currents of ``motors`` when a plant with
         drives calls (:class:`plant.actuated.ActuatedPlant`: rows of
@@ -203,20 +213,27 @@ class PlantSimulator:
         held on theta11, theta21.  The compiled kernel integrates when it can (RK4; with no
         projection it also returns the :func:`plant.fast5r.report` of the new state for
         :meth:`accept`); ``derivative(z)``, the Python right-hand side, serves the general
-        kernel and dopri5.  A failed integration is a :class:`PlantError` naming ``held()``.
+        kernel and dopri5.  A failed integration is a :class:`PlantError` naming ``held()``;
+        dopri5 stops at ``max_evaluations`` with :class:`plant.integrators.WorkLimitError`,
+        nothing changed.
         """
         s = self.settings
+        rk4_evaluations = 4 * s.substeps
         try:
             if s.method == "rk4" and self._fast is not None and not s.project:
-                return self._fast.step(z, u1, u2, s.baumgarte, dt, s.substeps, self.count, self.encoder_offsets,
-                                       motors, voltages)
+                return (*self._fast.step(z, u1, u2, s.baumgarte, dt, s.substeps, self.count, self.encoder_offsets,
+                                         motors, voltages), rk4_evaluations)
             if s.method == "rk4" and self._fast is not None:
                 return fast5r.actuated_rk4(self._fast.p, motors, z, voltages, float(u1), float(u2),
-                                           float(s.baumgarte), float(dt), int(s.substeps)), None
+                                           float(s.baumgarte), float(dt), int(s.substeps)), None, rk4_evaluations
             if s.method == "rk4":
-                return rk4(derivative, z, dt, s.substeps), None
-            z, self._h_next, _ = dopri5(derivative, z, dt, s.rtol, s.atol, self._h_next)
-            return z, None
+                return rk4(derivative, z, dt, s.substeps), None, rk4_evaluations
+            z, h_next, _, evaluations = dopri5(derivative, z, dt, s.rtol, s.atol, self._h_next,
+                                               max_evaluations=max_evaluations)
+            self._h_next = h_next
+            return z, None, evaluations
+        except WorkLimitError:
+            raise
         except (IntegrationError, np.linalg.LinAlgError) as exc:
             raise PlantError(f"integration failed in the step from t = {self.time:.6g} s ({held()}): {exc}") from None
 

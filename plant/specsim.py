@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from .integrators import IntegrationError, dopri5, rk4
+from .integrators import IntegrationError, WorkLimitError, dopri5, rk4
 from .parallel import forward_dynamics, left_inverse_solve, mechanism_state
 from .serial import chain_dynamics, chain_kinematics
 from .simulator import BAUMGARTE_RK4_LIMIT, RESIDUAL_STOP, IntegratorSettings, PlantError
@@ -123,9 +123,11 @@ class SpecSimulator:
         n = y.size // 2
         return np.concatenate([y[n:], forward_dynamics(self.mechanism, y[:n], y[n:], u_star, self.settings.baumgarte)])
 
-    def step(self, torques, dt: float) -> None:
+    def step(self, torques, dt: float, max_evaluations: int | None = None) -> int:
         """Advance by dt with ``torques`` (one per actuated joint, :attr:`PlantSpec.inputs`
-        order) held; the state is kept on error (:class:`PlantError`)."""
+        order) held; return the right-hand-side evaluations taken.  The state is kept on error
+        (:class:`PlantError`; :class:`plant.integrators.WorkLimitError` when dopri5 reaches
+        ``max_evaluations``, None: unbounded)."""
         torques = np.asarray(torques, dtype=float)
         if torques.shape != (len(self.spec.inputs),):
             raise PlantError(f"{torques.size} torques given for the {len(self.spec.inputs)} inputs "
@@ -143,9 +145,12 @@ class SpecSimulator:
         f = lambda z: self.derivative(z, torques)   # noqa: E731
         try:
             if s.method == "rk4":
-                y = rk4(f, self.y, dt, s.substeps)
+                y, evaluations = rk4(f, self.y, dt, s.substeps), 4 * s.substeps
             else:
-                y, self._h_next, _ = dopri5(f, self.y, dt, s.rtol, s.atol, self._h_next)
+                y, self._h_next, _, evaluations = dopri5(f, self.y, dt, s.rtol, s.atol, self._h_next,
+                                                         max_evaluations=max_evaluations)
+        except WorkLimitError:
+            raise
         except (IntegrationError, np.linalg.LinAlgError) as exc:
             raise PlantError(f"integration failed in the step from t = {self.time:.6g} s ({held}): {exc}") from None
         if not np.all(np.isfinite(y)):
@@ -157,6 +162,7 @@ class SpecSimulator:
                              "motion for the step: use substeps or dopri5)")
         self.y = y
         self.time += dt
+        return evaluations
 
     def _residual_of(self, y) -> float:
         n = y.size // 2

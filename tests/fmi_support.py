@@ -8,9 +8,10 @@ from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFr
 
 class FmuInstance:
     """Instantiate, set parameters, initialise; then ``step`` and ``get``.  With
-    ``initialise=False`` the instance stays in Initialization Mode until :meth:`initialise`."""
+    ``initialise=False`` the instance stays in Initialization Mode until :meth:`initialise`;
+    with ``setup=False`` it stays instantiated (no fmi2SetupExperiment, no parameters)."""
 
-    def __init__(self, path, parameters=None, instance_name="instance", initialise=True):
+    def __init__(self, path, parameters=None, instance_name="instance", initialise=True, setup=True):
         self.md = read_model_description(str(path))
         self.vars = {v.name: v for v in self.md.modelVariables}
         self.dir = extract(str(path))
@@ -23,11 +24,13 @@ class FmuInstance:
         self.callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
         self.callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
         self.fmu.instantiate(callbacks=self.callbacks, loggingOn=True)
+        self.time = 0.0
+        if not setup:
+            return
         self.fmu.setupExperiment(startTime=0.0)
         self.fmu.enterInitializationMode()
         for name, value in (parameters or {}).items():
             self.set(name, value)
-        self.time = 0.0
         if initialise:
             self.initialise()
 

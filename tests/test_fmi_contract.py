@@ -10,7 +10,6 @@ import math
 import subprocess
 import sys
 import textwrap
-import time
 import warnings
 from pathlib import Path
 
@@ -259,10 +258,10 @@ def test_derivator_refuses_dbl_max_naming_the_input(value):
 
 
 def test_a_plant_step_that_would_take_over_the_limit_is_refused_at_initialisation():
-    start = time.perf_counter()
+    """Counted, not timed (fmus/budget.py; tests/test_call_limits.py covers every plant)."""
     slave = make_slave("FiveBarPlant", {"kernel": "general", "substeps": 10000})
-    assert time.perf_counter() - start < 2.0
     assert "kernel = 'general', substeps = 10000" in slave.error and "use substeps <=" in slave.error
+    assert "needs 40000 right-hand-side evaluations" in slave.error
     ok = make_slave("FiveBarPlant", {"kernel": "general", "substeps": 10})
     assert ok._ready, ok.error
 

@@ -20,6 +20,7 @@ process share one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
+from fmus import budget
 from fmus.guarded import MIN_STEP, GuardedSlave
 from fmus.refusals import PRESET_VALUE, TINY, refuse_absurd
 from fmus.parts import (PLANT_OUTPUTS, CurrentLoopSteps, build_drive, build_plant, correct_plant, declare_drive_options,
@@ -79,11 +80,20 @@ class ActuatedFiveBarPlant(CurrentLoopSteps, GuardedSlave):
         a.plant.time = current_time
         if self.idle_steps:
             a.plant.check_step(step_size)
-            a.advance([0.0] * len(a.drives), step_size)
+            self._advance(lambda limit: a.advance([0.0] * len(a.drives), step_size, limit), current_time, step_size)
             self.idle_steps -= 1
         else:
-            a.step((self.i_ref1, self.i_ref2), (self.i_hat1, self.i_hat2), (self.v_ref1, self.v_ref2), step_size)
+            self._advance(lambda limit: a.step((self.i_ref1, self.i_ref2), (self.i_hat1, self.i_hat2),
+                                               (self.v_ref1, self.v_ref2), step_size, limit), current_time, step_size)
         self._publish()
+
+    def _advance(self, run, current_time, step_size):
+        """``run(max_evaluations)``, a step of the whole state, within the call's work limit (:mod:`fmus.budget`)."""
+        budget.step_plant(self.actuated.plant, run, current_time, step_size)
+
+    def known_step_work(self) -> float:
+        """The least CPU [s] a step is charged (:func:`fmus.budget.known_step_work`)."""
+        return budget.known_step_work(self.actuated.plant)
 
     def _publish(self):
         a = self.actuated
@@ -111,7 +121,8 @@ class ActuatedFiveBarPlant(CurrentLoopSteps, GuardedSlave):
                 drive.i = i
                 if drive.lugre is not None:
                     drive.z = z
-            a.advance([drive.v for _, drive in a.drives], step_size)
+            self._advance(lambda limit: a.advance([drive.v for _, drive in a.drives], step_size, limit), a.plant.time,
+                          step_size)
 
         if not correct_plant(a.plant, (y, time), measured, redo, step_size):
             return False

@@ -32,7 +32,7 @@ class ClosedLoop(SystemSlave):
     def build(self, system):
         return LoopCore(system)
 
-    def step(self, current_time, step_size):
+    def advance(self, current_time, step_size):
         self.core.step(current_time, step_size)
         self.publish()
 

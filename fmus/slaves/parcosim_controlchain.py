@@ -24,6 +24,7 @@ from fmus.systemslave import SystemSlave
 class ControlChain(SystemSlave):
     """The sampled control chain of a parcosim scene, for a separate plant FMU."""
 
+    takes_multiples = False
     description = ("The control chain of a parcosim scene (Coutinho 2019 5R robot) for a Jacobi master: "
                    "measurements in, the plant's commands one sample ahead out")
 
@@ -49,7 +50,7 @@ class ControlChain(SystemSlave):
     def build(self, system):
         return ChainCore(system, self.plant, zero_start=bool(self.zero_start))
 
-    def step(self, current_time, step_size):
+    def advance(self, current_time, step_size):
         self.core.step(current_time, step_size, {name: getattr(self, name) for name in self.measured})
         self.publish()
 

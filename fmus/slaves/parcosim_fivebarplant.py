@@ -5,6 +5,7 @@ process share one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
+from fmus import budget
 from fmus.guarded import GuardedSlave
 from fmus.parts import PLANT_OUTPUTS, build_plant, correct_plant, declare_plant, publish_plant
 
@@ -25,18 +26,30 @@ class FiveBarPlant(GuardedSlave):
         self.sim = None
         self.idle_steps = 0    # a model in a controller: steps with zero torques (ChainCore)
 
+    def known_step_work(self) -> float:
+        """The least CPU [s] a step is charged (:func:`fmus.budget.known_step_work`)."""
+        return budget.known_step_work(self.sim)
+
     def setup(self):
         self.sim = build_plant(self)
         publish_plant(self, self.sim)
 
     def step(self, current_time, step_size):
-        self.sim.time = current_time
-        if self.idle_steps:
-            self.sim.step(0.0, 0.0, step_size)
-            self.idle_steps -= 1
+        sim = self.sim
+        sim.time = current_time
+        tau1, tau2 = (0.0, 0.0) if self.idle_steps else (self.tau1, self.tau2)
+        if sim.settings.method == "rk4" and budget.active() is None:
+            sim.step(tau1, tau2, step_size)     # the usual case: its count fits a call (checked at initialisation)
         else:
-            self.sim.step(self.tau1, self.tau2, step_size)
-        publish_plant(self, self.sim)
+            self._advance(tau1, tau2, current_time, step_size)
+        if self.idle_steps:
+            self.idle_steps -= 1
+        publish_plant(self, sim)
+
+    def _advance(self, tau1, tau2, current_time, step_size):
+        """The plant's step with the torques held, within the call's work limit (:mod:`fmus.budget`)."""
+        sim = self.sim
+        budget.step_plant(sim, lambda limit: sim.step(tau1, tau2, step_size, limit), current_time, step_size)
 
     # --- a model of the plant inside a controller (fmus.embedded.ChainCore) -------------
     def snapshot(self):
@@ -47,7 +60,7 @@ class FiveBarPlant(GuardedSlave):
         """Redo the last step (taken from ``snapshot``, with the same torques) from the state
         the ``measured`` outputs allow; False, nothing changed, when they agreed."""
         sim = self.sim
-        if not correct_plant(sim, snapshot, measured, lambda: sim.step(self.tau1, self.tau2, step_size),
+        if not correct_plant(sim, snapshot, measured, lambda: self._advance(self.tau1, self.tau2, sim.time, step_size),
                              step_size):
             return False
         publish_plant(self, sim)

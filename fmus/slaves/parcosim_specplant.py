@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import os
 
+from fmus import budget
 from fmus.guarded import GuardedSlave
 from fmus.refusals import refuse_absurd, require_finite
 
@@ -65,33 +66,19 @@ class SpecPlant(GuardedSlave):
         settings = IntegratorSettings(method=self.method, substeps=self.substeps, rtol=self.rtol, atol=self.atol,
                                       baumgarte=self.baumgarte, kernel="general")
         sim = SpecSimulator(self.spec, (self.x0, self.y0, self.z0), settings)
-        if settings.method == "rk4":
-            self._refuse_slow_steps(sim)
+        budget.check_rk4_substeps(sim, f"parameter substeps = {self.substeps!r}", "dopri5")
         self.sim = sim
         self._publish()
 
-    def _refuse_slow_steps(self, sim):
-        """Refuse ``substeps`` whose doStep would take more than half of
-        :data:`fmus.parts.MAX_CALL_SECONDS`: 4 right-hand sides a substep, timed here."""
-        import time
-
-        from fmus.parts import MAX_CALL_SECONDS
-
-        zero = [0.0] * len(self.spec.inputs)
-        rhs = []
-        for _ in range(3):
-            start = time.perf_counter()
-            sim.derivative(sim.y, zero)
-            rhs.append(time.perf_counter() - start)
-        per_step = 4 * self.substeps * min(rhs)
-        if per_step > 0.5 * MAX_CALL_SECONDS:
-            raise ValueError(f"parameter substeps = {self.substeps!r}: a doStep would take about {per_step:.3g} s "
-                             f"(general kernel), more than the {0.5 * MAX_CALL_SECONDS:g} s allowed per call; use "
-                             f"substeps <= {max(1, int(0.5 * MAX_CALL_SECONDS / (4 * min(rhs))))} or dopri5")
+    def known_step_work(self) -> float:
+        """The least CPU [s] a step is charged (:func:`fmus.budget.known_step_work`)."""
+        return budget.known_step_work(self.sim)
 
     def step(self, current_time, step_size):
-        self.sim.time = current_time
-        self.sim.step([getattr(self, name) for name in self.spec.inputs], step_size)
+        sim = self.sim
+        sim.time = current_time
+        torques = [getattr(self, name) for name in self.spec.inputs]
+        budget.step_plant(sim, lambda limit: sim.step(torques, step_size, limit), current_time, step_size)
         self._publish()
 
     def _publish(self):

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import fields
 
+from fmus import budget
 from fmus.guarded import GuardedSlave
 from fmus.refusals import refuse_absurd, refuse_absurd_inputs, require_finite
 
@@ -89,6 +90,10 @@ class WheeledPendulum(GuardedSlave):
                              substeps=self.substeps, encoder_counts=self.encoder_counts)
         self.publish()
 
+    def known_step_work(self) -> float:
+        """The CPU [s] a step is charged: 4 evaluations a substep (:mod:`fmus.budget`)."""
+        return 4 * self.sim.substeps * budget.WHEELED_RK4_EVALUATION
+
     def publish(self):
         for name, value in self.sim.outputs().items():
             setattr(self, name, value)
@@ -102,8 +107,19 @@ class WheeledPendulum(GuardedSlave):
         # the push acts over the steps that start inside its window (1e-9 s: rounding of t)
         if self.push_start - 1e-9 <= current_time < self.push_start + self.push_duration - 1e-9:
             tau_d += self.push_torque
+        sim = self.sim
+
+        def run(_):
+            sim.step(self.tau_l, self.tau_r, step_size, tau_d)
+            return 4 * sim.substeps
+
         try:
-            self.sim.step(self.tau_l, self.tau_r, step_size, tau_d)
+            if budget.active() is None:     # alone: any substeps allowed fit a call
+                run(None)
+            else:
+                budget.bounded_integration(run, budget.WHEELED_RK4_EVALUATION, 4 * sim.substeps,
+                                           "right-hand-side evaluations (RK4)", current_time, step_size,
+                                           "take shorter steps or use fewer substeps")
         except FallenError:
             self.fallen = True
             raise

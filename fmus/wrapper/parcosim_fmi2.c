@@ -782,13 +782,14 @@ EXPORT fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefi
     PyObject *start, *stop, *tol;
     fmi2Status status;
     if (in == NULL) return fmi2Error;
-    in->time = in->last_successful_time = startTime;
     gil = PyGILState_Ensure();
     start = PyFloat_FromDouble(startTime);
     stop = stopTimeDefined ? PyFloat_FromDouble(stopTime) : Py_NewRef(Py_None);
     tol = toleranceDefined ? PyFloat_FromDouble(tolerance) : Py_NewRef(Py_None);
     if (start && stop && tol) status = call0(in, "fmi2SetupExperiment", s_setup_experiment, start, stop, tol);
     else status = failed(in, "fmi2SetupExperiment");
+    /* A refused start time (not finite, too large) changes nothing, the wrapper's time included. */
+    if (status == fmi2OK) in->time = in->last_successful_time = startTime;
     Py_XDECREF(start);
     Py_XDECREF(stop);
     Py_XDECREF(tol);
