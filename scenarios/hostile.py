@@ -38,12 +38,13 @@ CALL_LIMIT = 10.0
 #: A case taking longer (all its calls) is a hang.
 CASE_TIMEOUT = 60.0
 #: What each case mostly exercises.
-KINDS = ("parameters", "inputs", "steps", "order", "strings", "sets")
-#: Kinds whose every call goes through the setters FMI 2.0 wants to return fmi2Error
-#: (set of an output, of a fixed parameter after initialisation, an unknown or wrongly typed
-#: value reference): pythonfmu's own binary returns fmi2Fatal there; checked only when the
-#: FMU's binary is parcosim's wrapper (:data:`fmus.guarded.WRAPPER_SYMBOL`).
-WRAPPER_KINDS = ("sets",)
+KINDS = ("parameters", "inputs", "steps", "order", "strings", "sets", "state", "start")
+#: Kinds whose calls FMI 2.0 wants refused with fmi2Error (a set of an output, of a fixed
+#: parameter after initialisation, an unknown or wrongly typed value reference; bytes that
+#: are not a state of this FMU; a start time that is not finite): pythonfmu's own binary
+#: returns fmi2Fatal there; checked only when the FMU's binary is parcosim's wrapper
+#: (:data:`fmus.guarded.WRAPPER_SYMBOL`).
+WRAPPER_KINDS = ("sets", "state", "start")
 #: Outcomes, in the order of the summary table.
 OUTCOMES = ("ok", "refused", "fatal", "violation", "crash", "hang")
 
@@ -58,7 +59,14 @@ HOSTILE_STRINGS = ("", "nonsense", "%s", "%s%s%s%s%n", "%d%x%p", "é", "日本",
 SANE_INPUTS = {"PositionController": {"q1": 0.5590695686115272, "q2": 2.625626722466347, "x_d": -0.002,
                                       "y_d": 0.108}}
 STEP_SIZES = (1e-3, 1e-3, 1e-3, 5e-4, 2.5e-4, 2e-3, 1e-2, 0.5, 10.0, 0.0, -1e-3, math.nan, math.inf, 1e300,
-              5e-324, 1e-9, 1e-10, 3e-4)
+              5e-324, 1e-9, 1e-10, 3e-4, 1e9, 100.0)
+#: Serialised states a "state" case gives fmi2DeSerializeFMUstate (scenarios.hostile_worker
+#: makes the bytes): all but "forged" must be refused; "forged" (a byte altered, the
+#: checksum recomputed) may be taken, and the steps after it must then stay clean.
+STATE_VARIANTS = ("random", "exploit", "truncated", "altered", "forged", "foreign", "legacy")
+#: Start times of a "start" case: those that are not finite or where t0 + 1e-6 == t0 must be
+#: refused by fmi2SetupExperiment (fmi2Error).
+START_TIMES = (0.0, -1.0, 1e5, 1e9, 1e10, 1e17, -1e20, 1e-300, math.inf, -math.inf, math.nan)
 
 
 def variable_table(model_description) -> list:
@@ -90,7 +98,8 @@ def _value(rng: random.Random, kind: str, start, hostile: float, spread: float =
     return base * rng.uniform(1.0 - spread, 1.0 + spread) + rng.uniform(-0.01, 0.01) * spread * (abs(base) or 1.0)
 
 
-def make_case(model: str, variables: list, seed: int, kind: str | None = None, wrapper: bool = False) -> dict:
+def make_case(model: str, variables: list, seed: int, kind: str | None = None, wrapper: bool = False,
+              models=()) -> dict:
     """The case of ``seed`` for ``model`` (``variables`` from :func:`variable_table`).
 
     ``kind`` (default: drawn from :data:`KINDS`, without :data:`WRAPPER_KINDS` unless
@@ -99,7 +108,9 @@ def make_case(model: str, variables: list, seed: int, kind: str | None = None, w
     ``instance_name``, ``logging``, ``start_time``, ``parameters`` ([name, value]) set in
     initialisation mode, and ``ops``: ["set", name, value], ["step", t, h] (t None: the
     last point plus the last step), ["get"], ["terminate"], ["get_state"], ["set_state"],
-    ["set_vr", type, vr, value] (a raw value reference).
+    ["set_vr", type, vr, value] (a raw value reference), ["state_bytes", variant, seed,
+    other model] (bytes of :data:`STATE_VARIANTS` deserialised, and set if taken).
+    ``models`` (all FMUs of the run) gives "foreign" states their source.
     """
     rng = random.Random(f"{model}:{seed}")
     kinds = [k for k in KINDS if wrapper or k not in WRAPPER_KINDS]
@@ -152,6 +163,11 @@ def make_case(model: str, variables: list, seed: int, kind: str | None = None, w
     if kind == "order" and rng.random() < 0.5:
         ops.insert(0, ["step", 0.0, 1e-3])            # before initialisation: runs in the init phase
         ops[0] = ["step_before_init", 0.0, 1e-3]
+    if kind == "state":
+        others = [m for m in models if m != model] or [model]
+        ops.insert(rng.randint(1, len(ops)), ["state_bytes", rng.choice(STATE_VARIANTS), rng.randrange(2 ** 31),
+                                              rng.choice(others)])
+    start_time = rng.choice(START_TIMES) if kind == "start" else 0.0
     if kind == "sets":
         for _ in range(rng.randint(1, 3)):
             choice = rng.random()
@@ -166,7 +182,7 @@ def make_case(model: str, variables: list, seed: int, kind: str | None = None, w
                 ops.insert(rng.randint(0, len(ops)), ["set_vr", type_, rng.choice((999999, 2 ** 32 - 1, 0, 1)),
                                                       _value(rng, type_, None, 0.5)])
     return {"model": model, "kind": kind, "seed": seed, "instance_name": instance_name,
-            "logging": rng.random() < 0.7, "start_time": 0.0, "parameters": parameters, "ops": ops}
+            "logging": rng.random() < 0.7, "start_time": start_time, "parameters": parameters, "ops": ops}
 
 
 # --- running cases in workers --------------------------------------------------------------------
@@ -326,7 +342,9 @@ def cases_for(model: str, unzip_dir, seeds, wrapper: bool = False, kinds=None) -
     from fmpy import read_model_description
 
     variables = variable_table(read_model_description(str(unzip_dir)))
-    return [make_case(model, variables, seed, kind=kinds[i % len(kinds)] if kinds else None, wrapper=wrapper)
+    models = sorted(p.name for p in Path(unzip_dir).parent.iterdir() if (p / "modelDescription.xml").exists())
+    return [make_case(model, variables, seed, kind=kinds[i % len(kinds)] if kinds else None, wrapper=wrapper,
+                      models=models)
             for i, seed in enumerate(seeds)]
 
 

@@ -8,11 +8,15 @@ freed, and the process is suspect); a crash ends it with the signal.
 """
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import os
+import pickle
+import random
 import signal
 import sys
+import tempfile
 import time
 
 from fmpy import read_model_description
@@ -20,6 +24,19 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave
 
 from scenarios.hostile import CALL_LIMIT
+
+#: Bytes of the checksum that ends a serialised parcosim state (docs/state.md).
+CHECKSUM_BYTES = 32
+
+
+class _Exploit:
+    """Pickles to a call of os.system (the issue-30 exploit against a pickle-based state)."""
+
+    def __init__(self, command: str):
+        self.command = command
+
+    def __reduce__(self):
+        return os.system, (self.command,)
 
 FATAL = 4
 NAMES = {0: "OK", 1: "Warning", 2: "Discard", 3: "Error", 4: "Fatal", 5: "Pending"}
@@ -32,8 +49,9 @@ class Fatal(Exception):
 class Runner:
     """One case on one FMU instance, recording every call's status."""
 
-    def __init__(self, case: dict, unzip_dir: str, md):
+    def __init__(self, case: dict, unzip_dir: str, md, unzipped=None):
         self.case, self.md = case, md
+        self.unzipped = unzipped or {}
         self.vars = {v.name: v for v in md.modelVariables}
         self.statuses, self.problems = [], []
         self.refused = False
@@ -74,8 +92,8 @@ class Runner:
             self.problems.append(f"after the refused {label}: getString(error) returned status {exc.status}")
             return
         message = message.decode("utf-8", "replace") if isinstance(message, bytes) else str(message)
-        if label.startswith(("set", "get")):      # refused sets and gets raise: the message is the log's
-            return
+        if not label.startswith(("doStep", "exitInitializationMode")):   # the other calls refuse with
+            return                                                          # fmi2Error and log the message
         names = [name for name in self.vars if name in message]
         if not message.strip() or not (names or " = " in message or "t = " in message):
             self.problems.append(f"the refused {label} left error = {message!r}, naming nothing")
@@ -106,7 +124,13 @@ class Runner:
     def run(self) -> None:
         case, f = self.case, self.fmu
         self.call("instantiate", lambda: f.instantiate(loggingOn=case["logging"]))
-        self.call("setupExperiment", lambda: f.setupExperiment(startTime=case["start_time"]))
+        start = case["start_time"]
+        status, _ = self.call("setupExperiment", lambda: f.setupExperiment(startTime=start))
+        unusable = not math.isfinite(start) or start + 1e-6 == start
+        if unusable and status != 3:
+            self.problems.append(f"setupExperiment({start!r}) returned {NAMES.get(status)}, not fmi2Error")
+        if status != 0:
+            start = 0.0
         self.call("enterInitializationMode", f.enterInitializationMode)
         for op in case["ops"]:
             if op[0] == "step_before_init":
@@ -116,7 +140,7 @@ class Runner:
         for name, value in case["parameters"]:
             self.set(name, value)
         self.call("exitInitializationMode", f.exitInitializationMode)
-        t, last = case["start_time"], 0.0
+        t, last = start, 0.0
         terminated, state_time = False, None
         for op in case["ops"]:
             kind = op[0]
@@ -151,6 +175,10 @@ class Runner:
                 status, state = self.call("getFMUstate", f.getFMUState)
                 if status == 0:
                     self.state, state_time = state, t + last
+            elif kind == "state_bytes" and not terminated:
+                point = self.deserialize(op[1], op[2], op[3], t + last)
+                if point is not None:
+                    t, last = point, 0.0
             elif kind == "set_state" and self.state is not None and not terminated:
                 status, _ = self.call("setFMUstate", lambda: f.setFMUState(self.state))
                 if status == 0:
@@ -162,6 +190,72 @@ class Runner:
         self.call("freeInstance", f.freeInstance)
 
 
+    def state_bytes(self, variant: str, seed: int, other: str, marker: str) -> bytes:
+        """Bytes of ``variant`` (scenarios.hostile.STATE_VARIANTS) for this FMU."""
+        rng = random.Random(seed)
+        if variant == "random":
+            return bytes(rng.randrange(256) for _ in range(rng.randrange(1, 400)))
+        if variant in ("exploit", "legacy"):
+            payload = _Exploit(f"touch {marker}") if variant == "exploit" else {"x": 1.0}
+            return b"parcosim-fmu-state-1\n" + self.case["model"].encode() + b"\n" + pickle.dumps(payload, protocol=4)
+        if variant == "foreign":
+            return self.foreign_state(other)
+        status, state = self.call("getFMUstate (own)", self.fmu.getFMUState)
+        if status != 0:
+            return b""
+        status, data = self.call("serializeFMUstate (own)", self.fmu.serializeFMUstate, state)
+        self.call("freeFMUstate (own)", self.fmu.freeFMUState, state)
+        data = bytes(data or b"")
+        if not data:
+            return data
+        if variant == "truncated":
+            return data[:rng.randrange(len(data))]
+        altered = bytearray(data)
+        altered[rng.randrange(len(data) - (CHECKSUM_BYTES if variant == "forged" else 0))] ^= rng.randrange(1, 256)
+        if variant == "forged":
+            body = bytes(altered[:-CHECKSUM_BYTES])
+            return body + hashlib.sha256(body).digest()
+        return bytes(altered)
+
+    def foreign_state(self, other: str) -> bytes:
+        """A serialised state of another FMU (``other``, initialised and stepped once)."""
+        md = read_model_description(self.unzipped[other])
+        fmu = FMU2Slave(guid=md.guid, unzipDirectory=self.unzipped[other],
+                        modelIdentifier=md.coSimulation.modelIdentifier, instanceName="foreign")
+        try:
+            fmu.instantiate()
+            fmu.setupExperiment(startTime=0.0)
+            fmu.enterInitializationMode()
+            fmu.exitInitializationMode()
+            fmu.doStep(0.0, 1e-3)
+            state = fmu.getFMUState()
+            data = bytes(fmu.serializeFMUstate(state))
+            fmu.freeFMUState(state)
+            fmu.terminate()
+            fmu.freeInstance()
+            return data
+        except FMICallException:
+            return b""
+
+    def deserialize(self, variant: str, seed: int, other: str, now: float):
+        """Deserialise the bytes of ``variant`` and set them if taken; the time the FMU is at
+        afterwards if it changed (a taken state's), else None."""
+        with tempfile.TemporaryDirectory(prefix="hostile-") as folder:
+            marker = os.path.join(folder, "code-ran")
+            data = self.state_bytes(variant, seed, other, marker)
+            label = f"deSerializeFMUstate ({variant})"
+            status, state = self.call(label, self.fmu.deSerializeFMUstate, data)
+            if os.path.exists(marker):
+                self.problems.append(f"{label}: the state's bytes ran a command in the importer")
+        if status == 0 and variant != "forged" and not (variant == "foreign" and other == self.case["model"]):
+            self.problems.append(f"{label} returned fmi2OK for bytes that are not a state of this FMU")
+        if status != 0:
+            return None
+        status, _ = self.call(f"setFMUstate ({variant})", self.fmu.setFMUState, state)
+        self.call(f"freeFMUstate ({variant})", self.fmu.freeFMUState, state)
+        return now if status == 0 else None
+
+
 def main() -> int:
     job = json.loads(sys.stdin.read())
     out = os.fdopen(int(os.environ["HOSTILE_RESULT_FD"]), "w", buffering=1)
@@ -170,7 +264,7 @@ def main() -> int:
         unzip_dir = job["unzipped"][case["model"]]
         md = descriptions.get(unzip_dir) or descriptions.setdefault(unzip_dir, read_model_description(unzip_dir))
         start = time.perf_counter()
-        runner = Runner(case, unzip_dir, md)
+        runner = Runner(case, unzip_dir, md, job["unzipped"])
         outcome = "ok"
         try:
             runner.run()

@@ -82,7 +82,10 @@ def test_no_crash_no_fatal_no_nan_under_hostile_use(model, seeds, extracted, wra
 @pytest.mark.parametrize("model", list(SLAVES))
 @CI
 @given(seeds=SEEDS)
-def test_refused_sets_are_fmi2error_not_fatal(model, seeds, extracted, wrapper):
+def test_refused_sets_states_and_start_times_are_fmi2error_not_fatal(model, seeds, extracted, wrapper):
+    """Sets FMI 2.0 refuses, bytes that are not this FMU's state (random, truncated, altered,
+    another FMU's, the pickle exploit: refused, no command run) and start times that are not
+    usable give fmi2Error; a forged state that is taken steps cleanly."""
     if not wrapper[model]:
         pytest.skip(f"{model}.fmu has pythonfmu's binary (no {WRAPPER_SYMBOL}): a refused set (FmiError) is "
                     "fmi2Fatal there; parcosim's FMI wrapper makes it fmi2Error")
@@ -90,6 +93,10 @@ def test_refused_sets_are_fmi2error_not_fatal(model, seeds, extracted, wrapper):
     assert not failures(results), "\n".join(failures(results))
     assert all(any(s[1] == "Error" for s in r.statuses) for r in results if r.case["kind"] == "sets"
                and any(op[0] == "set_vr" for op in r.case["ops"]))
+    for r in results:
+        variants = [op[1] for op in r.case["ops"] if op[0] == "state_bytes"]
+        if r.case["kind"] == "state" and variants[0] not in ("forged", "foreign"):
+            assert [s[1] for s in r.statuses if s[0].startswith("deSerializeFMUstate")] == ["Error"], r.statuses
 
 
 def test_the_worker_reports_a_crash_and_goes_on(extracted):
