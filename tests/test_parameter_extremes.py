@@ -141,10 +141,10 @@ def _set(slave, values: dict) -> None:
         setters[type(v)]([v.value_reference], [value])
 
 
-def _outputs(variables) -> list:
-    """The names of the numeric outputs among ``variables`` (pythonfmu's or fmpy's)."""
-    return [v.name for v in variables if str(getattr(v.causality, "name", v.causality)) == "output"
-            and (type(v).__name__ in ("Real", "Integer") or getattr(v, "type", "") in ("Real", "Integer"))]
+def _numeric_outputs(slave) -> list:
+    """The names of the slave's Real and Integer outputs."""
+    return [v.name for v in slave.vars.values()
+            if isinstance(v, (Real, Integer)) and v.causality is not None and v.causality.name == "output"]
 
 
 def run_case(slave, parameters: dict, inputs: dict, name: str, value, t0: float):
@@ -168,7 +168,7 @@ def run_case(slave, parameters: dict, inputs: dict, name: str, value, t0: float)
     slave.exit_initialization_mode()
     if slave.error:
         return "refused at initialisation", slave.error, t0
-    outputs = _outputs(slave.vars.values())
+    outputs = _numeric_outputs(slave)
     for k in range(STEPS):
         t = t0 + k * H
         _set(slave, inputs)
@@ -336,7 +336,8 @@ def run_through_fmpy(path, parameters: dict, inputs: dict, name: str, value):
             return "refused at initialisation", fmu.get("error"), 0.0
         if fmu.get("error"):
             return "refused at initialisation", fmu.get("error"), 0.0
-        outputs = _outputs(fmu.md.modelVariables)
+        outputs = [v.name for v in fmu.md.modelVariables
+                   if v.causality == "output" and v.type in ("Real", "Integer")]
         for k in range(STEPS):
             try:
                 fmu.step(H, **inputs)
