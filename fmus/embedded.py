@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 
 from plant.correction import MEASURABLE
 
@@ -112,7 +113,66 @@ def _in_process(system: System) -> Stepper:
     instances = _instantiate(system, "inprocess", None)
     system, _ = without_missing_parameters(system, {n: set(i.variables) for n, i in instances.items()})
     order = stepping_order(system, {n: inst.variables for n, inst in instances.items()})
-    return Stepper(system, instances, order)
+    return SystemStepper(system, instances, order)
+
+
+# --- refusals named as the FMU names the parameters ------------------------------------------
+
+class InitialisationRefused(CoSimulationError):
+    """A component of a system inside an FMU refused its initialisation."""
+
+    def __str__(self):
+        return f"{self.instance}: {self.message}"
+
+
+#: How :mod:`fmus.guarded` words a refused initialisation: the reason, then the start time.
+_INITIALISATION_REFUSAL = re.compile(r"initialisation refused: (?P<reason>.*) \(t = [^()]* s\)", re.S)
+
+
+def qualified(message: str, instance: str, parameters) -> str:
+    """``message`` of the component ``instance`` with its ``parameters`` written
+    ``<instance>.<parameter>`` where it names a value by them: ``lam = ...``, ``lam: ...``,
+    ``(lam) = ...``, ``lam must ...``, ``|lam|``, ``parameter lam``, ``parameters lam``.
+    Elsewhere (a unit ``m``, a word such as ``model``) the text stays as it is."""
+    names = "|".join(re.escape(name) for name in sorted(parameters, key=len, reverse=True))
+    if not names:
+        return message
+    name = rf"(?:{names})(?![\w.])"
+    naming = re.compile(rf"(?<![\w.]){name}(?=\s*(?:=(?!=)|:(?!:))|\)\s*=|\s+must\b|\|)"
+                        rf"|(?<=parameter ){name}|(?<=parameters ){name}")
+    return naming.sub(lambda m: f"{instance}.{m.group(0)}", message)
+
+
+class SystemStepper(Stepper):
+    """The :class:`fmus.stepper.Stepper` of a system inside an FMU.
+
+    A component's refusal names the component's parameters as the FMU does,
+    ``<instance>.<parameter>`` (:func:`qualified`); a component that refused its
+    initialisation refuses the system's (:class:`InitialisationRefused`): no step, no sample
+    is taken from a component that has no model (the ControlChain's first sample read its
+    plant model's state, and failed with "'NoneType' object has no attribute 'y'").
+    """
+
+    def __init__(self, system: System, instances: dict, order):
+        super().__init__(system, instances, order)
+        self.parameters = {name: [v.name for v in inst.variables.values() if v.causality == "parameter"]
+                           for name, inst in instances.items()}
+
+    def initialize(self, start_time: float = 0.0) -> None:
+        super().initialize(start_time)
+        for name, inst in self.instances.items():
+            error = getattr(getattr(inst, "slave", None), "error", "")     # an in-process slave's refusal
+            if error:
+                refusal = _INITIALISATION_REFUSAL.fullmatch(error)
+                reason = refusal["reason"] if refusal else error
+                raise InitialisationRefused(name, start_time, qualified(reason, name, self.parameters[name]))
+
+    def step(self, split: dict | None = None) -> None:
+        try:
+            super().step(split)
+        except CoSimulationError as exc:
+            raise CoSimulationError(exc.instance, exc.time,
+                                    qualified(exc.message, exc.instance, self.parameters[exc.instance])) from None
 
 
 def _steps_in(time: float, current_time: float, step_size: float, h: float, multiples: bool) -> int:

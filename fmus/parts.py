@@ -12,7 +12,8 @@ import math
 from dataclasses import replace
 
 from fmus import budget
-from fmus.refusals import PRESET_VALUE, TINY, refuse_absurd, require_finite, with_overrides
+from fmus.refusals import (PRESET_VALUE, TINY, motor_preset, refuse_absurd, refuse_tiny, require_finite,
+                           with_overrides)
 
 #: The plant's outputs (name, description).
 PLANT_OUTPUTS = (
@@ -130,7 +131,10 @@ def with_counter_masses(slave, params):
     for name, value in values.items():
         if value < 0.0:
             raise ValueError(f"parameter {name} = {value!r} kg must be >= 0")
-    return params.with_counter_masses(values["counter_mass1"], values["counter_mass2"])
+    params = params.with_counter_masses(values["counter_mass1"], values["counter_mass2"])
+    # counter_mass<j> is link j's mass on both chains: a mass too light is named so
+    params.check_counter_masses(name=lambda k, j: f"parameter counter_mass{j}")
+    return params
 
 
 def build_plant(slave):
@@ -142,6 +146,7 @@ def build_plant(slave):
         "J_rotor1", "J_rotor2", "m0", "l0", "gravity_x", "gravity_y", "gravity_z", "baumgarte", "rtol", "atol")}
     require_finite(**numeric)
     refuse_absurd(**numeric)
+    refuse_tiny(l0=slave.l0)     # base joints 1e-300 m apart: no mechanism (the models' own check wants > 0)
     for name in ("J_rotor1", "J_rotor2"):
         value = getattr(slave, name)
         if value < 0.0 and value != PRESET_VALUE:
@@ -240,16 +245,12 @@ def declare_drive_options(slave, suffix: str = "") -> None:
 def build_drive(slave, suffix: str = "", **options):
     """The :class:`motor.Drive` of the slave's motor parameters and :data:`DRIVE_OPTIONS`
     with ``suffix``; ``options`` (mode, method, T, torque_output) go to the Drive."""
-    from motor import Drive, get_motor_preset
+    from motor import Drive
     from motor._checks import BadValue
     from motor.presets import POSITIVE_FIELDS
 
-    preset = getattr(slave, f"preset{suffix}")
-    try:
-        params = get_motor_preset(preset)
-    except ValueError as exc:
-        raise ValueError(f"parameter preset{suffix} = {preset!r}: {exc}") from None
-    params = with_overrides(params, slave, motor_variables(suffix), positive=POSITIVE_FIELDS)   # refused below TINY
+    params = with_overrides(motor_preset(slave, f"preset{suffix}"), slave, motor_variables(suffix),
+                            positive=POSITIVE_FIELDS)   # refused below TINY
     changes = {}
     for field, var in DESIGN_PARAMETERS:
         value = getattr(slave, f"{var}{suffix}")

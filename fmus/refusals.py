@@ -22,6 +22,18 @@ ABSURD = 1e6
 TINY = 1e-12
 
 
+def motor_preset(slave, var: str = "preset"):
+    """The :class:`motor.MotorParams` preset the slave's String parameter ``var`` names; an
+    unknown name is refused as ``parameter <var> = '<name>': ...``."""
+    from motor import get_motor_preset
+
+    name = getattr(slave, var)
+    try:
+        return get_motor_preset(name)
+    except ValueError as exc:
+        raise ValueError(f"parameter {var} = {name!r}: {exc}") from None
+
+
 def with_overrides(params, slave, names, positive=()):
     """``params`` (a validated :class:`motor.MotorParams`) with the slave's parameters that
     are not PRESET_VALUE replacing its fields.

@@ -111,6 +111,9 @@ class Drive:
         self.torque_output = _checks.choice("torque_output", torque_output, TORQUE_OUTPUTS)
         self.mode = _checks.choice("mode", mode, DRIVE_MODES)
         self.method = _checks.choice("method", method, ELECTRICAL_METHODS)
+        if self.method == "euler" and params.L == 0.0:     # its step divides by L
+            raise _checks.BadValue("L", params.L, "method 'euler' needs {name} > 0, got {name} = {value!r}; "
+                                   "use 'quasi_static'")
         self.T = _checks.positive("T", T)
         design = params if design_params is None else design_params
         self.controller = (CurrentController(_design(design, self.T, poles), params.v_max)
@@ -320,6 +323,7 @@ class Drive:
         text = f"armature current i = {i!r} A, shaft torque tau = {tau!r} N m after this step are not finite"
         a = self._coefficients[0]
         if self.method == "euler" and a < -1.0:
-            text += (f": method 'euler' diverges for h = {h!r} s > 2 L/R = {2 * self.params.L / self.params.R:.3g} s "
-                     f"(the current is multiplied by 1 - hR/L = {a:.3g} every step); use 'exact'")
+            L, R = self.params.L, self.params.R
+            text += (f": method 'euler' diverges for h = {h!r} s > 2 L/R = {2 * L / R:.3g} s (L = {L!r} H, "
+                     f"R = {R!r} ohm; the current is multiplied by 1 - hR/L = {a:.3g} every step); use 'exact'")
         return text

@@ -70,7 +70,7 @@ def electrical_step_coefficients(R, L, h, method="exact"):
         x = R * h / L
         return math.exp(-x), -math.expm1(-x) / R
     if L == 0.0:
-        raise ValueError("method 'euler' needs L > 0, got L=0.0; use 'quasi_static'")
+        raise ValueError(f"method 'euler' needs L > 0, got L = {L!r}; use 'quasi_static'")
     return 1.0 - h * R / L, h / L
 
 

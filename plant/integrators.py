@@ -114,5 +114,6 @@ def dopri5(f, y, dt: float, rtol: float, atol: float, h_start: float | None = No
         else:
             h *= max(0.2, 0.9 * err ** -0.2)
         if h < 1e-14 * dt:
-            raise IntegrationError(f"step size underflow ({h:.3g} s) at t+{t:.3g} s within the step")
+            raise IntegrationError(f"step size underflow ({h:.3g} s) at t+{t:.3g} s within the step: the "
+                                   f"tolerances rtol = {rtol!r}, atol = {atol!r} cannot be met")
     raise IntegrationError(f"more than {max_steps} internal steps in one communication step")

@@ -92,16 +92,7 @@ class FiveBarParams:
                 f"links cannot close the loop: base distance 2*l0 = {2 * self.l0:g} m "
                 f"exceeds the reach of both chains together"
             )
-        for k, chain in ((1, self.chain1), (2, self.chain2)):
-            reach = COUNTER_REACH * (chain.l1 + chain.l2)
-            for j, (mass, offset) in enumerate(zip((chain.counter_mass1, chain.counter_mass2),
-                                                   chain.counter_offsets()), start=1):
-                if abs(offset) > reach:
-                    raise ValueError(
-                        f"chain{k}.counter_mass{j} = {mass!r} kg is too light to balance chain {k}: it would "
-                        f"sit {abs(offset):.3g} m behind its joint, more than {COUNTER_REACH:g} times the "
-                        f"chain's length ({reach:.3g} m)"
-                    )
+        self.check_counter_masses()
         counter = max(c.counter_mass1 + c.counter_mass2 for c in (self.chain1, self.chain2))
         if self.m0 > 0.0 and counter > 0.0:
             raise ValueError(
@@ -110,6 +101,21 @@ class FiveBarParams:
                 f"so the pair is refused; set m0 = 0 or both counter-masses to 0"
             )
         return self
+
+    def check_counter_masses(self, name=lambda k, j: f"chain{k}.counter_mass{j}") -> None:
+        """Raise ValueError for a counter-mass too light to balance its chain: it would sit more
+        than :data:`COUNTER_REACH` chain lengths behind its joint.  The message calls the mass
+        of chain k, link j ``name(k, j)`` (an FMU names it by its own variable)."""
+        for k, chain in ((1, self.chain1), (2, self.chain2)):
+            reach = COUNTER_REACH * (chain.l1 + chain.l2)
+            for j, (mass, offset) in enumerate(zip((chain.counter_mass1, chain.counter_mass2),
+                                                   chain.counter_offsets()), start=1):
+                if abs(offset) > reach:
+                    raise ValueError(
+                        f"{name(k, j)} = {mass!r} kg is too light to balance chain {k}: it would "
+                        f"sit {abs(offset):.3g} m behind its joint, more than {COUNTER_REACH:g} times the "
+                        f"chain's length ({reach:.3g} m)"
+                    )
 
     def with_counter_masses(self, counter_mass1: float, counter_mass2: float) -> "FiveBarParams":
         """Both chains with ``counter_mass1`` on the proximal and ``counter_mass2`` on the

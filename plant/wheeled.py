@@ -18,9 +18,13 @@ from dataclasses import asdict, dataclass, fields, replace
 
 import numpy as np
 
+from motor._checks import BadValue
+
 from . import wheeled_kernel as kernel
 
 MODELS = ("exact", "seed")
+#: The parameters that must be > 0 (the others must be >= 0).
+POSITIVE = ("R", "M", "W", "L")
 
 
 @dataclass(frozen=True)
@@ -51,7 +55,7 @@ class WheeledParams:
             value = getattr(self, f.name)
             if not (isinstance(value, (int, float)) and math.isfinite(value)):
                 raise ValueError(f"parameter {f.name} = {value!r} is not a finite number")
-            if f.name in ("R", "M", "W", "L") and not value > 0.0:
+            if f.name in POSITIVE and not value > 0.0:
                 raise ValueError(f"parameter {f.name} = {value!r} must be > 0")
             if value < 0.0:
                 raise ValueError(f"parameter {f.name} = {value!r} must be >= 0")
@@ -144,7 +148,8 @@ class WheeledPendulum:
                 raise ValueError(f"initial {name} = {value!r} is not finite")
             self.y[kernel.STATE_NAMES.index(name)] = value
         if not yaw and self.y[kernel.DPHI] != 0.0:
-            raise ValueError(f"initial dphi = {self.y[kernel.DPHI]!r} with the yaw locked (yaw = false) must be 0")
+            raise BadValue("dphi", float(self.y[kernel.DPHI]),
+                           "initial {name} = {value!r} with the yaw locked (yaw = false) must be 0")
         code = kernel.state_condition(self.prm, self.y)
         if code != kernel.OK:
             raise ValueError(f"initial state: {kernel.CODES[code]} (psi0 = {self.y[kernel.PSI]!r} rad)")

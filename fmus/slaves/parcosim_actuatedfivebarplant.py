@@ -70,8 +70,8 @@ class ActuatedFiveBarPlant(CurrentLoopSteps, GuardedSlave):
                 raise ValueError(f"parameter L{j} = {value!r} H must be > 0: the drives inside the plant integrate "
                                  "the armature current (use a separate DCMotorDrive with method 'quasi_static' "
                                  "for L = 0)")
+        sim = build_plant(self)     # first: a bad plant parameter is refused before the drives' designs
         drives = [(int(j), build_drive(self, j, mode=self.mode, T=self.T)) for j in JOINTS]
-        sim = build_plant(self)
         self.actuated = ActuatedPlant(sim, drives)
         self._publish()
 

@@ -17,9 +17,8 @@ from __future__ import annotations
 import math
 
 from fmus.guarded import MIN_STEP, GuardedSlave
-from fmus.refusals import PRESET_VALUE, refuse_absurd, require_finite, with_overrides
+from fmus.refusals import PRESET_VALUE, motor_preset, refuse_absurd, require_finite, with_overrides
 from motor import CurrentObserver as _Observer
-from motor import get_motor_preset
 
 #: Start value of the numeric motor parameters meaning "the preset's value".
 MOTOR_PARAMETERS = (
@@ -55,7 +54,7 @@ class CurrentObserver(GuardedSlave):
         self.observer = None
 
     def setup(self):
-        params = with_overrides(get_motor_preset(self.preset), self, {name: name for name, _ in MOTOR_PARAMETERS},
+        params = with_overrides(motor_preset(self), self, {name: name for name, _ in MOTOR_PARAMETERS},
                                 positive=("R", "ke"))
         require_finite(T=self.T)
         refuse_absurd(i0=self.i0, omega0=self.omega0, T=self.T)

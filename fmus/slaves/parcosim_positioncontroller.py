@@ -32,7 +32,7 @@ from controller.model import DEFAULT_EXTENT, DEFAULT_GRID_STEP
 from controller.position import PositionController as _Controller
 from controller.strategies import get_strategy
 from fmus.guarded import MIN_STEP, GuardedSlave
-from fmus.refusals import PRESET_VALUE, refuse_absurd, require_finite
+from fmus.refusals import PRESET_VALUE, refuse_absurd, refuse_tiny, require_finite
 from fmus.parts import declare_counter_masses, with_counter_masses
 from plant import get_preset
 
@@ -139,6 +139,7 @@ class PositionController(GuardedSlave):
         for name, value in zip(("kt1", "kt2"), kt):
             if not value > 0.0:
                 raise ValueError(f"parameter {name} = {value!r} must be > 0 (or -1 for the motor preset's)")
+        refuse_tiny(kt1=kt[0], kt2=kt[1])      # i_ref = tau / kt
         params = replace(get_preset(self.preset), gravity=(self.gravity_x, self.gravity_y, 0.0))
         self.controller = _Controller(
             with_counter_masses(self, params), strategy, model=self.model, model_error=self.model_error,

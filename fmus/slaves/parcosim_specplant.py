@@ -58,14 +58,18 @@ class SpecPlant(GuardedSlave):
 
     def setup(self):
         from plant import IntegratorSettings
-        from plant.specsim import SpecSimulator
+        from plant.specsim import AssemblyError, SpecSimulator
 
         numeric = {name: getattr(self, name) for name in ("x0", "y0", "z0", "rtol", "atol", "baumgarte")}
         require_finite(**numeric)
         refuse_absurd(**numeric)
         settings = IntegratorSettings(method=self.method, substeps=self.substeps, rtol=self.rtol, atol=self.atol,
                                       baumgarte=self.baumgarte, kernel="general")
-        sim = SpecSimulator(self.spec, (self.x0, self.y0, self.z0), settings)
+        try:
+            sim = SpecSimulator(self.spec, (self.x0, self.y0, self.z0), settings)
+        except AssemblyError as exc:    # the start point, named by the slave's parameters
+            raise ValueError(f"parameters x0 = {self.x0!r}, y0 = {self.y0!r}, z0 = {self.z0!r} m: no assembly "
+                             f"starts there: {exc}") from None
         budget.check_rk4_substeps(sim, f"parameter substeps = {self.substeps!r}", "dopri5")
         self.sim = sim
         self._publish()

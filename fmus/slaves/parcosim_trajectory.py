@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from controller.trajectories import BENCH_START, PRESET_CYCLES, from_parameters
 from fmus.guarded import GuardedSlave
-from fmus.refusals import refuse_absurd, require_finite
+from fmus.refusals import refuse_absurd, refuse_tiny, require_finite
 
 OUTPUTS = ("x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
 
@@ -46,6 +46,7 @@ class Trajectory(GuardedSlave):
                        "frequency": self.frequency}
         require_finite(**used_or_not)
         refuse_absurd(**used_or_not)
+        refuse_tiny(side_time=self.side_time)     # the triangle divides by side_time squared
         self.trajectory = from_parameters(self.kind, self.cycles, **used_or_not)
         self.x_start, self.y_start = (float(v) for v in self.trajectory.start_point)
         self._publish(self._start_time)

@@ -13,7 +13,7 @@ from dataclasses import fields
 
 from fmus import budget
 from fmus.guarded import GuardedSlave
-from fmus.refusals import refuse_absurd, refuse_absurd_inputs, require_finite
+from fmus.refusals import refuse_absurd, refuse_absurd_inputs, refuse_tiny, require_finite
 
 #: (output, description) of the pendulum (docs/contract.md).
 OUTPUTS = (
@@ -75,7 +75,8 @@ class WheeledPendulum(GuardedSlave):
         self.sim = None
 
     def setup(self):
-        from plant.wheeled import SEED, WheeledPendulum as Simulator
+        from motor._checks import BadValue
+        from plant.wheeled import POSITIVE, SEED, WheeledPendulum as Simulator
 
         values = {f.name: float(getattr(self, f.name)) for f in fields(SEED)}
         initial = {entry: float(getattr(self, name)) for name, entry in INITIAL}
@@ -85,9 +86,13 @@ class WheeledPendulum(GuardedSlave):
         refuse_absurd(**values, **push, **{name: float(getattr(self, name)) for name, _ in INITIAL})
         if self.push_duration < 0.0:
             raise ValueError(f"parameter push_duration = {self.push_duration!r} s must be >= 0")
+        refuse_tiny(**{name: values[name] for name in POSITIVE})     # the model divides by them
         params = SEED.with_(**values)
-        self.sim = Simulator(params, model=self.model, yaw=bool(self.yaw), initial=initial,
-                             substeps=self.substeps, encoder_counts=self.encoder_counts)
+        try:
+            self.sim = Simulator(params, model=self.model, yaw=bool(self.yaw), initial=initial,
+                                 substeps=self.substeps, encoder_counts=self.encoder_counts)
+        except BadValue as exc:     # an initial state entry, named as the slave's parameter
+            raise exc.renamed({entry: name for name, entry in INITIAL}) from None
         self.publish()
 
     def known_step_work(self) -> float:
