@@ -297,8 +297,7 @@ class _Applier:
             return self.leaf(template, data, path)
         if isinstance(data, Opaque):
             if opaque_tag(template) != data.tag:
-                raise StateMismatch(f"{path}: the state refers to {data.tag}, this instance has "
-                                    f"{opaque_tag(template) or _describe(template)}")
+                raise StateMismatch(f"{path}: the state refers to {data.tag}, this instance {_describe(template)}")
             return template
         if isinstance(data, (np.ndarray, ArrayBytes)):
             return self.array(template, data, path)
