@@ -45,6 +45,7 @@ import os
 import sys
 
 from fmus import fmustate
+from fmus.identity import read_identity
 
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, Real, String, Boolean
 from pythonfmu.enums import Fmi2Initial, Fmi2Status
@@ -113,6 +114,7 @@ class GuardedSlave(Fmi2Slave):
                                       variability=Fmi2Variability.discrete,
                                       description="Why the last step was refused ('' when all is well)"))
         self._ready = False          # initialised well, no step refused since
+        self._initialising = False   # in Initialization Mode (fmi2EnterInitializationMode was called)
         self._initialised = False    # fmi2ExitInitializationMode was called
         self._terminated = False     # fmi2Terminate was called
         self._start_time = 0.0       # of fmi2SetupExperiment
@@ -124,6 +126,9 @@ class GuardedSlave(Fmi2Slave):
         self._initial_warning = ""      # the last reason logged for outputs left at their start values
         # value-reference lists resolved by get_real/set_real (derived: not FMU state)
         self.__readers, self.__writers = {}, {}
+        #: The GUID of this slave's FMU (its modelDescription.xml's, from the identity the build
+        #: writes into the resources, :mod:`fmus.identity`); "" in process, where there is no FMU.
+        self.fmu_guid = str(read_identity(getattr(self, "resources", None)).get("guid", ""))
         _drop_duplicate_path_entries()
 
     # --- declaration -----------------------------------------------------------------
@@ -428,10 +433,35 @@ class GuardedSlave(Fmi2Slave):
         raise FmiError(f"{call}: value references {list(vrs)!r} refused ({self._now()})")
 
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
+        self._refuse_out_of_order("fmi2SetupExperiment", start_time=start_time)
         self._start_time = float(start_time)
         self._initial_outputs = self._built_for_exit = False
 
+    def enter_initialization_mode(self):
+        self._refuse_out_of_order("fmi2EnterInitializationMode")
+        self._initialising = True
+
+    def _refuse_out_of_order(self, call: str, **arguments) -> None:
+        """Raise FmiError for ``call`` (fmi2SetupExperiment, fmi2EnterInitializationMode) after
+        fmi2EnterInitializationMode: FMI 2.0 allows both once, right after instantiation."""
+        if self._initialising or self._initialised or self._terminated:
+            given = "".join(f" ({name} = {value!r})" for name, value in arguments.items())
+            raise FmiError(f"{call}{given} refused {self._mode()}: it is allowed only once, between "
+                           "fmi2Instantiate and fmi2EnterInitializationMode; nothing was changed")
+
+    def _mode(self) -> str:
+        """Where the FMI 2.0 state machine is, for call-order refusals."""
+        if self._terminated:
+            return "after fmi2Terminate"
+        if self._initialised:
+            return f"in Step Mode ({self._now()})"
+        return "in Initialization Mode" if self._initialising else "before fmi2EnterInitializationMode"
+
     def exit_initialization_mode(self):
+        if not self._initialising:
+            raise FmiError(f"fmi2ExitInitializationMode refused {self._mode()}: it ends Initialization Mode "
+                           "(after fmi2EnterInitializationMode); nothing was changed, the model is not rebuilt")
+        self._initialising = False
         self.__accepted_step = None
         self._initialised = True
         self._next_time, self._last_step = self._start_time, None
