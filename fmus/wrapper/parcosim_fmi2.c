@@ -617,42 +617,41 @@ static int ensure_loader(void)
     return loader_slave_class != NULL ? 0 : -1;
 }
 
-/* The process-wide lock every parcosim wrapper library shares: a recursive mutex kept in a
- * capsule in sys.modules["_parcosim_fmi2"] by the first library that needs it (under the GIL,
- * which nothing here releases in between: no race).  NULL only when out of memory. */
-#define LOCK_CAPSULE "parcosim_fmi2.python_lock"
+/* The process-wide lock every parcosim wrapper library shares: a recursive mutex whose address
+ * the first library that needs it keeps in sys.modules["_parcosim_fmi2"].python_lock (under the
+ * GIL, which nothing here releases in between: no race).  An address, not a capsule: a capsule's
+ * name would point into this library, which the importer may unload while others run on.  NULL
+ * only when out of memory. */
 static pthread_mutex_t *shared_lock(void)
 {
-    PyObject *modules = PySys_GetObject("modules"), *holder, *capsule;   /* borrowed */
-    pthread_mutex_t *lock = NULL;
+    PyObject *modules = PySys_GetObject("modules"), *holder, *address;   /* borrowed */
     PyObject *type, *value, *tb;
     if (python_lock != NULL) return python_lock;
     if (modules == NULL || !PyDict_Check(modules)) return NULL;
     PyErr_Fetch(&type, &value, &tb);
     holder = PyDict_GetItemString(modules, "_parcosim_fmi2");   /* borrowed */
     if (holder == NULL) {
-        pthread_mutexattr_t attr;
+        pthread_mutex_t *lock = malloc(sizeof *lock);   /* never freed: every library may use it */
         PyObject *made = PyModule_New("_parcosim_fmi2");
-        lock = malloc(sizeof *lock);   /* never freed: other libraries may hold it after this one unloads */
-        capsule = made && lock ? PyCapsule_New(lock, LOCK_CAPSULE, NULL) : NULL;
-        if (capsule != NULL) {
+        address = made && lock ? PyLong_FromVoidPtr(lock) : NULL;
+        if (address != NULL) {
+            pthread_mutexattr_t attr;
             pthread_mutexattr_init(&attr);
             pthread_mutexattr_settype(&attr, PTHREAD_MUTEX_RECURSIVE);
             pthread_mutex_init(lock, &attr);
             pthread_mutexattr_destroy(&attr);
         }
-        if (capsule != NULL && PyModule_AddObjectRef(made, "python_lock", capsule) == 0 &&
-            PyDict_SetItemString(modules, "_parcosim_fmi2", made) == 0) {
+        if (address != NULL && PyModule_AddObjectRef(made, "python_lock", address) == 0 &&
+            PyDict_SetItemString(modules, "_parcosim_fmi2", made) == 0)
             python_lock = lock;
-            lock = NULL;
-        }
-        Py_XDECREF(capsule);
+        else
+            free(lock);
+        Py_XDECREF(address);
         Py_XDECREF(made);
-        if (lock != NULL && capsule == NULL) free(lock);   /* a capsule made keeps its pointer */
     } else {
-        capsule = PyObject_GetAttrString(holder, "python_lock");
-        python_lock = capsule ? PyCapsule_GetPointer(capsule, LOCK_CAPSULE) : NULL;
-        Py_XDECREF(capsule);
+        address = PyObject_GetAttrString(holder, "python_lock");
+        python_lock = address ? PyLong_AsVoidPtr(address) : NULL;
+        Py_XDECREF(address);
     }
     PyErr_Clear();
     PyErr_Restore(type, value, tb);
