@@ -34,7 +34,11 @@ docs/extremes.md, "The FMI calls under hostile use"):
   communication point that does not follow the last one (the time of the state after
   ``fmi2SetFMUstate``), a step before initialisation or after ``fmi2Terminate``;
 * after a refused step (fmi2Discard) every later step is refused, as FMI 2.0's
-  ``stepFailed`` state wants, until ``fmi2SetFMUstate`` restores a state taken before it.
+  ``stepFailed`` state wants, until ``fmi2SetFMUstate`` restores a state taken before it;
+* ``fmi2SetupExperiment`` and ``fmi2EnterInitializationMode`` after
+  ``fmi2EnterInitializationMode``, and ``fmi2ExitInitializationMode`` outside Initialization
+  Mode, raise :class:`FmiError` naming the call and where the instance is, and change nothing
+  (FMI 2.0's co-simulation state machine; docs/bundle.md).
 """
 from __future__ import annotations
 

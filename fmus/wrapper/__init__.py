@@ -10,8 +10,12 @@ descriptions.
 * :func:`compiled_wrapper` compiles it with the system C compiler (``cc`` or ``gcc``;
   ``$CC`` first) and caches the shared library by the hash of its source, the compiler
   flags and the Python it was compiled for;
-* :func:`install_wrapper` replaces an FMU's Linux binary with it.  Without a compiler
-  the FMU keeps pythonfmu's binary, with one warning per process.
+* :func:`install_wrapper` replaces an FMU's Linux binary with it and writes the FMU's
+  identity (GUID, modelIdentifier: :mod:`fmus.identity`), which the wrapper checks at every
+  instantiation.  Without a compiler the FMU keeps pythonfmu's binary, with one warning per
+  process.
+
+How the wrapper loads an FMU's bundled code: docs/bundle.md.
 """
 from __future__ import annotations
 
