@@ -39,8 +39,9 @@ def build_bundled_fmu(script, model: str, dest, resources=(), feedthrough=None, 
 
     pythonfmu makes the model description and the archive; the resources then hold the
     bundle (:func:`fmus.bundle.write_bundle`, the slave module inside it, named dotted by
-    ``slavemodule.txt``, and a copy as ``<that name>.py``, which pythonfmu's binary runs), the mark (:func:`fmus.foreign.mark_file`) and ``resources`` (files
-    or folders); the ModelStructure is fixed (``feedthrough``: output -> inputs,
+    ``slavemodule.txt``, and a copy as ``<that name>.py``, which pythonfmu's binary runs),
+    the mark (:func:`fmus.foreign.mark_file`) and ``resources`` (files or folders); the
+    ModelStructure is fixed (``feedthrough``: output -> inputs,
     :func:`fmus.modeldescription.fix_model_structure`) and parcosim's wrapper installed with
     the FMU's identity (:func:`fmus.wrapper.install_wrapper`).  ``options``: pythonfmu's
     model options (``canHandleVariableCommunicationStepSize`` ...).
