@@ -225,19 +225,14 @@ def fmpy_cases(fmus, steps):
 
 def build_fmus(out):
     """The three controller-chain FMUs and the floor's pass-through FMU, built into out."""
-    from pythonfmu import FmuBuilder
-    from fmus.build import build_fmu, stage_sources
-    from fmus.modeldescription import fix_model_structure
+    from fmus.build import build_bundled_fmu, build_fmu
     paths = {name: build_fmu(name, out) for name in ("PositionController", "Derivator", "Trajectory")}
     with tempfile.TemporaryDirectory(prefix="parcosim_floor_") as tmp:
-        tmp = Path(tmp)
-        base = [p for p in stage_sources(tmp) if p.name == "fmus"]          # only the slave base goes in
-        script = tmp / "parcosim_passthrough.py"
+        script = Path(tmp) / "parcosim_passthrough.py"
         script.write_text(FLOOR_SLAVE.format(inputs=INPUTS))
-        fmu = FmuBuilder.build_FMU(script, dest=out, project_files=base,
-                                   canHandleVariableCommunicationStepSize="true")
-    fix_model_structure(fmu, {})
-    paths["PassThrough"] = Path(fmu)
+        # on the same slave base and binary as the three above (the bundle of fmus/bundle.py)
+        paths["PassThrough"] = build_bundled_fmu(script, "PassThrough", Path(out) / "PassThrough.fmu",
+                                                 canHandleVariableCommunicationStepSize="true")
     return paths
 
 

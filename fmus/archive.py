@@ -14,8 +14,8 @@ from pathlib import Path
 
 def rewrite(source, target, members: dict) -> Path:
     """Write ``target`` as a copy of the zip ``source`` whose members ``members`` (name ->
-    bytes, or name -> (ZipInfo, bytes) to set its attributes) replace or add to the old
-    ones; the others keep their entries.  ``target`` may be ``source``: it is replaced
+    bytes or str, or name -> (ZipInfo, bytes) to set its attributes) replace or add to the
+    old ones, a member named with None is left out; the others keep their entries.  ``target`` may be ``source``: it is replaced
     atomically (a temporary file in its folder, then renamed), as is any target."""
     source, target = Path(source), Path(target)
     target.parent.mkdir(parents=True, exist_ok=True)
@@ -27,8 +27,9 @@ def rewrite(source, target, members: dict) -> Path:
                 if item.filename not in members:
                     dst.writestr(item, src.read(item.filename))
             for name, data in members.items():
-                info, data = data if isinstance(data, tuple) else (name, data)
-                dst.writestr(info, data)
+                if data is not None:
+                    info, data = data if isinstance(data, tuple) else (name, data)
+                    dst.writestr(info, data)
         os.replace(tmp, target)
     finally:
         if os.path.exists(tmp):

@@ -1,8 +1,9 @@
 """Build the parcosim FMUs with pythonfmu and fix their model descriptions.
 
-Each FMU bundles the pure model packages (``plant``, ``motor``,
-``controller``) and the slave base (:data:`BUNDLED_FMUS_MODULES`) in its resources, so
-an importer needs only a Python 3.11 with numpy, scipy, numba and control.  Each FMU's
+Each FMU bundles the pure model packages (``plant``, ``motor``, ``controller``) and the
+``fmus`` modules its slaves run on in its resources, under a private package name
+(:mod:`fmus.bundle`), so an importer needs only a Python 3.11 with numpy, scipy, numba,
+control and pythonfmu, and its own packages of those names are left alone.  Each FMU's
 binary is parcosim's FMI wrapper (:mod:`fmus.wrapper`), compiled once per machine; without
 a C compiler it stays pythonfmu's.
 """
@@ -10,12 +11,15 @@ from __future__ import annotations
 
 import importlib
 import shutil
+import sys
 import tempfile
 import warnings
 from pathlib import Path
 
 from pythonfmu import FmuBuilder
 
+from .archive import rewrite
+from .bundle import source_files, write_bundle
 from .foreign import built_by_parcosim, mark_file
 from .modeldescription import fix_model_structure
 from .registry import SLAVES
@@ -24,32 +28,47 @@ from .wrapper import install_wrapper
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_OUT = ROOT / "fmus" / "build"
-BUNDLED_PACKAGES = ("plant", "motor", "controller")
-#: The modules of ``fmus`` the slaves import (the rest is the importer's side).
-BUNDLED_FMUS_MODULES = ("guarded.py", "fmustate.py", "stateformat.py", "parts.py", "refusals.py", "budget.py")
 
 #: Every parcosim FMU can save, restore and serialise its whole state (:mod:`fmus.fmustate`).
 STATE_OPTIONS = {"canGetAndSetFMUstate": "true", "canSerializeFMUstate": "true"}
 
 
-def stage_sources(tmp: Path, fmus_modules=BUNDLED_FMUS_MODULES, slaves: bool = False) -> list[Path]:
-    """Copy the bundled sources (no caches) into tmp: the model packages, the ``fmus``
-    modules named and, with ``slaves``, every slave module; return the project files."""
-    ignore = shutil.ignore_patterns("__pycache__", "*.pyc", "build")
-    staged = []
-    for package in BUNDLED_PACKAGES:
-        if (ROOT / package).is_dir():
-            shutil.copytree(ROOT / package, tmp / package, ignore=ignore)
-            staged.append(tmp / package)
-    fmus_pkg = tmp / "fmus"
-    fmus_pkg.mkdir()
-    (fmus_pkg / "__init__.py").write_text('"""The parcosim modules bundled into this FMU."""\n')
-    for module in dict.fromkeys(BUNDLED_FMUS_MODULES + tuple(fmus_modules)):
-        shutil.copy2(ROOT / "fmus" / module, fmus_pkg / module)
-    if slaves:
-        shutil.copytree(ROOT / "fmus" / "slaves", fmus_pkg / "slaves", ignore=ignore)
-    staged.append(fmus_pkg)
-    return staged
+def build_bundled_fmu(script, model: str, dest, resources=(), feedthrough=None, **options) -> Path:
+    """Build the FMU of the slave module ``script`` (class ``model``) at ``dest`` (a ``.fmu``
+    path) and return ``dest``.
+
+    pythonfmu makes the model description and the archive; the resources then hold the
+    bundle (:func:`fmus.bundle.write_bundle`, the slave module inside it, named dotted by
+    ``slavemodule.txt``, and a copy as ``<that name>.py``, which pythonfmu's binary runs),
+    the mark (:func:`fmus.foreign.mark_file`) and ``resources`` (files or folders); the
+    ModelStructure is fixed (``feedthrough``: output -> inputs,
+    :func:`fmus.modeldescription.fix_model_structure`) and parcosim's wrapper installed with
+    the FMU's identity (:func:`fmus.wrapper.install_wrapper`).  ``options``: pythonfmu's
+    model options (``canHandleVariableCommunicationStepSize`` ...).
+    """
+    script, dest = Path(script).resolve(), Path(dest)
+    extra = () if script.parent == ROOT / "fmus" / "slaves" else (script,)
+    with tempfile.TemporaryDirectory(prefix="parcosim_build_") as tmp:
+        tmp = Path(tmp)
+        package = write_bundle(tmp / "bundle", extra)
+        staged = tmp / script.name
+        shutil.copy2(script, staged)
+        path_before = list(sys.path)
+        try:
+            fmu = FmuBuilder.build_FMU(staged, dest=tmp / "out" / dest.name, **options, project_files=[
+                package, mark_file(tmp, model, package.name), *map(Path, resources)])
+        finally:
+            sys.path[:] = path_before   # pythonfmu leaves the script's folder on sys.path
+        slave_module = f"{package.name}.fmus.slaves.{script.stem}"
+        rewrite(fmu, fmu, {f"resources/{script.name}": None,   # the plain copy: the bundle has it
+                           "resources/slavemodule.txt": slave_module,
+                           # pythonfmu's binary (no C compiler) runs resources/<slavemodule.txt>.py
+                           f"resources/{slave_module}.py": (package / "fmus" / "slaves" / script.name).read_bytes()})
+        fix_model_structure(fmu, feedthrough or {})
+        install_wrapper(fmu)
+        dest.parent.mkdir(parents=True, exist_ok=True)
+        shutil.move(fmu, dest)
+    return dest
 
 
 class ForeignFmuError(ValueError):
@@ -70,30 +89,15 @@ def build_fmu(model: str, out_dir: Path = DEFAULT_OUT) -> Path | None:
         warnings.warn(f"{target} was not built by parcosim: left alone, not rebuilt (run a foreign FMU with "
                       "--replace INSTANCE=PATH)", stacklevel=2)
         return None
-    out_dir.mkdir(parents=True, exist_ok=True)
     module_name = SLAVES[model]
-    script = ROOT / "fmus" / "slaves" / f"{module_name}.py"
     slave_class = getattr(importlib.import_module(f"fmus.slaves.{module_name}"), model)
-    with tempfile.TemporaryDirectory(prefix="parcosim_build_") as tmp:
-        tmp = Path(tmp)
-        project_files = stage_sources(tmp) + [mark_file(tmp, model)]
-        staged_script = tmp / script.name
-        shutil.copy2(script, staged_script)
-        fmu = FmuBuilder.build_FMU(staged_script, dest=tmp / "out" / target.name, project_files=project_files,
-                                   canHandleVariableCommunicationStepSize="true", **STATE_OPTIONS)
-        fix_model_structure(fmu, getattr(slave_class, "feedthrough", {}))
-        install_wrapper(fmu)
-        shutil.move(fmu, target)
-    return target
+    return build_bundled_fmu(ROOT / "fmus" / "slaves" / f"{module_name}.py", model, target,
+                             feedthrough=getattr(slave_class, "feedthrough", {}),
+                             canHandleVariableCommunicationStepSize="true", **STATE_OPTIONS)
 
 
-def _sources(model: str) -> list[Path]:
-    files = [ROOT / "fmus" / module for module in BUNDLED_FMUS_MODULES] + [WRAPPER_SOURCE]
-    files.append(ROOT / "fmus" / "slaves" / f"{SLAVES[model]}.py")
-    for package in BUNDLED_PACKAGES:
-        files.extend((ROOT / package).rglob("*.py"))
-        files.extend((ROOT / package).rglob("*.csv"))
-    return files
+def _sources() -> list[Path]:
+    return [path for _, path in source_files()] + [WRAPPER_SOURCE, Path(__file__)]
 
 
 def ensure_built(models, out_dir=None) -> dict:
@@ -118,7 +122,7 @@ def ensure_built(models, out_dir=None) -> dict:
         elif path.exists() and not built_by_parcosim(path, model):
             raise ForeignFmuError(f"{path} was not built by parcosim; to run it in place of {model}, use "
                                   "--replace INSTANCE=PATH (Component(model=PATH))")
-        elif not path.exists() or path.stat().st_mtime < max(f.stat().st_mtime for f in _sources(model)):
+        elif not path.exists() or path.stat().st_mtime < max(f.stat().st_mtime for f in _sources()):
             path = build_fmu(model, out_dir)
         paths[model] = path
     return paths

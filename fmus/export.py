@@ -22,20 +22,14 @@ from pathlib import Path
 from xml.etree import ElementTree as ET
 
 from .archive import rewrite
-from .build import ROOT, STATE_OPTIONS, stage_sources
+from .build import ROOT, STATE_OPTIONS, build_bundled_fmu
 from .embedded import FOREIGN_DIR, SYSTEM_FILE, system_to_dict
 from .foreign import is_fmu_file
 from .guarded import START_VALUES_FILE
-from .modeldescription import fix_model_structure
 from .system import System
-from .wrapper import install_wrapper
 
 #: Slave module and class of each system role.
 ROLES = {"loop": ("parcosim_closedloop", "ClosedLoop"), "chain": ("parcosim_controlchain", "ControlChain")}
-#: The ``fmus`` modules a system FMU needs beyond the slave base: the in-process master (and
-#: its compiled mode, which the master imports when asked for it).
-SYSTEM_MODULES = ("embedded.py", "foreign.py", "instances.py", "master.py", "registry.py", "stepper.py", "system.py",
-                  "systemslave.py", "compiled.py", "adapters.py")
 
 
 def build_system_fmu(role: str, system: System, path, plant: str = "plant") -> Path:
@@ -45,8 +39,6 @@ def build_system_fmu(role: str, system: System, path, plant: str = "plant") -> P
     Raises ValueError for an unknown role, a path not ending in ``.fmu``, or a system whose
     components are not all parcosim models (their slaves run inside the FMU).
     """
-    from pythonfmu import FmuBuilder
-
     from .registry import SLAVES
 
     if role not in ROLES:
@@ -58,24 +50,16 @@ def build_system_fmu(role: str, system: System, path, plant: str = "plant") -> P
     if unknown:
         raise ValueError(f"cannot put {', '.join(unknown)} inside one FMU: a component is a parcosim model "
                          f"({', '.join(SLAVES)}) or an FMU file")
-    module, _ = ROLES[role]
-    path.parent.mkdir(parents=True, exist_ok=True)
+    module, model = ROLES[role]
     with tempfile.TemporaryDirectory(prefix="parcosim_system_") as tmp:
         tmp = Path(tmp)
-        staged = stage_sources(tmp, SYSTEM_MODULES, slaves=True)
         system, foreign = _carry_foreign(system, tmp)
-        staged += foreign
         spec = tmp / SYSTEM_FILE
         spec.write_text(json.dumps({"role": role, "plant": plant, "system": system_to_dict(system)}, indent=1))
-        script = tmp / f"{module}.py"
-        shutil.copy2(ROOT / "fmus" / "slaves" / f"{module}.py", script)
         # The loop takes any whole number of its steps per doStep; the chain exactly one.
         variable = "true" if role == "loop" else "false"
-        fmu = FmuBuilder.build_FMU(script, dest=path, project_files=staged + [spec],
-                                   canHandleVariableCommunicationStepSize=variable, **STATE_OPTIONS)
-    fix_model_structure(fmu, {})
-    install_wrapper(fmu)
-    return Path(fmu)
+        return build_bundled_fmu(ROOT / "fmus" / "slaves" / f"{module}.py", model, path, resources=foreign + [spec],
+                                 canHandleVariableCommunicationStepSize=variable, **STATE_OPTIONS)
 
 
 def _carry_foreign(system: System, tmp: Path):

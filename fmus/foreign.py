@@ -14,8 +14,11 @@ import zipfile
 from dataclasses import replace
 from pathlib import Path
 
-#: The file in an FMU's archive that says parcosim built it, and which model it is.
-MARK = "resources/parcosim_build.json"
+from .identity import IDENTITY_FILE
+
+#: The file in an FMU's archive that says parcosim built it, and which model it is (the
+#: FMU's identity, :mod:`fmus.identity`).
+MARK = f"resources/{IDENTITY_FILE}"
 
 
 def is_fmu_file(model) -> bool:
@@ -40,10 +43,11 @@ def built_by_parcosim(path, model: str) -> bool:
         return False
 
 
-def mark_file(directory: Path, model: str) -> Path:
-    """Write the mark for ``model`` into ``directory`` (bundled as a resource by the build)."""
-    path = Path(directory) / Path(MARK).name
-    path.write_text(json.dumps({"model": model, "built_by": "parcosim"}) + "\n")
+def mark_file(directory: Path, model: str, package: str) -> Path:
+    """Write the mark for ``model``, whose code runs as the bundle ``package``
+    (:mod:`fmus.bundle`), into ``directory`` (bundled as a resource by the build)."""
+    path = Path(directory) / IDENTITY_FILE
+    path.write_text(json.dumps({"model": model, "built_by": "parcosim", "package": package}) + "\n")
     return path
 
 

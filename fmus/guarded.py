@@ -36,7 +36,11 @@ docs/extremes.md, "The FMI calls under hostile use"):
   communication point that does not follow the last one (the time of the state after
   ``fmi2SetFMUstate``), a step before initialisation or after ``fmi2Terminate``;
 * after a refused step (fmi2Discard) every later step is refused, as FMI 2.0's
-  ``stepFailed`` state wants, until ``fmi2SetFMUstate`` restores a state taken before it.
+  ``stepFailed`` state wants, until ``fmi2SetFMUstate`` restores a state taken before it;
+* ``fmi2SetupExperiment`` and ``fmi2EnterInitializationMode`` after
+  ``fmi2EnterInitializationMode``, and ``fmi2ExitInitializationMode`` outside Initialization
+  Mode, raise :class:`FmiError` naming the call and where the instance is, and change nothing
+  (FMI 2.0's co-simulation state machine; docs/bundle.md).
 """
 from __future__ import annotations
 
@@ -47,6 +51,7 @@ import os
 import sys
 
 from fmus import fmustate
+from fmus.identity import read_identity
 
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, Real, String, Boolean
 from pythonfmu.enums import Fmi2Initial, Fmi2Status
@@ -115,6 +120,7 @@ class GuardedSlave(Fmi2Slave):
                                       variability=Fmi2Variability.discrete,
                                       description="Why the last step was refused ('' when all is well)"))
         self._ready = False          # initialised well, no step refused since
+        self._initialising = False   # in Initialization Mode (fmi2EnterInitializationMode was called)
         self._initialised = False    # fmi2ExitInitializationMode was called
         self._terminated = False     # fmi2Terminate was called
         self._start_time = 0.0       # of fmi2SetupExperiment
@@ -127,6 +133,9 @@ class GuardedSlave(Fmi2Slave):
         # value-reference lists resolved by get_real/set_real (derived: not FMU state)
         self.__readers, self.__writers = {}, {}
         self.__init_kwargs = dict(kwargs)   # a new instance like this one (a state's template)
+        #: The GUID of this slave's FMU (its modelDescription.xml's, from the identity the build
+        #: writes into the resources, :mod:`fmus.identity`); "" in process, where there is no FMU.
+        self.fmu_guid = str(read_identity(getattr(self, "resources", None)).get("guid", ""))
         _drop_duplicate_path_entries()
 
     # --- declaration -----------------------------------------------------------------
@@ -520,11 +529,36 @@ class GuardedSlave(Fmi2Slave):
         raise FmiError(f"{call}: value references {list(vrs)!r} refused ({self._now()})")
 
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
+        self._refuse_out_of_order("fmi2SetupExperiment", start_time=start_time)
         check_experiment_times(start_time, stop_time)
         self._start_time = float(start_time)
         self._initial_outputs = self._built_for_exit = False
 
+    def enter_initialization_mode(self):
+        self._refuse_out_of_order("fmi2EnterInitializationMode")
+        self._initialising = True
+
+    def _refuse_out_of_order(self, call: str, **arguments) -> None:
+        """Raise FmiError for ``call`` (fmi2SetupExperiment, fmi2EnterInitializationMode) after
+        fmi2EnterInitializationMode: FMI 2.0 allows both once, right after instantiation."""
+        if self._initialising or self._initialised or self._terminated:
+            given = "".join(f" ({name} = {value!r})" for name, value in arguments.items())
+            raise FmiError(f"{call}{given} refused {self._mode()}: it is allowed only once, between "
+                           "fmi2Instantiate and fmi2EnterInitializationMode; nothing was changed")
+
+    def _mode(self) -> str:
+        """Where the FMI 2.0 state machine is, for call-order refusals."""
+        if self._terminated:
+            return "after fmi2Terminate"
+        if self._initialised:
+            return f"in Step Mode ({self._now()})"
+        return "in Initialization Mode" if self._initialising else "before fmi2EnterInitializationMode"
+
     def exit_initialization_mode(self):
+        if not self._initialising:
+            raise FmiError(f"fmi2ExitInitializationMode refused {self._mode()}: it ends Initialization Mode "
+                           "(after fmi2EnterInitializationMode); nothing was changed, the model is not rebuilt")
+        self._initialising = False
         self.__accepted_step = None
         self._initialised = True
         self._next_time, self._last_step = self._start_time, None

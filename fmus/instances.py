@@ -245,7 +245,8 @@ class InProcessInstance:
 
         if model not in SLAVES:
             raise ValueError(f"component {name}: unknown model {model!r}; valid: {', '.join(SLAVES)}")
-        cls = getattr(importlib.import_module(f"fmus.slaves.{SLAVES[model]}"), model)
+        # relative: inside an FMU this package is its bundle's (fmus/bundle.py)
+        cls = getattr(importlib.import_module(f".slaves.{SLAVES[model]}", __package__), model)
         self.name = name
         self.slave = cls(instance_name=name)
         self.variables = slave_variables(self.slave)

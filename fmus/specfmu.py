@@ -2,20 +2,14 @@
 
 The FMU's slave is :class:`fmus.slaves.parcosim_specplant.SpecPlant`; the spec, checked
 here first, travels inside the FMU as the resource ``plant_spec.toml``, so the FMU
-needs nothing else than the usual parcosim bundle (:func:`fmus.build.stage_sources`).
+needs nothing else than the usual parcosim bundle (:mod:`fmus.bundle`).
 """
 from __future__ import annotations
 
-import shutil
 import tempfile
 from pathlib import Path
 
-from pythonfmu import FmuBuilder
-
-from .build import ROOT, STATE_OPTIONS, stage_sources
-from .foreign import mark_file
-from .modeldescription import fix_model_structure
-from .wrapper import install_wrapper
+from .build import ROOT, STATE_OPTIONS, build_bundled_fmu
 
 MODEL = "SpecPlant"
 SLAVE_MODULE = "parcosim_specplant"
@@ -40,18 +34,10 @@ def build_plant_fmu(spec, out) -> Path:
     out = Path(out)
     if out.suffix != ".fmu":
         raise ValueError(f"output {str(out)!r} must end in .fmu")
-    out.parent.mkdir(parents=True, exist_ok=True)
     from .slaves.parcosim_specplant import SPEC_RESOURCE
 
     with tempfile.TemporaryDirectory(prefix="parcosim_specplant_") as tmp:
-        tmp = Path(tmp)
-        (tmp / SPEC_RESOURCE).write_text(checked.text, encoding="utf-8")
-        project_files = stage_sources(tmp) + [mark_file(tmp, MODEL), tmp / SPEC_RESOURCE]
-        script = tmp / f"{SLAVE_MODULE}.py"
-        shutil.copy2(ROOT / "fmus" / "slaves" / script.name, script)
-        fmu = FmuBuilder.build_FMU(script, dest=tmp / "out" / f"{MODEL}.fmu", project_files=project_files,
-                                   canHandleVariableCommunicationStepSize="true", **STATE_OPTIONS)
-        fix_model_structure(fmu, {})
-        install_wrapper(fmu)
-        shutil.move(fmu, out)
-    return out
+        spec_file = Path(tmp) / SPEC_RESOURCE
+        spec_file.write_text(checked.text, encoding="utf-8")
+        return build_bundled_fmu(ROOT / "fmus" / "slaves" / f"{SLAVE_MODULE}.py", MODEL, out, resources=[spec_file],
+                                 canHandleVariableCommunicationStepSize="true", **STATE_OPTIONS)

@@ -122,13 +122,16 @@ def test_a_step_that_is_not_a_whole_number_of_its_steps_is_refused(exported):
 
 
 def _imports_of(source: str) -> set:
-    """The ``fmus`` modules a module imports (``from .x``, ``from fmus.x``, ``from fmus import x``)."""
+    """The ``fmus`` modules a bundled module imports (``from .x``, ``from <bundle>.fmus.x``,
+    ``from <bundle>.fmus import x``)."""
     import ast
+
+    from fmus.bundle import bundle_name
 
     found = set()
     for node in ast.walk(ast.parse(source)):
         if isinstance(node, ast.ImportFrom):
-            module = node.module or ""
+            module = (node.module or "").removeprefix(f"{bundle_name()}.")
             if node.level == 1:
                 found.add(module.split(".")[0] if module else "")
                 if not module:
@@ -145,10 +148,13 @@ def test_the_fmu_bundles_every_fmus_module_it_imports(exported):
     must travel in the FMU (in this process the repository's would hide a missing one)."""
     import zipfile
 
+    from fmus.bundle import bundle_name
+
     _, _, path = exported
+    base = f"resources/{bundle_name()}/fmus/"
     with zipfile.ZipFile(path) as z:
-        sources = {name[len("resources/fmus/"):]: z.read(name).decode() for name in z.namelist()
-                   if name.startswith("resources/fmus/") and name.endswith(".py")}
+        sources = {name[len(base):]: z.read(name).decode() for name in z.namelist()
+                   if name.startswith(base) and name.endswith(".py")}
     bundled = {name[:-3] for name in sources if "/" not in name} | {"slaves"}
     # fmus.build: only the master's "fmu" mode imports it; a system FMU runs in process.
     needed = set().union(*(_imports_of(text) for text in sources.values())) - {"build"}

@@ -346,6 +346,7 @@ def test_a_tunable_parameter_may_be_set_after_initialisation():
 
     slave = Tunable(instance_name="t")
     slave.setup_experiment(0.0, None, None)
+    slave.enter_initialization_mode()
     slave.exit_initialization_mode()
     vr = {v.name: v.value_reference for v in slave.vars.values()}
     slave.set_real([vr["gain"]], [2.0])

@@ -240,13 +240,15 @@ def test_bad_observer_parameters_are_refused_with_their_name(observer_fmu, param
 
 
 def test_drive_fmu_runs_in_a_process_without_parcosim(drive_fmu, tmp_path):
-    """The FMU carries its own model code (motor/, fmus/guarded.py)."""
+    """The FMU carries its own model code (motor/, fmus/guarded.py), under its bundle's name."""
+    from fmus.bundle import bundle_name
+
     script = (
         "import fmpy, sys\n"
-        "assert 'motor' not in sys.modules\n"
         "r = fmpy.simulate_fmu(sys.argv[1], stop_time=0.02, step_size=1e-3,"
         " start_values={'mode': 'voltage', 'v_ref': 6.0, 'preset': 'motor2'})\n"
-        "print(sys.modules['motor'].__file__)\n"
+        "assert 'motor' not in sys.modules\n"
+        f"print(sys.modules['{bundle_name()}.motor'].__file__)\n"
         "print(r['i'][-1])\n"
     )
     env = {"PATH": "/usr/bin:/bin", "HOME": str(tmp_path), "PYTHONNOUSERSITE": "1"}
@@ -254,5 +256,6 @@ def test_drive_fmu_runs_in_a_process_without_parcosim(drive_fmu, tmp_path):
                           capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr[-2000:]
     module_file, i_end = done.stdout.split()[-2:]
-    assert "/resources/motor/" in module_file and not module_file.startswith(str(Path(__file__).parent.parent))
+    assert f"/resources/{bundle_name()}/motor/" in module_file
+    assert not module_file.startswith(str(Path(__file__).parent.parent))
     assert float(i_end) == pytest.approx(6.0 / 0.829, rel=1e-9)

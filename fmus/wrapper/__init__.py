@@ -10,12 +10,17 @@ descriptions.
 * :func:`compiled_wrapper` compiles it with the system C compiler (``cc`` or ``gcc``;
   ``$CC`` first) and caches the shared library by the hash of its source, the compiler
   flags and the Python it was compiled for;
-* :func:`install_wrapper` replaces an FMU's Linux binary with it.  Without a compiler
-  the FMU keeps pythonfmu's binary, with one warning per process.
+* :func:`install_wrapper` replaces an FMU's Linux binary with it and writes the FMU's
+  identity (GUID, modelIdentifier: :mod:`fmus.identity`), which the wrapper checks at every
+  instantiation.  Without a compiler the FMU keeps pythonfmu's binary, with one warning per
+  process.
+
+How the wrapper loads an FMU's bundled code: docs/bundle.md.
 """
 from __future__ import annotations
 
 import hashlib
+import json
 import os
 import shlex
 import shutil
@@ -29,6 +34,7 @@ from pathlib import Path
 from xml.etree import ElementTree as ET
 
 from ..archive import rewrite
+from ..identity import IDENTITY_FILE
 
 #: The wrapper's C source.
 SOURCE = Path(__file__).resolve().parent / "parcosim_fmi2.c"
@@ -130,20 +136,34 @@ def model_identifier(fmu) -> str:
     return cs.get("modelIdentifier")
 
 
+def identity(fmu) -> dict:
+    """The identity ``fmu`` carries in ``resources/parcosim_build.json`` (:mod:`fmus.identity`;
+    {} if none) with the GUID and co-simulation modelIdentifier of its modelDescription.xml."""
+    with zipfile.ZipFile(fmu) as z:
+        root = ET.fromstring(z.read("modelDescription.xml"))
+        try:
+            carried = json.loads(z.read(f"resources/{IDENTITY_FILE}"))
+        except KeyError:
+            carried = {}
+    return {**carried, "guid": root.get("guid"), "model_identifier": model_identifier(fmu)}
+
+
 def install_wrapper(fmu, quiet: bool = False) -> bool:
-    """Replace ``fmu``'s ``binaries/linux64/<modelIdentifier>.so`` by parcosim's wrapper, in
+    """Replace ``fmu``'s ``binaries/linux64/<modelIdentifier>.so`` by parcosim's wrapper and
+    write its identity (:func:`identity`), which the wrapper checks at instantiation, in
     place; return True if it did, False if no compiler is available (see
-    :func:`compiled_wrapper`)."""
-    wrapper = compiled_wrapper(quiet=quiet)
-    if wrapper is None:
-        return False
+    :func:`compiled_wrapper`: the identity is written all the same, for the slave)."""
     fmu = Path(fmu)
-    binary = f"binaries/{PLATFORM}/{model_identifier(fmu)}.so"
-    info = zipfile.ZipInfo(binary, date_time=(2020, 1, 1, 0, 0, 0))
-    info.external_attr = 0o755 << 16
-    info.compress_type = zipfile.ZIP_DEFLATED
-    rewrite(fmu, fmu, {binary: (info, wrapper.read_bytes())})
-    return True
+    members = {f"resources/{IDENTITY_FILE}": json.dumps(identity(fmu)) + "\n"}
+    wrapper = compiled_wrapper(quiet=quiet)
+    if wrapper is not None:
+        binary = f"binaries/{PLATFORM}/{model_identifier(fmu)}.so"
+        info = zipfile.ZipInfo(binary, date_time=(2020, 1, 1, 0, 0, 0))
+        info.external_attr = 0o755 << 16
+        info.compress_type = zipfile.ZIP_DEFLATED
+        members[binary] = (info, wrapper.read_bytes())
+    rewrite(fmu, fmu, members)
+    return wrapper is not None
 
 
 def has_wrapper(fmu) -> bool:

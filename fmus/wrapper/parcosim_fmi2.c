@@ -21,28 +21,36 @@
  *    unrecoverable failure (Python cannot be initialised) makes fmi2Instantiate NULL;
  *  - value references are checked against the slave's variables and their types, strings
  *    set must be UTF-8, NULL arrays are refused: fmi2Error naming the variable;
- *  - the resources folder enters sys.path once per process, not once per instance; no
- *    Python reference is kept past fmi2FreeInstance;
+ *  - the slave's code is the FMU's own: a parcosim FMU's bundle (resources/<package>, the
+ *    package named by resources/parcosim_build.json, fmus/bundle.py) is loaded under its
+ *    private name without touching sys.path; an instantiation whose GUID (fmuGUID) or binary
+ *    (its modelIdentifier: this library's file name) is not the one the resources' identity
+ *    names is refused (resources of another FMU).  No Python reference is kept past
+ *    fmi2FreeInstance;
  *  - an FMU state pointer is set, serialised or freed only by the instance that issued it
  *    (fmi2GetFMUstate or fmi2DeSerializeFMUstate); a parcosim slave reads serialised bytes
  *    against its own instance (deserialize_fmu_state: data, never code; docs/state.md);
- *  - Python is initialised only if the host has not done it, every call takes the GIL
- *    with PyGILState_Ensure, and nothing is finalised at exit or unload.
+ *  - Python is initialised only if the host has not done it; every call takes the GIL with
+ *    PyGILState_Ensure and then one process-wide lock that every parcosim wrapper loaded
+ *    (one per FMU type) shares, so that no two FMUs import or run Python at once from two
+ *    threads; nothing is finalised at exit or unload.
  *
  * Build (fmus/wrapper/__init__.py does it once per machine):
  *   cc -O2 -fPIC -shared -fvisibility=hidden -I<python include> parcosim_fmi2.c -o w.so
  * Python's symbols are left to the host process (not linked), as pythonfmu does.
  */
+#define _GNU_SOURCE   /* dladdr */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
 
+#include <dlfcn.h>
 #include <pthread.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#define PARCOSIM_FMI2_WRAPPER_VERSION "parcosim-fmi2-wrapper 1.0"
+#define PARCOSIM_FMI2_WRAPPER_VERSION "parcosim-fmi2-wrapper 1.1"
 #define EXPORT __attribute__((visibility("default")))
 
 /* ---- FMI 2.0 types (as the standard's fmi2TypesPlatform.h / fmi2FunctionTypes.h define them) ---- */
@@ -113,6 +121,8 @@ static PyObject *s_get_fmu_state, *s_set_fmu_state, *s_to_bytes, *s_from_bytes, 
 static PyObject *s_msg, *s_category, *s_status, *s_vars, *s_name, *s_log_queue;
 static PyObject *c_fmi2slave, *c_real, *c_integer, *c_boolean, *c_string;
 static pthread_mutex_t init_lock = PTHREAD_MUTEX_INITIALIZER;
+static PyObject *loader_slave_class;  /* slave_class of LOADER_SOURCE */
+static pthread_mutex_t *python_lock;  /* the process-wide lock (shared_lock) */
 
 EXPORT const char *parcosimFmi2WrapperVersion(void) { return PARCOSIM_FMI2_WRAPPER_VERSION; }
 
@@ -517,57 +527,173 @@ static char *uri_to_path(const char *uri, const char **why)
     return out;
 }
 
-/* The first line of <resources>/slavemodule.txt, stripped; a malloc'd string or NULL. */
-static char *read_slave_module(const char *resources)
+/* Which slave class an instantiation runs; executed once per wrapper library (per FMU type). */
+static const char LOADER_SOURCE[] =
+"import importlib, importlib.util, json, os, sys\n"
+"IDENTITY = 'parcosim_build.json'\n"
+"class FmiError(Exception):\n"
+"    'Refuses the instantiation; its message alone is logged.'\n"
+"def slave_class(resources, guid, identifier, base):\n"
+"    'The Fmi2Slave subclass of the FMU of resources, checked against the GUID given and this binary.'\n"
+"    identity = read_identity(resources, identifier)\n"
+"    own = identity.get('guid')\n"
+"    if identity.get('model_identifier') != identifier:\n"
+"        raise FmiError(f'the resources {resources} belong to the FMU {identity.get(\"model_identifier\")!r} '\n"
+"                       f'(GUID {own!r}), not to this binary ({identifier}): resources of another FMU refused')\n"
+"    if guid != own:\n"
+"        raise FmiError(f'GUID {guid!r} is not this FMU\\'s: {identifier} has GUID {own!r} '\n"
+"                       f'({os.path.join(resources, IDENTITY)})')\n"
+"    name = slave_module(resources)\n"
+"    package = identity.get('package')\n"
+"    if package:\n"
+"        if not name.startswith(package + '.'):\n"
+"            raise FmiError(f'slavemodule.txt names {name!r}, not a module of the bundle {package!r}')\n"
+"        attach(package, os.path.join(resources, package))\n"
+"    elif resources not in sys.path:\n"
+"        sys.path.insert(0, resources)   # a pythonfmu slave without a bundle: as pythonfmu imports it\n"
+"    return deepest_subclass(importlib.import_module(name), base)\n"
+"def read_identity(resources, identifier):\n"
+"    path = os.path.join(resources, IDENTITY)\n"
+"    try:\n"
+"        with open(path, encoding='utf-8') as f:\n"
+"            identity = json.load(f)\n"
+"    except (OSError, ValueError) as exc:\n"
+"        raise FmiError(f'no identity of the FMU ({exc}): the resources {resources} are not those of '\n"
+"                       f'{identifier}, an FMU with parcosim\\'s wrapper') from None\n"
+"    if not isinstance(identity, dict):\n"
+"        raise FmiError(f'{path} is not a JSON object')\n"
+"    return identity\n"
+"def slave_module(resources):\n"
+"    path = os.path.join(resources, 'slavemodule.txt')\n"
+"    try:\n"
+"        with open(path, encoding='utf-8') as f:\n"
+"            name = f.readline().strip()\n"
+"    except (OSError, ValueError) as exc:\n"
+"        raise FmiError(f'cannot read {path} (the slave\\'s module name): {exc}') from None\n"
+"    if not all(part.isidentifier() for part in name.split('.')):\n"
+"        raise FmiError(f'slavemodule.txt names {name!r}, not a Python module')\n"
+"    return name\n"
+"def attach(package, folder):\n"
+"    # The bundle under its private name, from folder, without sys.path.  Loaded already (another\n"
+"    # FMU of the same build): its packages also look in folder, and no more in folders that are\n"
+"    # gone (an importer deletes an extraction when it is done with it).\n"
+"    if not os.path.isfile(os.path.join(folder, '__init__.py')):\n"
+"        raise FmiError(f'the bundle {package} is missing from the resources ({folder})')\n"
+"    loaded = sys.modules.get(package)\n"
+"    if loaded is None:\n"
+"        spec = importlib.util.spec_from_file_location(package, os.path.join(folder, '__init__.py'),\n"
+"                                                      submodule_search_locations=[folder])\n"
+"        module = importlib.util.module_from_spec(spec)\n"
+"        sys.modules[package] = module\n"
+"        try:\n"
+"            spec.loader.exec_module(module)\n"
+"        except BaseException:\n"
+"            del sys.modules[package]\n"
+"            raise\n"
+"        return\n"
+"    for name, module in list(sys.modules.items()):\n"
+"        path = getattr(module, '__path__', None)\n"
+"        if (name == package or name.startswith(package + '.')) and isinstance(path, list):\n"
+"            own = os.path.join(folder, *name.split('.')[1:])\n"
+"            path[:] = [p for p in path if p != own and os.path.isdir(p)] + [own]\n"
+"def deepest_subclass(module, base):\n"
+"    'The subclass of base deepest below it, preferring those the module defines (as pythonfmu).'\n"
+"    found = [c for c in vars(module).values() if isinstance(c, type) and c is not base and issubclass(c, base)]\n"
+"    local = [c for c in found if c.__module__ == module.__name__] or found\n"
+"    if not local:\n"
+"        raise FmiError(f'module {module.__name__} defines no pythonfmu Fmi2Slave subclass')\n"
+"    return max(local, key=lambda c: c.__mro__.index(base))\n";
+
+/* The loader's slave_class, compiled from LOADER_SOURCE once (under the GIL); 0 on success. */
+static int ensure_loader(void)
 {
-    size_t n = strlen(resources) + sizeof("/slavemodule.txt");
-    char *path = malloc(n), line[512];
-    FILE *f;
-    size_t len;
-    if (path == NULL) return NULL;
-    snprintf(path, n, "%s/slavemodule.txt", resources);
-    f = fopen(path, "rb");
-    free(path);
-    if (f == NULL) return NULL;
-    if (fgets(line, sizeof line, f) == NULL) line[0] = '\0';
-    fclose(f);
-    len = strlen(line);
-    while (len > 0 && (line[len - 1] == '\n' || line[len - 1] == '\r' || line[len - 1] == ' ')) line[--len] = '\0';
-    return len ? strdup(line) : NULL;
+    PyObject *module, *code, *result;
+    if (loader_slave_class != NULL) return 0;
+    module = PyModule_New("parcosim_fmi2_loader");
+    code = module ? Py_CompileString(LOADER_SOURCE, "<parcosim_fmi2 loader>", Py_file_input) : NULL;
+    if (code != NULL && PyModule_AddObjectRef(module, "__builtins__", PyEval_GetBuiltins()) == 0) {
+        result = PyEval_EvalCode(code, PyModule_GetDict(module), PyModule_GetDict(module));
+        Py_XDECREF(result);
+        if (result != NULL) loader_slave_class = PyObject_GetAttrString(module, "slave_class");
+    }
+    Py_XDECREF(code);
+    Py_XDECREF(module);
+    return loader_slave_class != NULL ? 0 : -1;
 }
 
-/* The slave class of module: the Fmi2Slave subclass deepest below Fmi2Slave, preferring
- * classes defined in the module (pythonfmu picks the deepest one too). New reference. */
-static PyObject *find_slave_class(PyObject *module, PyObject *module_name)
+/* The process-wide lock every parcosim wrapper library shares: a recursive mutex whose address
+ * the first library that needs it keeps in sys.modules["_parcosim_fmi2"].python_lock (under the
+ * GIL, which nothing here releases in between: no race).  An address, not a capsule: a capsule's
+ * name would point into this library, which the importer may unload while others run on.  NULL
+ * only when out of memory. */
+static pthread_mutex_t *shared_lock(void)
 {
-    PyObject *dict = PyModule_GetDict(module), *key, *value, *best = NULL;
-    Py_ssize_t best_depth = 0;
-    int best_local = 0, pass;
-    for (pass = 0; pass < 2 && best == NULL; pass++) {
-        Py_ssize_t pos = 0;
-        while (PyDict_Next(dict, &pos, &key, &value)) {
-            PyObject *mro, *owner;
-            Py_ssize_t depth, i;
-            int local;
-            if (!PyType_Check(value) || value == c_fmi2slave || PyObject_IsSubclass(value, c_fmi2slave) != 1) {
-                PyErr_Clear();
-                continue;
-            }
-            owner = PyObject_GetAttrString(value, "__module__");
-            local = owner != NULL && PyObject_RichCompareBool(owner, module_name, Py_EQ) == 1;
-            Py_XDECREF(owner);
-            PyErr_Clear();
-            if (pass == 0 && !local) continue;
-            mro = ((PyTypeObject *)value)->tp_mro;
-            depth = 0;
-            for (i = 0; mro && i < PyTuple_GET_SIZE(mro); i++)
-                if (PyTuple_GET_ITEM(mro, i) == c_fmi2slave) depth = i;
-            if (depth > best_depth) { best = value; best_depth = depth; best_local = local; }
+    PyObject *modules = PySys_GetObject("modules"), *holder, *address;   /* borrowed */
+    PyObject *type, *value, *tb;
+    if (python_lock != NULL) return python_lock;
+    if (modules == NULL || !PyDict_Check(modules)) return NULL;
+    PyErr_Fetch(&type, &value, &tb);
+    holder = PyDict_GetItemString(modules, "_parcosim_fmi2");   /* borrowed */
+    if (holder == NULL) {
+        pthread_mutex_t *lock = malloc(sizeof *lock);   /* never freed: every library may use it */
+        PyObject *made = PyModule_New("_parcosim_fmi2");
+        address = made && lock ? PyLong_FromVoidPtr(lock) : NULL;
+        if (address != NULL) {
+            pthread_mutexattr_t attr;
+            pthread_mutexattr_init(&attr);
+            pthread_mutexattr_settype(&attr, PTHREAD_MUTEX_RECURSIVE);
+            pthread_mutex_init(lock, &attr);
+            pthread_mutexattr_destroy(&attr);
         }
+        if (address != NULL && PyModule_AddObjectRef(made, "python_lock", address) == 0 &&
+            PyDict_SetItemString(modules, "_parcosim_fmi2", made) == 0)
+            python_lock = lock;
+        else
+            free(lock);
+        Py_XDECREF(address);
+        Py_XDECREF(made);
+    } else {
+        address = PyObject_GetAttrString(holder, "python_lock");
+        python_lock = address ? PyLong_AsVoidPtr(address) : NULL;
+        Py_XDECREF(address);
     }
-    (void)best_local;
-    Py_XINCREF(best);
-    return best;
+    PyErr_Clear();
+    PyErr_Restore(type, value, tb);
+    return python_lock;
+}
+
+/* Take the GIL, then the shared lock; waiting for the lock releases the GIL, so the thread
+ * that holds the lock can always go on (no deadlock between the two). */
+static PyGILState_STATE enter_python(void)
+{
+    PyGILState_STATE gil = PyGILState_Ensure();
+    pthread_mutex_t *lock = shared_lock();
+    if (lock != NULL && pthread_mutex_trylock(lock) != 0) {
+        Py_BEGIN_ALLOW_THREADS
+        pthread_mutex_lock(lock);
+        Py_END_ALLOW_THREADS
+    }
+    return gil;
+}
+
+static void leave_python(PyGILState_STATE gil)
+{
+    if (python_lock != NULL) pthread_mutex_unlock(python_lock);
+    PyGILState_Release(gil);
+}
+
+/* This library's modelIdentifier: its file name without the extension (a malloc'd string). */
+static char *own_identifier(void)
+{
+    Dl_info info;
+    const char *name, *slash, *dot;
+    char *out;
+    if (dladdr((void *)own_identifier, &info) == 0 || info.dli_fname == NULL) return strdup("");
+    slash = strrchr(info.dli_fname, '/');
+    name = slash ? slash + 1 : info.dli_fname;
+    dot = strrchr(name, '.');
+    out = strndup(name, dot ? (size_t)(dot - name) : strlen(name));
+    return out ? out : strdup("");
 }
 
 static void free_instance(Instance *in)
@@ -617,11 +743,10 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, 
                                      fmi2Boolean visible, fmi2Boolean loggingOn)
 {
     const char *why = NULL;
-    char *resources, *module_name = NULL;
+    char *resources, *identifier = NULL;
     Instance *in;
     PyGILState_STATE gil;
-    PyObject *sys_path, *py_resources = NULL, *py_module_name = NULL, *module = NULL, *py_name = NULL, *ptr = NULL;
-    (void)fmuGUID;
+    PyObject *py_resources = NULL, *py_guid = NULL, *py_identifier = NULL, *py_name = NULL, *ptr = NULL;
     if (instanceName == NULL) {
         log_instantiate(functions, "", "fmi2Instantiate: the instance name is NULL");
         return NULL;
@@ -659,40 +784,16 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, 
     }
     in->logging_on = loggingOn != fmi2False;
 
-    gil = PyGILState_Ensure();
-    if (ensure_names() != 0) goto python_failed;
-    module_name = read_slave_module(resources);
-    if (module_name == NULL) {
-        logf_(in, fmi2Error, "fmi2Instantiate: cannot read %s/slavemodule.txt (the slave's module name)", resources);
-        goto failed;
-    }
+    gil = enter_python();   /* the import and the slave's creation under the shared lock */
+    if (ensure_names() != 0 || ensure_loader() != 0) goto python_failed;
+    identifier = own_identifier();
     py_resources = PyUnicode_DecodeFSDefault(resources);
-    py_module_name = PyUnicode_DecodeUTF8(module_name, (Py_ssize_t)strlen(module_name), "strict");
-    if (py_resources == NULL || py_module_name == NULL) goto python_failed;
-    if (!PyUnicode_IsIdentifier(py_module_name)) {
-        logf_(in, fmi2Error, "fmi2Instantiate: slavemodule.txt names '%s', not a Python module", module_name);
-        goto failed;
-    }
-    /* the resources folder on sys.path once per process, ahead of the rest */
-    sys_path = PySys_GetObject("path");   /* borrowed */
-    if (sys_path == NULL || !PyList_Check(sys_path)) {
-        PyErr_SetString(PyExc_RuntimeError, "sys.path is not a list");
-        goto python_failed;
-    }
-    switch (PySequence_Contains(sys_path, py_resources)) {
-    case 0: if (PyList_Insert(sys_path, 0, py_resources) != 0) goto python_failed; break;
-    case 1: break;
-    default: goto python_failed;
-    }
-    module = PyImport_Import(py_module_name);
-    if (module == NULL) goto python_failed;
-    in->cls = find_slave_class(module, py_module_name);
-    if (in->cls == NULL) {
-        if (!PyErr_Occurred())
-            logf_(in, fmi2Error, "fmi2Instantiate: module %s (%s) defines no pythonfmu Fmi2Slave subclass",
-                  module_name, resources);
-        goto python_or_failed;
-    }
+    py_guid = fmuGUID ? PyUnicode_DecodeUTF8(fmuGUID, (Py_ssize_t)strlen(fmuGUID), "replace") : Py_NewRef(Py_None);
+    py_identifier = identifier ? PyUnicode_DecodeFSDefault(identifier) : NULL;
+    if (py_resources == NULL || py_guid == NULL || py_identifier == NULL) goto python_failed;
+    in->cls = PyObject_CallFunctionObjArgs(loader_slave_class, py_resources, py_guid, py_identifier, c_fmi2slave,
+                                           NULL);
+    if (in->cls == NULL) goto python_failed;
     py_name = PyUnicode_DecodeUTF8(instanceName, (Py_ssize_t)strlen(instanceName), "replace");
     ptr = PyLong_FromVoidPtr((void *)functions);
     if (py_name == NULL || ptr == NULL) goto python_failed;
@@ -701,17 +802,15 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, 
     if (in->kwargs == NULL || make_slave(in) != 0) goto python_failed;
     drain_log(in);
     Py_DECREF(py_resources);
-    Py_DECREF(py_module_name);
-    Py_DECREF(module);
+    Py_DECREF(py_guid);
+    Py_DECREF(py_identifier);
     Py_DECREF(py_name);
     Py_DECREF(ptr);
-    PyGILState_Release(gil);
+    leave_python(gil);
     free(resources);
-    free(module_name);
+    free(identifier);
     return in;
 
-python_or_failed:
-    if (!PyErr_Occurred()) goto failed;
 python_failed:
     {
         char *message = take_exception();
@@ -719,15 +818,14 @@ python_failed:
         logf_(in, fmi2Error, "fmi2Instantiate: %s (resources %s)", message, resources);
         free(message);
     }
-failed:
     Py_XDECREF(py_resources);
-    Py_XDECREF(py_module_name);
-    Py_XDECREF(module);
+    Py_XDECREF(py_guid);
+    Py_XDECREF(py_identifier);
     Py_XDECREF(py_name);
     Py_XDECREF(ptr);
-    PyGILState_Release(gil);
+    leave_python(gil);
     free(resources);
-    free(module_name);
+    free(identifier);
     free_instance(in);
     return NULL;
 }
@@ -764,13 +862,13 @@ static fmi2Status call0(Instance *in, const char *fn, PyObject *method, PyObject
     PyObject *result;
     fmi2Status status = fmi2OK;
     if (in == NULL) return fmi2Error;
-    gil = PyGILState_Ensure();
+    gil = enter_python();
     if (arg1 && arg2 && arg3) result = PyObject_CallMethodObjArgs(in->slave, method, arg1, arg2, arg3, NULL);
     else result = PyObject_CallMethodNoArgs(in->slave, method);
     if (result == NULL) status = failed(in, fn);
     else drain_log(in);
     Py_XDECREF(result);
-    PyGILState_Release(gil);
+    leave_python(gil);
     return status;
 }
 
@@ -782,18 +880,17 @@ EXPORT fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefi
     PyObject *start, *stop, *tol;
     fmi2Status status;
     if (in == NULL) return fmi2Error;
-    gil = PyGILState_Ensure();
+    gil = enter_python();
     start = PyFloat_FromDouble(startTime);
     stop = stopTimeDefined ? PyFloat_FromDouble(stopTime) : Py_NewRef(Py_None);
     tol = toleranceDefined ? PyFloat_FromDouble(tolerance) : Py_NewRef(Py_None);
     if (start && stop && tol) status = call0(in, "fmi2SetupExperiment", s_setup_experiment, start, stop, tol);
     else status = failed(in, "fmi2SetupExperiment");
-    /* A refused start time (not finite, too large) changes nothing, the wrapper's time included. */
-    if (status == fmi2OK) in->time = in->last_successful_time = startTime;
+    if (status == fmi2OK) in->time = in->last_successful_time = startTime;   /* a refusal changes nothing */
     Py_XDECREF(start);
     Py_XDECREF(stop);
     Py_XDECREF(tol);
-    PyGILState_Release(gil);
+    leave_python(gil);
     return status;
 }
 
@@ -818,12 +915,12 @@ EXPORT fmi2Status fmi2Reset(fmi2Component c)
     PyGILState_STATE gil;
     fmi2Status status = fmi2OK;
     if (in == NULL) return fmi2Error;
-    gil = PyGILState_Ensure();
+    gil = enter_python();
     drain_log(in);
     if (make_slave(in) != 0) status = failed(in, "fmi2Reset");   /* the old slave stays if creating fails */
     else drain_log(in);
     in->time = in->last_successful_time = 0.0;
-    PyGILState_Release(gil);
+    leave_python(gil);
     return status;
 }
 
@@ -868,8 +965,8 @@ static PyObject *get_values(Instance *in, const char *fn, PyObject *getter, cons
     if (in == NULL) return fmi2Error;                                                      \
     if (!arrays_ok(in, FN, vr, value, nvr)) return fmi2Error;                              \
     if (nvr == 0) return fmi2OK;                                                           \
-    gil = PyGILState_Ensure();                                                             \
-    if (check_vrs(in, FN, vr, nvr, KIND) != 0) { PyGILState_Release(gil); return fmi2Error; }
+    gil = enter_python();                                                                  \
+    if (check_vrs(in, FN, vr, nvr, KIND) != 0) { leave_python(gil); return fmi2Error; }
 
 EXPORT fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[])
 {
@@ -883,7 +980,7 @@ EXPORT fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], si
     if (seq == NULL || PyErr_Occurred()) status = failed(in, "fmi2GetReal");
     else drain_log(in);
     Py_XDECREF(seq);
-    PyGILState_Release(gil);
+    leave_python(gil);
     return status;
 }
 
@@ -905,7 +1002,7 @@ EXPORT fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[],
     if (seq == NULL || PyErr_Occurred()) status = failed(in, "fmi2GetInteger");
     else drain_log(in);
     Py_XDECREF(seq);
-    PyGILState_Release(gil);
+    leave_python(gil);
     return status;
 }
 
@@ -921,7 +1018,7 @@ EXPORT fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[],
     if (seq == NULL || PyErr_Occurred()) status = failed(in, "fmi2GetBoolean");
     else drain_log(in);
     Py_XDECREF(seq);
-    PyGILState_Release(gil);
+    leave_python(gil);
     return status;
 }
 
@@ -948,7 +1045,7 @@ EXPORT fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], 
         drain_log(in);
     }
     Py_XDECREF(seq);
-    PyGILState_Release(gil);
+    leave_python(gil);
     return status;
 }
 
@@ -977,8 +1074,8 @@ static fmi2Status set_values(Instance *in, const char *fn, PyObject *setter, con
         if (in == NULL) return fmi2Error;                                                                   \
         if (!arrays_ok(in, #NAME, vr, value, nvr)) return fmi2Error;                                        \
         if (nvr == 0) return fmi2OK;                                                                        \
-        gil = PyGILState_Ensure();                                                                          \
-        if (check_vrs(in, #NAME, vr, nvr, KIND) != 0) { PyGILState_Release(gil); return fmi2Error; }        \
+        gil = enter_python();                                                                               \
+        if (check_vrs(in, #NAME, vr, nvr, KIND) != 0) { leave_python(gil); return fmi2Error; }        \
         values = PyList_New((Py_ssize_t)nvr);                                                               \
         for (i = 0; values && i < nvr; i++) {                                                               \
             PyObject *item = CONVERT(value[i]);                                                             \
@@ -986,7 +1083,7 @@ static fmi2Status set_values(Instance *in, const char *fn, PyObject *setter, con
             PyList_SET_ITEM(values, (Py_ssize_t)i, item);                                                   \
         }                                                                                                   \
         status = set_values(in, #NAME, METHOD, vr, nvr, values);                                            \
-        PyGILState_Release(gil);                                                                            \
+        leave_python(gil);                                                                            \
         return status;                                                                                      \
     }
 
@@ -1005,8 +1102,8 @@ EXPORT fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], 
     if (in == NULL) return fmi2Error;
     if (!arrays_ok(in, "fmi2SetString", vr, value, nvr)) return fmi2Error;
     if (nvr == 0) return fmi2OK;
-    gil = PyGILState_Ensure();
-    if (check_vrs(in, "fmi2SetString", vr, nvr, KIND_STRING) != 0) { PyGILState_Release(gil); return fmi2Error; }
+    gil = enter_python();
+    if (check_vrs(in, "fmi2SetString", vr, nvr, KIND_STRING) != 0) { leave_python(gil); return fmi2Error; }
     values = PyList_New((Py_ssize_t)nvr);
     for (i = 0; values && i < nvr; i++) {
         PyObject *item;
@@ -1017,7 +1114,7 @@ EXPORT fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], 
                   name, vr[i], in->time);
             free(name);
             Py_DECREF(values);
-            PyGILState_Release(gil);
+            leave_python(gil);
             return fmi2Error;
         }
         item = PyUnicode_DecodeUTF8(value[i], (Py_ssize_t)strlen(value[i]), "strict");
@@ -1035,13 +1132,13 @@ EXPORT fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], 
                   name, vr[i], at >= 0 ? (unsigned char)value[i][at] : 0u, at, in->time);
             free(name);
             Py_DECREF(values);
-            PyGILState_Release(gil);
+            leave_python(gil);
             return fmi2Error;
         }
         PyList_SET_ITEM(values, (Py_ssize_t)i, item);
     }
     status = set_values(in, "fmi2SetString", s_set_string, vr, nvr, values);
-    PyGILState_Release(gil);
+    leave_python(gil);
     return status;
 }
 
@@ -1054,7 +1151,7 @@ EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint
     fmi2Status status;
     (void)noSetFMUStatePriorToCurrentPoint;
     if (in == NULL) return fmi2Error;
-    gil = PyGILState_Ensure();
+    gil = enter_python();
     in->time = currentCommunicationPoint;
     t = PyFloat_FromDouble(currentCommunicationPoint);
     h = PyFloat_FromDouble(communicationStepSize);
@@ -1074,7 +1171,7 @@ EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint
             if (ok) in->time = in->last_successful_time = currentCommunicationPoint + communicationStepSize;
         }
     }
-    PyGILState_Release(gil);
+    leave_python(gil);
     return status;
 }
 
@@ -1201,11 +1298,11 @@ EXPORT fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
         logf_(in, fmi2Error, "fmi2GetFMUstate: the FMUstate pointer is NULL");
         return fmi2Error;
     }
-    gil = PyGILState_Ensure();
+    gil = enter_python();
     value = PyObject_CallMethodNoArgs(in->slave, s_get_fmu_state);
     if (value == NULL) status = failed(in, "fmi2GetFMUstate");
     else { drain_log(in); status = store_state(in, "fmi2GetFMUstate", FMUstate, value); }
-    PyGILState_Release(gil);
+    leave_python(gil);
     return status;
 }
 
@@ -1217,17 +1314,17 @@ EXPORT fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
     PyObject *result;
     fmi2Status status = fmi2OK;
     if (in == NULL) return fmi2Error;
-    gil = PyGILState_Ensure();
+    gil = enter_python();
     state = as_state(in, "fmi2SetFMUstate", FMUstate);
     if (state == NULL) {
-        PyGILState_Release(gil);
+        leave_python(gil);
         return fmi2Error;
     }
     result = PyObject_CallMethodOneArg(in->slave, s_set_fmu_state, state->state);
     if (result == NULL) status = failed(in, "fmi2SetFMUstate");
     else drain_log(in);
     Py_XDECREF(result);
-    PyGILState_Release(gil);
+    leave_python(gil);
     return status;
 }
 
@@ -1238,10 +1335,10 @@ EXPORT fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
     State *state;
     if (in == NULL) return fmi2Error;
     if (FMUstate == NULL || *FMUstate == NULL) return fmi2OK;   /* FMI 2.0: freeing NULL is allowed */
-    gil = PyGILState_Ensure();
+    gil = enter_python();
     state = as_state(in, "fmi2FreeFMUstate", *FMUstate);
     if (state != NULL) drop_state(state);
-    PyGILState_Release(gil);
+    leave_python(gil);
     if (state == NULL) return fmi2Error;
     *FMUstate = NULL;
     return fmi2OK;
@@ -1277,11 +1374,11 @@ EXPORT fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUst
         logf_(in, fmi2Error, "fmi2SerializedFMUstateSize: the size pointer is NULL");
         return fmi2Error;
     }
-    gil = PyGILState_Ensure();
+    gil = enter_python();
     state = as_state(in, "fmi2SerializedFMUstateSize", FMUstate);
     if (state != NULL) bytes = serialized(in, "fmi2SerializedFMUstateSize", state);
     if (bytes != NULL) *size = (size_t)PyBytes_GET_SIZE(bytes);
-    PyGILState_Release(gil);
+    leave_python(gil);
     return bytes ? fmi2OK : fmi2Error;
 }
 
@@ -1294,7 +1391,7 @@ EXPORT fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, 
     PyObject *bytes = NULL;
     fmi2Status status = fmi2Error;
     if (in == NULL) return fmi2Error;
-    gil = PyGILState_Ensure();
+    gil = enter_python();
     state = as_state(in, "fmi2SerializeFMUstate", FMUstate);
     if (state != NULL) bytes = serialized(in, "fmi2SerializeFMUstate", state);
     if (bytes != NULL) {
@@ -1307,7 +1404,7 @@ EXPORT fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, 
             status = fmi2OK;
         }
     }
-    PyGILState_Release(gil);
+    leave_python(gil);
     return status;
 }
 
@@ -1324,7 +1421,7 @@ EXPORT fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serial
               FMUstate == NULL ? "the FMUstate pointer" : "the serialised state");
         return fmi2Error;
     }
-    gil = PyGILState_Ensure();
+    gil = enter_python();
     bytes = PyBytes_FromStringAndSize(serializedState, (Py_ssize_t)size);
     /* A parcosim slave reads the bytes against the instance (model, GUID, configuration, its own
      * state's layout); any other pythonfmu slave as pythonfmu does, on its class. */
@@ -1334,6 +1431,6 @@ EXPORT fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serial
     Py_XDECREF(bytes);
     if (value == NULL) status = failed(in, "fmi2DeSerializeFMUstate");
     else { drain_log(in); status = store_state(in, "fmi2DeSerializeFMUstate", FMUstate, value); }
-    PyGILState_Release(gil);
+    leave_python(gil);
     return status;
 }
