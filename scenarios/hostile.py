@@ -38,13 +38,13 @@ CALL_LIMIT = 10.0
 #: A case taking longer (all its calls) is a hang.
 CASE_TIMEOUT = 60.0
 #: What each case mostly exercises.
-KINDS = ("parameters", "inputs", "steps", "order", "strings", "sets", "state", "start")
+KINDS = ("parameters", "inputs", "steps", "order", "strings", "sets", "state", "start", "lifecycle")
 #: Kinds whose calls FMI 2.0 wants refused with fmi2Error (a set of an output, of a fixed
 #: parameter after initialisation, an unknown or wrongly typed value reference; bytes that
 #: are not a state of this FMU; a start time that is not finite): pythonfmu's own binary
 #: returns fmi2Fatal there; checked only when the FMU's binary is parcosim's wrapper
 #: (:data:`fmus.guarded.WRAPPER_SYMBOL`).
-WRAPPER_KINDS = ("sets", "state", "start")
+WRAPPER_KINDS = ("sets", "state", "start", "lifecycle")
 #: Outcomes, in the order of the summary table.
 OUTCOMES = ("ok", "refused", "fatal", "violation", "crash", "hang")
 
@@ -64,6 +64,9 @@ STEP_SIZES = (1e-3, 1e-3, 1e-3, 5e-4, 2.5e-4, 2e-3, 1e-2, 0.5, 10.0, 0.0, -1e-3,
 #: makes the bytes): all but "forged" must be refused; "forged" (a byte altered, the
 #: checksum recomputed) may be taken, and the steps after it must then stay clean.
 STATE_VARIANTS = ("random", "exploit", "truncated", "altered", "forged", "foreign", "legacy")
+#: Calls of a "lifecycle" case out of FMI 2.0's order, each to be refused with fmi2Error and
+#: nothing changed; "guid" instantiates with a GUID that is not the FMU's (refused: NULL).
+LIFECYCLE_CALLS = ("exit_init_again", "enter_init_again", "setup_again", "guid")
 #: Start times of a "start" case: those that are not finite or where t0 + 1e-6 == t0 must be
 #: refused by fmi2SetupExperiment (fmi2Error).
 START_TIMES = (0.0, -1.0, 1e5, 1e9, 1e10, 1e17, -1e20, 1e-300, math.inf, -math.inf, math.nan)
@@ -109,7 +112,9 @@ def make_case(model: str, variables: list, seed: int, kind: str | None = None, w
     initialisation mode, and ``ops``: ["set", name, value], ["step", t, h] (t None: the
     last point plus the last step), ["get"], ["terminate"], ["get_state"], ["set_state"],
     ["set_vr", type, vr, value] (a raw value reference), ["state_bytes", variant, seed,
-    other model] (bytes of :data:`STATE_VARIANTS` deserialised, and set if taken).
+    other model] (bytes of :data:`STATE_VARIANTS` deserialised, and set if taken), and the
+    out-of-order calls of :data:`LIFECYCLE_CALLS`; ``guid`` "wrong" instantiates with
+    another GUID.
     ``models`` (all FMUs of the run) gives "foreign" states their source.
     """
     rng = random.Random(f"{model}:{seed}")
@@ -168,6 +173,10 @@ def make_case(model: str, variables: list, seed: int, kind: str | None = None, w
         ops.insert(rng.randint(1, len(ops)), ["state_bytes", rng.choice(STATE_VARIANTS), rng.randrange(2 ** 31),
                                               rng.choice(others)])
     start_time = rng.choice(START_TIMES) if kind == "start" else 0.0
+    guid = "wrong" if kind == "lifecycle" and rng.random() < 0.2 else "own"
+    if kind == "lifecycle" and guid == "own":
+        for _ in range(rng.randint(1, 3)):
+            ops.insert(rng.randint(0, len(ops)), [rng.choice(LIFECYCLE_CALLS[:-1])])
     if kind == "sets":
         for _ in range(rng.randint(1, 3)):
             choice = rng.random()
@@ -182,7 +191,8 @@ def make_case(model: str, variables: list, seed: int, kind: str | None = None, w
                 ops.insert(rng.randint(0, len(ops)), ["set_vr", type_, rng.choice((999999, 2 ** 32 - 1, 0, 1)),
                                                       _value(rng, type_, None, 0.5)])
     return {"model": model, "kind": kind, "seed": seed, "instance_name": instance_name,
-            "logging": rng.random() < 0.7, "start_time": start_time, "parameters": parameters, "ops": ops}
+            "logging": rng.random() < 0.7, "start_time": start_time, "guid": guid, "parameters": parameters,
+            "ops": ops}
 
 
 # --- running cases in workers --------------------------------------------------------------------

@@ -82,10 +82,11 @@ def test_no_crash_no_fatal_no_nan_under_hostile_use(model, seeds, extracted, wra
 @pytest.mark.parametrize("model", list(SLAVES))
 @CI
 @given(seeds=SEEDS)
-def test_refused_sets_states_and_start_times_are_fmi2error_not_fatal(model, seeds, extracted, wrapper):
+def test_refused_sets_states_start_times_and_call_orders_are_fmi2error_not_fatal(model, seeds, extracted, wrapper):
     """Sets FMI 2.0 refuses, bytes that are not this FMU's state (random, truncated, altered,
-    another FMU's, the pickle exploit: refused, no command run) and start times that are not
-    usable give fmi2Error; a forged state that is taken steps cleanly."""
+    another FMU's, the pickle exploit: refused, no command run), start times that are not
+    usable and calls out of FMI 2.0's order give fmi2Error (an instantiation with another
+    GUID gives no instance); a forged state that is taken steps cleanly."""
     if not wrapper[model]:
         pytest.skip(f"{model}.fmu has pythonfmu's binary (no {WRAPPER_SYMBOL}): a refused set (FmiError) is "
                     "fmi2Fatal there; parcosim's FMI wrapper makes it fmi2Error")
