@@ -8,6 +8,18 @@ from __future__ import annotations
 
 import math
 
+class FmiError(Exception):
+    """Refuse the current FMI call with ``fmi2Error``.
+
+    parcosim's FMI wrapper (``fmus/wrapper/parcosim_fmi2.c``) turns this exception, raised
+    in any callback of a slave, into ``fmi2Error`` and logs its message alone (category
+    ``logStatusError``); any other exception, ``KeyboardInterrupt`` included, also becomes
+    ``fmi2Error``, logged as ``<Type>: <message>``.  The instance stays valid: the importer
+    may go on calling it or free it.  (Under pythonfmu's own binary any exception is
+    ``fmi2Fatal``.)
+    """
+
+
 #: Start value of a numeric parameter meaning "the preset's value".
 PRESET_VALUE = -1.0
 
