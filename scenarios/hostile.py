@@ -338,11 +338,16 @@ def prepared_fmus(fmu_dir, models, work) -> dict:
 
 def wrapper_is_ours(unzip_dir, model: str) -> bool:
     """Whether the extracted FMU's binary is parcosim's own FMI wrapper (checked in a
-    subprocess: loading the binary here would start its Python in this process)."""
+    subprocess: loading the binary here would start its Python in this process).  The binary
+    is named by the FMU's modelIdentifier, which need not be ``model`` (the FMU's file name:
+    ``SpecPlant_delta3.fmu`` holds ``SpecPlant.so``)."""
+    from fmpy import read_model_description
+
+    identifier = read_model_description(str(unzip_dir)).coSimulation.modelIdentifier
     code = ("import sys; from fmus.guarded import wrapper_symbol_present; "
             "sys.exit(0 if wrapper_symbol_present(sys.argv[1], sys.argv[2]) else 1)")
     root = str(Path(__file__).resolve().parents[1])
-    run = subprocess.run([sys.executable, "-c", code, str(Path(unzip_dir) / "resources"), model],
+    run = subprocess.run([sys.executable, "-c", code, str(Path(unzip_dir) / "resources"), identifier],
                          env={**os.environ, "PYTHONPATH": root}, capture_output=True, timeout=120)
     return run.returncode == 0
 
