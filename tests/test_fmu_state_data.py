@@ -228,6 +228,18 @@ def test_a_state_cannot_name_code_into_the_instance():
             target.deserialize_state(_reframed(data, tree2))
 
 
+def _inner_snapshots(node):
+    """The inner slaves' states (records tagged as snapshots) in a read tree."""
+    if isinstance(node, stateformat.ObjectRecord):
+        if node.tag == fmustate.SNAPSHOT_TAG:
+            yield node
+            return
+        node = node.fields
+    items = node.values() if isinstance(node, dict) else node if isinstance(node, (list, tuple)) else ()
+    for item in items:
+        yield from _inner_snapshots(item)
+
+
 def test_reading_any_state_imports_and_runs_nothing(tmp_path):
     """The issue's exploit: pickle bytes naming ``fmus.guarded`` + ``os.system``.  In a fresh
     process the crafted bytes, and a well-formed state naming subprocess.Popen and ctypes,
@@ -293,10 +305,10 @@ def _refused_or_clean(model: str, data: bytes) -> None:
 
 
 @_PROPERTY
-@given(data=st.binary(max_size=300))
-def test_random_bytes_are_refused(data):
+@given(model=st.sampled_from(MODELS), data=st.binary(max_size=300))
+def test_random_bytes_are_refused(model, data):
     with pytest.raises(FmiError, match="fmi2DeSerializeFMUstate: "):
-        _running("CurrentObserver", steps=0).deserialize_state(data)
+        _running(model, steps=0).deserialize_state(data)
 
 
 @_PROPERTY
@@ -340,6 +352,44 @@ def test_a_forged_state_is_refused_or_continues_cleanly(model, where, flip):
 
 
 # --- through the FMI wrapper ---------------------------------------------------------------
+
+from test_fmu_state import system_fmus  # noqa: E402,F401 - the ClosedLoop and ControlChain FMUs (a fixture)
+
+
+@pytest.mark.parametrize("model", ["ClosedLoop", "ControlChain"])
+def test_a_system_fmu_refuses_foreign_truncated_and_altered_states(model, system_fmus):
+    """The FMUs that contain a system: their own state (every inner slave's) reads back; the
+    other system FMU's state, a truncated or altered one, and one whose inner values were
+    forged to NaN are fmi2Error; the instance then steps on."""
+    from fmpy.fmi1 import FMICallException
+
+    other = {"ClosedLoop": "ControlChain", "ControlChain": "ClosedLoop"}[model]
+    insts = {name: _FmuInstance(system_fmus[name], name) for name in (model, other)}
+    for each in insts.values():
+        each.initialize({}, 0.0)
+    inst = insts[model]
+    own = inst.serialize_state(inst.get_state())
+    foreign = insts[other].serialize_state(insts[other].get_state())
+    decoded = fmustate.read(own)
+    tree = decoded.tree
+    values = next(_inner_snapshots(tree["core"])).fields["values"]
+    float_name = next(k for k, v in values.items() if type(v) is float and math.isfinite(v))
+    values[float_name] = math.nan
+    forged = _reframed(own, tree)
+    altered = bytearray(own)
+    altered[len(own) // 2] ^= 0x55
+    for data, why in ((foreign, f"a state of '{other}', not of {model}"), (own[:len(own) // 3], "truncated"),
+                      (bytes(altered), "checksum"), (forged, "not a finite number")):
+        with pytest.raises(FMICallException) as info:
+            inst.deserialize_state(data)
+        assert info.value.status == 3
+        assert why in inst.messages[-1], inst.messages[-1]
+    restored = inst.deserialize_state(own)
+    inst.set_state(restored)
+    inst.free_state(restored)
+    inst.do_step(0.0, 1e-3)
+    for each in insts.values():
+        each.close()
 
 
 def test_the_fmu_refuses_foreign_states_and_states_of_other_instances(built_fmus, tmp_path):
