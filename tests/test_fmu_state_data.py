@@ -328,6 +328,18 @@ def test_truncated_states_are_refused(model, cut):
         _running(model, steps=0).deserialize_state(data[:int(cut * len(data))])
 
 
+def test_every_prefix_shorter_than_the_frame_is_refused_as_not_a_state():
+    """The magic and a few bytes, up to a whole header without its checksum: refused by name
+    before any field is read (a reader that unpacked the version and length from fewer bytes
+    would raise struct.error, not the refusal)."""
+    data = _state_bytes("Trajectory")
+    target = _running("Trajectory", steps=0)
+    frame = len(stateformat.MAGIC) + 12 + stateformat.DIGEST_SIZE
+    for n in range(frame):
+        with pytest.raises(FmiError, match="not a serialised parcosim FMU state"):
+            target.deserialize_state(data[:n])
+
+
 @_PROPERTY
 @given(model=st.sampled_from(MODELS), where=st.floats(0.0, 1.0, exclude_max=True), flip=st.integers(1, 255))
 def test_an_altered_byte_is_refused_by_the_checksum(model, where, flip):
