@@ -194,6 +194,10 @@ class Derivator:
     Call :meth:`reset` before the first :meth:`step`; it fixes the number of channels.
     """
 
+    #: Kernel buffers and their layout words, which a restored FMU state may not change
+    #: (:mod:`fmus.fmustate`).
+    KERNEL_LAYOUT = {"buf": fastderivator.LAYOUT_WORDS}
+
     def __init__(self, fc_vel=DEFAULT_FC_VEL, fc_acc=DEFAULT_FC_ACC, T=SAMPLE_TIME):
         self.fc_vel, self.fc_acc, self.T = float(fc_vel), float(fc_acc), float(T)
         self.velocity_sos = bessel_lowpass_sos(VELOCITY_FILTER_ORDER, fc_vel, T)

@@ -49,6 +49,9 @@ B_C = B_LO + N_MAX * NY_MAX                # C (NY_MAX x N_MAX)
 B_AD = B_C + NY_MAX * N_MAX                # Ad (N_MAX x N_MAX)
 B_BD = B_AD + N_MAX * N_MAX                # Bd (N_MAX x 2)
 BUF_SIZE = B_BD + N_MAX * 2
+#: The words of the buffer that say its layout (sizes, kept-state indices, the yaw switch):
+#: the kernel indexes arrays with them, so a restored FMU state may not change them.
+LAYOUT_WORDS = (B_N, B_NY, B_YAW) + tuple(range(B_STATES, B_STATES + N_MAX))
 
 OK, REFUSED = 0, 1
 

@@ -36,6 +36,9 @@ V_STATES, V_CHANNELS, V_STARTED = 0, 1, 2
 #: First entry of the step matrix, shape (2 + n, n + 1), row-major; then the rest state per
 #: unit angle (n); then the state with the newest input, shape (n + 1, m).
 V_MATRIX = 3
+#: The words of the buffer that say its layout (states, channels): the kernel's loops run over
+#: them, so a restored FMU state may not change them.
+LAYOUT_WORDS = (V_STATES, V_CHANNELS)
 
 
 def _offsets(n, m):

@@ -348,9 +348,11 @@ class _Applier:
         elif template is not None and not _is_leaf(template) and not (fits and template.dtype == data.dtype):
             raise StateMismatch(f"{path}: an array of dtype {data.dtype} in the state, this instance has "
                                 f"{_describe(template)}")
-        same = fits and template.dtype == data.dtype and template.shape == data.shape
-        _check_array_finite(data, template if same else None, path)
-        if same and template.flags.writeable:
+        if fits and template.shape != data.shape:
+            raise StateMismatch(f"{path}: an array of shape {data.shape} in the state, this instance has "
+                                f"{_describe(template)}")
+        _check_array_finite(data, template if fits else None, path)
+        if fits and template.flags.writeable:
             np.copyto(template, data)
             data = template
         self.rebuilt[slot] = data
@@ -390,11 +392,21 @@ class _Applier:
             raise StateMismatch(f"{path}: the state holds a {data.tag}, this instance {_describe(template)}")
         self.rebuilt.append(template)
         configuration = _canonical(template) if _is_frozen(template) else None
+        layout = _layout_words(template)
         fields = object_fields(template) or {}
         for name, item in data.fields.items():
             if name not in fields and (not name.isidentifier() or hasattr(type(template), name)):
                 raise StateMismatch(f"{path}: {data.tag} has no field {name!r}")
             _set_field(template, name, self.value(fields.get(name), item, f"{path}.{name}"))
+        for name, (words, before) in layout.items():
+            after = getattr(template, name, None)
+            changed = [w for w, value in zip(words, before)
+                       if not (isinstance(after, np.ndarray) and after.ndim == 1 and w < after.size
+                               and after[w] == value)]
+            if changed:
+                raise StateMismatch(f"{path}.{name}[{changed[0]}]: the state changes a layout word of the kernel "
+                                    f"buffer ({before[words.index(changed[0])]!r} in this instance); it is "
+                                    "configuration (sizes, indices, modes), not run state")
         if configuration is not None and _canonical(template) != configuration:
             raise StateMismatch(f"{path}: the state's {data.tag} differs from this instance's; it is configuration "
                                 "(frozen: fixed by the parameters), not run state")
@@ -421,6 +433,19 @@ class _Applier:
         for k, item in enumerate(items):
             template.flat[k] = item
         return template
+
+
+def _layout_words(obj) -> dict:
+    """Field -> (word indices, their values now) of the kernel buffers ``obj``'s class names in
+    ``KERNEL_LAYOUT``: the words a kernel indexes or branches with (docs/state.md)."""
+    layout = getattr(type(obj), "KERNEL_LAYOUT", None) or {}
+    result = {}
+    for name, words in layout.items():
+        buffer = getattr(obj, name, None)
+        if isinstance(buffer, np.ndarray) and buffer.ndim == 1:
+            words = tuple(words)
+            result[name] = (words, [buffer[w] for w in words])
+    return result
 
 
 def _is_frozen(obj) -> bool:

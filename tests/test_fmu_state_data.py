@@ -215,6 +215,36 @@ def test_configuration_inside_the_state_cannot_be_forged():
     target.set_state(target.deserialize_state(_reframed(data, tree)))   # unforged: taken
 
 
+@pytest.mark.parametrize("model, holder, field, word", [
+    ("Derivator", "derivator", "buf", "V_STATES"),
+    ("BalanceController", "controller", "buf", "B_STATES"),
+    ("PositionController", "controller", "_buf", "B_TNX")])
+def test_the_layout_words_of_a_kernel_buffer_cannot_be_forged(model, holder, field, word):
+    """The compiled kernels index arrays with words of their buffers (the derivator's number of
+    states, the balance controller's kept-state indices, the table's cells): a forged state
+    that changed one would make a kernel read or write outside its arrays.  Refused, naming
+    the word; so is a buffer of another shape."""
+    import importlib
+
+    kernel = {"Derivator": "controller.fastderivator", "BalanceController": "controller.fastbalance",
+              "PositionController": "controller.fastlaw"}[model]
+    index = getattr(importlib.import_module(kernel), word)
+    data = _state_bytes(model)
+    tree = fmustate.read(data).tree
+    buffer = tree[holder].fields[field]
+    target = _running(model, steps=2)
+    forged = buffer.copy()
+    forged[index] += 1000.0
+    tree[holder].fields[field] = forged
+    with pytest.raises(FmiError, match=rf"{holder}\.{field}\[{index}\]: the state changes a layout word"):
+        target.deserialize_state(_reframed(data, tree))
+    tree[holder].fields[field] = np.concatenate([buffer, buffer])
+    with pytest.raises(FmiError, match=rf"{holder}\.{field}: an array of shape"):
+        target.deserialize_state(_reframed(data, tree))
+    tree[holder].fields[field] = buffer
+    target.set_state(target.deserialize_state(_reframed(data, tree)))   # unforged: taken
+
+
 def test_a_state_cannot_name_code_into_the_instance():
     """An object record or an opaque value naming other code (os.system) where the instance
     holds something else is refused by name, and reading it imports nothing."""
