@@ -251,7 +251,9 @@ def test_a_state_cannot_name_code_into_the_instance():
     data = _state_bytes("Trajectory")
     tree = fmustate.read(data).tree
     target = _running("Trajectory", steps=2)
-    for forged in (stateformat.Opaque("function:posix.system"), stateformat.ObjectRecord("posix.system", {})):
+    own = tree["trajectory"]
+    for forged in (stateformat.Opaque("function:posix.system"), stateformat.ObjectRecord("posix.system", {}),
+                   stateformat.ObjectRecord("aaa.Evil", dict(own.fields))):   # sorts before the instance's class
         tree2 = dict(tree)
         tree2["trajectory"] = forged
         with pytest.raises(FmiError, match="trajectory: the state"):
@@ -312,6 +314,17 @@ print("new modules:", sorted(set(sys.modules) - modules))
     assert "not a serialised parcosim FMU state" in run.stdout
     assert "new modules: []" in run.stdout
     assert not marker.exists()
+
+
+def test_ints_round_trip_over_the_whole_64_bit_range_and_beyond_it_are_refused_by_place():
+    header = stateformat.Header("M", "", bytes(32), 1)
+    values = {"low": -2 ** 63, "high": 2 ** 63 - 1, "minus": -1000, "list": [-2 ** 62, 7]}
+    assert stateformat.decode(stateformat.encode(header, values))[1] == values
+    builder = fmustate._TreeBuilder()
+    assert builder.node(values, "") == values
+    for wide in (2 ** 63, -2 ** 63 - 1):
+        with pytest.raises(TypeError, match=r"\['x'\]\[1\]: the int .* does not fit the state format's 64 bits"):
+            fmustate._TreeBuilder().node({"x": [0, wide]}, "")
 
 
 # --- properties over any bytes -------------------------------------------------------------
