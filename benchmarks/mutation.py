@@ -92,6 +92,11 @@ TARGETS = {
     "fmus/slaves/parcosim_balancecontroller.py": ("test_wheeled_fmu",),
     "fmus/slaves/parcosim_specplant.py": ("test_spec_plant",),
     "fmus/slaves/parcosim_wheeledpendulum.py": ("test_wheeled_fmu",),
+    # The FMU state and the call budget (issue 30; their first sample: benchmarks/mutation_state.py)
+    "fmus/stateformat.py": ("test_fmu_state_data",),
+    "fmus/fmustate.py": ("test_fmu_state_data", "test_fmu_state"),
+    "fmus/slavestate.py": ("test_fmu_state_data", "test_fmu_state"),
+    "fmus/budget.py": ("test_call_limits",),
 }
 #: The control law, whose every mutant runs: functions by name; "f:for" is the for loops in f
 #: (step_reference's loop over the two components is the law; the rest is checks and torques).
