@@ -234,9 +234,9 @@ class BalanceController:
         Wheel radius and track width the encoders are converted with [m].
     """
 
-    #: Kernel buffers and their layout words, which a restored FMU state may not change
-    #: (:mod:`fmus.fmustate`).
-    KERNEL_LAYOUT = {"buf": fastbalance.LAYOUT_WORDS}
+    #: Kernel buffers -> the function giving the words a run changes; a restored FMU state may
+    #: not change the others (:mod:`fmus.fmustate`).
+    KERNEL_BUFFERS = {"buf": fastbalance.run_state_words}
 
     def __init__(self, design: BalanceDesign, route: Route = Route(), R: float = 0.04, W: float = 0.14):
         from motor import get_motor_preset

@@ -194,9 +194,9 @@ class Derivator:
     Call :meth:`reset` before the first :meth:`step`; it fixes the number of channels.
     """
 
-    #: Kernel buffers and their layout words, which a restored FMU state may not change
-    #: (:mod:`fmus.fmustate`).
-    KERNEL_LAYOUT = {"buf": fastderivator.LAYOUT_WORDS}
+    #: Kernel buffers -> the function giving the words a run changes; a restored FMU state may
+    #: not change the others (:mod:`fmus.fmustate`).  The step matrix's view is all configuration.
+    KERNEL_BUFFERS = {"buf": fastderivator.run_state_words, "_matrix": lambda matrix: ()}
 
     def __init__(self, fc_vel=DEFAULT_FC_VEL, fc_acc=DEFAULT_FC_ACC, T=SAMPLE_TIME):
         self.fc_vel, self.fc_acc, self.T = float(fc_vel), float(fc_acc), float(T)

@@ -49,9 +49,15 @@ B_C = B_LO + N_MAX * NY_MAX                # C (NY_MAX x N_MAX)
 B_AD = B_C + NY_MAX * N_MAX                # Ad (N_MAX x N_MAX)
 B_BD = B_AD + N_MAX * N_MAX                # Bd (N_MAX x 2)
 BUF_SIZE = B_BD + N_MAX * 2
-#: The words of the buffer that say its layout (sizes, kept-state indices, the yaw switch):
-#: the kernel indexes arrays with them, so a restored FMU state may not change them.
-LAYOUT_WORDS = (B_N, B_NY, B_YAW) + tuple(range(B_STATES, B_STATES + N_MAX))
+#: The words of the buffer a run changes (started, the estimate, the last voltages); every
+#: other word is configuration (sizes, kept-state indices the kernel indexes with, gains,
+#: matrices), which a restored FMU state may not change (:mod:`fmus.fmustate`).
+RUN_STATE_WORDS = (B_STARTED,) + tuple(range(B_X_HAT, B_X_HAT + N_MAX)) + (B_U, B_U + 1)
+
+
+def run_state_words(buf):
+    """The indices of ``buf`` a run changes (:data:`RUN_STATE_WORDS`)."""
+    return RUN_STATE_WORDS
 
 OK, REFUSED = 0, 1
 

@@ -36,15 +36,21 @@ V_STATES, V_CHANNELS, V_STARTED = 0, 1, 2
 #: First entry of the step matrix, shape (2 + n, n + 1), row-major; then the rest state per
 #: unit angle (n); then the state with the newest input, shape (n + 1, m).
 V_MATRIX = 3
-#: The words of the buffer that say its layout (states, channels): the kernel's loops run over
-#: them, so a restored FMU state may not change them.
-LAYOUT_WORDS = (V_STATES, V_CHANNELS)
 
 
 def _offsets(n, m):
     rest = V_MATRIX + (2 + n) * (n + 1)
     state = rest + n
     return rest, state, state + (n + 1) * m
+
+
+def run_state_words(buf: np.ndarray) -> range:
+    """The indices of ``buf`` a run changes: ``V_STARTED`` and the state; every other word is
+    configuration (the sizes the kernel's loops run over, the step matrix, the rest state),
+    which a restored FMU state may not change (:mod:`fmus.fmustate`)."""
+    n, m = int(buf[V_STATES]), int(buf[V_CHANNELS])
+    _, state, end = _offsets(n, m)
+    return (V_STARTED,) + tuple(range(state, end))
 
 
 def pack(step_matrix: np.ndarray, rest_per_unit_angle: np.ndarray, channels: int) -> np.ndarray:

@@ -52,10 +52,13 @@ STATE = slice(22, 32)
 B_LAW = 32                                           # 0: unified law (7.21-7.22), 1: seed 001's
 #: First entry of the table, shape (ny + 1, nx + 1, N_TERMS) flattened row-major.
 B_TABLE = 33
-#: The words of the buffer that say its layout and modes (space, model, law, the table's
-#: cells): the kernel branches on them and indexes the table with them, so a restored FMU
-#: state may not change them.
-LAYOUT_WORDS = (B_SPACE, B_MODEL, B_TNX, B_TNY, B_LAW)
+
+
+def run_state_words(buf):
+    """The indices of ``buf`` a run changes (:data:`STATE`); every other word is configuration
+    (modes the kernel branches on, the table's cells it indexes with, gains, the table), which
+    a restored FMU state may not change (:mod:`fmus.fmustate`)."""
+    return range(STATE.start, STATE.stop)
 
 SPACE_Q, SPACE_X = 0.0, 1.0
 MODEL_PD, MODEL_TABULATED, MODEL_EXACT = 0.0, 1.0, 2.0

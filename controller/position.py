@@ -120,9 +120,9 @@ class PositionController:
         Samples that used the exact model in place of the table (``table_fallback``).
     """
 
-    #: Kernel buffers and their layout words, which a restored FMU state may not change
-    #: (:mod:`fmus.fmustate`).
-    KERNEL_LAYOUT = {"_buf": fastlaw.LAYOUT_WORDS}
+    #: Kernel buffers -> the function giving the words a run changes; a restored FMU state may
+    #: not change the others (:mod:`fmus.fmustate`).
+    KERNEL_BUFFERS = {"_buf": fastlaw.run_state_words}
 
     def __init__(self, params: FiveBarParams, strategy: Strategy, model="tabulated", model_error=0.0,
                  grid_step=DEFAULT_GRID_STEP, extent=DEFAULT_EXTENT, kt=None, T=SAMPLE_TIME,

@@ -392,21 +392,18 @@ class _Applier:
             raise StateMismatch(f"{path}: the state holds a {data.tag}, this instance {_describe(template)}")
         self.rebuilt.append(template)
         configuration = _canonical(template) if _is_frozen(template) else None
-        layout = _layout_words(template)
+        configured = _configuration_words(template)
         fields = object_fields(template) or {}
         for name, item in data.fields.items():
             if name not in fields and (not name.isidentifier() or hasattr(type(template), name)):
                 raise StateMismatch(f"{path}: {data.tag} has no field {name!r}")
             _set_field(template, name, self.value(fields.get(name), item, f"{path}.{name}"))
-        for name, (words, before) in layout.items():
-            after = getattr(template, name, None)
-            changed = [w for w, value in zip(words, before)
-                       if not (isinstance(after, np.ndarray) and after.ndim == 1 and w < after.size
-                               and after[w] == value)]
-            if changed:
-                raise StateMismatch(f"{path}.{name}[{changed[0]}]: the state changes a layout word of the kernel "
-                                    f"buffer ({before[words.index(changed[0])]!r} in this instance); it is "
-                                    "configuration (sizes, indices, modes), not run state")
+        for name, (mask, before) in configured.items():
+            first = _first_changed(getattr(template, name, None), mask, before)
+            if first is not None:
+                raise StateMismatch(f"{path}.{name}[{first}]: the state changes a configuration word of the kernel "
+                                    "buffer (sizes, indices, modes, coefficients: fixed by the parameters), not "
+                                    "run state")
         if configuration is not None and _canonical(template) != configuration:
             raise StateMismatch(f"{path}: the state's {data.tag} differs from this instance's; it is configuration "
                                 "(frozen: fixed by the parameters), not run state")
@@ -435,17 +432,31 @@ class _Applier:
         return template
 
 
-def _layout_words(obj) -> dict:
-    """Field -> (word indices, their values now) of the kernel buffers ``obj``'s class names in
-    ``KERNEL_LAYOUT``: the words a kernel indexes or branches with (docs/state.md)."""
-    layout = getattr(type(obj), "KERNEL_LAYOUT", None) or {}
+def _configuration_words(obj) -> dict:
+    """Field -> (mask of its configuration words, their bytes now) of the kernel buffers
+    ``obj``'s class names in ``KERNEL_BUFFERS`` (field -> the function giving the words a run
+    changes): the sizes, indices, modes and coefficients a kernel runs with (docs/state.md)."""
     result = {}
-    for name, words in layout.items():
+    for name, run_state in (getattr(type(obj), "KERNEL_BUFFERS", None) or {}).items():
         buffer = getattr(obj, name, None)
-        if isinstance(buffer, np.ndarray) and buffer.ndim == 1:
-            words = tuple(words)
-            result[name] = (words, [buffer[w] for w in words])
+        if isinstance(buffer, np.ndarray) and not buffer.dtype.hasobject:
+            mask = np.ones(buffer.size, dtype=bool)
+            mask[list(run_state(buffer))] = False
+            result[name] = (mask, buffer.ravel()[mask].tobytes())
     return result
+
+
+def _first_changed(buffer, mask, before: bytes):
+    """The first index of ``buffer`` under ``mask`` whose value is not the one in ``before``
+    (NaN equals NaN), 0 if the buffer is gone or resized, None if none changed."""
+    if not isinstance(buffer, np.ndarray) or buffer.size != mask.size:
+        return 0
+    now = buffer.ravel()[mask]
+    was = np.frombuffer(before, dtype=now.dtype)
+    changed = ~((now == was) | (np.isnan(now) & np.isnan(was)))
+    if not changed.any():
+        return None
+    return int(np.flatnonzero(mask)[np.flatnonzero(changed)[0]])
 
 
 def _is_frozen(obj) -> bool:

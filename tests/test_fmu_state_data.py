@@ -215,34 +215,41 @@ def test_configuration_inside_the_state_cannot_be_forged():
     target.set_state(target.deserialize_state(_reframed(data, tree)))   # unforged: taken
 
 
-@pytest.mark.parametrize("model, holder, field, word", [
-    ("Derivator", "derivator", "buf", "V_STATES"),
-    ("BalanceController", "controller", "buf", "B_STATES"),
-    ("PositionController", "controller", "_buf", "B_TNX")])
-def test_the_layout_words_of_a_kernel_buffer_cannot_be_forged(model, holder, field, word):
-    """The compiled kernels index arrays with words of their buffers (the derivator's number of
-    states, the balance controller's kept-state indices, the table's cells): a forged state
-    that changed one would make a kernel read or write outside its arrays.  Refused, naming
-    the word; so is a buffer of another shape."""
+@pytest.mark.parametrize("model, holder, field, layout, coefficient, run_state", [
+    ("Derivator", "derivator", "buf", "V_STATES", "V_MATRIX", "V_STARTED"),
+    ("BalanceController", "controller", "buf", "B_STATES", "B_GAIN", "B_X_HAT"),
+    ("PositionController", "controller", "_buf", "B_TNX", "B_KP", "S_INTEGRAL")])
+def test_the_configuration_words_of_a_kernel_buffer_cannot_be_forged(model, holder, field, layout, coefficient,
+                                                                     run_state):
+    """The compiled kernels index arrays and loop with words of their buffers (the
+    derivator's number of states, the balance controller's kept-state indices, the table's
+    cells) and compute with others (gains, matrices): a forged state that changed a layout
+    word would make a kernel read or write outside its arrays, a coefficient would change the
+    design.  Both refused, naming the word; so is a buffer of another shape.  A run-state
+    word (the filter's start flag, the estimate, the integral) is taken."""
     import importlib
 
-    kernel = {"Derivator": "controller.fastderivator", "BalanceController": "controller.fastbalance",
-              "PositionController": "controller.fastlaw"}[model]
-    index = getattr(importlib.import_module(kernel), word)
+    kernel = importlib.import_module({"Derivator": "controller.fastderivator",
+                                      "BalanceController": "controller.fastbalance",
+                                      "PositionController": "controller.fastlaw"}[model])
     data = _state_bytes(model)
     tree = fmustate.read(data).tree
     buffer = tree[holder].fields[field]
     target = _running(model, steps=2)
-    forged = buffer.copy()
-    forged[index] += 1000.0
-    tree[holder].fields[field] = forged
-    with pytest.raises(FmiError, match=rf"{holder}\.{field}\[{index}\]: the state changes a layout word"):
-        target.deserialize_state(_reframed(data, tree))
+    for word in (layout, coefficient):
+        index = getattr(kernel, word)
+        forged = buffer.copy()
+        forged[index] += 1000.0
+        tree[holder].fields[field] = forged
+        with pytest.raises(FmiError, match=rf"{holder}\.{field}\[{index}\]: the state changes a configuration word"):
+            target.deserialize_state(_reframed(data, tree))
     tree[holder].fields[field] = np.concatenate([buffer, buffer])
     with pytest.raises(FmiError, match=rf"{holder}\.{field}: an array of shape"):
         target.deserialize_state(_reframed(data, tree))
-    tree[holder].fields[field] = buffer
-    target.set_state(target.deserialize_state(_reframed(data, tree)))   # unforged: taken
+    forged = buffer.copy()
+    forged[getattr(kernel, run_state)] += 0.5
+    tree[holder].fields[field] = forged
+    target.set_state(target.deserialize_state(_reframed(data, tree)))   # run state: taken
 
 
 def test_a_state_cannot_name_code_into_the_instance():
