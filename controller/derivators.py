@@ -77,6 +77,7 @@ noise is 1.5 rad/s^2 rms (< phi/10; 50 Hz gives 2.4), for a lag of
 1 Hz of the thesis' circle).
 """
 
+import copy
 import math
 
 import numpy as np
@@ -215,6 +216,18 @@ class Derivator:
         self._step_matrix = np.block([[c_vel, velocity_chain[3]], [c_acc, d_acc], [a, b]])
         self._rest_state_per_unit_angle = np.linalg.solve(np.eye(a.shape[0]) - a, b)
         self.buf = None
+
+    def __deepcopy__(self, memo):
+        """A copy whose ``_matrix`` and ``_state`` are views of its own ``buf``, as here (numpy
+        copies a view as a separate array: a restored FMU state would step ``_state`` while
+        ``buf``, which the compiled loop reads, stood still)."""
+        twin = object.__new__(type(self))
+        memo[id(self)] = twin
+        twin.__dict__.update({name: copy.deepcopy(value, memo) for name, value in vars(self).items()
+                              if name not in ("_matrix", "_state")})
+        if twin.buf is not None:
+            twin._matrix, twin._state = fastderivator.views(twin.buf)
+        return twin
 
     def reset(self, q0):
         """Start at rest at the angles ``q0`` (one per channel): both estimates are zero.

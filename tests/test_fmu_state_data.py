@@ -108,6 +108,23 @@ def test_a_state_read_back_continues_bit_for_bit_in_any_instance_of_the_model(mo
         np.testing.assert_array_equal(continuation(target), reference)
 
 
+def test_a_restored_derivator_steps_its_kernel_buffer():
+    """The derivator's state and step matrix are views of the buffer the compiled loop reads:
+    after fmi2SetFMUstate (a live snapshot or bytes read back) they must still be, or the
+    Python step would advance a copy while the buffer stood still."""
+    from controller import fastderivator
+
+    inst = _running("Derivator")
+    for state in (inst.get_state(), inst.deserialize_state(inst.serialize_state(inst.get_state()))):
+        inst.set_state(state)
+        derivator = inst.slave.derivator
+        assert np.shares_memory(derivator._state, derivator.buf)
+        inst.slave.q1, inst.slave.q2 = 0.3, -0.2
+        inst.do_step(inst.slave._next_time, 1e-3)
+        np.testing.assert_array_equal(fastderivator.views(derivator.buf)[1], derivator._state)
+        assert derivator._state[-1].tolist() == [0.3, -0.2]
+
+
 def test_the_format_keeps_shared_arrays_shared():
     """The drive's controller buffer is one array reached from two places; after a read the
     two places must still be one array (a copy each would let the fast step and the design
@@ -215,8 +232,13 @@ def test_configuration_inside_the_state_cannot_be_forged():
     target.set_state(target.deserialize_state(_reframed(data, tree)))   # unforged: taken
 
 
+def _derivator_rest_word(kernel, buffer):
+    """The first word of the derivator's rest state per unit angle (outside its two views)."""
+    return kernel._offsets(int(buffer[kernel.V_STATES]), int(buffer[kernel.V_CHANNELS]))[0]
+
+
 @pytest.mark.parametrize("model, holder, field, layout, coefficient, run_state", [
-    ("Derivator", "derivator", "buf", "V_STATES", "V_MATRIX", "V_STARTED"),
+    ("Derivator", "derivator", "buf", "V_STATES", _derivator_rest_word, "V_STARTED"),
     ("BalanceController", "controller", "buf", "B_STATES", "B_GAIN", "B_X_HAT"),
     ("PositionController", "controller", "_buf", "B_TNX", "B_KP", "S_INTEGRAL")])
 def test_the_configuration_words_of_a_kernel_buffer_cannot_be_forged(model, holder, field, layout, coefficient,
@@ -237,7 +259,7 @@ def test_the_configuration_words_of_a_kernel_buffer_cannot_be_forged(model, hold
     buffer = tree[holder].fields[field]
     target = _running(model, steps=2)
     for word in (layout, coefficient):
-        index = getattr(kernel, word)
+        index = getattr(kernel, word) if isinstance(word, str) else word(kernel, buffer)
         forged = buffer.copy()
         forged[index] += 1000.0
         tree[holder].fields[field] = forged
