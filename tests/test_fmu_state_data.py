@@ -184,6 +184,23 @@ def test_a_state_of_another_configuration_is_refused_once_initialised():
         fresh.do_step(4e-3, 1e-3)
 
 
+def test_the_configuration_of_a_state_follows_parameters_set_after_a_restore():
+    """A state taken before initialisation, set after it, opens the parameters again: the
+    digest the next snapshot carries is the new configuration's (a digest kept from before
+    would let a state of T = 1 ms into a T = 2 ms instance)."""
+    inst = InProcessInstance("Derivator", "d")
+    inst.enter_initialization({}, 0.0)
+    before = inst.get_state()
+    inst.exit_initialization()
+    one_ms = inst.get_state().config
+    inst.set_state(before)
+    inst.slave.T = 2e-3
+    inst.exit_initialization()
+    two_ms = inst.get_state().config
+    assert two_ms != one_ms
+    assert two_ms == fmustate.config_digest("Derivator", fmustate.parameter_values(inst.slave))
+
+
 @pytest.mark.parametrize("model", ["Derivator", "FiveBarPlant", "PositionController"])
 def test_a_non_finite_value_is_refused_by_its_place(model):
     """One float of the state set to NaN (or infinity) with a recomputed checksum: refused,
