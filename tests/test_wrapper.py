@@ -377,3 +377,19 @@ def test_without_a_compiler_fmus_keep_pythonfmus_binary_with_one_warning(built_f
     assert not has_wrapper(fmu)
     monkeypatch.undo()
     assert wrapper.install_wrapper(fmu) and has_wrapper(fmu)
+
+
+def test_the_wrapper_compiles_without_a_warning(tmp_path):
+    """-Wall -Wextra -Werror on the wrapper's source (the build itself does not use -Werror, so
+    that a newer compiler's new warning never stops a user's build): an unused variable, a
+    signed/unsigned comparison or a missing prototype introduced in the C fails here."""
+    import sysconfig
+
+    from fmus.wrapper import CFLAGS, SOURCE, compiler
+
+    cc = compiler()
+    if cc is None:
+        pytest.skip("no C compiler")
+    run = subprocess.run([cc, *CFLAGS, "-Wall", "-Wextra", "-Werror", f"-I{sysconfig.get_paths()['include']}",
+                          str(SOURCE), "-o", str(tmp_path / "w.so")], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
