@@ -235,9 +235,12 @@ def test_two_fmu_types_instantiate_and_step_at_once_from_two_threads(built_fmus,
         from fmpy.fmi2 import FMU2Slave
         folders = {[str(f) for f in folders]!r}
         barrier, out = threading.Barrier(2), [None, None]
+        # fmpy's reader validates against the FMI schema with lxml, which is not thread-safe
+        # (seen once in CI: XMLSchemaParseError): the importer's part is read before the threads.
+        descriptions = [read_model_description(folder) for folder in folders]
         def run(k):
             try:
-                md = read_model_description(folders[k])
+                md = descriptions[k]
                 fmu = FMU2Slave(guid=md.guid, unzipDirectory=folders[k], instanceName=f"i{{k}}",
                                 modelIdentifier=md.coSimulation.modelIdentifier)
                 barrier.wait()
