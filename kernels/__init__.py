@@ -1,0 +1,182 @@
+"""parcosim's C kernels and their one binding layer (ctypes).
+
+Each model's numerical step exists once, in C, in ``kernels/src/<model>.c`` (conventions in
+``kernels/src/pc_common.h`` and docs/kernels.md).  :func:`library` loads the shared library
+``kernels/libparcosim_kernels.so`` that ``pip install -e .`` builds (:mod:`kernels.build`);
+the model modules (``plant``, ``motor``, ``controller``), the FMU slaves, the compiled mode
+and the monolithic reference all call these functions, through ctypes, on numpy float64
+buffers whose layout is the C structs' (:func:`layout`).
+
+Inside an FMU the library travels in the bundle beside this file (``fmus/bundle.py``) and is
+loaded by path: starting an FMU compiles nothing.  ``$PARCOSIM_KERNELS_LIB`` names another
+build of the same sources to load instead (the sanitizer build of the tests).
+"""
+from __future__ import annotations
+
+import ctypes
+import os
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+LIBRARY = HERE / "libparcosim_kernels.so"
+#: Environment variable naming a library to load instead of :data:`LIBRARY`.
+LIBRARY_VARIABLE = "PARCOSIM_KERNELS_LIB"
+
+c_double_p = ctypes.POINTER(ctypes.c_double)
+
+
+class KernelsUnavailable(RuntimeError):
+    """The C kernels cannot be loaded; the message says why and what to do."""
+
+
+class Refusal(ctypes.Structure):
+    """``pc_refusal``: the code of a refused step, which quantity (its index in the model's
+    list) and the quantity's value."""
+
+    _fields_ = [("code", ctypes.c_int), ("index", ctypes.c_int), ("value", ctypes.c_double)]
+
+
+class Field(ctypes.Structure):
+    """``pc_field``: one field of a struct of doubles (name, offset and count in doubles)."""
+
+    _fields_ = [("name", ctypes.c_char_p), ("offset", ctypes.c_int), ("count", ctypes.c_int)]
+
+
+_library = None
+
+
+def _sources_present() -> bool:
+    return (HERE / "src").is_dir() and any((HERE / "src").glob("*.c"))
+
+
+def _load(path: Path) -> ctypes.CDLL:
+    try:
+        lib = ctypes.CDLL(str(path))
+    except OSError as exc:
+        raise KernelsUnavailable(f"parcosim's C kernels at {path} do not load: {exc}") from None
+    lib.pc_sources_hash.restype = ctypes.c_char_p
+    return lib
+
+
+def library() -> ctypes.CDLL:
+    """The kernels' shared library, loaded once per process.
+
+    A missing or stale library (its sources changed since it was built) is built first when
+    a C compiler is there.
+
+    Raises
+    ------
+    KernelsUnavailable
+        The library is missing or stale and cannot be built (no compiler: the message says
+        what to install), or does not load.
+    """
+    global _library
+    if _library is not None:
+        return _library
+    override = os.environ.get(LIBRARY_VARIABLE)
+    if override:
+        _library = _load(Path(override))
+        return _library
+    if _sources_present():
+        from . import build
+
+        wanted = build.sources_hash()
+        current = None
+        if LIBRARY.exists():
+            current = _load(LIBRARY).pc_sources_hash().decode()
+        if current != wanted:
+            try:
+                build.build()
+            except build.NoCompiler as exc:
+                state = "stale (its sources changed)" if LIBRARY.exists() else "not built"
+                raise KernelsUnavailable(f"parcosim's C kernels are {state} and cannot be built: {exc}") from None
+            # a fresh path: dlopen would hand back the stale library already loaded
+            _library = _load(_fresh_copy(LIBRARY))
+            return _library
+    elif not LIBRARY.exists():
+        raise KernelsUnavailable(f"parcosim's C kernels are missing: no {LIBRARY} (reinstall parcosim with "
+                                 "'pip install -e .', which builds them with the system C compiler)")
+    _library = _load(LIBRARY)
+    return _library
+
+
+def _fresh_copy(path: Path) -> Path:
+    """A copy of ``path`` under a name no process has loaded (the rebuilt library, when the
+    stale one is already mapped)."""
+    import shutil
+    import tempfile
+
+    folder = Path(tempfile.mkdtemp(prefix="parcosim_kernels_"))
+    copy = folder / path.name
+    shutil.copy2(path, copy)
+    return copy
+
+
+def function(name: str, restype, *argtypes):
+    """The library's function ``name`` with its ctypes signature."""
+    f = getattr(library(), name)
+    f.restype, f.argtypes = restype, list(argtypes)
+    return f
+
+
+def layout(symbol: str) -> dict:
+    """``{field: slice}`` of the struct whose ``pc_field`` list the library exports as
+    ``symbol`` (terminated by a NULL name): its fields' places in a float64 buffer."""
+    first = ctypes.cast(getattr(library(), symbol), ctypes.POINTER(Field))
+    fields, k = {}, 0
+    while first[k].name is not None:
+        f = first[k]
+        fields[f.name.decode()] = slice(f.offset, f.offset + f.count)
+        k += 1
+    return fields
+
+
+def address(array: np.ndarray) -> int:
+    """The data address of a C-contiguous float64 (or int) array, for a ``c_void_p`` argument;
+    the caller keeps ``array`` alive."""
+    if not array.flags.c_contiguous:
+        raise ValueError("a kernel buffer must be C-contiguous")
+    return array.ctypes.data
+
+
+# --- refusals: one record from the C code to the Python exception and the FMI message ----------
+
+class Reason:
+    """What a model's refusal code means: the quantities its ``pc_refusal.index`` picks from
+    (``variables``), their unit, and the message template (``str.format`` fields
+    ``variable``, ``value``, ``unit``, ``time`` and any given to :func:`refused`)."""
+
+    __slots__ = ("name", "variables", "unit", "text")
+
+    def __init__(self, name: str, variables: tuple, unit: str, text: str):
+        self.name, self.variables, self.unit, self.text = name, tuple(variables), unit, text
+
+
+class Refused(ValueError):
+    """A kernel's refusal as one record: ``instance`` (None until the FMI layer names it),
+    ``time`` (s, or None outside a run), ``variable``, ``value``, ``unit``, ``code`` and
+    ``reason`` (the model's code name), and the message (``str(exc)``), which names the
+    variable, its value, its unit and the time."""
+
+    def __init__(self, message: str, *, code: int, reason: str, variable: str, value: float, unit: str,
+                 time: float | None = None, instance: str | None = None):
+        super().__init__(message)
+        self.message, self.code, self.reason = message, code, reason
+        self.variable, self.value, self.unit, self.time, self.instance = variable, value, unit, time, instance
+
+    def record(self) -> dict:
+        """The record's fields as a dict (for logs, results and tests)."""
+        return {"instance": self.instance, "time": self.time, "variable": self.variable, "value": self.value,
+                "unit": self.unit, "code": self.code, "reason": self.reason, "message": self.message}
+
+
+def refused(reasons: dict, refusal: Refusal, time: float | None = None, **fields) -> Refused:
+    """The :class:`Refused` of a kernel's ``refusal`` under the model's ``reasons`` (code ->
+    :class:`Reason`)."""
+    reason = reasons[refusal.code]
+    variable = reason.variables[refusal.index] if reason.variables else ""
+    message = reason.text.format(variable=variable, value=refusal.value, unit=reason.unit, time=time, **fields)
+    return Refused(message, code=refusal.code, reason=reason.name, variable=variable, value=refusal.value,
+                   unit=reason.unit, time=time, **{k: v for k, v in fields.items() if k == "instance"})
