@@ -24,7 +24,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 #: Model packages bundled whole.
-PACKAGES = ("plant", "motor", "controller")
+PACKAGES = ("kernels", "plant", "motor", "controller")
 #: The ``fmus`` modules bundled: the slave base, and the in-process master a system FMU
 #: (``ClosedLoop``, ``ControlChain``) steps its components with; plus ``fmus/slaves``.
 FMUS_MODULES = ("__init__.py", "guarded.py", "slavestate.py", "fmustate.py", "stateformat.py", "budget.py", "parts.py",
@@ -35,7 +35,7 @@ REWRITTEN = frozenset(PACKAGES + ("fmus",))
 #: The private package's name: this prefix and 12 hex digits of the sources' hash.
 PREFIX = "parcosim_"
 
-_IGNORED = shutil.ignore_patterns("__pycache__", "*.pyc", "build")
+_IGNORED = shutil.ignore_patterns("__pycache__", "*.pyc", "build", "*.tmp")
 
 
 def source_files(extra=()) -> list:
@@ -44,7 +44,7 @@ def source_files(extra=()) -> list:
     files = [(f"fmus/slaves/{Path(p).name}", Path(p)) for p in extra]
     for package in PACKAGES:
         for path in (ROOT / package).rglob("*"):
-            if path.is_file() and "__pycache__" not in path.parts and path.suffix != ".pyc":
+            if path.is_file() and "__pycache__" not in path.parts and path.suffix not in (".pyc", ".tmp"):
                 files.append((path.relative_to(ROOT).as_posix(), path))
     files += [(f"fmus/{name}", ROOT / "fmus" / name) for name in FMUS_MODULES]
     files += [(f"fmus/slaves/{p.name}", p) for p in (ROOT / "fmus" / "slaves").glob("*.py")]
