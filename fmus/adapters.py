@@ -57,14 +57,13 @@ class DerivatorAdapter(Adapter):
 
 @register
 class PositionControllerAdapter(Adapter):
-    """:func:`controller.fastlaw.law_io`; for the exact model :func:`controller.fastlaw.exact_state`,
-    :func:`plant.fast5r.inverse_terms` and :func:`controller.fastlaw.law_terms_io` (the calls of
-    ``PositionController._compiled_step``)."""
+    """:func:`controller.lawloop.law_io` (the C kernel ``pc_law_io``); for the exact model
+    :func:`controller.lawloop.law_exact_io` (with :func:`plant.fast5r.inverse_terms`)."""
 
     model = "PositionController"
     inputs = ("q1", "q2", "dq1", "dq2", "ddq1", "ddq2", "x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
     outputs = ("tau1", "tau2", "i_ref1", "i_ref2", "e1", "e2")
-    modules = ("controller.fastlaw", "plant.fast5r")
+    modules = ("controller.lawloop",)
 
     def __init__(self, name, slave, h):
         super().__init__(name, slave, h)
@@ -72,21 +71,19 @@ class PositionControllerAdapter(Adapter):
         if not c.compiled:
             raise NotCompilable(f"component {name}: the controller's kernel {c.kernel!r} is not compiled")
         self.exact = c.model_kind == "exact"
-        self.arrays = [c._buf] + ([c.model._p, c._q, c._dq, c._terms] if self.exact else [])
+        # The context's address (kept alive by the controller's binding) and a pc_refusal.
+        self.arrays = [np.array([c._binding().address], dtype=np.uint64), np.zeros(2)]
+        if self.exact:
+            self.arrays += [c._scratch, c.model._p, c._terms]
         self.delays = len(slave.delayed)
         if self.delays:
             self.arrays.append(slave.delayed)
 
     def emit(self, arrays, x, t, h):
         if not self.exact:
-            lines = [f"st = int(fastlaw.law_io({arrays[0]}, {x}, {h}))"]
+            lines = [f"st = lawloop.law_io({arrays[0]}, {arrays[1]}, {x}, {t}, {h})"]
         else:
-            buf, p, q, dq, terms = arrays[:5]
-            lines = [f"if fastlaw.exact_state({buf}, {x}[0], {x}[1], {x}[2], {x}[3], {q}, {dq}):",
-                     f"    fast5r.inverse_terms({p}, {q}, {dq}, {terms})",
-                     f"    st = int(fastlaw.law_terms_io({buf}, {x}, {h}, {terms}))",
-                     "else:",
-                     "    st = 1"]
+            lines = [f"st = lawloop.law_exact_io({arrays[0]}, {arrays[1]}, {x}, {t}, {h}, {', '.join(arrays[2:5])})"]
         if self.delays:    # the slave's delay(): apply the oldest commands, queue the new ones
             first, n = len(self.inputs), self.delays
             lines += ["if st == 0:",
