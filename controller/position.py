@@ -229,7 +229,7 @@ class PositionController:
             code = self._finish(b, code, h)
             if code != law.OK:
                 raise self._refused(b.refusal, t, inputs)
-        return tuple(b.outputs)
+        return tuple(b.outputs[:])
 
     def _binding(self):
         return law.binding(self, self._buf, self._scratch, self._terms,

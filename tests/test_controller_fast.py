@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 
 import kernels
-from controller.model import ExactModel, TabulatedModel
+from controller.model import ExactModel
 from controller.position import PositionController
-from controller.strategies import ALL_STRATEGY_NAMES, get_strategy
+from controller.strategies import get_strategy
 from plant import fast5r, fivebar, get_preset
 from plant.parallel import inverse_dynamics_terms, mechanism_state
 
