@@ -240,15 +240,16 @@ class PositionController:
         off the table with ``table_fallback``), then the law; the final code."""
         if code == law.NEEDS_TERMS:
             self._exact_terms(self.model)
-        elif code in law.TABLE_CODES and self._fallback is not None:
-            code = b.exact_pose()
-            if code != law.OK:
-                return code
-            self._exact_terms(self._fallback)
-            self.fallbacks += 1
-        else:
+            return b.resume(h)
+        if code not in law.TABLE_CODES or self._fallback is None:
             return code
-        return b.resume(h)
+        code = b.exact_pose()
+        if code != law.OK:
+            return code
+        self._exact_terms(self._fallback)
+        code = b.resume(h)
+        self.fallbacks += code == law.OK
+        return code
 
     def _exact_terms(self, model):
         """``model``'s M_M, v_M, g_M, Z (5.74-5.77) at the thesis' q, dq the kernel left in scratch."""
