@@ -134,6 +134,7 @@ def test_refusals_name_the_variable_and_leave_the_state_alone(tmp_path, monkeypa
         (dict(q1=0.0, q2=math.pi), "measured (q1, q2) = (0.0, 3.14159"),
         (dict(q1=top[0], q2=top[2], x_d=0.0, y_d=0.27), "left out of the table"),
         (dict(q1=side[0], q2=side[2], x_d=0.1, y_d=0.15), "outside the tabulated region"),
+        (dict(dq1=1e300), "at t = 0.25 s are not finite; largest input: dq1 = 1e+300"),   # the law overflows
     ]
     state = ctrl._buf.copy()
     for change, message in cases:
