@@ -111,7 +111,7 @@ def test_metrics_report_compile_time_and_peak_memory():
 def test_generated_source_follows_the_stepping_order():
     scene = _short(get_scene("bench_circle_PDq"), 0.01)
     result = simulate(scene.system, mode="compiled")
-    source = result.extra["source"]
+    source = result.extra["plan"]
     positions = [source.index(f"# {name} (") for name in result.order]
     assert positions == sorted(positions)
     assert compiled.ADAPTERS.keys() >= {c.model for c in scene.system.components}
