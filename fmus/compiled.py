@@ -125,76 +125,114 @@ def _ints(values) -> np.ndarray:
     return np.ascontiguousarray(values, dtype=np.intc)
 
 
+class Member:
+    """One member of a :class:`LoopPlan`: its I/O step and context (addresses), its ``x``
+    array, and its connections as (index in x, slot) pairs."""
+
+    def __init__(self, io: int, context: int, x: np.ndarray, inputs=(), outputs=()):
+        self.io, self.context, self.x = io, context, x
+        self.inputs, self.outputs = list(inputs), list(outputs)
+
+
+class LoopPlan:
+    """A ``pc_loop_plan`` (kernels/src/loop.h) and the arrays it points into.
+
+    Parameters
+    ----------
+    groups : list of (int, list of Member)
+        The stepping order: groups of members stepped ``substeps`` times per step.
+    record_slots : sequence of int
+        The slots recorded after every step.
+    """
+
+    def __init__(self, groups, record_slots):
+        group_substeps, group_end, members = [], [], []
+        for substeps, group in groups:
+            members += group
+            group_substeps.append(substeps)
+            group_end.append(len(members))
+        self.members = members
+        pairs = {"in": [m.inputs for m in members], "out": [m.outputs for m in members]}
+        arrays = {"group_substeps": group_substeps, "group_end": group_end, "record_slot": list(record_slots)}
+        for kind, lists in pairs.items():
+            arrays[f"{kind}_end"] = np.cumsum([len(p) for p in lists]).tolist()
+            arrays[f"{kind}_x"] = [x for p in lists for x, _ in p]
+            arrays[f"{kind}_slot"] = [s for p in lists for _, s in p]
+        self._arrays = {name: _ints(values) for name, values in arrays.items()}
+        self._pointers = {"io": np.array([m.io for m in members], dtype=np.uintp),
+                          "context": np.array([m.context for m in members], dtype=np.uintp),
+                          "x": np.array([kernels.address(m.x) for m in members], dtype=np.uintp)}
+        fields = {name: a.ctypes.data_as(ctypes.POINTER(ctypes.c_int)) for name, a in self._arrays.items()}
+        fields.update({name: a.ctypes.data_as(ctypes.POINTER(ctypes.c_void_p)) for name, a in self._pointers.items()})
+        self.struct = _LoopPlan(n_groups=len(group_substeps), n_record=len(arrays["record_slot"]), **fields)
+
+    def run(self, values: np.ndarray, record: np.ndarray, k0: int, k1: int, t: float, h: float) -> _LoopStop:
+        """Steps k0 .. k1-1 in C (``values`` and the C-contiguous ``record`` are written in
+        place); the stop says where and why it ended."""
+        stop = _LoopStop()
+        _loop_run()(ctypes.byref(self.struct), kernels.address(values), kernels.address(record), k0, k1, t, h,
+                    ctypes.byref(stop))
+        return stop
+
+
 class Plan:
-    """The compiled loop of one system: adapters in stepping order, their slots, and the
-    ``pc_loop_plan`` the C loop (kernels/src/loop.c) runs."""
+    """The compiled loop of one system: its adapters in stepping order and their
+    :class:`LoopPlan`."""
 
     def __init__(self, system, stepper, instances):
         self.system, self.stepper = system, stepper
         entries = {id(inst): name for name, inst in instances.items()}
         self.adapters, self.positions = [], []   # positions: (group, member) of each adapter
+        self._contexts = []
         h = system.step
-        group_substeps, group_end = [], []
-        in_end, in_x, in_slot, out_end, out_x, out_slot = [], [], [], [], [], []
+        groups = []
         for g, (substeps, members) in enumerate(stepper.groups):
+            group = []
             for m, (inst, in_slots, out_slots) in enumerate(members):
                 name = entries[id(inst)]
-                model = system.component(name).model
-                cls = ADAPTERS.get(model)
-                if cls is None:
-                    raise NotCompilable(f"component {name}: model {model!r} has no compiled adapter")
-                slave = inst.slave
-                try:
-                    slave.check_step_size(0.0, h / substeps)
-                except ValueError as exc:
-                    raise NotCompilable(f"component {name}: {exc}") from None
-                adapter = cls(name, slave, h / substeps)
+                adapter = self._adapter(name, system.component(name).model, inst.slave, h / substeps)
                 in_names, out_names = stepper.io_names[name]
-                for kind, names, known in (("input", in_names, cls.inputs), ("output", out_names, cls.outputs)):
-                    unknown = [n for n in names if n not in known]
-                    if unknown:
-                        raise NotCompilable(f"component {name}: {kind}s {', '.join(unknown)} of {model} are not "
-                                            "in its compiled adapter")
-                layout = cls.inputs + cls.outputs
-                adapter.x = np.array([float(getattr(slave, n)) for n in layout])
-                in_x += [layout.index(n) for n in in_names]
-                in_slot += list(in_slots)
-                out_x += [layout.index(n) for n in out_names]
-                out_slot += list(out_slots)
-                in_end.append(len(in_x))
-                out_end.append(len(out_x))
+                layout = adapter.inputs + adapter.outputs
+                context = adapter.context()
+                self._contexts.append(context)
+                group.append(Member(adapter.io_address(), ctypes.addressof(context), adapter.x,
+                                    [(layout.index(n), s) for n, s in zip(in_names, in_slots)],
+                                    [(layout.index(n), s) for n, s in zip(out_names, out_slots)]))
                 self.adapters.append(adapter)
                 self.positions.append((g, m))
-            group_substeps.append(substeps)
-            group_end.append(len(self.adapters))
+            groups.append((substeps, group))
+        self.loop = LoopPlan(groups, stepper.record_slots)
         self.description = self._describe()
-        self._arrays = {"group_substeps": _ints(group_substeps), "group_end": _ints(group_end),
-                        "in_end": _ints(in_end), "in_x": _ints(in_x), "in_slot": _ints(in_slot),
-                        "out_end": _ints(out_end), "out_x": _ints(out_x), "out_slot": _ints(out_slot),
-                        "record_slot": _ints(stepper.record_slots)}
-        self._contexts = [a.context() for a in self.adapters]
-        self._pointers = {
-            "io": np.array([a.io_address() for a in self.adapters], dtype=np.uintp),
-            "context": np.array([ctypes.addressof(c) for c in self._contexts], dtype=np.uintp),
-            "x": np.array([kernels.address(a.x) for a in self.adapters], dtype=np.uintp)}
-        fields = {name: a.ctypes.data_as(ctypes.POINTER(ctypes.c_int)) for name, a in self._arrays.items()}
-        fields.update({name: a.ctypes.data_as(ctypes.POINTER(ctypes.c_void_p)) for name, a in self._pointers.items()})
-        self.plan = _LoopPlan(n_groups=len(group_substeps), n_record=len(stepper.record_slots), **fields)
+
+    def _adapter(self, name, model, slave, h):
+        cls = ADAPTERS.get(model)
+        if cls is None:
+            raise NotCompilable(f"component {name}: model {model!r} has no compiled adapter")
+        try:
+            slave.check_step_size(0.0, h)
+        except ValueError as exc:
+            raise NotCompilable(f"component {name}: {exc}") from None
+        adapter = cls(name, slave, h)
+        in_names, out_names = self.stepper.io_names[name]
+        for kind, names, known in (("input", in_names, cls.inputs), ("output", out_names, cls.outputs)):
+            unknown = [n for n in names if n not in known]
+            if unknown:
+                raise NotCompilable(f"component {name}: {kind}s {', '.join(unknown)} of {model} are not "
+                                    "in its compiled adapter")
+        adapter.x = np.array([float(getattr(slave, n)) for n in cls.inputs + cls.outputs])
+        return adapter
 
     def _describe(self) -> str:
         """The stepping order as text: one line per member (``# name (model): kernel``)."""
         lines = []
-        for (g, m), a in zip(self.positions, self.adapters):
+        for (g, _), a in zip(self.positions, self.adapters):
             substeps = self.stepper.groups[g][0]
             lines.append(f"# {a.name} ({a.model}): {a.kernel}" + (f", {substeps} sub-steps" if substeps > 1 else ""))
         return "\n".join(lines)
 
-    def run(self, values: np.ndarray, record: np.ndarray, k0: int, k1: int, t: float, h: float) -> _LoopStop:
-        """Steps k0 .. k1-1 in C; the stop says where and why it ended."""
-        stop = _LoopStop()
-        _loop_run()(ctypes.byref(self.plan), kernels.address(values), kernels.address(record), k0, k1, t, h,
-                    ctypes.byref(stop))
-        return stop
+    def run(self, values, record, k0, k1, t, h) -> _LoopStop:
+        """:meth:`LoopPlan.run` of the system's plan."""
+        return self.loop.run(values, record, k0, k1, t, h)
 
 
 def _loop_run():
