@@ -240,28 +240,6 @@ def _loop_run():
                             ctypes.c_int, ctypes.c_double, ctypes.c_double, ctypes.c_void_p)
 
 
-def _finish_step_in_python(stepper, start_group: int, start_member: int, start_substep: int, t: float) -> None:
-    """The rest of the step from ``t`` in Python, from the given group, member and sub-step
-    on (Gauss-Seidel, as :meth:`fmus.stepper.Stepper.step`)."""
-    h, values = stepper.system.step, stepper.values
-    for g, (substeps, members) in enumerate(stepper.groups):
-        if g < start_group:
-            continue
-        dt = h / substeps
-        for j in range(substeps):
-            if g == start_group and j < start_substep:
-                continue
-            for m, (inst, in_slots, out_slots) in enumerate(members):
-                if g == start_group and j == start_substep and m < start_member:
-                    continue
-                if in_slots:
-                    inst.set_inputs([values[i] for i in in_slots])
-                inst.do_step(t + j * dt if substeps > 1 else t, dt)
-                for i, v in zip(out_slots, inst.get_outputs()):
-                    values[i] = v
-    stepper.time = t + h
-
-
 def check_compilable(system, coupling: str, retry_substeps) -> None:
     """Raise :class:`NotCompilable` for what the compiled loop does not cover, before anything is built."""
     from .foreign import is_fmu_file
@@ -324,7 +302,8 @@ def run_compiled(system, instances, order, progress, interrupt, result_of):
                     a.slave._next_time = None   # the slaves did not see the compiled steps
                 stepper.values[:] = values.tolist()
                 g, m = plan.positions[stop.member]
-                _finish_step_in_python(stepper, g, m, stop.substep, t)
+                stepper.time = t
+                stepper.step(start=(g, m, stop.substep))
                 for a in plan.adapters:
                     a.from_python()
                 values[:] = stepper.values
