@@ -118,6 +118,18 @@ _interpolate = kernels.function("pc_law_interpolate", _i, _v, _d, _d, _v, _v)
 _run = kernels.function("pc_law_run", _i, _v, _d, _v)
 _resume = kernels.function("pc_law_resume", _i, _v, _d, _v)
 _exact_pose = kernels.function("pc_law_exact_pose", _i, _v, _v, _v)
+_delay = kernels.function("pc_law_delay", None, _v, _i, _v)
+#: ``pc_law_terms_fn``: the exact model's terms at (q, dq) into terms (model, q, dq, terms).
+TERMS_FN = ctypes.CFUNCTYPE(None, _v, ctypes.POINTER(_d), ctypes.POINTER(_d), ctypes.POINTER(_d))
+
+
+def delay(delayed, commands):
+    """The computation delay (``pc_law_delay``): the commands to apply now, the oldest row of
+    ``delayed`` (n rows of tau1, tau2, i_ref1, i_ref2), and ``commands`` queued as the newest,
+    in place."""
+    now = np.array(commands, dtype=np.float64)
+    _delay(kernels.address(delayed), len(delayed), kernels.address(now))
+    return tuple(now.tolist())
 
 
 def interpolate(table_buf, x, y, out):
@@ -132,7 +144,7 @@ class Context(ctypes.Structure):
     """``pc_law_context``: the addresses of one controller's buffers."""
 
     _fields_ = [("params", _v), ("table", _v), ("terms", _v), ("state", _v), ("scratch", _v),
-                ("terms_of", _v), ("model", _v)]
+                ("terms_of", _v), ("model", _v), ("delayed", _v), ("n_delayed", _i)]
 
 
 class Binding:
@@ -167,6 +179,18 @@ class Binding:
     def exact_pose(self):
         """``pc_law_exact_pose``: the thesis' q, dq of the measured pose into scratch."""
         return _exact_pose(self.context.params, self.context.scratch, self.refusal_address)
+
+
+def loop_context(b: Binding, delayed, terms_of=None) -> Context:
+    """A context for ``pc_law_io`` in the compiled loop: ``b``'s buffers, the delay queue
+    ``delayed`` (rows of 4) and the exact model's ``terms_of`` (a :data:`TERMS_FN`; the
+    caller keeps it alive)."""
+    context = Context.from_buffer_copy(b.context)
+    if len(delayed):
+        context.delayed, context.n_delayed = kernels.address(delayed), len(delayed)
+    if terms_of is not None:
+        context.terms_of = ctypes.cast(terms_of, _v)
+    return context
 
 
 #: id(owner) -> its Binding (removed when the owner goes).

@@ -239,6 +239,15 @@ def test_io_with_a_terms_function_runs_the_exact_model_in_c():
     assert np.array_equal(ctrl._buf, state) and np.all(x[12:] == 7.0)
 
 
+def test_delay_queue_applies_the_commands_n_samples_late():
+    """pc_law_delay with n = 2: the commands applied are those of two samples before (zeros
+    first), and the queue keeps the newest last."""
+    delayed = np.zeros((2, 4))
+    applied = [law.delay(delayed, (k, 10.0 * k, -k, 0.5 * k)) for k in (1.0, 2.0, 3.0, 4.0)]
+    assert applied == [(0.0,) * 4, (0.0,) * 4, (1.0, 10.0, -1.0, 0.5), (2.0, 20.0, -2.0, 1.0)]
+    assert delayed.tolist() == [[3.0, 30.0, -3.0, 1.5], [4.0, 40.0, -4.0, 2.0]]
+
+
 def inverse_terms_into(p, q, dq, out):
     """:func:`plant.fast5r.inverse_terms` on the kernel's pointers (q, dq of 7, out of INVERSE_SIZE)."""
     as_array = np.ctypeslib.as_array

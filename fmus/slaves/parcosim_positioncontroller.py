@@ -27,6 +27,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from controller.law import delay
 from controller.model import DEFAULT_EXTENT, DEFAULT_GRID_STEP
 from controller.position import PositionController as _Controller
 from controller.strategies import get_strategy
@@ -173,15 +174,6 @@ class PositionController(GuardedSlave):
             current_time, self.q1, self.q2, self.dq1, self.dq2, self.ddq1, self.ddq2,
             self.x_d, self.y_d, self.dx_d, self.dy_d, self.ddx_d, self.ddy_d, step_size)
         if len(self.delayed):
-            out = (*delay(self.delayed, out[:4]), *out[4:])
+            out = (*delay(self.delayed, out[:4]), *out[4:])   # the queue in C (pc_law_delay), as the compiled loop
         self.tau1, self.tau2, self.i_ref1, self.i_ref2, self.e1, self.e2 = out
         self.model_fallbacks = self.controller.fallbacks
-
-
-def delay(delayed: np.ndarray, commands) -> tuple:
-    """The oldest row of ``delayed`` (the commands to apply now); ``commands`` appended as the
-    newest, in place (the compiled loop's ``PositionControllerAdapter`` does the same)."""
-    applied = tuple(float(v) for v in delayed[0])
-    delayed[:-1] = delayed[1:]
-    delayed[-1] = commands
-    return applied

@@ -209,14 +209,26 @@ int pc_law_resume(const pc_law_context *c, double h, pc_refusal *r)
     return pc_law_finish(c->params, c->table, c->terms, c->state, c->scratch, h, r);
 }
 
+void pc_law_delay(double *delayed, int n, double commands[4])
+{
+    for (int j = 0; j < 4; ++j) {
+        const double fresh = commands[j];
+        commands[j] = delayed[j];
+        for (int m = 0; m + 1 < n; ++m) delayed[4 * m + j] = delayed[4 * (m + 1) + j];
+        delayed[4 * (n - 1) + j] = fresh;
+    }
+}
+
 int pc_law_io(void *context, double *x, double t, double h, pc_refusal *r)
 {
     (void)t;
     const pc_law_context *c = context;
     memcpy(&c->scratch->in, x, sizeof c->scratch->in);
     const int rc = pc_law_run(c, h, r);
-    if (rc == PC_OK) memcpy(x + 12, &c->scratch->out, sizeof c->scratch->out);
-    return rc;
+    if (rc != PC_OK) return rc;
+    memcpy(x + 12, &c->scratch->out, sizeof c->scratch->out);
+    if (c->n_delayed > 0) pc_law_delay(c->delayed, c->n_delayed, x + 12);
+    return PC_OK;
 }
 
 /* Field lists (kernels.layout). */

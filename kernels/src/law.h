@@ -129,6 +129,9 @@ typedef struct {
     pc_law_scratch *scratch;
     pc_law_terms_fn terms_of;      /* NULL: PC_LAW_NEEDS_TERMS, the caller computes them */
     const void *model;             /* terms_of's model */
+    double *delayed;               /* the computation delay's queue: n_delayed rows of
+                                    * (tau1, tau2, i_ref1, i_ref2), oldest first (pc_law_delay) */
+    int n_delayed;                 /* 0: the commands apply at once */
 } pc_law_context;
 
 /* The table's PC_LAW_TERMS values at (x, y), bilinear in the cell (7.2.5): PC_LAW_TABLE_OUT,
@@ -155,7 +158,12 @@ int pc_law_run(const pc_law_context *c, double h, pc_refusal *r);
  * PC_LAW_NEEDS_TERMS, or after a table refusal: the exact model off the table). */
 int pc_law_resume(const pc_law_context *c, double h, pc_refusal *r);
 
-/* The compiled loop's I/O (pc_io_fn): x = the 12 inputs of pc_law_inputs, then the 6 outputs. */
+/* The computation delay (the FMU's delay_steps = n > 0): `commands` (tau1, tau2, i_ref1, i_ref2)
+ * take the oldest row of `delayed` (n rows of 4, oldest first) and join the queue as its newest. */
+void pc_law_delay(double *delayed, int n, double commands[4]);
+
+/* The compiled loop's I/O (pc_io_fn): x = the 12 inputs of pc_law_inputs, then the 6 outputs
+ * (the commands through the context's delay queue). */
 int pc_law_io(void *context, double *x, double t, double h, pc_refusal *r);
 
 #endif
