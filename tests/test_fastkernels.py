@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+import kernels
 from controller.derivators import Derivator
 from controller.trajectories import circle, triangle
 from motor import CurrentObserver, Drive, get_motor_preset
@@ -84,5 +85,5 @@ def test_balance_kernel_is_the_observer_and_lqr_written_with_numpy(yaw):
         assert controller.io[fastbalance.O_REF] == x_d
     saved = controller.buf.copy()
     io = np.array([0.1, float("nan"), 0.0] + [0.0] * len(fastbalance.OUTPUTS))
-    assert fastbalance.balance_io(controller.buf, io, 8.0, 1e6) == fastbalance.REFUSED
+    assert fastbalance.sample(controller.buf, io, 8.0, 1e6, kernels.Refusal()) == fastbalance.BAD_INPUT
     assert np.array_equal(controller.buf, saved)

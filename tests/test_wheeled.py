@@ -138,7 +138,7 @@ def test_balance_design_body_torque_column_is_the_plant_s_response():
     y, out = np.zeros(K.N_STATE), np.zeros(K.N_STATE)
     rates = []
     for tau_d in (1.0, -1.0):
-        K.derivative(prm[0], y, 0.0, 0.0, tau_d, out)
+        K.derivative(prm, y, 0.0, 0.0, tau_d, out)
         rates.append(out[[K.THETA, K.PSI, K.PHI, K.DTHETA, K.DPSI, K.DPHI]].copy())
     column = (rates[0] - rates[1]) / 2.0
     assert abs(column[4]) > 0.0                   # a body torque tilts the body
@@ -161,7 +161,7 @@ def test_encoders_read_the_count_nearest_to_the_wheel_relative_to_the_body(count
     for _ in range(20):
         y = np.zeros(K.N_STATE)
         y[[K.THETA, K.PSI, K.PHI]] = rng.uniform(-3.0, 3.0, 3)
-        K.sensors(prm, y, count, out, 0)
+        K.sensors(prm, y, count, out)
         relative = (y[K.THETA] - half * y[K.PHI] - y[K.PSI], y[K.THETA] + half * y[K.PHI] - y[K.PSI])
         for name, angle in zip(("enc_l", "enc_r"), relative):
             reading = out[K.OUTPUT_NAMES.index(name)]
