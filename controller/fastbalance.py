@@ -73,6 +73,13 @@ _sample = kernels.function("pc_balance_sample", ctypes.c_int, ctypes.c_void_p, c
                            ctypes.c_double, ctypes.c_void_p)
 
 
+class Context(ctypes.Structure):
+    """``pc_balance_context``: the buffer's address and the largest |input| taken
+    (``pc_balance_io``'s ``context`` in the compiled loop)."""
+
+    _fields_ = [("balance", ctypes.c_void_p), ("limit", ctypes.c_double)]
+
+
 def pack(design, route, R: float, W: float, torque_per_volt: float, smooth, slope) -> np.ndarray:
     """The ``buf`` of :func:`sample` for a :class:`controller.balance.BalanceDesign`, a
     :class:`controller.balance.Route` and the smooth step's coefficients (ascending)."""
@@ -101,24 +108,3 @@ def sample(buf: np.ndarray, x: np.ndarray, t: float, limit: float, refusal: kern
         if not (isinstance(array, np.ndarray) and array.dtype == np.float64 and array.size >= size):
             raise ValueError(f"a balance kernel buffer must be a float64 array of >= {size} words")
     return _sample(kernels.address(buf), kernels.address(x), t, limit, ctypes.addressof(refusal))
-
-
-def __getattr__(name):
-    """``balance_io(buf, x, t, limit)``: the compiled loop's numba call of ``pc_balance_sample``
-    (made on first use; goes when fmus/compiled.py calls ``pc_balance_io`` itself).  Linked
-    by symbol name, so numba caches the loop."""
-    if name != "balance_io":
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    import llvmlite.binding as llvm
-    from numba import njit, types
-
-    llvm.load_library_permanently(kernels.library()._name)
-    io = types.ExternalFunction("pc_balance_sample", types.int32(types.voidptr, types.voidptr, types.float64,
-                                                                 types.float64, types.intp))   # intp 0: no refusal
-
-    @njit
-    def balance_io(buf, x, t, limit):
-        return io(buf.ctypes, x.ctypes, t, limit, 0)
-
-    globals()["balance_io"] = balance_io
-    return balance_io

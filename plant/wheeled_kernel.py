@@ -98,6 +98,25 @@ def new_params() -> np.ndarray:
     return np.zeros(PARAMS_SIZE)
 
 
+def new_settings(**values) -> np.ndarray:
+    """A settings buffer of the compiled loop (``pc_wheeled_settings``) with every field given by name."""
+    missing = set(SETTINGS) - set(values)
+    if missing or set(values) - set(SETTINGS):
+        raise ValueError(f"the pendulum's settings are {', '.join(SETTINGS)}: missing {sorted(missing)}, "
+                         f"unknown {sorted(set(values) - set(SETTINGS))}")
+    settings = np.empty(SETTINGS_SIZE)
+    for name, value in values.items():
+        settings[SETTINGS[name]] = value
+    return settings
+
+
+class Context(ctypes.Structure):
+    """``pc_wheeled_context``: the addresses of the parameter, state and settings buffers
+    (``pc_wheeled_io``'s ``context`` in the compiled loop)."""
+
+    _fields_ = [("params", _vp), ("state", _vp), ("settings", _vp)]
+
+
 def derivative(prm: np.ndarray, y: np.ndarray, tau_l: float, tau_r: float, tau_d: float, out: np.ndarray) -> None:
     """out = dy/dt at the state y, wheel torques tau_l, tau_r and body torque tau_d [N m] held."""
     y = np.ascontiguousarray(y, dtype=float)
@@ -138,25 +157,3 @@ def _check(*pairs) -> None:
     for array, size in zip(pairs[::2], pairs[1::2]):
         if not (isinstance(array, np.ndarray) and array.dtype == np.float64 and array.size >= size):
             raise ValueError(f"a wheeled-pendulum kernel buffer must be a float64 array of >= {size} words")
-
-
-def __getattr__(name):
-    """``pendulum_io(prm, y, settings, x, t, dt)``: the compiled loop's numba call of
-    ``pc_wheeled_step_io`` (made on first use; goes when fmus/compiled.py calls
-    ``pc_wheeled_io`` itself).  Linked by symbol name, so numba caches the loop."""
-    if name != "pendulum_io":
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    import llvmlite.binding as llvm
-    from numba import njit, types
-
-    llvm.load_library_permanently(kernels.library()._name)
-    pointer = types.voidptr
-    io = types.ExternalFunction("pc_wheeled_step_io", types.int32(pointer, pointer, pointer, pointer, types.float64,
-                                                                  types.float64, types.intp))   # intp 0: no refusal
-
-    @njit
-    def pendulum_io(prm, y, settings, x, t, dt):
-        return io(prm.ctypes, y.ctypes, settings.ctypes, x.ctypes, t, dt, 0)
-
-    globals()["pendulum_io"] = pendulum_io
-    return pendulum_io
