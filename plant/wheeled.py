@@ -20,7 +20,6 @@ from dataclasses import asdict, dataclass, fields, replace
 import numpy as np
 
 import kernels
-from motor._checks import BadValue
 
 from . import wheeled_kernel as kernel
 
@@ -177,6 +176,8 @@ class WheeledPendulum:
                 raise ValueError(f"initial {name} = {value!r} is not finite")
             self.y[kernel.STATE[name]] = value
         if not yaw and self.y[kernel.DPHI] != 0.0:
+            from motor._checks import BadValue   # the motor package imports python-control: only here
+
             raise BadValue("dphi", float(self.y[kernel.DPHI]),
                            "initial {name} = {value!r} with the yaw locked (yaw = false) must be 0")
         code = kernel.condition(self.prm, self.y)

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import ctypes
 import math
-import re
 
 import numpy as np
 import pytest
@@ -67,37 +66,6 @@ def test_rk4_is_fourth_order():
     assert errors[0] > 1e-5, "the motion should be large enough to show the error"
     for coarse, finer in zip(errors, errors[1:]):
         assert 12.0 < coarse / finer < 20.0, errors
-
-
-def test_the_c_derivative_linearises_to_the_lqr_design_model():
-    """Finite differences of the C derivative, with the drives of seed 000 (22) in front
-    (tau = (K_t/R_m) v - c omega), at the upright at rest, give the (A, B) the balance
-    controller is designed on (controller.balance.voltage_model)."""
-    from controller.balance import BalanceSettings, voltage_model
-    from motor import get_motor_preset
-
-    settings = BalanceSettings()
-    A_design, B_design = voltage_model(settings)
-    motor = get_motor_preset(settings.motor_preset)
-    c = motor.kt * motor.ke / motor.R + motor.b
-    half = SEED.W / (2 * SEED.R)
-    prm = pack(SEED)
-
-    def f(x, v):
-        y = np.zeros(K.N_STATE)
-        y[SIX] = x
-        omega_l = x[3] - half * x[5] - x[4]
-        omega_r = x[3] + half * x[5] - x[4]
-        dy = np.empty(K.N_STATE)
-        K.derivative(prm, y, motor.kt / motor.R * v[0] - c * omega_l, motor.kt / motor.R * v[1] - c * omega_r, 0.0,
-                     dy)
-        return dy[SIX]
-
-    eps = 1e-6
-    A = np.column_stack([(f(eps * e, (0, 0)) - f(-eps * e, (0, 0))) / (2 * eps) for e in np.eye(6)])
-    B = np.column_stack([(f(np.zeros(6), eps * e) - f(np.zeros(6), -eps * e)) / (2 * eps) for e in np.eye(2)])
-    np.testing.assert_allclose(A, A_design, rtol=1e-6, atol=1e-6)
-    np.testing.assert_allclose(B, B_design, rtol=1e-6, atol=1e-6)
 
 
 def test_a_fall_changes_nothing_and_names_the_substep():
@@ -164,10 +132,66 @@ def test_the_io_step_is_the_step_with_the_push_then_the_sensors():
         assert dict(zip(K.OUTPUT_NAMES, x[3:].tolist())) == sim.outputs()
 
 
-def _controller(yaw=True):
-    from controller.balance import BalanceController, BalanceSettings, design_balance, get_route
+def _smooth(t, start, end):
+    """(s, s') of (7.27) in closed form over the window [start, end]."""
+    tau = min(max((t - start) / (end - start), 0.0), 1.0)
+    s = 35 * tau ** 4 - 84 * tau ** 5 + 70 * tau ** 6 - 20 * tau ** 7
+    ds = (140 * tau ** 3 - 420 * tau ** 4 + 420 * tau ** 5 - 140 * tau ** 6) / (end - start)
+    return s, ds
 
-    return BalanceController(design_balance(BalanceSettings(yaw=yaw)), get_route("forward_turn"))
+
+def _design(yaw: bool, seed: int = 5):
+    """A design of random matrices (the C sample must not care where they came from) with
+    the kept states and measurements of controller.balance, and the forward_turn route."""
+    from types import SimpleNamespace
+
+    rng = np.random.default_rng(seed)
+    states = (0, 1, 2, 3, 4, 5) if yaw else (0, 1, 3, 4)
+    n, ny = len(states), 3 if yaw else 2
+    design = SimpleNamespace(states=states, K=rng.normal(0, 20, (2, n)), Lo=rng.normal(0, 0.3, (n, ny)),
+                             C=rng.normal(0, 1, (ny, n)), Ad=np.eye(n) + rng.normal(0, 1e-2, (n, n)),
+                             Bd=rng.normal(0, 1e-2, (n, 2)), settings=SimpleNamespace(yaw=yaw, v_battery=2.0))
+    route = SimpleNamespace(distance=1.0, turn=0.5 * math.pi, drive=(0.5, 5.5), turning=(6.0, 8.0))
+    return design, route
+
+
+def _buffer(yaw: bool = True) -> np.ndarray:
+    from controller.trajectories import SMOOTHSTEP_COEFFICIENTS, SMOOTHSTEP_SLOPE_COEFFICIENTS
+
+    design, route = _design(yaw)
+    return fastbalance.pack(design, route, 0.04, 0.14, 0.35, SMOOTHSTEP_COEFFICIENTS, SMOOTHSTEP_SLOPE_COEFFICIENTS)
+
+
+@pytest.mark.parametrize("yaw", [True, False])
+def test_the_balance_sample_is_the_observer_and_lqr_written_with_numpy(yaw):
+    """controller/balance.py's docstring in matrix form: correct, command (saturated),
+    predict; the first sample starts at rest at the encoders' theta - psi."""
+    design, route = _design(yaw)
+    buf, x, refusal = _buffer(yaw), np.zeros(fastbalance.IO_SIZE), kernels.Refusal()
+    rng = np.random.default_rng(4)
+    states, x_hat = list(design.states), None
+    for k in range(450):
+        t = 0.02 * k
+        enc_l, enc_r, gyro = rng.normal(0.0, 0.05, 3) + (0.3 * t, 0.35 * t, 0.0)
+        y = np.array([0.5 * (enc_l + enc_r), gyro] + ([0.04 / 0.14 * (enc_r - enc_l)] if yaw else []))
+        if x_hat is None:
+            x_hat = np.array([y[0], 0.0, y[2] if yaw else 0.0, 0.0, gyro, 0.0])[states]
+        x_hat = x_hat + design.Lo @ (y - design.C @ x_hat)
+        s, ds = _smooth(t, *route.drive)
+        a, da = _smooth(t, *route.turning)
+        reference = np.array([s / 0.04, 0.0, a * route.turn, ds / 0.04, 0.0, da * route.turn])[states]
+        u = np.clip(-design.K @ (x_hat - reference), -2.0, 2.0)
+        x_hat = design.Ad @ x_hat + design.Bd @ u
+        x[:3] = enc_l, enc_r, gyro
+        assert fastbalance.sample(buf, x, t, 1e6, refusal) == fastbalance.OK
+        out = dict(zip(fastbalance.OUTPUTS, x[3:]))
+        np.testing.assert_allclose([out["v_l"], out["v_r"], out["tau_l"], out["tau_r"]], [*u, *(0.35 * u)],
+                                   rtol=1e-11, atol=1e-11)
+        full = np.zeros(6)
+        full[states] = x_hat
+        np.testing.assert_allclose(x[fastbalance.O_HAT:], full, rtol=1e-10, atol=1e-11)
+        assert out["x_d"] == pytest.approx(s, rel=1e-12, abs=1e-15) and out["y_d"] == 0.0
+    assert np.any(np.abs(u) == 2.0), "the run should reach the saturation"
 
 
 @pytest.mark.parametrize("word, value", [("n", 7.0), ("n", -1.0), ("n", 2.5), ("ny", 4.0), ("ny", math.nan),
@@ -176,26 +200,28 @@ def test_the_balance_sample_refuses_a_size_or_index_outside_its_arrays(word, val
     """The controller indexes its arrays with words of its buffer (sizes, kept-state
     indices): a forged word is refused by index and value before anything is read or
     written, the buffer and the I/O array unchanged."""
-    controller = _controller()
-    controller.sample(0.0, 0.01, 0.02, 0.0)
+    buf, x, refusal = _buffer(), np.zeros(fastbalance.IO_SIZE), kernels.Refusal()
+    x[:3] = 0.01, 0.02, 0.0
+    assert fastbalance.sample(buf, x, 0.0, math.inf, refusal) == fastbalance.OK
     index = fastbalance.BUFFER[word].start + (3 if word == "states" else 0)
-    controller.buf[index] = value
-    buf, io = controller.buf.copy(), controller.io.copy()
-    io[:3] = 0.01, 0.02, 0.0
-    x = io.copy()
-    refusal = kernels.Refusal()
-    assert fastbalance.sample(controller.buf, x, 0.001, math.inf, refusal) == fastbalance.BAD_BUFFER
+    buf[index] = value
+    before, x_before = buf.copy(), x.copy()
+    assert fastbalance.sample(buf, x, 0.001, math.inf, refusal) == fastbalance.BAD_BUFFER
     assert refusal.index == index and (refusal.value == value or math.isnan(value))
-    assert np.array_equal(controller.buf, buf, equal_nan=True) and np.array_equal(x, io)
-    with pytest.raises(kernels.Refused, match="buffer word " + re.escape(fastbalance.WORD_NAMES[index])):
-        controller.sample(0.001, 0.01, 0.02, 0.0)
+    assert np.array_equal(buf, before, equal_nan=True) and np.array_equal(x, x_before)
+    assert fastbalance.WORD_NAMES[index] == (f"{word}[3]" if word == "states" else word)
 
 
-def test_the_balance_sample_refuses_a_non_finite_input_by_name_and_time():
-    controller = _controller(yaw=False)
-    with pytest.raises(kernels.Refused, match=r"input gyro = nan at t = 0.25 s is not finite") as caught:
-        controller.sample(0.25, 0.0, 0.0, math.nan)
-    assert caught.value.variable == "gyro" and caught.value.time == 0.25 and controller.x_hat is None
+@pytest.mark.parametrize("index, value, limit, code", [(2, math.nan, math.inf, fastbalance.BAD_INPUT),
+                                                       (0, math.inf, math.inf, fastbalance.BAD_INPUT),
+                                                       (1, -2e6, 1e6, fastbalance.INPUT_LIMIT)])
+def test_the_balance_sample_refuses_an_input_and_changes_nothing(index, value, limit, code):
+    buf, x, refusal = _buffer(yaw=False), np.zeros(fastbalance.IO_SIZE), kernels.Refusal()
+    x[index] = value
+    before, x_before = buf.copy(), x.copy()
+    assert fastbalance.sample(buf, x, 0.25, limit, refusal) == code
+    assert (refusal.index, refusal.value) == (index, value) or math.isnan(value)
+    assert np.array_equal(buf, before) and np.array_equal(x, x_before, equal_nan=True)
 
 
 def test_the_balance_buffer_layout_is_params_then_run_state():
