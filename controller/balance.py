@@ -288,7 +288,7 @@ class BalanceController:
         io = self.io
         io[0], io[1], io[2] = enc_l, enc_r, gyro
         buf, x = b.addresses
-        code = fastbalance._sample(buf, x, t, math.inf, b.refusal_address)
+        code = fastbalance.c_sample(buf, x, t, math.inf, b.refusal_address)
         if code != fastbalance.OK:
             raise kernels.refused(REASONS, b.refusal, t, limit=math.inf)
         return float(io[fastbalance.O_V]), float(io[fastbalance.O_V + 1])

@@ -69,7 +69,8 @@ def run_state_words(buf):
 #: of the buffer out of its array's range.
 OK, BAD_INPUT, INPUT_LIMIT, BAD_BUFFER = range(4)
 
-_sample = kernels.function("pc_balance_sample", ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double,
+#: ``pc_balance_sample`` on addresses (the per-sample caller's fast path; :func:`sample` checks its arrays).
+c_sample = kernels.function("pc_balance_sample", ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double,
                            ctypes.c_double, ctypes.c_void_p)
 
 
@@ -107,4 +108,4 @@ def sample(buf: np.ndarray, x: np.ndarray, t: float, limit: float, refusal: kern
     for array, size in ((buf, BUF_SIZE), (x, IO_SIZE)):
         if not (isinstance(array, np.ndarray) and array.dtype == np.float64 and array.size >= size):
             raise ValueError(f"a balance kernel buffer must be a float64 array of >= {size} words")
-    return _sample(kernels.address(buf), kernels.address(x), t, limit, ctypes.addressof(refusal))
+    return c_sample(kernels.address(buf), kernels.address(x), t, limit, ctypes.addressof(refusal))

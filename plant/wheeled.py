@@ -208,7 +208,7 @@ class WheeledPendulum:
         """
         b = self._bound()
         prm, y = b.addresses
-        code = kernel._step(prm, y, tau_l, tau_r, tau_d, dt, self.substeps, b.taken_address, b.refusal_address)
+        code = kernel.c_step(prm, y, tau_l, tau_r, tau_d, dt, self.substeps, b.taken_address, b.refusal_address)
         if code != kernel.OK:
             if code in kernel.FALLS:
                 self.fallen = True
@@ -221,13 +221,13 @@ class WheeledPendulum:
     def energy(self) -> float:
         """Kinetic plus potential energy [J]."""
         prm, y = self._bound().addresses
-        return kernel._energy(prm, y)
+        return kernel.c_energy(prm, y)
 
     def outputs(self) -> dict:
         """The WheeledPendulum outputs (docs/contract.md), as Python floats (:func:`plant.wheeled_kernel.sensors`)."""
         b = self._bound()
         prm, y = b.addresses
-        kernel._sensors(prm, y, self.count, b.out_address)
+        kernel.c_sensors(prm, y, self.count, b.out_address)
         return dict(zip(kernel.OUTPUT_NAMES, b.out.tolist()))
 
 

@@ -46,11 +46,12 @@ INPUT_NAMES = ("tau_l", "tau_r", "tau_d")
 OUTPUT_NAMES = ("theta", "psi", "phi", "dtheta", "dpsi", "dphi", "x", "y", "omega_l", "omega_r", "enc_l", "enc_r",
                 "gyro", "energy")
 
+# The ctypes functions on addresses (the c_* ones are the per-step callers' fast path).
 _derivative = kernels.function("pc_wheeled_derivative", None, _vp, _vp, _d, _d, _d, _vp)
 _condition = kernels.function("pc_wheeled_condition", _i, _vp, _vp, _vp)
-_step = kernels.function("pc_wheeled_step", _i, _vp, _vp, _d, _d, _d, _d, _i, _vp, _vp)
-_energy = kernels.function("pc_wheeled_energy", _d, _vp, _vp)
-_sensors = kernels.function("pc_wheeled_sensors", None, _vp, _vp, _d, _vp)
+c_step = kernels.function("pc_wheeled_step", _i, _vp, _vp, _d, _d, _d, _d, _i, _vp, _vp)
+c_energy = kernels.function("pc_wheeled_energy", _d, _vp, _vp)
+c_sensors = kernels.function("pc_wheeled_sensors", None, _vp, _vp, _d, _vp)
 _step_io = kernels.function("pc_wheeled_step_io", _i, _vp, _vp, _vp, _vp, _d, _d, _vp)
 
 
@@ -124,23 +125,22 @@ def derivative(prm: np.ndarray, y: np.ndarray, tau_l: float, tau_r: float, tau_d
     _derivative(kernels.address(prm), kernels.address(y), tau_l, tau_r, tau_d, kernels.address(out))
 
 
-def condition(prm: np.ndarray, y: np.ndarray, refusal: kernels.Refusal | None = None) -> int:
-    """OK, or the code of why the state ``y`` is no longer a standing robot (``refusal``, if
-    given, receives the quantity)."""
+def condition(prm: np.ndarray, y: np.ndarray) -> int:
+    """OK, or the code of why the state ``y`` is no longer a standing robot."""
     _check(prm, PARAMS_SIZE, y, N_STATE)
-    return _condition(kernels.address(prm), kernels.address(y), None if refusal is None else ctypes.addressof(refusal))
+    return _condition(kernels.address(prm), kernels.address(y), None)
 
 
 def energy(prm: np.ndarray, y: np.ndarray) -> float:
     """T + U [J] of seed 000 (8), (11), (12), the floor at z = 0."""
     _check(prm, PARAMS_SIZE, y, N_STATE)
-    return _energy(kernels.address(prm), kernels.address(y))
+    return c_energy(kernels.address(prm), kernels.address(y))
 
 
 def sensors(prm: np.ndarray, y: np.ndarray, count: float, out: np.ndarray) -> None:
     """out[:14] = :data:`OUTPUT_NAMES` of the state y; the encoders quantised to ``count`` [rad]."""
     _check(prm, PARAMS_SIZE, y, N_STATE, out, len(OUTPUT_NAMES))
-    _sensors(kernels.address(prm), kernels.address(y), count, kernels.address(out))
+    c_sensors(kernels.address(prm), kernels.address(y), count, kernels.address(out))
 
 
 def step_io(prm: np.ndarray, y: np.ndarray, settings: np.ndarray, x: np.ndarray, t: float, h: float,

@@ -81,7 +81,7 @@ def test_a_fall_changes_nothing_and_names_the_substep():
             break
     sim = WheeledPendulum(initial=start, substeps=4)
     before, refusal, b = sim.y.copy(), kernels.Refusal(), sim._bound()
-    code = K._step(*b.addresses, 0.0, 0.0, 0.0, 4 * h, 4, b.taken_address, ctypes.addressof(refusal))
+    code = K.c_step(*b.addresses, 0.0, 0.0, 0.0, 4 * h, 4, b.taken_address, ctypes.addressof(refusal))
     assert code == K.FALLEN_PITCH and b.taken.value == falls_at and 1 < falls_at
     assert refusal.value == psi and abs(psi) >= math.pi / 2 and np.array_equal(sim.y, before)
 
