@@ -31,7 +31,7 @@ import numpy as np
 
 import kernels
 from controller import fastbalance
-from controller.trajectories import SMOOTHSTEP_COEFFICIENTS, SMOOTHSTEP_SLOPE_COEFFICIENTS, smoothstep
+from controller.trajectories import SMOOTHSTEP_COEFFICIENTS, SMOOTHSTEP_SLOPE_COEFFICIENTS
 from plant.wheeled_kernel import bound
 
 #: Bryson's rule: the largest acceptable excursion of each state, (theta [rad], psi [rad],
@@ -193,24 +193,6 @@ class Route:
     turn: float = 0.0
     drive: tuple = (0.5, 5.5)
     turning: tuple = (6.0, 8.0)
-
-    def sample(self, t: float, R: float):
-        """(theta_d, phi_d, theta_d', phi_d', x_d, y_d) at time t for wheel radius R."""
-        s, ds = _smooth(t, self.drive)
-        a, da = _smooth(t, self.turning)
-        return (self.distance * s / R, self.turn * a, self.distance * ds / R, self.turn * da,
-                self.distance * s, 0.0)
-
-
-def _smooth(t, window):
-    start, end = window
-    if t <= start:
-        return 0.0, 0.0
-    if t >= end:
-        return 1.0, 0.0
-    tau = (t - start) / (end - start)
-    s, ds = smoothstep(tau)
-    return s, ds / (end - start)
 
 
 def get_route(name: str) -> Route:
