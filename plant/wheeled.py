@@ -96,8 +96,10 @@ REASONS = {
     kernel.NONFINITE: kernels.Reason("nonfinite_state", kernel.STATE_NAMES, "", "the state became non-finite " + _FELL),
     kernel.BAD_INPUT: kernels.Reason("input_not_finite", kernel.INPUT_NAMES, "N m",
                                      "input {variable} = {value!r} at t = {time:.6g} s is not finite"),
-    kernel.BAD_STEP: kernels.Reason("bad_step", ("dt", "substeps", "count"), "",
-                                    "step size {value!r} at t = {time:.6g} s must be > 0"),
+    kernel.BAD_STEP: kernels.Reason("bad_step", ("dt",), "s", "step size {value!r} at t = {time:.6g} s must be > 0"),
+    kernel.BAD_SETTING: kernels.Reason("bad_setting", ("substeps", "count"), "",
+                                       "setting {variable} = {value!r} at t = {time:.6g} s is out of range (substeps: "
+                                       f"an integer in [1, {kernel.MAX_SUBSTEPS}]; count: > 0 rad)"),
     kernel.INPUT_LIMIT: kernels.Reason("input_absurd", kernel.INPUT_NAMES, "N m",
                                        "input {variable} = {value!r} at t = {time:.6g} s is absurd: "
                                        "|{variable}| must be <= {limit:g}"),

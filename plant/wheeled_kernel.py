@@ -35,9 +35,9 @@ S_SUBSTEPS, S_COUNT, S_PUSH_TORQUE, S_PUSH_START, S_PUSH_DURATION, S_LIMIT = (
 MAX_SUBSTEPS = _i.in_dll(kernels.library(), "pc_wheeled_max_substeps").value
 
 #: wheeled.h's refusal codes: the pitch passed +-90 degrees; a corner of the body reached the
-#: floor; the state became non-finite; an input not finite; a step size or substep count out
-#: of range; an input beyond the compiled loop's limit.
-OK, FALLEN_PITCH, FALLEN_FLOOR, NONFINITE, BAD_INPUT, BAD_STEP, INPUT_LIMIT = range(7)
+#: floor; the state became non-finite; an input not finite; a step size not finite and > 0;
+#: an input beyond the compiled loop's limit; a substep count or encoder count out of range.
+OK, FALLEN_PITCH, FALLEN_FLOOR, NONFINITE, BAD_INPUT, BAD_STEP, INPUT_LIMIT, BAD_SETTING = range(8)
 FALLS = (FALLEN_PITCH, FALLEN_FLOOR, NONFINITE)
 CODES = {OK: "ok", FALLEN_PITCH: "pitch beyond 90 degrees", FALLEN_FLOOR: "body touching the floor",
          NONFINITE: "non-finite state"}

@@ -16,7 +16,7 @@ import pytest
 import kernels
 from controller import fastbalance
 from plant import wheeled_kernel as K
-from plant.wheeled import SEED, FallenError, WheeledPendulum, pack
+from plant.wheeled import SEED, FallenError, WheeledPendulum, pack, refusal_error
 
 SIX = [K.THETA, K.PSI, K.PHI, K.DTHETA, K.DPSI, K.DPHI]
 
@@ -111,8 +111,10 @@ def test_the_io_step_refuses_forged_settings(substeps, count):
     settings[K.S_SUBSTEPS], settings[K.S_COUNT], settings[K.S_LIMIT] = substeps, count, 1e6
     x = np.zeros(3 + len(K.OUTPUT_NAMES))
     refusal = kernels.Refusal()
-    assert K.step_io(sim.prm, sim.y, settings, x, 0.0, 1e-3, refusal) == K.BAD_STEP
-    assert refusal.index == (1 if count == 1e-3 else 2)
+    assert K.step_io(sim.prm, sim.y, settings, x, 0.0, 1e-3, refusal) == K.BAD_SETTING
+    assert refusal.index == (0 if count == 1e-3 else 1)
+    message = str(refusal_error(refusal, 0.5, 0.0))
+    assert message.startswith(f"setting {('substeps', 'count')[refusal.index]} = ") and "t = 0.5 s" in message
 
 
 def test_the_io_step_is_the_step_with_the_push_then_the_sensors():
@@ -232,3 +234,14 @@ def test_the_balance_buffer_layout_is_params_then_run_state():
     assert set(range(fastbalance.B_X_HAT, fastbalance.B_X_HAT + fastbalance.N_MAX)) <= words
     assert len(words) == 1 + fastbalance.N_MAX + 2
     assert not {fastbalance.B_N, fastbalance.B_NY, *range(fastbalance.B_STATES, fastbalance.B_STATES + 6)} & words
+
+
+def test_every_refusal_code_has_its_message():
+    """A code without a Reason would end in a KeyError instead of the refusal's message."""
+    from plant.wheeled import REASONS
+
+    assert set(REASONS) == {K.FALLEN_PITCH, K.FALLEN_FLOOR, K.NONFINITE, K.BAD_INPUT, K.BAD_STEP, K.INPUT_LIMIT,
+                            K.BAD_SETTING}
+    refusal = kernels.Refusal(code=K.INPUT_LIMIT, index=2, value=2e6)
+    assert str(refusal_error(refusal, 0.001, 0.0, limit=1e6)) == \
+        "input tau_d = 2000000.0 at t = 0.001 s is absurd: |tau_d| must be <= 1e+06"

@@ -232,3 +232,14 @@ def test_the_balance_controller_refuses_a_non_finite_input_by_name_and_time():
     with pytest.raises(kernels.Refused, match=r"input gyro = nan at t = 0.25 s is not finite") as caught:
         controller.sample(0.25, 0.0, 0.0, math.nan)
     assert (caught.value.variable, caught.value.time) == ("gyro", 0.25) and controller.x_hat is None
+
+
+def test_every_balance_refusal_code_has_its_message():
+    import kernels
+    from controller import fastbalance
+    from controller.balance import REASONS
+
+    assert set(REASONS) == {fastbalance.BAD_INPUT, fastbalance.INPUT_LIMIT, fastbalance.BAD_BUFFER}
+    refusal = kernels.Refusal(code=fastbalance.BAD_BUFFER, index=fastbalance.B_STATES + 2, value=9.0)
+    assert str(kernels.refused(REASONS, refusal, 0.5, limit=1e6)).startswith(
+        "the balance controller's buffer word states[2] = 9.0 at t = 0.5 s")

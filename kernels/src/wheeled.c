@@ -102,7 +102,7 @@ int pc_wheeled_step(const pc_wheeled_params *p, pc_wheeled_state *s, double tau_
     for (int i = 0; i < 3; ++i)
         if (!isfinite(tau[i])) return pc_refuse(r, PC_WHEELED_BAD_INPUT, i, tau[i]);
     if (!(isfinite(dt) && dt > 0.0)) return pc_refuse(r, PC_WHEELED_BAD_STEP, 0, dt);
-    if (substeps < 1 || substeps > PC_WHEELED_MAX_SUBSTEPS) return pc_refuse(r, PC_WHEELED_BAD_STEP, 1, substeps);
+    if (substeps < 1 || substeps > PC_WHEELED_MAX_SUBSTEPS) return pc_refuse(r, PC_WHEELED_BAD_SETTING, 0, substeps);
     const held_torques model = {p, tau_l, tau_r, tau_d};
     double z[PC_WHEELED_N_STATE], work[5 * PC_WHEELED_N_STATE];   /* fixed size: the stack is scratch enough */
     memcpy(z, &s->theta, sizeof z);
@@ -165,9 +165,9 @@ int pc_wheeled_step_io(const pc_wheeled_params *p, pc_wheeled_state *s, const pc
     /* the settings are words of a buffer: a forged substep count or count is refused, not cast */
     const double substeps = settings->substeps;
     if (!(substeps >= 1.0 && substeps <= PC_WHEELED_MAX_SUBSTEPS && substeps == floor(substeps)))
-        return pc_refuse(r, PC_WHEELED_BAD_STEP, 1, substeps);
+        return pc_refuse(r, PC_WHEELED_BAD_SETTING, 0, substeps);
     if (!(settings->count > 0.0 && isfinite(settings->count)))
-        return pc_refuse(r, PC_WHEELED_BAD_STEP, 2, settings->count);
+        return pc_refuse(r, PC_WHEELED_BAD_SETTING, 1, settings->count);
     double tau_d = x[2];
     const double start = settings->push_start;
     if (start - 1e-9 <= t && t < start + settings->push_duration - 1e-9)   /* 1e-9 s: rounding of t */

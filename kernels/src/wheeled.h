@@ -75,8 +75,9 @@ enum {
     PC_WHEELED_FALLEN_FLOOR = 2, /* a body corner reached the floor: index 0, value psi [rad] */
     PC_WHEELED_NONFINITE = 3,    /* index: the state entry, value: it */
     PC_WHEELED_BAD_INPUT = 4,    /* index: 0 tau_l, 1 tau_r, 2 tau_d; value: not finite */
-    PC_WHEELED_BAD_STEP = 5,     /* index 0: dt not finite and > 0; 1: substeps out of range; 2: count <= 0 */
+    PC_WHEELED_BAD_STEP = 5,     /* index 0: dt, not finite and > 0 */
     PC_WHEELED_INPUT_LIMIT = 6,  /* index as PC_WHEELED_BAD_INPUT; value: beyond the settings' limit */
+    PC_WHEELED_BAD_SETTING = 7,  /* index 0: substeps not an integer in [1, PC_WHEELED_MAX_SUBSTEPS]; 1: count <= 0 */
 };
 
 extern const int pc_wheeled_max_substeps;
