@@ -14,9 +14,10 @@ import importlib
 
 import numpy as np
 
+import kernels
 from controller import fastbalance, law
 from motor.friction import F_Z
-from plant import wheeled_kernel as kernel
+from plant import wheeled_kernel
 from plant.fast5r import inverse_terms
 
 from .compiled import Adapter, NotCompilable, register
@@ -331,40 +332,41 @@ class ActuatedFiveBarPlantAdapter(_PlantState):
 
 
 @register
-class BalanceControllerAdapter(EmittedAdapter):
-    """:func:`controller.fastbalance.balance_io`, inputs limited to |x| <= ABSURD as the slave."""
+class BalanceControllerAdapter(Adapter):
+    """``pc_balance_io`` on the controller's own buffer, inputs limited to |x| <= ABSURD as the slave."""
 
     model = "BalanceController"
     inputs, outputs = fastbalance.INPUTS, fastbalance.OUTPUTS
-    modules = ("controller.fastbalance",)
+    kernel = "pc_balance_io"
 
     def __init__(self, name, slave, h):
         super().__init__(name, slave, h)
-        self.arrays = [slave.controller.buf]
+        self.buf = slave.controller.buf
 
-    def emit(self, arrays, x, t, h):
-        return [f"st = fastbalance.balance_io({arrays[0]}, {x}, {t}, {ABSURD!r})"]
+    def context(self):
+        self._context = fastbalance.Context(kernels.address(self.buf), ABSURD)
+        return self._context
 
 
 @register
-class WheeledPendulumAdapter(EmittedAdapter):
-    """:func:`plant.wheeled_kernel.pendulum_io` on the simulator's own state array (the kernel
-    changes it only when the whole step is accepted: a fall is re-run by the Python path)."""
+class WheeledPendulumAdapter(Adapter):
+    """``pc_wheeled_io`` on the simulator's own parameter and state buffers (the kernel
+    changes the state only when the whole step is accepted: a fall is re-run by the Python
+    path, which raises it)."""
 
     model = "WheeledPendulum"
-    inputs = ("tau_l", "tau_r", "tau_d")
-    outputs = kernel.OUTPUT_NAMES
-    modules = ("plant.wheeled_kernel",)
+    inputs = wheeled_kernel.INPUT_NAMES
+    outputs = wheeled_kernel.OUTPUT_NAMES
+    kernel = "pc_wheeled_io"
 
     def __init__(self, name, slave, h):
         super().__init__(name, slave, h)
         sim = slave.sim
-        settings = np.empty(kernel.SETTINGS_SIZE)
-        settings[kernel.S_SUBSTEPS], settings[kernel.S_COUNT], settings[kernel.S_LIMIT] = \
-            sim.substeps, sim.count, ABSURD
-        settings[kernel.S_PUSH_TORQUE], settings[kernel.S_PUSH_START], settings[kernel.S_PUSH_DURATION] = \
-            slave.push_torque, slave.push_start, slave.push_duration
-        self.arrays = [sim.prm, sim.y, settings]
+        self.settings = wheeled_kernel.new_settings(substeps=sim.substeps, count=sim.count, limit=ABSURD,
+                                                    push_torque=slave.push_torque, push_start=slave.push_start,
+                                                    push_duration=slave.push_duration)
+        self.buffers = (sim.prm, sim.y, self.settings)
 
-    def emit(self, arrays, x, t, h):
-        return [f"st = wheeled_kernel.pendulum_io({arrays[0]}, {arrays[1]}, {arrays[2]}, {x}, {t}, {h})"]
+    def context(self):
+        self._context = wheeled_kernel.Context(*(kernels.address(b) for b in self.buffers))
+        return self._context
