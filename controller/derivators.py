@@ -339,6 +339,16 @@ class _Call:
         self.q_address, self.out_address = kernels.address(self.q), kernels.address(self.out)
 
 
+def kernel_context(derivator, limit: float) -> _Context:
+    """A ``pc_derivator_context`` over ``derivator.buf`` (started or not) with its own scratch
+    and ``limit`` [rad], for ``pc_derivator_io`` in the compiled loop; the caller keeps it alive
+    (it keeps its scratch)."""
+    call = _Call(derivator.buf)
+    call.context.limit = limit
+    call.context.keep = call
+    return call.context
+
+
 #: Derivator -> its :class:`_Call`, rebuilt when its buffer is another array (a restored state).
 _CALLS = weakref.WeakKeyDictionary()
 

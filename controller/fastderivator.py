@@ -1,21 +1,15 @@
 """The derivator's buffer (thesis 7.2.3): its layout, read from the C kernel, and its packing.
 
 The step is the C kernel ``pc_derivator_step`` (``kernels/src/derivator.c``), which
-:class:`controller.derivators.Derivator`, its FMU slave and the compiled scene loop call.
+:class:`controller.derivators.Derivator` and its FMU slave call.
 One float64 array holds the sizes, the step matrix, the rest state per unit angle and the
 state with the newest input: the struct ``pc_derivator`` with its flexible array (layout in
-``kernels/src/derivator.h``; the offsets here come from its exported field list).
-
-:func:`derivator_io` is the compiled loop's numba call (:mod:`fmus.compiled`) until that
-loop calls the C functions (``pc_derivator_io``); it sums in the kernel's index order, so the
-two give the same bits.
+``kernels/src/derivator.h``; the offsets here come from its exported field list).  The
+compiled loop (:mod:`fmus.compiled`) calls ``pc_derivator_io`` on the same buffer.
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
-from numba import njit
 
 import kernels
 
@@ -67,34 +61,3 @@ def views(buf: np.ndarray):
     n, m = int(buf[V_STATES]), int(buf[V_CHANNELS])
     rest, state, end = _offsets(n, m)
     return buf[V_MATRIX:rest].reshape(2 + n, n + 1), buf[state:end].reshape(n + 1, m)
-
-
-@njit(cache=True)
-def derivator_io(buf, x, limit):  # pragma: no cover - numba; goes with fmus/compiled.py's numba loop
-    """Derivator (two channels): x = [q1, q2 | dq1, dq2, ddq1, ddq2]; ``pc_derivator_io``'s
-    arithmetic, in the same order."""
-    n, m = int(buf[V_STATES]), int(buf[V_CHANNELS])
-    rest = V_MATRIX + (2 + n) * (n + 1)
-    state = rest + n
-    for c in range(m):
-        if not (math.isfinite(x[c]) and abs(x[c]) <= limit):
-            return BAD_INPUT
-    started = buf[V_STARTED] != 0.0
-    out = np.empty(2 * m + n * m)
-    for row in range(2 + n):
-        for c in range(m):
-            total = 0.0
-            for j in range(n):
-                total += buf[V_MATRIX + row * (n + 1) + j] * (buf[state + j * m + c] if started
-                                                              else buf[rest + j] * x[c])
-            out[row * m + c] = total + buf[V_MATRIX + row * (n + 1) + n] * x[c]
-    for k in range(2 * m):
-        if not math.isfinite(out[k]):
-            return NONFINITE_OUTPUT
-    for k in range(n * m):
-        buf[state + k] = out[2 * m + k]
-    for c in range(m):
-        buf[state + n * m + c] = x[c]
-    buf[V_STARTED] = 1.0
-    x[2], x[3], x[4], x[5] = out[0], out[1], out[2], out[3]
-    return OK

@@ -88,6 +88,21 @@ def _address(trajectory, buf) -> int:
     return _ADDRESSES[id(trajectory)][1]
 
 
+class _Context(ctypes.Structure):
+    """``pc_trajectory_context``."""
+
+    _fields_ = [("trajectory", ctypes.c_void_p), ("words", ctypes.c_long)]
+
+
+def kernel_context(trajectory) -> _Context:
+    """The ``pc_trajectory_context`` of ``trajectory``'s buffer, for ``pc_trajectory_io`` in
+    the compiled loop; the caller keeps it alive (it keeps the buffer)."""
+    buf = trajectory.buf
+    context = _Context(kernels.address(buf), buf.size)
+    context.keep = buf
+    return context
+
+
 def _evaluate(trajectory, t):
     """The :class:`ReferenceSample` of ``trajectory`` at ``t`` (s)."""
     buf = trajectory.buf

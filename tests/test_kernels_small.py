@@ -11,7 +11,7 @@ import pytest
 from scipy import signal
 
 import kernels
-from controller import derivators, fastderivator, fasttrajectory
+from controller import derivators, fastderivator, fasttrajectory, trajectories
 from controller.derivators import Derivator
 from controller.trajectories import circle, hold, thesis_circle, triangle
 
@@ -104,10 +104,12 @@ def test_the_io_function_is_the_step_on_two_channels():
     """pc_derivator_io (the compiled loop's call) writes the step's estimates after the inputs."""
     buf = _started_buffer()
     twin = buf.copy()
-    scratch = np.zeros(int(buf[fastderivator.V_STATES]) * 2)
+    holder = Derivator()
+    holder.buf = buf
+    context = derivators.kernel_context(holder, 10.0)
     x = np.array([0.25, -0.05, 0, 0, 0, 0], dtype=float)
     refusal = kernels.Refusal()
-    assert _IO(ctypes.addressof(_context(buf, scratch, 10.0)), kernels.address(x), 0.0, T, refusal) == 0
+    assert _IO(ctypes.addressof(context), kernels.address(x), 0.0, T, refusal) == 0
     derivator = Derivator()
     derivator.start_at_first_sample(2)
     derivator.buf[:] = twin
@@ -116,8 +118,7 @@ def test_the_io_function_is_the_step_on_two_channels():
     np.testing.assert_array_equal(buf, derivator.buf)
     x[0] = 11.0
     saved = buf.copy()
-    assert _IO(ctypes.addressof(_context(buf, scratch, 10.0)), kernels.address(x), 0.0, T, refusal) == \
-        fastderivator.BAD_INPUT
+    assert _IO(ctypes.addressof(context), kernels.address(x), 0.0, T, refusal) == fastderivator.BAD_INPUT
     assert (refusal.index, refusal.value) == (0, 11.0)
     np.testing.assert_array_equal(buf, saved)
 
@@ -253,8 +254,7 @@ def test_a_time_before_zero_is_a_refusal_record(t):
 
 def test_the_trajectory_io_function_gives_the_reference_at_the_steps_end():
     trajectory = triangle()
-    buf = trajectory.buf
-    context = (ctypes.c_void_p * 2)(kernels.address(buf), buf.size)
+    context = trajectories.kernel_context(trajectory)
     io = kernels.function("pc_trajectory_io", ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double,
                           ctypes.c_double, ctypes.POINTER(kernels.Refusal))
     x = np.zeros(6)
