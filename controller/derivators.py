@@ -239,8 +239,8 @@ class Derivator:
 
     def _rest_at(self, q0):
         """At rest at q0 (``pc_derivator_reset``)."""
-        call = _call(self)
-        if _RESET(call.context, kernels.address(np.ascontiguousarray(q0, dtype=float)), call.refusal) != 0:
+        call, angles = _call(self), np.ascontiguousarray(q0, dtype=float)
+        if _RESET(call.context, kernels.address(angles), call.refusal) != 0:
             raise kernels.refused(_REASONS, call.refusal, angles=q0.tolist(), limit=math.inf, words=call.buf.size)
 
     def step(self, q, limit=math.inf):
@@ -271,7 +271,8 @@ class Derivator:
         if self.buf is None:
             raise RuntimeError("Derivator.step called before reset(q0)")
         call = _call(self)
-        call.q[:] = q
+        if call.scratch.size:       # else the buffer is damaged: refused before q is read
+            call.q[:] = q
         code = _STEP(call.context, call.q_address, limit, call.out_address, call.refusal)
         if code not in (fastderivator.OK, fastderivator.NONFINITE_OUTPUT):
             raise kernels.refused(_REASONS, call.refusal, angles=call.q.tolist(), limit=limit, words=call.buf.size)
@@ -313,6 +314,7 @@ _CONTEXT_P, _REFUSAL_P = ctypes.POINTER(_Context), ctypes.POINTER(kernels.Refusa
 _STEP = kernels.function("pc_derivator_step", ctypes.c_int, _CONTEXT_P, ctypes.c_void_p, ctypes.c_double,
                          ctypes.c_void_p, _REFUSAL_P)
 _RESET = kernels.function("pc_derivator_reset", ctypes.c_int, _CONTEXT_P, ctypes.c_void_p, _REFUSAL_P)
+_SCRATCH_WORDS = kernels.function("pc_derivator_scratch_words", ctypes.c_long, ctypes.c_void_p, ctypes.c_long)
 _LAYOUT_WORDS = ("states", "channels", "length", "scratch length")
 _REASONS = {
     fastderivator.BAD_INPUT: kernels.Reason("bad_input", ("q1", "q2"), "rad",
@@ -331,8 +333,11 @@ class _Call:
     __slots__ = ("buf", "q", "out", "scratch", "context", "refusal", "q_address", "out_address")
 
     def __init__(self, buf):
-        n, m = int(buf[fastderivator.V_STATES]), int(buf[fastderivator.V_CHANNELS])
-        self.buf, self.q, self.out, self.scratch = buf, np.zeros(m), np.zeros(2 * m), np.zeros(n * m)
+        # Sized by the kernel's own check of the buffer: none for sizes that do not fit it
+        # (a damaged buffer, which every kernel call then refuses).
+        self.scratch = np.zeros(_SCRATCH_WORDS(kernels.address(buf), buf.size))
+        channels = int(buf[fastderivator.V_CHANNELS]) if self.scratch.size else 1
+        self.buf, self.q, self.out = buf, np.zeros(channels), np.zeros(2 * channels)
         self.context = _Context(kernels.address(buf), kernels.address(self.scratch), buf.size, self.scratch.size,
                                 math.inf)
         self.refusal = kernels.Refusal()

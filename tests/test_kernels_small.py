@@ -142,13 +142,20 @@ def test_a_forged_derivator_buffer_is_refused_before_any_access(word, value, ind
     assert not out.any()
 
 
-def test_a_damaged_derivator_buffer_is_a_refusal_record_naming_the_word():
+@pytest.mark.parametrize("word, change, message", [
+    ("V_STATES", 1.0, "length = 223.0"), ("V_STATES", 1e300, r"states = 1e\+300"),
+    ("V_CHANNELS", -2.0, "channels = 0.0")])
+def test_a_damaged_derivator_buffer_is_a_refusal_record_naming_the_word(word, change, message):
+    """Through the Derivator: refused by the kernel, naming the word (and no scratch of the
+    forged size is allocated: 1e300 states would not fit in memory)."""
     derivator = Derivator()
     derivator.reset([0.0, 0.0])
-    derivator.buf[fastderivator.V_STATES] += 1.0
-    with pytest.raises(kernels.Refused, match=r"buffer of 223 words is damaged: length = 223.0 does not fit") as caught:
+    derivator.buf[getattr(fastderivator, word)] += change
+    saved = derivator.buf.copy()
+    with pytest.raises(kernels.Refused, match=rf"buffer of 223 words is damaged: {message} does not fit") as caught:
         derivator.step([0.0, 0.0])
     assert caught.value.reason == "bad_layout"
+    np.testing.assert_array_equal(derivator.buf, saved)
 
 
 def test_a_small_scratch_is_refused():

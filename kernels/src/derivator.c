@@ -21,23 +21,36 @@ static int whole(double value, long most)
     return value >= 1.0 && value <= (double)most && value == (double)(long)value;
 }
 
-/* The sizes n, m of the context's buffer, checked against its length and the scratch's. */
-static int sizes(const pc_derivator_context *c, long *n, long *m, pc_refusal *r)
+/* The sizes n, m of a buffer of `words` doubles, checked against its length. */
+static int layout(const pc_derivator *d, long words, long *n, long *m, pc_refusal *r)
 {
-    if (!c->derivator || c->words < (long)(offsetof(pc_derivator, data) / sizeof(double)))
-        return pc_refuse(r, PC_DERIVATOR_BAD_LAYOUT, 2, (double)c->words);
-    const pc_derivator *d = c->derivator;
+    if (!d || words < (long)(offsetof(pc_derivator, data) / sizeof(double)))
+        return pc_refuse(r, PC_DERIVATOR_BAD_LAYOUT, 2, (double)words);
     if (!whole(d->states, PC_DERIVATOR_MAX_STATES))
         return pc_refuse(r, PC_DERIVATOR_BAD_LAYOUT, 0, d->states);
     if (!whole(d->channels, PC_DERIVATOR_MAX_CHANNELS))
         return pc_refuse(r, PC_DERIVATOR_BAD_LAYOUT, 1, d->channels);
     *n = (long)d->states;
     *m = (long)d->channels;
-    if (pc_derivator_words(*n, *m) != c->words)
-        return pc_refuse(r, PC_DERIVATOR_BAD_LAYOUT, 2, (double)c->words);
+    if (pc_derivator_words(*n, *m) != words)
+        return pc_refuse(r, PC_DERIVATOR_BAD_LAYOUT, 2, (double)words);
+    return PC_OK;
+}
+
+/* The sizes of the context's buffer, checked against its length and the scratch's. */
+static int sizes(const pc_derivator_context *c, long *n, long *m, pc_refusal *r)
+{
+    int code = layout(c->derivator, c->words, n, m, r);
+    if (code != PC_OK) return code;
     if (!c->scratch || c->scratch_words < *n * *m)
         return pc_refuse(r, PC_DERIVATOR_BAD_LAYOUT, 3, (double)c->scratch_words);
     return PC_OK;
+}
+
+long pc_derivator_scratch_words(const pc_derivator *d, long words)
+{
+    long n, m;
+    return layout(d, words, &n, &m, NULL) == PC_OK ? n * m : 0;
 }
 
 int pc_derivator_reset(const pc_derivator_context *c, const double *q0, pc_refusal *r)

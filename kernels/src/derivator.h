@@ -55,6 +55,9 @@ typedef struct {
 /* The doubles a buffer of n states and m channels takes. */
 long pc_derivator_words(long states, long channels);
 
+/* The scratch a buffer of `words` doubles needs, n m; 0 when its sizes do not fit it. */
+long pc_derivator_scratch_words(const pc_derivator *d, long words);
+
 /* At rest at the angles q0[m]: both estimates zero from the next sample on. */
 int pc_derivator_reset(const pc_derivator_context *c, const double *q0, pc_refusal *r);
 
