@@ -59,7 +59,7 @@ same in all four):
     a what-if: as ``"cosim"``, but the plant holds each drive's MEAN shaft torque over
     the step, kt * mean(i) - b omega - mu tanh(omega/omega_eps) with omega held at the
     step start (mean(i) from the exact solution of 4.162 for the held voltage and
-    speed).  It measures what a drive output "torque averaged over the step" would
+    speed); a LuGre drive's own mean torque (``torque_output="mean"``).  It measures what a drive output "torque averaged over the step" would
     buy the co-simulation.
 
 Scenes: any :class:`fmus.system.System` with one ``FiveBarPlant``, up to two
@@ -169,7 +169,13 @@ class _MeanTorqueDrive(_Replaced):
         slave = self.slave
         i_start, omega = slave.drive.i, slave.omega
         self.inner.do_step(t, h)
-        self.link.tau_mean = _mean_torque(slave, i_start, slave.v, omega, h)
+        if slave.drive.lugre is None:
+            self.link.tau_mean = _mean_torque(slave, i_start, slave.v, omega, h)
+        elif slave.drive.torque_output == "mean":     # the drive's own mean, its LuGre bristles' included
+            self.link.tau_mean = slave.tau
+        else:
+            raise ReferenceError(f"drive {self.inner.name}: the 'mean' what-if of a LuGre drive needs "
+                                 "torque_output = 'mean' (its own mean torque)")
 
 
 class _IntegratedPlant(_Replaced):
@@ -400,6 +406,9 @@ def reference_run(scene_or_name, rtol: float = RTOL, atol: float = ATOL, stop_ti
         stepper.initialize(0.0)
     except CoSimulationError as exc:
         raise ReferenceError(str(exc)) from None
+    for name, inst in instances.items():
+        if inst.slave.error:
+            raise ReferenceError(f"{name}: {inst.slave.error}")
     links = _links(system, instances, order, plant_name, coupling)
     for name, drive in drives.items():
         drive.link = links[name]
@@ -573,8 +582,9 @@ def main(argv=None) -> int:
         variants.append(("encoder 2^30 counts", lambda s: with_parameters(s, plant, encoder_counts=2 ** 30)))
     if drives:
         def no_friction(s):
-            for d in drives:
-                s = with_parameters(s, d, mu=0.0)
+            for d in drives:   # LuGre needs mu > 0: its drives lose the LuGre model too
+                lugre = s.component(d).parameters.get("friction") == "lugre"
+                s = with_parameters(s, d, mu=0.0, **({"friction": "tanh"} if lugre else {}))
             return s
         variants.append(("mu = 0", no_friction))
         if variants[0][0].startswith("encoder"):

@@ -228,3 +228,10 @@ def test_the_twins_cosimulation_is_its_reference_up_to_the_coupling(twin_runs):
           f"t = {d['t_max']:.3f} s")
     assert deviation(master, twin_runs["cosim"])["max"] < 1e-9
     assert d["rms"] < 3e-5
+
+
+def test_a_component_refusing_its_initialisation_is_named():
+    """A drive whose parameters its model refuses (LuGre needs mu > 0): the reference says
+    which component and why, rather than failing later on a model that was never built."""
+    with pytest.raises(ReferenceError, match=r"drive1: initialisation refused: LuGre friction: Fc \(mu\) = 0.0"):
+        reference_run(TWIN, stop_time=0.01, system_changes=_drives_changed(mu=0.0))
