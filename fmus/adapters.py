@@ -15,7 +15,7 @@ import importlib
 import numpy as np
 
 import kernels
-from controller import fastbalance, law
+from controller import derivators, fastbalance, law, trajectories
 from motor.friction import F_Z
 from plant import wheeled_kernel
 from plant.fast5r import inverse_terms
@@ -66,36 +66,28 @@ _PLANT_OUTPUTS = tuple(name for name, _ in PLANT_OUTPUTS)
 
 
 @register
-class TrajectoryAdapter(EmittedAdapter):
-    """:func:`controller.fasttrajectory.trajectory_io`: the reference at the step's end."""
+class TrajectoryAdapter(Adapter):
+    """``pc_trajectory_io``: the reference at the step's end."""
 
     model = "Trajectory"
     outputs = ("x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d", "x_start", "y_start")
-    modules = ("controller.fasttrajectory",)
+    kernel = "pc_trajectory_io"
 
-    def __init__(self, name, slave, h):
-        super().__init__(name, slave, h)
-        self.arrays = [slave.trajectory.buf]
-
-    def emit(self, arrays, x, t, h):
-        return [f"st = fasttrajectory.trajectory_io({arrays[0]}, {x}, {t}, {h})"]
+    def context(self):
+        return trajectories.kernel_context(self.slave.trajectory)
 
 
 @register
-class DerivatorAdapter(EmittedAdapter):
-    """:func:`controller.fastderivator.derivator_io`, inputs limited to |q| <= ABSURD as the slave."""
+class DerivatorAdapter(Adapter):
+    """``pc_derivator_io``, inputs limited to |q| <= ABSURD as the slave."""
 
     model = "Derivator"
     inputs = ("q1", "q2")
     outputs = ("dq1", "dq2", "ddq1", "ddq2")
-    modules = ("controller.fastderivator",)
+    kernel = "pc_derivator_io"
 
-    def __init__(self, name, slave, h):
-        super().__init__(name, slave, h)
-        self.arrays = [slave.derivator.buf]
-
-    def emit(self, arrays, x, t, h):
-        return [f"st = fastderivator.derivator_io({arrays[0]}, {x}, {ABSURD!r})"]
+    def context(self):
+        return derivators.kernel_context(self.slave.derivator, ABSURD)
 
 
 @register
