@@ -1,0 +1,178 @@
+"""The 5R's C kernel (kernels/src/fivebar.c) against oracles: energy conservation, the loop
+closure, refusals that change nothing, and the C structs' layout as Python packs them.
+(tests/test_plant_dynamics.py holds it against the general algorithm, state by state.)"""
+from __future__ import annotations
+
+import ctypes
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+import kernels
+from plant import IntegratorSettings, PlantSimulator, fast5r, fivebar, get_preset
+from plant.simulator import RESIDUAL_STOP, SINGULAR_STOP
+
+GRAVITY = (0.0, -9.81, 0.0)
+DT = 1e-3
+
+
+def potential_energy(params, q) -> float:
+    """-g . (sum of mass times centre of mass) of the links and the end effector, from the
+    world link angles of the thesis' q (bench preset: no counter-masses)."""
+    g = np.array(params.gravity[:2])
+    phi11, phi12 = q[3], q[3] + q[4]
+    phi21, phi22 = math.pi - q[5], math.pi - (q[5] + q[6])
+    energy = -params.m0 * float(g @ q[:2])
+    for c, base, a, b in ((params.chain1, params.l0, phi11, phi12), (params.chain2, -params.l0, phi21, phi22)):
+        elbow = np.array([base + c.l1 * math.cos(a), c.l1 * math.sin(a)])
+        com1 = np.array([base + c.lg1 * math.cos(a), c.lg1 * math.sin(a)])
+        com2 = elbow + c.lg2 * np.array([math.cos(b), math.sin(b)])
+        energy -= c.m1 * float(g @ com1) + c.m2 * float(g @ com2)
+    return energy
+
+
+@pytest.mark.parametrize("gravity", [(0.0, 0.0, 0.0), GRAVITY, (9.81, 0.0, 0.0)])
+def test_unactuated_frictionless_5r_keeps_its_energy_under_rk4(gravity):
+    """No torque, no friction: kinetic (the general model's M', with the rotors) plus potential
+    energy stays constant over 400 RK4 steps of 1 ms, while the mechanism swings through a
+    good part of its workspace; the loop stays closed.  A wrong inertia, Coriolis or gravity
+    term, or a wrong elimination of the constraints, makes energy drift by far more."""
+    params = replace(get_preset("bench"), gravity=gravity)
+    sim = PlantSimulator(params, 0.0, 0.15, IntegratorSettings(substeps=4), dx0=0.4, dy0=0.3)
+    energy = lambda: sim.kinetic_energy() + potential_energy(params, sim.q)   # noqa: E731
+    e0, scale, start = energy(), sim.kinetic_energy(), sim.y[:2].copy()
+    for _ in range(400):
+        sim.step(0.0, 0.0, DT)
+        assert sim.residual_norm() < 1e-9
+    assert np.linalg.norm(sim.y[:2] - start) > 0.02          # it moved
+    assert abs(energy() - e0) <= 1e-7 * scale
+
+
+def _context(kernel: fast5r.FastKernel, state, motors=fast5r.NO_MOTORS, voltages=None, held=None, first=2):
+    """A pc_fivebar_context over the kernel's buffers and ``state``."""
+    voltages = np.zeros(2) if voltages is None else voltages
+    address = kernels.address
+    context = fast5r.Context(address(kernel.p), address(kernel.s), address(motors), address(state),
+                             address(voltages), None if held is None else address(held), address(kernel.scratch),
+                             motors.shape[0], first)
+    context.keep = (voltages, motors)       # alive while the context is
+    return context
+
+
+def _plant(settings=IntegratorSettings()):
+    sim = PlantSimulator(get_preset("bench"), 0.0, 0.15, settings)
+    return sim, sim._fast
+
+
+def test_plant_io_steps_as_the_simulator_and_publishes_its_outputs():
+    sim, kernel = _plant()
+    state = sim.y.copy()
+    context = _context(kernel, state)
+    refusal = kernels.Refusal()
+    for k in range(5):
+        x = np.array([0.01 * k, -0.02] + [0.0] * 11)
+        assert fast5r.plant_io_c(ctypes.addressof(context), kernels.address(x), 0.0, DT, ctypes.byref(refusal)) == 0
+        sim.step(0.01 * k, -0.02, DT)
+        assert np.array_equal(state, sim.y)
+        outputs = sim.outputs()
+        assert x[2:].tolist() == [outputs[name] for name in ("q1", "q2", "dq1", "dq2", "x", "y", "dx", "dy",
+                                                             "q1_enc", "q2_enc", "residual")]
+
+
+@pytest.mark.parametrize("index", [0, 1])
+@pytest.mark.parametrize("value", [math.nan, math.inf, -math.inf])
+def test_a_non_finite_input_is_refused_with_its_code_and_changes_nothing(index, value):
+    sim, kernel = _plant()
+    state = sim.y.copy()
+    before, scratch = state.copy(), kernel.scratch.copy()
+    x = np.full(13, 7.0)
+    x[index] = value
+    refusal = kernels.Refusal()
+    status = fast5r.plant_io_c(ctypes.addressof(_context(kernel, state)), kernels.address(x), 0.0, DT,
+                               ctypes.byref(refusal))
+    assert (status, refusal.code, refusal.index) == (fast5r.NONFINITE_INPUT, fast5r.NONFINITE_INPUT, index)
+    assert refusal.value == value or (math.isnan(value) and math.isnan(refusal.value))
+    assert np.array_equal(state, before) and np.array_equal(kernel.scratch, scratch)
+    assert x[2:].tolist() == [7.0] * 11 and x[1 - index] == 7.0
+
+
+def test_a_non_finite_voltage_or_state_is_refused_and_changes_nothing():
+    sim, kernel = _plant()
+    a_motors = np.array([[0, 1.0, 1e-3, 0.05, 0.05, 1e-5, 0.0, 0.1], [1, 1.0, 1e-3, 0.05, 0.05, 1e-5, 0.0, 0.1]])
+    state = np.concatenate([sim.y, [0.1, -0.2]])
+    before = state.copy()
+    x = np.zeros(6 + 13)
+    refusal = kernels.Refusal()
+    voltages = np.array([1.0, math.nan])
+    context = _context(kernel, state, a_motors, voltages, first=6)
+    status = fast5r.actuated_io_c(ctypes.addressof(context), kernels.address(x), 0.0, DT, ctypes.byref(refusal))
+    assert (status, refusal.index) == (fast5r.NONFINITE_INPUT, 3)        # voltage 1: u1, u2, then the voltages
+    assert np.array_equal(state, before) and not x.any()
+    voltages[1] = 2.0
+    state[8] = math.nan                                                  # dy
+    before = state.copy()
+    status = fast5r.actuated_io_c(ctypes.addressof(context), kernels.address(x), 0.0, DT, ctypes.byref(refusal))
+    assert (status, refusal.index) == (fast5r.NONFINITE_STATE, 14)       # the currents are checked first
+    assert np.array_equal(state, before, equal_nan=True) and not x.any()
+
+
+def test_a_singular_pose_is_refused_naming_the_measure():
+    """Driven into the distal links' alignment, the step that gets there is refused with the
+    parallel measure (index 2) below SINGULAR_STOP; the state is the last accepted one."""
+    sim, kernel = _plant()
+    state = sim.y.copy()
+    context = _context(kernel, state)
+    refusal = kernels.Refusal()
+    x = np.zeros(13)
+    for _ in range(5000):
+        last = state.copy()
+        x[:2] = (0.05, 0.0)
+        status = fast5r.plant_io_c(ctypes.addressof(context), kernels.address(x), 0.0, DT, ctypes.byref(refusal))
+        if status:
+            break
+    assert status == fast5r.SINGULAR and abs(refusal.value) < SINGULAR_STOP
+    assert np.array_equal(state, last)
+    measures = fivebar.singularity(get_preset("bench"), *kernel.scratch[:2])
+    assert refusal.value == pytest.approx((measures.serial1, measures.serial2, measures.parallel)[refusal.index],
+                                          abs=1e-5)   # IK near the singularity: ill-conditioned
+
+
+def test_c_layouts_are_the_python_packing():
+    """Every named parameter lands where the C struct has it, the fields tile each buffer,
+    and the ctypes mirrors of the pointer structs have the C sizes."""
+    params = get_preset("thesis_sim")
+    p = fast5r.pack_params(params)
+    assert p[fast5r.PARAMS["l0"]][0] == params.l0 and p[fast5r.PARAMS["m0"]][0] == params.m0
+    assert p[fast5r.PARAMS["gravity"]].tolist() == list(params.gravity[:2])
+    chains = p[fast5r.PARAMS["chain"]].reshape(2, fast5r.CHAIN_SIZE)
+    for row, c in zip(chains, (params.chain1, params.chain2)):
+        assert [row[fast5r.CHAIN[n]][0] for n in ("l1", "l2", "J_rotor")] == [c.l1, c.l2, c.J_rotor]
+    for layout in (fast5r.PARAMS, fast5r.CHAIN, fast5r.MOTOR, fast5r.SETTINGS, fast5r.REPORT, fast5r.INVERSE):
+        places = sorted((s.start, s.stop) for s in layout.values())
+        assert places[0][0] == 0 and all(a[1] == b[0] for a, b in zip(places, places[1:]))
+    assert fast5r.PARAMS_SIZE == 4 + 2 * 9 and fast5r.MOTOR_COLUMNS == 8 and fast5r.PLANT_STATES == 14
+    assert ctypes.sizeof(fast5r.Context) == fast5r.CONTEXT_SIZE
+
+
+def test_the_transitional_numba_loop_kernels_step_as_the_c_kernel():
+    """Until the C loop lands, --mode compiled steps the plant with plant/fast5r_numba.py: it
+    must read the C layouts and give the C kernel's states (to round-off)."""
+    pytest.importorskip("numba")
+    from plant import fast5r_numba
+
+    sim, kernel = _plant()
+    state, mirror = sim.y.copy(), sim.y.copy()
+    context = _context(kernel, state)
+    settings = fast5r.pack_settings(10.0, 1, sim.count, RESIDUAL_STOP, SINGULAR_STOP)
+    refusal = kernels.Refusal()
+    for k in range(20):
+        x, y = np.array([0.02, -0.01 * k] + [0.0] * 11), np.array([0.02, -0.01 * k] + [0.0] * 11)
+        assert fast5r.plant_io_c(ctypes.addressof(context), kernels.address(x), 0.0, DT, ctypes.byref(refusal)) == 0
+        assert fast5r_numba.plant_io(kernel.p, mirror, settings, y, DT) == 0
+        np.testing.assert_allclose(mirror, state, rtol=1e-13, atol=1e-15)
+    terms_c, terms_numba = np.empty(fast5r.INVERSE_SIZE), np.empty(fast5r.INVERSE_SIZE)
+    fast5r.inverse_terms(kernel.p, state[:7].copy(), state[7:].copy(), terms_c)
+    fast5r_numba.inverse_terms_jit(kernel.p, state[:7].copy(), state[7:].copy(), terms_numba)
+    np.testing.assert_allclose(terms_numba, terms_c, rtol=1e-13, atol=1e-15)
