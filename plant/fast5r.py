@@ -209,13 +209,21 @@ class FastKernel:
         p, s, scratch, rep, z, v = (_address(a) for a in (self.p, self.s, self.scratch, self.report, self.z,
                                                           self.voltages))
         ref, res = ctypes.addressof(self.refusal), _address(self._res)
-        motors = {id(NO_MOTORS): (NO_MOTORS, _address(NO_MOTORS))}   # id -> (rows, their address)
+        # The step is the hot call: its arguments as ctypes objects made once, passed to a
+        # function object without argtypes (no conversion per call; 2-3x less overhead).
+        fixed = [ctypes.c_void_p(a) for a in (p, s, z, v, scratch, rep, ref)]
+        u1, u2, dt = _d(), _d(), _d()
+        call = kernels.library()["pc_fivebar_step"]
+        call.restype = _i
+        motors = {}      # id -> (rows, their address, their count)
 
-        def step(rows, u1, u2, dt):
+        def step(rows, u1_value, u2_value, dt_value):
             known = motors.get(id(rows))
             if known is None or known[0] is not rows:
-                known = motors[id(rows)] = (rows, _address(rows))
-            return _step(p, s, known[1], rows.shape[0], z, v, u1, u2, dt, scratch, rep, ref)
+                known = motors[id(rows)] = (rows, ctypes.c_void_p(_address(rows)), _i(rows.shape[0]))
+            u1.value, u2.value, dt.value = u1_value, u2_value, dt_value
+            return call(fixed[0], fixed[1], known[1], known[2], fixed[2], fixed[3], u1, u2, dt, fixed[4], fixed[5],
+                        fixed[6])
 
         def residual(y):
             _residual(p, y, res)
@@ -225,6 +233,17 @@ class FastKernel:
 
     def __deepcopy__(self, memo):
         return self
+
+    def context(self, state, motors=NO_MOTORS, voltages=NO_VOLTAGES, held=None, first: int = 2) -> Context:
+        """A ``pc_fivebar_context`` for the compiled loop over this kernel's parameters and
+        settings, ``state`` (z), the motor rows, the ``voltages`` and ``held`` (u1, u2) buffers
+        the caller fills, and a scratch of its own; the context keeps every buffer alive."""
+        scratch = np.empty(6 * (PLANT_STATES + MAX_MOTORS))
+        context = Context(_address(self.p), _address(self.s), _address(motors), _address(state),
+                          _address(voltages) if voltages.size else None, None if held is None else _address(held),
+                          _address(scratch), motors.shape[0], first)
+        context.buffers = (self, state, motors, voltages, held, scratch)
+        return context
 
     def derivative(self, y, u_star, baumgarte):
         """dy/dt (a new array) with u* on (theta11, theta21)."""
@@ -270,15 +289,22 @@ class FastKernel:
         return self._res.copy()
 
 
-# TRANSITIONAL (until fmus/adapters.py runs plant_io_c/actuated_io_c in the C loop): the numba
-# loop's plant_io, actuated_io, actuated_io_held, and inverse_terms inside it.
-try:
-    from . import fast5r_numba as _loop
-except ImportError:     # no numba: no numba loop either
-    _loop = None
+class ActuatedIO:
+    """``pc_fivebar_actuated_io`` over fixed buffers, called from Python: the plant's part of
+    the compiled loop's ActuatedFiveBarPlant step while the drives' part is not C yet
+    (fmus/adapters.py).  ``state`` is z, ``first`` the index of the plant's outputs in x."""
 
+    def __init__(self, kernel: FastKernel, state, motors, first: int):
+        self.voltages, self.held = np.zeros(motors.shape[0]), np.zeros(2)
+        self.context = kernel.context(state, motors, self.voltages, self.held, first)
+        self.refusal = kernels.Refusal()
+        self._call = functools.partial(actuated_io_c, ctypes.addressof(self.context))
+        self._x = self._x_address = None
 
-def __getattr__(name):
-    if _loop is not None and name in ("plant_io", "actuated_io", "actuated_io_held"):
-        return getattr(_loop, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    def __call__(self, x, h: float, voltages, u1: float = 0.0, u2: float = 0.0) -> int:
+        """One step with ``voltages`` and (u1, u2) on theta11, theta21 held; the status."""
+        if x is not self._x:
+            self._x, self._x_address = x, _address(x)
+        self.voltages[:] = voltages
+        self.held[0], self.held[1] = u1, u2
+        return self._call(self._x_address, 0.0, h, ctypes.byref(self.refusal))

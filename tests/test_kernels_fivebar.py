@@ -12,7 +12,7 @@ import pytest
 
 import kernels
 from plant import IntegratorSettings, PlantSimulator, fast5r, fivebar, get_preset
-from plant.simulator import RESIDUAL_STOP, SINGULAR_STOP
+from plant.simulator import SINGULAR_STOP
 
 GRAVITY = (0.0, -9.81, 0.0)
 DT = 1e-3
@@ -50,17 +50,6 @@ def test_unactuated_frictionless_5r_keeps_its_energy_under_rk4(gravity):
     assert abs(energy() - e0) <= 1e-7 * scale
 
 
-def _context(kernel: fast5r.FastKernel, state, motors=fast5r.NO_MOTORS, voltages=None, held=None, first=2):
-    """A pc_fivebar_context over the kernel's buffers and ``state``."""
-    voltages = np.zeros(2) if voltages is None else voltages
-    address = kernels.address
-    context = fast5r.Context(address(kernel.p), address(kernel.s), address(motors), address(state),
-                             address(voltages), None if held is None else address(held), address(kernel.scratch),
-                             motors.shape[0], first)
-    context.keep = (voltages, motors)       # alive while the context is
-    return context
-
-
 def _plant(settings=IntegratorSettings()):
     sim = PlantSimulator(get_preset("bench"), 0.0, 0.15, settings)
     return sim, sim._fast
@@ -69,7 +58,7 @@ def _plant(settings=IntegratorSettings()):
 def test_plant_io_steps_as_the_simulator_and_publishes_its_outputs():
     sim, kernel = _plant()
     state = sim.y.copy()
-    context = _context(kernel, state)
+    context = kernel.context(state)
     refusal = kernels.Refusal()
     for k in range(5):
         x = np.array([0.01 * k, -0.02] + [0.0] * 11)
@@ -86,15 +75,17 @@ def test_plant_io_steps_as_the_simulator_and_publishes_its_outputs():
 def test_a_non_finite_input_is_refused_with_its_code_and_changes_nothing(index, value):
     sim, kernel = _plant()
     state = sim.y.copy()
-    before, scratch = state.copy(), kernel.scratch.copy()
+    context = kernel.context(state)
+    scratch = context.buffers[-1]
+    scratch[:] = 0.5
+    before, scratch_before = state.copy(), scratch.copy()
     x = np.full(13, 7.0)
     x[index] = value
     refusal = kernels.Refusal()
-    status = fast5r.plant_io_c(ctypes.addressof(_context(kernel, state)), kernels.address(x), 0.0, DT,
-                               ctypes.byref(refusal))
+    status = fast5r.plant_io_c(ctypes.addressof(context), kernels.address(x), 0.0, DT, ctypes.byref(refusal))
     assert (status, refusal.code, refusal.index) == (fast5r.NONFINITE_INPUT, fast5r.NONFINITE_INPUT, index)
     assert refusal.value == value or (math.isnan(value) and math.isnan(refusal.value))
-    assert np.array_equal(state, before) and np.array_equal(kernel.scratch, scratch)
+    assert np.array_equal(state, before) and np.array_equal(scratch, scratch_before)
     assert x[2:].tolist() == [7.0] * 11 and x[1 - index] == 7.0
 
 
@@ -106,7 +97,7 @@ def test_a_non_finite_voltage_or_state_is_refused_and_changes_nothing():
     x = np.zeros(6 + 13)
     refusal = kernels.Refusal()
     voltages = np.array([1.0, math.nan])
-    context = _context(kernel, state, a_motors, voltages, first=6)
+    context = kernel.context(state, a_motors, voltages, first=6)
     status = fast5r.actuated_io_c(ctypes.addressof(context), kernels.address(x), 0.0, DT, ctypes.byref(refusal))
     assert (status, refusal.index) == (fast5r.NONFINITE_INPUT, 3)        # voltage 1: u1, u2, then the voltages
     assert np.array_equal(state, before) and not x.any()
@@ -123,7 +114,7 @@ def test_a_singular_pose_is_refused_naming_the_measure():
     parallel measure (index 2) below SINGULAR_STOP; the state is the last accepted one."""
     sim, kernel = _plant()
     state = sim.y.copy()
-    context = _context(kernel, state)
+    context = kernel.context(state)
     refusal = kernels.Refusal()
     x = np.zeros(13)
     for _ in range(5000):
@@ -134,7 +125,7 @@ def test_a_singular_pose_is_refused_naming_the_measure():
             break
     assert status == fast5r.SINGULAR and abs(refusal.value) < SINGULAR_STOP
     assert np.array_equal(state, last)
-    measures = fivebar.singularity(get_preset("bench"), *kernel.scratch[:2])
+    measures = fivebar.singularity(get_preset("bench"), *context.buffers[-1][:2])   # the refused trial state
     assert refusal.value == pytest.approx((measures.serial1, measures.serial2, measures.parallel)[refusal.index],
                                           abs=1e-5)   # IK near the singularity: ill-conditioned
 
@@ -154,25 +145,3 @@ def test_c_layouts_are_the_python_packing():
         assert places[0][0] == 0 and all(a[1] == b[0] for a, b in zip(places, places[1:]))
     assert fast5r.PARAMS_SIZE == 4 + 2 * 9 and fast5r.MOTOR_COLUMNS == 8 and fast5r.PLANT_STATES == 14
     assert ctypes.sizeof(fast5r.Context) == fast5r.CONTEXT_SIZE
-
-
-def test_the_transitional_numba_loop_kernels_step_as_the_c_kernel():
-    """Until the C loop lands, --mode compiled steps the plant with plant/fast5r_numba.py: it
-    must read the C layouts and give the C kernel's states (to round-off)."""
-    pytest.importorskip("numba")
-    from plant import fast5r_numba
-
-    sim, kernel = _plant()
-    state, mirror = sim.y.copy(), sim.y.copy()
-    context = _context(kernel, state)
-    settings = fast5r.pack_settings(10.0, 1, sim.count, RESIDUAL_STOP, SINGULAR_STOP)
-    refusal = kernels.Refusal()
-    for k in range(20):
-        x, y = np.array([0.02, -0.01 * k] + [0.0] * 11), np.array([0.02, -0.01 * k] + [0.0] * 11)
-        assert fast5r.plant_io_c(ctypes.addressof(context), kernels.address(x), 0.0, DT, ctypes.byref(refusal)) == 0
-        assert fast5r_numba.plant_io(kernel.p, mirror, settings, y, DT) == 0
-        np.testing.assert_allclose(mirror, state, rtol=1e-13, atol=1e-15)
-    terms_c, terms_numba = np.empty(fast5r.INVERSE_SIZE), np.empty(fast5r.INVERSE_SIZE)
-    fast5r.inverse_terms(kernel.p, state[:7].copy(), state[7:].copy(), terms_c)
-    fast5r_numba.inverse_terms_jit(kernel.p, state[:7].copy(), state[7:].copy(), terms_numba)
-    np.testing.assert_allclose(terms_numba, terms_c, rtol=1e-13, atol=1e-15)
