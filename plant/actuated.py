@@ -164,9 +164,11 @@ class ActuatedPlant:
                                                  lambda w: self.derivative(w, voltages, external),
                                                  self._motors, np.array(voltages, dtype=float), max_evaluations)
         currents = z[14:].tolist()
-        if not all(math.isfinite(i) for i in currents):
-            raise PlantError(f"armature currents {currents} after the step from t = {plant.time:.6g} s "
-                             f"({held()}) are not finite")
+        bad = [n for n, i in enumerate(currents) if not math.isfinite(i)]
+        if bad:
+            raise plant._record(f"armature currents {currents} after the step from t = {plant.time:.6g} s "
+                                f"({held()}) are not finite", fast5r.NONFINITE_STATE,
+                                f"i{self.drives[bad[0]][0]}", currents[bad[0]], plant.time)
         plant.accept(z[:14], dt, held, verdict)
         for (_, d), i, v, b in zip(self.drives, currents, voltages, bristles):
             d.i, d.v = i, v

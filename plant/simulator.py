@@ -21,6 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+import kernels
+
 from . import fast5r, fivebar
 from .integrators import IntegrationError, WorkLimitError, dopri5, rk4
 from .parallel import left_inverse_solve, mechanism_state, forward_dynamics
@@ -104,6 +106,21 @@ class PlantError(RuntimeError):
     """The plant cannot go on: singular pose, non-finite input or state."""
 
 
+class PlantRefused(PlantError, kernels.Refused):
+    """A step the plant refused, as the kernels' refusal record (:class:`kernels.Refused`:
+    variable, value, unit, time, code, reason) with the message of its :class:`PlantError`."""
+
+    def __init__(self, message: str, **record):
+        kernels.Refused.__init__(self, message, **record)
+
+
+#: What the 5R kernel's refusal codes name: (reason, unit) and, for SINGULAR, the measure of
+#: each index (pc_fivebar_report.measures).
+REFUSALS = {fast5r.NONFINITE_INPUT: ("nonfinite_input", "N m"), fast5r.NONFINITE_STATE: ("nonfinite_state", ""),
+            fast5r.DIVERGED: ("diverged", "m"), fast5r.SINGULAR: ("singular", "")}
+MEASURES = ("chain 1 elbow (serial)", "chain 2 elbow (serial)", "distal links (parallel)")
+
+
 #: Below this singularity margin the step is refused: the mechanism is at a
 #: singular pose where its dynamics (5.66) lose rank.
 SINGULAR_STOP = 1e-3
@@ -183,7 +200,8 @@ class PlantSimulator:
         """
         if not (math.isfinite(tau1) and math.isfinite(tau2)):
             name, value = ("tau1", tau1) if not math.isfinite(tau1) else ("tau2", tau2)
-            raise PlantError(f"input {name} = {value!r} at t = {self.time:.6g} s is not finite")
+            raise self._record(f"input {name} = {value!r} at t = {self.time:.6g} s is not finite",
+                               fast5r.NONFINITE_INPUT, name, value, self.time)
         self.check_step(dt)
 
         def held():
@@ -239,9 +257,10 @@ class PlantSimulator:
         fast = self._fast
         status = fast.step(z, float(u1), float(u2), float(dt), motors, voltages)
         r = fast.refusal
-        if status == fast5r.NONFINITE_INPUT:
-            raise PlantError(f"integration failed in the step from t = {self.time:.6g} s ({held()}): the held input "
-                             f"{r.index} = {r.value!r} is not finite")
+        if status == fast5r.NONFINITE_INPUT:    # (u1, u2, voltages): the callers' checks come first
+            raise self._record(f"integration failed in the step from t = {self.time:.6g} s ({held()}): the held "
+                               f"input {r.index} = {r.value!r} is not finite", status, f"input {r.index}", r.value,
+                               self.time)
         return fast.scratch[:z.size].copy(), (status, r.index, r.value, fast.report.tolist())
 
     def check_step(self, dt: float) -> None:
@@ -293,20 +312,28 @@ class PlantSimulator:
                 return fast5r.SINGULAR, k, value, None
         return fast5r.OK, 0, residual, None
 
-    def _refusal(self, status, index, value, y, dt, held) -> PlantError:
-        """The :class:`PlantError` of a refused step's status (the one text of each reason)."""
+    def _refusal(self, status, index, value, y, dt, held) -> PlantRefused:
+        """The refusal record of a refused step's status (the one text of each reason)."""
+        t = self.time
         if status == fast5r.NONFINITE_STATE:
-            return PlantError(f"state became non-finite in the step from t = {self.time:.6g} s ({held()})")
+            message = f"state became non-finite in the step from t = {t:.6g} s ({held()})"
+            return self._record(message, status, f"state[{index}]", value, t)
         if status == fast5r.DIVERGED:
             s = self.settings
-            return PlantError(
-                f"integration diverged in the step from t = {self.time:.6g} s ({held()}): loop-closure "
-                f"residual {value:.3g} m > {RESIDUAL_STOP:g} m, the state no longer closes the loop "
-                + (f"(motion too fast for RK4 steps of {dt / s.substeps:.3g} s: check the torques, use "
-                   f"substeps or dopri5)" if s.method == "rk4" else "(check the torques)"))
-        names = ("chain 1 elbow (serial)", "chain 2 elbow (serial)", "distal links (parallel)")
-        return PlantError(f"singular pose reached at t = {self.time + dt:.6g} s: {names[index]} measure {value:.3g} "
-                          f"at x = {float(y[0]):.6g} m, y = {float(y[1]):.6g} m")
+            message = (f"integration diverged in the step from t = {t:.6g} s ({held()}): loop-closure "
+                       f"residual {value:.3g} m > {RESIDUAL_STOP:g} m, the state no longer closes the loop "
+                       + (f"(motion too fast for RK4 steps of {dt / s.substeps:.3g} s: check the torques, use "
+                          f"substeps or dopri5)" if s.method == "rk4" else "(check the torques)"))
+            return self._record(message, status, "residual", value, t)
+        message = (f"singular pose reached at t = {t + dt:.6g} s: {MEASURES[index]} measure {value:.3g} "
+                   f"at x = {float(y[0]):.6g} m, y = {float(y[1]):.6g} m")
+        return self._record(message, status, MEASURES[index], value, t + dt)
+
+    @staticmethod
+    def _record(message, status, variable, value, time) -> PlantRefused:
+        reason, unit = REFUSALS[status]
+        return PlantRefused(message, code=status, reason=reason, variable=variable, value=float(value), unit=unit,
+                            time=time)
 
     def project(self, y, iterations: int = 3):
         """Newton projection on q̄(q) = 0 and dq = C dq#, keeping q# fixed."""

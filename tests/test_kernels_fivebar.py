@@ -12,7 +12,7 @@ import pytest
 
 import kernels
 from plant import IntegratorSettings, PlantSimulator, fast5r, fivebar, get_preset
-from plant.simulator import SINGULAR_STOP
+from plant.simulator import MEASURES, SINGULAR_STOP, PlantError
 
 GRAVITY = (0.0, -9.81, 0.0)
 DT = 1e-3
@@ -145,3 +145,25 @@ def test_c_layouts_are_the_python_packing():
         assert places[0][0] == 0 and all(a[1] == b[0] for a, b in zip(places, places[1:]))
     assert fast5r.PARAMS_SIZE == 4 + 2 * 9 and fast5r.MOTOR_COLUMNS == 8 and fast5r.PLANT_STATES == 14
     assert ctypes.sizeof(fast5r.Context) == fast5r.CONTEXT_SIZE
+
+
+def test_the_simulator_refuses_with_one_record_and_its_message():
+    """A refused step is one kernels.Refused (and a PlantError): variable, value, unit and time
+    of the record are those its message names; the state is kept."""
+    sim, _ = _plant()
+    with pytest.raises(PlantError) as refused:
+        sim.step(0.0, math.inf, DT)
+    assert isinstance(refused.value, kernels.Refused)
+    assert refused.value.record() | {"message": None} == {
+        "instance": None, "time": 0.0, "variable": "tau2", "value": math.inf, "unit": "N m",
+        "code": fast5r.NONFINITE_INPUT, "reason": "nonfinite_input", "message": None}
+    with pytest.raises(PlantError) as refused:
+        for _ in range(5000):
+            y = sim.y
+            sim.step(0.05, 0.0, DT)
+    record = refused.value.record()
+    assert record["variable"] in MEASURES and record["code"] == fast5r.SINGULAR
+    assert f"{record['variable']} measure {record['value']:.3g}" in record["message"]
+    assert abs(record["value"]) < SINGULAR_STOP
+    assert f"at t = {record['time']:.6g} s" in record["message"] and record["time"] == pytest.approx(sim.time + DT)
+    assert sim.y is y
