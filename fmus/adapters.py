@@ -14,9 +14,11 @@ import importlib
 
 import numpy as np
 
-from controller import fastbalance
+import kernels
+from controller import fastbalance, law
 from motor.friction import F_Z
-from plant import wheeled_kernel as kernel
+from plant import wheeled_kernel
+from plant.fast5r import inverse_terms
 
 from .compiled import Adapter, NotCompilable, register
 
@@ -97,47 +99,36 @@ class DerivatorAdapter(EmittedAdapter):
 
 
 @register
-class PositionControllerAdapter(EmittedAdapter):
-    """:func:`controller.fastlaw.law_io`; for the exact model :func:`controller.fastlaw.exact_state`,
-    :func:`plant.fast5r.inverse_terms` and :func:`controller.fastlaw.law_terms_io` (the calls of
-    ``PositionController._compiled_step``)."""
+class PositionControllerAdapter(Adapter):
+    """``pc_law_io`` (kernels/src/law.c) on the controller's buffers, the commands through the
+    slave's delay queue.  The exact model's terms come from :func:`plant.fast5r.inverse_terms`
+    through a ctypes callback, the context's terms function (transitional: until the 5R's C
+    inverse terms are that function)."""
 
     model = "PositionController"
     inputs = ("q1", "q2", "dq1", "dq2", "ddq1", "ddq2", "x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
     outputs = ("tau1", "tau2", "i_ref1", "i_ref2", "e1", "e2")
-    modules = ("controller.fastlaw", "plant.fast5r")
+    kernel = "pc_law_io"
 
     def __init__(self, name, slave, h):
         super().__init__(name, slave, h)
         c = slave.controller
         if not c.compiled:
             raise NotCompilable(f"component {name}: the controller's kernel {c.kernel!r} is not compiled")
-        self.exact = c.model_kind == "exact"
-        self.arrays = [c._buf] + ([c.model._p, c._q, c._dq, c._terms] if self.exact else [])
-        self.delays = len(slave.delayed)
-        if self.delays:
-            self.arrays.append(slave.delayed)
+        self.controller, self.delayed = c, slave.delayed
 
-    def emit(self, arrays, x, t, h):
-        if not self.exact:
-            lines = [f"st = int(fastlaw.law_io({arrays[0]}, {x}, {h}))"]
-        else:
-            buf, p, q, dq, terms = arrays[:5]
-            lines = [f"if fastlaw.exact_state({buf}, {x}[0], {x}[1], {x}[2], {x}[3], {q}, {dq}):",
-                     f"    fast5r.inverse_terms({p}, {q}, {dq}, {terms})",
-                     f"    st = int(fastlaw.law_terms_io({buf}, {x}, {h}, {terms}))",
-                     "else:",
-                     "    st = 1"]
-        if self.delays:    # the slave's delay(): apply the oldest commands, queue the new ones
-            first, n = len(self.inputs), self.delays
-            lines += ["if st == 0:",
-                      "    for c in range(4):",
-                      f"        fresh = {x}[{first} + c]",
-                      f"        {x}[{first} + c] = {arrays[-1]}[0, c]",
-                      f"        for m in range({n - 1}):",
-                      f"            {arrays[-1]}[m, c] = {arrays[-1]}[m + 1, c]",
-                      f"        {arrays[-1]}[{n - 1}, c] = fresh"]
-        return lines
+    def context(self):
+        c = self.controller
+        self._terms_of = None
+        if c.model_kind == "exact":
+            q, dq, terms, p = c._scratch[law.Q], c._scratch[law.DQ], c._terms, c.model._p
+
+            def terms_of(_model, _q, _dq, _out):
+                inverse_terms(p, q, dq, terms)      # _q, _dq, _out point into these arrays
+
+            self._terms_of = law.TERMS_FN(terms_of)
+        self._context = law.loop_context(c._binding(), self.delayed, self._terms_of)
+        return self._context
 
 
 @register
@@ -336,40 +327,41 @@ class ActuatedFiveBarPlantAdapter(_PlantState, EmittedAdapter):
 
 
 @register
-class BalanceControllerAdapter(EmittedAdapter):
-    """:func:`controller.fastbalance.balance_io`, inputs limited to |x| <= ABSURD as the slave."""
+class BalanceControllerAdapter(Adapter):
+    """``pc_balance_io`` on the controller's own buffer, inputs limited to |x| <= ABSURD as the slave."""
 
     model = "BalanceController"
     inputs, outputs = fastbalance.INPUTS, fastbalance.OUTPUTS
-    modules = ("controller.fastbalance",)
+    kernel = "pc_balance_io"
 
     def __init__(self, name, slave, h):
         super().__init__(name, slave, h)
-        self.arrays = [slave.controller.buf]
+        self.buf = slave.controller.buf
 
-    def emit(self, arrays, x, t, h):
-        return [f"st = fastbalance.balance_io({arrays[0]}, {x}, {t}, {ABSURD!r})"]
+    def context(self):
+        self._context = fastbalance.Context(kernels.address(self.buf), ABSURD)
+        return self._context
 
 
 @register
-class WheeledPendulumAdapter(EmittedAdapter):
-    """:func:`plant.wheeled_kernel.pendulum_io` on the simulator's own state array (the kernel
-    changes it only when the whole step is accepted: a fall is re-run by the Python path)."""
+class WheeledPendulumAdapter(Adapter):
+    """``pc_wheeled_io`` on the simulator's own parameter and state buffers (the kernel
+    changes the state only when the whole step is accepted: a fall is re-run by the Python
+    path, which raises it)."""
 
     model = "WheeledPendulum"
-    inputs = ("tau_l", "tau_r", "tau_d")
-    outputs = kernel.OUTPUT_NAMES
-    modules = ("plant.wheeled_kernel",)
+    inputs = wheeled_kernel.INPUT_NAMES
+    outputs = wheeled_kernel.OUTPUT_NAMES
+    kernel = "pc_wheeled_io"
 
     def __init__(self, name, slave, h):
         super().__init__(name, slave, h)
         sim = slave.sim
-        settings = np.empty(kernel.SETTINGS_SIZE)
-        settings[kernel.S_SUBSTEPS], settings[kernel.S_COUNT], settings[kernel.S_LIMIT] = \
-            sim.substeps, sim.count, ABSURD
-        settings[kernel.S_PUSH_TORQUE], settings[kernel.S_PUSH_START], settings[kernel.S_PUSH_DURATION] = \
-            slave.push_torque, slave.push_start, slave.push_duration
-        self.arrays = [sim.prm, sim.y, settings]
+        self.settings = wheeled_kernel.new_settings(substeps=sim.substeps, count=sim.count, limit=ABSURD,
+                                                    push_torque=slave.push_torque, push_start=slave.push_start,
+                                                    push_duration=slave.push_duration)
+        self.buffers = (sim.prm, sim.y, self.settings)
 
-    def emit(self, arrays, x, t, h):
-        return [f"st = wheeled_kernel.pendulum_io({arrays[0]}, {arrays[1]}, {arrays[2]}, {x}, {t}, {h})"]
+    def context(self):
+        self._context = wheeled_kernel.Context(*(kernels.address(b) for b in self.buffers))
+        return self._context

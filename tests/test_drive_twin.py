@@ -16,7 +16,6 @@ from scipy import stats
 # The compiled loop hashes its kernels' source: import them from the worktree before an FMU
 # loaded in this process imports its own bundled (temporary) copies under the same names.
 import controller.fastderivator  # noqa: F401
-import controller.fastlaw  # noqa: F401
 import controller.fasttrajectory  # noqa: F401
 import plant.fast5r  # noqa: F401
 from motor import Drive, fastdrive, friction as fr, motor1

@@ -257,7 +257,7 @@ def _derivator_rest_word(kernel, buffer):
 @pytest.mark.parametrize("model, holder, field, layout, coefficient, run_state", [
     ("Derivator", "derivator", "buf", "V_STATES", _derivator_rest_word, "V_STARTED"),
     ("BalanceController", "controller", "buf", "B_STATES", "B_GAIN", "B_X_HAT"),
-    ("PositionController", "controller", "_buf", "B_TNX", "B_KP", "S_INTEGRAL")])
+    ("PositionController", "controller", "_buf", "BUF_MODEL", "BUF_KP", "BUF_INTEGRAL")])
 def test_the_configuration_words_of_a_kernel_buffer_cannot_be_forged(model, holder, field, layout, coefficient,
                                                                      run_state):
     """The compiled kernels index arrays and loop with words of their buffers (the
@@ -270,7 +270,7 @@ def test_the_configuration_words_of_a_kernel_buffer_cannot_be_forged(model, hold
 
     kernel = importlib.import_module({"Derivator": "controller.fastderivator",
                                       "BalanceController": "controller.fastbalance",
-                                      "PositionController": "controller.fastlaw"}[model])
+                                      "PositionController": "controller.law"}[model])
     data = _state_bytes(model)
     tree = fmustate.read(data).tree
     buffer = tree[holder].fields[field]

@@ -34,16 +34,15 @@ def _runtime(name: str) -> str | None:
 
 
 ASAN = _runtime("libasan.so")
-#: Preloaded after ASan when present: its __cxa_throw interceptor needs the real one at start-up,
-#: or a C++ extension that throws (matplotlib's ft2font, imported with motor -> control) aborts
-#: the run in an ASan CHECK before any kernel is reached.
-CXX_RUNTIME = _runtime("libstdc++.so")
+#: Loaded after the ASan runtime so that its __cxa_throw interceptor finds the real one: a
+#: C++ extension that throws (matplotlib's, which python-control imports with ``plant``)
+#: otherwise stops the process in ASan's CHECK.
+STDCXX = _runtime("libstdc++.so.6")
 pytestmark = pytest.mark.skipif(ASAN is None, reason="the C compiler has no AddressSanitizer runtime")
 
 
 def _sanitized_env(library: Path) -> dict:
-    preload = " ".join(filter(None, (ASAN, CXX_RUNTIME)))
-    return {**os.environ, "PARCOSIM_KERNELS_LIB": str(library), "LD_PRELOAD": preload,
+    return {**os.environ, "PARCOSIM_KERNELS_LIB": str(library), "LD_PRELOAD": " ".join(filter(None, (ASAN, STDCXX))),
             # Python's small-object allocator would hide a buffer's end from ASan's redzones
             "PYTHONMALLOC": "malloc",
             "ASAN_OPTIONS": "detect_leaks=0:exitcode=99",
