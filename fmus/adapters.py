@@ -18,7 +18,7 @@ import kernels
 from controller import fastbalance, law
 from motor.friction import F_Z
 from plant import wheeled_kernel
-from plant.fast5r import inverse_terms
+from plant.fast5r import TERMS_OF
 
 from .compiled import Adapter, NotCompilable, register
 
@@ -101,9 +101,8 @@ class DerivatorAdapter(EmittedAdapter):
 @register
 class PositionControllerAdapter(Adapter):
     """``pc_law_io`` (kernels/src/law.c) on the controller's buffers, the commands through the
-    slave's delay queue.  The exact model's terms come from :func:`plant.fast5r.inverse_terms`
-    through a ctypes callback, the context's terms function (transitional: until the 5R's C
-    inverse terms are that function)."""
+    slave's delay queue.  The exact model's terms come from the 5R kernel's inverse terms,
+    the context's terms function (``pc_fivebar_terms_of`` on the model's parameter buffer)."""
 
     model = "PositionController"
     inputs = ("q1", "q2", "dq1", "dq2", "ddq1", "ddq2", "x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
@@ -119,15 +118,11 @@ class PositionControllerAdapter(Adapter):
 
     def context(self):
         c = self.controller
-        self._terms_of = None
-        if c.model_kind == "exact":
-            q, dq, terms, p = c._scratch[law.Q], c._scratch[law.DQ], c._terms, c.model._p
-
-            def terms_of(_model, _q, _dq, _out):
-                inverse_terms(p, q, dq, terms)      # _q, _dq, _out point into these arrays
-
-            self._terms_of = law.TERMS_FN(terms_of)
-        self._context = law.loop_context(c._binding(), self.delayed, self._terms_of)
+        exact = c.model_kind == "exact"
+        self._context = law.loop_context(c._binding(), self.delayed, ctypes.c_void_p(TERMS_OF) if exact else None)
+        if exact:
+            self._model = c.model._p        # the parameters the terms function reads, kept alive
+            self._context.model = kernels.address(self._model)
         return self._context
 
 

@@ -97,6 +97,9 @@ _inverse_terms = kernels.function("pc_fivebar_inverse_terms", None, _vp, _vp, _v
 plant_io_c = kernels.function("pc_fivebar_plant_io", _i, _vp, _vp, _d, _d, _vp)
 actuated_io_c = kernels.function("pc_fivebar_actuated_io", _i, _vp, _vp, _d, _d, _vp)
 CONTEXT_SIZE = kernels.function("pc_fivebar_context_size", _i)()
+#: The address of ``pc_fivebar_terms_of``: the inverse terms as the position law's terms function
+#: (``pc_law_terms_fn``; its model a ``pc_fivebar_params`` buffer, its terms :data:`INVERSE_SIZE` words).
+TERMS_OF = ctypes.cast(kernels.library().pc_fivebar_terms_of, _vp).value
 
 
 def _address(array: np.ndarray) -> int:

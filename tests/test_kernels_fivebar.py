@@ -167,3 +167,17 @@ def test_the_simulator_refuses_with_one_record_and_its_message():
     assert abs(record["value"]) < SINGULAR_STOP
     assert f"at t = {record['time']:.6g} s" in record["message"] and record["time"] == pytest.approx(sim.time + DT)
     assert sim.y is y
+
+
+def test_the_terms_function_is_the_inverse_terms():
+    """pc_fivebar_terms_of (the position law's terms function, fmus/adapters.py) reads its model
+    as the parameter buffer and fills the inverse terms (held to the general algorithm in
+    tests/test_controller_fast.py): argument order and layout."""
+    sim, kernel = _plant()
+    q, dq = sim.y[:7].copy(), sim.y[7:].copy() + 0.3
+    expected, got = np.empty(fast5r.INVERSE_SIZE), np.full(fast5r.INVERSE_SIZE, np.nan)
+    fast5r.inverse_terms(kernel.p, q, dq, expected)
+    terms_of = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)(
+        fast5r.TERMS_OF)
+    terms_of(kernels.address(kernel.p), kernels.address(q), kernels.address(dq), kernels.address(got))
+    assert np.array_equal(got, expected) and np.any(expected[fast5r.INVERSE_V:fast5r.INVERSE_V + 2] != 0.0)

@@ -362,6 +362,14 @@ void pc_fivebar_inverse_terms(const pc_fivebar_params *p, const double *q, const
     out->g[1] = g1;
 }
 
+/* pc_fivebar_inverse_terms in the shape of the position law's terms function (pc_law_terms_fn,
+ * law.h): `model` is a pc_fivebar_params, `terms` a pc_fivebar_inverse (its first words are
+ * pc_law_terms: M_M, v_M, g_M, Z). */
+void pc_fivebar_terms_of(const void *model, const double *q, const double *dq, double *terms)
+{
+    pc_fivebar_inverse_terms(model, q, dq, (pc_fivebar_inverse *)terms);
+}
+
 /* The plant's outputs (fmus.parts.PLANT_OUTPUTS order) from a report into x[first ..]. */
 static void publish(const pc_fivebar_report *rep, double *x, int first)
 {

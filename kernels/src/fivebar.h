@@ -148,6 +148,7 @@ int pc_fivebar_step(const pc_fivebar_params *p, const pc_fivebar_settings *s, co
 void pc_fivebar_project(const pc_fivebar_params *p, double *y, int iterations);
 void pc_fivebar_inverse_terms(const pc_fivebar_params *p, const double *q, const double *dq,
                               pc_fivebar_inverse *out);
+void pc_fivebar_terms_of(const void *model, const double *q, const double *dq, double *terms);
 int pc_fivebar_plant_io(void *context, double *x, double t, double h, pc_refusal *refusal);
 int pc_fivebar_actuated_io(void *context, double *x, double t, double h, pc_refusal *refusal);
 
