@@ -18,7 +18,7 @@ import kernels
 from controller import derivators, fastbalance, law, trajectories
 from motor.friction import F_Z
 from plant import wheeled_kernel
-from plant.fast5r import inverse_terms
+from plant.fast5r import TERMS_OF
 
 from .compiled import Adapter, NotCompilable, register
 
@@ -93,9 +93,8 @@ class DerivatorAdapter(Adapter):
 @register
 class PositionControllerAdapter(Adapter):
     """``pc_law_io`` (kernels/src/law.c) on the controller's buffers, the commands through the
-    slave's delay queue.  The exact model's terms come from :func:`plant.fast5r.inverse_terms`
-    through a ctypes callback, the context's terms function (transitional: until the 5R's C
-    inverse terms are that function)."""
+    slave's delay queue.  The exact model's terms come from the 5R kernel's inverse terms,
+    the context's terms function (``pc_fivebar_terms_of`` on the model's parameter buffer)."""
 
     model = "PositionController"
     inputs = ("q1", "q2", "dq1", "dq2", "ddq1", "ddq2", "x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
@@ -111,15 +110,11 @@ class PositionControllerAdapter(Adapter):
 
     def context(self):
         c = self.controller
-        self._terms_of = None
-        if c.model_kind == "exact":
-            q, dq, terms, p = c._scratch[law.Q], c._scratch[law.DQ], c._terms, c.model._p
-
-            def terms_of(_model, _q, _dq, _out):
-                inverse_terms(p, q, dq, terms)      # _q, _dq, _out point into these arrays
-
-            self._terms_of = law.TERMS_FN(terms_of)
-        self._context = law.loop_context(c._binding(), self.delayed, self._terms_of)
+        exact = c.model_kind == "exact"
+        self._context = law.loop_context(c._binding(), self.delayed, ctypes.c_void_p(TERMS_OF) if exact else None)
+        if exact:
+            self._model = c.model._p        # the parameters the terms function reads, kept alive
+            self._context.model = kernels.address(self._model)
         return self._context
 
 
@@ -179,10 +174,10 @@ class DCMotorDriveAdapter(EmittedAdapter):
                 f"    friction.friction_commit({f}, z)"]
 
 
-def _plant_settings(name, sim, h) -> np.ndarray:
-    """The settings array of :func:`plant.fast5r.plant_io` for ``sim`` at step h, or NotCompilable."""
-    from plant import fast5r
-    from plant.simulator import RESIDUAL_STOP, SINGULAR_STOP, PlantError
+def _check_plant(name, sim, h) -> None:
+    """Raise NotCompilable unless ``sim``'s step at h is the C kernel's (its settings buffer,
+    ``sim._fast.s``, is then the compiled loop's)."""
+    from plant.simulator import PlantError
 
     s = sim.settings
     if s.method != "rk4" or s.kernel != "fast" or s.project:
@@ -192,15 +187,9 @@ def _plant_settings(name, sim, h) -> np.ndarray:
         sim.check_step(h)
     except PlantError as exc:
         raise NotCompilable(f"component {name}: {exc}") from None
-    settings = np.empty(fast5r.SETTINGS_SIZE)
-    settings[fast5r.S_LAMBDA], settings[fast5r.S_SUBSTEPS], settings[fast5r.S_COUNT] = \
-        s.baumgarte, s.substeps, sim.count
-    settings[fast5r.S_RESIDUAL_STOP], settings[fast5r.S_SINGULAR_STOP] = RESIDUAL_STOP, SINGULAR_STOP
-    settings[fast5r.S_OFFSET1], settings[fast5r.S_OFFSET2] = sim.encoder_offsets
-    return settings
 
 
-class _PlantState(EmittedAdapter):
+class _PlantState(Adapter):
     """The plant's state lives in ``self.state`` while compiled (the simulator replaces its
     array every step): copied to and from the simulator around a Python step."""
 
@@ -218,39 +207,43 @@ class _PlantState(EmittedAdapter):
 
 @register
 class FiveBarPlantAdapter(_PlantState):
-    """:func:`plant.fast5r.plant_io`."""
+    """``pc_fivebar_plant_io`` (kernels/src/fivebar.c) on the adapter's copy of the state."""
 
     model = "FiveBarPlant"
     inputs = ("tau1", "tau2")
     outputs = _PLANT_OUTPUTS
-    modules = ("plant.fast5r",)
+    kernel = "pc_fivebar_plant_io"
 
     def __init__(self, name, slave, h):
         super().__init__(name, slave, h)
         if slave.idle_steps:
             raise NotCompilable(f"component {name}: idle steps (a model inside a controller)")
         sim = slave.sim
+        _check_plant(name, sim, h)
         self.state = sim.y.copy()
-        self.arrays = [sim._fast.p, self.state, _plant_settings(name, sim, h)]
+        self._context = sim._fast.context(self.state)
 
     def _sim(self):
         return self.slave.sim
 
-    def emit(self, arrays, x, t, h):
-        return [f"st = fast5r.plant_io({arrays[0]}, {arrays[1]}, {arrays[2]}, {x}, {h})"]
+    def context(self):
+        return self._context
 
 
 @register
-class ActuatedFiveBarPlantAdapter(_PlantState):
-    """Each drive's :func:`motor.fastdrive.peek_voltage`, then :func:`plant.fast5r.actuated_io`,
-    then :func:`motor.fastdrive.commit_step`: nothing changes unless the whole step is accepted."""
+class ActuatedFiveBarPlantAdapter(_PlantState, EmittedAdapter):
+    """Each drive's :func:`motor.fastdrive.peek_voltage`, then the plant's
+    ``pc_fivebar_actuated_io`` (:class:`plant.fast5r.ActuatedIO`), then
+    :func:`motor.fastdrive.commit_step`: nothing changes unless the whole step is accepted."""
 
     model = "ActuatedFiveBarPlant"
     inputs = ("i_ref1", "i_hat1", "v_ref1", "i_ref2", "i_hat2", "v_ref2")
     outputs = _PLANT_OUTPUTS + ("tau1", "tau2", "v1", "v2", "i1", "i2")
-    modules = ("motor.fastdrive", "plant.fast5r")
+    modules = ("motor.fastdrive",)
+    kernel = "pc_fivebar_actuated_io (drives: motor.fastdrive)"
 
     def __init__(self, name, slave, h):
+        from plant.fast5r import ActuatedIO
         from plant.simulator import PlantError
 
         super().__init__(name, slave, h)
@@ -259,13 +252,13 @@ class ActuatedFiveBarPlantAdapter(_PlantState):
             raise NotCompilable(f"component {name}: idle steps (a model inside a controller)")
         if [j for j, _ in a.drives] != [1, 2]:
             raise NotCompilable(f"component {name}: drives on joints {[j for j, _ in a.drives]} (1 and 2 are compiled)")
-        settings = _plant_settings(name, a.plant, h)
+        _check_plant(name, a.plant, h)
         try:
             a._check_rk4_stability(h, a.plant.settings.substeps)
         except PlantError as exc:
             raise NotCompilable(f"component {name}: {exc}") from None
         self.state = a.state()
-        self.arrays = [a.plant._fast.p, settings, a._motors, self.state, np.zeros(2)]
+        self.arrays = [ActuatedIO(a.plant._fast, self.state, a._motors, len(self.inputs)), self.state]
         for n, (_, drive) in enumerate(a.drives):
             self.arrays += _prepared(name, drive, h)
         # LuGre drives: the parameters without b (ActuatedPlant.lugre_models), then the drives'
@@ -285,28 +278,25 @@ class ActuatedFiveBarPlantAdapter(_PlantState):
             self.state[14 + n] = drive.i
 
     def emit(self, arrays, x, t, h):
-        p, s, motors, z, volts, d1, c1, d2, c2 = arrays[:9]
+        plant, z, d1, c1, d2, c2 = arrays[:6]
         lugre = [n for n, on in enumerate(self.lugre) if on]
-        bristles = dict(zip(lugre, zip(arrays[9:9 + len(lugre)], arrays[9 + len(lugre):])))   # n: (model, drive's)
+        bristles = dict(zip(lugre, zip(arrays[6:6 + len(lugre)], arrays[6 + len(lugre):])))   # n: (model, drive's)
         first = len(self.inputs)
         lines = [
             f"st, v1, e1, s1, p1 = fastdrive.peek_voltage({d1}, {c1}, {x}[0], {x}[2], {x}[1], {h})",
             "if st == 0:",
             f"    st, v2, e2, s2, p2 = fastdrive.peek_voltage({d2}, {c2}, {x}[3], {x}[5], {x}[4], {h})",
-            "if st == 0:",
-            f"    {volts}[0] = v1",
-            f"    {volts}[1] = v2",
         ]
         if not bristles:
-            lines.append(f"    st = fast5r.actuated_io({p}, {s}, {motors}, {z}, {volts}, {x}, {first}, {h})")
+            lines += ["if st == 0:", f"    st = {plant}({x}, {h}, (v1, v2))"]
         else:   # ActuatedPlant.held_friction: joint 1's speed z[10], joint 2's -z[12] (world)
             speed = {0: f"{z}[10]", 1: f"-{z}[12]"}
+            lines.append("if st == 0:")
             for n, (f, state) in bristles.items():
                 lines.append(f"    b{n}, _, m{n} = friction.advance({f}, {state}[{F_Z}], {speed[n]}, {h})")
             u1 = "-m0" if 0 in bristles else "0.0"
             u2 = "m1" if 1 in bristles else "0.0"
-            lines.append(f"    st = fast5r.actuated_io_held({p}, {s}, {motors}, {z}, {volts}, {x}, {first}, {h}, "
-                         f"{u1}, {u2})")
+            lines.append(f"    st = {plant}({x}, {h}, (v1, v2), {u1}, {u2})")
         lines += [
             "if st == 0:",
             f"    fastdrive.commit_step({d1}, {c1}, v1, e1, s1, p1, {z}[14])",

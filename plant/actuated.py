@@ -99,10 +99,16 @@ class ActuatedPlant:
     def derivative(self, z, voltages, external=(0.0, 0.0), omega_held=None):
         """dz/dt with the drives' voltages and world torques ``external`` on (q1, q2) held.
 
-        The Python reference of the compiled :func:`plant.fast5r.actuated_derivative`.
-        ``omega_held`` (one speed per drive), a diagnostic of the reference, replaces the
-        joint speed the drives see (back-emf and friction) by a held one.
+        With the plant's C kernel, :func:`plant.fast5r.actuated_derivative`; with the general
+        kernel (or ``omega_held``), the general algorithm's forward dynamics with the motors'
+        equations added here.  ``omega_held`` (one speed per drive), a diagnostic of the
+        reference, replaces the joint speed the drives see (back-emf and friction) by a held one.
         """
+        fast = self.plant._fast
+        if fast is not None and omega_held is None:
+            u_star = fivebar.thesis_torques(*external)
+            return fast.actuated_derivative(z, self._motors, np.asarray(voltages, dtype=float), u_star[0], u_star[1],
+                                            self.plant.settings.baumgarte)
         y = z[:14]
         rates = fivebar.world_rates(y[7:])
         tau = list(external)
@@ -154,14 +160,16 @@ class ActuatedPlant:
 
         external, bristles = self.held_friction(dt)
         u_star = fivebar.thesis_torques(*external) if any(b is not None for b in bristles) else (0.0, 0.0)
-        z, report, evaluations = plant.integrate(self.state(), dt, u_star[0], u_star[1], held,
+        z, verdict, evaluations = plant.integrate(self.state(), dt, u_star[0], u_star[1], held,
                                                  lambda w: self.derivative(w, voltages, external),
                                                  self._motors, np.array(voltages, dtype=float), max_evaluations)
         currents = z[14:].tolist()
-        if not all(math.isfinite(i) for i in currents):
-            raise PlantError(f"armature currents {currents} after the step from t = {plant.time:.6g} s "
-                             f"({held()}) are not finite")
-        plant.accept(z[:14], dt, held, report)
+        bad = [n for n, i in enumerate(currents) if not math.isfinite(i)]
+        if bad:
+            raise plant._record(f"armature currents {currents} after the step from t = {plant.time:.6g} s "
+                                f"({held()}) are not finite", fast5r.NONFINITE_STATE,
+                                f"i{self.drives[bad[0]][0]}", currents[bad[0]], plant.time)
+        plant.accept(z[:14], dt, held, verdict)
         for (_, d), i, v, b in zip(self.drives, currents, voltages, bristles):
             d.i, d.v = i, v
             if b is not None:

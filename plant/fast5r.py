@@ -1,44 +1,109 @@
-"""Compiled 5R kernel: the chapter 4-5 algorithm specialised to planar RR chains.
+"""The 5R kernel's Python side: the C kernel ``kernels/src/fivebar.c`` bound through ctypes.
 
-The general algorithm (:mod:`plant.serial`, :mod:`plant.parallel`) builds
-3-D Jacobians, 7x7 matrices and a least-squares solve at every evaluation;
-numpy spends microseconds per call on such small arrays.  This module
-evaluates the same equations for the thesis' 5R (Table 2 DH tables,
-architecture 7.8-7.11) with scalars, compiled by numba:
+The kernel is the chapter 4-5 algorithm specialised to the thesis' 5R (Table 2 DH tables,
+architecture 7.8-7.11) with scalars: per chain the tip, J_v and the velocity-quadratic tip term
+(4.13, 4.57-4.58) and M, v, g of (4.85-4.87) with the rotor inertia (4.139-4.140); the forward
+dynamics (5.56, 5.66, Baumgarte rows eliminated); the actuated 5R (the drives' armature
+circuits, 4.162, and shaft torques, B.2, inside the ODE); the one RK4 (``pc_rk4.h``); the
+report of a state, projection, residual and the inverse dynamics terms (5.67-5.77).
 
-* per chain, in its own base frame N_k (E_k = diag(s_k, 1, s_k), s = +1, -1):
-  tip, J_v and the velocity-quadratic tip term (4.13, 4.57-4.58), and
-  M, v, g of (4.85-4.87) with the rotor inertia (4.139-4.140) — for planar
-  revolute joints these recursions reduce to the classic RR expressions;
-* the z rows of (7.7) decouple (z'' = -2 lambda z' - lambda^2 z, z = 0 from a
-  consistent start), leaving A Q° = blockdiag(-E_k J_v,k), invertible away
-  from serial singularities, so C = [1; (E_1 J_1)^-1; (E_2 J_2)^-1] (5.56);
-* (5.66) is solved by eliminating the constraint rows: the Baumgarte rows
-  give theta'' = C x'' + e, and the projected dynamics a 2x2 system
-  C^T M' C x'' = C^T (u' - v' - g' - M' e).
-
-Counter-masses (seed 001) are absorbed into each chain's link mass, centre of mass and
-inertia (:func:`composite_link`), so the kernel itself does not see them.
-
-``tests/test_plant_dynamics.py`` checks the accelerations and the residual, and
-``tests/test_controller_fast.py`` :func:`inverse_terms`, against the general algorithm to
-round-off at random states of both presets (the accelerations with counter-masses too).
+This module packs :class:`~plant.presets.FiveBarParams` into the C struct ``pc_fivebar_params``
+(counter-masses, seed 001 (55)-(64), absorbed into each chain's links by
+:func:`composite_link`), reads every buffer offset from the library (:func:`kernels.layout`),
+and offers :class:`FastKernel`, the simulator's binding with its buffers' addresses computed
+once.  ``tests/test_plant_dynamics.py`` holds the kernel against the general algorithm
+(:mod:`plant.serial`, :mod:`plant.parallel`), ``tests/test_kernels_fivebar.py`` checks energy,
+refusals and layouts.
 """
 from __future__ import annotations
 
+import ctypes
+import functools
 import math
 
 import numpy as np
-from numba import njit
+
+import kernels
 
 from .presets import ChainParams, FiveBarParams
 from .serial import RigidLink, with_point_mass
 
-# Layout of the parameter vector.
-_L0, _M0, _GX, _GY = 0, 1, 2, 3
-_CHAIN = 4          # first chain offset; each chain has 9 entries
-_L1, _L2, _LG1, _LG2, _M1, _M2, _JZ1, _JZ2, _JR = range(9)
-_SIGN = (1.0, -1.0)  # s_k of E_k (7.3-7.4)
+_vp, _d, _i = ctypes.c_void_p, ctypes.c_double, ctypes.c_int
+
+
+def _size(layout: dict) -> int:
+    return max(s.stop for s in layout.values())
+
+
+#: The C structs' fields: {name: slice of a float64 buffer} (kernels/src/fivebar.h).
+PARAMS = kernels.layout("pc_fivebar_params_fields")
+CHAIN = kernels.layout("pc_fivebar_chain_fields")
+MOTOR = kernels.layout("pc_fivebar_motor_fields")
+SETTINGS = kernels.layout("pc_fivebar_settings_fields")
+REPORT = kernels.layout("pc_fivebar_report_fields")
+INVERSE = kernels.layout("pc_fivebar_inverse_fields")
+STATE = kernels.layout("pc_fivebar_state_fields")
+PARAMS_SIZE, CHAIN_SIZE = _size(PARAMS), _size(CHAIN)
+#: Columns of one motor row (``pc_fivebar_motor``): joint (0: q1, 1: q2), R, L, kt, ke, b, mu, omega_eps.
+MOTOR_COLUMNS = _size(MOTOR)
+NO_MOTORS = np.empty((0, MOTOR_COLUMNS))
+NO_VOLTAGES = np.empty(0)
+#: Places in the report of a state (``pc_fivebar_report``): finite flag, residual norm (5.18), the
+#: three singularity measures, then the outputs q1, q2, dq1, dq2, x, y, dx, dy, q1_enc, q2_enc.
+REPORT_FINITE, REPORT_RESIDUAL = REPORT["finite"].start, REPORT["residual"].start
+REPORT_MEASURES, REPORT_OUTPUTS, REPORT_SIZE = REPORT["measures"].start, REPORT["q1"].start, _size(REPORT)
+#: Places in the inverse dynamics terms (``pc_fivebar_inverse``): M_M, v_M, g_M, Z, c.
+INVERSE_M, INVERSE_V, INVERSE_G = INVERSE["M"].start, INVERSE["v"].start, INVERSE["g"].start
+INVERSE_Z, INVERSE_C, INVERSE_SIZE = INVERSE["Z"].start, INVERSE["c"].start, _size(INVERSE)
+#: Places in the settings (``pc_fivebar_settings``): Baumgarte lambda, RK4 steps per step, one
+#: encoder count [rad], the largest residual and the smallest singularity measure accepted, the
+#: encoders' zero errors [rad].
+S_LAMBDA, S_SUBSTEPS, S_COUNT = SETTINGS["lambda"].start, SETTINGS["substeps"].start, SETTINGS["count"].start
+S_RESIDUAL_STOP, S_SINGULAR_STOP = SETTINGS["residual_stop"].start, SETTINGS["singular_stop"].start
+S_OFFSET1, S_OFFSET2, SETTINGS_SIZE = SETTINGS["offset"].start, SETTINGS["offset"].start + 1, _size(SETTINGS)
+#: Status codes of a step (fivebar.h's enum); on a refusal the state is unchanged.
+OK, NONFINITE_INPUT, NONFINITE_STATE, DIVERGED, SINGULAR = 0, 1, 2, 3, 4
+#: The plant's state entries before the currents (q and dq, 7.12).
+PLANT_STATES = STATE["current"].start
+#: Entries of x after the inputs: the FiveBarPlant outputs (fmus.parts.PLANT_OUTPUTS order).
+PLANT_OUTPUT_COUNT = 11
+#: The most motors a step takes (one per actuated joint).
+MAX_MOTORS = 2
+
+
+class Held(ctypes.Structure):
+    """``pc_fivebar_held``: what a step holds constant (the actuated derivative's model)."""
+
+    _fields_ = [("params", _vp), ("motors", _vp), ("voltages", _vp), ("u1", _d), ("u2", _d), ("lam", _d),
+                ("n_motors", _i)]
+
+
+class Context(ctypes.Structure):
+    """``pc_fivebar_context``: the compiled loop's buffers of one plant (``pc_io_fn`` context)."""
+
+    _fields_ = [("params", _vp), ("settings", _vp), ("motors", _vp), ("state", _vp), ("voltages", _vp),
+                ("held", _vp), ("scratch", _vp), ("n_motors", _i), ("first", _i)]
+
+
+_derivative = kernels.function("pc_fivebar_derivative", None, _vp, _vp, _d, _d, _d, _vp)
+_actuated_derivative = kernels.function("pc_fivebar_actuated_derivative", None, _vp, _vp, _vp)
+_advance = kernels.function("pc_fivebar_advance", None, _vp, _vp, _d, _i, _vp)
+_residual = kernels.function("pc_fivebar_residual", None, _vp, _vp, _vp)
+_report = kernels.function("pc_fivebar_report_of", None, _vp, _vp, _vp, _vp)
+_step = kernels.function("pc_fivebar_step", _i, _vp, _vp, _vp, _i, _vp, _vp, _d, _d, _d, _vp, _vp, _vp)
+_project = kernels.function("pc_fivebar_project", None, _vp, _vp, _i)
+_inverse_terms = kernels.function("pc_fivebar_inverse_terms", None, _vp, _vp, _vp, _vp)
+#: The compiled loop's I/O functions (``pc_io_fn``) with a :class:`Context`.
+plant_io_c = kernels.function("pc_fivebar_plant_io", _i, _vp, _vp, _d, _d, _vp)
+actuated_io_c = kernels.function("pc_fivebar_actuated_io", _i, _vp, _vp, _d, _d, _vp)
+CONTEXT_SIZE = kernels.function("pc_fivebar_context_size", _i)()
+#: The address of ``pc_fivebar_terms_of``: the inverse terms as the position law's terms function
+#: (``pc_law_terms_fn``; its model a ``pc_fivebar_params`` buffer, its terms :data:`INVERSE_SIZE` words).
+TERMS_OF = ctypes.cast(kernels.library().pc_fivebar_terms_of, _vp).value
+
+
+def _address(array: np.ndarray) -> int:
+    return kernels.address(array)
 
 
 def composite_link(m: float, lg: float, Jz: float, mass: float, offset: float) -> tuple[float, float, float]:
@@ -48,468 +113,201 @@ def composite_link(m: float, lg: float, Jz: float, mass: float, offset: float) -
     return link.mass, link.com[0], link.inertia[2][2]
 
 
-def _chain_entries(c: ChainParams) -> list:
-    """The 9 chain entries, the counter-masses absorbed into the links (seed 001 (55)-(64))."""
+def _pack_chain(c: ChainParams, out: np.ndarray) -> None:
+    """One ``pc_fivebar_chain`` into ``out``, the counter-masses absorbed into the links."""
     L1, L2 = c.counter_offsets()
     m1, lg1, Jz1 = composite_link(c.m1, c.lg1, c.Jz1, c.counter_mass1, L1)
     m2, lg2, Jz2 = composite_link(c.m2, c.lg2, c.Jz2, c.counter_mass2, L2)
-    return [c.l1, c.l2, lg1, lg2, m1, m2, Jz1, Jz2, c.J_rotor]
+    for name, value in (("l1", c.l1), ("l2", c.l2), ("lg1", lg1), ("lg2", lg2), ("m1", m1), ("m2", m2),
+                        ("Jz1", Jz1), ("Jz2", Jz2), ("J_rotor", c.J_rotor)):
+        out[CHAIN[name]] = value
 
 
 def pack_params(params: FiveBarParams) -> np.ndarray:
-    """The parameter vector the compiled functions read."""
-    p = [params.l0, params.m0, params.gravity[0], params.gravity[1]]
-    for c in (params.chain1, params.chain2):
-        p += _chain_entries(c)
-    return np.array(p, dtype=np.float64)
+    """The ``pc_fivebar_params`` buffer of ``params``."""
+    p = np.zeros(PARAMS_SIZE)
+    p[PARAMS["l0"]], p[PARAMS["m0"]], p[PARAMS["gravity"]] = params.l0, params.m0, params.gravity[:2]
+    chains = p[PARAMS["chain"]]
+    for k, c in enumerate((params.chain1, params.chain2)):
+        _pack_chain(c, chains[k * CHAIN_SIZE:(k + 1) * CHAIN_SIZE])
+    return p
 
 
-@njit(cache=True, fastmath=False)
-def _chain_terms(p, k, a, b, da, db, out):
-    """Tip, J_v, tip bias, M, v, g of chain k in world-aligned form (E_k applied).
-
-    out[0:2] = E_k tip, out[2:6] = E_k J_v (row-major 2x2), out[6:8] = E_k a_bias,
-    out[8:12] = M (2x2), out[12:14] = v, out[14:16] = g.
-    """
-    o = _CHAIN + 9 * k
-    s = 1.0 if k == 0 else -1.0
-    l1, l2 = p[o + _L1], p[o + _L2]
-    lg1, lg2 = p[o + _LG1], p[o + _LG2]
-    m1, m2 = p[o + _M1], p[o + _M2]
-    c1, s1 = math.cos(a), math.sin(a)
-    c12, s12 = math.cos(a + b), math.sin(a + b)
-    cb, sb = math.cos(b), math.sin(b)
-    w1 = da
-    w12 = da + db
-    # Tip (4.4) and J_v (4.13) in the chain frame; only x, y rows are non-zero.
-    tx = l1 * c1 + l2 * c12
-    ty = l1 * s1 + l2 * s12
-    j11 = -l1 * s1 - l2 * s12
-    j12 = -l2 * s12
-    j21 = l1 * c1 + l2 * c12
-    j22 = l2 * c12
-    # Velocity-quadratic tip acceleration (4.57-4.58): centripetal terms.
-    ax = -l1 * c1 * w1 * w1 - l2 * c12 * w12 * w12
-    ay = -l1 * s1 * w1 * w1 - l2 * s12 * w12 * w12
-    out[0] = s * tx
-    out[1] = ty
-    out[2] = s * j11
-    out[3] = s * j12
-    out[4] = j21
-    out[5] = j22
-    out[6] = s * ax
-    out[7] = ay
-    # (4.85) with the rotor of (4.139) on joint 1.
-    h = m2 * l1 * lg2
-    m22 = m2 * lg2 * lg2 + p[o + _JZ2]
-    out[8] = m1 * lg1 * lg1 + p[o + _JZ1] + m2 * l1 * l1 + m22 + 2.0 * h * cb + p[o + _JR]
-    out[9] = m22 + h * cb
-    out[10] = out[9]
-    out[11] = m22
-    # (4.86): Coriolis and centripetal efforts.
-    out[12] = -h * sb * (2.0 * da * db + db * db)
-    out[13] = h * sb * da * da
-    # (4.87) with gravity written in the chain frame, E_k^T g.
-    gx = s * p[_GX]
-    gy = p[_GY]
-    gc1x = lg1 * -s1
-    gc1y = lg1 * c1
-    g2ax = -l1 * s1 - lg2 * s12
-    g2ay = l1 * c1 + lg2 * c12
-    g2bx = -lg2 * s12
-    g2by = lg2 * c12
-    out[14] = -(m1 * (gc1x * gx + gc1y * gy) + m2 * (g2ax * gx + g2ay * gy))
-    out[15] = -(m2 * (g2bx * gx + g2by * gy))
+def pack_settings(baumgarte: float, substeps: int, count: float, residual_stop: float, singular_stop: float,
+                  offsets=(0.0, 0.0)) -> np.ndarray:
+    """The ``pc_fivebar_settings`` buffer."""
+    s = np.empty(SETTINGS_SIZE)
+    s[S_LAMBDA], s[S_SUBSTEPS], s[S_COUNT] = baumgarte, substeps, count
+    s[S_RESIDUAL_STOP], s[S_SINGULAR_STOP], s[SETTINGS["offset"]] = residual_stop, singular_stop, offsets
+    return s
 
 
-@njit(cache=True)
-def _inv2(m00, m01, m10, m11):
-    det = m00 * m11 - m01 * m10
-    return m11 / det, -m01 / det, -m10 / det, m00 / det
+def _held(p, motors, voltages, u1, u2, lam) -> Held:
+    return Held(_address(p), _address(motors), _address(voltages), u1, u2, lam, motors.shape[0])
 
 
-@njit(cache=True)
-def derivative(p, y, u1, u2, lam, out):
+# --- array-level calls (tests, the controller's exact model) -------------------------------------
+def derivative(p, y, u1, u2, lam, out) -> None:
     """out = dy/dt for y = [q(7), dq(7)] with u* = (u1, u2) on theta11, theta21 (5.66)."""
-    terms = np.empty((2, 16))
-    for k in range(2):
-        _chain_terms(p, k, y[3 + 2 * k], y[4 + 2 * k], y[10 + 2 * k], y[11 + 2 * k], terms[k])
-    x, yy = y[0], y[1]
-    dx, dy = y[7], y[8]
-    l0 = p[_L0]
-    m0 = p[_M0]
-    # Per chain: theta'' = Cinv_k (x'' - w_k), w_k from the Baumgarte rows.
-    cinv = np.empty((2, 4))
-    e = np.empty((2, 2))
-    for k in range(2):
-        t = terms[k]
-        base = l0 if k == 0 else -l0
-        rx = x - base - t[0]                     # residual (5.18)
-        ry = yy - t[1]
-        dth1 = y[10 + 2 * k]
-        dth2 = y[11 + 2 * k]
-        vrx = dx - (t[2] * dth1 + t[3] * dth2)   # A dq
-        vry = dy - (t[4] * dth1 + t[5] * dth2)
-        # A q'' + b + 2 lam A dq + lam^2 res = 0, A = [1, -E J], b = -E a_bias:
-        # E J theta'' = x'' - E a_bias + 2 lam (A dq) + lam^2 res.
-        wx = -t[6] + 2.0 * lam * vrx + lam * lam * rx
-        wy = -t[7] + 2.0 * lam * vry + lam * lam * ry
-        i00, i01, i10, i11 = _inv2(t[2], t[3], t[4], t[5])
-        cinv[k, 0], cinv[k, 1], cinv[k, 2], cinv[k, 3] = i00, i01, i10, i11
-        e[k, 0] = i00 * wx + i01 * wy
-        e[k, 1] = i10 * wx + i11 * wy
-    # Projected dynamics: (C^T M' C) x'' = C^T (u' - v' - g' - M' e).
-    a00 = m0
-    a01 = 0.0
-    a11 = m0
-    r0 = m0 * p[_GX]      # -g' of the platform (5.9)
-    r1 = m0 * p[_GY]
-    for k in range(2):
-        t = terms[k]
-        c = cinv[k]
-        u = u1 if k == 0 else u2
-        f0 = u - t[12] - t[14] - (t[8] * e[k, 0] + t[9] * e[k, 1])
-        f1 = -t[13] - t[15] - (t[10] * e[k, 0] + t[11] * e[k, 1])
-        # M C (2x2) then C^T M C
-        mc00 = t[8] * c[0] + t[9] * c[2]
-        mc01 = t[8] * c[1] + t[9] * c[3]
-        mc10 = t[10] * c[0] + t[11] * c[2]
-        mc11 = t[10] * c[1] + t[11] * c[3]
-        a00 += c[0] * mc00 + c[2] * mc10
-        a01 += c[0] * mc01 + c[2] * mc11
-        a11 += c[1] * mc01 + c[3] * mc11
-        r0 += c[0] * f0 + c[2] * f1
-        r1 += c[1] * f0 + c[3] * f1
-    det = a00 * a11 - a01 * a01
-    ddx = (a11 * r0 - a01 * r1) / det
-    ddy = (a00 * r1 - a01 * r0) / det
-    for i in range(7):
-        out[i] = y[7 + i]
-    out[7] = ddx
-    out[8] = ddy
-    out[9] = -2.0 * lam * y[9] - lam * lam * y[2]
-    for k in range(2):
-        c = cinv[k]
-        out[10 + 2 * k] = c[0] * ddx + c[1] * ddy + e[k, 0]
-        out[11 + 2 * k] = c[2] * ddx + c[3] * ddy + e[k, 1]
+    _derivative(_address(p), _address(y), u1, u2, lam, _address(out))
 
 
-#: Columns of one motor row of :func:`actuated_derivative`: the joint it drives (0: tau1/q1,
-#: 1: tau2/q2, world convention), then R, L, kt, ke, b, mu, omega_eps (motor.MotorParams).
-MOTOR_COLUMNS = 8
-NO_MOTORS = np.empty((0, MOTOR_COLUMNS))
-NO_VOLTAGES = np.empty(0)
+def actuated_derivative(p, motors, z, voltages, u1, u2, lam, out) -> None:
+    """out = dz/dt for z = [q, dq, i_1 .. i_n]: the plant (5.66) with each motor's shaft torque
+    (B.2) on its world joint besides (u1, u2) on theta11, theta21, and its armature circuit
+    L di/dt = v_n - R i - ke omega (4.162); ``motors`` rows of :data:`MOTOR_COLUMNS`."""
+    motors = np.ascontiguousarray(motors, dtype=np.float64)
+    voltages = np.ascontiguousarray(voltages, dtype=np.float64)
+    _actuated_derivative(ctypes.byref(_held(p, motors, voltages, u1, u2, lam)), _address(z), _address(out))
 
 
-@njit(cache=True)
-def actuated_derivative(p, motors, y, v, u1, u2, lam, out):
-    """out = dz/dt for z = [q(7), dq(7), i_1 .. i_n]: the plant (5.66) and n armature circuits.
-
-    Motor n (row ``motors[n]``, :data:`MOTOR_COLUMNS`) on world joint j at speed omega
-    (``plant.fivebar.world_rates``) delivers the shaft torque kt i - b omega - mu tanh(omega /
-    omega_eps) (B.2, ``motor.shaft_torque``), added to the held efforts (u1, u2) on theta11,
-    theta21 (world -> thesis sign as ``plant.fivebar.thesis_torques``), and its current obeys
-    L di/dt = v_n - R i - ke omega (4.162, ``motor.armature_current_rate``).  With no motors
-    this is :func:`derivative`.  ``plant.actuated.ActuatedPlant.derivative`` is the Python
-    reference it is tested against.
-    """
-    for n in range(motors.shape[0]):
-        joint = int(motors[n, 0])
-        sign = 1.0 if joint == 0 else -1.0
-        omega = sign * y[10 + 2 * joint]
-        i = y[14 + n]
-        tau = motors[n, 3] * i - motors[n, 5] * omega - motors[n, 6] * math.tanh(omega / motors[n, 7])
-        if joint == 0:
-            u1 += tau
-        else:
-            u2 -= tau
-        out[14 + n] = (v[n] - motors[n, 1] * i - motors[n, 4] * omega) / motors[n, 2]
-    derivative(p, y, u1, u2, lam, out)
+def report(p, y, count, offset1, offset2, out) -> None:
+    """What the simulator checks and publishes after a step, for the state y (:data:`REPORT`)."""
+    s = pack_settings(0.0, 1, count, 0.0, 0.0, (offset1, offset2))
+    _report(_address(p), _address(s), _address(np.ascontiguousarray(y, dtype=np.float64)), _address(out))
 
 
-@njit(cache=True)
-def actuated_rk4(p, motors, y, v, u1, u2, lam, dt, substeps):
-    """Classical RK4, ``substeps`` steps over dt, of :func:`actuated_derivative` (inputs held;
-    the same scheme as plant.integrators.rk4)."""
-    h = dt / substeps
-    n = y.size
-    k1 = np.empty(n)
-    k2 = np.empty(n)
-    k3 = np.empty(n)
-    k4 = np.empty(n)
-    tmp = np.empty(n)
-    y = y.copy()
-    for _ in range(substeps):
-        actuated_derivative(p, motors, y, v, u1, u2, lam, k1)
-        for i in range(n):
-            tmp[i] = y[i] + 0.5 * h * k1[i]
-        actuated_derivative(p, motors, tmp, v, u1, u2, lam, k2)
-        for i in range(n):
-            tmp[i] = y[i] + 0.5 * h * k2[i]
-        actuated_derivative(p, motors, tmp, v, u1, u2, lam, k3)
-        for i in range(n):
-            tmp[i] = y[i] + h * k3[i]
-        actuated_derivative(p, motors, tmp, v, u1, u2, lam, k4)
-        for i in range(n):
-            y[i] += (h / 6.0) * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
-    return y
-
-
-#: Layout of the report of :func:`actuated_step`: 1.0 if every state is finite; the norm of
-#: the position residual (5.18); the three singularity measures of
-#: ``plant.simulator.PlantSimulator`` (sin theta12, sin theta22, sin(phi12 - phi22)); then the
-#: plant's outputs q1, q2, dq1, dq2, x, y, dx, dy, q1_enc, q2_enc (world convention,
-#: ``plant.fivebar.world_angles``/``world_rates``; encoder k reads q_k + its zero error
-#: ``offset<k>``, quantised to ``count``: ``PlantSimulator.encoder_offsets``).
-REPORT_FINITE, REPORT_RESIDUAL, REPORT_MEASURES, REPORT_OUTPUTS, REPORT_SIZE = 0, 1, 2, 5, 15
-
-
-@njit(cache=True)
-def report(p, y, count, offset1, offset2, out):
-    """What the simulator checks and publishes after a step, for the state y (layout above)."""
-    finite = True
-    for i in range(y.size):
-        if not math.isfinite(y[i]):
-            finite = False
-    out[REPORT_FINITE] = 1.0 if finite else 0.0
-    res = np.empty(6)
-    residual(p, y, res)
-    out[REPORT_RESIDUAL] = math.sqrt(np.dot(res, res))
-    out[REPORT_MEASURES] = math.sin(y[4])
-    out[REPORT_MEASURES + 1] = math.sin(y[6])
-    out[REPORT_MEASURES + 2] = math.sin((y[3] + y[4]) - (math.pi - (y[5] + y[6])))
-    q1, q2 = y[3], math.pi - y[5]
-    o = REPORT_OUTPUTS
-    out[o], out[o + 1], out[o + 2], out[o + 3] = q1, q2, y[10], -y[12]
-    out[o + 4], out[o + 5], out[o + 6], out[o + 7] = y[0], y[1], y[7], y[8]
-    out[o + 8] = count * math.floor((q1 + offset1) / count + 0.5)
-    out[o + 9] = count * math.floor((q2 + offset2) / count + 0.5)
-
-
-@njit(cache=True)
-def actuated_step(p, motors, y, v, u1, u2, lam, dt, substeps, count, offset1, offset2, out):
-    """:func:`actuated_rk4`, then :func:`report` of the new plant state into ``out``; returns z."""
-    z = actuated_rk4(p, motors, y, v, u1, u2, lam, dt, substeps)
-    report(p, z[:14], count, offset1, offset2, out)
-    return z
-
-
-@njit(cache=True)
-def project(p, y, iterations):
-    """Newton on the residual with x, y fixed; then dq = C dq# (as PlantSimulator.project)."""
-    y = y.copy()
-    t = np.empty(16)
-    l0 = p[_L0]
-    for k in range(2):
-        base = l0 if k == 0 else -l0
-        for _ in range(iterations):
-            _chain_terms(p, k, y[3 + 2 * k], y[4 + 2 * k], 0.0, 0.0, t)
-            rx = y[0] - base - t[0]
-            ry = y[1] - t[1]
-            i00, i01, i10, i11 = _inv2(t[2], t[3], t[4], t[5])
-            y[3 + 2 * k] += i00 * rx + i01 * ry
-            y[4 + 2 * k] += i10 * rx + i11 * ry
-        _chain_terms(p, k, y[3 + 2 * k], y[4 + 2 * k], 0.0, 0.0, t)
-        i00, i01, i10, i11 = _inv2(t[2], t[3], t[4], t[5])
-        y[10 + 2 * k] = i00 * y[7] + i01 * y[8]
-        y[11 + 2 * k] = i10 * y[7] + i11 * y[8]
-    y[2] = 0.0
-    y[9] = 0.0
-    return y
-
-
-@njit(cache=True)
-def residual(p, y, out):
+def residual(p, y, out) -> None:
     """The position constraint residual q̄ (5.18, 7.7), 6 entries."""
-    t = np.empty(16)
-    l0 = p[_L0]
-    for k in range(2):
-        base = l0 if k == 0 else -l0
-        _chain_terms(p, k, y[3 + 2 * k], y[4 + 2 * k], 0.0, 0.0, t)
-        out[3 * k] = y[0] - base - t[0]
-        out[3 * k + 1] = y[1] - t[1]
-        out[3 * k + 2] = y[2]
+    _residual(_address(p), _address(y), _address(out))
 
 
-#: Layout of :func:`inverse_terms`' output: M_M (2x2, row-major), v_M, g_M, Z (2x2, row-major), c (7).
-INVERSE_M, INVERSE_V, INVERSE_G, INVERSE_Z, INVERSE_C, INVERSE_SIZE = 0, 4, 6, 8, 12, 19
+def project(p, y, iterations: int):
+    """A copy of y put back on the constraints: Newton on the residual with x, y fixed, then
+    dq = C dq# (as PlantSimulator.project)."""
+    y = np.array(y, dtype=np.float64)
+    _project(_address(p), _address(y), iterations)
+    return y
 
 
-@njit(cache=True)
-def inverse_terms(p, q, dq, out):
-    """The inverse dynamics terms of (5.67-5.77) at (q, dq), as :func:`plant.parallel.inverse_dynamics_terms`.
-
-    ``M_M ddq# + v_M + g_M = Z^T u*`` (5.74) with q# = (x, y).  Same elimination as
-    :func:`derivative`: the chain blocks of C (5.56) are Cinv_k = (E_k J_v,k)^-1, so
-
-    * ``M_M = m0 1 + sum_k Cinv_k^T M_k Cinv_k`` (5.75);
-    * c (5.69): the chains' accelerations at ddq# = 0, ``c_k = -Cinv_k E_k a_bias,k``
-      (platform rows 0), and ``v_M = sum_k Cinv_k^T (M_k c_k + v_k)`` (5.76);
-    * ``g_M = -m0 g_xy + sum_k Cinv_k^T g_k`` (5.77, 5.9);
-    * ``Z = U^T C``: the rows of C of theta11 and theta21 (5.72).
-
-    ``out`` (:data:`INVERSE_SIZE` entries): out[0:4] M_M, out[4:6] v_M, out[6:8] g_M,
-    out[8:12] Z, out[12:19] c.
-    """
-    t = np.empty(16)
-    m0 = p[_M0]
-    m00 = m0
-    m01 = 0.0
-    m11 = m0
-    v0 = 0.0
-    v1 = 0.0
-    g0 = -m0 * p[_GX]
-    g1 = -m0 * p[_GY]
-    for i in range(7):
-        out[INVERSE_C + i] = 0.0
-    for k in range(2):
-        _chain_terms(p, k, q[3 + 2 * k], q[4 + 2 * k], dq[3 + 2 * k], dq[4 + 2 * k], t)
-        i00, i01, i10, i11 = _inv2(t[2], t[3], t[4], t[5])
-        c0 = i00 * -t[6] + i01 * -t[7]
-        c1 = i10 * -t[6] + i11 * -t[7]
-        out[INVERSE_C + 3 + 2 * k] = c0
-        out[INVERSE_C + 4 + 2 * k] = c1
-        # M_k Cinv_k, then Cinv_k^T (M_k Cinv_k)
-        mc00 = t[8] * i00 + t[9] * i10
-        mc01 = t[8] * i01 + t[9] * i11
-        mc10 = t[10] * i00 + t[11] * i10
-        mc11 = t[10] * i01 + t[11] * i11
-        m00 += i00 * mc00 + i10 * mc10
-        m01 += i00 * mc01 + i10 * mc11
-        m11 += i01 * mc01 + i11 * mc11
-        f0 = t[8] * c0 + t[9] * c1 + t[12]
-        f1 = t[10] * c0 + t[11] * c1 + t[13]
-        v0 += i00 * f0 + i10 * f1
-        v1 += i01 * f0 + i11 * f1
-        g0 += i00 * t[14] + i10 * t[15]
-        g1 += i01 * t[14] + i11 * t[15]
-        out[INVERSE_Z + 2 * k] = i00
-        out[INVERSE_Z + 2 * k + 1] = i01
-    out[INVERSE_M] = m00
-    out[INVERSE_M + 1] = m01
-    out[INVERSE_M + 2] = m01
-    out[INVERSE_M + 3] = m11
-    out[INVERSE_V] = v0
-    out[INVERSE_V + 1] = v1
-    out[INVERSE_G] = g0
-    out[INVERSE_G + 1] = g1
+def inverse_terms(p, q, dq, out) -> None:
+    """The inverse dynamics terms of (5.67-5.77) at (q, dq) into ``out`` (:data:`INVERSE`), as
+    :func:`plant.parallel.inverse_dynamics_terms`: ``M_M ddq# + v_M + g_M = Z^T u*`` (5.74),
+    q# = (x, y); c (5.69) the chains' accelerations at ddq# = 0."""
+    _inverse_terms(_address(p), _address(q), _address(dq), _address(out))
 
 
 class FastKernel:
-    """The compiled functions bound to one parameter set."""
+    """The C kernel bound to one parameter set and one set of step settings.
 
-    def __init__(self, params: FiveBarParams):
+    The buffers (parameters, settings, report, scratch, refusal) belong to this object and
+    their addresses are computed once, inside the bound calls (opaque to an FMU state, which
+    lays values over the arrays in place).  A deep copy (an FMU snapshot) is this object: it
+    holds configuration and scratch only, no run state.
+    """
+
+    def __init__(self, params: FiveBarParams, settings: np.ndarray | None = None):
         self.p = pack_params(params)
-        self._out = np.empty(14)
+        self.s = settings if settings is not None else pack_settings(0.0, 1, 1.0, math.inf, 0.0)
+        self.report = np.empty(REPORT_SIZE)
+        self.scratch = np.empty(6 * (PLANT_STATES + MAX_MOTORS))
+        self.z = np.empty(PLANT_STATES + MAX_MOTORS)     # the state a step starts from
+        self.voltages = np.zeros(MAX_MOTORS)
+        self.refusal = kernels.Refusal()
         self._res = np.empty(6)
+        self._bind()
+
+    def _bind(self) -> None:
+        """The kernel calls with this object's buffer addresses (closures: code, not state)."""
+        p, s, scratch, rep, z, v = (_address(a) for a in (self.p, self.s, self.scratch, self.report, self.z,
+                                                          self.voltages))
+        ref, res = ctypes.addressof(self.refusal), _address(self._res)
+        # The step is the hot call: its arguments as ctypes objects made once, passed to a
+        # function object without argtypes (no conversion per call; 2-3x less overhead).
+        fixed = [ctypes.c_void_p(a) for a in (p, s, z, v, scratch, rep, ref)]
+        u1, u2, dt = _d(), _d(), _d()
+        call = kernels.library()["pc_fivebar_step"]
+        call.restype = _i
+        motors = {}      # id -> (rows, their address, their count)
+
+        def step(rows, u1_value, u2_value, dt_value):
+            known = motors.get(id(rows))
+            if known is None or known[0] is not rows:
+                known = motors[id(rows)] = (rows, ctypes.c_void_p(_address(rows)), _i(rows.shape[0]))
+            u1.value, u2.value, dt.value = u1_value, u2_value, dt_value
+            return call(fixed[0], fixed[1], known[1], known[2], fixed[2], fixed[3], u1, u2, dt, fixed[4], fixed[5],
+                        fixed[6])
+
+        def residual(y):
+            _residual(p, y, res)
+
+        self._step, self._residual = step, residual
+        self._derivative = functools.partial(_derivative, p)
+
+    def __deepcopy__(self, memo):
+        return self
+
+    def context(self, state, motors=NO_MOTORS, voltages=NO_VOLTAGES, held=None, first: int = 2) -> Context:
+        """A ``pc_fivebar_context`` for the compiled loop over this kernel's parameters and
+        settings, ``state`` (z), the motor rows, the ``voltages`` and ``held`` (u1, u2) buffers
+        the caller fills, and a scratch of its own; the context keeps every buffer alive."""
+        scratch = np.empty(6 * (PLANT_STATES + MAX_MOTORS))
+        context = Context(_address(self.p), _address(self.s), _address(motors), _address(state),
+                          _address(voltages) if voltages.size else None, None if held is None else _address(held),
+                          _address(scratch), motors.shape[0], first)
+        context.buffers = (self, state, motors, voltages, held, scratch)
+        return context
 
     def derivative(self, y, u_star, baumgarte):
-        out = np.empty(14)
-        derivative(self.p, np.ascontiguousarray(y, dtype=np.float64), float(u_star[0]), float(u_star[1]),
-                   float(baumgarte), out)
+        """dy/dt (a new array) with u* on (theta11, theta21)."""
+        y = np.ascontiguousarray(y, dtype=np.float64)
+        out = np.empty(PLANT_STATES)
+        self._derivative(_address(y), float(u_star[0]), float(u_star[1]), float(baumgarte), _address(out))
         return out
 
-    def step(self, y, u1, u2, baumgarte, dt, substeps, count, offsets=(0.0, 0.0), motors=NO_MOTORS,
-             voltages=NO_VOLTAGES):
-        """RK4 over dt and the report of the new state: (z, report as a list, :data:`REPORT_SIZE`);
-        ``offsets`` are the encoders' zero errors [rad]."""
-        out = np.empty(REPORT_SIZE)
-        z = actuated_step(self.p, motors, y, voltages, float(u1), float(u2), float(baumgarte), float(dt),
-                          int(substeps), float(count), float(offsets[0]), float(offsets[1]), out)
-        return z, out.tolist()
+    def step(self, z, u1: float, u2: float, dt: float, motors=NO_MOTORS, voltages=NO_VOLTAGES) -> int:
+        """RK4 from ``z`` (copied into ``self.z``, ``voltages`` into ``self.voltages``) over dt
+        with the settings; returns the status (:data:`OK` or a
+        refusal code, ``self.refusal`` naming the quantity).  The trial state is
+        ``self.scratch[:z.size]`` and its report ``self.report``; ``z`` is not changed."""
+        n = z.size
+        self.z[:n] = z
+        if n > PLANT_STATES:
+            self.voltages[:n - PLANT_STATES] = voltages
+        return self._step(motors, u1, u2, dt)
+
+    def advance(self, z, u1, u2, baumgarte, dt, substeps, motors=NO_MOTORS, voltages=NO_VOLTAGES):
+        """RK4 of the actuated derivative from z over dt (a new array), no checks."""
+        z = np.array(z, dtype=np.float64)
+        held = _held(self.p, motors, voltages, float(u1), float(u2), float(baumgarte))
+        _advance(ctypes.byref(held), _address(z), float(dt), int(substeps), _address(self.scratch))
+        return z
+
+    def actuated_derivative(self, z, motors, voltages, u1, u2, baumgarte):
+        """dz/dt (a new array) of :func:`actuated_derivative`."""
+        out = np.empty(len(z))
+        actuated_derivative(self.p, motors, np.ascontiguousarray(z, dtype=np.float64), voltages, float(u1),
+                            float(u2), float(baumgarte), out)
+        return out
 
     def project(self, y, iterations=3):
         return project(self.p, y, iterations)
 
     def residual_norm(self, y) -> float:
-        residual(self.p, y, self._res)
+        self._residual(_address(np.ascontiguousarray(y, dtype=np.float64)))
         return math.sqrt(float(self._res @ self._res))
 
     def residual(self, y):
-        residual(self.p, y, self._res)
+        self._residual(_address(np.ascontiguousarray(y, dtype=np.float64)))
         return self._res.copy()
 
 
-# --- the compiled scene's calls (fmus.compiled) ------------------------------------------------
-#: Status codes of :func:`plant_io` and :func:`actuated_io`; on a refusal the state is unchanged.
-OK, NONFINITE_INPUT, NONFINITE_STATE, DIVERGED, SINGULAR = 0, 1, 2, 3, 4
-#: Layout of the settings array of :func:`plant_io`: Baumgarte lambda, RK4 steps per step,
-#: one encoder count [rad], the largest residual and the smallest singularity measure accepted
-#: (plant.simulator.RESIDUAL_STOP, SINGULAR_STOP), the two encoders' zero errors [rad]
-#: (PlantSimulator.encoder_offsets).
-S_LAMBDA, S_SUBSTEPS, S_COUNT, S_RESIDUAL_STOP, S_SINGULAR_STOP, S_OFFSET1, S_OFFSET2, SETTINGS_SIZE = range(8)
-#: Entries of x after the inputs: the FiveBarPlant outputs (fmus.parts.PLANT_OUTPUTS order).
-PLANT_OUTPUT_COUNT = 11
+class ActuatedIO:
+    """``pc_fivebar_actuated_io`` over fixed buffers, called from Python: the plant's part of
+    the compiled loop's ActuatedFiveBarPlant step while the drives' part is not C yet
+    (fmus/adapters.py).  ``state`` is z, ``first`` the index of the plant's outputs in x."""
 
+    def __init__(self, kernel: FastKernel, state, motors, first: int):
+        self.voltages, self.held = np.zeros(motors.shape[0]), np.zeros(2)
+        self.context = kernel.context(state, motors, self.voltages, self.held, first)
+        self.refusal = kernels.Refusal()
+        self._call = functools.partial(actuated_io_c, ctypes.addressof(self.context))
+        self._x = self._x_address = None
 
-@njit(cache=True)
-def _accept(s, out):
-    """The status of a step whose :func:`report` is ``out`` (PlantSimulator.accept's checks)."""
-    if out[REPORT_FINITE] != 1.0:
-        return NONFINITE_STATE
-    if not out[REPORT_RESIDUAL] <= s[S_RESIDUAL_STOP]:
-        return DIVERGED
-    for k in range(3):
-        if abs(out[REPORT_MEASURES + k]) < s[S_SINGULAR_STOP]:
-            return SINGULAR
-    return OK
-
-
-@njit(cache=True)
-def _publish(out, x, first):
-    """The plant's outputs from the report ``out`` into x[first:first + 11]."""
-    for k in range(10):
-        x[first + k] = out[REPORT_OUTPUTS + k]
-    x[first + 10] = out[REPORT_RESIDUAL]
-
-
-@njit(cache=True)
-def plant_io(p, y, s, x, dt):
-    """FiveBarPlant with RK4, no projection: x = [tau1, tau2 | the 11 plant outputs].
-
-    The state y (14) is replaced by the new one only when the step is accepted.
-    """
-    tau1, tau2 = x[0], x[1]
-    if not (math.isfinite(tau1) and math.isfinite(tau2)):
-        return NONFINITE_INPUT
-    out = np.empty(REPORT_SIZE)
-    z = actuated_step(p, NO_MOTORS, y, NO_VOLTAGES, tau1, -tau2, s[S_LAMBDA], dt, int(s[S_SUBSTEPS]),
-                      s[S_COUNT], s[S_OFFSET1], s[S_OFFSET2], out)
-    status = _accept(s, out)
-    if status == OK:
-        y[:] = z
-        _publish(out, x, 2)
-    return status
-
-
-@njit(cache=True)
-def actuated_io(p, s, motors, z, voltages, x, first, dt):
-    """ActuatedFiveBarPlant's integration with the drives' ``voltages`` held: z = [q, dq, currents].
-
-    On acceptance z is replaced and x[first:first + 11] gets the plant's outputs;
-    x[first + 11 + n] the shaft torque of motor n at the new current and joint speed (B.2).
-    Refused, nothing changed: a non-finite state or current, divergence, a singular pose.
-    """
-    return actuated_io_held(p, s, motors, z, voltages, x, first, dt, 0.0, 0.0)
-
-
-@njit(cache=True)
-def actuated_io_held(p, s, motors, z, voltages, x, first, dt, u1, u2):
-    """:func:`actuated_io` with efforts (u1, u2) on theta11, theta21 held besides the motors'
-    (the drives' LuGre bristle torques, ``plant.actuated.ActuatedPlant.held_friction``)."""
-    out = np.empty(REPORT_SIZE)
-    w = actuated_step(p, motors, z, voltages, u1, u2, s[S_LAMBDA], dt, int(s[S_SUBSTEPS]), s[S_COUNT],
-                      s[S_OFFSET1], s[S_OFFSET2], out)
-    for n in range(motors.shape[0]):
-        if not math.isfinite(w[14 + n]):
-            return NONFINITE_STATE
-    status = _accept(s, out)
-    if status == OK:
-        z[:] = w
-        _publish(out, x, first)
-        for n in range(motors.shape[0]):
-            joint = int(motors[n, 0])
-            omega = w[10] if joint == 0 else -w[12]
-            x[first + 11 + n] = (motors[n, 3] * w[14 + n] - motors[n, 5] * omega
-                                 - motors[n, 6] * math.tanh(omega / motors[n, 7]))
-    return status
+    def __call__(self, x, h: float, voltages, u1: float = 0.0, u2: float = 0.0) -> int:
+        """One step with ``voltages`` and (u1, u2) on theta11, theta21 held; the status."""
+        if x is not self._x:
+            self._x, self._x_address = x, _address(x)
+        self.voltages[:] = voltages
+        self.held[0], self.held[1] = u1, u2
+        return self._call(self._x_address, 0.0, h, ctypes.byref(self.refusal))

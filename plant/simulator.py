@@ -12,7 +12,7 @@ Two evaluation kernels compute the same forward dynamics (5.66):
     DH chains and architecture matrices, in numpy.  The source of truth.
 ``fast``
     :mod:`plant.fast5r`, the same equations specialised to planar RR chains
-    and compiled with numba; tested against ``general`` to round-off.
+    in C (``kernels/src/fivebar.c``); tested against ``general`` to round-off.
 """
 from __future__ import annotations
 
@@ -20,6 +20,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+
+import kernels
 
 from . import fast5r, fivebar
 from .integrators import IntegrationError, WorkLimitError, dopri5, rk4
@@ -104,6 +106,21 @@ class PlantError(RuntimeError):
     """The plant cannot go on: singular pose, non-finite input or state."""
 
 
+class PlantRefused(PlantError, kernels.Refused):
+    """A step the plant refused, as the kernels' refusal record (:class:`kernels.Refused`:
+    variable, value, unit, time, code, reason) with the message of its :class:`PlantError`."""
+
+    def __init__(self, message: str, **record):
+        kernels.Refused.__init__(self, message, **record)
+
+
+#: What the 5R kernel's refusal codes name: (reason, unit) and, for SINGULAR, the measure of
+#: each index (pc_fivebar_report.measures).
+REFUSALS = {fast5r.NONFINITE_INPUT: ("nonfinite_input", "N m"), fast5r.NONFINITE_STATE: ("nonfinite_state", ""),
+            fast5r.DIVERGED: ("diverged", "m"), fast5r.SINGULAR: ("singular", "")}
+MEASURES = ("chain 1 elbow (serial)", "chain 2 elbow (serial)", "distal links (parallel)")
+
+
 #: Below this singularity margin the step is refused: the mechanism is at a
 #: singular pose where its dynamics (5.66) lose rank.
 SINGULAR_STOP = 1e-3
@@ -157,11 +174,9 @@ class PlantSimulator:
         self._last = None
         self._fast = None
         if self.settings.kernel == "fast":
-            self._fast = fast5r.FastKernel(params)
-            # Compile the step now (numba: seconds in a fresh process, e.g. a just-extracted
-            # FMU), so that initialisation, not the first step, pays for it.
-            self._fast.step(self.y, 0.0, 0.0, self.settings.baumgarte, 1e-3, 1, self.count,
-                            self.encoder_offsets)
+            s = self.settings
+            self._fast = fast5r.FastKernel(params, fast5r.pack_settings(
+                s.baumgarte, s.substeps, self.count, RESIDUAL_STOP, SINGULAR_STOP, self.encoder_offsets))
 
     # --- derivatives -----------------------------------------------------------
     def derivative(self, y, u_star):
@@ -185,16 +200,17 @@ class PlantSimulator:
         """
         if not (math.isfinite(tau1) and math.isfinite(tau2)):
             name, value = ("tau1", tau1) if not math.isfinite(tau1) else ("tau2", tau2)
-            raise PlantError(f"input {name} = {value!r} at t = {self.time:.6g} s is not finite")
+            raise self._record(f"input {name} = {value!r} at t = {self.time:.6g} s is not finite",
+                               fast5r.NONFINITE_INPUT, name, value, self.time)
         self.check_step(dt)
 
         def held():
             return f"tau1 = {tau1!r}, tau2 = {tau2!r} N m held"
 
         u_star = fivebar.thesis_torques(tau1, tau2)     # once: held over every derivative call of the step
-        y, report, evaluations = self.integrate(self.y, dt, u_star[0], u_star[1], held,
-                                                lambda z: self.derivative(z, u_star), max_evaluations=max_evaluations)
-        self.accept(y, dt, held, report)
+        y, verdict, evaluations = self.integrate(self.y, dt, u_star[0], u_star[1], held,
+                                                 lambda z: self.derivative(z, u_star), max_evaluations=max_evaluations)
+        self.accept(y, dt, held, verdict)
         return evaluations
 
     def evaluations_per_step(self) -> int | None:
@@ -204,16 +220,16 @@ class PlantSimulator:
 
     def integrate(self, z, dt: float, u1: float, u2: float, held, derivative,
                   motors=fast5r.NO_MOTORS, voltages=fast5r.NO_VOLTAGES, max_evaluations: int | None = None):
-        """Integrate ``z`` over dt with the settings; return (z at the end, report or None,
-        the right-hand-side evaluations taken).
+        """Integrate ``z`` over dt with the settings; return (z at the end, the C kernel's verdict
+        or None, the right-hand-side evaluations taken).
 
         ``z`` is the plant's state, followed by the currents of ``motors`` when a plant with
         drives calls (:class:`plant.actuated.ActuatedPlant`: rows of
         :data:`plant.fast5r.MOTOR_COLUMNS`, their ``voltages`` held).  (u1, u2) are the efforts
-        held on theta11, theta21.  The compiled kernel integrates when it can (RK4; with no
-        projection it also returns the :func:`plant.fast5r.report` of the new state for
-        :meth:`accept`); ``derivative(z)``, the Python right-hand side, serves the general
-        kernel and dopri5.  A failed integration is a :class:`PlantError` naming ``held()``;
+        held on theta11, theta21.  The C kernel integrates when it can (RK4; with no
+        projection it also judges the new state: the verdict (status, index, value, report as
+        a list, :data:`plant.fast5r.REPORT`) for :meth:`accept`); ``derivative(z)`` serves the
+        general kernel and dopri5.  A failed integration is a :class:`PlantError` naming ``held()``;
         dopri5 stops at ``max_evaluations`` with :class:`plant.integrators.WorkLimitError`,
         nothing changed.
         """
@@ -221,11 +237,10 @@ class PlantSimulator:
         rk4_evaluations = 4 * s.substeps
         try:
             if s.method == "rk4" and self._fast is not None and not s.project:
-                return (*self._fast.step(z, u1, u2, s.baumgarte, dt, s.substeps, self.count, self.encoder_offsets,
-                                         motors, voltages), rk4_evaluations)
+                return (*self._fast_step(z, u1, u2, dt, held, motors, voltages), rk4_evaluations)
             if s.method == "rk4" and self._fast is not None:
-                return fast5r.actuated_rk4(self._fast.p, motors, z, voltages, float(u1), float(u2),
-                                           float(s.baumgarte), float(dt), int(s.substeps)), None, rk4_evaluations
+                return self._fast.advance(z, u1, u2, s.baumgarte, dt, s.substeps, motors, voltages), None, \
+                    rk4_evaluations
             if s.method == "rk4":
                 return rk4(derivative, z, dt, s.substeps), None, rk4_evaluations
             z, h_next, _, evaluations = dopri5(derivative, z, dt, s.rtol, s.atol, self._h_next,
@@ -236,6 +251,17 @@ class PlantSimulator:
             raise
         except (IntegrationError, np.linalg.LinAlgError) as exc:
             raise PlantError(f"integration failed in the step from t = {self.time:.6g} s ({held()}): {exc}") from None
+
+    def _fast_step(self, z, u1, u2, dt, held, motors, voltages):
+        """The C kernel's RK4 step from z: (the trial state, a new array; the verdict)."""
+        fast = self._fast
+        status = fast.step(z, float(u1), float(u2), float(dt), motors, voltages)
+        r = fast.refusal
+        if status == fast5r.NONFINITE_INPUT:    # (u1, u2, voltages): the callers' checks come first
+            raise self._record(f"integration failed in the step from t = {self.time:.6g} s ({held()}): the held "
+                               f"input {r.index} = {r.value!r} is not finite", status, f"input {r.index}", r.value,
+                               self.time)
+        return fast.scratch[:z.size].copy(), (status, r.index, r.value, fast.report.tolist())
 
     def check_step(self, dt: float) -> None:
         """Refuse (:class:`PlantError`) a step length that is not finite and > 0, or a Baumgarte
@@ -251,37 +277,63 @@ class PlantSimulator:
                 f"loop-closure residual (unstable beyond {RK4_REAL_STABILITY:.4g}); use baumgarte <= "
                 f"{BAUMGARTE_RK4_LIMIT / h:.4g} /s (the thesis advises <= 1/h), more substeps or dopri5")
 
-    def accept(self, y, dt: float, held, report=None) -> None:
+    def accept(self, y, dt: float, held, verdict=None) -> None:
         """Make ``y``, the state integrated over dt from the present one, the new state.
 
         Projects it if the settings say so, then refuses it (:class:`PlantError`, the state
         kept; ``held()`` names the inputs held over the step) when it is not finite, does not
-        close the loop (residual above :data:`RESIDUAL_STOP`) or is singular.  ``report``,
-        from the compiled kernel's step (:func:`plant.fast5r.report`, without projection),
-        gives those checks and the outputs already computed.
+        close the loop (residual above :data:`RESIDUAL_STOP`) or is singular.  ``verdict``,
+        from the C kernel's step (:meth:`integrate`, without projection), gives those checks'
+        outcome and the outputs already computed; without it they run here.
         """
-        s = self.settings
-        if report is None:
-            if s.project and math.isfinite(float(y.sum())):
+        if verdict is None:
+            if self.settings.project and math.isfinite(float(y.sum())):
                 y = self.project(y)
-            finite = math.isfinite(float(y.sum()))
+            status, index, value, report = self._judge(y)
         else:
-            finite = report[fast5r.REPORT_FINITE] == 1.0
-        if not finite:
-            raise PlantError(f"state became non-finite in the step from t = {self.time:.6g} s ({held()})")
-        residual = self._residual_of(y) if report is None else report[fast5r.REPORT_RESIDUAL]
-        if not residual <= RESIDUAL_STOP:
-            raise PlantError(
-                f"integration diverged in the step from t = {self.time:.6g} s ({held()}): loop-closure "
-                f"residual {residual:.3g} m > {RESIDUAL_STOP:g} m, the state no longer closes the loop "
-                + (f"(motion too fast for RK4 steps of {dt / s.substeps:.3g} s: check the torques, use "
-                   f"substeps or dopri5)" if s.method == "rk4" else "(check the torques)"))
-        measures = (self._pose_measures(y) if report is None
-                    else report[fast5r.REPORT_MEASURES:fast5r.REPORT_MEASURES + 3])
-        self._check_pose(y, measures, self.time + dt)
+            status, index, value, report = verdict
+        if status != fast5r.OK:
+            raise self._refusal(status, index, value, y, dt, held)
+        residual = report[fast5r.REPORT_RESIDUAL] if report is not None else value
         self.y = y
         self._last = (y, residual, report)
         self.time += dt
+
+    def _judge(self, y):
+        """(status, index, value, None) of the state y as the C kernel judges it
+        (fivebar.c: judge); the value of an accepted state is its residual."""
+        if not math.isfinite(float(y.sum())):
+            return fast5r.NONFINITE_STATE, 0, math.nan, None
+        residual = self._residual_of(y)
+        if not residual <= RESIDUAL_STOP:
+            return fast5r.DIVERGED, 0, residual, None
+        for k, value in enumerate(self._pose_measures(y)):
+            if abs(value) < SINGULAR_STOP:
+                return fast5r.SINGULAR, k, value, None
+        return fast5r.OK, 0, residual, None
+
+    def _refusal(self, status, index, value, y, dt, held) -> PlantRefused:
+        """The refusal record of a refused step's status (the one text of each reason)."""
+        t = self.time
+        if status == fast5r.NONFINITE_STATE:
+            message = f"state became non-finite in the step from t = {t:.6g} s ({held()})"
+            return self._record(message, status, f"state[{index}]", value, t)
+        if status == fast5r.DIVERGED:
+            s = self.settings
+            message = (f"integration diverged in the step from t = {t:.6g} s ({held()}): loop-closure "
+                       f"residual {value:.3g} m > {RESIDUAL_STOP:g} m, the state no longer closes the loop "
+                       + (f"(motion too fast for RK4 steps of {dt / s.substeps:.3g} s: check the torques, use "
+                          f"substeps or dopri5)" if s.method == "rk4" else "(check the torques)"))
+            return self._record(message, status, "residual", value, t)
+        message = (f"singular pose reached at t = {t + dt:.6g} s: {MEASURES[index]} measure {value:.3g} "
+                   f"at x = {float(y[0]):.6g} m, y = {float(y[1]):.6g} m")
+        return self._record(message, status, MEASURES[index], value, t + dt)
+
+    @staticmethod
+    def _record(message, status, variable, value, time) -> PlantRefused:
+        reason, unit = REFUSALS[status]
+        return PlantRefused(message, code=status, reason=reason, variable=variable, value=float(value), unit=unit,
+                            time=time)
 
     def project(self, y, iterations: int = 3):
         """Newton projection on q̄(q) = 0 and dq = C dq#, keeping q# fixed."""
@@ -303,15 +355,6 @@ class PlantSimulator:
         phi12 = q[fivebar.TH11] + q[fivebar.TH12]
         phi22 = math.pi - (q[fivebar.TH21] + q[fivebar.TH22])
         return math.sin(q[fivebar.TH12]), math.sin(q[fivebar.TH22]), math.sin(phi12 - phi22)
-
-    def _check_pose(self, y, measures, t):
-        names = ("chain 1 elbow (serial)", "chain 2 elbow (serial)", "distal links (parallel)")
-        for name, value in zip(names, measures):
-            if abs(value) < SINGULAR_STOP:
-                raise PlantError(
-                    f"singular pose reached at t = {t:.6g} s: {name} measure {value:.3g} "
-                    f"at x = {float(y[0]):.6g} m, y = {float(y[1]):.6g} m"
-                )
 
     # --- outputs --------------------------------------------------------------
     @property

@@ -31,9 +31,11 @@ def _random_state(a, rng):
     return z
 
 
-@pytest.mark.parametrize("kernel", ["fast", "general"])
-def test_compiled_derivative_equals_the_python_one(kernel):
-    a = _actuated(kernel)
+def test_c_derivative_equals_the_general_algorithm_with_the_motor_equations():
+    """The C kernel's actuated derivative against an independent formulation: the general
+    algorithm's forward dynamics (plant.parallel) with motor.shaft_torque and
+    motor.armature_current_rate on the world joints (ActuatedPlant.derivative, general kernel)."""
+    a = _actuated("general")
     p = fast5r.pack_params(a.plant.params)
     rng = np.random.default_rng(7)
     for _ in range(20):

@@ -1,0 +1,425 @@
+/* The 5R and the actuated 5R (fivebar.h): chain terms, forward dynamics (5.66), RK4, the
+ * report of a state, projection, residual, inverse dynamics terms, the compiled loop's I/O.
+ *
+ * Forward dynamics: the z rows of (7.7) decouple (z'' = -2 lambda z' - lambda^2 z), leaving
+ * A Q° = blockdiag(-E_k J_v,k), invertible away from serial singularities, so
+ * C = [1; (E_1 J_1)^-1; (E_2 J_2)^-1] (5.56).  (5.66) is solved by eliminating the constraint
+ * rows: the Baumgarte rows give theta'' = C x'' + e, the projected dynamics a 2x2 system
+ * C^T M' C x'' = C^T (u' - v' - g' - M' e).
+ */
+#include "fivebar.h"
+
+#include "pc_motor.h"
+#include "pc_rk4.h"
+
+#define N_Q 7
+#define PI 3.14159265358979323846
+#define N_Y 14
+
+const pc_field pc_fivebar_params_fields[] = {
+    PC_FIELD(pc_fivebar_params, l0), PC_FIELD(pc_fivebar_params, m0), PC_FIELD(pc_fivebar_params, gravity),
+    /* chain[2], each pc_fivebar_chain_fields (PC_FIELD's count is for arrays of doubles) */
+    {"chain", (int)(offsetof(pc_fivebar_params, chain) / sizeof(double)),
+     (int)(2 * (sizeof(pc_fivebar_chain) / sizeof(double)))},
+    {0, 0, 0}};
+const pc_field pc_fivebar_chain_fields[] = {
+    PC_FIELD(pc_fivebar_chain, l1), PC_FIELD(pc_fivebar_chain, l2), PC_FIELD(pc_fivebar_chain, lg1),
+    PC_FIELD(pc_fivebar_chain, lg2), PC_FIELD(pc_fivebar_chain, m1), PC_FIELD(pc_fivebar_chain, m2),
+    PC_FIELD(pc_fivebar_chain, Jz1), PC_FIELD(pc_fivebar_chain, Jz2), PC_FIELD(pc_fivebar_chain, J_rotor),
+    {0, 0, 0}};
+const pc_field pc_fivebar_motor_fields[] = {
+    PC_FIELD(pc_fivebar_motor, joint), PC_FIELD(pc_fivebar_motor, R), PC_FIELD(pc_fivebar_motor, L),
+    PC_FIELD(pc_fivebar_motor, kt), PC_FIELD(pc_fivebar_motor, ke), PC_FIELD(pc_fivebar_motor, b),
+    PC_FIELD(pc_fivebar_motor, mu), PC_FIELD(pc_fivebar_motor, omega_eps), {0, 0, 0}};
+const pc_field pc_fivebar_settings_fields[] = {
+    PC_FIELD(pc_fivebar_settings, lambda), PC_FIELD(pc_fivebar_settings, substeps),
+    PC_FIELD(pc_fivebar_settings, count), PC_FIELD(pc_fivebar_settings, residual_stop),
+    PC_FIELD(pc_fivebar_settings, singular_stop), PC_FIELD(pc_fivebar_settings, offset), {0, 0, 0}};
+const pc_field pc_fivebar_state_fields[] = {
+    PC_FIELD(pc_fivebar_state, q), PC_FIELD(pc_fivebar_state, dq),
+    {"current", (int)(offsetof(pc_fivebar_state, current) / sizeof(double)), 0}, {0, 0, 0}};
+const pc_field pc_fivebar_terms_fields[] = {
+    PC_FIELD(pc_fivebar_terms, tip), PC_FIELD(pc_fivebar_terms, J), PC_FIELD(pc_fivebar_terms, a_bias),
+    PC_FIELD(pc_fivebar_terms, M), PC_FIELD(pc_fivebar_terms, v), PC_FIELD(pc_fivebar_terms, g), {0, 0, 0}};
+const pc_field pc_fivebar_report_fields[] = {
+    PC_FIELD(pc_fivebar_report, finite), PC_FIELD(pc_fivebar_report, residual),
+    PC_FIELD(pc_fivebar_report, measures), PC_FIELD(pc_fivebar_report, q1), PC_FIELD(pc_fivebar_report, q2),
+    PC_FIELD(pc_fivebar_report, dq1), PC_FIELD(pc_fivebar_report, dq2), PC_FIELD(pc_fivebar_report, x),
+    PC_FIELD(pc_fivebar_report, y), PC_FIELD(pc_fivebar_report, dx), PC_FIELD(pc_fivebar_report, dy),
+    PC_FIELD(pc_fivebar_report, q1_enc), PC_FIELD(pc_fivebar_report, q2_enc), {0, 0, 0}};
+const pc_field pc_fivebar_inverse_fields[] = {
+    PC_FIELD(pc_fivebar_inverse, M), PC_FIELD(pc_fivebar_inverse, v), PC_FIELD(pc_fivebar_inverse, g),
+    PC_FIELD(pc_fivebar_inverse, Z), PC_FIELD(pc_fivebar_inverse, c), {0, 0, 0}};
+
+int pc_fivebar_context_size(void)
+{
+    return (int)sizeof(pc_fivebar_context);
+}
+
+/* s_k of E_k (7.3-7.4) and the chain's base x (7.8). */
+static double chain_sign(int k)
+{
+    return k == 0 ? 1.0 : -1.0;
+}
+
+static double chain_base(const pc_fivebar_params *p, int k)
+{
+    return k == 0 ? p->l0 : -p->l0;
+}
+
+/* Chain k at joint angles (a, b) and rates (da, db): tip, J_v, tip bias, M, v, g, the tip rows
+ * world-aligned (E_k applied) and gravity written in the chain frame (E_k^T g). */
+void pc_fivebar_chain_terms(const pc_fivebar_params *p, int k, double a, double b, double da, double db,
+                            pc_fivebar_terms *t)
+{
+    const pc_fivebar_chain *c = &p->chain[k];
+    const double s = chain_sign(k);
+    const double l1 = c->l1, l2 = c->l2, lg1 = c->lg1, lg2 = c->lg2, m1 = c->m1, m2 = c->m2;
+    const double c1 = cos(a), s1 = sin(a);
+    const double c12 = cos(a + b), s12 = sin(a + b);
+    const double cb = cos(b), sb = sin(b);
+    const double w1 = da, w12 = da + db;
+    /* Tip (4.4) and J_v (4.13) in the chain frame; only the x, y rows are non-zero. */
+    t->tip[0] = s * (l1 * c1 + l2 * c12);
+    t->tip[1] = l1 * s1 + l2 * s12;
+    t->J[0] = s * (-l1 * s1 - l2 * s12);
+    t->J[1] = s * (-l2 * s12);
+    t->J[2] = l1 * c1 + l2 * c12;
+    t->J[3] = l2 * c12;
+    /* Velocity-quadratic tip acceleration (4.57-4.58): centripetal terms. */
+    t->a_bias[0] = s * (-l1 * c1 * w1 * w1 - l2 * c12 * w12 * w12);
+    t->a_bias[1] = -l1 * s1 * w1 * w1 - l2 * s12 * w12 * w12;
+    /* (4.85) with the rotor of (4.139) on joint 1. */
+    const double h = m2 * l1 * lg2;
+    const double m22 = m2 * lg2 * lg2 + c->Jz2;
+    t->M[0] = m1 * lg1 * lg1 + c->Jz1 + m2 * l1 * l1 + m22 + 2.0 * h * cb + c->J_rotor;
+    t->M[1] = m22 + h * cb;
+    t->M[2] = t->M[1];
+    t->M[3] = m22;
+    /* (4.86): Coriolis and centripetal efforts. */
+    t->v[0] = -h * sb * (2.0 * da * db + db * db);
+    t->v[1] = h * sb * da * da;
+    /* (4.87) with gravity in the chain frame, E_k^T g. */
+    const double gx = s * p->gravity[0], gy = p->gravity[1];
+    const double gc1x = lg1 * -s1, gc1y = lg1 * c1;
+    const double g2ax = -l1 * s1 - lg2 * s12, g2ay = l1 * c1 + lg2 * c12;
+    const double g2bx = -lg2 * s12, g2by = lg2 * c12;
+    t->g[0] = -(m1 * (gc1x * gx + gc1y * gy) + m2 * (g2ax * gx + g2ay * gy));
+    t->g[1] = -(m2 * (g2bx * gx + g2by * gy));
+}
+
+/* The inverse of the 2x2 row-major m into inv. */
+static void inverse2(const double *m, double *inv)
+{
+    const double det = m[0] * m[3] - m[1] * m[2];
+    inv[0] = m[3] / det;
+    inv[1] = -m[1] / det;
+    inv[2] = -m[2] / det;
+    inv[3] = m[0] / det;
+}
+
+static void terms_at(const pc_fivebar_params *p, int k, const double *y, int with_rates, pc_fivebar_terms *t)
+{
+    const double *q = y, *dq = y + N_Q;
+    pc_fivebar_chain_terms(p, k, q[3 + 2 * k], q[4 + 2 * k], with_rates ? dq[3 + 2 * k] : 0.0,
+                           with_rates ? dq[4 + 2 * k] : 0.0, t);
+}
+
+/* dy/dt for y = [q, dq] with u* = (u1, u2) on theta11, theta21 (5.66). */
+void pc_fivebar_derivative(const pc_fivebar_params *p, const double *y, double u1, double u2, double lambda,
+                           double *dydt)
+{
+    pc_fivebar_terms t[2];
+    double cinv[2][4], e[2][2];
+    const double x = y[0], yy = y[1], dx = y[7], dy = y[8];
+    for (int k = 0; k < 2; ++k) {
+        terms_at(p, k, y, 1, &t[k]);
+        const double rx = x - chain_base(p, k) - t[k].tip[0];   /* residual (5.18) */
+        const double ry = yy - t[k].tip[1];
+        const double dth1 = y[10 + 2 * k], dth2 = y[11 + 2 * k];
+        const double vrx = dx - (t[k].J[0] * dth1 + t[k].J[1] * dth2);   /* A dq */
+        const double vry = dy - (t[k].J[2] * dth1 + t[k].J[3] * dth2);
+        /* A q'' + b + 2 lam A dq + lam^2 res = 0, A = [1, -E J], b = -E a_bias:
+         * E J theta'' = x'' - E a_bias + 2 lam (A dq) + lam^2 res. */
+        const double wx = -t[k].a_bias[0] + 2.0 * lambda * vrx + lambda * lambda * rx;
+        const double wy = -t[k].a_bias[1] + 2.0 * lambda * vry + lambda * lambda * ry;
+        inverse2(t[k].J, cinv[k]);
+        e[k][0] = cinv[k][0] * wx + cinv[k][1] * wy;
+        e[k][1] = cinv[k][2] * wx + cinv[k][3] * wy;
+    }
+    /* Projected dynamics: (C^T M' C) x'' = C^T (u' - v' - g' - M' e). */
+    double a00 = p->m0, a01 = 0.0, a11 = p->m0;
+    double r0 = p->m0 * p->gravity[0], r1 = p->m0 * p->gravity[1];   /* -g' of the platform (5.9) */
+    for (int k = 0; k < 2; ++k) {
+        const double *M = t[k].M, *c = cinv[k];
+        const double u = k == 0 ? u1 : u2;
+        const double f0 = u - t[k].v[0] - t[k].g[0] - (M[0] * e[k][0] + M[1] * e[k][1]);
+        const double f1 = -t[k].v[1] - t[k].g[1] - (M[2] * e[k][0] + M[3] * e[k][1]);
+        const double mc00 = M[0] * c[0] + M[1] * c[2], mc01 = M[0] * c[1] + M[1] * c[3];
+        const double mc10 = M[2] * c[0] + M[3] * c[2], mc11 = M[2] * c[1] + M[3] * c[3];
+        a00 += c[0] * mc00 + c[2] * mc10;
+        a01 += c[0] * mc01 + c[2] * mc11;
+        a11 += c[1] * mc01 + c[3] * mc11;
+        r0 += c[0] * f0 + c[2] * f1;
+        r1 += c[1] * f0 + c[3] * f1;
+    }
+    const double det = a00 * a11 - a01 * a01;
+    const double ddx = (a11 * r0 - a01 * r1) / det;
+    const double ddy = (a00 * r1 - a01 * r0) / det;
+    for (int i = 0; i < N_Q; ++i) dydt[i] = y[N_Q + i];
+    dydt[7] = ddx;
+    dydt[8] = ddy;
+    dydt[9] = -2.0 * lambda * y[9] - lambda * lambda * y[2];
+    for (int k = 0; k < 2; ++k) {
+        dydt[10 + 2 * k] = cinv[k][0] * ddx + cinv[k][1] * ddy + e[k][0];
+        dydt[11 + 2 * k] = cinv[k][2] * ddx + cinv[k][3] * ddy + e[k][1];
+    }
+}
+
+/* The world speed of motor m's joint (plant.fivebar.world_rates). */
+static double motor_speed(const pc_fivebar_motor *m, const double *z)
+{
+    return m->joint == 0.0 ? z[10] : -z[12];
+}
+
+/* dz/dt for z = [q, dq, i_1 .. i_n]: the plant (5.66) with each motor's shaft torque (B.2) added
+ * to the held efforts on its joint (world -> thesis sign on chain 2), and the armature
+ * circuits (4.162).  `held` is a pc_fivebar_held (the signature of pc_rk4's derivative). */
+void pc_fivebar_actuated_derivative(const void *held, const double *z, double *dzdt)
+{
+    const pc_fivebar_held *m = held;
+    double u1 = m->u1, u2 = m->u2;
+    for (int n = 0; n < m->n_motors; ++n) {
+        const pc_fivebar_motor *r = &m->motors[n];
+        const double omega = motor_speed(r, z), i = z[N_Y + n];
+        const double tau = pc_shaft_torque(r->kt, r->b, r->mu, r->omega_eps, i, omega);
+        if (r->joint == 0.0)
+            u1 += tau;
+        else
+            u2 -= tau;
+        dzdt[N_Y + n] = pc_armature_rate(r->R, r->L, r->ke, m->voltages[n], i, omega);
+    }
+    pc_fivebar_derivative(m->params, z, u1, u2, m->lambda, dzdt);
+}
+
+/* RK4 of the actuated derivative over dt, `substeps` steps, z in place; work: 5 (14 + n) doubles. */
+void pc_fivebar_advance(const pc_fivebar_held *held, double *z, double dt, int substeps, double *work)
+{
+    pc_rk4(pc_fivebar_actuated_derivative, held, z, N_Y + held->n_motors, dt, substeps, work);
+}
+
+/* The position constraint residual q̄ (5.18, 7.7): 6 entries. */
+void pc_fivebar_residual(const pc_fivebar_params *p, const double *y, double *out)
+{
+    pc_fivebar_terms t;
+    for (int k = 0; k < 2; ++k) {
+        terms_at(p, k, y, 0, &t);
+        out[3 * k] = y[0] - chain_base(p, k) - t.tip[0];
+        out[3 * k + 1] = y[1] - t.tip[1];
+        out[3 * k + 2] = y[2];
+    }
+}
+
+/* The encoder's reading of q with zero error `offset`, quantised to `count`. */
+static double encoder(double q, double offset, double count)
+{
+    return count * floor((q + offset) / count + 0.5);
+}
+
+/* What PlantSimulator checks and publishes for the plant state y (14 entries). */
+void pc_fivebar_report_of(const pc_fivebar_params *p, const pc_fivebar_settings *s, const double *y,
+                          pc_fivebar_report *out)
+{
+    int finite = 1;
+    for (int i = 0; i < N_Y; ++i) finite = finite && isfinite(y[i]);
+    out->finite = finite ? 1.0 : 0.0;
+    double res[6], sum = 0.0;
+    pc_fivebar_residual(p, y, res);
+    for (int i = 0; i < 6; ++i) sum += res[i] * res[i];
+    out->residual = sqrt(sum);
+    out->measures[0] = sin(y[4]);
+    out->measures[1] = sin(y[6]);
+    out->measures[2] = sin((y[3] + y[4]) - (PI - (y[5] + y[6])));
+    out->q1 = y[3];
+    out->q2 = PI - y[5];
+    out->dq1 = y[10];
+    out->dq2 = -y[12];
+    out->x = y[0];
+    out->y = y[1];
+    out->dx = y[7];
+    out->dy = y[8];
+    out->q1_enc = encoder(out->q1, s->offset[0], s->count);
+    out->q2_enc = encoder(out->q2, s->offset[1], s->count);
+}
+
+/* The verdict on a trial state z (n = 14 + motors) and its report: PlantSimulator.accept's
+ * checks, the currents first (ActuatedPlant.advance). */
+static int judge(const pc_fivebar_settings *s, const double *z, int n, const pc_fivebar_report *rep,
+                 pc_refusal *refusal)
+{
+    for (int i = N_Y; i < n; ++i)
+        if (!isfinite(z[i])) return pc_refuse(refusal, PC_FIVEBAR_NONFINITE_STATE, i, z[i]);
+    if (rep->finite != 1.0) {
+        int i = 0;
+        while (i < N_Y - 1 && isfinite(z[i])) ++i;
+        return pc_refuse(refusal, PC_FIVEBAR_NONFINITE_STATE, i, z[i]);
+    }
+    if (!(rep->residual <= s->residual_stop)) return pc_refuse(refusal, PC_FIVEBAR_DIVERGED, 0, rep->residual);
+    for (int k = 0; k < 3; ++k)
+        if (fabs(rep->measures[k]) < s->singular_stop)
+            return pc_refuse(refusal, PC_FIVEBAR_SINGULAR, k, rep->measures[k]);
+    return PC_OK;
+}
+
+/* One step: RK4 from z over dt with the efforts (u1, u2) on theta11, theta21, the motors and
+ * their voltages held; the trial state goes to scratch[0 .. n) (n = 14 + n_motors) and its
+ * report to `report`, z itself is never written.  Returns PC_OK when the caller may take the
+ * trial state, else the refusal (non-finite input before integrating; non-finite state,
+ * divergence or a singular pose after it). */
+int pc_fivebar_step(const pc_fivebar_params *p, const pc_fivebar_settings *s, const pc_fivebar_motor *motors,
+                    int n_motors, const double *z, const double *voltages, double u1, double u2, double dt,
+                    double *scratch, pc_fivebar_report *report, pc_refusal *refusal)
+{
+    if (!isfinite(u1)) return pc_refuse(refusal, PC_FIVEBAR_NONFINITE_INPUT, 0, u1);
+    if (!isfinite(u2)) return pc_refuse(refusal, PC_FIVEBAR_NONFINITE_INPUT, 1, u2);
+    for (int k = 0; k < n_motors; ++k)
+        if (!isfinite(voltages[k])) return pc_refuse(refusal, PC_FIVEBAR_NONFINITE_INPUT, 2 + k, voltages[k]);
+    const int n = N_Y + n_motors;
+    double *trial = scratch;
+    for (int i = 0; i < n; ++i) trial[i] = z[i];
+    const pc_fivebar_held held = {p, motors, voltages, u1, u2, s->lambda, n_motors};
+    pc_fivebar_advance(&held, trial, dt, (int)s->substeps, scratch + n);
+    pc_fivebar_report_of(p, s, trial, report);
+    return judge(s, trial, n, report, refusal);
+}
+
+/* Newton on the residual with x, y fixed, then dq = C dq# (PlantSimulator.project); y in place. */
+void pc_fivebar_project(const pc_fivebar_params *p, double *y, int iterations)
+{
+    pc_fivebar_terms t;
+    double inv[4];
+    for (int k = 0; k < 2; ++k) {
+        const double base = chain_base(p, k);
+        for (int it = 0; it < iterations; ++it) {
+            terms_at(p, k, y, 0, &t);
+            const double rx = y[0] - base - t.tip[0], ry = y[1] - t.tip[1];
+            inverse2(t.J, inv);
+            y[3 + 2 * k] += inv[0] * rx + inv[1] * ry;
+            y[4 + 2 * k] += inv[2] * rx + inv[3] * ry;
+        }
+        terms_at(p, k, y, 0, &t);
+        inverse2(t.J, inv);
+        y[10 + 2 * k] = inv[0] * y[7] + inv[1] * y[8];
+        y[11 + 2 * k] = inv[2] * y[7] + inv[3] * y[8];
+    }
+    y[2] = 0.0;
+    y[9] = 0.0;
+}
+
+/* The inverse dynamics terms of (5.67-5.77) at (q, dq), as plant.parallel.inverse_dynamics_terms,
+ * by the elimination of pc_fivebar_derivative (Cinv_k = (E_k J_v,k)^-1, the chain blocks of C):
+ * M_M = m0 1 + sum_k Cinv_k^T M_k Cinv_k (5.75); c_k = -Cinv_k E_k a_bias,k (5.69, platform rows
+ * 0); v_M = sum_k Cinv_k^T (M_k c_k + v_k) (5.76); g_M = -m0 g_xy + sum_k Cinv_k^T g_k (5.77,
+ * 5.9); Z = U^T C, the rows of C of theta11 and theta21 (5.72). */
+void pc_fivebar_inverse_terms(const pc_fivebar_params *p, const double *q, const double *dq,
+                              pc_fivebar_inverse *out)
+{
+    pc_fivebar_terms t;
+    double i[4];
+    const double m0 = p->m0;
+    double m00 = m0, m01 = 0.0, m11 = m0, v0 = 0.0, v1 = 0.0;
+    double g0 = -m0 * p->gravity[0], g1 = -m0 * p->gravity[1];
+    for (int n = 0; n < N_Q; ++n) out->c[n] = 0.0;
+    for (int k = 0; k < 2; ++k) {
+        pc_fivebar_chain_terms(p, k, q[3 + 2 * k], q[4 + 2 * k], dq[3 + 2 * k], dq[4 + 2 * k], &t);
+        inverse2(t.J, i);
+        const double c0 = i[0] * -t.a_bias[0] + i[1] * -t.a_bias[1];
+        const double c1 = i[2] * -t.a_bias[0] + i[3] * -t.a_bias[1];
+        out->c[3 + 2 * k] = c0;
+        out->c[4 + 2 * k] = c1;
+        const double *M = t.M;
+        const double mc00 = M[0] * i[0] + M[1] * i[2], mc01 = M[0] * i[1] + M[1] * i[3];
+        const double mc10 = M[2] * i[0] + M[3] * i[2], mc11 = M[2] * i[1] + M[3] * i[3];
+        m00 += i[0] * mc00 + i[2] * mc10;
+        m01 += i[0] * mc01 + i[2] * mc11;
+        m11 += i[1] * mc01 + i[3] * mc11;
+        const double f0 = M[0] * c0 + M[1] * c1 + t.v[0];
+        const double f1 = M[2] * c0 + M[3] * c1 + t.v[1];
+        v0 += i[0] * f0 + i[2] * f1;
+        v1 += i[1] * f0 + i[3] * f1;
+        g0 += i[0] * t.g[0] + i[2] * t.g[1];
+        g1 += i[1] * t.g[0] + i[3] * t.g[1];
+        out->Z[2 * k] = i[0];
+        out->Z[2 * k + 1] = i[1];
+    }
+    out->M[0] = m00;
+    out->M[1] = m01;
+    out->M[2] = m01;
+    out->M[3] = m11;
+    out->v[0] = v0;
+    out->v[1] = v1;
+    out->g[0] = g0;
+    out->g[1] = g1;
+}
+
+/* pc_fivebar_inverse_terms in the shape of the position law's terms function (pc_law_terms_fn,
+ * law.h): `model` is a pc_fivebar_params, `terms` a pc_fivebar_inverse (its first words are
+ * pc_law_terms: M_M, v_M, g_M, Z). */
+void pc_fivebar_terms_of(const void *model, const double *q, const double *dq, double *terms)
+{
+    pc_fivebar_inverse_terms(model, q, dq, (pc_fivebar_inverse *)terms);
+}
+
+/* The plant's outputs (fmus.parts.PLANT_OUTPUTS order) from a report into x[first ..]. */
+static void publish(const pc_fivebar_report *rep, double *x, int first)
+{
+    const double o[11] = {rep->q1, rep->q2, rep->dq1, rep->dq2, rep->x, rep->y, rep->dx, rep->dy, rep->q1_enc,
+                          rep->q2_enc, rep->residual};
+    for (int k = 0; k < 11; ++k) x[first + k] = o[k];
+}
+
+/* Take an accepted trial state: copy it into the state and publish the outputs. */
+static void take(pc_fivebar_context *c, const pc_fivebar_report *rep, double *x, int first)
+{
+    const int n = N_Y + c->n_motors;
+    for (int i = 0; i < n; ++i) c->state[i] = c->scratch[i];
+    publish(rep, x, first);
+}
+
+/* FiveBarPlant with RK4, no projection: x = [tau1, tau2 | the 11 plant outputs].  Refused, the
+ * state and x are unchanged. */
+int pc_fivebar_plant_io(void *context, double *x, double t, double h, pc_refusal *refusal)
+{
+    (void)t;
+    pc_fivebar_context *c = context;
+    pc_fivebar_report rep;
+    if (!isfinite(x[0])) return pc_refuse(refusal, PC_FIVEBAR_NONFINITE_INPUT, 0, x[0]);
+    if (!isfinite(x[1])) return pc_refuse(refusal, PC_FIVEBAR_NONFINITE_INPUT, 1, x[1]);
+    const int status = pc_fivebar_step(c->params, c->settings, c->motors, 0, c->state, c->voltages, x[0], -x[1],
+                                       h, c->scratch, &rep, refusal);
+    if (status == PC_OK) take(c, &rep, x, 2);
+    return status;
+}
+
+/* ActuatedFiveBarPlant's integration with the drives' voltages (context) held, and the held
+ * efforts on theta11, theta21 (context->held, the drives' LuGre bristle torques; NULL: none).
+ * Accepted: the state is replaced, x[first .. first + 11) gets the plant's outputs and
+ * x[first + 11 + n] motor n's shaft torque at the new current and joint speed (B.2).  Refused:
+ * nothing changes. */
+int pc_fivebar_actuated_io(void *context, double *x, double t, double h, pc_refusal *refusal)
+{
+    (void)t;
+    pc_fivebar_context *c = context;
+    pc_fivebar_report rep;
+    const double u1 = c->held ? c->held[0] : 0.0, u2 = c->held ? c->held[1] : 0.0;
+    const int status = pc_fivebar_step(c->params, c->settings, c->motors, c->n_motors, c->state, c->voltages, u1,
+                                       u2, h, c->scratch, &rep, refusal);
+    if (status != PC_OK) return status;
+    take(c, &rep, x, c->first);
+    for (int n = 0; n < c->n_motors; ++n) {
+        const pc_fivebar_motor *r = &c->motors[n];
+        x[c->first + 11 + n] = pc_shaft_torque(r->kt, r->b, r->mu, r->omega_eps, c->state[N_Y + n],
+                                               motor_speed(r, c->state));
+    }
+    return PC_OK;
+}

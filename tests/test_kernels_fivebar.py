@@ -1,0 +1,183 @@
+"""The 5R's C kernel (kernels/src/fivebar.c) against oracles: energy conservation, the loop
+closure, refusals that change nothing, and the C structs' layout as Python packs them.
+(tests/test_plant_dynamics.py holds it against the general algorithm, state by state.)"""
+from __future__ import annotations
+
+import ctypes
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+import kernels
+from plant import IntegratorSettings, PlantSimulator, fast5r, fivebar, get_preset
+from plant.simulator import MEASURES, SINGULAR_STOP, PlantError
+
+GRAVITY = (0.0, -9.81, 0.0)
+DT = 1e-3
+
+
+def potential_energy(params, q) -> float:
+    """-g . (sum of mass times centre of mass) of the links and the end effector, from the
+    world link angles of the thesis' q (bench preset: no counter-masses)."""
+    g = np.array(params.gravity[:2])
+    phi11, phi12 = q[3], q[3] + q[4]
+    phi21, phi22 = math.pi - q[5], math.pi - (q[5] + q[6])
+    energy = -params.m0 * float(g @ q[:2])
+    for c, base, a, b in ((params.chain1, params.l0, phi11, phi12), (params.chain2, -params.l0, phi21, phi22)):
+        elbow = np.array([base + c.l1 * math.cos(a), c.l1 * math.sin(a)])
+        com1 = np.array([base + c.lg1 * math.cos(a), c.lg1 * math.sin(a)])
+        com2 = elbow + c.lg2 * np.array([math.cos(b), math.sin(b)])
+        energy -= c.m1 * float(g @ com1) + c.m2 * float(g @ com2)
+    return energy
+
+
+@pytest.mark.parametrize("gravity", [(0.0, 0.0, 0.0), GRAVITY, (9.81, 0.0, 0.0)])
+def test_unactuated_frictionless_5r_keeps_its_energy_under_rk4(gravity):
+    """No torque, no friction: kinetic (the general model's M', with the rotors) plus potential
+    energy stays constant over 400 RK4 steps of 1 ms, while the mechanism swings through a
+    good part of its workspace; the loop stays closed.  A wrong inertia, Coriolis or gravity
+    term, or a wrong elimination of the constraints, makes energy drift by far more."""
+    params = replace(get_preset("bench"), gravity=gravity)
+    sim = PlantSimulator(params, 0.0, 0.15, IntegratorSettings(substeps=4), dx0=0.4, dy0=0.3)
+    energy = lambda: sim.kinetic_energy() + potential_energy(params, sim.q)   # noqa: E731
+    e0, scale, start = energy(), sim.kinetic_energy(), sim.y[:2].copy()
+    for _ in range(400):
+        sim.step(0.0, 0.0, DT)
+        assert sim.residual_norm() < 1e-9
+    assert np.linalg.norm(sim.y[:2] - start) > 0.02          # it moved
+    assert abs(energy() - e0) <= 1e-7 * scale
+
+
+def _plant(settings=IntegratorSettings()):
+    sim = PlantSimulator(get_preset("bench"), 0.0, 0.15, settings)
+    return sim, sim._fast
+
+
+def test_plant_io_steps_as_the_simulator_and_publishes_its_outputs():
+    sim, kernel = _plant()
+    state = sim.y.copy()
+    context = kernel.context(state)
+    refusal = kernels.Refusal()
+    for k in range(5):
+        x = np.array([0.01 * k, -0.02] + [0.0] * 11)
+        assert fast5r.plant_io_c(ctypes.addressof(context), kernels.address(x), 0.0, DT, ctypes.byref(refusal)) == 0
+        sim.step(0.01 * k, -0.02, DT)
+        assert np.array_equal(state, sim.y)
+        outputs = sim.outputs()
+        assert x[2:].tolist() == [outputs[name] for name in ("q1", "q2", "dq1", "dq2", "x", "y", "dx", "dy",
+                                                             "q1_enc", "q2_enc", "residual")]
+
+
+@pytest.mark.parametrize("index", [0, 1])
+@pytest.mark.parametrize("value", [math.nan, math.inf, -math.inf])
+def test_a_non_finite_input_is_refused_with_its_code_and_changes_nothing(index, value):
+    sim, kernel = _plant()
+    state = sim.y.copy()
+    context = kernel.context(state)
+    scratch = context.buffers[-1]
+    scratch[:] = 0.5
+    before, scratch_before = state.copy(), scratch.copy()
+    x = np.full(13, 7.0)
+    x[index] = value
+    refusal = kernels.Refusal()
+    status = fast5r.plant_io_c(ctypes.addressof(context), kernels.address(x), 0.0, DT, ctypes.byref(refusal))
+    assert (status, refusal.code, refusal.index) == (fast5r.NONFINITE_INPUT, fast5r.NONFINITE_INPUT, index)
+    assert refusal.value == value or (math.isnan(value) and math.isnan(refusal.value))
+    assert np.array_equal(state, before) and np.array_equal(scratch, scratch_before)
+    assert x[2:].tolist() == [7.0] * 11 and x[1 - index] == 7.0
+
+
+def test_a_non_finite_voltage_or_state_is_refused_and_changes_nothing():
+    sim, kernel = _plant()
+    a_motors = np.array([[0, 1.0, 1e-3, 0.05, 0.05, 1e-5, 0.0, 0.1], [1, 1.0, 1e-3, 0.05, 0.05, 1e-5, 0.0, 0.1]])
+    state = np.concatenate([sim.y, [0.1, -0.2]])
+    before = state.copy()
+    x = np.zeros(6 + 13)
+    refusal = kernels.Refusal()
+    voltages = np.array([1.0, math.nan])
+    context = kernel.context(state, a_motors, voltages, first=6)
+    status = fast5r.actuated_io_c(ctypes.addressof(context), kernels.address(x), 0.0, DT, ctypes.byref(refusal))
+    assert (status, refusal.index) == (fast5r.NONFINITE_INPUT, 3)        # voltage 1: u1, u2, then the voltages
+    assert np.array_equal(state, before) and not x.any()
+    voltages[1] = 2.0
+    state[8] = math.nan                                                  # dy
+    before = state.copy()
+    status = fast5r.actuated_io_c(ctypes.addressof(context), kernels.address(x), 0.0, DT, ctypes.byref(refusal))
+    assert (status, refusal.index) == (fast5r.NONFINITE_STATE, 14)       # the currents are checked first
+    assert np.array_equal(state, before, equal_nan=True) and not x.any()
+
+
+def test_a_singular_pose_is_refused_naming_the_measure():
+    """Driven into the distal links' alignment, the step that gets there is refused with the
+    parallel measure (index 2) below SINGULAR_STOP; the state is the last accepted one."""
+    sim, kernel = _plant()
+    state = sim.y.copy()
+    context = kernel.context(state)
+    refusal = kernels.Refusal()
+    x = np.zeros(13)
+    for _ in range(5000):
+        last = state.copy()
+        x[:2] = (0.05, 0.0)
+        status = fast5r.plant_io_c(ctypes.addressof(context), kernels.address(x), 0.0, DT, ctypes.byref(refusal))
+        if status:
+            break
+    assert status == fast5r.SINGULAR and abs(refusal.value) < SINGULAR_STOP
+    assert np.array_equal(state, last)
+    measures = fivebar.singularity(get_preset("bench"), *context.buffers[-1][:2])   # the refused trial state
+    assert refusal.value == pytest.approx((measures.serial1, measures.serial2, measures.parallel)[refusal.index],
+                                          abs=1e-5)   # IK near the singularity: ill-conditioned
+
+
+def test_c_layouts_are_the_python_packing():
+    """Every named parameter lands where the C struct has it, the fields tile each buffer,
+    and the ctypes mirrors of the pointer structs have the C sizes."""
+    params = get_preset("thesis_sim")
+    p = fast5r.pack_params(params)
+    assert p[fast5r.PARAMS["l0"]][0] == params.l0 and p[fast5r.PARAMS["m0"]][0] == params.m0
+    assert p[fast5r.PARAMS["gravity"]].tolist() == list(params.gravity[:2])
+    chains = p[fast5r.PARAMS["chain"]].reshape(2, fast5r.CHAIN_SIZE)
+    for row, c in zip(chains, (params.chain1, params.chain2)):
+        assert [row[fast5r.CHAIN[n]][0] for n in ("l1", "l2", "J_rotor")] == [c.l1, c.l2, c.J_rotor]
+    for layout in (fast5r.PARAMS, fast5r.CHAIN, fast5r.MOTOR, fast5r.SETTINGS, fast5r.REPORT, fast5r.INVERSE):
+        places = sorted((s.start, s.stop) for s in layout.values())
+        assert places[0][0] == 0 and all(a[1] == b[0] for a, b in zip(places, places[1:]))
+    assert fast5r.PARAMS_SIZE == 4 + 2 * 9 and fast5r.MOTOR_COLUMNS == 8 and fast5r.PLANT_STATES == 14
+    assert ctypes.sizeof(fast5r.Context) == fast5r.CONTEXT_SIZE
+
+
+def test_the_simulator_refuses_with_one_record_and_its_message():
+    """A refused step is one kernels.Refused (and a PlantError): variable, value, unit and time
+    of the record are those its message names; the state is kept."""
+    sim, _ = _plant()
+    with pytest.raises(PlantError) as refused:
+        sim.step(0.0, math.inf, DT)
+    assert isinstance(refused.value, kernels.Refused)
+    assert refused.value.record() | {"message": None} == {
+        "instance": None, "time": 0.0, "variable": "tau2", "value": math.inf, "unit": "N m",
+        "code": fast5r.NONFINITE_INPUT, "reason": "nonfinite_input", "message": None}
+    with pytest.raises(PlantError) as refused:
+        for _ in range(5000):
+            y = sim.y
+            sim.step(0.05, 0.0, DT)
+    record = refused.value.record()
+    assert record["variable"] in MEASURES and record["code"] == fast5r.SINGULAR
+    assert f"{record['variable']} measure {record['value']:.3g}" in record["message"]
+    assert abs(record["value"]) < SINGULAR_STOP
+    assert f"at t = {record['time']:.6g} s" in record["message"] and record["time"] == pytest.approx(sim.time + DT)
+    assert sim.y is y
+
+
+def test_the_terms_function_is_the_inverse_terms():
+    """pc_fivebar_terms_of (the position law's terms function, fmus/adapters.py) reads its model
+    as the parameter buffer and fills the inverse terms (held to the general algorithm in
+    tests/test_controller_fast.py): argument order and layout."""
+    sim, kernel = _plant()
+    q, dq = sim.y[:7].copy(), sim.y[7:].copy() + 0.3
+    expected, got = np.empty(fast5r.INVERSE_SIZE), np.full(fast5r.INVERSE_SIZE, np.nan)
+    fast5r.inverse_terms(kernel.p, q, dq, expected)
+    terms_of = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)(
+        fast5r.TERMS_OF)
+    terms_of(kernels.address(kernel.p), kernels.address(q), kernels.address(dq), kernels.address(got))
+    assert np.array_equal(got, expected) and np.any(expected[fast5r.INVERSE_V:fast5r.INVERSE_V + 2] != 0.0)
