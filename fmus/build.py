@@ -18,6 +18,7 @@ from pathlib import Path
 
 from pythonfmu import FmuBuilder
 
+from . import designs
 from .archive import rewrite
 from .bundle import source_files, write_bundle
 from .foreign import built_by_parcosim, mark_file
@@ -40,17 +41,21 @@ def build_bundled_fmu(script, model: str, dest, resources=(), feedthrough=None, 
     pythonfmu makes the model description and the archive; the resources then hold the
     bundle (:func:`fmus.bundle.write_bundle`, the slave module inside it, named dotted by
     ``slavemodule.txt``, and a copy as ``<that name>.py``, which pythonfmu's binary runs),
-    the mark (:func:`fmus.foreign.mark_file`) and ``resources`` (files or folders); the
+    the mark (:func:`fmus.foreign.mark_file`), ``resources`` (files or folders) and, for a
+    slave of ``fmus/slaves``, the designs its initialisation computes (:func:`precompute`); the
     ModelStructure is fixed (``feedthrough``: output -> inputs,
     :func:`fmus.modeldescription.fix_model_structure`) and parcosim's wrapper installed with
     the FMU's identity (:func:`fmus.wrapper.install_wrapper`).  ``options``: pythonfmu's
     model options (``canHandleVariableCommunicationStepSize`` ...).
     """
     script, dest = Path(script).resolve(), Path(dest)
-    extra = () if script.parent == ROOT / "fmus" / "slaves" else (script,)
+    ours = script.parent == ROOT / "fmus" / "slaves"
+    extra = () if ours else (script,)
     with tempfile.TemporaryDirectory(prefix="parcosim_build_") as tmp:
         tmp = Path(tmp)
         package = write_bundle(tmp / "bundle", extra)
+        if ours:
+            resources = [*resources, *precompute(script.stem, model, resources, tmp)]
         staged = tmp / script.name
         shutil.copy2(script, staged)
         path_before = list(sys.path)
@@ -69,6 +74,34 @@ def build_bundled_fmu(script, model: str, dest, resources=(), feedthrough=None, 
         dest.parent.mkdir(parents=True, exist_ok=True)
         shutil.move(fmu, dest)
     return dest
+
+
+def precompute(module: str, model: str, resources, tmp: Path) -> list:
+    """The designs file (:mod:`fmus.designs`) of the FMU of slave ``module`` (class ``model``)
+    with ``resources``, written in ``tmp``: what its initialisation computes with its
+    parameters as built, found by initialising it here; [] when it computes none.  An FMU
+    whose initialisation fails here is built without the file, with a warning (it then
+    computes its designs when it starts, or refuses as it did here)."""
+    folder = tmp / "precompute"
+    folder.mkdir()
+    for item in map(Path, resources):
+        (shutil.copytree if item.is_dir() else shutil.copy2)(item, folder / item.name)
+    slave_class = getattr(importlib.import_module(f"fmus.slaves.{module}"), model)
+    with designs.recording() as recorded:
+        slave = slave_class(instance_name=model, resources=str(folder))
+        slave.setup_experiment(0.0)
+        slave.enter_initialization_mode()
+        slave.exit_initialization_mode()
+        found = recorded()
+    if slave.error:
+        warnings.warn(f"{model}: its designs are not computed ahead, its initialisation with the parameters "
+                      f"as built failed: {slave.error}", stacklevel=3)
+        return []
+    if not found:
+        return []
+    path = tmp / designs.DESIGNS_FILE
+    designs.write(found, path)
+    return [path]
 
 
 class ForeignFmuError(ValueError):
