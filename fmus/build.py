@@ -1,9 +1,12 @@
 """Build the parcosim FMUs with pythonfmu and fix their model descriptions.
 
-Each FMU bundles the pure model packages (``plant``, ``motor``, ``controller``) and the
-``fmus`` modules its slaves run on in its resources, under a private package name
-(:mod:`fmus.bundle`), so an importer needs only a Python 3.11 with numpy, scipy, numba,
-control and pythonfmu, and its own packages of those names are left alone.  Each FMU's
+Each FMU bundles the pure model packages (``plant``, ``motor``, ``controller``), the C
+kernels (``kernels``, the built library loaded by path) and the ``fmus`` modules its slaves
+run on in its resources, under a private package name (:mod:`fmus.bundle`), and the designs
+its initialisation computes with its parameters as built (:func:`precompute`,
+:mod:`fmus.designs`), so an importer needs a Python 3.11 with numpy and pythonfmu (and scipy
+and python-control when a parameter set away from the build's asks for a new design; numba
+while a model's kernel still uses it), and its own packages of those names are left alone.  Each FMU's
 binary is parcosim's FMI wrapper (:mod:`fmus.wrapper`), compiled once per machine; without
 a C compiler it stays pythonfmu's.
 """

@@ -62,7 +62,9 @@ def bundle_name(extra=()) -> str:
 
 def write_bundle(directory, extra=()) -> Path:
     """Write the bundle (package :func:`bundle_name`, imports rewritten; ``extra`` slave
-    modules in ``fmus/slaves``) into ``directory`` and return the package's folder."""
+    modules in ``fmus/slaves``; the C kernels' library built first if missing or stale) into
+    ``directory`` and return the package's folder."""
+    _build_kernels()
     name = bundle_name(extra)
     package = Path(directory) / name
     for relative, path in source_files(extra):
@@ -75,6 +77,24 @@ def write_bundle(directory, extra=()) -> Path:
     (package / "__init__.py").write_text(f'"""parcosim\'s model code bundled into an FMU as {name} '
                                          '(fmus/bundle.py)."""\n')
     return package
+
+
+def _build_kernels() -> None:
+    """Build the C kernels' library now if it is missing or stale: the bundle carries it and
+    the FMU loads it by path, so starting an FMU compiles nothing (issue 27, item 5).
+
+    Raises
+    ------
+    kernels.KernelsUnavailable
+        It cannot be built (no C compiler: the message says what to install).
+    """
+    import kernels
+
+    kernels.library()
+    if not kernels.LIBRARY.exists():     # $PARCOSIM_KERNELS_LIB named another build to load
+        from kernels import build
+
+        build.build()
 
 
 def rewrite_imports(source: bytes, package: str, filename: str = "<bundled>") -> bytes:
