@@ -19,6 +19,7 @@ cold, whose e_ef (thesis 7.31 over t in [1, 8] s, from its outputs ``x``, ``y``,
     python -m benchmarks.cold_start                     # build, measure, print a table
     python -m benchmarks.cold_start --repeat 3 --json cold.json
     python -m benchmarks.cold_start --fmu-dir DIR       # FMUs already built there (names below)
+    python -m benchmarks.cold_start --env NUMBA_DISABLE_JIT=1 --no-e-ef   # the start without numba's JIT
 
 Run it from the repository (``python -m``: the checkout's packages build the FMUs).
 """
@@ -118,10 +119,14 @@ def build_fmus(out: Path) -> dict:
     return paths
 
 
+#: Variables given to every child beside the cache folders (``--env``).
+EXTRA_ENV = {}
+
+
 def cold_environment(scratch: Path) -> dict:
     """The parent's environment with every cache variable at a new empty folder under
-    ``scratch`` and nothing of this checkout on the Python path."""
-    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    ``scratch``, nothing of this checkout on the Python path, and :data:`EXTRA_ENV`."""
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"} | EXTRA_ENV
     for name in CACHE_VARIABLES:
         folder = scratch / name.lower()
         folder.mkdir()
@@ -251,17 +256,31 @@ def main(argv=None) -> int:
     parser.add_argument("--repeat", type=int, default=1, help="cold runs per FMU; the least CPU is reported")
     parser.add_argument("--no-e-ef", action="store_true", help="skip the ClosedLoop's 9 s run")
     parser.add_argument("--json", type=Path, help="also write the figures to this file")
+    parser.add_argument("--env", action="append", default=[], metavar="NAME=VALUE",
+                        help="set a variable in every child (e.g. NUMBA_DISABLE_JIT=1: what the start costs "
+                             "without numba's compilation)")
     args = parser.parse_args(argv)
+    for assignment in args.env:
+        name, equals, value = assignment.partition("=")
+        if not equals or not name:
+            raise SystemExit(f"--env {assignment!r}: write NAME=VALUE")
+        EXTRA_ENV[name] = value
     with tempfile.TemporaryDirectory(prefix="cold_fmus_") as tmp:
         if args.fmu_dir:
             paths = {name: args.fmu_dir / f"{name}.fmu" for name in FMUS}
+            missing = [str(p) for p in paths.values() if not p.is_file()]
+            if missing:
+                raise SystemExit(f"--fmu-dir {args.fmu_dir}: no {', '.join(missing)}")
         else:
             paths = build_fmus(Path(tmp))
         report = measure(paths, args.repeat)
         loop = None if args.no_e_ef else closed_loop_e_ef(paths["ClosedLoop"])
     print_report(report, loop)
+    if EXTRA_ENV:
+        print(f"children's extra environment: {EXTRA_ENV}")
     if args.json:
         args.json.write_text(json.dumps({"fmus": report, "closed_loop_9s": loop, "repeat": args.repeat,
+                                         "env": EXTRA_ENV,
                                          "python": sys.version.split()[0], "date_utc":
                                          time.strftime("%Y-%m-%d %H:%M", time.gmtime())}, indent=1))
     return 0

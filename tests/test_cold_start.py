@@ -26,8 +26,8 @@ HEAVY = ("control", "scipy.signal", "matplotlib", "numba")
 NUMBA_IN_KERNELS = any("from numba import" in path.read_text()
                        for package in ("plant", "motor", "controller") for path in (ROOT / package).rglob("*.py"))
 
-#: A fresh process: simulate each FMU (argv: "path[|name=value]" ...) for 3 ms, print the
-#: heavy packages loaded after each and every log message.
+#: A fresh process: simulate each FMU (argv: "path[|name=value]" ...) for 3 ms, logging on,
+#: print the heavy packages loaded after each and the log messages so far.
 CHILD = """
 import json, sys
 from fmpy import simulate_fmu
@@ -41,7 +41,7 @@ for spec in sys.argv[1:]:
     if change:
         name, value = change.split("=")
         start[name] = float(value)
-    simulate_fmu(path, stop_time=0.003, output_interval=1e-3, start_values=start, logger=log)
+    simulate_fmu(path, stop_time=0.003, output_interval=1e-3, start_values=start, debug_logging=True, logger=log)
     print(json.dumps({"fmu": spec, "heavy": [h for h in heavy if h in sys.modules], "messages": messages}))
 """ % (HEAVY,)
 
@@ -111,7 +111,7 @@ def test_designs_travel_bit_for_bit(tmp_path):
     from plant import get_preset
 
     def compute():
-        drive = Drive(motor1())
+        drive = Drive(motor1)
         derivator = derivators.Derivator()
         law = PositionController(get_preset("bench"), get_strategy("TCMDx", "circle"), model="tabulated", cache=False)
         return drive.controller.design, derivator.velocity_sos, derivator.acceleration_sos, law.model.table
