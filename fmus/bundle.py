@@ -28,8 +28,8 @@ PACKAGES = ("kernels", "plant", "motor", "controller")
 #: The ``fmus`` modules bundled: the slave base, and the in-process master a system FMU
 #: (``ClosedLoop``, ``ControlChain``) steps its components with; plus ``fmus/slaves``.
 FMUS_MODULES = ("__init__.py", "guarded.py", "slavestate.py", "fmustate.py", "stateformat.py", "budget.py", "parts.py",
-                "refusals.py", "identity.py", "designs.py", "embedded.py", "foreign.py", "instances.py", "master.py", "registry.py",
-                "stepper.py", "system.py", "systemslave.py", "compiled.py", "adapters.py")
+                "refusals.py", "identity.py", "designs.py", "embedded.py", "foreign.py", "instances.py", "master.py",
+                "registry.py", "stepper.py", "system.py", "systemslave.py", "compiled.py", "adapters.py")
 #: Top-level names whose imports the bundle rewrites to its private package.
 REWRITTEN = frozenset(PACKAGES + ("fmus",))
 #: The private package's name: this prefix and 12 hex digits of the sources' hash.
