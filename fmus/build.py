@@ -58,13 +58,19 @@ def build_bundled_fmu(script, model: str, dest, resources=(), feedthrough=None, 
         tmp = Path(tmp)
         package = write_bundle(tmp / "bundle", extra)
         if ours:
-            resources = [*resources, *precompute(script.stem, model, resources, tmp)]
+            folder = tmp / "precompute"
+            folder.mkdir()
+            for item in map(Path, resources):
+                (shutil.copytree if item.is_dir() else shutil.copy2)(item, folder / item.name)
+            computed = precompute(script.stem, model, folder, tmp / designs.DESIGNS_FILE)
+            resources = [*resources, *([computed] if computed else [])]
         staged = tmp / script.name
         shutil.copy2(script, staged)
         path_before = list(sys.path)
         try:
-            fmu = FmuBuilder.build_FMU(staged, dest=tmp / "out" / dest.name, **options, project_files=[
-                package, mark_file(tmp, model, package.name), *map(Path, resources)])
+            with designs.isolated():    # pythonfmu instantiates the slave with the resources
+                fmu = FmuBuilder.build_FMU(staged, dest=tmp / "out" / dest.name, **options, project_files=[
+                    package, mark_file(tmp, model, package.name), *map(Path, resources)])
         finally:
             sys.path[:] = path_before   # pythonfmu leaves the script's folder on sys.path
         slave_module = f"{package.name}.fmus.slaves.{script.stem}"
@@ -79,32 +85,28 @@ def build_bundled_fmu(script, model: str, dest, resources=(), feedthrough=None, 
     return dest
 
 
-def precompute(module: str, model: str, resources, tmp: Path) -> list:
-    """The designs file (:mod:`fmus.designs`) of the FMU of slave ``module`` (class ``model``)
-    with ``resources``, written in ``tmp``: what its initialisation computes with its
-    parameters as built, found by initialising it here; [] when it computes none.  An FMU
-    whose initialisation fails here is built without the file, with a warning (it then
-    computes its designs when it starts, or refuses as it did here)."""
-    folder = tmp / "precompute"
-    folder.mkdir()
-    for item in map(Path, resources):
-        (shutil.copytree if item.is_dir() else shutil.copy2)(item, folder / item.name)
+def precompute(module: str, model: str, resources: Path, path: Path) -> Path | None:
+    """Write to ``path`` the designs file (:mod:`fmus.designs`) of the FMU of slave ``module``
+    (class ``model``) whose resources are the folder ``resources``: what its initialisation
+    computes with its parameters as built (its start values, ``start_values.json`` if there),
+    found by initialising it here; return ``path``, or None when it computes none.  An FMU
+    whose initialisation fails here gets no file, with a warning (it then computes its designs
+    when it starts, or refuses as it did here)."""
     slave_class = getattr(importlib.import_module(f"fmus.slaves.{module}"), model)
     with designs.recording() as recorded:
-        slave = slave_class(instance_name=model, resources=str(folder))
+        slave = slave_class(instance_name=model, resources=str(resources))
         slave.setup_experiment(0.0)
         slave.enter_initialization_mode()
         slave.exit_initialization_mode()
         found = recorded()
     if slave.error:
-        warnings.warn(f"{model}: its designs are not computed ahead, its initialisation with the parameters "
-                      f"as built failed: {slave.error}", stacklevel=3)
-        return []
+        warnings.warn(f"{model}: its designs are not computed ahead, its initialisation here with its start values "
+                      f"failed: {slave.error}", stacklevel=3)
+        return None
     if not found:
-        return []
-    path = tmp / designs.DESIGNS_FILE
+        return None
     designs.write(found, path)
-    return [path]
+    return path
 
 
 class ForeignFmuError(ValueError):

@@ -42,23 +42,33 @@ def _module(name: str):
 
 
 @contextmanager
-def recording():
-    """Within: every design the model modules compute or load is kept, starting from none
-    (so each is computed, not taken from an earlier FMU's).  Yields a function returning
-    the designs kept so far, ``{module: {key: design}}``; afterwards the dicts are as
-    before."""
+def isolated():
+    """Within: the model modules' designs may be changed (loaded, recorded); afterwards they
+    are as before.  Yields the modules, ``{name: module}``.  The build uses it around what
+    instantiates the repository's slaves with an FMU's resources (pythonfmu's reading of
+    the model description loads them), so the process keeps computing its own designs."""
     modules = {name: _module(name) for name in MODULES}
     saved = {name: (dict(m.PRECOMPUTED), m.RECORDING) for name, m in modules.items()}
-    for m in modules.values():
-        m.PRECOMPUTED.clear()
-        m.RECORDING = True
     try:
-        yield lambda: {name: dict(m.PRECOMPUTED) for name, m in modules.items() if m.PRECOMPUTED}
+        yield modules
     finally:
         for name, m in modules.items():
             m.PRECOMPUTED.clear()
             m.PRECOMPUTED.update(saved[name][0])
             m.RECORDING = saved[name][1]
+
+
+@contextmanager
+def recording():
+    """Within: every design the model modules compute or load is kept, starting from none
+    (so each is computed, not taken from an earlier FMU's).  Yields a function returning
+    the designs kept so far, ``{module: {key: design}}``; afterwards the dicts are as
+    before (:func:`isolated`)."""
+    with isolated() as modules:
+        for m in modules.values():
+            m.PRECOMPUTED.clear()
+            m.RECORDING = True
+        yield lambda: {name: dict(m.PRECOMPUTED) for name, m in modules.items() if m.PRECOMPUTED}
 
 
 def write(designs: dict, path) -> None:

@@ -71,10 +71,14 @@ def closed_loop(tmp_path_factory):
 @pytest.fixture(scope="module")
 def fresh_runs(built_fmus, closed_loop, tmp_path_factory):
     """One fresh process that runs, in turn, the FMUs whose initialisation computes designs
-    (and the plant), then the drive with another resistance and the controller with
-    another grid: {spec: line}."""
+    (and the plant), a copy of the drive with motor 2 baked in (as an SSP package's), then the
+    drive with another resistance and the controller with another grid: {spec: line}."""
+    from fmus.export import with_start_values
+
+    baked = with_start_values(built_fmus["DCMotorDrive"], {"preset": "motor2"},
+                              tmp_path_factory.mktemp("baked") / "BakedDrive.fmu")
     specs = [built_fmus["FiveBarPlant"], built_fmus["Derivator"], built_fmus["DCMotorDrive"],
-             built_fmus["PositionController"], closed_loop,
+             built_fmus["PositionController"], closed_loop, baked,
              f"{built_fmus['DCMotorDrive']}|R=1.5", f"{built_fmus['PositionController']}|grid_step=0.006"]
     return {Path(line["fmu"].split("|")[0]).stem + line["fmu"].partition("|")[2]: line
             for line in _run_fresh(specs, tmp_path_factory.mktemp("fresh"))}
@@ -86,8 +90,9 @@ def fresh_runs(built_fmus, closed_loop, tmp_path_factory):
 def test_an_fmu_started_as_built_does_not_import(fresh_runs, package):
     """Catches an eager import put back: a package ``__init__`` that imports every module, a
     module-level ``import control``, a slave that imports a model it does not run, or an FMU
-    whose designs are not in its resources (computed at its start)."""
-    for name in ("FiveBarPlant", "Derivator", "DCMotorDrive", "PositionController", "ClosedLoop"):
+    whose designs are not in its resources (computed at its start; for the baked copy: the
+    designs of its start values, not only the defaults')."""
+    for name in ("FiveBarPlant", "Derivator", "DCMotorDrive", "PositionController", "ClosedLoop", "BakedDrive"):
         assert package not in fresh_runs[name]["heavy"], f"{name} imported {package}"
 
 
@@ -132,3 +137,13 @@ def test_designs_travel_bit_for_bit(tmp_path):
     np.testing.assert_array_equal(velocity, computed[1])
     np.testing.assert_array_equal(acceleration, computed[2])
     np.testing.assert_array_equal(table, computed[3])
+
+
+def test_a_build_leaves_the_process_computing_its_own_designs(closed_loop):
+    """Building an FMU instantiates our slaves here with its resources (to find its designs,
+    and in pythonfmu's reading of the model description): the designs it loads or records
+    must not stay in this process's modules (catches a design served from a build, without
+    its transfer functions, to code that asked to compute it)."""
+    from motor import current_controller, motor1
+
+    assert current_controller.design_current_controller(motor1).plant is not None
