@@ -107,8 +107,7 @@ CONTROLLERS = (   # (label, strategy, model, kernel)
     ("TCx exact", "TCx", "exact", "fast"),
     ("TCq exact", "TCq", "exact", "fast"),
 )
-REFERENCE_ONLY = (   # in-process only: the readable Python reference and the general algorithm
-    ("TCx tabulated, Python reference", "TCx", "tabulated", "python"),
+REFERENCE_ONLY = (   # in-process only: the exact model by the general algorithm
     ("TCx exact, general algorithm", "TCx", "exact", "general"),
 )
 

@@ -29,8 +29,10 @@ from dataclasses import dataclass, field
 import control   # at import (an FMU's instantiation), not in the design: importing it takes 1-7 s
 import numpy as np
 
+import kernels
 from controller import fastbalance
-from controller.trajectories import SMOOTHSTEP_COEFFICIENTS, SMOOTHSTEP_SLOPE_COEFFICIENTS, smoothstep
+from controller.trajectories import SMOOTHSTEP_COEFFICIENTS, SMOOTHSTEP_SLOPE_COEFFICIENTS
+from plant.wheeled_kernel import bound
 
 #: Bryson's rule: the largest acceptable excursion of each state, (theta [rad], psi [rad],
 #: phi [rad], theta' [rad/s], psi' [rad/s], phi' [rad/s]); Q = diag(1/scale^2).
@@ -192,24 +194,6 @@ class Route:
     drive: tuple = (0.5, 5.5)
     turning: tuple = (6.0, 8.0)
 
-    def sample(self, t: float, R: float):
-        """(theta_d, phi_d, theta_d', phi_d', x_d, y_d) at time t for wheel radius R."""
-        s, ds = _smooth(t, self.drive)
-        a, da = _smooth(t, self.turning)
-        return (self.distance * s / R, self.turn * a, self.distance * ds / R, self.turn * da,
-                self.distance * s, 0.0)
-
-
-def _smooth(t, window):
-    start, end = window
-    if t <= start:
-        return 0.0, 0.0
-    if t >= end:
-        return 1.0, 0.0
-    tau = (t - start) / (end - start)
-    s, ds = smoothstep(tau)
-    return s, ds / (end - start)
-
 
 def get_route(name: str) -> Route:
     """``"hold"`` (stay at the origin) or ``"forward_turn"`` (1 m forward, then 90 degrees left)."""
@@ -220,11 +204,25 @@ def get_route(name: str) -> Route:
     raise ValueError(f"route = {name!r}; valid: {', '.join(ROUTES)}")
 
 
+#: The C sample's refusal codes -> their record and message.
+REASONS = {
+    fastbalance.BAD_INPUT: kernels.Reason("input_not_finite", fastbalance.INPUTS, "",
+                                          "input {variable} = {value!r} at t = {time:.6g} s is not finite"),
+    fastbalance.INPUT_LIMIT: kernels.Reason("input_absurd", fastbalance.INPUTS, "",
+                                            "input {variable} = {value!r} at t = {time:.6g} s is absurd: "
+                                            "|{variable}| must be <= {limit:g}"),
+    fastbalance.BAD_BUFFER: kernels.Reason("bad_buffer", fastbalance.WORD_NAMES, "",
+                                           "the balance controller's buffer word {variable} = {value!r} at "
+                                           "t = {time:.6g} s is not a size or state index its arrays have"),
+}
+
+
 class BalanceController:
     """The sampled controller: observer, LQR, saturation (see the module docstring).
 
-    Each sample is :func:`controller.fastbalance.balance_io` on :attr:`buf` (the arithmetic the
-    FMU and the compiled loop run too); :attr:`io` holds the last sample's inputs and outputs.
+    Each sample is the C ``pc_balance_sample`` on :attr:`buf` (:mod:`controller.fastbalance`:
+    the arithmetic the FMU and the compiled loop run too); :attr:`io` holds the last sample's
+    inputs and outputs.
 
     Parameters
     ----------
@@ -247,7 +245,6 @@ class BalanceController:
         self.buf = fastbalance.pack(design, route, R, W, self.torque_per_volt, SMOOTHSTEP_COEFFICIENTS,
                                     SMOOTHSTEP_SLOPE_COEFFICIENTS)
         self.io = np.zeros(fastbalance.IO_SIZE)
-        fastbalance.balance_io(self.buf.copy(), self.io.copy(), 0.0, math.inf)   # compile now, not in a step
 
     @property
     def x_hat(self):
@@ -262,13 +259,21 @@ class BalanceController:
         return self.buf[fastbalance.B_U:fastbalance.B_U + 2].copy()
 
     def sample(self, t: float, enc_l: float, enc_r: float, gyro: float):
-        """Read the sensors at time t; return the saturated voltages (v_l, v_r) held over the sample."""
-        for name, value in (("enc_l", enc_l), ("enc_r", enc_r), ("gyro", gyro)):
-            if not math.isfinite(value):
-                raise ValueError(f"input {name} = {value!r} at t = {t:.6g} s is not finite")
-        self.io[:3] = enc_l, enc_r, gyro
-        fastbalance.balance_io(self.buf, self.io, float(t), math.inf)
-        return float(self.io[fastbalance.O_V]), float(self.io[fastbalance.O_V + 1])
+        """Read the sensors at time t; return the saturated voltages (v_l, v_r) held over the sample.
+
+        Raises
+        ------
+        kernels.Refused
+            An input that is not finite (named, with the time), or a buffer word out of range.
+        """
+        b = bound(self, (self.buf, self.io))
+        io = self.io
+        io[0], io[1], io[2] = enc_l, enc_r, gyro
+        buf, x = b.addresses
+        code = fastbalance.c_sample(buf, x, t, math.inf, b.refusal_address)
+        if code != fastbalance.OK:
+            raise kernels.refused(REASONS, b.refusal, t, limit=math.inf)
+        return float(io[fastbalance.O_V]), float(io[fastbalance.O_V + 1])
 
     def ideal_torques(self) -> tuple:
         """(K_t/R_m) (v_l, v_r): the wheel torques of ideal drives for the last voltages [N m]."""

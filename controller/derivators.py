@@ -30,7 +30,8 @@ bilinear rather than zero-order-hold or matched poles:
 The filters are stored as second-order sections; for stepping, the whole chain
 (difference, F_v, difference, F_a) is assembled once into one discrete state-space
 model built section by section (no high-order polynomial is ever formed), so that
-a step costs one small matrix product (about 3 us for two channels).
+a step costs one small matrix product, the C kernel ``pc_derivator_step``
+(``kernels/src/derivator.c``).
 
 Exactness
 ---------
@@ -77,10 +78,13 @@ noise is 1.5 rad/s^2 rms (< phi/10; 50 Hz gives 2.4), for a lag of
 1 Hz of the thesis' circle).
 """
 
-import copy
+import ctypes
 import math
+import weakref
 
 import numpy as np
+
+import kernels
 
 from . import fastderivator
 
@@ -210,8 +214,8 @@ class Derivator:
     """
 
     #: Kernel buffers -> the function giving the words a run changes; a restored FMU state may
-    #: not change the others (:mod:`fmus.fmustate`).  The step matrix's view is all configuration.
-    KERNEL_BUFFERS = {"buf": fastderivator.run_state_words, "_matrix": lambda matrix: ()}
+    #: not change the others (:mod:`fmus.fmustate`).
+    KERNEL_BUFFERS = {"buf": fastderivator.run_state_words}
 
     def __init__(self, fc_vel=DEFAULT_FC_VEL, fc_acc=DEFAULT_FC_ACC, T=SAMPLE_TIME):
         self.fc_vel, self.fc_acc, self.T = float(fc_vel), float(fc_acc), float(T)
@@ -226,22 +230,10 @@ class Derivator:
         c_vel = np.zeros_like(c_acc)
         c_vel[:, : velocity_chain[0].shape[0]] = velocity_chain[2]
         # One product per step: [dq; ddq; next state] = [[C, D], [A, B]] @ [state; q]
-        # (controller.fastderivator, which holds it with the state in one array).
+        # (kernels/src/derivator.c, which holds it with the state in one array).
         self._step_matrix = np.block([[c_vel, velocity_chain[3]], [c_acc, d_acc], [a, b]])
         self._rest_state_per_unit_angle = np.linalg.solve(np.eye(a.shape[0]) - a, b)
         self.buf = None
-
-    def __deepcopy__(self, memo):
-        """A copy whose ``_matrix`` and ``_state`` are views of its own ``buf``, as here (numpy
-        copies a view as a separate array: a restored FMU state would step ``_state`` while
-        ``buf``, which the compiled loop reads, stood still)."""
-        twin = object.__new__(type(self))
-        memo[id(self)] = twin
-        twin.__dict__.update({name: copy.deepcopy(value, memo) for name, value in vars(self).items()
-                              if name not in ("_matrix", "_state")})
-        if twin.buf is not None:
-            twin._matrix, twin._state = fastderivator.views(twin.buf)
-        return twin
 
     def reset(self, q0):
         """Start at rest at the angles ``q0`` (one per channel): both estimates are zero.
@@ -258,22 +250,18 @@ class Derivator:
     def start_at_first_sample(self, channels):
         """Start at rest at the angles of the first :meth:`step` (``channels`` of them)."""
         self.buf = fastderivator.pack(self._step_matrix, self._rest_state_per_unit_angle, int(channels))
-        self._matrix, self._state = fastderivator.views(self.buf)
 
     def _rest_at(self, q0):
-        """At rest at q0 (as :func:`controller.fastderivator.reset`)."""
-        self._state[:-1] = self._rest_state_per_unit_angle * q0[None, :]
-        self._state[-1] = q0
-        self.buf[fastderivator.V_STARTED] = 1.0
+        """At rest at q0 (``pc_derivator_reset``)."""
+        call, angles = _call(self), np.ascontiguousarray(q0, dtype=float)
+        if _RESET(call.context, kernels.address(angles), call.refusal) != 0:
+            raise kernels.refused(_REASONS, call.refusal, angles=q0.tolist(), limit=math.inf, words=call.buf.size)
 
     def step(self, q, limit=math.inf):
         """Take the angles of the current sample and return the estimates.
 
-        The product of :func:`controller.fastderivator.derivator_step` (which the compiled
-        loop runs on the same array) in numpy: the same BLAS call, the same bits.  Numpy
-        here, not the kernel: a Derivator FMU would compile the kernel's ``np.dot`` in its
-        first call (over 20 s in a fresh process on a loaded machine), where an FMI call's
-        work is held to about a second (``fmus.budget``).
+        One call of the C kernel ``pc_derivator_step`` on :attr:`buf` (the array the FMU
+        state saves and the compiled loop reads).
 
         Parameters
         ----------
@@ -290,22 +278,20 @@ class Derivator:
 
         Raises
         ------
-        ValueError
-            An angle not finite or beyond ``limit`` (the state is not advanced).
+        kernels.Refused
+            (a ValueError) An angle not finite or beyond ``limit``, or a buffer whose sizes do
+            not fit it; the state is not advanced.
         """
         if self.buf is None:
             raise RuntimeError("Derivator.step called before reset(q0)")
-        q = np.asarray(q, dtype=float)
-        # Checked on Python floats: numpy's reductions cost more than the product for 2 angles.
-        if not all(math.isfinite(v) and abs(v) <= limit for v in q.tolist()):
-            raise ValueError(f"angles q = {q.tolist()!r} rad must be finite with |q| <= {limit:g}")
-        if self.buf[fastderivator.V_STARTED] == 0.0:
-            self._rest_at(q)
-        self._state[-1] = q
-        outputs = np.dot(self._matrix, self._state)   # np.dot: the BLAS call of `@`, less overhead
-        if all(map(math.isfinite, outputs[:2].ravel().tolist())):
-            self._state[:-1] = outputs[2:]
-        return outputs[0], outputs[1]
+        call = _call(self)
+        if call.scratch.size:       # else the buffer is damaged: refused before q is read
+            call.q[:] = q
+        code = _STEP(call.context, call.q_address, limit, call.out_address, call.refusal)
+        if code not in (fastderivator.OK, fastderivator.NONFINITE_OUTPUT):
+            raise kernels.refused(_REASONS, call.refusal, angles=call.q.tolist(), limit=limit, words=call.buf.size)
+        m = call.q.size
+        return call.out[:m].copy(), call.out[m:].copy()
 
     def frequency_response(self, f):
         """Frequency responses of the velocity and acceleration estimates.
@@ -329,3 +315,67 @@ class Derivator:
         _, acceleration_filter = signal.sosfreqz(self.acceleration_sos, worN=omega)
         velocity = difference * velocity_filter
         return velocity, difference * acceleration_filter * velocity
+
+
+# --- the C kernel -------------------------------------------------------------------------------
+
+class _Context(ctypes.Structure):
+    """``pc_derivator_context``."""
+
+    _fields_ = [("derivator", ctypes.c_void_p), ("scratch", ctypes.c_void_p), ("words", ctypes.c_long),
+                ("scratch_words", ctypes.c_long), ("limit", ctypes.c_double)]
+
+
+_CONTEXT_P, _REFUSAL_P = ctypes.POINTER(_Context), ctypes.POINTER(kernels.Refusal)
+_STEP = kernels.function("pc_derivator_step", ctypes.c_int, _CONTEXT_P, ctypes.c_void_p, ctypes.c_double,
+                         ctypes.c_void_p, _REFUSAL_P)
+_RESET = kernels.function("pc_derivator_reset", ctypes.c_int, _CONTEXT_P, ctypes.c_void_p, _REFUSAL_P)
+_SCRATCH_WORDS = kernels.function("pc_derivator_scratch_words", ctypes.c_long, ctypes.c_void_p, ctypes.c_long)
+_LAYOUT_WORDS = ("states", "channels", "length", "scratch length")
+_REASONS = {
+    fastderivator.BAD_INPUT: kernels.Reason("bad_input", ("q1", "q2"), "rad",
+                                            "angles q = {angles!r} rad must be finite with |q| <= {limit:g}"),
+    fastderivator.BAD_LAYOUT: kernels.Reason(
+        "bad_layout", _LAYOUT_WORDS, "",
+        "the derivator's buffer of {words} words is damaged: {variable} = {value!r} does not fit it"),
+}
+
+
+class _Call:
+    """What a :class:`Derivator`'s kernel calls need besides its buffer: the context (the
+    buffers' addresses), the input, output and scratch arrays and the refusal record.  Kept
+    out of the Derivator (whose attributes are its FMU state), in :data:`_CALLS`."""
+
+    __slots__ = ("buf", "q", "out", "scratch", "context", "refusal", "q_address", "out_address")
+
+    def __init__(self, buf):
+        # Sized by the kernel's own check of the buffer: none for sizes that do not fit it
+        # (a damaged buffer, which every kernel call then refuses).
+        self.scratch = np.zeros(_SCRATCH_WORDS(kernels.address(buf), buf.size))
+        channels = int(buf[fastderivator.V_CHANNELS]) if self.scratch.size else 1
+        self.buf, self.q, self.out = buf, np.zeros(channels), np.zeros(2 * channels)
+        self.context = _Context(kernels.address(buf), kernels.address(self.scratch), buf.size, self.scratch.size,
+                                math.inf)
+        self.refusal = kernels.Refusal()
+        self.q_address, self.out_address = kernels.address(self.q), kernels.address(self.out)
+
+
+def kernel_context(derivator, limit: float) -> _Context:
+    """A ``pc_derivator_context`` over ``derivator.buf`` (started or not) with its own scratch
+    and ``limit`` [rad], for ``pc_derivator_io`` in the compiled loop; the caller keeps it alive
+    (it keeps its scratch)."""
+    call = _Call(derivator.buf)
+    call.context.limit = limit
+    call.context.keep = call
+    return call.context
+
+
+#: Derivator -> its :class:`_Call`, rebuilt when its buffer is another array (a restored state).
+_CALLS = weakref.WeakKeyDictionary()
+
+
+def _call(derivator) -> _Call:
+    call = _CALLS.get(derivator)
+    if call is None or call.buf is not derivator.buf:
+        call = _CALLS[derivator] = _Call(derivator.buf)
+    return call

@@ -1,89 +1,34 @@
-"""Compiled evaluation of the reference trajectories (thesis 7.18, 7.23-7.27).
+"""The reference trajectories' buffers (thesis 7.18, 7.23-7.27): their layout, read from the C
+kernel.
 
-:mod:`controller.trajectories` defines the trajectories as frozen objects; each packs itself
-into one float64 array (layout below) and is evaluated by :func:`sample`, which the
-trajectory objects, their FMU slave and the compiled scene loop (:mod:`fmus.compiled`)
-share.  Every expression is written in the order of the Python it replaced (bit-identical
-results, ``tests/test_trajectories.py``).
-
-This module calls no compiled function of another file, so numba's on-disk cache
-(``cache=True``, invalidated by this file's modification time only) cannot go stale.
+The evaluation is the C kernel ``pc_trajectory_sample`` (``kernels/src/trajectory.c``), which
+:mod:`controller.trajectories`, the Trajectory FMU slave and the compiled scene loop
+(``pc_trajectory_io``) call on the array each trajectory packs itself into: the struct of its
+kind (``pc_trajectory_circle``, ``_polygon``, ``_hold`` in ``kernels/src/trajectory.h``), whose
+offsets come from the exported field lists.
 """
 from __future__ import annotations
 
-import math
-
-from numba import njit
+import kernels
 
 OK = 0
 #: t < 0 or not a number.
 BAD_TIME = 1
+#: An unknown kind, or sizes that do not fit the buffer.
+BAD_LAYOUT = 2
 
 KIND_CIRCLE, KIND_POLYGON, KIND_HOLD = 0.0, 1.0, 2.0
-# --- layout ----------------------------------------------------------------------------------
-T_KIND = 0
+CIRCLE = kernels.layout("pc_trajectory_circle_fields")
+POLYGON = kernels.layout("pc_trajectory_polygon_fields")
+HOLD = kernels.layout("pc_trajectory_hold_fields")
+T_KIND = CIRCLE["kind"].start
 #: Circle: centre, radius, initial angle, angular velocity, duration, stops (1.0 or 0.0).
-T_CX, T_CY, T_RADIUS, T_PHI0, T_OMEGA, T_DURATION, T_STOPS = 1, 2, 3, 4, 5, 6, 7
+T_CX, T_CY, T_RADIUS, T_PHI0, T_OMEGA, T_DURATION, T_STOPS = (
+    CIRCLE[name].start for name in ("cx", "cy", "radius", "phi0", "omega", "duration", "stops"))
 #: Polygon: time per side, cycles, vertices n, then the position, velocity, acceleration
 #: polynomials of (7.27) in ascending powers (8, 7, 6 coefficients), then the n vertices (x, y).
-T_SIDE_TIME, T_CYCLES, T_VERTICES = 1, 2, 3
-T_POSITION, T_VELOCITY, T_ACCELERATION, T_POINTS = 4, 12, 19, 25
+T_SIDE_TIME, T_CYCLES, T_VERTICES, T_POSITION, T_VELOCITY, T_ACCELERATION, T_POINTS = (
+    POLYGON[name].start for name in ("side_time", "cycles", "vertices", "position", "velocity", "acceleration",
+                                     "points"))
 #: Hold: the point.
-T_HOLD_X, T_HOLD_Y = 1, 2
-
-
-@njit(cache=True)
-def _polynomial(buf, first, count, tau):
-    """Horner evaluation of buf[first:first + count], ascending powers."""
-    value = 0.0
-    for k in range(count - 1, -1, -1):
-        value = value * tau + buf[first + k]
-    return value
-
-
-@njit(cache=True)
-def sample(buf, t):
-    """(status, x, y, dx, dy, ddx, ddy): the reference at time t [s]."""
-    if not t >= 0.0:
-        return BAD_TIME, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    kind = buf[T_KIND]
-    if kind == KIND_HOLD:
-        return OK, buf[T_HOLD_X], buf[T_HOLD_Y], 0.0, 0.0, 0.0, 0.0
-    if kind == KIND_CIRCLE:
-        moving = not (buf[T_STOPS] != 0.0 and t >= buf[T_DURATION])
-        w = buf[T_OMEGA]
-        angle = buf[T_PHI0] + w * (t if moving else buf[T_DURATION])
-        cosine, sine = math.cos(angle), math.sin(angle)
-        r = buf[T_RADIUS]
-        x = buf[T_CX] + r * cosine
-        y = buf[T_CY] + r * sine
-        if not moving:
-            return OK, x, y, 0.0, 0.0, 0.0, 0.0
-        speed = r * w
-        centripetal = r * w ** 2
-        return OK, x, y, -speed * sine, speed * cosine, -centripetal * cosine, -centripetal * sine
-    n = int(buf[T_VERTICES])
-    side_time = buf[T_SIDE_TIME]
-    sides = int(buf[T_CYCLES]) * n
-    if t >= sides * side_time:
-        return OK, buf[T_POINTS], buf[T_POINTS + 1], 0.0, 0.0, 0.0, 0.0
-    side = min(int(math.floor(t / side_time)), sides - 1)
-    tau = t / side_time - side
-    i0 = T_POINTS + 2 * (side % n)
-    i1 = T_POINTS + 2 * ((side + 1) % n)
-    x0, y0 = buf[i0], buf[i0 + 1]
-    position = _polynomial(buf, T_POSITION, 8, tau)
-    velocity = _polynomial(buf, T_VELOCITY, 7, tau) / side_time
-    acceleration = _polynomial(buf, T_ACCELERATION, 6, tau) / side_time ** 2
-    dx, dy = buf[i1] - x0, buf[i1 + 1] - y0
-    return (OK, x0 + dx * position, y0 + dy * position, dx * velocity, dy * velocity,
-            dx * acceleration, dy * acceleration)
-
-
-@njit(cache=True)
-def trajectory_io(buf, x, t, h):
-    """Trajectory: x = [x_d, y_d, dx_d, dy_d, ddx_d, ddy_d], the reference at t + h."""
-    status, a, b, c, d, e, f = sample(buf, t + h)
-    if status == OK:
-        x[0], x[1], x[2], x[3], x[4], x[5] = a, b, c, d, e, f
-    return status
+T_HOLD_X, T_HOLD_Y = HOLD["x"].start, HOLD["y"].start

@@ -15,7 +15,7 @@ three evaluations at dx = (1, 0), (0, 1), (1, 1):
 (:func:`plant.fast5r.inverse_terms`, default, a few µs) or the general numpy algorithm
 (``kernel="general"``, ~2 ms; the reference).  :class:`TabulatedModel` stores H (3 entries),
 the six quadratic coefficients and g on a square grid (default 5 mm, thesis 7.2.5) and
-interpolates bilinearly (a few µs; compiled into the law by :mod:`controller.fastlaw`).
+interpolates bilinearly (the C kernel's ``pc_law_interpolate``, which the law uses too).
 Grid points outside the workspace or in the near-singular band
 (margin < :data:`plant.fivebar.NEAR_SINGULAR_MARGIN`) are left out; asking for a point
 whose cell has a missing corner raises :class:`ModelRangeError`.
@@ -46,10 +46,11 @@ from plant.fast5r import INVERSE_SIZE, inverse_terms, pack_params
 from plant.parallel import inverse_dynamics_terms
 from plant.presets import FiveBarParams
 
+from . import law
 from .kinematics import Kinematics
 
 #: Entries of one table row: H00, H01, H11, cxx(2), cyy(2), cxy(2), g(2).
-N_TERMS = 11
+N_TERMS = law.N_TERMS
 DEFAULT_GRID_STEP = 0.005
 #: Default tabulated region (x_min, x_max, y_min, y_max), m: covers the bench and simulation
 #: trajectories (thesis 7.18, 7.23-7.26) with margin; pass ``extent="workspace"`` for all of
@@ -122,10 +123,7 @@ class ExactModel:
 
     def full_state(self, x, y, dx, dy):
         """Consistent thesis coordinates q (7.12) and dq = C dq# (5.56) for (x, y, dx, dy)."""
-        angles = self.kin.inverse(x, y)
-        p11, p12, p21, p22 = angles
-        q = np.array([x, y, 0.0, p11, p12 - p11, math.pi - p21, p21 - p22])
-        return q, np.array(self.kin.thesis_rates(x, y, angles, dx, dy))
+        return self.kin.thesis_state(x, y, dx, dy)
 
     def terms(self, x, y, dx, dy):
         """(H00, H01, H11, h0, h1) at (x, y, dx, dy); also keeps Z of (5.72) in ``last_Z``."""
@@ -274,6 +272,8 @@ class TabulatedModel:
     """
 
     kind = "tabulated"
+    #: The kernel's table is configuration: a restored FMU state may not change a word of it.
+    KERNEL_BUFFERS = {"kernel_table": lambda buf: ()}
 
     def __init__(self, params: FiveBarParams, step=DEFAULT_GRID_STEP, extent=DEFAULT_EXTENT,
                  cache=True, band=fivebar.NEAR_SINGULAR_MARGIN):
@@ -306,13 +306,13 @@ class TabulatedModel:
                     _save_table(path, xs, ys, table)
             if RECORDING:
                 PRECOMPUTED[key] = (xs.copy(), ys.copy(), table.copy())
-        self.xs, self.ys, self.table = xs, ys, table
+        self.xs, self.ys = xs, ys
+        # The kernel's pc_law_table; ``table`` is its values' view (shape (ny, nx, N_TERMS)).
+        self.kernel_table = law.pack_table(float(xs[0]), float(ys[0]), self.step, table)
+        self.table = law.table_values(self.kernel_table, table.shape)
         valid = ~np.isnan(table[:, :, 0])
         self.valid = valid
         self.cell_ok = valid[:-1, :-1] & valid[1:, :-1] & valid[:-1, 1:] & valid[1:, 1:]
-        self._x0, self._y0 = float(xs[0]), float(ys[0])
-        self._nx, self._ny = xs.size - 1, ys.size - 1
-        self._inv = 1.0 / self.step
 
     def interpolate(self, x, y):
         """The N_TERMS table values at (x, y), bilinear in the grid cell (7.2.5).
@@ -322,25 +322,19 @@ class TabulatedModel:
         ModelRangeError
             If (x, y) is outside the grid or a corner of its cell was left out.
         """
-        fx = (x - self._x0) * self._inv
-        fy = (y - self._y0) * self._inv
-        ix, iy = int(math.floor(fx)), int(math.floor(fy))
-        if ix == self._nx and fx - ix < 1e-9:
-            ix -= 1
-        if iy == self._ny and fy - iy < 1e-9:
-            iy -= 1
-        if not (0 <= ix < self._nx and 0 <= iy < self._ny):
-            raise ModelRangeError(
-                f"point (x={x:.6g}, y={y:.6g}) m is outside the tabulated region "
-                f"x in [{self.extent[0]:g}, {self.extent[1]:g}], y in [{self.extent[2]:g}, {self.extent[3]:g}] m")
-        if not self.cell_ok[iy, ix]:
-            raise ModelRangeError(
-                f"point (x={x:.6g}, y={y:.6g}) m needs a grid point left out of the table "
+        out = np.empty(N_TERMS)
+        code, _ = law.interpolate(self.kernel_table, x, y, out)
+        if code != law.OK:
+            raise ModelRangeError(self.refusal_text(code, x, y))
+        return out
+
+    def refusal_text(self, code, x, y) -> str:
+        """Why the table has no value at (x, y) (``code``: law.TABLE_OUT or law.TABLE_HOLE)."""
+        if code == law.TABLE_OUT:
+            return (f"point (x={x:.6g}, y={y:.6g}) m is outside the tabulated region "
+                    f"x in [{self.extent[0]:g}, {self.extent[1]:g}], y in [{self.extent[2]:g}, {self.extent[3]:g}] m")
+        return (f"point (x={x:.6g}, y={y:.6g}) m needs a grid point left out of the table "
                 f"(outside the workspace or near-singular)")
-        wx, wy = fx - ix, fy - iy
-        c = self.table[iy:iy + 2, ix:ix + 2]
-        return ((1.0 - wy) * ((1.0 - wx) * c[0, 0] + wx * c[0, 1])
-                + wy * ((1.0 - wx) * c[1, 0] + wx * c[1, 1]))
 
     def terms(self, x, y, dx, dy):
         """(H00, H01, H11, h0, h1) at (x, y, dx, dy) from the interpolated table."""

@@ -11,16 +11,20 @@ returning a :class:`ReferenceSample` ``(x, y, dx, dy, ddx, ddy)`` in the world f
   at least this long.
 
 Kinds (:func:`get_trajectory`): ``thesis_circle``, ``circle``, ``triangle``, ``hold``.
-Evaluation is one compiled call (:func:`controller.fasttrajectory.sample`) on the array each
-trajectory packs itself into (``buf``).
+Evaluation is one call of the C kernel ``pc_trajectory_sample`` (``kernels/src/trajectory.c``)
+on the array each trajectory packs itself into (``buf``).
 """
 
+import ctypes
 import math
+import weakref
 from dataclasses import dataclass
 from functools import cached_property
 from typing import NamedTuple
 
 import numpy as np
+
+import kernels
 
 from . import fasttrajectory as _fast
 
@@ -59,12 +63,53 @@ class ReferenceSample(NamedTuple):
     ddy: float
 
 
-def _evaluate(buf, t):
-    """The :class:`ReferenceSample` of the packed trajectory ``buf`` at ``t`` (s)."""
-    status, *values = _fast.sample(buf, float(t))
-    if status != _fast.OK:
-        raise ValueError(f"trajectory time must be >= 0 s, got {t}")
-    return ReferenceSample(*values)
+_SAMPLE = kernels.function("pc_trajectory_sample", ctypes.c_int, ctypes.c_void_p, ctypes.c_long, ctypes.c_double,
+                           ctypes.POINTER(ctypes.c_double), ctypes.POINTER(kernels.Refusal))
+_SAMPLE_VALUES = ctypes.c_double * len(ReferenceSample._fields)
+_REASONS = {
+    _fast.BAD_TIME: kernels.Reason("bad_time", ("t",), "s", "trajectory time must be >= 0 s, got {value}"),
+    _fast.BAD_LAYOUT: kernels.Reason("bad_layout", (), "",
+                                     "the trajectory's buffer is damaged: word {index} = {value!r} does not fit it"),
+}
+
+
+#: id(trajectory) -> (its buffer, the buffer's address), while the trajectory lives: kept out
+#: of the frozen trajectory, whose fields are its FMU state and configuration.
+_ADDRESSES = {}
+
+
+def _address(trajectory, buf) -> int:
+    known = _ADDRESSES.get(id(trajectory))
+    if known is not None and known[0] is buf:
+        return known[1]
+    if known is None:
+        weakref.finalize(trajectory, _ADDRESSES.pop, id(trajectory), None)
+    _ADDRESSES[id(trajectory)] = (buf, kernels.address(buf))
+    return _ADDRESSES[id(trajectory)][1]
+
+
+class _Context(ctypes.Structure):
+    """``pc_trajectory_context``."""
+
+    _fields_ = [("trajectory", ctypes.c_void_p), ("words", ctypes.c_long)]
+
+
+def kernel_context(trajectory) -> _Context:
+    """The ``pc_trajectory_context`` of ``trajectory``'s buffer, for ``pc_trajectory_io`` in
+    the compiled loop; the caller keeps it alive (it keeps the buffer)."""
+    buf = trajectory.buf
+    context = _Context(kernels.address(buf), buf.size)
+    context.keep = buf
+    return context
+
+
+def _evaluate(trajectory, t):
+    """The :class:`ReferenceSample` of ``trajectory`` at ``t`` (s)."""
+    buf = trajectory.buf
+    values, refusal = _SAMPLE_VALUES(), kernels.Refusal()
+    if _SAMPLE(_address(trajectory, buf), buf.size, t, values, refusal) != _fast.OK:
+        raise kernels.refused(_REASONS, refusal, time=float(t), index=refusal.index)
+    return ReferenceSample(*values[:])
 
 
 @dataclass(frozen=True)
@@ -101,7 +146,7 @@ class CircleTrajectory:
 
     @cached_property
     def buf(self):
-        """This trajectory packed for :func:`controller.fasttrajectory.sample`."""
+        """This trajectory packed for ``pc_trajectory_sample``."""
         buf = np.zeros(_fast.T_STOPS + 1)
         buf[_fast.T_KIND] = _fast.KIND_CIRCLE
         buf[_fast.T_CX:_fast.T_CY + 1] = self.center
@@ -111,7 +156,7 @@ class CircleTrajectory:
 
     def __call__(self, t):
         """Reference at time ``t`` (s), a :class:`ReferenceSample`."""
-        return _evaluate(self.buf, t)
+        return _evaluate(self, t)
 
 
 @dataclass(frozen=True)
@@ -148,7 +193,7 @@ class PolygonTrajectory:
 
     @cached_property
     def buf(self):
-        """This trajectory packed for :func:`controller.fasttrajectory.sample`."""
+        """This trajectory packed for ``pc_trajectory_sample``."""
         points = np.asarray(self.vertices, dtype=float).ravel()
         buf = np.zeros(_fast.T_POINTS + points.size)
         buf[_fast.T_KIND] = _fast.KIND_POLYGON
@@ -161,7 +206,7 @@ class PolygonTrajectory:
 
     def __call__(self, t):
         """Reference at time ``t`` (s), a :class:`ReferenceSample`."""
-        return _evaluate(self.buf, t)
+        return _evaluate(self, t)
 
 
 @dataclass(frozen=True)
@@ -178,7 +223,7 @@ class HoldTrajectory:
 
     @cached_property
     def buf(self):
-        """This trajectory packed for :func:`controller.fasttrajectory.sample`."""
+        """This trajectory packed for ``pc_trajectory_sample``."""
         buf = np.zeros(_fast.T_HOLD_Y + 1)
         buf[_fast.T_KIND] = _fast.KIND_HOLD
         buf[_fast.T_HOLD_X:_fast.T_HOLD_Y + 1] = self.point
@@ -186,7 +231,7 @@ class HoldTrajectory:
 
     def __call__(self, t):
         """Reference at time ``t`` (s): the held point at rest."""
-        return _evaluate(self.buf, t)
+        return _evaluate(self, t)
 
 
 def thesis_circle(cycles=2):

@@ -9,13 +9,56 @@ change.
 """
 from __future__ import annotations
 
+import ctypes
+import importlib
+
 import numpy as np
 
-from controller import fastbalance
+import kernels
+from controller import derivators, fastbalance, law, trajectories
 from motor.friction import F_Z
-from plant import wheeled_kernel as kernel
+from plant import wheeled_kernel
+from plant.fast5r import inverse_terms
 
 from .compiled import Adapter, NotCompilable, register
+
+#: What the kernel module names of :class:`EmittedAdapter` (``"plant.fast5r"``) are relative to:
+#: "" here, the bundle's package inside an FMU (fmus/bundle.py).
+_PACKAGE_ROOT = __name__[:-len("fmus.adapters")]
+
+_IO_CALLBACK = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double, ctypes.c_double,
+                                ctypes.c_void_p)
+
+
+class EmittedAdapter(Adapter):
+    """Transitional: a model whose step is still a numba kernel, called from the C loop
+    through a ctypes callback running the source lines :meth:`emit` returns (the protocol
+    of the generated loop this module replaced).  Subclasses set ``modules`` (the kernel
+    modules the lines call, imported under their last name) and :attr:`arrays`."""
+
+    modules: tuple = ()
+
+    def emit(self, arrays: list, x: str, t: str, h: str) -> list:
+        raise NotImplementedError
+
+    def context(self):
+        names = [f"a{k}" for k in range(len(self.arrays))]
+        body = "\n".join("    " + line for line in self.emit(names, "x", "t", "h"))
+        namespace = {m.rpartition(".")[2]: importlib.import_module(_PACKAGE_ROOT + m) for m in self.modules}
+        exec(f"def io({', '.join(names + ['x', 't', 'h'])}):\n{body}\n    return st\n", namespace)
+        step, arrays, x = namespace["io"], self.arrays, self.x
+
+        def io(_context, _x, t, h, _refusal):
+            try:
+                return int(step(*arrays, x, t, h))
+            except Exception:   # noqa: BLE001 - the Python path reruns the step and raises it
+                return -1
+
+        self._callback = _IO_CALLBACK(io)
+        return ctypes.c_int(0)
+
+    def io_address(self) -> int:
+        return ctypes.cast(self._callback, ctypes.c_void_p).value
 from .refusals import ABSURD
 from .parts import PLANT_OUTPUTS
 
@@ -24,83 +67,64 @@ _PLANT_OUTPUTS = tuple(name for name, _ in PLANT_OUTPUTS)
 
 @register
 class TrajectoryAdapter(Adapter):
-    """:func:`controller.fasttrajectory.trajectory_io`: the reference at the step's end."""
+    """``pc_trajectory_io``: the reference at the step's end."""
 
     model = "Trajectory"
     outputs = ("x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d", "x_start", "y_start")
-    modules = ("controller.fasttrajectory",)
+    kernel = "pc_trajectory_io"
 
-    def __init__(self, name, slave, h):
-        super().__init__(name, slave, h)
-        self.arrays = [slave.trajectory.buf]
-
-    def emit(self, arrays, x, t, h):
-        return [f"st = fasttrajectory.trajectory_io({arrays[0]}, {x}, {t}, {h})"]
+    def context(self):
+        return trajectories.kernel_context(self.slave.trajectory)
 
 
 @register
 class DerivatorAdapter(Adapter):
-    """:func:`controller.fastderivator.derivator_io`, inputs limited to |q| <= ABSURD as the slave."""
+    """``pc_derivator_io``, inputs limited to |q| <= ABSURD as the slave."""
 
     model = "Derivator"
     inputs = ("q1", "q2")
     outputs = ("dq1", "dq2", "ddq1", "ddq2")
-    modules = ("controller.fastderivator",)
+    kernel = "pc_derivator_io"
 
-    def __init__(self, name, slave, h):
-        super().__init__(name, slave, h)
-        self.arrays = [slave.derivator.buf]
-
-    def emit(self, arrays, x, t, h):
-        return [f"st = fastderivator.derivator_io({arrays[0]}, {x}, {ABSURD!r})"]
+    def context(self):
+        return derivators.kernel_context(self.slave.derivator, ABSURD)
 
 
 @register
 class PositionControllerAdapter(Adapter):
-    """:func:`controller.fastlaw.law_io`; for the exact model :func:`controller.fastlaw.exact_state`,
-    :func:`plant.fast5r.inverse_terms` and :func:`controller.fastlaw.law_terms_io` (the calls of
-    ``PositionController._compiled_step``)."""
+    """``pc_law_io`` (kernels/src/law.c) on the controller's buffers, the commands through the
+    slave's delay queue.  The exact model's terms come from :func:`plant.fast5r.inverse_terms`
+    through a ctypes callback, the context's terms function (transitional: until the 5R's C
+    inverse terms are that function)."""
 
     model = "PositionController"
     inputs = ("q1", "q2", "dq1", "dq2", "ddq1", "ddq2", "x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
     outputs = ("tau1", "tau2", "i_ref1", "i_ref2", "e1", "e2")
-    modules = ("controller.fastlaw", "plant.fast5r")
+    kernel = "pc_law_io"
 
     def __init__(self, name, slave, h):
         super().__init__(name, slave, h)
         c = slave.controller
         if not c.compiled:
             raise NotCompilable(f"component {name}: the controller's kernel {c.kernel!r} is not compiled")
-        self.exact = c.model_kind == "exact"
-        self.arrays = [c._buf] + ([c.model._p, c._q, c._dq, c._terms] if self.exact else [])
-        self.delays = len(slave.delayed)
-        if self.delays:
-            self.arrays.append(slave.delayed)
+        self.controller, self.delayed = c, slave.delayed
 
-    def emit(self, arrays, x, t, h):
-        if not self.exact:
-            lines = [f"st = int(fastlaw.law_io({arrays[0]}, {x}, {h}))"]
-        else:
-            buf, p, q, dq, terms = arrays[:5]
-            lines = [f"if fastlaw.exact_state({buf}, {x}[0], {x}[1], {x}[2], {x}[3], {q}, {dq}):",
-                     f"    fast5r.inverse_terms({p}, {q}, {dq}, {terms})",
-                     f"    st = int(fastlaw.law_terms_io({buf}, {x}, {h}, {terms}))",
-                     "else:",
-                     "    st = 1"]
-        if self.delays:    # the slave's delay(): apply the oldest commands, queue the new ones
-            first, n = len(self.inputs), self.delays
-            lines += ["if st == 0:",
-                      "    for c in range(4):",
-                      f"        fresh = {x}[{first} + c]",
-                      f"        {x}[{first} + c] = {arrays[-1]}[0, c]",
-                      f"        for m in range({n - 1}):",
-                      f"            {arrays[-1]}[m, c] = {arrays[-1]}[m + 1, c]",
-                      f"        {arrays[-1]}[{n - 1}, c] = fresh"]
-        return lines
+    def context(self):
+        c = self.controller
+        self._terms_of = None
+        if c.model_kind == "exact":
+            q, dq, terms, p = c._scratch[law.Q], c._scratch[law.DQ], c._terms, c.model._p
+
+            def terms_of(_model, _q, _dq, _out):
+                inverse_terms(p, q, dq, terms)      # _q, _dq, _out point into these arrays
+
+            self._terms_of = law.TERMS_FN(terms_of)
+        self._context = law.loop_context(c._binding(), self.delayed, self._terms_of)
+        return self._context
 
 
 @register
-class CurrentObserverAdapter(Adapter):
+class CurrentObserverAdapter(EmittedAdapter):
     """:func:`motor.fastdrive.observer_io`."""
 
     model = "CurrentObserver"
@@ -126,7 +150,7 @@ def _prepared(name, drive, h):
 
 
 @register
-class DCMotorDriveAdapter(Adapter):
+class DCMotorDriveAdapter(EmittedAdapter):
     """:func:`motor.fastdrive.drive_io`; with LuGre friction :func:`motor.friction.friction_peek`,
     :func:`motor.fastdrive.drive_io_friction`, then :func:`motor.friction.friction_commit`
     (the calls of ``Drive._step``)."""
@@ -176,7 +200,7 @@ def _plant_settings(name, sim, h) -> np.ndarray:
     return settings
 
 
-class _PlantState(Adapter):
+class _PlantState(EmittedAdapter):
     """The plant's state lives in ``self.state`` while compiled (the simulator replaces its
     array every step): copied to and from the simulator around a Python step."""
 
@@ -301,39 +325,40 @@ class ActuatedFiveBarPlantAdapter(_PlantState):
 
 @register
 class BalanceControllerAdapter(Adapter):
-    """:func:`controller.fastbalance.balance_io`, inputs limited to |x| <= ABSURD as the slave."""
+    """``pc_balance_io`` on the controller's own buffer, inputs limited to |x| <= ABSURD as the slave."""
 
     model = "BalanceController"
     inputs, outputs = fastbalance.INPUTS, fastbalance.OUTPUTS
-    modules = ("controller.fastbalance",)
+    kernel = "pc_balance_io"
 
     def __init__(self, name, slave, h):
         super().__init__(name, slave, h)
-        self.arrays = [slave.controller.buf]
+        self.buf = slave.controller.buf
 
-    def emit(self, arrays, x, t, h):
-        return [f"st = fastbalance.balance_io({arrays[0]}, {x}, {t}, {ABSURD!r})"]
+    def context(self):
+        self._context = fastbalance.Context(kernels.address(self.buf), ABSURD)
+        return self._context
 
 
 @register
 class WheeledPendulumAdapter(Adapter):
-    """:func:`plant.wheeled_kernel.pendulum_io` on the simulator's own state array (the kernel
-    changes it only when the whole step is accepted: a fall is re-run by the Python path)."""
+    """``pc_wheeled_io`` on the simulator's own parameter and state buffers (the kernel
+    changes the state only when the whole step is accepted: a fall is re-run by the Python
+    path, which raises it)."""
 
     model = "WheeledPendulum"
-    inputs = ("tau_l", "tau_r", "tau_d")
-    outputs = kernel.OUTPUT_NAMES
-    modules = ("plant.wheeled_kernel",)
+    inputs = wheeled_kernel.INPUT_NAMES
+    outputs = wheeled_kernel.OUTPUT_NAMES
+    kernel = "pc_wheeled_io"
 
     def __init__(self, name, slave, h):
         super().__init__(name, slave, h)
         sim = slave.sim
-        settings = np.empty(kernel.SETTINGS_SIZE)
-        settings[kernel.S_SUBSTEPS], settings[kernel.S_COUNT], settings[kernel.S_LIMIT] = \
-            sim.substeps, sim.count, ABSURD
-        settings[kernel.S_PUSH_TORQUE], settings[kernel.S_PUSH_START], settings[kernel.S_PUSH_DURATION] = \
-            slave.push_torque, slave.push_start, slave.push_duration
-        self.arrays = [sim.prm, sim.y, settings]
+        self.settings = wheeled_kernel.new_settings(substeps=sim.substeps, count=sim.count, limit=ABSURD,
+                                                    push_torque=slave.push_torque, push_start=slave.push_start,
+                                                    push_duration=slave.push_duration)
+        self.buffers = (sim.prm, sim.y, self.settings)
 
-    def emit(self, arrays, x, t, h):
-        return [f"st = wheeled_kernel.pendulum_io({arrays[0]}, {arrays[1]}, {arrays[2]}, {x}, {t}, {h})"]
+    def context(self):
+        self._context = wheeled_kernel.Context(*(kernels.address(b) for b in self.buffers))
+        return self._context

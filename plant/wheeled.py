@@ -1,10 +1,11 @@
 """The two-wheeled inverted pendulum of seed 000: parameters, simulator, linearisation.
 
-The physics is :mod:`plant.wheeled_kernel` (one compiled kernel, named layouts); this module
-holds the parameters (single source of truth, seed 000's values), the mutable state and
-the Python-facing refusals.  ``model="exact"`` applies the rolling constraints by
-Lagrange-d'Alembert; ``model="seed"`` is seed 000's equations (16)-(18) with its printed
-typos corrected but without the two nonholonomic terms (docs/pendulum.md).
+The physics is the C kernel ``kernels/src/wheeled.c`` (bound in :mod:`plant.wheeled_kernel`);
+this module holds the parameters (single source of truth, seed 000's values), the state
+buffer and the kernel's refusals as :class:`kernels.Refused`.  ``model="exact"`` applies the
+rolling constraints by Lagrange-d'Alembert; ``model="seed"`` is seed 000's equations
+(16)-(18) with its printed typos corrected but without the two nonholonomic terms
+(docs/pendulum.md).
 
 Conventions (docs/contract.md, SYSTEM.md section 7): theta is the mean wheel angle from the
 vertical (x' = R theta' cos phi), psi the pitch (0 upright, + leaning toward the heading),
@@ -18,7 +19,7 @@ from dataclasses import asdict, dataclass, fields, replace
 
 import numpy as np
 
-from motor._checks import BadValue
+import kernels
 
 from . import wheeled_kernel as kernel
 
@@ -73,21 +74,42 @@ SEED = WheeledParams()
 
 
 def pack(params: WheeledParams, model: str = "exact", yaw: bool = True) -> np.ndarray:
-    """The kernel's parameter record (shape (1,), dtype :data:`plant.wheeled_kernel.PARAMS`)."""
+    """The kernel's parameter buffer (float64, ``pc_wheeled_params``'s layout)."""
     if model not in MODELS:
         raise ValueError(f"model = {model!r}; valid: {', '.join(MODELS)}")
-    # a recarray: its element reads p.R in plain Python too (NUMBA_DISABLE_JIT, the mutation
-    # campaign); numba types it as the same record array
-    record = np.zeros(1, dtype=kernel.PARAMS).view(np.recarray)
+    prm = kernel.new_params()
     for name, value in asdict(params.validate()).items():
-        record[name] = value
-    record["nonholonomic"] = 1.0 if model == "exact" else 0.0
-    record["yaw"] = 1.0 if yaw else 0.0
-    return record
+        prm[kernel.PARAMS[name]] = value
+    prm[kernel.PARAMS["nonholonomic"]] = 1.0 if model == "exact" else 0.0
+    prm[kernel.PARAMS["yaw"]] = 1.0 if yaw else 0.0
+    return prm
 
 
-class FallenError(RuntimeError):
-    """The robot fell over (or its state became non-finite) within a step.
+_FELL = "at t = {time:.6g} s: psi = {psi_deg:.4g} deg at the last good state"
+#: The kernel's refusal codes -> their record and message (``psi_deg``: the pitch at the last
+#: good state [deg], the start of the step).
+REASONS = {
+    kernel.FALLEN_PITCH: kernels.Reason("fallen_pitch", ("psi",), "rad",
+                                        "the robot fell over (pitch beyond 90 degrees) " + _FELL),
+    kernel.FALLEN_FLOOR: kernels.Reason("fallen_floor", ("psi",), "rad",
+                                        "the robot fell over (body touching the floor) " + _FELL),
+    kernel.NONFINITE: kernels.Reason("nonfinite_state", kernel.STATE_NAMES, "", "the state became non-finite " + _FELL),
+    kernel.BAD_INPUT: kernels.Reason("input_not_finite", kernel.INPUT_NAMES, "N m",
+                                     "input {variable} = {value!r} at t = {time:.6g} s is not finite"),
+    kernel.BAD_STEP: kernels.Reason("bad_step", ("dt",), "s", "step size {value!r} at t = {time:.6g} s must be > 0"),
+    kernel.BAD_SETTING: kernels.Reason("bad_setting", ("substeps", "count"), "",
+                                       "setting {variable} = {value!r} at t = {time:.6g} s is out of range (substeps: "
+                                       f"an integer in [1, {kernel.MAX_SUBSTEPS}]; count: > 0 rad)"),
+    kernel.INPUT_LIMIT: kernels.Reason("input_absurd", kernel.INPUT_NAMES, "N m",
+                                       "input {variable} = {value!r} at t = {time:.6g} s is absurd: "
+                                       "|{variable}| must be <= {limit:g}"),
+}
+
+
+class FallenError(kernels.Refused, RuntimeError):
+    """The robot fell over (or its state became non-finite) within a step: the kernel's
+    refusal record (:class:`kernels.Refused`: ``variable`` psi or the non-finite state entry,
+    its ``value`` at the end of the failing substep, ``time`` the end of that substep [s]).
 
     Attributes
     ----------
@@ -95,25 +117,33 @@ class FallenError(RuntimeError):
         :data:`plant.wheeled_kernel.CODES` key.
     psi : float
         Pitch at the last good state [rad].
-    time : float
-        End of the substep where it happened [s].
     """
 
-    def __init__(self, code: int, psi: float, time: float):
-        self.code, self.psi, self.time = code, psi, time
-        what = ("the state became non-finite" if code == kernel.NONFINITE
-                else f"the robot fell over ({kernel.CODES[code]})")
-        super().__init__(f"{what} at t = {time:.6g} s: psi = {math.degrees(psi):.4g} deg at the last good state")
+    def __init__(self, refused: kernels.Refused, psi: float):
+        record = refused.record()
+        message = record.pop("message")
+        super().__init__(message, **record)
+        self.psi = psi
+
+
+def refusal_error(refusal: kernels.Refusal, time: float, psi: float, limit: float = math.inf) -> kernels.Refused:
+    """The exception of a kernel refusal at ``time`` [s] (a fall: :class:`FallenError`, with
+    ``psi`` the pitch at the last good state [rad])."""
+    refused = kernels.refused(REASONS, refusal, time, psi_deg=math.degrees(psi), limit=limit)
+    return FallenError(refused, psi) if refusal.code in kernel.FALLS else refused
 
 
 #: Default RK4 substeps per 1 ms communication step: 2 keeps the error below 1e-9 rad
 #: against a tight-tolerance solution (docs/pendulum.md, tests/test_wheeled.py).
 SUBSTEPS = 2
-MAX_SUBSTEPS = 10000
+MAX_SUBSTEPS = kernel.MAX_SUBSTEPS
 
 
 class WheeledPendulum:
     """The pendulum's state and its stepping (the FMU ``WheeledPendulum`` is a thin adapter).
+
+    :attr:`prm` and :attr:`y` are the kernel's parameter and state buffers (float64, the C
+    structs' layouts; an FMU state lays saved values over them).
 
     Parameters
     ----------
@@ -146,21 +176,25 @@ class WheeledPendulum:
                 raise ValueError(f"unknown initial state {name!r}; valid: {', '.join(kernel.STATE_NAMES)}")
             if not math.isfinite(value):
                 raise ValueError(f"initial {name} = {value!r} is not finite")
-            self.y[kernel.STATE_NAMES.index(name)] = value
+            self.y[kernel.STATE[name]] = value
         if not yaw and self.y[kernel.DPHI] != 0.0:
+            from motor._checks import BadValue   # the motor package imports python-control: only here
+
             raise BadValue("dphi", float(self.y[kernel.DPHI]),
                            "initial {name} = {value!r} with the yaw locked (yaw = false) must be 0")
-        code = kernel.state_condition(self.prm, self.y)
+        code = kernel.condition(self.prm, self.y)
         if code != kernel.OK:
             raise ValueError(f"initial state: {kernel.CODES[code]} (psi0 = {self.y[kernel.PSI]!r} rad)")
         self.time = 0.0
         self.fallen = False
-        kernel.step(self.prm, self.y.copy(), 0.0, 0.0, 0.0, 1e-3, 1)   # compile now, not in the first step
+
+    def _bound(self) -> kernel.Bound:
+        return kernel.bound(self, (self.prm, self.y), len(kernel.OUTPUT_NAMES))
 
     def derivative(self, y, tau_l: float = 0.0, tau_r: float = 0.0, tau_d: float = 0.0) -> np.ndarray:
-        """dy/dt at state y (layout of :mod:`plant.wheeled_kernel`)."""
+        """dy/dt at state y (layout :data:`plant.wheeled_kernel.STATE`)."""
         out = np.empty(kernel.N_STATE)
-        kernel.rhs(self.prm, np.asarray(y, dtype=float), float(tau_l), float(tau_r), float(tau_d), out)
+        kernel.derivative(self.prm, y, float(tau_l), float(tau_r), float(tau_d), out)
         return out
 
     def step(self, tau_l: float, tau_r: float, dt: float, tau_d: float = 0.0) -> None:
@@ -168,33 +202,35 @@ class WheeledPendulum:
 
         Raises
         ------
-        ValueError
+        kernels.Refused
             A non-finite torque or a step that is not finite and > 0 (naming it and the time).
         FallenError
             The robot fell within the step (:attr:`fallen` becomes True, the state stays the
             last good one).
         """
-        for name, value in (("tau_l", tau_l), ("tau_r", tau_r), ("tau_d", tau_d)):
-            if not math.isfinite(value):
-                raise ValueError(f"input {name} = {value!r} at t = {self.time:.6g} s is not finite")
-        if not (math.isfinite(dt) and dt > 0.0):
-            raise ValueError(f"step size {dt!r} at t = {self.time:.6g} s must be > 0")
-        code, substep = kernel.step(self.prm, self.y, float(tau_l), float(tau_r), float(tau_d), float(dt),
-                                    self.substeps)
+        b = self._bound()
+        prm, y = b.addresses
+        code = kernel.c_step(prm, y, tau_l, tau_r, tau_d, dt, self.substeps, b.taken_address, b.refusal_address)
         if code != kernel.OK:
-            self.fallen = True
-            raise FallenError(code, float(self.y[kernel.PSI]), self.time + dt * substep / self.substeps)
+            if code in kernel.FALLS:
+                self.fallen = True
+                end = self.time + dt * b.taken.value / self.substeps
+            else:
+                end = self.time
+            raise refusal_error(b.refusal, end, float(self.y[kernel.PSI])) from None
         self.time += dt
 
     def energy(self) -> float:
         """Kinetic plus potential energy [J]."""
-        return kernel.energy(self.prm, self.y)
+        prm, y = self._bound().addresses
+        return kernel.c_energy(prm, y)
 
     def outputs(self) -> dict:
         """The WheeledPendulum outputs (docs/contract.md), as Python floats (:func:`plant.wheeled_kernel.sensors`)."""
-        out = np.empty(len(kernel.OUTPUT_NAMES))
-        kernel.sensors(self.prm, self.y, self.count, out, 0)
-        return dict(zip(kernel.OUTPUT_NAMES, out.tolist()))
+        b = self._bound()
+        prm, y = b.addresses
+        kernel.c_sensors(prm, y, self.count, b.out_address)
+        return dict(zip(kernel.OUTPUT_NAMES, b.out.tolist()))
 
 
 def upright_mass_matrix(p: WheeledParams):

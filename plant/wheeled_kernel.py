@@ -1,225 +1,159 @@
-"""Compiled kernel of the two-wheeled inverted pendulum (seed 000), with named layouts.
+"""The binding of the wheeled pendulum's C kernel (``kernels/src/wheeled.c``, equations in
+``wheeled.h``): its layouts, refusal codes and functions, through ctypes.
 
-One file, one kernel family (numba caches per file).  The parameters travel as ONE record of
-the structured dtype :data:`PARAMS` (fields named as in seed 000); the state is a float64
-vector whose entries are named by the module constants :data:`THETA` ... :data:`DPHI`
-(compile-time constants inside the kernel); the step's outcome is an integer code of
-:data:`CODES` plus the substep at which it happened.
-
-Equations (derived by Lagrange-d'Alembert in docs/pendulum.md; seed 000 numbers in brackets),
-with nu = (theta, psi, phi) and s = sin psi, c = cos psi::
-
-    M(psi) nu'' + C(psi, nu') + G(psi) = F                                  [(17)]
-    M11 = (2m + M_b) R^2 + 2 J_w,  M12 = M_b R L c,  M22 = M_b L^2 + J_psi  [(18)]
-    M33 = m W^2/2 + M_b L^2 s^2 + J_phi + W^2/(2 R^2) J_w                   [(18), m not M_b: typo]
-    C1  = -M_b R L s psi'^2  - k M_b L R s phi'^2                           [(18) + nonholonomic]
-    C2  = -M_b L^2 s c phi'^2                                               [(18), phi' not psi': typo]
-    C3  = 2 M_b L^2 s c psi' phi' + k M_b L R s theta' phi'                 [(18) + nonholonomic]
-    G2  = -M_b g L s                                                        [(18)]
-    F   = (tau_l + tau_r, -(tau_l + tau_r) + tau_d, W/(2R) (tau_r - tau_l)) [(20)]
-    x' = R theta' cos phi,  y' = R theta' sin phi                           [(2)]
-
-k = 1 for the exact model (``nonholonomic`` = 1), 0 for the seed's (constraints substituted
-into the Lagrangian before differentiating, (13)-(16)).  M_b is the body mass (the seed's M).
-tau_d is a disturbance torque on the body about the axle (scene ``pendulum_push``).
+Buffers are numpy float64 arrays laid out as the C structs (:func:`kernels.layout`): the
+parameters (:data:`PARAMS`, ``pc_wheeled_params``), the state (:data:`STATE`, indices
+:data:`THETA` ... :data:`DPHI`) and the compiled loop's settings (:data:`SETTINGS`).
 """
 from __future__ import annotations
 
-import math
+import ctypes
+import weakref
 
 import numpy as np
-from numba import njit
 
-#: Parameter record (one element of this dtype): seed 000's symbols; ``nonholonomic`` 1.0 for
-#: the exact model, 0.0 for the seed's; ``yaw`` 0.0 locks the yaw (phi' = 0, phi'' = 0).
-PARAMS = np.dtype([(name, np.float64) for name in (
-    "g", "m", "R", "J_w", "M", "W", "D", "H", "L", "J_psi", "J_phi", "nonholonomic", "yaw")])
+import kernels
 
-#: State layout: mean wheel angle from the vertical, pitch, yaw, axle midpoint, rates.
-THETA, PSI, PHI, X, Y, DTHETA, DPSI, DPHI = range(8)
-N_STATE = 8
-STATE_NAMES = ("theta", "psi", "phi", "x", "y", "dtheta", "dpsi", "dphi")
+_vp, _d, _i = ctypes.c_void_p, ctypes.c_double, ctypes.c_int
 
-#: Step outcomes: the step was taken; the pitch passed +-90 degrees; a corner of the body
-#: reached the floor; the state became non-finite.
-OK, FALLEN_PITCH, FALLEN_FLOOR, NONFINITE = 0, 1, 2, 3
+#: Field -> slice of the parameter buffer (seed 000's symbols; ``nonholonomic`` 1.0 for the
+#: exact model, 0.0 for the seed's; ``yaw`` 0.0 locks the yaw).
+PARAMS = kernels.layout("pc_wheeled_params_fields")
+PARAMS_SIZE = max(s.stop for s in PARAMS.values())
+#: Field -> slice of the state buffer.
+STATE = kernels.layout("pc_wheeled_state_fields")
+STATE_NAMES = tuple(sorted(STATE, key=lambda name: STATE[name].start))
+N_STATE = len(STATE_NAMES)
+THETA, PSI, PHI, X, Y, DTHETA, DPSI, DPHI = (STATE[name].start for name in
+                                             ("theta", "psi", "phi", "x", "y", "dtheta", "dpsi", "dphi"))
+#: The compiled loop's settings (``pc_wheeled_settings``): RK4 substeps, encoder count [rad],
+#: push torque [N m], push start and duration [s], input limit.
+SETTINGS = kernels.layout("pc_wheeled_settings_fields")
+SETTINGS_SIZE = max(s.stop for s in SETTINGS.values())
+S_SUBSTEPS, S_COUNT, S_PUSH_TORQUE, S_PUSH_START, S_PUSH_DURATION, S_LIMIT = (
+    SETTINGS[name].start for name in ("substeps", "count", "push_torque", "push_start", "push_duration", "limit"))
+MAX_SUBSTEPS = _i.in_dll(kernels.library(), "pc_wheeled_max_substeps").value
+
+#: wheeled.h's refusal codes: the pitch passed +-90 degrees; a corner of the body reached the
+#: floor; the state became non-finite; an input not finite; a step size not finite and > 0;
+#: an input beyond the compiled loop's limit; a substep count or encoder count out of range.
+OK, FALLEN_PITCH, FALLEN_FLOOR, NONFINITE, BAD_INPUT, BAD_STEP, INPUT_LIMIT, BAD_SETTING = range(8)
+FALLS = (FALLEN_PITCH, FALLEN_FLOOR, NONFINITE)
 CODES = {OK: "ok", FALLEN_PITCH: "pitch beyond 90 degrees", FALLEN_FLOOR: "body touching the floor",
          NONFINITE: "non-finite state"}
-
-
-@njit(cache=True)
-def derivative(p, y, tau_l, tau_r, tau_d, out):
-    """out = dy/dt for the state y (layout above), wheel torques tau_l, tau_r [N m] (motor on
-    wheel, reaction on the body) and a body torque tau_d [N m], held."""
-    s = math.sin(y[PSI])
-    c = math.cos(y[PSI])
-    dth, dps, dph = y[DTHETA], y[DPSI], y[DPHI]
-    mb, R, L = p.M, p.R, p.L
-    m11 = (2.0 * p.m + mb) * R * R + 2.0 * p.J_w
-    m12 = mb * R * L * c
-    m22 = mb * L * L + p.J_psi
-    k = p.nonholonomic
-    c1 = -mb * R * L * s * dps * dps - k * mb * L * R * s * dph * dph
-    c2 = -mb * L * L * s * c * dph * dph
-    g2 = -mb * p.g * L * s
-    f = tau_l + tau_r
-    r1 = f - c1
-    r2 = -f + tau_d - c2 - g2
-    det = m11 * m22 - m12 * m12
-    out[THETA] = dth
-    out[PSI] = dps
-    out[PHI] = dph
-    out[X] = R * dth * math.cos(y[PHI])
-    out[Y] = R * dth * math.sin(y[PHI])
-    out[DTHETA] = (m22 * r1 - m12 * r2) / det
-    out[DPSI] = (m11 * r2 - m12 * r1) / det
-    if p.yaw != 0.0:
-        m33 = 0.5 * p.m * p.W * p.W + mb * L * L * s * s + p.J_phi + p.W * p.W / (2.0 * R * R) * p.J_w
-        c3 = 2.0 * mb * L * L * s * c * dps * dph + k * mb * L * R * s * dth * dph
-        out[DPHI] = (p.W / (2.0 * R) * (tau_r - tau_l) - c3) / m33
-    else:
-        out[DPHI] = 0.0
-
-
-@njit(cache=True)
-def lowest_body_point(p, psi):
-    """Height above the floor [m] of the body's lowest corner: a box of depth D and height H
-    standing on the axle (at height R), tilted by psi."""
-    return p.R + min(0.0, p.H * math.cos(psi)) - 0.5 * p.D * abs(math.sin(psi))
-
-
-@njit(cache=True)
-def condition(p, y):
-    """OK, or the code of why the state ``y`` is no longer a standing robot."""
-    for i in range(N_STATE):
-        if not math.isfinite(y[i]):
-            return NONFINITE
-    if abs(y[PSI]) >= 0.5 * math.pi:
-        return FALLEN_PITCH
-    if lowest_body_point(p, y[PSI]) <= 0.0:
-        return FALLEN_FLOOR
-    return OK
-
-
-@njit(cache=True)
-def rhs(prm, y, tau_l, tau_r, tau_d, out):
-    """:func:`derivative` for the parameter array ``prm`` (shape (1,)): the entry point from
-    Python (a record passed from Python is compiled anew in every process, numba's cache
-    misses it; measured 1.5 s)."""
-    derivative(prm[0], y, tau_l, tau_r, tau_d, out)
-
-
-@njit(cache=True)
-def state_condition(prm, y):
-    """:func:`condition` for the parameter array ``prm`` (the entry point from Python)."""
-    return condition(prm[0], y)
-
-
-@njit(cache=True)
-def step(prm, y, tau_l, tau_r, tau_d, dt, substeps):
-    """Advance y in place over dt by ``substeps`` RK4 steps, inputs held (zero-order hold).
-
-    Returns (code, substep): :data:`OK` and ``substeps``, or the code of the first substep
-    whose end state fails :func:`condition` and its 1-based index; y then holds the state at
-    the START of the step (untouched).
-    """
-    p = prm[0]
-    h = dt / substeps
-    z = y.copy()
-    k1 = np.empty(N_STATE)
-    k2 = np.empty(N_STATE)
-    k3 = np.empty(N_STATE)
-    k4 = np.empty(N_STATE)
-    w = np.empty(N_STATE)
-    for n in range(substeps):
-        derivative(p, z, tau_l, tau_r, tau_d, k1)
-        for i in range(N_STATE):
-            w[i] = z[i] + 0.5 * h * k1[i]
-        derivative(p, w, tau_l, tau_r, tau_d, k2)
-        for i in range(N_STATE):
-            w[i] = z[i] + 0.5 * h * k2[i]
-        derivative(p, w, tau_l, tau_r, tau_d, k3)
-        for i in range(N_STATE):
-            w[i] = z[i] + h * k3[i]
-        derivative(p, w, tau_l, tau_r, tau_d, k4)
-        for i in range(N_STATE):
-            z[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
-        code = condition(p, z)
-        if code != OK:
-            return code, n + 1
-    y[:] = z
-    return OK, substeps
-
-
-@njit(cache=True)
-def energy(prm, y):
-    """T + U [J] of seed 000 (8), (11), (12), with the floor at z = 0."""
-    p = prm[0]
-    s = math.sin(y[PSI])
-    c = math.cos(y[PSI])
-    dth, dps, dph = y[DTHETA], y[DPSI], y[DPHI]
-    mb, R, L, W = p.M, p.R, p.L, p.W
-    t1 = 0.5 * (p.m * (2.0 * R * R * dth * dth + 0.5 * W * W * dph * dph)
-                + mb * (R * R * dth * dth + L * L * dps * dps + L * L * s * s * dph * dph + 2.0 * R * L * c * dth * dps))
-    t2 = p.J_w * dth * dth + 0.5 * p.J_psi * dps * dps + 0.5 * (p.J_phi + W * W / (2.0 * R * R) * p.J_w) * dph * dph
-    u = 2.0 * p.m * p.g * R + mb * p.g * (R + L * c)
-    return t1 + t2 + u
-
-
+INPUT_NAMES = ("tau_l", "tau_r", "tau_d")
 #: The sensors and outputs of :func:`sensors`, in order (the ``WheeledPendulum`` FMU's outputs).
 OUTPUT_NAMES = ("theta", "psi", "phi", "dtheta", "dpsi", "dphi", "x", "y", "omega_l", "omega_r", "enc_l", "enc_r",
                 "gyro", "energy")
-#: Layout of the settings array of :func:`pendulum_io`: RK4 substeps, encoder count [rad],
-#: push torque [N m], push start and duration [s], input limit.
-S_SUBSTEPS, S_COUNT, S_PUSH_TORQUE, S_PUSH_START, S_PUSH_DURATION, S_LIMIT = range(6)
-SETTINGS_SIZE = 6
-#: :func:`pendulum_io`'s code for an input that is not finite or beyond the limit.
-REFUSED_INPUT = 4
+
+# The ctypes functions on addresses (the c_* ones are the per-step callers' fast path).
+_derivative = kernels.function("pc_wheeled_derivative", None, _vp, _vp, _d, _d, _d, _vp)
+_condition = kernels.function("pc_wheeled_condition", _i, _vp, _vp, _vp)
+c_step = kernels.function("pc_wheeled_step", _i, _vp, _vp, _d, _d, _d, _d, _i, _vp, _vp)
+c_energy = kernels.function("pc_wheeled_energy", _d, _vp, _vp)
+c_sensors = kernels.function("pc_wheeled_sensors", None, _vp, _vp, _d, _vp)
+_step_io = kernels.function("pc_wheeled_step_io", _i, _vp, _vp, _vp, _vp, _d, _d, _vp)
 
 
-@njit(cache=True)
-def sensors(prm, y, count, out, first):
-    """out[first:first + 14] = :data:`OUTPUT_NAMES` of the state y: the encoders read
-    theta_l,r - psi (10) quantised to ``count`` [rad], the gyro psi'."""
-    p = prm[0]
-    half = p.W / (2.0 * p.R)
-    enc_l = y[THETA] - half * y[PHI] - y[PSI]
-    enc_r = y[THETA] + half * y[PHI] - y[PSI]
-    out[first + 0] = y[THETA]
-    out[first + 1] = y[PSI]
-    out[first + 2] = y[PHI]
-    out[first + 3] = y[DTHETA]
-    out[first + 4] = y[DPSI]
-    out[first + 5] = y[DPHI]
-    out[first + 6] = y[X]
-    out[first + 7] = y[Y]
-    out[first + 8] = y[DTHETA] - half * y[DPHI] - y[DPSI]
-    out[first + 9] = y[DTHETA] + half * y[DPHI] - y[DPSI]
-    out[first + 10] = count * math.floor(enc_l / count + 0.5)
-    out[first + 11] = count * math.floor(enc_r / count + 0.5)
-    out[first + 12] = y[DPSI]
-    out[first + 13] = energy(prm, y)
+class Bound:
+    """The C addresses of an owner's buffers, its refusal record and an output scratch
+    array, kept OUTSIDE the owner (an FMU state writes the owner's fields: a stored address
+    would be a forgeable pointer, and a deep copy's would name the original's arrays).
+    :func:`bound` hands them out while the owner still holds the same arrays."""
+
+    __slots__ = ("buffers", "addresses", "refusal", "refusal_address", "taken", "taken_address", "out",
+                 "out_address")
+
+    def __init__(self, buffers: tuple, scratch: int):
+        self.buffers = buffers
+        self.addresses = tuple(kernels.address(b) for b in buffers)
+        self.out = np.zeros(scratch)
+        self.out_address = kernels.address(self.out)
+        self.refusal = kernels.Refusal()
+        self.refusal_address = ctypes.addressof(self.refusal)
+        self.taken = _i()
+        self.taken_address = ctypes.addressof(self.taken)
 
 
-@njit(cache=True)
-def pendulum_io(prm, y, settings, x, t, dt):
-    """One communication step of the ``WheeledPendulum`` FMU from t over dt: torques
-    (tau_l, tau_r, tau_d) from x[0:3], the push added over the steps starting in its window
-    (1e-9 s: rounding of t), then :func:`step` and :func:`sensors` into x[3:17].
+_BOUND: dict = {}
 
-    Returns the code of :func:`step` (nothing changed unless :data:`OK`), or
-    :data:`REFUSED_INPUT` for an input that is not finite or beyond the limit.
-    """
-    limit = settings[S_LIMIT]
-    for i in range(3):
-        if not abs(x[i]) <= limit:
-            return REFUSED_INPUT
-    tau_d = x[2]
-    start = settings[S_PUSH_START]
-    if start - 1e-9 <= t < start + settings[S_PUSH_DURATION] - 1e-9:
-        tau_d += settings[S_PUSH_TORQUE]
-    code, _ = step(prm, y, x[0], x[1], tau_d, dt, int(settings[S_SUBSTEPS]))
-    if code != OK:
-        return code
-    sensors(prm, y, settings[S_COUNT], x, 3)
-    return OK
+
+def bound(owner, buffers: tuple, scratch: int = 0) -> Bound:
+    """The :class:`Bound` of ``owner``'s ``buffers`` with ``scratch`` output words (made
+    again when the owner holds other arrays)."""
+    entry = _BOUND.get(id(owner))
+    if entry is not None:
+        for kept, now in zip(entry.buffers, buffers):
+            if kept is not now:
+                break
+        else:
+            return entry
+    if entry is None:
+        weakref.finalize(owner, _BOUND.pop, id(owner), None)
+    entry = _BOUND[id(owner)] = Bound(buffers, scratch)
+    return entry
+
+
+def new_params() -> np.ndarray:
+    """A zeroed parameter buffer."""
+    return np.zeros(PARAMS_SIZE)
+
+
+def new_settings(**values) -> np.ndarray:
+    """A settings buffer of the compiled loop (``pc_wheeled_settings``) with every field given by name."""
+    missing = set(SETTINGS) - set(values)
+    if missing or set(values) - set(SETTINGS):
+        raise ValueError(f"the pendulum's settings are {', '.join(SETTINGS)}: missing {sorted(missing)}, "
+                         f"unknown {sorted(set(values) - set(SETTINGS))}")
+    settings = np.empty(SETTINGS_SIZE)
+    for name, value in values.items():
+        settings[SETTINGS[name]] = value
+    return settings
+
+
+class Context(ctypes.Structure):
+    """``pc_wheeled_context``: the addresses of the parameter, state and settings buffers
+    (``pc_wheeled_io``'s ``context`` in the compiled loop)."""
+
+    _fields_ = [("params", _vp), ("state", _vp), ("settings", _vp)]
+
+
+def derivative(prm: np.ndarray, y: np.ndarray, tau_l: float, tau_r: float, tau_d: float, out: np.ndarray) -> None:
+    """out = dy/dt at the state y, wheel torques tau_l, tau_r and body torque tau_d [N m] held."""
+    y = np.ascontiguousarray(y, dtype=float)
+    _check(prm, PARAMS_SIZE, y, N_STATE, out, N_STATE)
+    _derivative(kernels.address(prm), kernels.address(y), tau_l, tau_r, tau_d, kernels.address(out))
+
+
+def condition(prm: np.ndarray, y: np.ndarray) -> int:
+    """OK, or the code of why the state ``y`` is no longer a standing robot."""
+    _check(prm, PARAMS_SIZE, y, N_STATE)
+    return _condition(kernels.address(prm), kernels.address(y), None)
+
+
+def energy(prm: np.ndarray, y: np.ndarray) -> float:
+    """T + U [J] of seed 000 (8), (11), (12), the floor at z = 0."""
+    _check(prm, PARAMS_SIZE, y, N_STATE)
+    return c_energy(kernels.address(prm), kernels.address(y))
+
+
+def sensors(prm: np.ndarray, y: np.ndarray, count: float, out: np.ndarray) -> None:
+    """out[:14] = :data:`OUTPUT_NAMES` of the state y; the encoders quantised to ``count`` [rad]."""
+    _check(prm, PARAMS_SIZE, y, N_STATE, out, len(OUTPUT_NAMES))
+    c_sensors(kernels.address(prm), kernels.address(y), count, kernels.address(out))
+
+
+def step_io(prm: np.ndarray, y: np.ndarray, settings: np.ndarray, x: np.ndarray, t: float, h: float,
+            refusal: kernels.Refusal) -> int:
+    """``pc_wheeled_step_io``: one communication step of the compiled loop's I/O array ``x``
+    (:data:`INPUT_NAMES` then :data:`OUTPUT_NAMES`); PC_OK or a code, ``refusal`` filled."""
+    _check(prm, PARAMS_SIZE, y, N_STATE, settings, SETTINGS_SIZE, x, len(INPUT_NAMES) + len(OUTPUT_NAMES))
+    return _step_io(kernels.address(prm), kernels.address(y), kernels.address(settings), kernels.address(x), t, h,
+                    ctypes.addressof(refusal))
+
+
+def _check(*pairs) -> None:
+    """Each (array, size): a float64 array of at least ``size`` words (the C reads that many)."""
+    for array, size in zip(pairs[::2], pairs[1::2]):
+        if not (isinstance(array, np.ndarray) and array.dtype == np.float64 and array.size >= size):
+            raise ValueError(f"a wheeled-pendulum kernel buffer must be a float64 array of >= {size} words")

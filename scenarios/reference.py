@@ -12,16 +12,23 @@ else:
   joint rate — is ONE ODE, :meth:`plant.actuated.ActuatedPlant.derivative` (the same model
   code as the ``ActuatedFiveBarPlant`` FMU), integrated by ``scipy.integrate.solve_ivp``
   (DOP853, rtol 1e-10 by default) over each sample interval, restarted at every sample; the
-  shaft torque is :func:`motor.shaft_torque` of the instantaneous current and speed (B.2);
+  shaft torque is that of the instantaneous current and speed (B.2);
+* a drive's **LuGre friction** (``friction="lugre"``) stays discrete, as in the drive's own
+  step: its bristles advance over the interval with the joint speed of the sample held and
+  their mean torque is held on the joint (:meth:`plant.actuated.ActuatedPlant.held_friction`);
+  the drive's ``tau`` output is :meth:`motor.Drive.torque` of the state at the interval's end;
 * the **discrete part** — trajectory, derivator, position controller, observers — are the
-  scene's own slave objects (``fmus/slaves``, built from the scene's parameters exactly
-  as the master builds them), stepped in the master's Gauss-Seidel order
-  (:func:`fmus.master.stepping_order`) with the same inputs as in the co-simulation;
-* each drive's discrete current controller (the drive slave's own
-  :class:`motor.CurrentController`) samples ``i_ref`` and ``i_hat`` at t_k, at the
-  drive's place in that order, and its saturated voltage is held over [t_k, t_k+1]
-  (zero-order hold); the drive's ``v`` output is then that voltage, so the observers
-  read the previous interval's voltage, as in the co-simulation.
+  scene's own components, the master's in-process instances, initialised and stepped by the
+  master's own loop (:class:`fmus.stepper.Stepper`, the Gauss-Seidel order of
+  :func:`fmus.master.stepping_order`) with the same inputs as in the co-simulation;
+* each drive samples its voltage with its own :meth:`motor.Drive.sample_voltage` at t_k, at
+  the drive's place in that order — the co-simulation drive's current controller, PWM
+  quantisation, current noise and offset — held over [t_k, t_k+1] (zero-order hold); the
+  drive's ``v`` output is then that voltage, so the observers read the previous interval's
+  voltage, as in the co-simulation.
+
+So the reference models exactly what the co-simulation models but for the plant/drive
+coupling at the communication step.
 
 Encoder quantisation is the plant's own (:meth:`plant.PlantSimulator.outputs`, applied
 to the integrated state at each sample).
@@ -52,7 +59,7 @@ same in all four):
     a what-if: as ``"cosim"``, but the plant holds each drive's MEAN shaft torque over
     the step, kt * mean(i) - b omega - mu tanh(omega/omega_eps) with omega held at the
     step start (mean(i) from the exact solution of 4.162 for the held voltage and
-    speed).  It measures what a drive output "torque averaged over the step" would
+    speed); a LuGre drive's own mean torque (``torque_output="mean"``).  It measures what a drive output "torque averaged over the step" would
     buy the co-simulation.
 
 Scenes: any :class:`fmus.system.System` with one ``FiveBarPlant``, up to two
@@ -71,9 +78,11 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from fmus.instances import InProcessInstance, slave_variables
-from fmus.master import CoSimulationError, RecordedRun, stepping_order
-from fmus.system import System, split_signal
+from fmus.instances import CoSimulationError, InProcessInstance
+from fmus.master import RecordedRun, stepping_order
+from fmus.parts import publish_plant
+from fmus.stepper import Stepper
+from fmus.system import System
 from motor import shaft_torque
 from plant import fivebar
 from plant.actuated import ActuatedPlant
@@ -115,32 +124,120 @@ class ReferenceResult(RecordedRun):
     extra: dict = field(default_factory=dict)
 
 
-# --- the scene's components, built as the master's in-process back end builds them --------
+# --- the scene's components, stepped by the master's own Gauss-Seidel loop ----------------
 
-def _slave(component):
-    """The component's slave object, initialised with its parameters (as the master does)."""
-    from fmus.build import SLAVES
-
-    if component.model not in SLAVES:
-        raise ReferenceError(f"component {component.name}: unknown model {component.model!r}")
-    instance = InProcessInstance(component.model, component.name)
-    for name in component.parameters:
-        if name not in instance.variables:
-            raise ReferenceError(f"component {component.name}: {component.model} has no parameter {name!r}")
-    try:
-        instance.initialize(component.parameters, 0.0)
-    except CoSimulationError as exc:
-        raise ReferenceError(str(exc)) from None
-    if instance.slave.error:
-        raise ReferenceError(f"{component.name}: {instance.slave.error}")
-    return instance.slave
+def _real_outputs(instance) -> list:
+    return [v.name for v in instance.variables.values() if v.type == "Real" and v.causality == "output"]
 
 
-def _real_outputs(slave) -> list:
-    from pythonfmu import Real
+class _Replaced:
+    """An instance of the master's loop (:class:`fmus.stepper.Stepper`) whose ``do_step`` the
+    reference replaces; everything else (variables, inputs, outputs, initialisation) is the
+    in-process instance's."""
 
-    return [v.name for v in slave.vars.values()
-            if isinstance(v, Real) and v.causality is not None and v.causality.name == "output"]
+    def __init__(self, inner):
+        self.inner = inner
+        self.slave = inner.slave
+
+    def __getattr__(self, name):
+        return getattr(self.inner, name)
+
+
+class _SampledDrive(_Replaced):
+    """A drive of the monolithic block: at t_k it only samples its voltage with its own
+    :meth:`motor.Drive.sample_voltage` (the co-simulation drive's controller, PWM and current
+    noise), held over the interval; its current is the continuous block's."""
+
+    link = None     # its _DriveLink, once the instances are initialised
+
+    def do_step(self, t: float, h: float) -> None:
+        slave = self.slave
+        try:
+            v = slave.drive.sample_voltage(slave.i_ref, slave.v_ref, slave.i_hat, h)
+        except ValueError as exc:
+            raise ReferenceError(f"{self.inner.name} refused the step from t = {t:.6g} s: {exc}") from None
+        self.link.v = slave.v = v
+
+
+class _MeanTorqueDrive(_Replaced):
+    """A drive stepped as in the co-simulation that also gives its mean torque over the step
+    (the ``"mean"`` what-if)."""
+
+    link = None     # its _DriveLink, once the instances are initialised
+
+    def do_step(self, t: float, h: float) -> None:
+        slave = self.slave
+        i_start, omega = slave.drive.i, slave.omega
+        self.inner.do_step(t, h)
+        if slave.drive.lugre is None:
+            self.link.tau_mean = _mean_torque(slave, i_start, slave.v, omega, h)
+        elif slave.drive.torque_output == "mean":     # the drive's own mean, its LuGre bristles' included
+            self.link.tau_mean = slave.tau
+        else:
+            raise ReferenceError(f"drive {self.inner.name}: the 'mean' what-if of a LuGre drive needs "
+                                 "torque_output = 'mean' (its own mean torque)")
+
+
+class _IntegratedPlant(_Replaced):
+    """The plant whose interval is the continuous block integrated by solve_ivp; with the
+    monolithic coupling the drives' currents and bristles advance with it and their outputs
+    (``i``, ``tau``) are set at the interval's end, in the loop's values too."""
+
+    def __init__(self, inner, coupling, solver):
+        super().__init__(inner)
+        self.coupling, self.solver = coupling, solver
+        self.block, self.links, self.values, self.slots = None, [], None, {}   # set by couple
+        self.nfev = self.steps = 0
+        self.first_step = None
+
+    def couple(self, block, links, stepper) -> None:
+        """The continuous block, the drives coupled to the plant and the loop whose values
+        get the drives' outputs (once the instances are initialised)."""
+        self.block, self.links, self.values, self.slots = block, links, stepper.values, stepper.slots
+
+    def do_step(self, t: float, h: float) -> None:
+        sim, slave, block = self.slave.sim, self.slave, self.block
+        monolithic = self.coupling in ("monolithic", "held_speed")
+        drives = [link.slave.drive for link in self.links] if monolithic else []
+        omega = fivebar.world_rates(sim.y[7:])
+        for link in self.links:
+            link.omega_held = omega[link.joint]
+        block.held = [slave.tau1, slave.tau2]
+        if self.coupling == "mean":
+            for link in self.links:
+                block.held[link.joint] = link.tau_mean
+        bristles = block.hold_friction(h) if monolithic else []
+        z0 = np.concatenate([sim.y, [d.i for d in drives]])
+        method, rtol, atol = self.solver
+        sol = solve_ivp(block.rhs, (t, t + h), z0, method=method, rtol=rtol, atol=atol, first_step=self.first_step)
+        if sol.status != 0 or not np.all(np.isfinite(sol.y[:, -1])):
+            raise ReferenceError(f"{self.inner.name}: solve_ivp failed over [{t:.6g}, {t + h:.6g}] s: {sol.message}")
+        self.nfev += sol.nfev
+        self.steps += len(sol.t) - 1
+        if len(sol.t) > 2:
+            self.first_step = float(sol.t[-2] - sol.t[-3]) if len(sol.t) > 3 else float(sol.t[-2] - t)
+        z = sol.y[:, -1]
+        sim.y = z[:14].copy()
+        sim.time = t + h
+        publish_plant(slave, sim)
+        if monolithic:
+            self._drives_at_the_end(z[14:], bristles)
+
+    def _drives_at_the_end(self, currents, bristles) -> None:
+        """Each drive's current and bristles at the interval's end, and its outputs ``i`` and
+        ``tau`` (:meth:`motor.Drive.torque`: B.2 or LuGre) from them."""
+        omega = fivebar.world_rates(self.slave.sim.y[7:])
+        for link, i, bristle in zip(self.links, currents, bristles):
+            drive = link.slave.drive
+            drive.i = float(i)
+            if bristle is not None:
+                drive.z = bristle
+            w = link.omega_held if self.block.held_speed else omega[link.joint]
+            link.slave.i, link.slave.tau = drive.i, drive.torque(w)
+            for name in ("i", "tau"):
+                slot = self.slots.get(f"{link.name}.{name}")
+                if slot is not None:
+                    self.values[slot] = getattr(link.slave, name)
 
 
 # --- the continuous part --------------------------------------------------------------------
@@ -166,11 +263,20 @@ class _Continuous:
         self.actuated = ActuatedPlant(sim, [(d.joint + 1, d.slave.drive) for d in drives])
         self.held_speed = held_speed
         self.held = [0.0, 0.0]          # the plant's inputs tau1, tau2 at the sample
+        self.friction = [0.0, 0.0]      # the LuGre drives' mean bristle torques over the interval
+
+    def hold_friction(self, h: float) -> list:
+        """The LuGre drives' bristles over the next interval, the joint speed held
+        (:meth:`plant.actuated.ActuatedPlant.held_friction`, as the drive's own step): their
+        mean torque is held on the driven joints; returns each drive's deflection at the
+        interval's end (None without LuGre)."""
+        self.friction, bristles = self.actuated.held_friction(h)
+        return bristles
 
     def rhs(self, t, z):
         external = list(self.held)
         for d in self.drives:           # a driven joint gets its drive's torque instead
-            external[d.joint] = 0.0
+            external[d.joint] = self.friction[d.joint]
         return self.actuated.derivative(z, [d.v for d in self.drives], external,
                                         [d.omega_held for d in self.drives] if self.held_speed else None)
 
@@ -186,10 +292,78 @@ def _mean_torque(drive_slave, i_start, v, omega, h):
 
 # --- the run ------------------------------------------------------------------------------
 
+def _system_of(scene_or_name, stop_time, system_changes):
+    from .scenes import Scene, get_scene
+
+    scene = get_scene(scene_or_name) if isinstance(scene_or_name, str) else scene_or_name
+    system = scene.system if isinstance(scene, Scene) else scene
+    if not isinstance(system, System):
+        raise TypeError(f"expected a scene name, a Scene or a System, got {type(scene_or_name).__name__}")
+    if stop_time is not None:
+        system = replace(system, stop_time=float(stop_time))
+    if system_changes is not None:
+        system = system_changes(system)
+    return scene, system
+
+
+def _the_plant(system) -> str:
+    plants = [c.name for c in system.components if c.model == "FiveBarPlant"]
+    if len(plants) != 1:
+        actuated = [c.name for c in system.components if c.model == "ActuatedFiveBarPlant"]
+        hint = (f" ({', '.join(actuated)} is an ActuatedFiveBarPlant: its truth is the reference of the scene "
+                "before scenarios.scenes.drives_in_plant)") if actuated else ""
+        raise ReferenceError(f"the reference needs exactly one FiveBarPlant, found {len(plants)}{hint}")
+    return plants[0]
+
+
+def _instances(system) -> dict:
+    instances = {}
+    for c in system.components:
+        try:
+            instances[c.name] = InProcessInstance(c.model, c.name)
+        except ValueError as exc:
+            raise ReferenceError(str(exc)) from None
+        for name in c.parameters:
+            if name not in instances[c.name].variables:
+                raise ReferenceError(f"component {c.name}: {c.model} has no parameter {name!r}")
+    return instances
+
+
+def _driving(system, plant_name) -> dict:
+    """Drive instance -> the plant joint it drives (:func:`scenarios.scenes.drive_joints`)."""
+    from .scenes import drive_joints
+
+    try:
+        return drive_joints(system, plant_name)
+    except ValueError as exc:
+        raise ReferenceError(str(exc)) from None
+
+
+def _links(system, instances, order, plant_name, coupling) -> dict:
+    """The drives that feed the plant, checked: their period is the step, they have an
+    electrical state and, but in ``"cosim"``, step before the plant."""
+    links, h = {}, system.step
+    for name, joint in _driving(system, plant_name).items():
+        drive = instances[name].slave.drive
+        if abs(drive.T - h) > 1e-12 * h:
+            raise ReferenceError(f"drive {name}: controller period T = {drive.T} s differs from the step {h} s")
+        if drive.params.L <= 0.0:
+            raise ReferenceError(f"drive {name}: L = 0 has no electrical state to integrate")
+        if coupling != "cosim" and order.index(name) > order.index(plant_name):
+            raise ReferenceError(f"drive {name} steps after the plant: its voltage would not be known")
+        links[name] = _DriveLink(name, joint - 1, instances[name].slave, v=drive.v)
+    return links
+
+
 def reference_run(scene_or_name, rtol: float = RTOL, atol: float = ATOL, stop_time: float | None = None,
                   method: str = METHOD, coupling: str = "monolithic", system_changes=None,
                   progress=None) -> ReferenceResult:
     """Run the reference of a scene (a name, a :class:`scenarios.scenes.Scene` or a System).
+
+    The components are the master's in-process instances, initialised and stepped by the
+    master's own loop (:class:`fmus.stepper.Stepper`, Gauss-Seidel order); only the plant's
+    step (the continuous block) and, coupled monolithically, the drives' (their voltage
+    sample) are the reference's.
 
     Parameters
     ----------
@@ -210,136 +384,48 @@ def reference_run(scene_or_name, rtol: float = RTOL, atol: float = ATOL, stop_ti
     ReferenceResult
         Keeps the rows so far and sets ``error`` when a component refused a step.
     """
-    from .scenes import Scene, drive_joints, get_scene
+    from .scenes import Scene
 
     if coupling not in COUPLINGS:
         raise ValueError(f"coupling = {coupling!r}; valid: {', '.join(COUPLINGS)}")
-    scene = get_scene(scene_or_name) if isinstance(scene_or_name, str) else scene_or_name
-    system = scene.system if isinstance(scene, Scene) else scene
-    if not isinstance(system, System):
-        raise TypeError(f"expected a scene name, a Scene or a System, got {type(scene_or_name).__name__}")
-    if stop_time is not None:
-        system = replace(system, stop_time=float(stop_time))
-    if system_changes is not None:
-        system = system_changes(system)
+    scene, system = _system_of(scene_or_name, stop_time, system_changes)
     h, steps = system.step, system.steps
-
-    slaves = {c.name: _slave(c) for c in system.components}
-    order = stepping_order(system, {n: slave_variables(s) for n, s in slaves.items()})
-    plants = [c.name for c in system.components if c.model == "FiveBarPlant"]
-    if len(plants) != 1:
-        actuated = [c.name for c in system.components if c.model == "ActuatedFiveBarPlant"]
-        hint = (f" ({', '.join(actuated)} is an ActuatedFiveBarPlant: its truth is the reference of the scene "
-                "before scenarios.scenes.drives_in_plant)") if actuated else ""
-        raise ReferenceError(f"the reference needs exactly one FiveBarPlant, found {len(plants)}{hint}")
-    plant_name = plants[0]
-    sim = slaves[plant_name].sim
-    inputs = {c.name: [] for c in system.components}
-    for conn in system.connections:
-        inputs[split_signal(conn.target)[0]].append((split_signal(conn.target)[1], conn.source))
-
-    # The drives that feed the plant (continuous block in "monolithic").
-    links = {}
+    plant_name = _the_plant(system)
+    instances = _instances(system)
+    order = stepping_order(system, {n: inst.variables for n, inst in instances.items()})
+    # Every output recorded; the plant and the drives step once per interval (no sub-steps).
+    names = [f"{n}.{v}" for n in order for v in _real_outputs(instances[n])]
+    replaced = {plant_name, *_driving(system, plant_name)}
+    system = replace(system, record=tuple(names), components=tuple(
+        replace(c, substeps=1) if c.name in replaced else c for c in system.components))
+    plant = _IntegratedPlant(instances[plant_name], coupling, (method, rtol, atol))
+    wrap = {"monolithic": _SampledDrive, "held_speed": _SampledDrive, "mean": _MeanTorqueDrive}.get(coupling)
+    drives = {name: wrap(instances[name]) for name in _driving(system, plant_name)} if wrap else {}
+    stepper = Stepper(system, {**instances, plant_name: plant, **drives}, order)
     try:
-        joints = drive_joints(system, plant_name)
-    except ValueError as exc:
+        stepper.initialize(0.0)
+    except CoSimulationError as exc:
         raise ReferenceError(str(exc)) from None
-    for name, joint in joints.items():
-        c, j = system.component(name), joint - 1
-        drive = slaves[c.name].drive
-        if abs(drive.T - h) > 1e-12 * h:
-            raise ReferenceError(f"drive {c.name}: controller period T = {drive.T} s differs from the step {h} s")
-        if drive.params.L <= 0.0:
-            raise ReferenceError(f"drive {c.name}: L = 0 has no electrical state to integrate")
-        if coupling != "cosim" and order.index(c.name) > order.index(plant_name):
-            raise ReferenceError(f"drive {c.name} steps after the plant: its voltage would not be known")
-        links[c.name] = _DriveLink(c.name, j, slaves[c.name], v=drive.v)
+    for name, inst in instances.items():
+        if inst.slave.error:
+            raise ReferenceError(f"{name}: {inst.slave.error}")
+    links = _links(system, instances, order, plant_name, coupling)
+    for name, drive in drives.items():
+        drive.link = links[name]
     monolithic = coupling in ("monolithic", "held_speed")
-    block = _Continuous(sim, list(links.values()) if monolithic else [], coupling == "held_speed")
+    plant.couple(_Continuous(plant.slave.sim, list(links.values()) if monolithic else [], coupling == "held_speed"),
+                 list(links.values()), stepper)
 
-    values = {}
-
-    def publish(name):
-        slave = slaves[name]
-        if name == plant_name:
-            for key, value in sim.outputs().items():
-                values[f"{name}.{key}"] = float(value)
-        else:
-            for key in outputs[name]:
-                values[f"{name}.{key}"] = float(getattr(slave, key))
-
-    outputs = {n: _real_outputs(s) for n, s in slaves.items()}
-    for name in order:
-        publish(name)
-    names = list(values)
-    rows = [[values[s] for s in names]]
-    substeps = {c.name: c.substeps for c in system.components}
-
-    nfev = n_steps = 0
-    first_step = None
-    error = None
+    rows, error = [stepper.row()], None
     start = _time.perf_counter()
     report_every = max(1, steps // 100)
     for k in range(steps):
-        t = k * h
         try:
-            for name in order:
-                slave = slaves[name]
-                for var, src in inputs[name]:
-                    setattr(slave, var, values[src])
-                if name == plant_name:
-                    z0 = np.concatenate([sim.y, [slaves[d].drive.i for d in links] if monolithic else []])
-                    block.held = [slave.tau1, slave.tau2]
-                    omega = fivebar.world_rates(sim.y[7:])
-                    for link in links.values():
-                        link.omega_held = omega[link.joint]
-                    if coupling == "mean":
-                        for link in links.values():
-                            block.held[link.joint] = link.tau_mean
-                    sol = solve_ivp(block.rhs, (t, t + h), z0, method=method, rtol=rtol, atol=atol,
-                                    first_step=first_step)
-                    if sol.status != 0 or not np.all(np.isfinite(sol.y[:, -1])):
-                        raise ReferenceError(f"{plant_name}: solve_ivp failed over [{t:.6g}, {t + h:.6g}] s: "
-                                             f"{sol.message}")
-                    nfev += sol.nfev
-                    n_steps += len(sol.t) - 1
-                    if len(sol.t) > 2:
-                        first_step = float(sol.t[-2] - sol.t[-3]) if len(sol.t) > 3 else float(sol.t[-2] - t)
-                    z = sol.y[:, -1]
-                    sim.y = z[:14].copy()
-                    sim.time = t + h
-                    publish(name)
-                    if monolithic:
-                        omega = fivebar.world_rates(sim.y[7:])
-                        for n, (d, link) in enumerate(links.items()):
-                            drive = slaves[d].drive
-                            drive.i = float(z[14 + n])
-                            w = link.omega_held if block.held_speed else omega[link.joint]
-                            values[f"{d}.i"] = drive.i
-                            values[f"{d}.tau"] = shaft_torque(drive.i, w, drive.params)
-                    continue
-                if monolithic and name in links:
-                    drive = slave.drive
-                    if drive.mode == "current":
-                        v = drive.controller.update(slave.i_ref, slave.i_hat)
-                    else:
-                        v = min(max(slave.v_ref, -drive.params.v_max), drive.params.v_max)
-                    links[name].v = drive.v = slave.v = v
-                    values[f"{name}.v"] = v
-                    continue
-                if coupling == "mean" and name in links:
-                    i_start, omega = slave.drive.i, slave.omega
-                n = substeps[name]
-                for j in range(n):
-                    if slave.do_step(t + j * h / n, h / n) is False:
-                        raise ReferenceError(f"{name} refused the step from t = {t:.6g} s: {slave.error}")
-                publish(name)
-                if coupling == "mean" and name in links:
-                    links[name].tau_mean = _mean_torque(slave, i_start, slave.v, omega, h)
-        except ReferenceError as exc:
+            stepper.step()
+        except (CoSimulationError, ReferenceError) as exc:
             error = str(exc)
             break
-        rows.append([values[s] for s in names])
+        rows.append(stepper.row())
         if progress is not None and (k + 1) % report_every == 0:
             progress((k + 1) / steps)
     wall = _time.perf_counter() - start
@@ -350,9 +436,9 @@ def reference_run(scene_or_name, rtol: float = RTOL, atol: float = ATOL, stop_ti
     if isinstance(scene, Scene):
         columns.update({name: signals[signal] for name, signal in scene.columns.items() if signal in signals})
     return ReferenceResult(time, signals, columns, tuple(order), coupling, method, rtol, atol, wall,
-                           nfev, n_steps, error,
+                           plant.nfev, plant.steps, error,
                            extra={"stop_time": system.stop_time, "plant": plant_name,
-                                  "mean_steps_per_interval": n_steps / max(1, len(rows) - 1)})
+                                  "mean_steps_per_interval": plant.steps / max(1, len(rows) - 1)})
 
 
 def common_rows(time_a, time_b) -> tuple[np.ndarray, np.ndarray]:
@@ -496,8 +582,9 @@ def main(argv=None) -> int:
         variants.append(("encoder 2^30 counts", lambda s: with_parameters(s, plant, encoder_counts=2 ** 30)))
     if drives:
         def no_friction(s):
-            for d in drives:
-                s = with_parameters(s, d, mu=0.0)
+            for d in drives:   # LuGre needs mu > 0: its drives lose the LuGre model too
+                lugre = s.component(d).parameters.get("friction") == "lugre"
+                s = with_parameters(s, d, mu=0.0, **({"friction": "tanh"} if lugre else {}))
             return s
         variants.append(("mu = 0", no_friction))
         if variants[0][0].startswith("encoder"):

@@ -4,23 +4,25 @@ Written from the thesis' text (chapter 6.3, 7.2.6), not from our code: the slidi
 s = ë + kv ė + kp e (7.22) with e = r_d - r (6.5); the adaptive gain (6.66) on a hand-made
 sequence of s; and what the sliding term is for: with a model error and a constant
 disturbance, the integral of k sat(s/phi) (7.21) removes the steady error that the PD law
-keeps (e = -d / (m* kp)).  Every test runs both the compiled kernel (controller/fastlaw.py)
-and the Python reference (controller/position.py).
+keeps (e = -d / (m* kp)).  The law is the C kernel (kernels/src/law.c); the exact model's
+terms come from the 5R kernel ("fast") or the general algorithm ("general").
 """
+import ctypes
 import dataclasses
 import math
 
 import numpy as np
 import pytest
 
-from controller import fastlaw
+import kernels
+from controller import law
 from controller.position import PositionController
 from controller.strategies import get_strategy
 from plant import fivebar, get_preset
 from tests.support.strategies import strategy_read_from_a_file
 
 BENCH = get_preset("bench")
-KERNELS = ("fast", "python")
+KERNELS = ("fast", "general")
 #: The reference point: the start of the circle (7.23), well inside the workspace.
 X_REF, Y_REF = 0.0, 0.108
 
@@ -84,8 +86,12 @@ def _jacobian_by_differences(q, h=1e-6):
     return J
 
 
+_IO = kernels.function("pc_law_io", ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double, ctypes.c_double,
+                       ctypes.POINTER(kernels.Refusal))
+
+
 def test_compiled_loop_entry_reads_its_inputs_in_the_documented_order():
-    """The compiled scene loop calls the law as ``law_io(buf, x, h)`` with
+    """The compiled scene loop calls the law as ``pc_law_io(context, x, t, h, refusal)`` with
     x = [q1, q2, dq1, dq2, ddq1, ddq2, x_d, y_d, dx_d, dy_d, ddx_d, ddy_d | tau1, tau2, ...].
     PDx has k = 0, Ĥ = m*·1, ĥ = 0, so τ = Jᵀ m* (ẍ_d + kv ė + kp e) (7.21): a change δ of the
     reference acceleration (ẍ_d, ÿ_d) changes τ by m* Jᵀ δ, whatever the output slots hold."""
@@ -96,7 +102,8 @@ def test_compiled_loop_entry_reads_its_inputs_in_the_documented_order():
         ctrl = PositionController(BENCH, get_strategy("PDx"), kernel="fast")
         x = np.full(18, 7.0)                            # output slots: stale values from a last sample
         x[:12] = (*q, 0.2, 0.1, 1.0, 2.0, X_REF, Y_REF, 0.0, 0.0, ddx_d, ddy_d)
-        assert fastlaw.law_io(ctrl._buf, x, 1e-3) == fastlaw.OK
+        context = law.loop_context(ctrl._binding(), np.zeros((0, 4)))
+        assert _IO(ctypes.addressof(context), x.ctypes.data, 0.0, 1e-3, kernels.Refusal()) == law.OK
         return x[12:14].copy(), ctrl.strategy.m_star
 
     tau0, m_star = torques(0.0, 0.0)

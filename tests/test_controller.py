@@ -97,11 +97,12 @@ def test_k_zero_is_computed_torque(space, model, tmp_path, monkeypatch):
 
 
 @pytest.mark.parametrize("source", ["preset", "file"])
-@pytest.mark.parametrize("kernel", ["fast", "python"])
+@pytest.mark.parametrize("kernel", ["fast", "general"])
 @pytest.mark.parametrize("space", ["q", "x"])
 def test_computed_torque_is_the_inverse_dynamics_of_the_commanded_acceleration(space, kernel, source):
-    """TC with the exact model: tau = inverse dynamics (5.74) of ddr_d + kv ė + kp e; both
-    implementations of the law, the strategy as a preset and as read from a file."""
+    """TC with the exact model: tau = inverse dynamics (5.74) of ddr_d + kv ė + kp e; the model's
+    terms from the 5R kernel and from the general algorithm, the strategy as a preset and as
+    read from a file."""
     meas, ref = sample_inputs()
     strategy = get_strategy(f"TC{space}") if source == "preset" else strategy_read_from_a_file(f"TC{space}")
     ctrl = PositionController(BENCH, strategy, model="exact", kernel=kernel)

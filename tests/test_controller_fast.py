@@ -1,26 +1,23 @@
-"""The compiled paths of the controller against their readable references.
+"""The controller's exact model by two formulations, and the law's refusals.
 
 * :func:`plant.fast5r.inverse_terms` equals :func:`plant.parallel.inverse_dynamics_terms`
   (M_M, v_M, g_M, Z, c) at random states of both presets, with m0, gravity and rotors;
 * :class:`ExactModel` with the compiled kernel equals the general one, and so does the exact
   controller;
-* the compiled law (:func:`controller.fastlaw.law_step`, ``kernel="fast"``) equals the Python
-  reference (``kernel="python"``) over many random samples, all eight strategies, with and
-  without the adaptive gain, including refusals: the compiled law refuses exactly where the
-  reference raises, leaves the state alone, and the caller raises the reference's message.
+* every refusal of the law's kernel becomes one message naming the variable, its value and
+  the time, and leaves the law's state alone; off the table the exact model takes over.
 """
 import math
 import re
 from dataclasses import replace
 
-import numba
 import numpy as np
 import pytest
 
-from controller import fastlaw
-from controller.model import ExactModel, TabulatedModel
+import kernels
+from controller.model import ExactModel
 from controller.position import PositionController
-from controller.strategies import ALL_STRATEGY_NAMES, get_strategy
+from controller.strategies import get_strategy
 from plant import fast5r, fivebar, get_preset
 from plant.parallel import inverse_dynamics_terms, mechanism_state
 
@@ -118,87 +115,7 @@ def test_exact_controller_kernels_agree(space):
             assert rel_err(a, b) < 1e-10, (name, k, a, b)
 
 
-# --- the compiled law ------------------------------------------------------------------------
-def random_inputs(rng, table_region=REGION):
-    """One random sample; about one in six is refused by the reference for one reason or another."""
-    kind = rng.integers(0, 24)
-    while True:
-        x, y = rng.uniform(table_region[0] - 0.03, table_region[1] + 0.03), rng.uniform(0.005, 0.30)
-        try:
-            ang = fivebar.inverse_kinematics(BENCH, x, y)
-            break
-        except fivebar.KinematicsError:
-            continue
-    meas = [ang[0] + rng.normal(0, 2e-3), ang[2] + rng.normal(0, 2e-3), *rng.normal(0, 1.0, 2),
-            *rng.normal(0, 20.0, 2)]
-    ref = [x + rng.normal(0, 3e-3), y + rng.normal(0, 3e-3), *rng.normal(0, 0.3, 2), *rng.normal(0, 5.0, 2)]
-    values = meas + ref
-    if kind == 0:
-        values[rng.integers(0, 12)] = rng.choice([math.nan, math.inf, -math.inf])
-    elif kind == 1:
-        values[0], values[1] = 0.0, math.pi                    # elbows too far apart: no assembly
-    elif kind == 2:
-        values[6], values[7] = 0.4, 0.1                        # reference out of reach
-    elif kind == 3:
-        values[6], values[7] = 0.0, rng.uniform(0.0, 0.03)     # reference in or near the near-singular band
-    return values
-
-
-def outcome(ctrl, t, values, dt):
-    try:
-        return ctrl.step(t, *values, dt)
-    except ValueError as exc:
-        return str(exc)
-
-
-def agree(a, b):
-    """The same message, or outputs equal to 1e-12 relative (torques and currents separately)."""
-    if isinstance(a, str) or isinstance(b, str):
-        return a == b
-    a, b = np.array(a), np.array(b)
-    return all(np.abs(a[part] - b[part]).max() <= 1e-12 * np.abs(b[part]).max() for part in (slice(0, 2), slice(2, 4)))
-
-
-@pytest.fixture(scope="module")
-def region_cache(tmp_path_factory):
-    return tmp_path_factory.mktemp("tables")
-
-
-@pytest.mark.parametrize("gamma", [None, (40.0, 25.0)])
-@pytest.mark.parametrize("name", ALL_STRATEGY_NAMES)
-def test_compiled_law_equals_the_reference(name, gamma, region_cache, monkeypatch):
-    monkeypatch.setenv("PARCOSIM_CACHE", str(region_cache))
-    st = get_strategy(name, "triangle")
-    if gamma is not None:
-        st = st.with_(gamma=gamma, k=st.k if any(st.k) else (30.0, 10.0))
-    args = dict(model_error=0.3, grid_step=0.01, extent=REGION, table_fallback=False)
-    fast = PositionController(BENCH, st, kernel="fast", **args)
-    ref = PositionController(BENCH, st, kernel="python", **args)
-    assert fast.compiled and not ref.compiled
-    rng = np.random.default_rng(2 * ALL_STRATEGY_NAMES.index(name) + (gamma is not None))
-    refused = answered = 0
-    for k in range(600):
-        values = random_inputs(rng)
-        dt = 1e-3 if k % 5 else 2.5e-4
-        probe = fastlaw.law_step(fast._buf.copy(), *values, dt)
-        a, b = outcome(fast, k * 1e-3, values, dt), outcome(ref, k * 1e-3, values, dt)
-        assert agree(a, b), (k, values, a, b)
-        # The compiled law refuses exactly where the reference raises.
-        assert (probe[6] == fastlaw.REFUSED) == isinstance(b, str), (k, values, b)
-        if isinstance(b, str):
-            refused += 1
-        else:
-            answered += 1
-            assert probe[:4] == tuple(a)
-        for attr in ("integral", "k", "s_prev", "s", "e"):
-            u, v = getattr(fast, attr), getattr(ref, attr)
-            assert np.allclose(u, v, rtol=1e-12, atol=1e-12 * max(1.0, *map(abs, v))), (k, attr, u, v)
-    assert refused > 60 and answered > 300
-    if gamma is not None:
-        assert fast.k != list(st.k)                             # the gains did adapt
-
-
-def test_compiled_law_raises_the_reference_messages(tmp_path, monkeypatch):
+def test_refusals_name_the_variable_and_leave_the_state_alone(tmp_path, monkeypatch):
     monkeypatch.setenv("PARCOSIM_CACHE", str(tmp_path))
     ctrl = PositionController(BENCH, get_strategy("TCMDx"), grid_step=0.01, extent=REGION, table_fallback=False)
     assert ctrl.compiled
@@ -217,13 +134,20 @@ def test_compiled_law_raises_the_reference_messages(tmp_path, monkeypatch):
         (dict(q1=0.0, q2=math.pi), "measured (q1, q2) = (0.0, 3.14159"),
         (dict(q1=top[0], q2=top[2], x_d=0.0, y_d=0.27), "left out of the table"),
         (dict(q1=side[0], q2=side[2], x_d=0.1, y_d=0.15), "outside the tabulated region"),
+        (dict(dq1=1e300), "at t = 0.25 s are not finite; largest input: dq1 = 1e+300"),   # the law overflows
     ]
+    state = ctrl._buf.copy()
     for change, message in cases:
         values = dict(zip(NAMES, good), **change)
-        with pytest.raises(ValueError, match=re.escape(message)):
+        with pytest.raises(kernels.Refused, match=re.escape(message)) as refused:
             ctrl.step(0.25, *values.values())
-        with pytest.raises(ValueError, match=re.escape(message)):
-            ctrl.step_reference(0.25, *values.values())
+        assert refused.value.time == 0.25 and refused.value.record()["message"] == str(refused.value)
+        assert np.array_equal(ctrl._buf, state)                 # nothing changed
+    nan = pytest.raises(kernels.Refused, match="input dq2")
+    with nan as refused:
+        ctrl.step(0.25, *dict(zip(NAMES, good), dq2=math.nan).values())
+    assert (refused.value.variable, refused.value.reason) == ("dq2", "NONFINITE")
+    assert math.isnan(refused.value.value)
 
 
 def test_unknown_kernel_is_refused():
@@ -238,17 +162,6 @@ def test_step_with_errors_returns_the_errors():
     out = ctrl.step_with_errors(0.0, ang[0], ang[2], 0, 0, 0, 0, x + 1e-3, y, 0, 0, 0, 0)
     assert out[4:] == tuple(ctrl.e) and out[:4] == PositionController(BENCH, get_strategy("PDq")).step(
         0.0, ang[0], ang[2], 0, 0, 0, 0, x + 1e-3, y, 0, 0, 0, 0)
-
-
-@pytest.mark.skipif(numba.config.DISABLE_JIT, reason="NUMBA_DISABLE_JIT=1: nothing is compiled")
-def test_law_is_compiled_once_for_float_arguments():
-    """Ints from a caller are converted to float64: no compilation per type combination."""
-    ctrl = PositionController(BENCH, get_strategy("PDq"))
-    x, y = 0.01, 0.15
-    ang = fivebar.inverse_kinematics(BENCH, x, y)
-    a = ctrl.step(0, ang[0], ang[2], 0, 0, 0, 0, x, y, 0, 0, 0, 0)
-    b = PositionController(BENCH, get_strategy("PDq")).step(0.0, ang[0], ang[2], *[0.0] * 4, x, y, *[0.0] * 4, 1e-3)
-    assert a == b and len(fastlaw.law_step.signatures) == 1
 
 
 def test_table_fallback_uses_the_exact_model_off_the_table(tmp_path, monkeypatch):

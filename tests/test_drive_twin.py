@@ -16,7 +16,6 @@ from scipy import stats
 # The compiled loop hashes its kernels' source: import them from the worktree before an FMU
 # loaded in this process imports its own bundled (temporary) copies under the same names.
 import controller.fastderivator  # noqa: F401
-import controller.fastlaw  # noqa: F401
 import controller.fasttrajectory  # noqa: F401
 import plant.fast5r  # noqa: F401
 from motor import Drive, fastdrive, friction as fr, motor1
@@ -201,7 +200,7 @@ def test_fidelity_twin_runs_compiled_as_in_process_and_numbers_do_not_change_the
     assert a.completed and np.array_equal(rows(a), rows(b))
     other = replace(twin, noise_seed=9, current_noise=0.05, drive_parameters=(("sigma0", 60.0),))
     c = simulate(_short(bench("TCMDq", "circle", fidelity=other)).system, mode="compiled")
-    assert c.extra["source"] == b.extra["source"]
+    assert c.extra["plan"] == b.extra["plan"]
     assert c.completed and not np.array_equal(rows(c), rows(b))
     drives = [comp for comp in scene.system.components if comp.model == "DCMotorDrive"]
     assert [d.parameters["noise_instance"] for d in drives] == [1, 2]

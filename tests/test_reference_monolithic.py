@@ -167,3 +167,71 @@ def test_bench_cosimulation_deviation_is_the_coupling():
     assert master.completed and ref.completed and cosim.completed
     assert abs(d["rms"] - coupling["rms"]) < 1e-9
     assert abs(d_x4["rms"] - d["rms"]) < 1e-9
+
+
+# --- the bench twin: the drive's own effects in the reference ----------------------------------
+
+TWIN = "bench_real_circle_TCMDq"
+
+
+def _drives_changed(**changes):
+    """``System -> System`` setting each drive's parameters; a callable value maps the old one."""
+    def change(system):
+        for c in system.components:
+            if c.model == "DCMotorDrive":
+                system = with_parameters(system, c.name, **{k: v(c.parameters[k]) if callable(v) else v
+                                                            for k, v in changes.items()})
+        return system
+    return change
+
+
+@pytest.fixture(scope="module")
+def twin_runs():
+    system = _system(TWIN, SHORT)
+    return {"system": system, "ref": reference_run(system), "master": simulate(system),
+            "cosim": reference_run(system, coupling="cosim")}
+
+
+def test_the_twins_reference_moves_with_the_drives_stiction_and_imperfections(twin_runs):
+    """The reference steps the drive's own model: three times the stiction, or the drive's effects
+    (LuGre, PWM, current noise and offset) off, move the end effector far more than the
+    co-simulation's coupling error (a reference that dropped them gave identical rows)."""
+    ref, coupling = twin_runs["ref"], deviation(twin_runs["master"], twin_runs["ref"])
+    stiction = deviation(reference_run(twin_runs["system"], system_changes=_drives_changed(mu_s=lambda v: 3 * v)), ref)
+    ideal = deviation(reference_run(twin_runs["system"], system_changes=_drives_changed(
+        friction="tanh", pwm_counts=0, current_noise=0.0, current_offset=0.0)), ref)
+    print(f"\n{TWIN} 0-{SHORT} s, reference moved by mu_s x3: max {stiction['max']:.2e} m, by the drive's effects "
+          f"off: max {ideal['max']:.2e} m; master - reference max {coupling['max']:.2e} m")
+    assert stiction["max"] > 10 * coupling["max"]
+    assert ideal["max"] > 10 * coupling["max"]
+
+
+def test_the_twins_reference_samples_the_drives_pwm_voltage(twin_runs):
+    """Each drive's voltage is its own sample (Drive.sample_voltage): a multiple of the PWM
+    quantum v_max / pwm_counts, the controller's unquantised output being kept inside."""
+    system, ref = twin_runs["system"], twin_runs["ref"]
+    for name in ("drive1", "drive2"):
+        c = system.component(name)
+        quantum = get_motor_preset(c.parameters["preset"]).v_max / c.parameters["pwm_counts"]
+        steps = ref[f"{name}.v"] / quantum
+        assert np.max(np.abs(steps - np.round(steps))) < 1e-9
+        assert np.abs(steps).max() > 10
+
+
+def test_the_twins_cosimulation_is_its_reference_up_to_the_coupling(twin_runs):
+    """The reference with the co-simulation's explicit coupling reproduces the master up to the
+    plant's RK4 error (every discrete part, the drives' included, is the same code); the
+    monolithic reference differs by the coupling error only (printed)."""
+    master, ref = twin_runs["master"], twin_runs["ref"]
+    d = deviation(master, ref)
+    print(f"\nmaster - reference, {TWIN} 0-{SHORT} s: rms {d['rms']:.2e} m, max {d['max']:.2e} m at "
+          f"t = {d['t_max']:.3f} s")
+    assert deviation(master, twin_runs["cosim"])["max"] < 1e-9
+    assert d["rms"] < 3e-5
+
+
+def test_a_component_refusing_its_initialisation_is_named():
+    """A drive whose parameters its model refuses (LuGre needs mu > 0): the reference says
+    which component and why, rather than failing later on a model that was never built."""
+    with pytest.raises(ReferenceError, match=r"drive1: initialisation refused: LuGre friction: Fc \(mu\) = 0.0"):
+        reference_run(TWIN, stop_time=0.01, system_changes=_drives_changed(mu=0.0))

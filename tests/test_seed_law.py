@@ -1,9 +1,8 @@
 """Seed 001's sliding-mode law (section 1.2; strategies SMCq, SMCx): its closed loop against
 the analytic sliding dynamics, and its relation to computed torque (docs/controller.md).
 
-Both implementations are run against these properties, the compiled law (``kernel="fast"``,
-controller/fastlaw.py) and the Python reference (``kernel="python"``, controller/position.py);
-nothing compares one with the other."""
+The law is the C kernel (kernels/src/law.c); the exact model's terms come from the 5R kernel
+(``kernel="fast"``) or the general algorithm (``kernel="general"``)."""
 import math
 
 import numpy as np
@@ -25,7 +24,7 @@ def analytic_s(s0, k, phi, t):
     return np.where(t < reach, s0 - math.copysign(k, s0) * t, inside * np.exp(-(k / phi) * (t - reach)))
 
 
-KERNELS = ("fast", "python")
+KERNELS = ("fast", "general")
 
 
 def sliding_deviation(name, dt, kernel="fast", duration=0.06):

@@ -8,9 +8,10 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from plant import wheeled_kernel as K
-from plant.wheeled import MAX_SUBSTEPS, SEED, FallenError, WheeledPendulum, upright_linearisation
+from plant.wheeled import MAX_SUBSTEPS, SEED, FallenError, WheeledPendulum, pack, upright_linearisation
 
 START = dict(psi=0.1, dphi=1.0, dtheta=2.0)
+SIX = [K.THETA, K.PSI, K.PHI, K.DTHETA, K.DPSI, K.DPHI]
 
 
 def torques(k):
@@ -88,6 +89,11 @@ def test_fall_is_reported_with_psi_and_time_and_keeps_the_state():
     assert 0.1 < err.time < 2.0 and "psi = " in str(err) and f"t = {err.time:.6g} s" in str(err)
     assert np.all(np.isfinite(sim.y)) and abs(sim.y[K.PSI]) < 0.5 * math.pi
     assert sim.time < err.time <= sim.time + 1e-3
+    # one refusal record (kernels.Refused): psi past 90 degrees at the end of the failing substep
+    record = err.record()
+    assert (record["variable"], record["unit"], record["reason"], record["time"]) == ("psi", "rad", "fallen_pitch",
+                                                                                      err.time)
+    assert abs(record["value"]) >= 0.5 * math.pi and record["message"] == str(err)
 
 
 def test_body_touching_the_floor_is_a_fall():
@@ -132,13 +138,11 @@ def test_balance_design_body_torque_column_is_the_plant_s_response():
     upright (controller.balance); the plant's own derivative (seed 000 (18)-(20), exact
     model) gives that column: the accelerations per N m of tau_d, nothing on the angles."""
     from controller.balance import _body_torque_column
-    from plant.wheeled import pack
-
     prm = pack(SEED)
     y, out = np.zeros(K.N_STATE), np.zeros(K.N_STATE)
     rates = []
     for tau_d in (1.0, -1.0):
-        K.derivative(prm[0], y, 0.0, 0.0, tau_d, out)
+        K.derivative(prm, y, 0.0, 0.0, tau_d, out)
         rates.append(out[[K.THETA, K.PSI, K.PHI, K.DTHETA, K.DPSI, K.DPHI]].copy())
     column = (rates[0] - rates[1]) / 2.0
     assert abs(column[4]) > 0.0                   # a body torque tilts the body
@@ -151,8 +155,6 @@ def test_encoders_read_the_count_nearest_to_the_wheel_relative_to_the_body(count
     (seed 000 (10): θ_l,r = θ ∓ (W/2R) φ, the encoder's stator turns with the body).  It reads
     the multiple of 2π/N nearest to that angle; N = 7 makes a count 0.9 rad, so rounding down
     or up by half a count cannot pass."""
-    from plant.wheeled import pack
-
     prm = pack(SEED)
     count = 2 * math.pi / counts
     half = SEED.W / (2 * SEED.R)
@@ -161,7 +163,7 @@ def test_encoders_read_the_count_nearest_to_the_wheel_relative_to_the_body(count
     for _ in range(20):
         y = np.zeros(K.N_STATE)
         y[[K.THETA, K.PSI, K.PHI]] = rng.uniform(-3.0, 3.0, 3)
-        K.sensors(prm, y, count, out, 0)
+        K.sensors(prm, y, count, out)
         relative = (y[K.THETA] - half * y[K.PHI] - y[K.PSI], y[K.THETA] + half * y[K.PHI] - y[K.PSI])
         for name, angle in zip(("enc_l", "enc_r"), relative):
             reading = out[K.OUTPUT_NAMES.index(name)]
@@ -188,3 +190,56 @@ def test_pendulum_substeps_beyond_their_bounds_are_refused(substeps):
     with pytest.raises(ValueError, match=f"substeps = {substeps}"):
         WheeledPendulum(substeps=substeps)
     WheeledPendulum(substeps=MAX_SUBSTEPS)        # the bound itself is allowed
+
+
+def test_the_c_derivative_linearises_to_the_lqr_design_model():
+    """Finite differences of the C derivative, with the drives of seed 000 (22) in front
+    (tau = (K_t/R_m) v - c omega), at the upright at rest, give the (A, B) the balance
+    controller is designed on (controller.balance.voltage_model)."""
+    from controller.balance import BalanceSettings, voltage_model
+    from motor import get_motor_preset
+
+    settings = BalanceSettings()
+    A_design, B_design = voltage_model(settings)
+    motor = get_motor_preset(settings.motor_preset)
+    c = motor.kt * motor.ke / motor.R + motor.b
+    half = SEED.W / (2 * SEED.R)
+    prm = pack(SEED)
+
+    def f(x, v):
+        y = np.zeros(K.N_STATE)
+        y[SIX] = x
+        omega_l = x[3] - half * x[5] - x[4]
+        omega_r = x[3] + half * x[5] - x[4]
+        dy = np.empty(K.N_STATE)
+        K.derivative(prm, y, motor.kt / motor.R * v[0] - c * omega_l, motor.kt / motor.R * v[1] - c * omega_r, 0.0,
+                     dy)
+        return dy[SIX]
+
+    eps = 1e-6
+    A = np.column_stack([(f(eps * e, (0, 0)) - f(-eps * e, (0, 0))) / (2 * eps) for e in np.eye(6)])
+    B = np.column_stack([(f(np.zeros(6), eps * e) - f(np.zeros(6), -eps * e)) / (2 * eps) for e in np.eye(2)])
+    np.testing.assert_allclose(A, A_design, rtol=1e-6, atol=1e-6)
+    np.testing.assert_allclose(B, B_design, rtol=1e-6, atol=1e-6)
+
+
+def test_the_balance_controller_refuses_a_non_finite_input_by_name_and_time():
+    """The C sample's refusal becomes one kernels.Refused with the slave's text; nothing starts."""
+    import kernels
+    from controller.balance import BalanceController, BalanceSettings, design_balance
+
+    controller = BalanceController(design_balance(BalanceSettings(yaw=False)))
+    with pytest.raises(kernels.Refused, match=r"input gyro = nan at t = 0.25 s is not finite") as caught:
+        controller.sample(0.25, 0.0, 0.0, math.nan)
+    assert (caught.value.variable, caught.value.time) == ("gyro", 0.25) and controller.x_hat is None
+
+
+def test_every_balance_refusal_code_has_its_message():
+    import kernels
+    from controller import fastbalance
+    from controller.balance import REASONS
+
+    assert set(REASONS) == {fastbalance.BAD_INPUT, fastbalance.INPUT_LIMIT, fastbalance.BAD_BUFFER}
+    refusal = kernels.Refusal(code=fastbalance.BAD_BUFFER, index=fastbalance.B_STATES + 2, value=9.0)
+    assert str(kernels.refused(REASONS, refusal, 0.5, limit=1e6)).startswith(
+        "the balance controller's buffer word states[2] = 9.0 at t = 0.5 s")

@@ -25,12 +25,12 @@ process share one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import replace
 
 import numpy as np
 from pythonfmu.enums import Fmi2Status
 
+from controller.law import delay
 from controller.model import DEFAULT_EXTENT, DEFAULT_GRID_STEP
 from controller.position import PositionController as _Controller
 from controller.strategies import get_strategy
@@ -177,25 +177,13 @@ class PositionController(GuardedSlave):
         self.check_sample_time(current_time, step_size, self.T, divides=False)
 
     def step(self, current_time, step_size):
-        # One call (the compiled law for PD/tabulated): outputs and errors together.
+        # One call: outputs and errors together; the controller refuses non-finite outputs
+        # (finite but absurd inputs, e.g. a speed of 1e300 rad/s, overflow the law), naming the
+        # largest input.
         out = self.controller.step_with_errors(
             current_time, self.q1, self.q2, self.dq1, self.dq2, self.ddq1, self.ddq2,
             self.x_d, self.y_d, self.dx_d, self.dy_d, self.ddx_d, self.ddy_d, step_size)
-        if not math.isfinite(sum(out)):             # one check for all six (NaN propagates)
-            # Finite but absurd inputs (e.g. a speed of 1e300 rad/s) overflow the law: name the largest.
-            name = max(INPUTS, key=lambda n: abs(getattr(self, n)))
-            raise ValueError(f"the law's outputs (tau1, tau2, i_ref1, i_ref2, e1, e2) = {tuple(out)!r} at "
-                             f"t = {current_time:.6g} s are not finite; largest input: {name} = {getattr(self, name)!r}")
         if len(self.delayed):
-            out = (*delay(self.delayed, out[:4]), *out[4:])
+            out = (*delay(self.delayed, out[:4]), *out[4:])   # the queue in C (pc_law_delay), as the compiled loop
         self.tau1, self.tau2, self.i_ref1, self.i_ref2, self.e1, self.e2 = out
         self.model_fallbacks = self.controller.fallbacks
-
-
-def delay(delayed: np.ndarray, commands) -> tuple:
-    """The oldest row of ``delayed`` (the commands to apply now); ``commands`` appended as the
-    newest, in place (the compiled loop's ``PositionControllerAdapter`` does the same)."""
-    applied = tuple(float(v) for v in delayed[0])
-    delayed[:-1] = delayed[1:]
-    delayed[-1] = commands
-    return applied

@@ -1,0 +1,73 @@
+/* The derivator (thesis 7.2.3): velocity and acceleration estimates of sampled angles.
+ *
+ * controller/derivators.py designs the chain (backward difference 7.19, Bessel low-passes F_v
+ * and F_a, their discrete state space) with scipy; every sample is then one product per
+ * channel c,
+ *
+ *     [dq_c; ddq_c; next state_c] = [[C, D], [A, B]] @ [state_c; q_c],
+ *
+ * summed here in index order (numpy's BLAS may differ in the last bit).
+ *
+ * One buffer of doubles holds the sizes, the design and the run state: pc_derivator, whose
+ * flexible array `data` holds, in this order,
+ *   the step matrix [[C, D], [A, B]], (2 + n) rows of n + 1, row-major;
+ *   the rest state per unit angle, n (x_rest = (I - A)^-1 B q);
+ *   the state with the newest input, (n + 1) rows of m: row j < n is filter state j of every
+ *   channel, row n the last angles.
+ * The sizes are read from the buffer: every entry point checks them against the buffer's
+ * length and refuses (PC_DERIVATOR_BAD_LAYOUT) a buffer they do not fit, so a forged FMU
+ * state cannot make a step read or write outside it.
+ */
+#ifndef PC_DERIVATOR_H
+#define PC_DERIVATOR_H
+
+#include "pc_common.h"
+
+/* Refusal codes; pc_refusal.index: the channel (BAD_INPUT, NONFINITE_OUTPUT: the first
+ * non-finite estimate, velocities 0..m-1 then accelerations m..2m-1) or the size word
+ * (BAD_LAYOUT: 0 states, 1 channels, 2 the buffer's length, 3 the scratch's length). */
+#define PC_DERIVATOR_BAD_INPUT 1        /* an angle not finite or beyond the limit */
+#define PC_DERIVATOR_NONFINITE_OUTPUT 2 /* an estimate came out non-finite: the state not advanced */
+#define PC_DERIVATOR_BAD_LAYOUT 3       /* sizes that do not fit the buffer */
+
+/* Largest number of filter states and of channels a buffer may declare. */
+#define PC_DERIVATOR_MAX_STATES 64
+#define PC_DERIVATOR_MAX_CHANNELS 64
+
+typedef struct {
+    double states;   /* n: filter states of one channel (difference, F_v, difference, F_a) */
+    double channels; /* m: angles filtered side by side */
+    double started;  /* 1.0 once at rest at some angles (run state); 0.0: at the first sample's */
+    double data[];   /* step matrix, rest state per unit angle, state (see above) */
+} pc_derivator;
+
+extern const pc_field pc_derivator_fields[];
+
+/* The buffers of one derivator, for its step and the compiled loop (pc_io_fn). */
+typedef struct {
+    pc_derivator *derivator; /* the buffer */
+    double *scratch;         /* n m doubles: the next state before it replaces the state */
+    long words;              /* doubles in the buffer */
+    long scratch_words;      /* doubles in scratch */
+    double limit;            /* pc_derivator_io: largest |q| accepted [rad] */
+} pc_derivator_context;
+
+/* The doubles a buffer of n states and m channels takes. */
+long pc_derivator_words(long states, long channels);
+
+/* The scratch a buffer of `words` doubles needs, n m; 0 when its sizes do not fit it. */
+long pc_derivator_scratch_words(const pc_derivator *d, long words);
+
+/* At rest at the angles q0[m]: both estimates zero from the next sample on. */
+int pc_derivator_reset(const pc_derivator_context *c, const double *q0, pc_refusal *r);
+
+/* Take the angles q[m] of a sample; out[2 m]: velocities (rad/s) then accelerations
+ * (rad/s^2).  Not started: first at rest at q.  Refused: BAD_INPUT (nothing changed, out
+ * untouched), NONFINITE_OUTPUT (out written, the state and `started` unchanged), BAD_LAYOUT. */
+int pc_derivator_step(const pc_derivator_context *c, const double *q, double limit, double *out,
+                      pc_refusal *r);
+
+/* Compiled loop: x = [q1, q2 | dq1, dq2, ddq1, ddq2], |q| <= c->limit (two channels). */
+int pc_derivator_io(void *context, double *x, double t, double h, pc_refusal *r);
+
+#endif
