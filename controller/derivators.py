@@ -83,7 +83,6 @@ import math
 import weakref
 
 import numpy as np
-from scipy import signal
 
 import kernels
 
@@ -120,11 +119,26 @@ def bessel_lowpass_sos(order, fc, T=SAMPLE_TIME):
     """
     if not 0.0 < fc < 0.5 / T:
         raise ValueError(f"cut-off {fc} Hz must lie in (0, {0.5 / T}) Hz for T = {T} s")
+    key = ("bessel_lowpass_sos", int(order), float(fc), float(T))
+    if key in PRECOMPUTED:
+        return PRECOMPUTED[key].copy()
+    from scipy import signal   # here, not at import: it takes about 1 s (an FMU's start, issue 27)
+
     prewarped = 2.0 / T * np.tan(np.pi * fc * T)
     zeros, poles, gain = signal.bessel(order, prewarped, analog=True, norm="mag", output="zpk")
     sos = signal.zpk2sos(*signal.bilinear_zpk(zeros, poles, gain, fs=1.0 / T))
     sos[:, :3] *= (sos[:, 3:].sum(axis=1) / sos[:, :3].sum(axis=1))[:, None]
+    if RECORDING:
+        PRECOMPUTED[key] = sos.copy()
     return sos
+
+
+#: Filters computed ahead, ``("bessel_lowpass_sos", order, fc, T)`` -> sos: an FMU's, computed
+#: when it was built for its parameters then and loaded from its resources
+#: (:mod:`fmus.designs`), so that starting it needs no scipy.signal.  While an FMU is built
+#: (``RECORDING``), each filter computed is added.
+PRECOMPUTED = {}
+RECORDING = False
 
 
 def dc_group_delay(sos, T=SAMPLE_TIME):
@@ -293,6 +307,8 @@ class Derivator:
             Complex gains from q to dq and to ddq; an ideal derivator has
             j 2 pi f and -(2 pi f)^2.
         """
+        from scipy import signal
+
         omega = 2 * np.pi * np.asarray(f, dtype=float) * self.T
         difference = 2j * np.sin(omega / 2) * np.exp(-0.5j * omega) / self.T  # (1 - z^-1)/T, no cancellation
         _, velocity_filter = signal.sosfreqz(self.velocity_sos, worN=omega)

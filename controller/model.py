@@ -235,6 +235,14 @@ def _save_table(path: Path, xs, ys, table) -> None:
             pass
 
 
+#: Tables computed ahead, :func:`_cache_key` -> (xs, ys, table): an FMU's, built when the FMU
+#: was built for its parameters then and loaded from its resources (:mod:`fmus.designs`), so
+#: that starting it builds no table and reads no user cache.  While an FMU is built
+#: (``RECORDING``), each table made or loaded is added.
+PRECOMPUTED = {}
+RECORDING = False
+
+
 def _cache_key(params, step, extent, band):
     # "v2": tables built with the compiled exact model (v1: the general algorithm; equal to round-off).
     text = repr((params, float(step), tuple(float(e) for e in extent), float(band), N_TERMS, "v2"))
@@ -254,12 +262,13 @@ class TabulatedModel:
         (x_min, x_max, y_min, y_max) of the grid, m.
     cache : bool
         Load the table from / save it to :func:`cache_dir` (``np.savez``), keyed by a
-        hash of the parameters, step, extent and band.
+        hash of the parameters, step, extent and band.  A table of :data:`PRECOMPUTED`
+        (an FMU's own) is taken before either.
 
     Attributes
     ----------
     build_seconds : float
-        Wall time spent building (0 when loaded from the cache).
+        Wall time spent building (0 when loaded from the cache or :data:`PRECOMPUTED`).
     """
 
     kind = "tabulated"
@@ -279,9 +288,14 @@ class TabulatedModel:
             raise ValueError(f"extent = {extent!r} is empty")
         self.params, self.step, self.extent = params, float(step), extent
         self.build_seconds = 0.0
-        path = cache_dir() / f"model_{_cache_key(params, step, extent, band)}.npz" if cache else None
+        key = _cache_key(params, step, extent, band)
+        path = cache_dir() / f"model_{key}.npz" if cache else None
         with _TABLE_LOCK:   # one build per table, also with controllers initialised from two threads
-            loaded = _load_table(path) if path is not None else None
+            loaded = PRECOMPUTED.get(key)
+            if loaded is not None:
+                loaded = tuple(a.copy() for a in loaded)
+            elif path is not None:
+                loaded = _load_table(path)
             if loaded is not None:
                 xs, ys, table = loaded
             else:
@@ -290,6 +304,8 @@ class TabulatedModel:
                 self.build_seconds = time.perf_counter() - start
                 if path is not None:
                     _save_table(path, xs, ys, table)
+            if RECORDING:
+                PRECOMPUTED[key] = (xs.copy(), ys.copy(), table.copy())
         self.xs, self.ys = xs, ys
         # The kernel's pc_law_table; ``table`` is its values' view (shape (ny, nx, N_TERMS)).
         self.kernel_table = law.pack_table(float(xs[0]), float(ys[0]), self.step, table)

@@ -1,9 +1,12 @@
 """Build the parcosim FMUs with pythonfmu and fix their model descriptions.
 
-Each FMU bundles the pure model packages (``plant``, ``motor``, ``controller``) and the
-``fmus`` modules its slaves run on in its resources, under a private package name
-(:mod:`fmus.bundle`), so an importer needs only a Python 3.11 with numpy, scipy, numba,
-control and pythonfmu, and its own packages of those names are left alone.  Each FMU's
+Each FMU bundles the pure model packages (``plant``, ``motor``, ``controller``), the C
+kernels (``kernels``, the built library loaded by path) and the ``fmus`` modules its slaves
+run on in its resources, under a private package name (:mod:`fmus.bundle`), and the designs
+its initialisation computes with its parameters as built (:func:`precompute`,
+:mod:`fmus.designs`), so an importer needs a Python 3.11 with numpy and pythonfmu (and scipy
+and python-control when a parameter set away from the build's asks for a new design; numba
+while a model's kernel still uses it), and its own packages of those names are left alone.  Each FMU's
 binary is parcosim's FMI wrapper (:mod:`fmus.wrapper`), compiled once per machine; without
 a C compiler it stays pythonfmu's.
 """
@@ -18,6 +21,7 @@ from pathlib import Path
 
 from pythonfmu import FmuBuilder
 
+from . import designs
 from .archive import rewrite
 from .bundle import source_files, write_bundle
 from .foreign import built_by_parcosim, mark_file
@@ -40,23 +44,33 @@ def build_bundled_fmu(script, model: str, dest, resources=(), feedthrough=None, 
     pythonfmu makes the model description and the archive; the resources then hold the
     bundle (:func:`fmus.bundle.write_bundle`, the slave module inside it, named dotted by
     ``slavemodule.txt``, and a copy as ``<that name>.py``, which pythonfmu's binary runs),
-    the mark (:func:`fmus.foreign.mark_file`) and ``resources`` (files or folders); the
+    the mark (:func:`fmus.foreign.mark_file`), ``resources`` (files or folders) and, for a
+    slave of ``fmus/slaves``, the designs its initialisation computes (:func:`precompute`); the
     ModelStructure is fixed (``feedthrough``: output -> inputs,
     :func:`fmus.modeldescription.fix_model_structure`) and parcosim's wrapper installed with
     the FMU's identity (:func:`fmus.wrapper.install_wrapper`).  ``options``: pythonfmu's
     model options (``canHandleVariableCommunicationStepSize`` ...).
     """
     script, dest = Path(script).resolve(), Path(dest)
-    extra = () if script.parent == ROOT / "fmus" / "slaves" else (script,)
+    ours = script.parent == ROOT / "fmus" / "slaves"
+    extra = () if ours else (script,)
     with tempfile.TemporaryDirectory(prefix="parcosim_build_") as tmp:
         tmp = Path(tmp)
         package = write_bundle(tmp / "bundle", extra)
+        if ours:
+            folder = tmp / "precompute"
+            folder.mkdir()
+            for item in map(Path, resources):
+                (shutil.copytree if item.is_dir() else shutil.copy2)(item, folder / item.name)
+            computed = precompute(script.stem, model, folder, tmp / designs.DESIGNS_FILE)
+            resources = [*resources, *([computed] if computed else [])]
         staged = tmp / script.name
         shutil.copy2(script, staged)
         path_before = list(sys.path)
         try:
-            fmu = FmuBuilder.build_FMU(staged, dest=tmp / "out" / dest.name, **options, project_files=[
-                package, mark_file(tmp, model, package.name), *map(Path, resources)])
+            with designs.isolated():    # pythonfmu instantiates the slave with the resources
+                fmu = FmuBuilder.build_FMU(staged, dest=tmp / "out" / dest.name, **options, project_files=[
+                    package, mark_file(tmp, model, package.name), *map(Path, resources)])
         finally:
             sys.path[:] = path_before   # pythonfmu leaves the script's folder on sys.path
         slave_module = f"{package.name}.fmus.slaves.{script.stem}"
@@ -69,6 +83,30 @@ def build_bundled_fmu(script, model: str, dest, resources=(), feedthrough=None, 
         dest.parent.mkdir(parents=True, exist_ok=True)
         shutil.move(fmu, dest)
     return dest
+
+
+def precompute(module: str, model: str, resources: Path, path: Path) -> Path | None:
+    """Write to ``path`` the designs file (:mod:`fmus.designs`) of the FMU of slave ``module``
+    (class ``model``) whose resources are the folder ``resources``: what its initialisation
+    computes with its parameters as built (its start values, ``start_values.json`` if there),
+    found by initialising it here; return ``path``, or None when it computes none.  An FMU
+    whose initialisation fails here gets no file, with a warning (it then computes its designs
+    when it starts, or refuses as it did here)."""
+    slave_class = getattr(importlib.import_module(f"fmus.slaves.{module}"), model)
+    with designs.recording() as recorded:
+        slave = slave_class(instance_name=model, resources=str(resources))
+        slave.setup_experiment(0.0)
+        slave.enter_initialization_mode()
+        slave.exit_initialization_mode()
+        found = recorded()
+    if slave.error:
+        warnings.warn(f"{model}: its designs are not computed ahead, its initialisation here with its start values "
+                      f"failed: {slave.error}", stacklevel=3)
+        return None
+    if not found:
+        return None
+    designs.write(found, path)
+    return path
 
 
 class ForeignFmuError(ValueError):

@@ -28,8 +28,8 @@ PACKAGES = ("kernels", "plant", "motor", "controller")
 #: The ``fmus`` modules bundled: the slave base, and the in-process master a system FMU
 #: (``ClosedLoop``, ``ControlChain``) steps its components with; plus ``fmus/slaves``.
 FMUS_MODULES = ("__init__.py", "guarded.py", "slavestate.py", "fmustate.py", "stateformat.py", "budget.py", "parts.py",
-                "refusals.py", "identity.py", "embedded.py", "foreign.py", "instances.py", "master.py", "registry.py",
-                "stepper.py", "system.py", "systemslave.py", "compiled.py", "adapters.py")
+                "refusals.py", "identity.py", "designs.py", "embedded.py", "foreign.py", "instances.py", "master.py",
+                "registry.py", "stepper.py", "system.py", "systemslave.py", "compiled.py", "adapters.py")
 #: Top-level names whose imports the bundle rewrites to its private package.
 REWRITTEN = frozenset(PACKAGES + ("fmus",))
 #: The private package's name: this prefix and 12 hex digits of the sources' hash.
@@ -62,7 +62,9 @@ def bundle_name(extra=()) -> str:
 
 def write_bundle(directory, extra=()) -> Path:
     """Write the bundle (package :func:`bundle_name`, imports rewritten; ``extra`` slave
-    modules in ``fmus/slaves``) into ``directory`` and return the package's folder."""
+    modules in ``fmus/slaves``; the C kernels' library built first if missing or stale) into
+    ``directory`` and return the package's folder."""
+    _build_kernels()
     name = bundle_name(extra)
     package = Path(directory) / name
     for relative, path in source_files(extra):
@@ -75,6 +77,24 @@ def write_bundle(directory, extra=()) -> Path:
     (package / "__init__.py").write_text(f'"""parcosim\'s model code bundled into an FMU as {name} '
                                          '(fmus/bundle.py)."""\n')
     return package
+
+
+def _build_kernels() -> None:
+    """Build the C kernels' library now if it is missing or stale: the bundle carries it and
+    the FMU loads it by path, so starting an FMU compiles nothing (issue 27, item 5).
+
+    Raises
+    ------
+    kernels.KernelsUnavailable
+        It cannot be built (no C compiler: the message says what to install).
+    """
+    import kernels
+
+    kernels.library()
+    if not kernels.LIBRARY.exists():     # $PARCOSIM_KERNELS_LIB named another build to load
+        from kernels import build
+
+        build.build()
 
 
 def rewrite_imports(source: bytes, package: str, filename: str = "<bundled>") -> bytes:

@@ -8,7 +8,8 @@
   ``fmus`` modules that step a system in process.
 * :func:`with_start_values`: a copy of an FMU whose parameters start at given values, in
   its model description and, for the slave, in ``resources/start_values.json``
-  (:mod:`fmus.guarded`): what an SSP package gives each instance so that its parameters
+  (:mod:`fmus.guarded`), with the designs those values need (``resources/designs.npz``,
+  :mod:`fmus.designs`): what an SSP package gives each instance so that its parameters
   hold in a tool that ignores parameter bindings (fmpy's SSP runner).
 """
 from __future__ import annotations
@@ -22,10 +23,13 @@ from pathlib import Path
 from xml.etree import ElementTree as ET
 
 from .archive import rewrite
-from .build import ROOT, STATE_OPTIONS, build_bundled_fmu
+from .build import ROOT, STATE_OPTIONS, build_bundled_fmu, precompute
+from .bundle import bundle_name
+from .designs import DESIGNS_FILE
 from .embedded import FOREIGN_DIR, SYSTEM_FILE, system_to_dict
 from .foreign import is_fmu_file
 from .guarded import START_VALUES_FILE
+from .identity import IDENTITY_FILE
 from .system import System
 
 #: Slave module and class of each system role.
@@ -109,7 +113,9 @@ def _start_text(value) -> str:
 def with_start_values(fmu, values: dict, path) -> Path:
     """A copy of ``fmu`` at ``path`` whose variables ``values`` (name -> value of the
     variable's type) start there: the ``start`` attributes of its modelDescription.xml and,
-    read by every parcosim slave at instantiation, ``resources/start_values.json``."""
+    read by every parcosim slave at instantiation, ``resources/start_values.json``; the
+    designs its initialisation computes with them are computed here (``resources/designs.npz``,
+    beside the FMU's own: :func:`_designs_with`)."""
     fmu, path = Path(fmu), Path(path)
     with zipfile.ZipFile(fmu) as z:
         root = ET.fromstring(z.read("modelDescription.xml"))
@@ -125,5 +131,31 @@ def with_start_values(fmu, values: dict, path) -> Path:
         raise ValueError(f"{fmu.name} has no variables {sorted(missing)}")
     ET.indent(root)
     xml = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
-    return rewrite(fmu, path, {"modelDescription.xml": xml,
-                               f"resources/{START_VALUES_FILE}": json.dumps(values, indent=1)})
+    members = {"modelDescription.xml": xml, f"resources/{START_VALUES_FILE}": json.dumps(values, indent=1)}
+    computed = _designs_with(fmu, values)
+    if computed is not None:
+        members[f"resources/{DESIGNS_FILE}"] = computed
+    return rewrite(fmu, path, members)
+
+
+def _designs_with(fmu: Path, values: dict) -> bytes | None:
+    """The designs file (:mod:`fmus.designs`) of ``fmu`` started at ``values``, computed
+    here; None (the FMU keeps its own) when it carries none (its initialisation computes
+    none, or it is not one of our slaves) or was built from other sources than these (their
+    code makes its designs)."""
+    with zipfile.ZipFile(fmu) as z:
+        names = set(z.namelist())
+        if f"resources/{DESIGNS_FILE}" not in names or "resources/slavemodule.txt" not in names:
+            return None         # its initialisation computes none, or it is not ours
+        identity = json.loads(z.read(f"resources/{IDENTITY_FILE}"))
+        module = z.read("resources/slavemodule.txt").decode().strip().rsplit(".", 1)[-1]
+        if identity.get("package") != bundle_name():
+            return None
+        with tempfile.TemporaryDirectory(prefix="parcosim_designs_") as tmp:
+            folder = Path(tmp) / "resources"
+            bundled = (f"resources/{identity['package']}", "resources/pythonfmu/")
+            z.extractall(tmp, [n for n in names if n.startswith("resources/") and not n.startswith(bundled)])
+            folder.mkdir(exist_ok=True)
+            (folder / START_VALUES_FILE).write_text(json.dumps(values))
+            computed = precompute(module, identity["model"], folder, Path(tmp) / DESIGNS_FILE)
+            return computed.read_bytes() if computed else None

@@ -47,6 +47,21 @@ class Field(ctypes.Structure):
 _library = None
 
 
+#: True inside an FMU: the package runs under its bundle's private name (fmus/bundle.py), with
+#: the library built from its sources when the FMU was built (never stale, never built here).
+BUNDLED = __name__ != "kernels"
+
+
+def _folder() -> Path:
+    """This package's folder.  In an FMU, the first one that still exists: the FMUs of one
+    build share one bundle, which the FMI wrapper points at each one's extraction, dropping
+    those an importer deleted (docs/bundle.md, "Loading")."""
+    for entry in __path__:
+        if os.path.isdir(entry):
+            return Path(entry)
+    return HERE
+
+
 def _sources_present() -> bool:
     return (HERE / "src").is_dir() and any((HERE / "src").glob("*.c"))
 
@@ -79,7 +94,7 @@ def library() -> ctypes.CDLL:
     if override:
         _library = _load(Path(override))
         return _library
-    if _sources_present():
+    if not BUNDLED and _sources_present():
         from . import build
 
         wanted = build.sources_hash()
@@ -95,10 +110,11 @@ def library() -> ctypes.CDLL:
             # a fresh path: dlopen would hand back the stale library already loaded
             _library = _load(_fresh_copy(LIBRARY))
             return _library
-    elif not LIBRARY.exists():
-        raise KernelsUnavailable(f"parcosim's C kernels are missing: no {LIBRARY} (reinstall parcosim with "
+    path = _folder() / LIBRARY.name
+    if not path.exists():
+        raise KernelsUnavailable(f"parcosim's C kernels are missing: no {path} (reinstall parcosim with "
                                  "'pip install -e .', which builds them with the system C compiler)")
-    _library = _load(LIBRARY)
+    _library = _load(path)
     return _library
 
 

@@ -22,9 +22,10 @@ pole on the plant zero makes delta equal that zero: K cancels it, and the
 reference-to-current response is third order (poles 0, 0.6, 0.7).
 """
 
+from __future__ import annotations
+
 from dataclasses import dataclass
 
-import control
 import numpy as np
 
 from motor import _checks, fastdrive
@@ -48,6 +49,8 @@ def current_transfer_function(params):
     -------
     control.TransferFunction
     """
+    import control   # here, not at import: it takes 1-2 s (an FMU's start, issue 27)
+
     p = params
     den = np.polyadd(np.polymul([p.L, p.R], [p.J_rotor, p.b]), [p.kt * p.ke])
     return control.tf([p.J_rotor, p.b], den)
@@ -63,10 +66,11 @@ class CurrentControllerDesign:
         Coefficients of K(z) (C.5).
     T : float
         Sample time [s].
-    plant : control.TransferFunction
-        ZOH discretisation G_I(z) of (B.10) (C.3).
-    controller : control.TransferFunction
-        K(z).
+    plant : control.TransferFunction or None
+        ZOH discretisation G_I(z) of (B.10) (C.3); None in a design loaded from an FMU's
+        resources (:data:`PRECOMPUTED`).
+    controller : control.TransferFunction or None
+        K(z); None likewise.
     desired_poles : numpy.ndarray
         The four placed poles (requested ones and the plant zero).
     closed_loop_poles : numpy.ndarray
@@ -150,6 +154,11 @@ def design_current_controller(params, T=THESIS_T, poles=THESIS_POLES):
     poles = [_checks.finite(f"poles[{k}]", p) for k, p in enumerate(poles)]
     if len(poles) != 3 or any(abs(p) >= 1.0 for p in poles):
         raise ValueError(f"poles must be three values with |z| < 1, got {poles!r}")
+    key = design_key(params, T, poles)
+    if key in PRECOMPUTED:
+        return PRECOMPUTED[key]
+    import control   # here, not at import: it takes 1-2 s (an FMU's start, issue 27)
+
     plant = control.c2d(current_transfer_function(params), T, "zoh")
     num, den = _tf_coefficients(plant)
     if len(num) != 2 or len(den) != 3:
@@ -163,8 +172,25 @@ def design_current_controller(params, T=THESIS_T, poles=THESIS_POLES):
     # Compare characteristic polynomials: robust to root ordering.
     if not np.allclose(np.poly(cl_poles).real, np.poly(desired), rtol=0, atol=1e-9):
         raise RuntimeError(f"pole placement failed: closed-loop poles {cl_poles}, wanted {desired}")
-    return CurrentControllerDesign(alpha, beta, gamma, delta, T, plant, controller,
-                                   desired, cl_poles)
+    design = CurrentControllerDesign(alpha, beta, gamma, delta, T, plant, controller, desired, cl_poles)
+    if RECORDING:
+        PRECOMPUTED[key] = design
+    return design
+
+
+#: Designs computed ahead, :func:`design_key` -> :class:`CurrentControllerDesign` (without
+#: ``plant`` and ``controller``): an FMU's, computed when it was built for its parameters then
+#: and loaded from its resources (:mod:`fmus.designs`), so that starting it needs no
+#: python-control.  While an FMU is built (``RECORDING``), each design computed is added.
+PRECOMPUTED = {}
+RECORDING = False
+
+
+def design_key(params, T, poles) -> tuple:
+    """What :func:`design_current_controller` depends on, as plain numbers."""
+    p = params
+    return ("current_controller", *(float(v) for v in (p.R, p.L, p.kt, p.ke, p.b, p.J_rotor, T)),
+            *(float(v) for v in poles))
 
 
 class CurrentController:

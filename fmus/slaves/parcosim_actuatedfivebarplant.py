@@ -21,6 +21,7 @@ process share one Python interpreter and its module cache.
 from __future__ import annotations
 
 from fmus import budget
+from fmus import designs
 from fmus.guarded import MIN_STEP, GuardedSlave
 from fmus.refusals import PRESET_VALUE, TINY, refuse_absurd
 from fmus.parts import (PLANT_OUTPUTS, CurrentLoopSteps, build_drive, build_plant, correct_plant, declare_drive_options,
@@ -40,6 +41,7 @@ class ActuatedFiveBarPlant(CurrentLoopSteps, GuardedSlave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
+        designs.load(self.resources)   # what its build computed ahead (fmus/designs.py)
         d = self.declare
         for j in JOINTS:
             d(f"i_ref{j}", "input", 0.0, f"Drive {j}: current reference, sampled at the step start (current mode) [A]")

@@ -13,6 +13,7 @@ one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
+from fmus import designs
 from fmus.embedded import LoopCore
 from fmus.systemslave import SystemSlave
 
@@ -24,6 +25,7 @@ class ClosedLoop(SystemSlave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
+        designs.load(self.resources)   # what its build computed ahead (fmus/designs.py)
         self.declare("x", "output", 0.0, f"End effector x ({self.plant}.x) [m]")
         self.declare("y", "output", 0.0, f"End effector y ({self.plant}.y) [m]")
         for signal in self.system.record:

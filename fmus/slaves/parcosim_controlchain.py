@@ -17,6 +17,7 @@ one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
+from fmus import designs
 from fmus.embedded import ChainCore, chain_interface
 from fmus.systemslave import SystemSlave
 
@@ -30,6 +31,7 @@ class ControlChain(SystemSlave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
+        designs.load(self.resources)   # what its build computed ahead (fmus/designs.py)
         self.measured, commanded = chain_interface(self.system, self.plant)
         self.commanded = tuple(commanded)
         for name in self.measured:

@@ -12,6 +12,7 @@ process share one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
+from fmus import designs
 from fmus.guarded import MIN_STEP, GuardedSlave
 from fmus.refusals import refuse_absurd
 from fmus.parts import CurrentLoopSteps, build_drive, declare_drive_options, declare_motor
@@ -28,6 +29,7 @@ class DCMotorDrive(CurrentLoopSteps, GuardedSlave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
+        designs.load(self.resources)   # what its build computed ahead (fmus/designs.py)
         d = self.declare
         d("i_ref", "input", 0.0, "Current reference, sampled at the step start (current mode) [A]")
         d("v_ref", "input", 0.0, "Commanded voltage, applied over the step, saturated at +-v_max (voltage mode) [V]")

@@ -22,6 +22,7 @@ import numpy as np
 
 from controller.derivators import DEFAULT_FC_ACC, DEFAULT_FC_VEL, SAMPLE_TIME
 from controller.derivators import Derivator as _Derivator
+from fmus import designs
 from fmus.guarded import MIN_STEP, GuardedSlave
 from fmus.refusals import ABSURD, refuse_absurd, require_finite
 
@@ -39,6 +40,7 @@ class Derivator(GuardedSlave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
+        designs.load(self.resources)   # what its build computed ahead (fmus/designs.py)
         d = self.declare
         d("q1", "input", 0.0, "Chain 1 actuated angle sample [rad]")
         d("q2", "input", 0.0, "Chain 2 actuated angle sample [rad]")

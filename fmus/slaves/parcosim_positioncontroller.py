@@ -15,8 +15,10 @@ before), ``e1``, ``e2`` stay the present errors.
 Numeric parameters ``lam``, ``m_star``, ``phi``, ``k1``, ``k2``, ``kt1``, ``kt2`` start at -1,
 meaning "the strategy preset's value" (Tables 6-8; ``trajectory`` picks Table 6 or 7 for
 joint-space strategies) or the motor presets' kt.  ``gamma1``, ``gamma2`` > 0 turn on the
-adaptive gain (6.66).  The tabulated model's grid (``grid_step``, ``x_min`` ... ``y_max``)
-is built at initialisation or loaded from the cache (``controller.model.cache_dir``).
+adaptive gain (6.66).  The tabulated model's table travels in the FMU's resources, built with
+the FMU for its parameters then (:mod:`fmus.designs`); other parameters (the grid ``grid_step``,
+``x_min`` ... ``y_max``, the plant's, ``model_error``) give another table, loaded from the user's
+cache (``controller.model.cache_dir``) or built at initialisation, which the log says.
 
 The module name is unique among parcosim slaves: all FMUs loaded in one
 process share one Python interpreter and its module cache.
@@ -26,11 +28,13 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+from pythonfmu.enums import Fmi2Status
 
 from controller.law import delay
 from controller.model import DEFAULT_EXTENT, DEFAULT_GRID_STEP
 from controller.position import PositionController as _Controller
 from controller.strategies import get_strategy
+from fmus import designs
 from fmus.guarded import MIN_STEP, GuardedSlave
 from fmus.refusals import PRESET_VALUE, refuse_absurd, refuse_tiny, require_finite
 from fmus.parts import declare_counter_masses, with_counter_masses
@@ -58,6 +62,7 @@ class PositionController(GuardedSlave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
+        designs.load(self.resources)   # what its build computed ahead (fmus/designs.py)
         d = self.declare
         for name, text in (("q1", "Measured q1 [rad]"), ("q2", "Measured q2 [rad]"),
                            ("dq1", "Measured dq1 [rad/s]"), ("dq2", "Measured dq2 [rad/s]"),
@@ -145,6 +150,11 @@ class PositionController(GuardedSlave):
             with_counter_masses(self, params), strategy, model=self.model, model_error=self.model_error,
             grid_step=self.grid_step, extent=(self.x_min, self.x_max, self.y_min, self.y_max),
             kt=kt, T=self.T, cache=bool(self.cache), table_fallback=bool(self.table_fallback))
+        built = getattr(self.controller.model, "build_seconds", 0.0)
+        if built:
+            self.log(f"{self.instance_name}: the tabulated model was built at initialisation in {built:.2f} s "
+                     "(its parameters are not those the FMU was built with, nor in the user's cache)",
+                     Fmi2Status.ok, category="logAll")
 
     def _check_table(self):
         """The tabulated model's grid parameters, named (the model's own messages are about its grid)."""
