@@ -12,8 +12,8 @@ kernel), a drive written in C through the master's FMU calls, and MuJoCo's step 
 2. **Per component** (the same rounds, timers on: ``bench_master.breakdown``), µs per
    communication step: the slave's own Python ``do_step`` in process; the master's whole call in
    process (inputs, ``do_step``, outputs) and through the FMU (``fmi2SetReal``, ``fmi2DoStep``,
-   ``fmi2GetReal``); the instance's line of the compiled loop (its adapter's ``emit``,
-   :mod:`fmus.compiled`) timed alone in a compiled loop of 500 calls from the state reached at
+   ``fmi2GetReal``); the instance's C I/O step (its adapter's ``kernel``,
+   :mod:`fmus.compiled`) timed alone in the C loop, 500 calls from the state reached at
    the end of the run, its last inputs held, best of ``--rounds`` (a timer adds about 0.3 µs a
    call to the first three).
 3. **One step of** a drive through :class:`fmus.instances._FmuInstance` (the master's FMU path):
@@ -35,7 +35,6 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
-from numba import njit  # noqa: F401 - used by the generated timing loops
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -52,46 +51,40 @@ CALLS = 2000
 KERNEL_CALLS = 500
 
 
-def compiled_plans(system) -> list:
+def compiled_plans(system):
     """Run ``system`` compiled and return its :class:`fmus.compiled.Plan` (state at the end)."""
     plans = []
-    original = compiled.Plan.load
+    original = compiled.Plan.__init__
 
-    def load(plan):
+    def init(plan, *args, **kwargs):
+        original(plan, *args, **kwargs)
         plans.append(plan)
-        return original(plan)
 
-    compiled.Plan.load = load
+    compiled.Plan.__init__ = init
     try:
         result = simulate(system, mode="compiled")
     finally:
-        compiled.Plan.load = original
+        compiled.Plan.__init__ = original
     if result.error or not plans:
         raise RuntimeError(f"compiled run: {result.error or result.extra.get('fallback')}")
     return plans[0]
 
 
-def kernel_us(adapter, rounds: int) -> float:
-    """µs per call of ``adapter``'s compiled line, best of ``rounds`` loops of :data:`KERNEL_CALLS`
-    (or of the calls before a refusal, if at least 50)."""
-    arrays = [f"a{k}" for k in range(len(adapter.arrays))]
-    body = "\n".join("        " + line for line in adapter.emit(arrays, "x", "0.5", repr(adapter.h)))
-    source = (f"def loop({', '.join(arrays)}, x, n):\n    for k in range(n):\n{body}\n        if st != 0:\n"
-              "            return k\n    return n\n")
-    namespace = {}
-    for m in adapter.modules:
-        package, _, name = m.rpartition(".")
-        namespace[name] = __import__(m, fromlist=[name])
-    exec(compile(source, f"<timing loop of {adapter.name}>", "exec"), namespace)
-    loop = njit(namespace["loop"])
+def kernel_us(plan, n: int, rounds: int) -> float:
+    """µs per call of the ``n``-th member's C I/O step, alone in the C loop
+    (:class:`fmus.compiled.LoopPlan` of that one member, no connections) for
+    :data:`KERNEL_CALLS` steps from the state reached at the end of the run, its last inputs
+    held; best of ``rounds`` (or of the calls before a refusal, if at least 50)."""
+    adapter, member = plan.adapters[n], plan.loop.members[n]
+    alone = compiled.LoopPlan([(1, [compiled.Member(member.io, member.context, adapter.x)])], [])
+    values, record = np.zeros(1), np.zeros((KERNEL_CALLS + 1, 1))
     best = float("inf")
-    for r in range(rounds + 1):
-        args = [a.copy() for a in adapter.arrays] + [adapter.x.copy()]
+    for _ in range(rounds):
         start = time.perf_counter()
-        done = loop(*args, KERNEL_CALLS if r else 1)
+        stop = alone.run(values, record, 0, KERNEL_CALLS, 0.5, adapter.h)
         elapsed = time.perf_counter() - start
-        if r and done >= 50:
-            best = min(best, elapsed / done)
+        if stop.step >= 50:
+            best = min(best, elapsed / stop.step)
     return 1e6 * best
 
 
@@ -169,7 +162,7 @@ def main(argv=None) -> int:
 
     breakdowns = {k: bench_master._median_breakdown(v) for k, v in timed.items() if v}
     plan = compiled_plans(system)
-    kernels = {a.name: kernel_us(a, args.rounds) for a in plan.adapters}
+    kernels = {a.name: kernel_us(plan, n, args.rounds) for n, a in enumerate(plan.adapters)}
     kernel_load = _load()
     models = {c.name: c.model for c in system.components}
     python, fmu = breakdowns["inprocess"]["components"], breakdowns["fmu"]["components"]

@@ -1,8 +1,6 @@
 """The compiled mode (fmus.compiled): the same rows as in process, refusals, fall-backs.
 
-Compiles three loops at most (the bench wiring, shared by every bench scene; the bench with its
-drives in the plant; the thesis scenes' wiring, with the exact model); numba caches them on disk
-(fmus.compiled.cache_dir), so a second test run loads them.
+The loop is C (kernels/src/loop.c) over a plan of data: nothing is compiled per wiring.
 """
 import math
 from dataclasses import replace

@@ -227,7 +227,7 @@ def test_two_fmus_built_from_different_versions_coexist_in_one_process(built_fmu
 def test_two_fmu_types_instantiate_and_step_at_once_from_two_threads(built_fmus, tmp_path):
     """Before: 3 of 3 runs failed (the controller's initialisation saw a partially initialised
     ``motor.presets`` imported by the drive's thread).  Each run is a fresh process (imports
-    happen once per process); the extractions are kept, so numba compiles once."""
+    happen once per process)."""
     folders = [unzip(built_fmus[m], tmp_path / m) for m in ("PositionController", "DCMotorDrive")]
     code = f"""
         import json, threading
