@@ -9,6 +9,8 @@ offsets come from the exported field lists.
 """
 from __future__ import annotations
 
+import ctypes
+
 import kernels
 
 OK = 0
@@ -18,6 +20,8 @@ BAD_TIME = 1
 BAD_LAYOUT = 2
 
 KIND_CIRCLE, KIND_POLYGON, KIND_HOLD = 0.0, 1.0, 2.0
+#: The most rounds of a polygon the kernel takes (``PC_TRAJECTORY_MAX_CYCLES``).
+MAX_CYCLES = ctypes.c_int.in_dll(kernels.library(), "pc_trajectory_max_cycles").value
 CIRCLE = kernels.layout("pc_trajectory_circle_fields")
 POLYGON = kernels.layout("pc_trajectory_polygon_fields")
 HOLD = kernels.layout("pc_trajectory_hold_fields")

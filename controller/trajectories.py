@@ -174,12 +174,21 @@ class PolygonTrajectory:
     side_time : float
         Time per side, s.
     cycles : int
-        Number of rounds.
+        Number of rounds, 1 to :data:`controller.fasttrajectory.MAX_CYCLES`.
+
+    Raises
+    ------
+    ValueError
+        ``cycles`` out of that range, naming it and its value.
     """
 
     vertices: tuple
     side_time: float
     cycles: int
+
+    def __post_init__(self):
+        if not 1 <= self.cycles <= _fast.MAX_CYCLES:
+            raise ValueError(f"cycles = {self.cycles!r} must be between 1 and {_fast.MAX_CYCLES} (rounds of the polygon)")
 
     @property
     def start_point(self):
@@ -351,6 +360,8 @@ def from_parameters(kind, cycles=PRESET_CYCLES, side_time=0.75, frequency=1.0, x
         if cycles != PRESET_CYCLES:
             if cycles < 1:
                 raise ValueError(f"parameter cycles = {cycles!r} must be >= 1 (or -1 for the default)")
+            if kind == "triangle" and cycles > _fast.MAX_CYCLES:
+                raise ValueError(f"parameter cycles = {cycles!r} must be <= {_fast.MAX_CYCLES} (rounds of the triangle)")
             kwargs["cycles"] = cycles
         if kind == "circle" and frequency != 1.0:
             if not frequency > 0.0:

@@ -1,6 +1,9 @@
 /* The reference trajectories at a time (thesis 7.18, 7.23-7.27); layouts in trajectory.h. */
 #include "trajectory.h"
 
+/* The most rounds of a polygon, for the Python layer to refuse by name. */
+const int pc_trajectory_max_cycles = PC_TRAJECTORY_MAX_CYCLES;
+
 #define WORDS(type) ((long)(sizeof(type) / sizeof(double)))
 #define WORD(type, field) ((int)(offsetof(type, field) / sizeof(double)))
 
