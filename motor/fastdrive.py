@@ -1,26 +1,13 @@
-"""Compiled per-step arithmetic of the DC drive and the current observer (4.162, B.2, app. C, 7.20).
+"""TRANSITIONAL numba copies of the drive's, the observer's and LuGre's steps, for the compiled
+scene loop only (the code fmus/adapters.py generates for fmus/compiled.py calls them inside numba).
 
-Also the bench's imperfections a drive can model (all off by default): the PWM's voltage
-resolution, the offset and the noise of the current its loop reads (a stateless
-:func:`gaussian` of seed, instance and sample), and a friction torque given from outside
-(:func:`drive_step_friction`: the LuGre model of :mod:`motor.friction`, called beside, not
-from, this file).
-
-Design-time work stays in Python (:mod:`motor.current_controller` places the poles with
-python-control, :mod:`motor.electrics` computes the step coefficients (a, g) and the mean
-weights for a step length); what runs every step is here, compiled with numba, and called
-by :class:`motor.Drive`, :class:`motor.CurrentController`, :class:`motor.CurrentObserver`
-(so by the FMU slaves, the in-process master and the reference) and by the compiled scene
-loop (:mod:`fmus.compiled`).
-
-Each model keeps its constants and its state in one float64 array with the named layout
-below.  A kernel returns a status first: :data:`OK`, or a refusal code, in which case it
-has changed NOTHING and the Python caller raises the message (naming the input, its value
-and the time).  Every expression is written in the order of the Python it replaced, so the
-results are bit-identical to it (``tests/test_fastdrive.py``).
-
-This module calls no compiled function of another file, so numba's on-disk cache
-(``cache=True``, invalidated by this file's modification time only) cannot go stale.
+The one implementation is C (kernels/src/drive.c, observer.c): :class:`motor.Drive`,
+:class:`motor.CurrentObserver`, :class:`motor.CurrentController` and :mod:`motor.friction` call
+it through ctypes.  This file goes when the compiled loop runs the C kernels' ``pc_*_io``
+functions (issue 27); until then tests/test_kernels_drive.py holds the compiled loop's results
+to the C kernel's.  The buffers are the C structs' (offsets read from kernels.layout); the
+LuGre functions are registered as numba implementations of :mod:`motor.friction`'s, the names
+the generated loop calls.
 """
 from __future__ import annotations
 
@@ -28,53 +15,29 @@ import math
 
 import numpy as np
 from numba import njit
+from numba.extending import overload
 
-# --- status codes ------------------------------------------------------------------------
-OK = 0
-#: An input is NaN or infinite.
-NONFINITE_INPUT = 1
-#: The step length is not the one the coefficients were computed for (Python prepares it).
-UNPREPARED_STEP = 2
-#: The current or torque after the step is not finite.
-DIVERGED = 3
+from motor import friction, kernel
 
-# --- layout of a current controller's array (CurrentController, K(z) of C.5) ----------------
-C_ALPHA, C_BETA, C_GAMMA, C_DELTA, C_VMAX = 0, 1, 2, 3, 4
-#: State: the last two saturated outputs u and errors e.
-C_U1, C_U2, C_E1, C_E2 = 5, 6, 7, 8
-CONTROLLER_SIZE = 9
+# --- status codes (drive.h) ----------------------------------------------------------------
+OK, NONFINITE_INPUT, UNPREPARED_STEP, DIVERGED = kernel.OK, kernel.NONFINITE_INPUT, kernel.UNPREPARED_STEP, kernel.DIVERGED
 
-# --- layout of a drive's array (Drive) -------------------------------------------------------
-D_CURRENT_MODE = 0       # 1: current mode (K(z) on i_ref, i_hat), 0: voltage mode (v_ref)
-D_MEAN_TORQUE = 1        # 1: torque_output "mean", 0: "end"
-D_KE, D_KT, D_B, D_MU, D_OMEGA_EPS, D_VMAX, D_T = 2, 3, 4, 5, 6, 7, 8
-#: The step length h the coefficients are for, a and g of i(t+h) = a i + g (v - ke omega),
-#: the mean weights w_i, w_u (motor.electrics), and h / T.
-D_H, D_A, D_G, D_WI, D_WU, D_PHASE_STEP = 9, 10, 11, 12, 13, 14
-#: State: armature current i [A], last applied voltage v [V], controller phase (fraction of T).
-D_I, D_V, D_PHASE = 15, 16, 17
-#: The bench's imperfections (0: ideal): the PWM's voltage quantum v_max / pwm_counts [V]; the
-#: offset [A] and the noise's standard deviation [A] of the current the loop reads, the
-#: noise's seed and instance (:func:`gaussian`); state: the controller samples taken so far.
-D_PWM_QUANTUM, D_I_OFFSET, D_I_NOISE, D_NOISE_SEED, D_NOISE_INSTANCE, D_SAMPLE = 18, 19, 20, 21, 22, 23
-DRIVE_SIZE = 24
-
-#: Relative tolerance deciding that a controller period is over (motor.drive._PHASE_TOL).
+_C, _D, _O, _F = kernel.CONTROLLER, kernel.DRIVE, kernel.OBSERVER, kernel.LUGRE
+C_ALPHA, C_BETA, C_GAMMA, C_DELTA, C_VMAX = (kernel.index(_C, n) for n in ("alpha", "beta", "gamma", "delta", "v_max"))
+C_U1, C_U2, C_E1, C_E2 = (kernel.index(_C, n) for n in ("u1", "u2", "e1", "e2"))
+CONTROLLER_SIZE = kernel.size(_C)
+(D_CURRENT_MODE, D_MEAN_TORQUE, D_KE, D_KT, D_B, D_MU, D_OMEGA_EPS, D_VMAX, D_T, D_H, D_A, D_G, D_WI, D_WU,
+ D_PHASE_STEP, D_I, D_V, D_PHASE, D_PWM_QUANTUM, D_I_OFFSET, D_I_NOISE, D_NOISE_SEED, D_NOISE_INSTANCE,
+ D_SAMPLE) = (kernel.index(_D, n) for n in (
+    "current_mode", "mean_torque", "ke", "kt", "b", "mu", "omega_eps", "v_max", "T", "h", "a", "g", "w_i", "w_u",
+    "phase_step", "i", "v", "phase", "pwm_quantum", "i_offset", "i_noise", "noise_seed", "noise_instance", "sample"))
+DRIVE_SIZE = kernel.size(_D)
 PHASE_TOL = 1e-6
-
-# --- layout of an observer's array (CurrentObserver) ----------------------------------------
-O_STATIC = 0             # 1: static kind (7.20), 0: dynamic
-O_KE, O_H, O_A, O_G = 1, 2, 3, 4
-#: State: the estimate, the speed of the previous call and whether there was one.
-O_I_HAT, O_OMEGA_PREV, O_HAS_PREV = 5, 6, 7
-OBSERVER_SIZE = 8
-
-
-def new_controller(alpha, beta, gamma, delta, v_max) -> np.ndarray:
-    """A current controller's array, state zero."""
-    c = np.zeros(CONTROLLER_SIZE)
-    c[C_ALPHA], c[C_BETA], c[C_GAMMA], c[C_DELTA], c[C_VMAX] = alpha, beta, gamma, delta, v_max
-    return c
+O_STATIC, O_KE, O_H, O_A, O_G, O_I_HAT, O_OMEGA_PREV, O_HAS_PREV = (kernel.index(_O, n) for n in (
+    "is_static", "ke", "h", "a", "g", "i_hat", "omega_prev", "has_prev"))
+OBSERVER_SIZE = kernel.size(_O)
+F_FC, F_FS, F_OMEGA_S, F_SIGMA0, F_SIGMA1, F_SIGMA2, F_Z = (kernel.index(_F, n) for n in (
+    "Fc", "Fs", "omega_s", "sigma0", "sigma1", "sigma2", "z"))
 
 
 @njit(cache=True)
@@ -316,3 +279,97 @@ def observer_io(o, x, h):
     if status == OK:
         x[2] = i_hat
     return status
+
+
+# --- LuGre (motor.friction's functions inside the compiled loop) ----------------------------
+
+@njit(cache=True)
+def stribeck(f, omega):
+    """G(ω) = Fc + (Fs − Fc) exp(−(ω/ωs)²) [N m] (3)."""
+    s = omega / f[F_OMEGA_S]
+    return f[F_FC] + (f[F_FS] - f[F_FC]) * math.exp(-s * s)
+
+
+@njit(cache=True)
+def bristle_rate(f, z, omega):
+    """dz/dt = ω − σ0 |ω| z / G(ω) (1)."""
+    return _bristle_rate(f, z, omega, stribeck(f, omega))
+
+
+@njit(cache=True)
+def _bristle_rate(f, z, omega, g):
+    """(1) with G(ω) = ``g`` already evaluated."""
+    return omega - f[F_SIGMA0] * abs(omega) * z / g
+
+
+@njit(cache=True)
+def friction_force(f, z, omega):
+    """F = σ0 z + σ1 dz/dt + σ2 ω (4) at deflection z and speed ω."""
+    return _friction_force(f, z, omega, stribeck(f, omega))
+
+
+@njit(cache=True)
+def _friction_force(f, z, omega, g):
+    """(4) with G(ω) = ``g`` already evaluated."""
+    return f[F_SIGMA0] * z + f[F_SIGMA1] * _bristle_rate(f, z, omega, g) + f[F_SIGMA2] * omega
+
+
+@njit(cache=True)
+def steady_deflection(f, omega):
+    """The deflection (1) tends to at constant ω: sign(ω) G(ω)/σ0 (0 at ω = 0)."""
+    if omega == 0.0:
+        return 0.0
+    return math.copysign(stribeck(f, omega), omega) / f[F_SIGMA0]
+
+
+@njit(cache=True)
+def _phi(x):
+    """φ1(x) = (1 − e^{−x})/x and φ2(x) = (x − 1 + e^{−x})/x², x >= 0."""
+    if x < 1e-3:
+        return 1.0 - x * (0.5 - x * (1.0 / 6.0 - x / 24.0)), 0.5 - x * (1.0 / 6.0 - x * (1.0 / 24.0 - x / 120.0))
+    e = math.expm1(-x)           # e^{-x} - 1
+    return -e / x, (x + e) / (x * x)
+
+
+@njit(cache=True)
+def advance(f, z0, omega, h):
+    """(z, F_end, F_mean): (1) solved exactly over h with ω held, from z0.
+
+    ``z`` is the deflection at the step's end, ``F_end`` the friction (4) there, ``F_mean``
+    the friction averaged over the step (σ0 mean z + σ1 (z − z0)/h + σ2 ω).
+    """
+    g = stribeck(f, omega)                                      # once: the rate and F_end need it
+    x = f[F_SIGMA0] * abs(omega) / g * h                        # r h
+    phi1, phi2 = _phi(x)
+    z = z0 * math.exp(-x) + omega * h * phi1
+    mean_z = z0 * phi1 + omega * h * phi2
+    f_end = _friction_force(f, z, omega, g)
+    f_mean = f[F_SIGMA0] * mean_z + f[F_SIGMA1] * (z - z0) / h + f[F_SIGMA2] * omega
+    return z, f_end, f_mean
+
+
+@njit(cache=True)
+def friction_peek(f, omega, h):
+    """(status, z, F_end, F_mean): :func:`advance` from the array's deflection, nothing
+    changed; :func:`friction_commit` keeps z once the caller's step is accepted."""
+    if not math.isfinite(omega):
+        return NONFINITE_INPUT, 0.0, 0.0, 0.0
+    z, f_end, f_mean = advance(f, f[F_Z], omega, h)
+    return OK, z, f_end, f_mean
+
+
+@njit(cache=True)
+def friction_commit(f, z):
+    """Keep the deflection z of an accepted step."""
+    f[F_Z] = z
+
+
+
+# Inside numba, motor.friction's functions are these (their py_func: same signatures).
+overload(friction.stribeck)(lambda f, omega: stribeck.py_func)
+overload(friction.bristle_rate)(lambda f, z, omega: bristle_rate.py_func)
+overload(friction.friction_force)(lambda f, z, omega: friction_force.py_func)
+overload(friction.steady_deflection)(lambda f, omega: steady_deflection.py_func)
+overload(friction.advance)(lambda f, z0, omega, h: advance.py_func)
+overload(friction.friction_peek)(lambda f, omega, h: friction_peek.py_func)
+overload(friction.friction_commit)(lambda f, z: friction_commit.py_func)
