@@ -9,6 +9,9 @@ change.
 """
 from __future__ import annotations
 
+import ctypes
+import importlib
+
 import numpy as np
 
 from controller import fastbalance
@@ -16,6 +19,44 @@ from motor.friction import F_Z
 from plant import wheeled_kernel as kernel
 
 from .compiled import Adapter, NotCompilable, register
+
+#: What the kernel module names of :class:`EmittedAdapter` (``"plant.fast5r"``) are relative to:
+#: "" here, the bundle's package inside an FMU (fmus/bundle.py).
+_PACKAGE_ROOT = __name__[:-len("fmus.adapters")]
+
+_IO_CALLBACK = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double, ctypes.c_double,
+                                ctypes.c_void_p)
+
+
+class EmittedAdapter(Adapter):
+    """Transitional: a model whose step is still a numba kernel, called from the C loop
+    through a ctypes callback running the source lines :meth:`emit` returns (the protocol
+    of the generated loop this module replaced).  Subclasses set ``modules`` (the kernel
+    modules the lines call, imported under their last name) and :attr:`arrays`."""
+
+    modules: tuple = ()
+
+    def emit(self, arrays: list, x: str, t: str, h: str) -> list:
+        raise NotImplementedError
+
+    def context(self):
+        names = [f"a{k}" for k in range(len(self.arrays))]
+        body = "\n".join("    " + line for line in self.emit(names, "x", "t", "h"))
+        namespace = {m.rpartition(".")[2]: importlib.import_module(_PACKAGE_ROOT + m) for m in self.modules}
+        exec(f"def io({', '.join(names + ['x', 't', 'h'])}):\n{body}\n    return st\n", namespace)
+        step, arrays, x = namespace["io"], self.arrays, self.x
+
+        def io(_context, _x, t, h, _refusal):
+            try:
+                return int(step(*arrays, x, t, h))
+            except Exception:   # noqa: BLE001 - the Python path reruns the step and raises it
+                return -1
+
+        self._callback = _IO_CALLBACK(io)
+        return ctypes.c_int(0)
+
+    def io_address(self) -> int:
+        return ctypes.cast(self._callback, ctypes.c_void_p).value
 from .refusals import ABSURD
 from .parts import PLANT_OUTPUTS
 
@@ -23,7 +64,7 @@ _PLANT_OUTPUTS = tuple(name for name, _ in PLANT_OUTPUTS)
 
 
 @register
-class TrajectoryAdapter(Adapter):
+class TrajectoryAdapter(EmittedAdapter):
     """:func:`controller.fasttrajectory.trajectory_io`: the reference at the step's end."""
 
     model = "Trajectory"
@@ -39,7 +80,7 @@ class TrajectoryAdapter(Adapter):
 
 
 @register
-class DerivatorAdapter(Adapter):
+class DerivatorAdapter(EmittedAdapter):
     """:func:`controller.fastderivator.derivator_io`, inputs limited to |q| <= ABSURD as the slave."""
 
     model = "Derivator"
@@ -56,7 +97,7 @@ class DerivatorAdapter(Adapter):
 
 
 @register
-class PositionControllerAdapter(Adapter):
+class PositionControllerAdapter(EmittedAdapter):
     """:func:`controller.fastlaw.law_io`; for the exact model :func:`controller.fastlaw.exact_state`,
     :func:`plant.fast5r.inverse_terms` and :func:`controller.fastlaw.law_terms_io` (the calls of
     ``PositionController._compiled_step``)."""
@@ -100,7 +141,7 @@ class PositionControllerAdapter(Adapter):
 
 
 @register
-class CurrentObserverAdapter(Adapter):
+class CurrentObserverAdapter(EmittedAdapter):
     """:func:`motor.fastdrive.observer_io`."""
 
     model = "CurrentObserver"
@@ -126,7 +167,7 @@ def _prepared(name, drive, h):
 
 
 @register
-class DCMotorDriveAdapter(Adapter):
+class DCMotorDriveAdapter(EmittedAdapter):
     """:func:`motor.fastdrive.drive_io`; with LuGre friction :func:`motor.friction.friction_peek`,
     :func:`motor.fastdrive.drive_io_friction`, then :func:`motor.friction.friction_commit`
     (the calls of ``Drive._step``)."""
@@ -176,7 +217,7 @@ def _plant_settings(name, sim, h) -> np.ndarray:
     return settings
 
 
-class _PlantState(Adapter):
+class _PlantState(EmittedAdapter):
     """The plant's state lives in ``self.state`` while compiled (the simulator replaces its
     array every step): copied to and from the simulator around a Python step."""
 
@@ -300,7 +341,7 @@ class ActuatedFiveBarPlantAdapter(_PlantState):
 
 
 @register
-class BalanceControllerAdapter(Adapter):
+class BalanceControllerAdapter(EmittedAdapter):
     """:func:`controller.fastbalance.balance_io`, inputs limited to |x| <= ABSURD as the slave."""
 
     model = "BalanceController"
@@ -316,7 +357,7 @@ class BalanceControllerAdapter(Adapter):
 
 
 @register
-class WheeledPendulumAdapter(Adapter):
+class WheeledPendulumAdapter(EmittedAdapter):
     """:func:`plant.wheeled_kernel.pendulum_io` on the simulator's own state array (the kernel
     changes it only when the whole step is accepted: a fall is re-run by the Python path)."""
 

@@ -1,21 +1,15 @@
-"""The compiled mode: a system's whole step loop generated for its wiring and compiled.
+"""The compiled mode: a system's whole step loop run in C.
 
 ``simulate(system, mode="compiled")`` (``parcosim run SCENE --mode compiled``) builds the
 in-process slaves and initialises them exactly as ``mode="inprocess"`` does (same
 :class:`fmus.stepper.Stepper`, same stepping order, same t = 0 row).  Then each component's
 **compiled adapter** (:data:`ADAPTERS`, one per model, in :mod:`fmus.adapters`) hands over
-the float64 arrays its model already steps with (the kernels of ``plant/fast5r.py``,
-``motor/fastdrive.py``, ``controller/fastlaw.py``, ...) and the line of source that calls its
-kernel; :func:`generate` writes one Python function that runs the steps in the stepping order
-with the connections as copies between fixed slots, compiled by numba.  Same kernels, same
-arrays, same order: the rows are bit-identical to the in-process run.
-
-Caching: the generated source goes to ``<cache>/loop_<sha>.py`` where the sha covers the
-source and the text of every kernel module it calls (numba's own cache only watches the
-file of the function it compiled, so a changed kernel gives a new file instead of a stale
-one).  Parameters live in the arrays, not in the source: scenes with the same wiring (all
-16 bench scenes) share one compiled loop.  ``compile_s`` is importing it and compiling it or
-loading numba's cache; the stepping's wall time starts after that.
+its model's C I/O step (``pc_<model>_io`` in kernels/src/) and a context pointing at the
+buffers its model already steps with; :class:`Plan` lays the stepping order, the slots and
+those pointers out as one ``pc_loop_plan``, and ``pc_loop_run`` (kernels/src/loop.c) steps
+them with the connections as copies between fixed slots.  Same kernels, same buffers, same
+order: the rows are bit-identical to the in-process run.  Nothing is generated or compiled
+at run time: ``compile_s`` is building the plan.
 
 Refusals: a kernel that cannot do exactly what the Python model would (a refused input,
 a diverged step, a controller sample off its table) returns a non-zero status without
@@ -30,15 +24,14 @@ back to ``mode="inprocess"`` with a warning saying why (``Result.extra["fallback
 """
 from __future__ import annotations
 
-import hashlib
-import importlib.util
-import inspect
-import os
-import sys
+import ctypes
 import time as _time
 from pathlib import Path
 
 import numpy as np
+
+import kernels
+from kernels import Refusal
 
 from .guarded import MAX_TIME
 from .instances import CoSimulationError
@@ -64,10 +57,10 @@ class Adapter:
 
     A subclass sets ``model`` (the slave's model name), ``inputs`` and ``outputs`` (the
     variables of the layout of ``x``, the small array its kernel reads its inputs from and
-    writes its outputs to: inputs first) and ``modules`` (the kernel modules its source
-    calls, imported under their last name), and builds in ``__init__`` its :attr:`arrays`
-    (model arrays the kernel steps, shared with the slave's model objects).  :meth:`emit`
-    returns the source lines of one step.
+    writes its outputs to: inputs first) and ``kernel``, the name of its model's C I/O step in
+    the kernels' library (``pc_io_fn``, kernels/src/pc_common.h); :meth:`context` returns the
+    ctypes struct of pointers to the model arrays that step advances (shared with the slave's
+    model objects, so the compiled loop and the Python path step the same state).
 
     Parameters
     ----------
@@ -87,19 +80,19 @@ class Adapter:
     model = ""
     inputs: tuple = ()
     outputs: tuple = ()
-    modules: tuple = ()
+    kernel = ""
 
     def __init__(self, name: str, slave, h: float):
         self.name, self.slave, self.h = name, slave, h
-        self.arrays: list = []
 
-    def emit(self, arrays: list, x: str, t: str, h: str) -> list:
-        """Source lines of one step that set ``st`` to the status (0: done).
-
-        ``arrays`` are the names of :attr:`arrays` in the generated function, ``x`` that of
-        the I/O array, ``t`` the step's start time and ``h`` its length (expressions).
-        """
+    def context(self):
+        """The ctypes object whose address the kernel gets as ``context`` (kept alive by
+        the adapter)."""
         raise NotImplementedError
+
+    def io_address(self) -> int:
+        """The address of the I/O step: :attr:`kernel` in the kernels' library."""
+        return ctypes.cast(getattr(kernels.library(), self.kernel), ctypes.c_void_p).value
 
     def to_python(self) -> None:
         """Put state the kernel keeps outside the slave's objects back into them (before
@@ -109,148 +102,142 @@ class Adapter:
         """Take state back from the slave's objects (after the Python path took a step)."""
 
 
-#: What the adapters' kernel module names (``"plant.fast5r"``) are relative to: "" here, the
-#: bundle's package inside an FMU (fmus/bundle.py), whose ``plant`` is its own.
-_PACKAGE_ROOT = __name__[:-len("fmus.compiled")]
+class _LoopPlan(ctypes.Structure):
+    """``pc_loop_plan`` (kernels/src/loop.h)."""
+
+    _int_p = ctypes.POINTER(ctypes.c_int)
+    _fields_ = [("n_groups", ctypes.c_int), ("group_substeps", _int_p), ("group_end", _int_p),
+                ("io", ctypes.POINTER(ctypes.c_void_p)), ("context", ctypes.POINTER(ctypes.c_void_p)),
+                ("x", ctypes.POINTER(ctypes.c_void_p)),
+                ("in_end", _int_p), ("in_x", _int_p), ("in_slot", _int_p),
+                ("out_end", _int_p), ("out_x", _int_p), ("out_slot", _int_p),
+                ("n_record", ctypes.c_int), ("record_slot", _int_p)]
 
 
-def _module_text(name: str) -> str:
-    return inspect.getsource(importlib.import_module(_PACKAGE_ROOT + name))
+class _LoopStop(ctypes.Structure):
+    """``pc_loop_stop`` (kernels/src/loop.h)."""
+
+    _fields_ = [("step", ctypes.c_int), ("member", ctypes.c_int), ("substep", ctypes.c_int),
+                ("time", ctypes.c_double), ("refusal", Refusal)]
 
 
-def cache_dir() -> Path:
-    """Where generated loops and numba's cache of them go: ``$PARCOSIM_COMPILED_CACHE`` or
-    ``~/.cache/parcosim/compiled``."""
-    return Path(os.environ.get("PARCOSIM_COMPILED_CACHE") or Path.home() / ".cache" / "parcosim" / "compiled")
+def _ints(values) -> np.ndarray:
+    return np.ascontiguousarray(values, dtype=np.intc)
+
+
+class Member:
+    """One member of a :class:`LoopPlan`: its I/O step and context (addresses), its ``x``
+    array, and its connections as (index in x, slot) pairs."""
+
+    def __init__(self, io: int, context: int, x: np.ndarray, inputs=(), outputs=()):
+        self.io, self.context, self.x = io, context, x
+        self.inputs, self.outputs = list(inputs), list(outputs)
+
+
+class LoopPlan:
+    """A ``pc_loop_plan`` (kernels/src/loop.h) and the arrays it points into.
+
+    Parameters
+    ----------
+    groups : list of (int, list of Member)
+        The stepping order: groups of members stepped ``substeps`` times per step.
+    record_slots : sequence of int
+        The slots recorded after every step.
+    """
+
+    def __init__(self, groups, record_slots):
+        group_substeps, group_end, members = [], [], []
+        for substeps, group in groups:
+            members += group
+            group_substeps.append(substeps)
+            group_end.append(len(members))
+        self.members = members
+        pairs = {"in": [m.inputs for m in members], "out": [m.outputs for m in members]}
+        arrays = {"group_substeps": group_substeps, "group_end": group_end, "record_slot": list(record_slots)}
+        for kind, lists in pairs.items():
+            arrays[f"{kind}_end"] = np.cumsum([len(p) for p in lists]).tolist()
+            arrays[f"{kind}_x"] = [x for p in lists for x, _ in p]
+            arrays[f"{kind}_slot"] = [s for p in lists for _, s in p]
+        self._arrays = {name: _ints(values) for name, values in arrays.items()}
+        self._pointers = {"io": np.array([m.io for m in members], dtype=np.uintp),
+                          "context": np.array([m.context for m in members], dtype=np.uintp),
+                          "x": np.array([kernels.address(m.x) for m in members], dtype=np.uintp)}
+        fields = {name: a.ctypes.data_as(ctypes.POINTER(ctypes.c_int)) for name, a in self._arrays.items()}
+        fields.update({name: a.ctypes.data_as(ctypes.POINTER(ctypes.c_void_p)) for name, a in self._pointers.items()})
+        self.struct = _LoopPlan(n_groups=len(group_substeps), n_record=len(arrays["record_slot"]), **fields)
+
+    def run(self, values: np.ndarray, record: np.ndarray, k0: int, k1: int, t: float, h: float) -> _LoopStop:
+        """Steps k0 .. k1-1 in C (``values`` and the C-contiguous ``record`` are written in
+        place); the stop says where and why it ended."""
+        stop = _LoopStop()
+        _loop_run()(ctypes.byref(self.struct), kernels.address(values), kernels.address(record), k0, k1, t, h,
+                    ctypes.byref(stop))
+        return stop
 
 
 class Plan:
-    """The compiled loop of one system: adapters in stepping order, slots, generated source."""
+    """The compiled loop of one system: its adapters in stepping order and their
+    :class:`LoopPlan`."""
 
     def __init__(self, system, stepper, instances):
         self.system, self.stepper = system, stepper
         entries = {id(inst): name for name, inst in instances.items()}
         self.adapters, self.positions = [], []   # positions: (group, member) of each adapter
+        self._contexts = []
         h = system.step
+        groups = []
         for g, (substeps, members) in enumerate(stepper.groups):
-            for m, (inst, _, _) in enumerate(members):
+            group = []
+            for m, (inst, in_slots, out_slots) in enumerate(members):
                 name = entries[id(inst)]
-                model = system.component(name).model
-                cls = ADAPTERS.get(model)
-                if cls is None:
-                    raise NotCompilable(f"component {name}: model {model!r} has no compiled adapter")
-                slave = inst.slave
-                try:
-                    slave.check_step_size(0.0, h / substeps)
-                except ValueError as exc:
-                    raise NotCompilable(f"component {name}: {exc}") from None
-                adapter = cls(name, slave, h / substeps)
+                adapter = self._adapter(name, system.component(name).model, inst.slave, h / substeps)
                 in_names, out_names = stepper.io_names[name]
-                for kind, names, known in (("input", in_names, cls.inputs), ("output", out_names, cls.outputs)):
-                    unknown = [n for n in names if n not in known]
-                    if unknown:
-                        raise NotCompilable(f"component {name}: {kind}s {', '.join(unknown)} of {model} are not "
-                                            "in its compiled adapter")
-                adapter.x = np.array([float(getattr(slave, n)) for n in cls.inputs + cls.outputs])
+                layout = adapter.inputs + adapter.outputs
+                context = adapter.context()
+                self._contexts.append(context)
+                group.append(Member(adapter.io_address(), ctypes.addressof(context), adapter.x,
+                                    [(layout.index(n), s) for n, s in zip(in_names, in_slots)],
+                                    [(layout.index(n), s) for n, s in zip(out_names, out_slots)]))
                 self.adapters.append(adapter)
                 self.positions.append((g, m))
-        self.source = self._generate()
+            groups.append((substeps, group))
+        self.loop = LoopPlan(groups, stepper.record_slots)
+        self.description = self._describe()
 
-    def _generate(self) -> str:
-        stepper, system = self.stepper, self.stepper.system
-        h = system.step
-        params, lines, modules = [], [], set()
-        by_position = dict(zip(self.positions, range(len(self.adapters))))
-        for n, a in enumerate(self.adapters):
-            params += [f"a{n}_{k}" for k in range(len(a.arrays))] + [f"x{n}"]
-            modules.update(a.modules)
-        body = ["    t = t0", "    for k in range(k0, k1):"]
-        for g, (substeps, members) in enumerate(stepper.groups):
-            dt = repr(h / substeps)
-            indent = "        "
-            if substeps > 1:
-                body.append(f"{indent}for j in range({substeps}):")
-                indent += "    "
-                tstart = f"t + j * {dt}"
-                sub = "j"
-            else:
-                tstart, sub = "t", "0"
-            for m, (inst, in_slots, out_slots) in enumerate(members):
-                n = by_position[(g, m)]
-                a = self.adapters[n]
-                in_names, out_names = stepper.io_names[a.name]
-                layout = a.inputs + a.outputs
-                body.append(f"{indent}# {a.name} ({a.model})")
-                for name, slot in zip(in_names, in_slots):
-                    body.append(f"{indent}x{n}[{layout.index(name)}] = values[{slot}]")
-                arrays = [f"a{n}_{k}" for k in range(len(a.arrays))]
-                body += [indent + line for line in a.emit(arrays, f"x{n}", tstart, dt)]
-                body.append(f"{indent}if st != 0:")
-                body.append(f"{indent}    return k, {n}, {sub}, t")
-                for name, slot in zip(out_names, out_slots):
-                    body.append(f"{indent}values[{slot}] = x{n}[{layout.index(name)}]")
-        body.append("        t = t + h")
-        for j, slot in enumerate(stepper.record_slots):
-            body.append(f"        record[k + 1, {j}] = values[{slot}]")
-        body.append("    return k1, -1, 0, t")
-        imports = [f"from {_PACKAGE_ROOT}{m.rpartition('.')[0]} import {m.rpartition('.')[2]}"
-                   for m in sorted(modules)]
-        signature = ", ".join(params + ["values", "record", "k0", "k1", "t0", "h"])
-        return "\n".join(['"""Generated by fmus.compiled: the step loop of one wiring (do not edit)."""',
-                          "from numba import njit", *imports, "", "",
-                          "@njit(cache=True, error_model=\"numpy\")", f"def run({signature}):",
-                          *body, ""])
+    def _adapter(self, name, model, slave, h):
+        cls = ADAPTERS.get(model)
+        if cls is None:
+            raise NotCompilable(f"component {name}: model {model!r} has no compiled adapter")
+        try:
+            slave.check_step_size(0.0, h)
+        except ValueError as exc:
+            raise NotCompilable(f"component {name}: {exc}") from None
+        adapter = cls(name, slave, h)
+        in_names, out_names = self.stepper.io_names[name]
+        for kind, names, known in (("input", in_names, cls.inputs), ("output", out_names, cls.outputs)):
+            unknown = [n for n in names if n not in known]
+            if unknown:
+                raise NotCompilable(f"component {name}: {kind}s {', '.join(unknown)} of {model} are not "
+                                    "in its compiled adapter")
+        adapter.x = np.array([float(getattr(slave, n)) for n in cls.inputs + cls.outputs])
+        return adapter
 
-    def arguments(self) -> list:
-        args = []
-        for a in self.adapters:
-            args += list(a.arrays) + [a.x]
-        return args
+    def _describe(self) -> str:
+        """The stepping order as text: one line per member (``# name (model): kernel``)."""
+        lines = []
+        for (g, _), a in zip(self.positions, self.adapters):
+            substeps = self.stepper.groups[g][0]
+            lines.append(f"# {a.name} ({a.model}): {a.kernel}" + (f", {substeps} sub-steps" if substeps > 1 else ""))
+        return "\n".join(lines)
 
-    def load(self):
-        """The compiled ``run`` of :attr:`source` (written, imported, compiled or loaded)."""
-        modules = sorted({m for a in self.adapters for m in a.modules})
-        digest = hashlib.sha256(self.source.encode())
-        for m in modules:
-            digest.update(_module_text(m).encode())
-        key = digest.hexdigest()[:24]
-        directory = cache_dir()
-        directory.mkdir(parents=True, exist_ok=True)
-        path = directory / f"loop_{key}.py"
-        if not path.exists():
-            tmp = path.with_suffix(f".{os.getpid()}.tmp")
-            tmp.write_text(self.source)
-            os.replace(tmp, path)
-        name = f"parcosim_loop_{key}"
-        module = sys.modules.get(name)
-        if module is None:
-            spec = importlib.util.spec_from_file_location(name, path)
-            module = importlib.util.module_from_spec(spec)
-            spec.loader.exec_module(module)
-            sys.modules[name] = module
-        return module.run
+    def run(self, values, record, k0, k1, t, h) -> _LoopStop:
+        """:meth:`LoopPlan.run` of the system's plan."""
+        return self.loop.run(values, record, k0, k1, t, h)
 
 
-def _finish_step_in_python(stepper, start_group: int, start_member: int, start_substep: int, t: float) -> None:
-    """The rest of the step from ``t`` in Python, from the given group, member and sub-step
-    on (Gauss-Seidel, as :meth:`fmus.stepper.Stepper.step`)."""
-    h, values = stepper.system.step, stepper.values
-    for g, (substeps, members) in enumerate(stepper.groups):
-        if g < start_group:
-            continue
-        dt = h / substeps
-        for j in range(substeps):
-            if g == start_group and j < start_substep:
-                continue
-            for m, (inst, in_slots, out_slots) in enumerate(members):
-                if g == start_group and j == start_substep and m < start_member:
-                    continue
-                if in_slots:
-                    inst.set_inputs([values[i] for i in in_slots])
-                inst.do_step(t + j * dt if substeps > 1 else t, dt)
-                for i, v in zip(out_slots, inst.get_outputs()):
-                    values[i] = v
-    stepper.time = t + h
+def _loop_run():
+    return kernels.function("pc_loop_run", None, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int,
+                            ctypes.c_int, ctypes.c_double, ctypes.c_double, ctypes.c_void_p)
 
 
 def check_compilable(system, coupling: str, retry_substeps) -> None:
@@ -293,12 +280,9 @@ def run_compiled(system, instances, order, progress, interrupt, result_of):
     except CoSimulationError as exc:
         return result_of(data[:0], exc, False, 0.0, _time.perf_counter() - init_start, {})
     data[0] = stepper.row()
-    plan = Plan(system, stepper, instances)
     compile_start = _time.perf_counter()
-    run = plan.load()
+    plan = Plan(system, stepper, instances)
     values = np.array(stepper.values, dtype=float)
-    args = plan.arguments()
-    run(*args, values.copy(), data[:1].copy(), 0, 0, 0.0, h)    # compile or load numba's cache
     compile_s = _time.perf_counter() - compile_start
     init_s = compile_start - init_start
     start, cpu_start = _time.perf_counter(), _time.thread_time()
@@ -310,20 +294,21 @@ def run_compiled(system, instances, order, progress, interrupt, result_of):
             if interrupt.requested:
                 raise KeyboardInterrupt
             end = min(steps, done + chunk)
-            k, n, sub, t = run(*args, values, data, done, end, t, h)
-            done = k
-            if n >= 0:     # a kernel declined step k: the Python path takes the rest of it
+            stop = plan.run(values, data, done, end, t, h)
+            done, t = stop.step, stop.time
+            if stop.member >= 0:     # a kernel declined step k: the Python path takes the rest of it
                 for a in plan.adapters:
                     a.to_python()
                     a.slave._next_time = None   # the slaves did not see the compiled steps
                 stepper.values[:] = values.tolist()
-                g, m = plan.positions[n]
-                _finish_step_in_python(stepper, g, m, sub, t)
+                g, m = plan.positions[stop.member]
+                stepper.time = t
+                stepper.step(start=(g, m, stop.substep))
                 for a in plan.adapters:
                     a.from_python()
                 values[:] = stepper.values
                 t = stepper.time
-                done = k + 1
+                done += 1
                 data[done] = stepper.row()
                 python_steps += 1
             if progress is not None:
@@ -333,6 +318,6 @@ def run_compiled(system, instances, order, progress, interrupt, result_of):
     except KeyboardInterrupt:
         interrupted = True
     wall = _time.perf_counter() - start
-    extra = {"compile_s": compile_s, "python_steps": python_steps, "source": plan.source,
+    extra = {"compile_s": compile_s, "python_steps": python_steps, "plan": plan.description,
              "cpu_s": _time.thread_time() - cpu_start}
     return result_of(data[:done + 1], error, interrupted, wall, init_s, extra)

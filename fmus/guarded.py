@@ -51,6 +51,7 @@ import os
 import sys
 
 from fmus.identity import read_identity
+from kernels import Refused
 from fmus.refusals import FmiError
 from fmus.slavestate import SlaveState
 
@@ -95,6 +96,8 @@ class GuardedSlave(SlaveState, Fmi2Slave):
 
     #: Outputs are samples at the step's start, held over the step (see above).
     sampled = False
+    #: The record of the last step a kernel refused (:meth:`kernels.Refused.record`), or None.
+    refusal = None
     #: The step size the last :meth:`check_step_size` accepted (derived, not FMU state: its
     #: mangled name keeps it out of :func:`fmus.fmustate.model_state`).
     __accepted_step = None
@@ -477,6 +480,7 @@ class GuardedSlave(SlaveState, Fmi2Slave):
                 self._ready = False
                 return False
             except Exception as exc:  # noqa: BLE001
+                self.refusal = _refusal_record(exc, self.instance_name, current_time)
                 self._refuse(str(exc), current_time)
                 self._ready = False
                 return False
@@ -533,6 +537,18 @@ class GuardedSlave(SlaveState, Fmi2Slave):
         except AttributeError:
             self.__wrapper_is_ours = wrapper_symbol_present(getattr(self, "resources", None), type(self).__name__)
             return self.__wrapper_is_ours
+
+
+def _refusal_record(exc: Exception, instance: str, time: float) -> dict | None:
+    """The record of a kernel's refusal (:class:`kernels.Refused`) with its instance and time
+    filled in; None for any other exception."""
+    if not isinstance(exc, Refused):
+        return None
+    if exc.instance is None:
+        exc.instance = instance
+    if exc.time is None:
+        exc.time = time
+    return exc.record()
 
 
 #: A start time t0 is refused where t0 + TIME_RESOLUTION == t0: time could not advance there.

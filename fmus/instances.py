@@ -17,11 +17,13 @@ from pathlib import Path
 
 
 class CoSimulationError(Exception):
-    """A component refused a call; carries the instance, the time and its message."""
+    """A component refused a call; carries the instance, the time and its message, and, when
+    the refusal came from a kernel's code, its record (``refusal``: :meth:`kernels.Refused.record`,
+    the variable, value, unit and code as fields)."""
 
-    def __init__(self, instance: str, time: float, message: str):
+    def __init__(self, instance: str, time: float, message: str, refusal: dict | None = None):
         super().__init__(f"{instance} refused the step from t = {time:.6g} s: {message}")
-        self.instance, self.time, self.message = instance, time, message
+        self.instance, self.time, self.message, self.refusal = instance, time, message, refusal
 
 
 @dataclass(frozen=True)
@@ -299,7 +301,8 @@ class InProcessInstance:
         except Exception as exc:  # noqa: BLE001
             raise CoSimulationError(self.name, t, str(exc)) from None
         if ok is False:
-            raise CoSimulationError(self.name, t, getattr(self.slave, "error", "") or "do_step refused")
+            raise CoSimulationError(self.name, t, getattr(self.slave, "error", "") or "do_step refused",
+                                    getattr(self.slave, "refusal", None))
 
     def get_state(self) -> dict:
         """An independent copy of the slave's state (its ``fmi2GetFMUstate``)."""

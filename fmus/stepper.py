@@ -186,12 +186,14 @@ class Stepper:
         for name, inst in self.instances.items():
             inst.free_state(state["instances"][name])
 
-    def step(self, split: dict | None = None) -> None:
+    def step(self, split: dict | None = None, start: tuple = (0, 0, 0)) -> None:
         """One communication step of every instance from ``time``; ``time`` += h.
 
         ``split`` (instance name -> n) takes this one step with those instances in n times
-        their sub-steps (inputs held), as a master retrying a refused step does.  A refusal
-        raises the instance's :class:`fmus.master.CoSimulationError`."""
+        their sub-steps (inputs held), as a master retrying a refused step does.  ``start``
+        (group, member, sub-step) takes only the rest of the step from there on, as the
+        compiled mode does when a kernel declined a step (Gauss-Seidel).  A refusal raises
+        the instance's :class:`fmus.master.CoSimulationError`."""
         h, t, jacobi, values = self.system.step, self.time, self.jacobi, self.values
         groups = self.groups
         if split:
@@ -200,8 +202,13 @@ class Stepper:
                                   for inst, ins, outs, n in self.plan])
         exchanges_by_group = _exchanges_of(groups) if split else self._exchanges
         held = values[:] if jacobi else values
-        for (substeps, members), exchanges in zip(groups, exchanges_by_group, strict=True):
-            if substeps == 1:
+        first_group, first_member, first_substep = start
+        for g, ((substeps, members), exchanges) in enumerate(zip(groups, exchanges_by_group, strict=True)):
+            if g < first_group:
+                continue
+            if g > first_group:
+                first_member = first_substep = 0
+            if substeps == 1 and first_member == 0:
                 inst, gather, outputs = exchanges[0]
                 if gather is not None:
                     inst.set_inputs(gather(held))
@@ -212,9 +219,9 @@ class Stepper:
             # sub-step; what they read from outside the group is held.
             local = held[:] if jacobi else values
             dt = h / substeps
-            for j in range(substeps):
+            for j in range(first_substep, substeps):
                 start_of_substep = local[:] if jacobi else local
-                for inst, in_slots, out_slots in members:
+                for inst, in_slots, out_slots in members[first_member if j == first_substep else 0:]:
                     if in_slots:
                         inst.set_inputs([start_of_substep[i] for i in in_slots])
                     inst.do_step(t + j * dt, dt)

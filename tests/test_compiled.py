@@ -111,13 +111,15 @@ def test_metrics_report_compile_time_and_peak_memory():
 def test_generated_source_follows_the_stepping_order():
     scene = _short(get_scene("bench_circle_PDq"), 0.01)
     result = simulate(scene.system, mode="compiled")
-    source = result.extra["source"]
+    source = result.extra["plan"]
     positions = [source.index(f"# {name} (") for name in result.order]
     assert positions == sorted(positions)
     assert compiled.ADAPTERS.keys() >= {c.model for c in scene.system.components}
 
 
 def test_python_finishes_a_declined_step_from_the_declining_member_and_sub_step():
+    from fmus.stepper import Stepper, _exchanges_of
+
     calls = []
 
     class Instance:
@@ -134,17 +136,17 @@ def test_python_finishes_a_declined_step_from_the_declining_member_and_sub_step(
             return []
 
     a, b, c, d = (Instance(n) for n in "abcd")
-
-    class Stepper:
-        system = System((), (), (), stop_time=1.0, step=1.0)
-        values = []
-        groups = [(1, [(a, [], [])]), (2, [(b, [], []), (c, [], [])]), (1, [(d, [], [])])]
-        time = 0.0
-
-    stepper = Stepper()
-    compiled._finish_step_in_python(stepper, 1, 1, 0, 3.0)   # c declined in the first of b, c's two sub-steps
+    stepper = Stepper.__new__(Stepper)
+    stepper.system = System((), (), (), stop_time=1.0, step=1.0)
+    stepper.values, stepper.jacobi, stepper.time = [], False, 3.0
+    stepper.groups = [(1, [(a, [], [])]), (2, [(b, [], []), (c, [], [])]), (1, [(d, [], [])])]
+    stepper._exchanges = _exchanges_of(stepper.groups)
+    stepper.step(start=(1, 1, 0))   # c declined in the first of b, c's two sub-steps
     assert calls == [("c", 3.0, 0.5), ("b", 3.5, 0.5), ("c", 3.5, 0.5), ("d", 3.0, 1.0)]
     assert stepper.time == 4.0
+    calls.clear()
+    stepper.step()
+    assert [n for n, _, _ in calls] == ["a", "b", "c", "b", "c", "d"]
 
 
 @pytest.mark.parametrize("name", ["pendulum_balance", "pendulum_push"])

@@ -202,7 +202,7 @@ def test_fidelity_twin_runs_compiled_as_in_process_and_numbers_do_not_change_the
     assert a.completed and np.array_equal(rows(a), rows(b))
     other = replace(twin, noise_seed=9, current_noise=0.05, drive_parameters=(("sigma0", 60.0),))
     c = simulate(_short(bench("TCMDq", "circle", fidelity=other)).system, mode="compiled")
-    assert c.extra["source"] == b.extra["source"]
+    assert c.extra["plan"] == b.extra["plan"]
     assert c.completed and not np.array_equal(rows(c), rows(b))
     drives = [comp for comp in scene.system.components if comp.model == "DCMotorDrive"]
     assert [d.parameters["noise_instance"] for d in drives] == [1, 2]

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from fmus.bundle import REWRITTEN, bundle_name, rewrite_imports
+from fmus.bundle import PACKAGES, REWRITTEN, bundle_name, rewrite_imports
 from fmus.wrapper import compiled_wrapper
 from tests.test_wrapper import run_case, unzip
 
@@ -98,7 +98,7 @@ def test_the_name_follows_the_sources(tmp_path, monkeypatch):
     """Any source change gives another package name; the same sources the same one."""
     import fmus.bundle as bundle
 
-    for name in ("plant", "motor", "controller", "fmus"):
+    for name in (*PACKAGES, "fmus"):
         shutil.copytree(ROOT / name, tmp_path / name, ignore=shutil.ignore_patterns("__pycache__", "build"))
     monkeypatch.setattr(bundle, "ROOT", tmp_path)
     same = bundle.bundle_name()
@@ -181,7 +181,7 @@ def test_with_parcosim_imported_the_fmu_runs_its_own_bundle(built_fmus, tmp_path
 def _build_from_copy(tmp_path, edit) -> Path:
     """Trajectory.fmu built from a copy of the sources changed by ``edit(copy)``."""
     copy = tmp_path / "sources"
-    for name in ("plant", "motor", "controller", "fmus"):
+    for name in (*PACKAGES, "fmus"):
         shutil.copytree(ROOT / name, copy / name, ignore=shutil.ignore_patterns("__pycache__", "build"))
     edit(copy)
     out = tmp_path / "out"

@@ -1,0 +1,47 @@
+#include "loop.h"
+
+static int first_of(const int *end, int m)
+{
+    return m == 0 ? 0 : end[m - 1];
+}
+
+static int step_member(const pc_loop_plan *p, int m, double *values, double t, double dt, pc_refusal *r)
+{
+    double *x = p->x[m];
+    for (int e = first_of(p->in_end, m); e < p->in_end[m]; ++e) x[p->in_x[e]] = values[p->in_slot[e]];
+    int status = p->io[m](p->context[m], x, t, dt, r);
+    if (status != PC_OK) return status;
+    for (int e = first_of(p->out_end, m); e < p->out_end[m]; ++e) values[p->out_slot[e]] = x[p->out_x[e]];
+    return PC_OK;
+}
+
+void pc_loop_run(const pc_loop_plan *p, double *values, double *record, int k0, int k1, double t, double h,
+                 pc_loop_stop *stop)
+{
+    for (int k = k0; k < k1; ++k) {
+        for (int g = 0; g < p->n_groups; ++g) {
+            const int substeps = p->group_substeps[g];
+            const double dt = h / substeps;
+            for (int j = 0; j < substeps; ++j) {
+                const double start = substeps > 1 ? t + j * dt : t;
+                for (int m = first_of(p->group_end, g); m < p->group_end[g]; ++m) {
+                    pc_refusal r = {PC_OK, 0, 0.0};
+                    if (step_member(p, m, values, start, dt, &r) != PC_OK) {
+                        stop->step = k;
+                        stop->member = m;
+                        stop->substep = j;
+                        stop->time = t;
+                        stop->refusal = r;
+                        return;
+                    }
+                }
+            }
+        }
+        t = t + h;
+        for (int c = 0; c < p->n_record; ++c) record[(size_t)(k + 1) * p->n_record + c] = values[p->record_slot[c]];
+    }
+    stop->step = k1;
+    stop->member = -1;
+    stop->substep = 0;
+    stop->time = t;
+}
