@@ -34,11 +34,15 @@ def _runtime(name: str) -> str | None:
 
 
 ASAN = _runtime("libasan.so")
+#: Preloaded with ASan: C++ extensions the kernels' tests import (matplotlib's ft2font, through
+#: python-control, which motor's current controller needs) throw exceptions, and ASan's
+#: __cxa_throw interceptor aborts unless libstdc++ is loaded when ASan starts.
+STDCXX = _runtime("libstdc++.so")
 pytestmark = pytest.mark.skipif(ASAN is None, reason="the C compiler has no AddressSanitizer runtime")
 
 
 def _sanitized_env(library: Path) -> dict:
-    return {**os.environ, "PARCOSIM_KERNELS_LIB": str(library), "LD_PRELOAD": ASAN,
+    return {**os.environ, "PARCOSIM_KERNELS_LIB": str(library), "LD_PRELOAD": " ".join(filter(None, (ASAN, STDCXX))),
             # Python's small-object allocator would hide a buffer's end from ASan's redzones
             "PYTHONMALLOC": "malloc",
             "ASAN_OPTIONS": "detect_leaks=0:exitcode=99",
