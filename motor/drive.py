@@ -30,13 +30,6 @@ _PHASE_TOL = 1e-6
 _D = kernel.indices(kernel.DRIVE)
 
 
-def _named(names, values):
-    """Raise the refusal of the first value that is not a number, named (the kernel's inputs
-    are doubles: a non-finite one is the kernel's to refuse)."""
-    for name, value in zip(names, values):
-        _checks.finite(name, value)
-
-
 def _design(params, T, poles):
     """:func:`design_current_controller`, its numerical failures named with the parameters."""
     try:
@@ -258,17 +251,14 @@ class Drive:
         ValueError
             Naming the input, for a NaN/inf input or a bad step length.
         """
-        try:
-            code = self._kernel_sample(i_ref, v_ref, i_hat, h)
-            if code == kernel.UNPREPARED_STEP:
-                self.prepare_step(h)
-                code = self._kernel_sample(i_ref, v_ref, i_hat, h)
-        except TypeError:
-            _named(("i_ref", "v_ref", "i_hat", "h"), (i_ref, v_ref, i_hat, h))
-            raise
+        names, values = ("i_ref", "v_ref", "i_hat", "h"), (i_ref, v_ref, i_hat, h)
+        code = kernel.call(self._kernel_sample, names, values)
+        if code == kernel.UNPREPARED_STEP:
+            self.prepare_step(h)
+            code = kernel.call(self._kernel_sample, names, values)
         if code != kernel.OK:
             raise self._refused()
-        return self._kernel_sample.__self__.x[5]
+        return self._kernel_sample.__self__.x[6]
 
     def _refused(self, h=None):
         """The :class:`kernels.Refused` of the kernel's last refusal (it changed nothing)."""
@@ -276,7 +266,7 @@ class Drive:
         if r.code != kernel.DIVERGED:
             return kernels.refused(kernel.DRIVE_REASONS, r)
         x = self._kernel_step.__self__.x
-        return kernels.refused(kernel.DRIVE_REASONS, r, i=x[6], tau=x[4], why=self._diverged_why(h))
+        return kernels.refused(kernel.DRIVE_REASONS, r, i=x[7], tau=x[5], why=self._diverged_why(h))
 
     def step(self, i_ref, v_ref, omega, i_hat, h):
         """Advance the drive by one step with inputs held over it.
@@ -311,16 +301,15 @@ class Drive:
         """
         try:
             code = self._kernel_step(i_ref, v_ref, omega, i_hat, h)
-            if code == kernel.UNPREPARED_STEP:
-                self.prepare_step(h)
-                code = self._kernel_step(i_ref, v_ref, omega, i_hat, h)
-        except TypeError:
-            _named(("i_ref", "v_ref", "omega", "i_hat", "h"), (i_ref, v_ref, omega, i_hat, h))
-            raise
+        except TypeError:     # not a float: converted, or refused by name
+            code = kernel.call(self._kernel_step, _STEP_INPUTS, (i_ref, v_ref, omega, i_hat, h))
+        if code == kernel.UNPREPARED_STEP:
+            self.prepare_step(h)
+            code = kernel.call(self._kernel_step, _STEP_INPUTS, (i_ref, v_ref, omega, i_hat, h))
         if code != kernel.OK:
             raise self._refused(h)
         x = self._kernel_step.__self__.x
-        return x[4], x[5], x[6]
+        return x[5], x[6], x[7]
 
     def _diverged_why(self, h):
         """Why the current of a step is not finite, if the method explains it."""
@@ -333,6 +322,7 @@ class Drive:
 
 
 _I, _V = _D["i"], _D["v"]
+_STEP_INPUTS = ("i_ref", "v_ref", "omega", "i_hat", "h")
 #: A drive's bound C calls (rebuilt by a copy, never copied).
 _BOUND = ("_kernel_step", "_kernel_sample", "_kernel_torque")
 

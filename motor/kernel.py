@@ -12,6 +12,7 @@ import ctypes
 import numpy as np
 
 import kernels
+from motor import _checks
 
 _d, _p, _u64, _int = ctypes.c_double, ctypes.c_void_p, ctypes.c_uint64, ctypes.c_int
 _ref = ctypes.POINTER(kernels.Refusal)
@@ -56,11 +57,23 @@ lugre_phi = kernels.function("pc_lugre_phi", None, _d, _p)
 lugre_advance = kernels.function("pc_lugre_advance", None, _p, _d, _d, _d, _p)
 lugre_push = kernels.function("pc_lugre_push", None, _p, _int, _d, _d, _d, _d, _int, _p)
 drive_torque = kernels.function("pc_drive_torque", _d, _p, _p, _d)
-drive_step_x = kernels.function("pc_drive_step_x", _int, _p, _p, _d, _p)
-drive_sample_x = kernels.function("pc_drive_sample_x", _int, _p, _p, _d, _p)
+drive_step_x = kernels.function("pc_drive_step_x", _int, _p, _p, _p)
+drive_sample_x = kernels.function("pc_drive_sample_x", _int, _p, _p, _p)
+observer_estimate_x = kernels.function("pc_observer_estimate_x", _int, _p, _p, _p)
 #: The compiled loop's I/O functions (pc_io_fn).
 drive_io = kernels.function("pc_drive_io", _int, _p, _p, _d, _d, _p)
 observer_io = kernels.function("pc_observer_io", _int, _p, _p, _d, _d, _p)
+
+
+def call(kernel_call, names, values):
+    """``kernel_call(*values)``; a value ctypes does not take as a double (a string, a numpy
+    0-d array) is converted, or refused by name (a non-finite one is the kernel's to refuse)."""
+    try:
+        return kernel_call(*values)
+    except TypeError:
+        for name, value in zip(names, values):
+            _checks.finite(name, value)
+        return kernel_call(*(float(v) for v in values))
 
 
 class DriveContext(ctypes.Structure):
@@ -77,8 +90,8 @@ class ObserverContext(ctypes.Structure):
 
 class Calls:
     """The C calls on one owner's buffers through a context struct (the compiled loop's) and an
-    I/O array ``x`` (inputs, then outputs), both made once: a call sets the inputs in ``x``
-    and passes five arguments (ctypes' cost grows with their number).
+    I/O array ``x`` (inputs and the step length, then outputs), both made once: a call sets
+    the inputs in ``x`` and passes three pointers (ctypes' cost grows with the arguments).
 
     An owner (:class:`motor.Drive`, ...) keeps its bound methods as attributes, which FMU
     state treats as code (fmus.fmustate.opaque_tag), never as data; a copy of the owner makes
@@ -95,34 +108,35 @@ class Calls:
     __slots__ = ("context", "_context", "x", "_x", "refusal", "_refusal")
 
     def __init__(self, context, n):
+        # the pointer arguments as c_void_p objects: ctypes passes them without converting
         self.context = context
-        self._context = ctypes.addressof(context)
+        self._context = ctypes.c_void_p(ctypes.addressof(context))
         self.x = (ctypes.c_double * n)()
-        self._x = ctypes.addressof(self.x)
+        self._x = ctypes.c_void_p(ctypes.addressof(self.x))
         self.refusal = kernels.Refusal()
-        self._refusal = ctypes.addressof(self.refusal)
+        self._refusal = ctypes.c_void_p(ctypes.addressof(self.refusal))
 
     @classmethod
     def drive(cls, drive, controller, lugre=None):
         """The calls of a drive's buffers (``lugre`` None: B.2's tanh friction)."""
-        return cls(DriveContext(*(None if b is None else kernels.address(b) for b in (drive, controller, lugre))), 7)
+        return cls(DriveContext(*(None if b is None else kernels.address(b) for b in (drive, controller, lugre))), 8)
 
     @classmethod
     def observer(cls, observer):
         """The calls of an observer's buffer."""
-        return cls(ObserverContext(kernels.address(observer)), 3)
+        return cls(ObserverContext(kernels.address(observer)), 4)
 
     def drive_step(self, i_ref, v_ref, omega, i_hat, h):
-        """``pc_drive_step_x``: the code; tau, v, i in ``x[4:7]``.  TypeError: an input is not a number."""
+        """``pc_drive_step_x``: the code; tau, v, i in ``x[5:8]``.  TypeError: an input is not a number."""
         x = self.x
-        x[0], x[1], x[2], x[3] = i_ref, v_ref, omega, i_hat
-        return drive_step_x(self._context, self._x, h, self._refusal)
+        x[0], x[1], x[2], x[3], x[4] = i_ref, v_ref, omega, i_hat, h
+        return drive_step_x(self._context, self._x, self._refusal)
 
     def sample_voltage(self, i_ref, v_ref, i_hat, h):
-        """``pc_drive_sample_x``: the code; v in ``x[5]``."""
+        """``pc_drive_sample_x``: the code; v in ``x[6]``."""
         x = self.x
-        x[0], x[1], x[3] = i_ref, v_ref, i_hat
-        return drive_sample_x(self._context, self._x, h, self._refusal)
+        x[0], x[1], x[3], x[4] = i_ref, v_ref, i_hat, h
+        return drive_sample_x(self._context, self._x, self._refusal)
 
     def torque(self, omega):
         """``pc_drive_torque``: the shaft torque of the present current at speed omega."""
@@ -130,10 +144,10 @@ class Calls:
         return drive_torque(c.drive, c.lugre, omega)
 
     def observer_estimate(self, v, omega, h):
-        """``pc_observer_io``: the code; i_hat in ``x[2]`` (a non-finite one in the refusal's value)."""
+        """``pc_observer_estimate_x``: the code; i_hat in ``x[3]`` (also a non-finite one)."""
         x = self.x
-        x[0], x[1] = v, omega
-        return observer_io(self._context, self._x, 0.0, h, self._refusal)
+        x[0], x[1], x[2] = v, omega, h
+        return observer_estimate_x(self._context, self._x, self._refusal)
 
 
 class Controller:

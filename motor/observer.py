@@ -106,19 +106,16 @@ class CurrentObserver:
         """
         try:
             code = self._kernel(v, omega, h)
-            if code == kernel.UNPREPARED_STEP:
-                self.prepare_step(h)
-                code = self._kernel(v, omega, h)
-        except TypeError:     # not a number: named
-            for name, value in (("v", v), ("omega", omega), ("h", h)):
-                _checks.finite(name, value)
-            raise
+        except TypeError:     # not a float: converted, or refused by name
+            code = kernel.call(self._kernel, _INPUTS, (v, omega, h))
+        if code == kernel.UNPREPARED_STEP:
+            self.prepare_step(h)
+            code = kernel.call(self._kernel, _INPUTS, (v, omega, h))
         calls = self._kernel.__self__
-        if code == kernel.OK:
-            return calls.x[2]
-        if code == kernel.DIVERGED:
-            return calls.refusal.value     # a non-finite estimate is returned, not kept
+        if code == kernel.OK or code == kernel.DIVERGED:
+            return calls.x[3]     # a non-finite estimate (DIVERGED) is returned, not kept
         raise kernels.refused(kernel.OBSERVER_REASONS, calls.refusal)
 
 
 _O = kernel.indices(kernel.OBSERVER)
+_INPUTS = ("v", "omega", "h")

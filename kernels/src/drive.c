@@ -339,30 +339,31 @@ int pc_drive_step_friction(pc_drive *d, pc_controller *c, double i_ref, double v
     return step(d, c, i_ref, v_ref, omega, i_hat, friction, out, r);
 }
 
-/* x = [i_ref, v_ref, omega, i_hat | tau, v, i], the outputs written also on a refusal DIVERGED
- * (the values refused): the Python layer's call, which names them. */
-int pc_drive_step_x(void *context, double *x, double h, pc_refusal *r)
+/* The Python layer's calls (motor.kernel.Calls): x = [i_ref, v_ref, omega, i_hat, h | tau, v, i],
+ * the outputs written also on a refusal DIVERGED (the values refused, for the message). */
+int pc_drive_step_x(void *context, double *x, pc_refusal *r)
 {
     const pc_drive_context *k = (const pc_drive_context *)context;
-    return pc_drive_step(k->drive, k->controller, k->lugre, x[0], x[1], x[2], x[3], h, x + 4, r);
+    return pc_drive_step(k->drive, k->controller, k->lugre, x[0], x[1], x[2], x[3], x[4], x + 5, r);
 }
 
-/* x as pc_drive_step_x; the voltage of pc_drive_sample_voltage in x[5]. */
-int pc_drive_sample_x(void *context, double *x, double h, pc_refusal *r)
+/* x as pc_drive_step_x; the voltage of pc_drive_sample_voltage in x[6]. */
+int pc_drive_sample_x(void *context, double *x, pc_refusal *r)
 {
     const pc_drive_context *k = (const pc_drive_context *)context;
-    return pc_drive_sample_voltage(k->drive, k->controller, x[0], x[1], x[3], h, x + 5, r);
+    return pc_drive_sample_voltage(k->drive, k->controller, x[0], x[1], x[3], x[4], x + 6, r);
 }
 
 int pc_drive_io(void *context, double *x, double t, double h, pc_refusal *r)
 {
     (void)t;
-    double out[7] = {x[0], x[1], x[2], x[3], 0.0, 0.0, 0.0};
-    int code = pc_drive_step_x(context, out, h, r);
+    const pc_drive_context *k = (const pc_drive_context *)context;
+    double out[3];
+    int code = pc_drive_step(k->drive, k->controller, k->lugre, x[0], x[1], x[2], x[3], h, out, r);
     if (code == PC_OK) {
-        x[4] = out[4];
-        x[5] = out[5];
-        x[6] = out[6];
+        x[4] = out[0];
+        x[5] = out[1];
+        x[6] = out[2];
     }
     return code;
 }

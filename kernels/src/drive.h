@@ -127,11 +127,13 @@ int pc_drive_step(pc_drive *d, pc_controller *c, pc_lugre *f, double i_ref, doub
 int pc_drive_step_friction(pc_drive *d, pc_controller *c, double i_ref, double v_ref, double omega, double i_hat,
                            double h, double friction_end, double friction_mean, double out[3], pc_refusal *r);
 
-/* DCMotorDrive: x = [i_ref, v_ref, omega, i_hat | tau, v, i].  pc_drive_io writes the outputs
- * only on PC_OK (the compiled loop); pc_drive_step_x also on PC_DRIVE_DIVERGED (the refused values,
- * for the message); pc_drive_sample_x puts the voltage of pc_drive_sample_voltage in x[5]. */
-int pc_drive_step_x(void *context, double *x, double h, pc_refusal *r);
-int pc_drive_sample_x(void *context, double *x, double h, pc_refusal *r);
+/* DCMotorDrive: x = [i_ref, v_ref, omega, i_hat | tau, v, i], the outputs written only on PC_OK. */
 int pc_drive_io(void *context, double *x, double t, double h, pc_refusal *r);
+
+/* The Python layer's calls (three pointers: ctypes' cost grows with the arguments):
+ * x = [i_ref, v_ref, omega, i_hat, h | tau, v, i], the outputs also on PC_DRIVE_DIVERGED (the
+ * refused values, for the message); pc_drive_sample_x puts pc_drive_sample_voltage's v in x[6]. */
+int pc_drive_step_x(void *context, double *x, pc_refusal *r);
+int pc_drive_sample_x(void *context, double *x, pc_refusal *r);
 
 #endif

@@ -31,3 +31,10 @@ int pc_observer_io(void *context, double *x, double t, double h, pc_refusal *r)
     if (code == PC_OK) x[2] = i_hat;
     return code;
 }
+
+/* The Python layer's call: x = [v, omega, h | i_hat], i_hat written also on PC_OBSERVER_DIVERGED. */
+int pc_observer_estimate_x(void *context, double *x, pc_refusal *r)
+{
+    const pc_observer_context *k = (const pc_observer_context *)context;
+    return pc_observer_estimate(k->observer, x[0], x[1], x[2], &x[3], r);
+}

@@ -34,4 +34,7 @@ int pc_observer_estimate(pc_observer *o, double v, double omega, double h, doubl
 /* CurrentObserver: x = [v, omega | i_hat]. */
 int pc_observer_io(void *context, double *x, double t, double h, pc_refusal *r);
 
+/* The Python layer's call: x = [v, omega, h | i_hat] (three pointers). */
+int pc_observer_estimate_x(void *context, double *x, pc_refusal *r);
+
 #endif
