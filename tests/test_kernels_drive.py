@@ -217,3 +217,15 @@ def test_a_copied_drive_steps_its_own_buffers():
     twin.step(0.3, 0.0, 0.5, 0.0, H)
     assert np.array_equal(drive.buf, before[0]) and np.array_equal(drive.lugre, before[1])
     assert not np.array_equal(twin.buf, before[0])
+
+
+@pytest.mark.parametrize("word", [-1.0, math.nan, 1e30])
+def test_a_seed_word_outside_the_whole_numbers_draws_seed_zeros_noise(word):
+    """The noise's seed is a double in the buffer (a restored FMU state writes it): outside
+    [0, 2^64), where C's conversion would be undefined, the kernel takes 0."""
+    voltages = []
+    for seed in (word, 0.0):
+        drive = Drive(motor1, current_noise=0.05)
+        drive.buf[kernel.DRIVE["noise_seed"]] = seed
+        voltages.append(drive.step(0.0, 0.0, 0.0, 0.0, H)[1])
+    assert voltages[0] == voltages[1] and math.isfinite(voltages[0])

@@ -189,12 +189,18 @@ void pc_lugre_push(const pc_lugre *f, int kind, double a, double b, double mass,
 
 /* --- the voltage of a step: controller sample, held voltage, PWM --------------------------------- */
 
+/* A whole number held in a double as uint64 (0 outside [0, 2^64), where C's cast is undefined:
+ * Python validates the seeds, but a buffer is also what a restored FMU state wrote). */
+static uint64_t whole(double x)
+{
+    return (x >= 0.0 && x < 18446744073709551616.0) ? (uint64_t)x : 0;
+}
+
 /* The current the loop reads at this sample: i_hat plus the offset and the noise (if any). */
 static double measured_current(const pc_drive *d, double i_hat)
 {
     if (d->i_offset == 0.0 && d->i_noise == 0.0) return i_hat;
-    double noise = d->i_noise * pc_drive_gaussian((uint64_t)d->noise_seed, (uint64_t)d->noise_instance,
-                                                  (uint64_t)d->sample);
+    double noise = d->i_noise * pc_drive_gaussian(whole(d->noise_seed), whole(d->noise_instance), whole(d->sample));
     return i_hat + d->i_offset + noise;
 }
 
