@@ -173,4 +173,8 @@ DIVERGED_REASON = kernels.Reason("diverged", ("i", "tau"), "",
                                  "armature current i = {i!r} A, shaft torque tau = {tau!r} N m after this step are "
                                  "not finite{why}")
 DRIVE_REASONS = {NONFINITE_INPUT: NONFINITE, DIVERGED: DIVERGED_REASON}
-OBSERVER_REASONS = {NONFINITE_INPUT: OBSERVER_NONFINITE}
+#: The observer's estimate is not finite (the CurrentObserver slave's text).
+OBSERVER_DIVERGED = kernels.Reason("diverged", ("i_hat",), "A",
+                                   "the estimate i_hat = {value!r} A{at} is not finite (inputs v = {v!r} V, "
+                                   "omega = {omega!r} rad/s)")
+OBSERVER_REASONS = {NONFINITE_INPUT: OBSERVER_NONFINITE, DIVERGED: OBSERVER_DIVERGED}

@@ -82,7 +82,7 @@ class CurrentObserver:
             self.buf[_O["h"]] = h
             self._h = h
 
-    def estimate(self, v, omega, h):
+    def estimate(self, v, omega, h, time=None):
         """Current estimate at the end of a step.
 
         Parameters
@@ -93,6 +93,8 @@ class CurrentObserver:
             Speed now, at the end of that step [rad/s].
         h : float
             Length of that step [s].
+        time : float, optional
+            The time now [s], for the message of a refusal.
 
         Returns
         -------
@@ -102,7 +104,8 @@ class CurrentObserver:
         Raises
         ------
         ValueError
-            Naming the input, for a NaN/inf input or h <= 0.
+            Naming the input, for a NaN/inf input or h <= 0; :class:`kernels.Refused` also
+            for an estimate that is not finite (not kept).
         """
         try:
             code = self._kernel(v, omega, h)
@@ -112,9 +115,10 @@ class CurrentObserver:
             self.prepare_step(h)
             code = kernel.call(self._kernel, _INPUTS, (v, omega, h))
         calls = self._kernel.__self__
-        if code == kernel.OK or code == kernel.DIVERGED:
-            return calls.x[3]     # a non-finite estimate (DIVERGED) is returned, not kept
-        raise kernels.refused(kernel.OBSERVER_REASONS, calls.refusal)
+        if code == kernel.OK:
+            return calls.x[3]
+        at = "" if time is None else f" at t = {time:.6g} s"
+        raise kernels.refused(kernel.OBSERVER_REASONS, calls.refusal, time, at=at, v=v, omega=omega)
 
 
 _O = kernel.indices(kernel.OBSERVER)

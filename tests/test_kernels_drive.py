@@ -229,3 +229,15 @@ def test_a_seed_word_outside_the_whole_numbers_draws_seed_zeros_noise(word):
         drive.buf[kernel.DRIVE["noise_seed"]] = seed
         voltages.append(drive.step(0.0, 0.0, 0.0, 0.0, H)[1])
     assert voltages[0] == voltages[1] and math.isfinite(voltages[0])
+
+
+def test_an_observer_estimate_that_overflows_is_refused_and_not_kept():
+    """v = 1e308 V on a motor with R << 1: the estimate (v - ke omega)/R overflows; the
+    refusal names i_hat, its value and the time, and the observer keeps its last estimate."""
+    observer = CurrentObserver(motor1.with_(R=1e-3), "static")
+    kept = observer.estimate(1.0, 0.0, H)
+    with pytest.raises(kernels.Refused) as caught:
+        observer.estimate(1e308, 0.0, H, time=0.25)
+    assert caught.value.variable == "i_hat" and caught.value.code == kernel.DIVERGED and caught.value.time == 0.25
+    assert str(caught.value).startswith("the estimate i_hat = inf A at t = 0.25 s is not finite (inputs v = 1e+308 V")
+    assert observer.i_hat == kept
