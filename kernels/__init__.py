@@ -47,8 +47,15 @@ class Field(ctypes.Structure):
 _library = None
 
 
-def _sources_present() -> bool:
-    return (HERE / "src").is_dir() and any((HERE / "src").glob("*.c"))
+def _folder() -> Path:
+    """The package's folder now.  Inside an FMU the wrapper points ``__path__`` at the latest
+    extraction of the bundle (fmus/wrapper/parcosim_fmi2.c), and an earlier one, where this
+    module was imported from, may be gone: the library is loaded from there."""
+    return Path(__path__[-1]) if __path__ else HERE
+
+
+def _sources_present(folder: Path) -> bool:
+    return (folder / "src").is_dir() and any((folder / "src").glob("*.c"))
 
 
 def _load(path: Path) -> ctypes.CDLL:
@@ -79,26 +86,28 @@ def library() -> ctypes.CDLL:
     if override:
         _library = _load(Path(override))
         return _library
-    if _sources_present():
+    folder = _folder()
+    path = folder / LIBRARY.name
+    if _sources_present(folder):
         from . import build
 
         wanted = build.sources_hash()
         current = None
-        if LIBRARY.exists():
-            current = _load(LIBRARY).pc_sources_hash().decode()
+        if path.exists():
+            current = _load(path).pc_sources_hash().decode()
         if current != wanted:
             try:
-                build.build()
+                build.build(path)
             except build.NoCompiler as exc:
-                state = "stale (its sources changed)" if LIBRARY.exists() else "not built"
+                state = "stale (its sources changed)" if path.exists() else "not built"
                 raise KernelsUnavailable(f"parcosim's C kernels are {state} and cannot be built: {exc}") from None
             # a fresh path: dlopen would hand back the stale library already loaded
-            _library = _load(_fresh_copy(LIBRARY))
+            _library = _load(_fresh_copy(path))
             return _library
-    elif not LIBRARY.exists():
-        raise KernelsUnavailable(f"parcosim's C kernels are missing: no {LIBRARY} (reinstall parcosim with "
+    elif not path.exists():
+        raise KernelsUnavailable(f"parcosim's C kernels are missing: no {path} (reinstall parcosim with "
                                  "'pip install -e .', which builds them with the system C compiler)")
-    _library = _load(LIBRARY)
+    _library = _load(path)
     return _library
 
 
