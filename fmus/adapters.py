@@ -119,21 +119,24 @@ class PositionControllerAdapter(Adapter):
 
 
 @register
-class CurrentObserverAdapter(EmittedAdapter):
-    """:func:`motor.fastdrive.observer_io`."""
+class CurrentObserverAdapter(Adapter):
+    """``pc_observer_io`` (kernels/src/observer.c) on the slave's observer buffer."""
 
     model = "CurrentObserver"
     inputs = ("v", "omega")
     outputs = ("i_hat",)
-    modules = ("motor.fastdrive",)
+    kernel = "pc_observer_io"
 
     def __init__(self, name, slave, h):
         super().__init__(name, slave, h)
         slave.observer.prepare_step(h)
-        self.arrays = [slave.observer.buf]
+        self.buffers = [slave.observer.buf]
 
-    def emit(self, arrays, x, t, h):
-        return [f"st = fastdrive.observer_io({arrays[0]}, {x}, {h})"]
+    def context(self):
+        from motor.kernel import ObserverContext
+
+        self._context = ObserverContext(kernels.address(self.buffers[0]))
+        return self._context
 
 
 def _prepared(name, drive, h):
@@ -145,33 +148,25 @@ def _prepared(name, drive, h):
 
 
 @register
-class DCMotorDriveAdapter(EmittedAdapter):
-    """:func:`motor.fastdrive.drive_io`; with LuGre friction :func:`motor.friction.friction_peek`,
-    :func:`motor.fastdrive.drive_io_friction`, then :func:`motor.friction.friction_commit`
-    (the calls of ``Drive._step``)."""
+class DCMotorDriveAdapter(Adapter):
+    """``pc_drive_io`` (kernels/src/drive.c) on the slave's drive buffers: the drive, its
+    controller and, with LuGre friction, its bristles (advanced with the step, as ``Drive.step``)."""
 
     model = "DCMotorDrive"
     inputs = ("i_ref", "v_ref", "omega", "i_hat")
     outputs = ("tau", "v", "i")
-    modules = ("motor.fastdrive",)
+    kernel = "pc_drive_io"
 
     def __init__(self, name, slave, h):
         super().__init__(name, slave, h)
         drive = slave.drive
-        self.arrays = _prepared(name, drive, h)
-        if drive.lugre is not None:
-            self.arrays.append(drive.lugre)
-            self.modules = ("motor.fastdrive", "motor.friction")
+        self.buffers = _prepared(name, drive, h) + [drive.lugre]
 
-    def emit(self, arrays, x, t, h):
-        if len(arrays) == 2:
-            return [f"st = fastdrive.drive_io({arrays[0]}, {arrays[1]}, {x}, {h})"]
-        d, c, f = arrays
-        return [f"st, z, f_end, f_mean = friction.friction_peek({f}, {x}[2], {h})",
-                "if st == 0:",
-                f"    st = fastdrive.drive_io_friction({d}, {c}, {x}, {h}, f_end, f_mean)",
-                "if st == 0:",
-                f"    friction.friction_commit({f}, z)"]
+    def context(self):
+        from motor.kernel import DriveContext
+
+        self._context = DriveContext(*(None if b is None else kernels.address(b) for b in self.buffers))
+        return self._context
 
 
 def _check_plant(name, sim, h) -> None:

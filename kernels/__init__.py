@@ -94,23 +94,20 @@ def library() -> ctypes.CDLL:
     if override:
         _library = _load(Path(override))
         return _library
+    path = _folder() / LIBRARY.name
     if not BUNDLED and _sources_present():
         from . import build
 
-        wanted = build.sources_hash()
-        current = None
-        if LIBRARY.exists():
-            current = _load(LIBRARY).pc_sources_hash().decode()
-        if current != wanted:
+        current = _load(path).pc_sources_hash().decode() if path.exists() else None
+        if current != build.sources_hash():
             try:
-                build.build()
+                build.build(path)
             except build.NoCompiler as exc:
-                state = "stale (its sources changed)" if LIBRARY.exists() else "not built"
+                state = "stale (its sources changed)" if path.exists() else "not built"
                 raise KernelsUnavailable(f"parcosim's C kernels are {state} and cannot be built: {exc}") from None
             # a fresh path: dlopen would hand back the stale library already loaded
-            _library = _load(_fresh_copy(LIBRARY))
+            _library = _load(_fresh_copy(path))
             return _library
-    path = _folder() / LIBRARY.name
     if not path.exists():
         raise KernelsUnavailable(f"parcosim's C kernels are missing: no {path} (reinstall parcosim with "
                                  "'pip install -e .', which builds them with the system C compiler)")

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from motor import _checks, fastdrive
+from motor import _checks, kernel
 
 #: Closed-loop poles chosen in the thesis (section 7.2.10); the fourth is the plant zero.
 THESIS_POLES = (0.0, 0.6, 0.7)
@@ -219,16 +219,34 @@ class CurrentController:
     def __init__(self, design, v_max):
         self.design = design
         self.v_max = _checks.positive("v_max", v_max)
-        # Coefficients and state in one array, stepped by motor.fastdrive.
-        self.buf = fastdrive.new_controller(design.alpha, design.beta, design.gamma, design.delta, self.v_max)
+        # Coefficients and state in one array, the C struct pc_controller (kernels/src/drive.h).
+        self.buf = np.zeros(kernel.size(kernel.CONTROLLER))
+        for name in ("alpha", "beta", "gamma", "delta"):
+            self.buf[kernel.CONTROLLER[name]] = getattr(design, name)
+        self.buf[kernel.CONTROLLER["v_max"]] = self.v_max
+        self._update = kernel.Controller(self.buf).update
         self.reset()
+
+    @staticmethod
+    def idle_buffer(v_max):
+        """A controller buffer with zero coefficients: the voltage-mode drive's (never sampled)."""
+        b = np.zeros(kernel.size(kernel.CONTROLLER))
+        b[kernel.CONTROLLER["v_max"]] = v_max
+        return b
+
+    def __getstate__(self):
+        return {k: v for k, v in self.__dict__.items() if k != "_update"}
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self._update = kernel.Controller(self.buf).update
 
     def reset(self, v0=0.0):
         """Restart from a steady voltage ``v0`` with zero error (bumpless start)."""
         v0 = min(max(_checks.finite("v0", v0), -self.v_max), self.v_max)
-        b = self.buf
-        b[fastdrive.C_U1] = b[fastdrive.C_U2] = v0
-        b[fastdrive.C_E1] = b[fastdrive.C_E2] = 0.0
+        c, b = kernel.CONTROLLER, self.buf
+        b[c["u1"]] = b[c["u2"]] = v0
+        b[c["e1"]] = b[c["e2"]] = 0.0
 
     def update(self, i_ref, i_meas):
         """One controller sample: voltage to hold over the next period.
@@ -245,4 +263,4 @@ class CurrentController:
         float
             Saturated voltage [V].
         """
-        return fastdrive.controller_update(self.buf, float(i_ref), float(i_meas))
+        return self._update(float(i_ref), float(i_meas))

@@ -8,7 +8,8 @@ import math
 
 import numpy as np
 
-from motor import _checks, fastdrive, friction as lugre
+import kernels
+from motor import _checks, friction as lugre, kernel
 from motor.current_controller import THESIS_POLES, THESIS_T, CurrentController, design_current_controller
 from motor.electrics import ELECTRICAL_METHODS, electrical_step_coefficients, mean_current_coefficients
 
@@ -26,13 +27,7 @@ MAX_SEED = 2 ** 53
 _PHASE_TOL = 1e-6
 
 
-def _floats(*values):
-    """The values as floats (the kernels' one signature); a value that is not a number
-    becomes NaN, which the kernel refuses and the caller names with its original value."""
-    try:
-        return tuple(float(v) for v in values)
-    except (TypeError, ValueError):
-        return tuple(v if isinstance(v, float) else math.nan for v in values)
+_D = kernel.indices(kernel.DRIVE)
 
 
 def _design(params, T, poles):
@@ -86,7 +81,7 @@ class Drive:
         Offset [A] and standard deviation [A] of a Gaussian noise added to the current the
         loop reads (``i_hat``) at each controller sample (current mode; 0: exact).
     noise_seed, noise_instance : int
-        The noise of sample k is :func:`motor.fastdrive.gaussian` (noise_seed,
+        The noise of sample k is :func:`motor.drive.gaussian` (noise_seed,
         noise_instance, k): give each drive of a system its own instance.
 
     Raises
@@ -121,32 +116,41 @@ class Drive:
         self._h = None
         self._coefficients = None
         self._mean = None
-        # Constants and state of the per-step arithmetic (motor.fastdrive's layout).
+        # Constants and state of the step: the C struct pc_drive (kernels/src/drive.h).
         p = params
-        self.buf = np.zeros(fastdrive.DRIVE_SIZE)
-        self.buf[fastdrive.D_CURRENT_MODE] = 1.0 if self.mode == "current" else 0.0
-        self.buf[fastdrive.D_MEAN_TORQUE] = 1.0 if self.torque_output == "mean" else 0.0
-        self.buf[fastdrive.D_KE:fastdrive.D_T + 1] = (p.ke, p.kt, p.b, p.mu, p.omega_eps, p.v_max, self.T)
-        self.buf[fastdrive.D_H] = math.nan     # no step prepared (prepare_step)
-        self.buf[fastdrive.D_PWM_QUANTUM] = p.v_max / pwm_counts if pwm_counts else 0.0
-        self.buf[fastdrive.D_I_OFFSET:fastdrive.D_NOISE_INSTANCE + 1] = (offset, noise, seed, instance)
+        self.buf = np.zeros(kernel.size(kernel.DRIVE))
+        values = {"current_mode": 1.0 if self.mode == "current" else 0.0,
+                  "mean_torque": 1.0 if self.torque_output == "mean" else 0.0,
+                  "ke": p.ke, "kt": p.kt, "b": p.b, "mu": p.mu, "omega_eps": p.omega_eps, "v_max": p.v_max,
+                  "T": self.T, "h": math.nan,     # no step prepared (prepare_step)
+                  "pwm_quantum": p.v_max / pwm_counts if pwm_counts else 0.0, "i_offset": offset,
+                  "i_noise": noise, "noise_seed": seed, "noise_instance": instance}
+        for name, value in values.items():
+            self.buf[_D[name]] = value
         self._controller_buf = (self.controller.buf if self.controller is not None
-                                else fastdrive.new_controller(0.0, 0.0, 0.0, 0.0, p.v_max))
+                                else CurrentController.idle_buffer(p.v_max))
+        self._bind()
         self.reset()
-        # Compile the step kernels (or load numba's cache) now, on copies: the construction
-        # (an FMU's initialisation), not the first step, pays for it.
-        fastdrive.drive_step(self.buf.copy(), self._controller_buf.copy(), 0.0, 0.0, 0.0, 0.0, math.nan)
-        fastdrive.sample_voltage(self.buf.copy(), self._controller_buf.copy(), 0.0, 0.0, 0.0, math.nan)
-        if self.lugre is not None:
-            lugre.friction_peek(self.lugre, 0.0, 1.0)
-            fastdrive.drive_step_friction(self.buf.copy(), self._controller_buf.copy(), 0.0, 0.0, 0.0, 0.0,
-                                          math.nan, 0.0, 0.0)
 
-    i = property(lambda self: float(self.buf[fastdrive.D_I]),
-                 lambda self, value: self.buf.__setitem__(fastdrive.D_I, value),
+    def _bind(self):
+        """The C calls on this drive's buffers (:class:`motor.kernel.Calls`)."""
+        calls = kernel.Calls.drive(self.buf, self._controller_buf, self.lugre)
+        # Bound methods only: FMU state treats them as code (an address must never be state).
+        self._kernel_step, self._kernel_sample, self._kernel_torque = (calls.drive_step, calls.sample_voltage,
+                                                                       calls.torque)
+
+    def __getstate__(self):
+        return {k: v for k, v in self.__dict__.items() if k not in _BOUND}
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self._bind()
+
+    i = property(lambda self: float(self.buf[_I]),
+                 lambda self, value: self.buf.__setitem__(_I, value),
                  doc="Armature current [A].")
-    v = property(lambda self: float(self.buf[fastdrive.D_V]),
-                 lambda self, value: self.buf.__setitem__(fastdrive.D_V, value),
+    v = property(lambda self: float(self.buf[_V]),
+                 lambda self, value: self.buf.__setitem__(_V, value),
                  doc="Voltage applied over the last step [V].")
 
     def reset(self, i0=0.0, v0=0.0):
@@ -158,8 +162,8 @@ class Drive:
         v_max = self.params.v_max
         self.i = _checks.finite("i0", i0)
         self.v = min(max(_checks.finite("v0", v0), -v_max), v_max)
-        self.buf[fastdrive.D_PHASE] = 0.0
-        self.buf[fastdrive.D_SAMPLE] = 0.0
+        self.buf[_D["phase"]] = 0.0
+        self.buf[_D["sample"]] = 0.0
         if self.lugre is not None:
             self.lugre[lugre.F_Z] = 0.0
         if self.controller is not None:
@@ -196,9 +200,7 @@ class Drive:
         """Shaft torque [N m] for the present current at speed ``omega`` (B.2, or kt i minus
         the LuGre friction (4) at the present deflection)."""
         omega = _checks.finite("omega", omega)
-        if self.lugre is not None:
-            return self.params.kt * self.i - lugre.friction_force(self.lugre, self.lugre[lugre.F_Z], omega)
-        return fastdrive.shaft_torque(self.buf, self.i, omega)
+        return self._kernel_torque(omega)
 
     def controller_state(self):
         """A copy of the drive's per-step state (current, voltage, controller, phase) for
@@ -228,10 +230,10 @@ class Drive:
             self._coefficients = electrical_step_coefficients(self.params.R, self.params.L, h, self.method)
             self._mean = mean_current_coefficients(self.params.R, self.params.L, h, self.method)
             b = self.buf
-            b[fastdrive.D_A], b[fastdrive.D_G] = self._coefficients
-            b[fastdrive.D_WI], b[fastdrive.D_WU] = self._mean
-            b[fastdrive.D_PHASE_STEP] = h / self.T
-            b[fastdrive.D_H] = h
+            b[_D["a"]], b[_D["g"]] = self._coefficients
+            b[_D["w_i"]], b[_D["w_u"]] = self._mean
+            b[_D["phase_step"]] = h / self.T
+            b[_D["h"]] = h
             self._h = h
 
     def sample_voltage(self, i_ref, v_ref, i_hat, h):
@@ -249,20 +251,22 @@ class Drive:
         ValueError
             Naming the input, for a NaN/inf input or a bad step length.
         """
-        args = _floats(i_ref, v_ref, i_hat, h)
-        status, v = fastdrive.sample_voltage(self.buf, self._controller_buf, *args)
-        if status == fastdrive.UNPREPARED_STEP:
+        names, values = ("i_ref", "v_ref", "i_hat", "h"), (i_ref, v_ref, i_hat, h)
+        code = kernel.call(self._kernel_sample, names, values)
+        if code == kernel.UNPREPARED_STEP:
             self.prepare_step(h)
-            status, v = fastdrive.sample_voltage(self.buf, self._controller_buf, *args)
-        if status != fastdrive.OK:
-            self._refuse(status, i_ref, v_ref, i_hat)
-        return v
+            code = kernel.call(self._kernel_sample, names, values)
+        if code != kernel.OK:
+            raise self._refused()
+        return self._kernel_sample.__self__.x[6]
 
-    def _refuse(self, status, i_ref, v_ref, i_hat, omega=0.0):
-        """Raise the message of a refusal of :mod:`motor.fastdrive` (nothing was changed)."""
-        for name, value in (("omega", omega), ("i_ref", i_ref), ("v_ref", v_ref), ("i_hat", i_hat)):
-            _checks.finite(name, value)
-        raise RuntimeError(f"motor.fastdrive refused a step with status {status} that the Python checks accept")
+    def _refused(self, h=None):
+        """The :class:`kernels.Refused` of the kernel's last refusal (it changed nothing)."""
+        r = self._kernel_step.__self__.refusal
+        if r.code != kernel.DIVERGED:
+            return kernels.refused(kernel.DRIVE_REASONS, r)
+        x = self._kernel_step.__self__.x
+        return kernels.refused(kernel.DRIVE_REASONS, r, i=x[7], tau=x[5], why=self._diverged_why(h))
 
     def step(self, i_ref, v_ref, omega, i_hat, h):
         """Advance the drive by one step with inputs held over it.
@@ -295,35 +299,43 @@ class Drive:
         ValueError
             Naming the input, for a NaN/inf input or a bad step length.
         """
-        args = _floats(i_ref, v_ref, omega, i_hat, h)
-        status, tau, v, i = self._step(args)
-        if status == fastdrive.UNPREPARED_STEP:
+        try:
+            code = self._kernel_step(i_ref, v_ref, omega, i_hat, h)
+        except TypeError:     # not a float: converted, or refused by name
+            code = kernel.call(self._kernel_step, _STEP_INPUTS, (i_ref, v_ref, omega, i_hat, h))
+        if code == kernel.UNPREPARED_STEP:
             self.prepare_step(h)
-            status, tau, v, i = self._step(args)
-        if status == fastdrive.DIVERGED:
-            raise ValueError(self._diverged(i, tau, h))
-        if status != fastdrive.OK:
-            self._refuse(status, i_ref, v_ref, i_hat, omega)
-        return tau, v, i
+            code = kernel.call(self._kernel_step, _STEP_INPUTS, (i_ref, v_ref, omega, i_hat, h))
+        if code != kernel.OK:
+            raise self._refused(h)
+        x = self._kernel_step.__self__.x
+        return x[5], x[6], x[7]
 
-    def _step(self, args):
-        """The kernel's (status, tau, v, i); with LuGre friction its bristles advance too
-        (kept only when the drive's step is)."""
-        if self.lugre is None:
-            return fastdrive.drive_step(self.buf, self._controller_buf, *args)
-        omega, h = args[2], args[4]
-        _, z, f_end, f_mean = lugre.friction_peek(self.lugre, omega, h if h > 0.0 else 1.0)
-        result = fastdrive.drive_step_friction(self.buf, self._controller_buf, *args, f_end, f_mean)
-        if result[0] == fastdrive.OK:
-            lugre.friction_commit(self.lugre, z)
-        return result
-
-    def _diverged(self, i, tau, h):
-        """Why the current or torque of a step is not finite."""
-        text = f"armature current i = {i!r} A, shaft torque tau = {tau!r} N m after this step are not finite"
+    def _diverged_why(self, h):
+        """Why the current of a step is not finite, if the method explains it."""
         a = self._coefficients[0]
         if self.method == "euler" and a < -1.0:
             L, R = self.params.L, self.params.R
-            text += (f": method 'euler' diverges for h = {h!r} s > 2 L/R = {2 * L / R:.3g} s (L = {L!r} H, "
-                     f"R = {R!r} ohm; the current is multiplied by 1 - hR/L = {a:.3g} every step); use 'exact'")
-        return text
+            return (f": method 'euler' diverges for h = {h!r} s > 2 L/R = {2 * L / R:.3g} s (L = {L!r} H, "
+                    f"R = {R!r} ohm; the current is multiplied by 1 - hR/L = {a:.3g} every step); use 'exact'")
+        return ""
+
+
+_I, _V = _D["i"], _D["v"]
+_STEP_INPUTS = ("i_ref", "v_ref", "omega", "i_hat", "h")
+#: A drive's bound C calls (rebuilt by a copy, never copied).
+_BOUND = ("_kernel_step", "_kernel_sample", "_kernel_torque")
+
+
+def gaussian(seed: int, instance: int, step: int) -> float:
+    """A standard normal sample that depends only on (seed, instance, step), whole numbers in
+    [0, 2**64): SplitMix64 (Steele, Lea, Flood 2014) hashes them, Box-Muller turns two 53-bit
+    uniforms into the sample (kernels/src/drive.c).  No state: a rerun, or a restored FMU
+    state, draws the same noise."""
+    return kernel.gaussian(seed, instance, step)
+
+
+def uniform(seed: int, instance: int, step: int) -> float:
+    """A uniform sample in (0, 1] that depends only on (seed, instance, step): the first
+    uniform :func:`gaussian` draws for the same three."""
+    return kernel.uniform(seed, instance, step)

@@ -22,7 +22,7 @@ the electrical model, used by the drive and by the dynamic current observer.
 
 import math
 
-from motor import _checks
+from motor import _checks, kernel
 
 #: Names accepted by :func:`electrical_step_coefficients`.
 ELECTRICAL_METHODS = ("exact", "euler", "quasi_static")
@@ -134,7 +134,7 @@ def armature_current_rate(i, v, omega, params):
     float
         [A/s].
     """
-    return (v - params.R * i - params.ke * omega) / params.L
+    return kernel.armature_rate(params.R, params.L, params.ke, v, i, omega)   # kernels/src/pc_motor.h
 
 
 def coulomb_friction(omega, mu, omega_eps):
@@ -166,7 +166,7 @@ def coulomb_friction(omega, mu, omega_eps):
     float
         Friction torque [N m] (sign of omega).
     """
-    return mu * math.tanh(omega / omega_eps)
+    return -kernel.shaft_torque(0.0, 0.0, mu, omega_eps, 0.0, omega)   # B.2's friction term (pc_motor.h)
 
 
 def shaft_torque(i, omega, params):
@@ -186,5 +186,5 @@ def shaft_torque(i, omega, params):
     float
         Torque [N m]; the sign convention is that of the current and speed.
     """
-    return (params.kt * i - params.b * omega
-            - coulomb_friction(omega, params.mu, params.omega_eps))
+    p = params
+    return kernel.shaft_torque(p.kt, p.b, p.mu, p.omega_eps, i, omega)   # kernels/src/pc_motor.h

@@ -23,10 +23,9 @@ linear in z with rate r = σ0 |ω| / G(ω), so :func:`advance` solves it exactly
 so the bristle model itself is stable for any step; what can go unstable is the loop that
 feeds ω back through an inertia held over the step (docs/friction.md measures the limit).
 
-Named layout of a friction array (:func:`new_lugre`): the parameters :data:`F_FC` ...
-:data:`F_SIGMA2`, then the state :data:`F_Z`.  Kernels return a status first (:data:`OK` or
-:data:`NONFINITE_INPUT`, nothing changed); they call no compiled function of another file
-(numba's cache watches one file).
+A friction array (:func:`new_lugre`) is laid out as the C struct ``pc_lugre``
+(kernels/src/drive.h): the parameters, then the state ``z``; the functions below call the C
+kernel (kernels/src/drive.c), which the drive's step uses too.
 """
 from __future__ import annotations
 
@@ -34,25 +33,17 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
+import kernels
+from motor import kernel
 from motor._checks import BadValue
 
-OK = 0
-#: The speed is NaN or infinite.
-NONFINITE_INPUT = 1
-
-#: Layout of a friction array: Fc, Fs [N m], ωs [rad/s], σ0 [N m/rad], σ1, σ2 [N m s/rad] ...
-F_FC, F_FS, F_OMEGA_S, F_SIGMA0, F_SIGMA1, F_SIGMA2 = 0, 1, 2, 3, 4, 5
-#: ... and the state: the bristle deflection z [rad].
-F_Z = 6
-FRICTION_SIZE = 7
+#: Index of the state (the bristle deflection z [rad]) in a friction array.
+F_Z = kernel.index(kernel.LUGRE, "z")
+FRICTION_SIZE = kernel.size(kernel.LUGRE)
 
 #: The drive's names (:class:`motor.MotorParams`) of the parameters it calls otherwise.
 _DRIVE_NAMES = {"Fc": "mu", "Fs": "mu_s", "sigma2": "b"}
-
-# Below this r h, φ2 by its series (the closed form loses all digits to cancellation).
-_SERIES_BELOW = 1e-3
 
 
 @dataclass(frozen=True)
@@ -111,90 +102,61 @@ class LuGre:
 
 
 def new_lugre(model: LuGre, z0: float = 0.0) -> np.ndarray:
-    """A friction array (layout above) for ``model`` with bristle deflection ``z0``."""
+    """A friction array (the C struct ``pc_lugre``) for ``model`` with bristle deflection ``z0``."""
     f = np.zeros(FRICTION_SIZE)
-    f[F_FC], f[F_FS], f[F_OMEGA_S] = model.Fc, model.Fs, model.omega_s
-    f[F_SIGMA0], f[F_SIGMA1], f[F_SIGMA2] = model.sigma0, model.sigma1, model.sigma2
+    for field in ("Fc", "Fs", "omega_s", "sigma0", "sigma1", "sigma2"):
+        f[kernel.LUGRE[field]] = getattr(model, field)
     f[F_Z] = z0
     return f
 
 
-@njit(cache=True)
-def stribeck(f, omega):
+def stribeck(f: np.ndarray, omega: float) -> float:
     """G(ω) = Fc + (Fs − Fc) exp(−(ω/ωs)²) [N m] (3)."""
-    s = omega / f[F_OMEGA_S]
-    return f[F_FC] + (f[F_FS] - f[F_FC]) * math.exp(-s * s)
+    return kernel.lugre_stribeck(kernels.address(f), omega)
 
 
-@njit(cache=True)
-def bristle_rate(f, z, omega):
+def bristle_rate(f: np.ndarray, z: float, omega: float) -> float:
     """dz/dt = ω − σ0 |ω| z / G(ω) (1)."""
-    return _bristle_rate(f, z, omega, stribeck(f, omega))
+    return kernel.lugre_bristle_rate(kernels.address(f), z, omega)
 
 
-@njit(cache=True)
-def _bristle_rate(f, z, omega, g):
-    """(1) with G(ω) = ``g`` already evaluated."""
-    return omega - f[F_SIGMA0] * abs(omega) * z / g
-
-
-@njit(cache=True)
-def friction_force(f, z, omega):
+def friction_force(f: np.ndarray, z: float, omega: float) -> float:
     """F = σ0 z + σ1 dz/dt + σ2 ω (4) at deflection z and speed ω."""
-    return _friction_force(f, z, omega, stribeck(f, omega))
+    return kernel.lugre_force(kernels.address(f), z, omega)
 
 
-@njit(cache=True)
-def _friction_force(f, z, omega, g):
-    """(4) with G(ω) = ``g`` already evaluated."""
-    return f[F_SIGMA0] * z + f[F_SIGMA1] * _bristle_rate(f, z, omega, g) + f[F_SIGMA2] * omega
-
-
-@njit(cache=True)
-def steady_deflection(f, omega):
+def steady_deflection(f: np.ndarray, omega: float) -> float:
     """The deflection (1) tends to at constant ω: sign(ω) G(ω)/σ0 (0 at ω = 0)."""
-    if omega == 0.0:
-        return 0.0
-    return math.copysign(stribeck(f, omega), omega) / f[F_SIGMA0]
+    return kernel.lugre_steady_deflection(kernels.address(f), omega)
 
 
-@njit(cache=True)
-def _phi(x):
-    """φ1(x) = (1 − e^{−x})/x and φ2(x) = (x − 1 + e^{−x})/x², x >= 0."""
-    if x < _SERIES_BELOW:
-        return 1.0 - x * (0.5 - x * (1.0 / 6.0 - x / 24.0)), 0.5 - x * (1.0 / 6.0 - x * (1.0 / 24.0 - x / 120.0))
-    e = math.expm1(-x)           # e^{-x} - 1
-    return -e / x, (x + e) / (x * x)
+def phi(x: float) -> tuple:
+    """(φ1(x), φ2(x)) = ((1 − e^{−x})/x, (x − 1 + e^{−x})/x²), x >= 0 (a series below 1e-3)."""
+    out = np.empty(2)
+    kernel.lugre_phi(x, kernels.address(out))
+    return float(out[0]), float(out[1])
 
 
-@njit(cache=True)
-def advance(f, z0, omega, h):
+def advance(f: np.ndarray, z0: float, omega: float, h: float) -> tuple:
     """(z, F_end, F_mean): (1) solved exactly over h with ω held, from z0.
 
     ``z`` is the deflection at the step's end, ``F_end`` the friction (4) there, ``F_mean``
     the friction averaged over the step (σ0 mean z + σ1 (z − z0)/h + σ2 ω).
     """
-    g = stribeck(f, omega)                                      # once: the rate and F_end need it
-    x = f[F_SIGMA0] * abs(omega) / g * h                        # r h
-    phi1, phi2 = _phi(x)
-    z = z0 * math.exp(-x) + omega * h * phi1
-    mean_z = z0 * phi1 + omega * h * phi2
-    f_end = _friction_force(f, z, omega, g)
-    f_mean = f[F_SIGMA0] * mean_z + f[F_SIGMA1] * (z - z0) / h + f[F_SIGMA2] * omega
-    return z, f_end, f_mean
+    out = np.empty(3)
+    kernel.lugre_advance(kernels.address(f), z0, omega, h, kernels.address(out))
+    return float(out[0]), float(out[1]), float(out[2])
 
 
-@njit(cache=True)
-def friction_peek(f, omega, h):
+def friction_peek(f: np.ndarray, omega: float, h: float) -> tuple:
     """(status, z, F_end, F_mean): :func:`advance` from the array's deflection, nothing
-    changed; :func:`friction_commit` keeps z once the caller's step is accepted."""
+    changed (status :data:`motor.kernel.NONFINITE_INPUT` for a non-finite ω); keep z with
+    :func:`friction_commit` once the caller's step is accepted."""
     if not math.isfinite(omega):
-        return NONFINITE_INPUT, 0.0, 0.0, 0.0
-    z, f_end, f_mean = advance(f, f[F_Z], omega, h)
-    return OK, z, f_end, f_mean
+        return kernel.NONFINITE_INPUT, 0.0, 0.0, 0.0
+    return (kernel.OK, *advance(f, float(f[F_Z]), omega, h))
 
 
-@njit(cache=True)
-def friction_commit(f, z):
+def friction_commit(f: np.ndarray, z: float) -> None:
     """Keep the deflection z of an accepted step."""
     f[F_Z] = z

@@ -8,7 +8,8 @@ import math
 
 import numpy as np
 
-from motor import _checks, fastdrive
+import kernels
+from motor import _checks, kernel
 from motor.electrics import electrical_step_coefficients
 
 #: Names accepted for ``CurrentObserver(kind=...)``.
@@ -43,33 +44,45 @@ class CurrentObserver:
         self.kind = _checks.choice("kind", kind, OBSERVER_KINDS)
         self._method = "quasi_static" if kind == "static" else "exact"
         self._h = None
-        # Constants and state of the per-step arithmetic (motor.fastdrive's layout).
-        self.buf = np.zeros(fastdrive.OBSERVER_SIZE)
-        self.buf[fastdrive.O_STATIC] = 1.0 if kind == "static" else 0.0
-        self.buf[fastdrive.O_KE] = params.ke
-        self.buf[fastdrive.O_H] = math.nan     # no step prepared
+        # Constants and state of the step: the C struct pc_observer (kernels/src/observer.h).
+        self.buf = np.zeros(kernel.size(kernel.OBSERVER))
+        self.buf[_O["is_static"]] = 1.0 if kind == "static" else 0.0
+        self.buf[_O["ke"]] = params.ke
+        self.buf[_O["h"]] = math.nan     # no step prepared
+        self._bind()
         self.reset()
-        fastdrive.observer_estimate(self.buf.copy(), 0.0, 0.0, math.nan)   # compile now, not in a step
 
-    i_hat = property(lambda self: float(self.buf[fastdrive.O_I_HAT]), doc="The last estimate [A].")
+    def _bind(self):
+        """The C call on this observer's buffer (:class:`motor.kernel.Calls`)."""
+        # A bound method only: FMU state treats it as code (an address must never be state).
+        self._kernel = kernel.Calls.observer(self.buf).observer_estimate
+
+    def __getstate__(self):
+        return {k: v for k, v in self.__dict__.items() if k != "_kernel"}
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self._bind()
+
+    i_hat = property(lambda self: float(self.buf[_O["i_hat"]]), doc="The last estimate [A].")
 
     def reset(self, i0=0.0, omega0=None):
         """Set the estimate ``i0`` [A]; ``omega0`` [rad/s] is the speed of the previous call."""
         b = self.buf
-        b[fastdrive.O_I_HAT] = _checks.finite("i0", i0)
-        b[fastdrive.O_HAS_PREV] = 0.0 if omega0 is None else 1.0
-        b[fastdrive.O_OMEGA_PREV] = 0.0 if omega0 is None else _checks.finite("omega0", omega0)
+        b[_O["i_hat"]] = _checks.finite("i0", i0)
+        b[_O["has_prev"]] = 0.0 if omega0 is None else 1.0
+        b[_O["omega_prev"]] = 0.0 if omega0 is None else _checks.finite("omega0", omega0)
 
     def prepare_step(self, h):
         """Check the step length h and compute its coefficients (kept until h changes)."""
         h = _checks.positive("h", h)
         if h != self._h:
             a, g = electrical_step_coefficients(self.params.R, self.params.L, h, self._method)
-            self.buf[fastdrive.O_A], self.buf[fastdrive.O_G] = a, g
-            self.buf[fastdrive.O_H] = h
+            self.buf[_O["a"]], self.buf[_O["g"]] = a, g
+            self.buf[_O["h"]] = h
             self._h = h
 
-    def estimate(self, v, omega, h):
+    def estimate(self, v, omega, h, time=None):
         """Current estimate at the end of a step.
 
         Parameters
@@ -80,6 +93,8 @@ class CurrentObserver:
             Speed now, at the end of that step [rad/s].
         h : float
             Length of that step [s].
+        time : float, optional
+            The time now [s], for the message of a refusal.
 
         Returns
         -------
@@ -89,19 +104,22 @@ class CurrentObserver:
         Raises
         ------
         ValueError
-            Naming the input, for a NaN/inf input or h <= 0.
+            Naming the input, for a NaN/inf input or h <= 0; :class:`kernels.Refused` also
+            for an estimate that is not finite (not kept).
         """
         try:
-            args = float(v), float(omega), float(h)
-        except (TypeError, ValueError):
-            args = math.nan, math.nan, math.nan
-        status, i_hat = fastdrive.observer_estimate(self.buf, *args)
-        if status == fastdrive.UNPREPARED_STEP:
-            _checks.finite("v", v)
-            _checks.finite("omega", omega)
+            code = self._kernel(v, omega, h)
+        except TypeError:     # not a float: converted, or refused by name
+            code = kernel.call(self._kernel, _INPUTS, (v, omega, h))
+        if code == kernel.UNPREPARED_STEP:
             self.prepare_step(h)
-            status, i_hat = fastdrive.observer_estimate(self.buf, *args)
-        if status == fastdrive.NONFINITE_INPUT:
-            _checks.finite("v", v)
-            _checks.finite("omega", omega)
-        return i_hat
+            code = kernel.call(self._kernel, _INPUTS, (v, omega, h))
+        calls = self._kernel.__self__
+        if code == kernel.OK:
+            return calls.x[3]
+        at = "" if time is None else f" at t = {time:.6g} s"
+        raise kernels.refused(kernel.OBSERVER_REASONS, calls.refusal, time, at=at, v=v, omega=omega)
+
+
+_O = kernel.indices(kernel.OBSERVER)
+_INPUTS = ("v", "omega", "h")

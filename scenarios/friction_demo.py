@@ -5,7 +5,8 @@
 Canudas de Wit et al. (IEEE TAC 1995): a 1 kg mass, σ0 = 1e5 N/m, σ1 = √1e5 N s/m,
 σ2 = 0.4 N s/m, Fc = 1 N, Fs = 1.5 N, vs = 0.001 m/s (:data:`PAPER`), stepped the way a drive
 steps :mod:`motor.friction`: the speed held over each step, the bristles solved exactly, the
-mass integrated with the step's mean friction (:func:`push`).  Three panels: presliding (a
+mass integrated with the step's mean friction (:func:`push`: ``pc_lugre_push`` of
+kernels/src/drive.c).  Three panels: presliding (a
 force below Fc: an elastic displacement ~ F/σ0 with hysteresis), break-away under ramped forces
 (near Fs when slow, lower when fast), and a spring (k = 2 N/m) pulled at 0.1 m/s (stick-slip)
 and at 0.5 m/s (steady sliding).  tests/test_friction.py checks the same runs against scipy.
@@ -17,35 +18,14 @@ import math
 from pathlib import Path
 
 import numpy as np
-from numba import njit
 
-from motor import friction
+import kernels
+from motor import friction, kernel
 
 #: The paper's example (translational: N, m, s).
 PAPER = {"Fc": 1.0, "Fs": 1.5, "omega_s": 1e-3, "sigma0": 1e5, "sigma1": math.sqrt(1e5), "sigma2": 0.4}
 #: Force laws of :func:`push`.
 RAMP, SINE, SPRING = 0, 1, 2
-
-
-@njit(cache=True)
-def _push(f, kind, a, b, mass, h, n):
-    x = v = z = 0.0
-    out = np.empty((n, 3))
-    for i in range(n):
-        t = (i + 0.5) * h
-        if kind == 0:
-            force = a * t
-        elif kind == 1:
-            force = a * math.sin(b * t)
-        else:
-            force = a * (b * t - (x + 0.5 * h * v))
-        z_new, _, f_mean = friction.advance(f, z, v, h)
-        acc = (force - f_mean) / mass
-        x += h * v + 0.5 * h * h * acc
-        v += h * acc
-        z = z_new
-        out[i, 0], out[i, 1], out[i, 2] = x, v, z
-    return out
 
 
 def push(kind: int, a: float, b: float, t_end: float, h: float = 1e-5, mass: float = 1.0, model=None):
@@ -54,7 +34,9 @@ def push(kind: int, a: float, b: float, t_end: float, h: float = 1e-5, mass: flo
     of stiffness ``a`` whose end moves at ``b`` (:data:`SPRING`), from rest, step h [s]."""
     model = friction.LuGre(**PAPER) if model is None else model
     n = int(round(t_end / h))
-    return _push(friction.new_lugre(model), kind, a, b, mass, h, n), (np.arange(n) + 1) * h
+    rows = np.empty((n, 3))
+    kernel.lugre_push(kernels.address(friction.new_lugre(model)), kind, a, b, mass, h, n, kernels.address(rows))
+    return rows, (np.arange(n) + 1) * h
 
 
 def plot(out: Path) -> Path:

@@ -31,7 +31,7 @@ from pathlib import Path
 
 from controller.strategies import STRATEGY_NAMES
 from motor import get_motor_preset
-from motor.fastdrive import uniform
+from motor.drive import uniform
 from motor.presets import STICTION_RATIO, motor1
 from plant import ENCODER_COUNTS, get_preset
 
@@ -171,7 +171,7 @@ ENCODER_STREAM = 1 << 32
 def encoder_phase(seed: int, k: int, counts: int = ENCODER_COUNTS) -> float:
     """Encoder ``k``'s zero error [rad] for noise seed ``seed``: uniform in [-1/2, 1/2) of one
     count of a ``counts``-count encoder, a function of (seed, k) only
-    (:func:`motor.fastdrive.uniform`)."""
+    (:func:`motor.drive.uniform`)."""
     return (uniform(seed, ENCODER_STREAM + k, 0) - 0.5) * 2.0 * math.pi / counts
 
 

@@ -18,7 +18,8 @@ from scipy import stats
 import controller.fastderivator  # noqa: F401
 import controller.fasttrajectory  # noqa: F401
 import plant.fast5r  # noqa: F401
-from motor import Drive, fastdrive, friction as fr, motor1
+from motor import Drive, friction as fr, kernel, motor1
+from motor.drive import gaussian
 from tests.fmi_support import FmuInstance
 
 H = 1e-3
@@ -84,33 +85,33 @@ def test_pwm_applies_multiples_of_the_quantum_the_controller_keeps_its_own_outpu
     ideal = Drive(motor1)
     for k, omega in enumerate(_speeds(200)):
         ideal.buf[:] = pwm.buf
-        ideal.buf[fastdrive.D_PWM_QUANTUM] = 0.0
+        ideal.buf[kernel.DRIVE["pwm_quantum"]] = 0.0
         ideal._controller_buf[:] = pwm._controller_buf
         i_ref, i_hat = 2.0 * math.sin(9.0 * k * H), pwm.i
         _, v, _ = pwm.step(i_ref, 0.0, omega, i_hat, H)
         _, v_ideal, _ = ideal.step(i_ref, 0.0, omega, i_hat, H)
         assert abs(v / q - round(v / q)) < 1e-9
         assert abs(v - v_ideal) <= 0.5 * q + 1e-12
-        assert pwm._controller_buf[fastdrive.C_U1] == v_ideal      # unquantised memory
+        assert pwm._controller_buf[kernel.CONTROLLER["u1"]] == v_ideal      # unquantised memory
 
 
 def test_noise_is_a_stateless_standard_normal():
-    g = np.array([fastdrive.gaussian(11, 1, k) for k in range(20000)])
-    assert g[17] == fastdrive.gaussian(11, 1, 17)
+    g = np.array([gaussian(11, 1, k) for k in range(20000)])
+    assert g[17] == gaussian(11, 1, 17)
     assert stats.kstest(g, "norm").pvalue > 1e-3
-    other = np.array([fastdrive.gaussian(11, 2, k) for k in range(20000)])
+    other = np.array([gaussian(11, 2, k) for k in range(20000)])
     assert abs(np.corrcoef(g, other)[0, 1]) < 0.03
     assert abs(np.corrcoef(g[:-1], g[1:])[0, 1]) < 0.03
-    assert fastdrive.gaussian(12, 1, 17) != g[17]
+    assert gaussian(12, 1, 17) != g[17]
 
 
 def test_offset_and_noise_enter_the_loops_sample():
     """First sample at rest with i_ref = i_hat = 0: v = alpha (0 - offset - sigma n(seed, instance, 0))."""
     offset, sigma, seed, instance = 0.05, 0.1, 7, 2
     drive = Drive(motor1, current_offset=offset, current_noise=sigma, noise_seed=seed, noise_instance=instance)
-    alpha = drive.controller.buf[fastdrive.C_ALPHA]
+    alpha = drive.controller.design.alpha
     _, v, _ = drive.step(0.0, 0.0, 0.0, 0.0, H)
-    assert v == pytest.approx(-alpha * (offset + sigma * fastdrive.gaussian(seed, instance, 0)), rel=1e-12)
+    assert v == pytest.approx(-alpha * (offset + sigma * gaussian(seed, instance, 0)), rel=1e-12)
     again = copy.deepcopy(drive)
     assert [drive.step(0.1, 0.0, 0.0, 0.0, H)[1] for _ in range(5)] == \
            [again.step(0.1, 0.0, 0.0, 0.0, H)[1] for _ in range(5)]

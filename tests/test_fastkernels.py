@@ -1,4 +1,4 @@
-"""The per-step kernels (motor.fastdrive, controller.fastderivator, controller.fasttrajectory):
+"""The per-step kernels (kernels/src/drive.c and observer.c, controller.fastderivator, controller.fasttrajectory):
 a refused step changes nothing, so the Python path can take it again (fmus.compiled)."""
 import math
 

@@ -174,7 +174,7 @@ def test_phi_functions_match_a_50_digit_evaluation(x):
         X = Decimal(x)
         e = (-X).exp()
         phi1_ref, phi2_ref = float((1 - e) / X), float((X - 1 + e) / (X * X))
-    phi1, phi2 = fr._phi(x)
+    phi1, phi2 = fr.phi(x)
     eps = np.finfo(float).eps
     series = x < 1e-3
     assert abs(phi1 / phi1_ref - 1) <= (x ** 4 / 120 if series else 0.0) + 2 * eps
