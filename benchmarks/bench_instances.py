@@ -140,8 +140,7 @@ def main(argv=None) -> int:
 
     work = Path(tempfile.mkdtemp(prefix="parcosim-bench-instances-"))
     unzipped = prepared_fmus(args.fmu_dir, args.models, work)
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")])),
-           "NUMBA_CACHE_DIR": str(work / "numba")}
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))}
     print(f"{args.warmup} warm-up cycles, then {args.cycles} measured; a fresh process per FMU and mode")
     print(f"| FMU | RSS per cycle through fmpy [B] | Python bytes kept per cycle through fmpy [B] | "
           f"Python bytes kept per cycle, slave alone [B] | RSS per cycle, slave alone [B] | "

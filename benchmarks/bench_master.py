@@ -19,8 +19,7 @@ count, Gauss-Seidel):
   built into a temporary directory at start.  The FMU floor is what the master, pythonfmu and
   the FMI calls cost alone; the real time minus the floor is our models' compute.
 
-Each case runs once untimed first (numba compiles the plant kernel in the first instance of a
-process, imports, file extraction); then ``--repeats`` rounds run every case in turn (so load
+Each case runs once untimed first (imports, file extraction, the controller's table); then ``--repeats`` rounds run every case in turn (so load
 from elsewhere on the machine hits all cases alike) and the median over the rounds is printed.
 
 Figures: ``wall`` is ``Result.wall_s`` (initialisation and every step; loading the FMUs and

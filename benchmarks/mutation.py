@@ -15,12 +15,12 @@ Run it in a detached worktree (it edits the source files in place, one mutant at
 What runs (docs/mutation.md):
 
 * every mutant of the control law (:data:`LAW`: the sliding variable (7.22), the integral of
-  (7.21), the adaptive gain (6.66), sat and sign, in the Python reference and the numba kernel);
+  (7.21), the adaptive gain (6.66), sat and sign; empty since the law is C (kernels/src/law.c),
+  which this Python tool does not mutate);
 * a seeded sample of :data:`SAMPLE` others, drawn uniformly from all other mutants of
   :data:`TARGETS`; the rest are marked ``skipped`` in their session.
 
-``NUMBA_DISABLE_JIT=1`` makes the numba kernels plain Python, so their mutants run (and are
-killed or not) like any other code.  Each mutant runs only the test modules of its file
+The C kernels (kernels/src/) are not mutated by this tool.  Each mutant runs only the test modules of its file
 (:data:`TARGETS`), stopping at the first failure.  Replacements by a bitwise operator
 (``>> << | & ^``) are left out: on the float operands of this code they raise TypeError at the
 first call, which tells nothing about the tests.
@@ -64,7 +64,7 @@ TARGETS = {
     "motor/electrics.py": ("test_motor_electrics", "test_motor_current_control"),
     "motor/current_controller.py": ("test_motor_current_control",),
     # LuGre drives step through test_friction and test_drive_twin; the Euler divergence hint through
-    # one test of test_extremes (the module as a whole expects numba's float behaviour)
+    # one test of test_extremes
     "motor/drive.py": ("test_motor_current_control", "test_motor_electrics", "test_fmu_motor", "test_actuated",
                        "test_friction", "test_drive_twin",
                        "test_extremes::test_explicit_euler_drive_alone_refuses_a_non_finite_current"),
@@ -256,7 +256,7 @@ def _restore_sources(workdir: Path):
 
 def execute(workdir: Path, only=None):
     """Run the pending mutants, control law first."""
-    env = dict(os.environ, NUMBA_DISABLE_JIT="1", PYTHONPATH=str(ROOT))
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
     order = list(LAW) + [s for s in TARGETS if s not in LAW]
     _restore_sources(workdir)
     for source in order:
@@ -342,7 +342,7 @@ def retest(workdir: Path, outcome: str, only=None, jobs=None):
     from cosmic_ray.mutating import mutate_and_test
     from cosmic_ray.work_db import WorkDB, use_db
 
-    os.environ.update(NUMBA_DISABLE_JIT="1", PYTHONPATH=str(ROOT))
+    os.environ.update(PYTHONPATH=str(ROOT))
     os.chdir(ROOT)
     _restore_sources(workdir)
     for source in TARGETS:

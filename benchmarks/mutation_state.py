@@ -5,8 +5,7 @@
 
 30 mutants drawn (seed 30) from fmus/stateformat.py, fmus/fmustate.py, fmus/slavestate.py and
 fmus/budget.py with :mod:`benchmarks.mutation`'s machinery, run against their test modules
-before any test is written for what the sample finds (the score is out of sample).  The
-kernels stay compiled (numba): none of these files is numba code.
+before any test is written for what the sample finds (the score is out of sample).
 """
 import os
 import subprocess

@@ -5,8 +5,8 @@ kernels (``kernels``, the built library loaded by path) and the ``fmus`` modules
 run on in its resources, under a private package name (:mod:`fmus.bundle`), and the designs
 its initialisation computes with its parameters as built (:func:`precompute`,
 :mod:`fmus.designs`), so an importer needs a Python 3.11 with numpy and pythonfmu (and scipy
-and python-control when a parameter set away from the build's asks for a new design; numba
-while a model's kernel still uses it), and its own packages of those names are left alone.  Each FMU's
+and python-control when a parameter set away from the build's asks for a new design), and its
+own packages of those names are left alone.  Each FMU's
 binary is parcosim's FMI wrapper (:mod:`fmus.wrapper`), compiled once per machine; without
 a C compiler it stays pythonfmu's.
 """

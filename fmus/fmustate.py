@@ -159,10 +159,6 @@ def opaque_tag(value) -> str | None:
         name = getattr(function, "__qualname__", getattr(function, "__name__", "?"))
         where = getattr(function, "__module__", None) or (class_tag(type(owner)) if owner is not None else "")
         return f"function:{where}.{name}"
-    if type(value).__module__.split(".")[0] == "numba":
-        function = getattr(value, "py_func", None)
-        name = class_tag(type(value)) if function is None else f"{function.__module__}.{function.__qualname__}"
-        return f"numba:{name}"
     return None
 
 

@@ -94,7 +94,7 @@ class Result(RecordedRun):
     wall_s: float   # stepping, from the first communication point to the last
     error: str | None = None
     stop_time: float = 0.0
-    init_s: float = 0.0   # loading, instantiating, initialising (tables, designs; numba's JIT while a kernel has it)
+    init_s: float = 0.0   # loading, instantiating, initialising (tables, designs)
     #: ``cpu_s``: CPU time of this thread in the stepping (steadier than wall_s on a shared
     #: machine); ``retried``; compiled mode: ``compile_s``, ``python_steps``, ``source``,
     #: or ``fallback``.

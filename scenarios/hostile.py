@@ -5,8 +5,7 @@ sizes, call orders and strings (:func:`make_case`, from a seed: the same seed gi
 same case).  Cases run in worker subprocesses (:mod:`scenarios.hostile_worker`), a batch
 per worker, so that a crash of the importing process is an outcome, not the end of the
 run: :func:`run_cases` starts a new worker after a crash, a hang (a case over
-:data:`CASE_TIMEOUT`) or an fmi2Fatal, and shares one numba cache among them while the
-FMUs' kernels still use numba (:func:`uses_numba`; the C kernels need none).
+:data:`CASE_TIMEOUT`) or an fmi2Fatal.
 
 The worker checks the properties of docs/extremes.md ("The FMI calls under hostile use")
 and reports each case's outcome:
@@ -209,19 +208,19 @@ class CaseResult:
     seconds: float = 0.0
 
 
-def run_cases(cases: list, unzipped: dict, numba_cache: str | os.PathLike | None = None, batch: int = 30,
-              case_timeout: float = CASE_TIMEOUT, progress=None) -> list:
+def run_cases(cases: list, unzipped: dict, batch: int = 30, case_timeout: float = CASE_TIMEOUT,
+              progress=None) -> list:
     """Run ``cases`` in worker subprocesses, ``batch`` cases a worker; a crashed, hung or
     fatal case ends its worker and the next cases go to a new one.
 
     ``unzipped`` maps a model to its FMU extracted once (all workers import the same
-    sources, so the numba cache in ``numba_cache`` serves them all; None: numba's default).
+    sources).
     """
     results = [None] * len(cases)
     pending = list(range(len(cases)))
     while pending:
         chunk = pending[:batch]
-        done = _run_worker([cases[i] for i in chunk], unzipped, numba_cache, case_timeout)
+        done = _run_worker([cases[i] for i in chunk], unzipped, case_timeout)
         for offset, result in enumerate(done):
             results[chunk[offset]] = result
             if progress is not None:
@@ -230,12 +229,11 @@ def run_cases(cases: list, unzipped: dict, numba_cache: str | os.PathLike | None
     return results
 
 
-def _run_worker(cases: list, unzipped: dict, numba_cache, case_timeout: float) -> list:
+def _run_worker(cases: list, unzipped: dict, case_timeout: float) -> list:
     """Run ``cases`` in one worker; the results of those it finished, the last one a crash,
     hang or fatal if the worker ended there."""
     read_fd, write_fd = os.pipe()
-    env = {**os.environ, **({} if numba_cache is None else {"NUMBA_CACHE_DIR": str(numba_cache)}),
-           "HOSTILE_RESULT_FD": str(write_fd),
+    env = {**os.environ, "HOSTILE_RESULT_FD": str(write_fd),
            "PYTHONPATH": os.pathsep.join(filter(None, [str(Path(__file__).resolve().parents[1]),
                                                         os.environ.get("PYTHONPATH")]))}
     payload = json.dumps({"unzipped": {k: str(v) for k, v in unzipped.items()}, "cases": cases})
@@ -363,27 +361,3 @@ def cases_for(model: str, unzip_dir, seeds, wrapper: bool = False, kinds=None) -
     return [make_case(model, variables, seed, kind=kinds[i % len(kinds)] if kinds else None, wrapper=wrapper,
                       models=models)
             for i, seed in enumerate(seeds)]
-
-
-def uses_numba(unzipped: dict) -> bool:
-    """Whether any of the extracted FMUs ``unzipped`` (model -> folder) carries code compiled
-    by numba (its bundle imports it)."""
-    return any(b"import numba" in text or b"from numba" in text
-               for folder in unzipped.values() for path in Path(folder, "resources").rglob("*.py")
-               for text in (path.read_bytes(),))
-
-
-def warm_up(unzipped: dict, numba_cache) -> list:
-    """Instantiate, initialise and step each FMU once, each in its own worker, filling the
-    shared numba cache; nothing (an empty list) when no FMU uses numba (:func:`uses_numba`:
-    its C kernels are compiled when it is built).  The first initialisation with an empty
-    numba cache compiles the kernels (3-14 s on two shared cores), the one call allowed over :data:`CALL_LIMIT`
-    (docs/extremes.md).  One worker per FMU because FMUs in one process share its module
-    cache: a second FMU would run the first one's copy of ``plant``/``motor``, and numba's
-    cache is per source file, so its own copy, which its cases load, would stay cold.  The
-    results are returned, not judged."""
-    if not uses_numba(unzipped):
-        return []
-    cases = [{"model": model, "kind": "warm-up", "seed": 0, "instance_name": "warm-up", "logging": False,
-              "start_time": 0.0, "parameters": [], "ops": [["step", None, 1e-3]]} for model in unzipped]
-    return run_cases(cases, unzipped, numba_cache, batch=1, case_timeout=10 * CASE_TIMEOUT)

@@ -40,7 +40,6 @@ def main(argv=None) -> int:
         kinds = [k for k in hostile.KINDS if wrapper[model] or k not in hostile.WRAPPER_KINDS]
         cases += hostile.cases_for(model, path, range(args.seed, args.seed + per_model), wrapper=wrapper[model],
                                    kinds=kinds)
-    hostile.warm_up(unzipped, work / "numba")
     start = time.perf_counter()
     done = [0]
 
@@ -52,7 +51,7 @@ def main(argv=None) -> int:
                      f"  {result.outcome}: {result.case['model']} {result.case['kind']} seed {result.case['seed']} "
                      f"{result.problems[:1]}"), file=sys.stderr, flush=True)
 
-    results = hostile.run_cases(cases, unzipped, work / "numba", batch=args.batch, progress=progress)
+    results = hostile.run_cases(cases, unzipped, batch=args.batch, progress=progress)
     wall = time.perf_counter() - start
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -11,7 +11,7 @@ the peak error, and the git commit that wrote them.
 
 Tolerance (:data:`RELATIVE_TOLERANCE`): one machine reproduces every run bit for bit (the
 master is deterministic), so the tolerance only has to absorb what another machine's libm,
-numpy build or numba's compiled code can change: last-bit differences in sin, cos, sqrt and
+numpy build or C compiler can change: last-bit differences in sin, cos, sqrt and
 sums.  ``--sensitivity`` measures what such differences grow into over a whole run by moving
 the start point by 1e-12 m (10^4 times more than a last-bit change of x0): the largest
 relative change of a metric over the 17 scenes (docs/testing.md).  The tolerance is that

@@ -24,7 +24,7 @@ things for the two kinds of row:
 
 Columns of ``trade.csv`` (one row per setting): ``setting``, ``kind``, ``what`` (the change);
 ``wall_s`` (the whole :func:`fmus.master.simulate` call: loading, initialisation and stepping,
-best of the rounds, so one-time costs such as numba compilation and table builds drop out);
+best of the rounds, so one-time costs such as imports and table builds drop out);
 ``cpu_s`` (the process's CPU time over the same call); ``speedup`` (the defaults' wall over
 this one); ``rms_err_m`` and ``max_err_m`` (end-effector distance from the reference over the
 whole run); ``gain`` (the defaults' RMS over this one); ``residual_m`` (largest loop-closure

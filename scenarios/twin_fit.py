@@ -190,7 +190,7 @@ def _text(twin: Twin) -> str:
 def _map(function, items, extra, workers: int, star: bool = False) -> list:
     """[function(item, *extra)] (``extra`` a tuple if ``star``, else one argument), on a local
     dask cluster of ``workers`` processes when more than one (:func:`scenarios.engine.open_client`,
-    the sweeps' and the report's; numba kernels load from their cache in each worker)."""
+    the sweeps' and the report's)."""
     extra = tuple(extra) if star else (extra,)
     if workers <= 1:
         return [function(item, *extra) for item in items]

@@ -22,9 +22,6 @@ ROOT = Path(__file__).resolve().parent.parent
 #: Packages an FMU started with its parameters as built must not import (they are for
 #: designs computed ahead, plots and the JIT that the C kernels replace).
 HEAVY = ("control", "scipy.signal", "matplotlib", "numba")
-#: The model packages still compiled by numba on this branch (the C kernels' ports remove it).
-NUMBA_IN_KERNELS = any("from numba import" in path.read_text()
-                       for package in ("plant", "motor", "controller") for path in (ROOT / package).rglob("*.py"))
 
 #: A fresh process: simulate each FMU (argv: "path[|name=value]" ...) for 3 ms, logging on,
 #: print the heavy packages loaded after each and the log messages so far.
@@ -84,9 +81,7 @@ def fresh_runs(built_fmus, closed_loop, tmp_path_factory):
             for line in _run_fresh(specs, tmp_path_factory.mktemp("fresh"))}
 
 
-@pytest.mark.parametrize("package", [p for p in HEAVY if p != "numba"] + [
-    pytest.param("numba", marks=pytest.mark.xfail(NUMBA_IN_KERNELS, strict=True,
-                                                  reason="the kernels on this branch are still numba's"))])
+@pytest.mark.parametrize("package", HEAVY)
 def test_an_fmu_started_as_built_does_not_import(fresh_runs, package):
     """Catches an eager import put back: a package ``__init__`` that imports every module, a
     module-level ``import control``, a slave that imports a model it does not run, or an FMU

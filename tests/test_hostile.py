@@ -3,7 +3,7 @@
 Cases come from :func:`scenarios.hostile.make_case` (random parameters, inputs, step sizes,
 call orders and strings) and run in worker subprocesses (:func:`scenarios.hostile.run_cases`),
 30 a worker, so that a crash of the importing process fails a test instead of ending the
-session; the workers share one numba cache.  Hypothesis draws the cases' seeds,
+session.  Hypothesis draws the cases' seeds,
 derandomised: CI runs the same 30 cases per FMU every time (about a minute in all).
 
 Properties (docs/extremes.md, "The FMI calls under hostile use"): no crash, no hang, no call
@@ -37,18 +37,14 @@ CI = settings(max_examples=1, derandomize=True, deadline=None, database=None,
 
 @pytest.fixture(scope="session")
 def extracted(built_fmus, tmp_path_factory):
-    """Model -> its FMU extracted once; a numba cache shared by all workers."""
-    root = tmp_path_factory.mktemp("hostile")
-    unzipped = hostile.extract_fmus(built_fmus, root / "fmus")
-    hostile.warm_up(unzipped, root / "numba")         # compiles the kernels: not a hostile call
-    return unzipped, root / "numba"
+    """Model -> its FMU extracted once."""
+    return hostile.extract_fmus(built_fmus, tmp_path_factory.mktemp("hostile") / "fmus")
 
 
 @pytest.fixture(scope="session")
 def wrapper(extracted):
     """Model -> whether its binary is parcosim's FMI wrapper."""
-    unzipped, _ = extracted
-    return {model: hostile.wrapper_is_ours(path, model) for model, path in unzipped.items()}
+    return {model: hostile.wrapper_is_ours(path, model) for model, path in extracted.items()}
 
 
 def failures(results) -> list:
@@ -62,9 +58,8 @@ def failures(results) -> list:
 
 
 def run(model, seeds, extracted, wrapper, kinds):
-    unzipped, numba = extracted
-    cases = hostile.cases_for(model, unzipped[model], seeds, wrapper=wrapper, kinds=kinds)
-    return hostile.run_cases(cases, unzipped, numba, batch=CASES_PER_FMU)
+    cases = hostile.cases_for(model, extracted[model], seeds, wrapper=wrapper, kinds=kinds)
+    return hostile.run_cases(cases, extracted, batch=CASES_PER_FMU)
 
 
 @pytest.mark.parametrize("model", list(SLAVES))
@@ -102,9 +97,8 @@ def test_refused_sets_states_start_times_and_call_orders_are_fmi2error_not_fatal
 
 def test_the_worker_reports_a_crash_and_goes_on(extracted):
     """A case that kills its worker is a crash; the next case runs in a new worker."""
-    unzipped, numba = extracted
-    cases = hostile.cases_for("Trajectory", unzipped["Trajectory"], [1, 2, 3], kinds=["inputs"])
+    cases = hostile.cases_for("Trajectory", extracted["Trajectory"], [1, 2, 3], kinds=["inputs"])
     cases[1]["ops"].insert(0, ["crash"])
-    results = hostile.run_cases(cases, unzipped, numba)
+    results = hostile.run_cases(cases, extracted)
     assert [r.outcome for r in results] == ["ok", "crash", "ok"]
     assert "signal" in results[1].problems[0]
