@@ -88,7 +88,6 @@ TARGETS = {
     "plant/specsim.py": ("test_spec_plant", "test_spec", "test_workspace"),
     "plant/wheeled.py": _WHEELED,
     "plant/wheeled_kernel.py": _WHEELED,
-    "motor/fastdrive.py": ("test_fastkernels", "test_motor_current_control", "test_compiled"),
     "fmus/slaves/parcosim_balancecontroller.py": ("test_wheeled_fmu",),
     "fmus/slaves/parcosim_specplant.py": ("test_spec_plant",),
     "fmus/slaves/parcosim_wheeledpendulum.py": ("test_wheeled_fmu",),

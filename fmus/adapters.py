@@ -3,62 +3,21 @@
 One class per model, registered by :func:`fmus.compiled.register`: which of the slave's
 variables the kernel's I/O array ``x`` holds (inputs first), the model arrays the kernel
 steps (taken from the initialised slave's model objects, so the compiled loop and the
-Python path step the same state), and the source line that calls the kernel.  A new model
+Python path step the same state), the C I/O function (``kernel``) and its ``context``.  A new model
 adds its class here (or in its own module imported by this one); the generator does not
 change.
 """
 from __future__ import annotations
 
 import ctypes
-import importlib
-
-import numpy as np
 
 import kernels
 from controller import derivators, fastbalance, law, trajectories
-from motor.friction import F_Z
 from plant import wheeled_kernel
+from plant.actuated import kernel_context as actuated_context
 from plant.fast5r import TERMS_OF
 
 from .compiled import Adapter, NotCompilable, register
-
-#: What the kernel module names of :class:`EmittedAdapter` (``"plant.fast5r"``) are relative to:
-#: "" here, the bundle's package inside an FMU (fmus/bundle.py).
-_PACKAGE_ROOT = __name__[:-len("fmus.adapters")]
-
-_IO_CALLBACK = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double, ctypes.c_double,
-                                ctypes.c_void_p)
-
-
-class EmittedAdapter(Adapter):
-    """Transitional: a model whose step is still a numba kernel, called from the C loop
-    through a ctypes callback running the source lines :meth:`emit` returns (the protocol
-    of the generated loop this module replaced).  Subclasses set ``modules`` (the kernel
-    modules the lines call, imported under their last name) and :attr:`arrays`."""
-
-    modules: tuple = ()
-
-    def emit(self, arrays: list, x: str, t: str, h: str) -> list:
-        raise NotImplementedError
-
-    def context(self):
-        names = [f"a{k}" for k in range(len(self.arrays))]
-        body = "\n".join("    " + line for line in self.emit(names, "x", "t", "h"))
-        namespace = {m.rpartition(".")[2]: importlib.import_module(_PACKAGE_ROOT + m) for m in self.modules}
-        exec(f"def io({', '.join(names + ['x', 't', 'h'])}):\n{body}\n    return st\n", namespace)
-        step, arrays, x = namespace["io"], self.arrays, self.x
-
-        def io(_context, _x, t, h, _refusal):
-            try:
-                return int(step(*arrays, x, t, h))
-            except Exception:   # noqa: BLE001 - the Python path reruns the step and raises it
-                return -1
-
-        self._callback = _IO_CALLBACK(io)
-        return ctypes.c_int(0)
-
-    def io_address(self) -> int:
-        return ctypes.cast(self._callback, ctypes.c_void_p).value
 from .refusals import ABSURD
 from .parts import PLANT_OUTPUTS
 
@@ -226,19 +185,17 @@ class FiveBarPlantAdapter(_PlantState):
 
 
 @register
-class ActuatedFiveBarPlantAdapter(_PlantState, EmittedAdapter):
-    """Each drive's :func:`motor.fastdrive.peek_voltage`, then the plant's
-    ``pc_fivebar_actuated_io`` (:class:`plant.fast5r.ActuatedIO`), then
-    :func:`motor.fastdrive.commit_step`: nothing changes unless the whole step is accepted."""
+class ActuatedFiveBarPlantAdapter(_PlantState):
+    """``pc_actuated_io`` (kernels/src/actuated.c): both drives' voltage samples, the LuGre
+    bristles, the plant's actuated step, then the drives kept; nothing changes unless the
+    whole step is accepted."""
 
     model = "ActuatedFiveBarPlant"
     inputs = ("i_ref1", "i_hat1", "v_ref1", "i_ref2", "i_hat2", "v_ref2")
     outputs = _PLANT_OUTPUTS + ("tau1", "tau2", "v1", "v2", "i1", "i2")
-    modules = ("motor.fastdrive",)
-    kernel = "pc_fivebar_actuated_io (drives: motor.fastdrive)"
+    kernel = "pc_actuated_io"
 
     def __init__(self, name, slave, h):
-        from plant.fast5r import ActuatedIO
         from plant.simulator import PlantError
 
         super().__init__(name, slave, h)
@@ -252,17 +209,10 @@ class ActuatedFiveBarPlantAdapter(_PlantState, EmittedAdapter):
             a._check_rk4_stability(h, a.plant.settings.substeps)
         except PlantError as exc:
             raise NotCompilable(f"component {name}: {exc}") from None
+        for _, drive in a.drives:
+            _prepared(name, drive, h)
         self.state = a.state()
-        self.arrays = [ActuatedIO(a.plant._fast, self.state, a._motors, len(self.inputs)), self.state]
-        for n, (_, drive) in enumerate(a.drives):
-            self.arrays += _prepared(name, drive, h)
-        # LuGre drives: the parameters without b (ActuatedPlant.lugre_models), then the drives'
-        # own arrays, which hold the bristle deflection
-        self.lugre = [f is not None for f in a.lugre_models]
-        self.arrays += [f for f in a.lugre_models if f is not None]
-        self.arrays += [d.lugre for (_, d), on in zip(a.drives, self.lugre) if on]
-        if any(self.lugre):
-            self.modules = self.modules + ("motor.friction",)
+        self._context = actuated_context(a, self.state, len(self.inputs))
 
     def _sim(self):
         return self.slave.actuated.plant
@@ -272,40 +222,8 @@ class ActuatedFiveBarPlantAdapter(_PlantState, EmittedAdapter):
         for n, (_, drive) in enumerate(self.slave.actuated.drives):
             self.state[14 + n] = drive.i
 
-    def emit(self, arrays, x, t, h):
-        plant, z, d1, c1, d2, c2 = arrays[:6]
-        lugre = [n for n, on in enumerate(self.lugre) if on]
-        bristles = dict(zip(lugre, zip(arrays[6:6 + len(lugre)], arrays[6 + len(lugre):])))   # n: (model, drive's)
-        first = len(self.inputs)
-        lines = [
-            f"st, v1, e1, s1, p1 = fastdrive.peek_voltage({d1}, {c1}, {x}[0], {x}[2], {x}[1], {h})",
-            "if st == 0:",
-            f"    st, v2, e2, s2, p2 = fastdrive.peek_voltage({d2}, {c2}, {x}[3], {x}[5], {x}[4], {h})",
-        ]
-        if not bristles:
-            lines += ["if st == 0:", f"    st = {plant}({x}, {h}, (v1, v2))"]
-        else:   # ActuatedPlant.held_friction: joint 1's speed z[10], joint 2's -z[12] (world)
-            speed = {0: f"{z}[10]", 1: f"-{z}[12]"}
-            lines.append("if st == 0:")
-            for n, (f, state) in bristles.items():
-                lines.append(f"    b{n}, _, m{n} = friction.advance({f}, {state}[{F_Z}], {speed[n]}, {h})")
-            u1 = "-m0" if 0 in bristles else "0.0"
-            u2 = "m1" if 1 in bristles else "0.0"
-            lines.append(f"    st = {plant}({x}, {h}, (v1, v2), {u1}, {u2})")
-        lines += [
-            "if st == 0:",
-            f"    fastdrive.commit_step({d1}, {c1}, v1, e1, s1, p1, {z}[14])",
-            f"    fastdrive.commit_step({d2}, {c2}, v2, e2, s2, p2, {z}[15])",
-            f"    {x}[{first + 13}] = v1",
-            f"    {x}[{first + 14}] = v2",
-            f"    {x}[{first + 15}] = {z}[14]",
-            f"    {x}[{first + 16}] = {z}[15]",
-        ]
-        for n, (f, state) in bristles.items():   # ActuatedPlant.shaft_torques: minus the bristles' torque
-            lines += [f"    friction.friction_commit({state}, b{n})",
-                      f"    {x}[{first + 11 + n}] = {x}[{first + 11 + n}] - friction.friction_force({f}, b{n}, "
-                      f"{speed[n]})"]
-        return lines
+    def context(self):
+        return self._context
 
 
 @register

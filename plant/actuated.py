@@ -30,15 +30,45 @@ The monolithic reference (``scenarios/reference.py``) integrates this same
 """
 from __future__ import annotations
 
+import ctypes
 import math
 
 import numpy as np
+
+import kernels
 
 from motor import armature_current_rate, friction, shaft_torque
 
 from . import fast5r, fivebar
 from .integrators import WorkLimitError
 from .simulator import RK4_REAL_STABILITY, PlantError, PlantSimulator
+
+_PAIR = ctypes.c_void_p * 2
+
+
+class KernelContext(ctypes.Structure):
+    """``pc_actuated_context`` (kernels/src/actuated.h): the buffers ``pc_actuated_io`` steps."""
+
+    _fields_ = [("plant", ctypes.c_void_p), ("drive", _PAIR), ("controller", _PAIR), ("friction", _PAIR),
+                ("bristles", _PAIR)]
+
+
+def kernel_context(actuated, state, first: int) -> KernelContext:
+    """A ``pc_actuated_context`` over ``actuated``'s (an :class:`ActuatedPlant` with drives on
+    joints 1 and 2, each prepared for the step) plant kernel, ``state`` (z) and its drives'
+    buffers; the plant's outputs start at x[first].  The context keeps every buffer alive."""
+    plant = actuated.plant._fast.context(state, actuated._motors, first=first)
+    drives = [d for _, d in actuated.drives]
+
+    def addresses(buffers):
+        return _PAIR(*(None if b is None else kernels.address(b) for b in buffers))
+
+    context = KernelContext(ctypes.addressof(plant), addresses([d.buf for d in drives]),
+                            addresses([d._controller_buf for d in drives]), addresses(actuated.lugre_models),
+                            addresses([d.lugre if f is not None else None
+                                       for d, f in zip(drives, actuated.lugre_models)]))
+    context.buffers = (plant, drives, actuated.lugre_models)
+    return context
 
 
 class ActuatedPlant:

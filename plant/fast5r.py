@@ -290,24 +290,3 @@ class FastKernel:
     def residual(self, y):
         self._residual(_address(np.ascontiguousarray(y, dtype=np.float64)))
         return self._res.copy()
-
-
-class ActuatedIO:
-    """``pc_fivebar_actuated_io`` over fixed buffers, called from Python: the plant's part of
-    the compiled loop's ActuatedFiveBarPlant step while the drives' part is not C yet
-    (fmus/adapters.py).  ``state`` is z, ``first`` the index of the plant's outputs in x."""
-
-    def __init__(self, kernel: FastKernel, state, motors, first: int):
-        self.voltages, self.held = np.zeros(motors.shape[0]), np.zeros(2)
-        self.context = kernel.context(state, motors, self.voltages, self.held, first)
-        self.refusal = kernels.Refusal()
-        self._call = functools.partial(actuated_io_c, ctypes.addressof(self.context))
-        self._x = self._x_address = None
-
-    def __call__(self, x, h: float, voltages, u1: float = 0.0, u2: float = 0.0) -> int:
-        """One step with ``voltages`` and (u1, u2) on theta11, theta21 held; the status."""
-        if x is not self._x:
-            self._x, self._x_address = x, _address(x)
-        self.voltages[:] = voltages
-        self.held[0], self.held[1] = u1, u2
-        return self._call(self._x_address, 0.0, h, ctypes.byref(self.refusal))

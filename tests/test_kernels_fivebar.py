@@ -181,3 +181,77 @@ def test_the_terms_function_is_the_inverse_terms():
         fast5r.TERMS_OF)
     terms_of(kernels.address(kernel.p), kernels.address(q), kernels.address(dq), kernels.address(got))
     assert np.array_equal(got, expected) and np.any(expected[fast5r.INVERSE_V:fast5r.INVERSE_V + 2] != 0.0)
+
+
+def _actuated_lugre():
+    """The bench plant with both drives inside, LuGre friction, prepared for DT steps, moving
+    (joint speeds and bristle deflections non-zero, so the bristle torque matters)."""
+    from motor import Drive, get_motor_preset
+    from plant.actuated import ActuatedPlant
+
+    sim = PlantSimulator(get_preset("bench"), -0.002, 0.108, IntegratorSettings())
+    sim.y = sim.y.copy()
+    sim.y[7:14] = [0.01, -0.02, 0.0, 0.4, -0.3, -0.5, 0.2]   # off the loop's velocity constraint: no matter here
+    drives = [(j, Drive(get_motor_preset(f"motor{j}"), friction="lugre")) for j in (1, 2)]
+    for n, (_, d) in enumerate(drives):
+        d.prepare_step(DT)
+        d.i, d.z = 0.3 - 0.5 * n, 1e-4 * (1 - 2 * n)
+    return ActuatedPlant(sim, drives)
+
+
+_ACTUATED_X = [0.5, 0.45, 0.0, -0.4, -0.35, 0.0]   # i_ref1, i_hat1, v_ref1, i_ref2, i_hat2, v_ref2
+
+
+def test_pc_actuated_io_is_the_actuated_plants_step():
+    """One step of pc_actuated_io equals ActuatedPlant.step (the Python composition of the
+    same kernels): state, currents, voltages, bristles and the torques minus the bristles'.
+    Catches a wrong input order, bristle sign, or the bristle torque at the wrong speed."""
+    from plant.actuated import kernel_context
+
+    a, b = _actuated_lugre(), _actuated_lugre()
+    state = a.state()
+    context = kernel_context(a, state, 6)
+    x = np.array(_ACTUATED_X + [0.0] * 17)
+    refusal = kernels.Refusal()
+    assert kernels.library().pc_actuated_io(ctypes.c_void_p(ctypes.addressof(context)),
+                                            ctypes.c_void_p(kernels.address(x)), ctypes.c_double(0.0),
+                                            ctypes.c_double(DT), ctypes.byref(refusal)) == 0
+    b.step(_ACTUATED_X[0::3], _ACTUATED_X[1::3], _ACTUATED_X[2::3], DT)
+    assert np.array_equal(state, b.state())
+    for (_, da), (_, db) in zip(a.drives, b.drives):
+        assert np.array_equal(da.buf, db.buf) and np.array_equal(da._controller_buf, db._controller_buf)
+        assert np.array_equal(da.lugre, db.lugre) and da.z != 0.0
+    assert x[6 + 11:6 + 13].tolist() == b.shaft_torques()
+    assert x[6 + 13:].tolist() == [d.v for _, d in b.drives] + b.currents
+
+
+@pytest.mark.parametrize("where", ["i_ref2", "state"])
+def test_pc_actuated_io_refuses_and_changes_nothing(where):
+    """A non-finite i_ref2 (the second drive's sample, after the first peeked) or a non-finite
+    current in z (the plant's step, after both drives peeked and the bristles advanced) is
+    refused with its code and value; the state, both drives' buffers, the bristles and x's
+    outputs stay as they were (a drive or bristle kept before the plant accepted would show)."""
+    from motor import kernel as drive_kernel
+    from plant.actuated import kernel_context
+
+    a = _actuated_lugre()
+    state = a.state()
+    context = kernel_context(a, state, 6)
+    x = np.array(_ACTUATED_X + [7.0] * 17)
+    if where == "i_ref2":
+        x[3] = math.nan
+    else:
+        state[15] = math.inf
+    buffers = [state] + [b for _, d in a.drives for b in (d.buf, d._controller_buf, d.lugre)]
+    before, x_before = [b.copy() for b in buffers], x.copy()
+    refusal = kernels.Refusal()
+    status = kernels.library().pc_actuated_io(ctypes.c_void_p(ctypes.addressof(context)),
+                                              ctypes.c_void_p(kernels.address(x)), ctypes.c_double(0.0),
+                                              ctypes.c_double(DT), ctypes.byref(refusal))
+    if where == "i_ref2":   # the drive's inputs: omega, i_ref, v_ref, i_hat
+        assert (status, refusal.code, refusal.index) == (drive_kernel.NONFINITE_INPUT,) * 2 + (1,)
+    else:                   # the currents, which the step couples, are checked first
+        assert (status, refusal.code) == (fast5r.NONFINITE_STATE,) * 2 and refusal.index in (14, 15)
+    assert not math.isfinite(refusal.value)
+    assert all(np.array_equal(b, b0, equal_nan=True) for b, b0 in zip(buffers, before))
+    assert np.array_equal(x, x_before, equal_nan=True)
