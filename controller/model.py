@@ -108,9 +108,6 @@ class ExactModel:
         self.last_Z = None
         self._p = pack_params(params)
         self._out = np.empty(INVERSE_SIZE)
-        if kernel == "fast":
-            # Compile (or load numba's cache) now; any pose with bent elbows does.
-            inverse_terms(self._p, np.array([0.0, 0.2, 0.0, 1.0, 1.0, 1.0, 1.0]), np.zeros(7), self._out)
 
     def _terms(self, q, dq):
         """(M_M, v_M, g_M, Z) of (5.74) at (q, dq) with the chosen kernel."""
