@@ -35,8 +35,6 @@ MIRROR = np.diag([-1.0, 1.0, -1.0])
 #: Index of each coordinate in q (7.12).
 X, Y, Z, TH11, TH12, TH21, TH22 = range(7)
 
-_D = ctypes.POINTER(ctypes.c_double)
-
 
 class KinematicsError(ValueError):
     """A point or a configuration the mechanism cannot take."""
@@ -122,17 +120,12 @@ def inverse_kinematics(params: FiveBarParams, x: float, y: float) -> np.ndarray:
     """
     if not (math.isfinite(x) and math.isfinite(y)):
         raise KinematicsError(f"point ({x!r}, {y!r}) is not finite")
-    angles = np.empty(4)
-    _inverse_into(params, x, y, angles)
-    return angles
-
-
-def _inverse_into(params: FiveBarParams, x: float, y: float, angles: np.ndarray) -> None:
-    """The C inverse kinematics (``pc_5r_inverse``) into ``angles``; raises as :func:`inverse_kinematics`."""
-    distance = ctypes.c_double()
-    if k5r.inverse(k5r.geometry(params), x, y, angles.ctypes.data_as(_D), ctypes.byref(distance)) != k5r.OK:
+    # A ctypes array viewed by numpy: cheaper per call than a numpy buffer's ctypes pointer.
+    angles, distance = (ctypes.c_double * 4)(), ctypes.c_double()
+    if k5r.inverse(k5r.geometry(params), x, y, angles, ctypes.byref(distance)) != k5r.OK:
         raise KinematicsError(f"point (x={x:.6g}, y={y:.6g}) is outside the workspace: "
                               f"point out of reach of a chain (distance {distance.value:.6g} m)")
+    return np.frombuffer(angles)
 
 
 def elbows(params: FiveBarParams, q1: float, q2: float) -> np.ndarray:
@@ -159,9 +152,9 @@ def direct_kinematics(params: FiveBarParams, q1: float, q2: float) -> np.ndarray
 
 def jacobians(params: FiveBarParams, x: float, y: float, q1: float, q2: float):
     """J_X and J_Theta of ``J_X dX + J_Theta dTheta = 0`` (002 eq. 15-17), world frame."""
-    jx, jt = np.empty(4), np.empty(2)
-    k5r.jacobians(k5r.geometry(params), x, y, q1, q2, jx.ctypes.data_as(_D), jt.ctypes.data_as(_D))
-    return jx.reshape(2, 2), np.diag(jt)
+    jx, jt = (ctypes.c_double * 4)(), (ctypes.c_double * 2)()
+    k5r.jacobians(k5r.geometry(params), x, y, q1, q2, jx, jt)
+    return np.frombuffer(jx).reshape(2, 2), np.diag(np.frombuffer(jt))
 
 
 def joint_rates(params: FiveBarParams, x, y, q1, q2, dx, dy) -> np.ndarray:
@@ -229,12 +222,11 @@ def workspace_map(params: FiveBarParams, step: float = 0.0025, band: float = NEA
     ys = np.arange(extent[2], extent[3] + step / 2, step)
     margin = np.full((ys.size, xs.size), np.nan)
     # One geometry and one angle buffer for the whole grid: the C calls dominate.
-    g, angles, distance = k5r.geometry(params), np.empty(4), ctypes.c_double()
-    angles_p = angles.ctypes.data_as(_D)
+    g, angles, distance = k5r.geometry(params), (ctypes.c_double * 4)(), ctypes.c_double()
     for iy, y in enumerate(ys.tolist()):
         for ix, x in enumerate(xs.tolist()):
-            if k5r.inverse(g, x, y, angles_p, ctypes.byref(distance)) == k5r.OK:
-                margin[iy, ix] = k5r.margin(angles_p)
+            if k5r.inverse(g, x, y, angles, ctypes.byref(distance)) == k5r.OK:
+                margin[iy, ix] = k5r.margin(angles)
     status = np.where(np.isnan(margin), WorkspaceMap.OUTSIDE,
                       np.where(margin < band, WorkspaceMap.NEAR_SINGULAR, WorkspaceMap.INSIDE))
     return WorkspaceMap(xs, ys, margin, status)
