@@ -1,5 +1,5 @@
 """The 5R's closed-form kinematics for the position controller (world frame), from the C kernel
-``kernels/src/kinematics5r.c`` (seed 002 eq. 1-20), which the law itself uses.
+``kernels/src/kinematics5r.c`` (binding: :mod:`plant.kinematics5r`) (seed 002 eq. 1-20), which the law itself uses.
 
 Inverse kinematics in the "elbows outward" working mode, direct kinematics, the Jacobians
 J_X, J_Theta of ``J_X dX + J_Theta dq = 0`` (002 eq. 15-17) and their time derivatives, the
@@ -22,36 +22,12 @@ import ctypes
 
 import numpy as np
 
-import kernels
+from plant import kinematics5r as k5r
 from plant.fivebar import KinematicsError
 from plant.presets import FiveBarParams
 
-_OK, _OUT_OF_REACH, _NO_ASSEMBLY, _SINGULAR = 0, 1, 2, 3
-_d, _p = ctypes.c_double, ctypes.c_void_p
+_d = ctypes.c_double
 _D = ctypes.POINTER(ctypes.c_double)
-
-
-class Geometry(ctypes.Structure):
-    """``pc_5r_geometry``: the lengths, m."""
-
-    _fields_ = [(name, ctypes.c_double) for name in ("l0", "l11", "l12", "l21", "l22")]
-
-
-class Task(ctypes.Structure):
-    """``pc_5r_task``: the task state of a joint measurement."""
-
-    _fields_ = [("x", _d), ("y", _d), ("dx", _d), ("dy", _d), ("ddx", _d), ("ddy", _d), ("jx", _d * 4),
-                ("jt", _d * 2), ("det", _d), ("J", _d * 4), ("beta", _d * 2), ("distance", _d)]
-
-
-_G = ctypes.POINTER(Geometry)
-_inverse = kernels.function("pc_5r_inverse", ctypes.c_int, _G, _d, _d, _D, _D)
-_margin = kernels.function("pc_5r_margin", ctypes.c_double, _D)
-_forward = kernels.function("pc_5r_forward", ctypes.c_int, _G, _d, _d, _D, _D, _D)
-_jacobians = kernels.function("pc_5r_jacobians", None, _G, _d, _d, _d, _d, _D, _D)
-_task_state = kernels.function("pc_5r_task_state", ctypes.c_int, _G, *([_d] * 6), ctypes.POINTER(Task))
-_joint_reference = kernels.function("pc_5r_joint_reference", ctypes.c_int, _G, *([_d] * 8), _D)
-_thesis_state = kernels.function("pc_5r_thesis_state", ctypes.c_int, _G, _d, _d, _d, _d, _D, _D, _D)
 
 
 class Kinematics:
@@ -68,9 +44,9 @@ class Kinematics:
         self.l11, self.l12 = float(params.chain1.l1), float(params.chain1.l2)
         self.l21, self.l22 = float(params.chain2.l1), float(params.chain2.l2)
 
-    def geometry(self) -> Geometry:
+    def geometry(self) -> k5r.Geometry:
         """The lengths as the kernels' ``pc_5r_geometry``."""
-        return Geometry(self.l0, self.l11, self.l12, self.l21, self.l22)
+        return k5r.Geometry(self.l0, self.l11, self.l12, self.l21, self.l22)
 
     # --- positions ------------------------------------------------------------
     def inverse(self, x: float, y: float):
@@ -82,7 +58,7 @@ class Kinematics:
             If (x, y) is out of reach of a chain.
         """
         angles, distance = (_d * 4)(), _d()
-        if _inverse(self.geometry(), x, y, angles, ctypes.byref(distance)) != _OK:
+        if k5r.inverse(self.geometry(), x, y, angles, ctypes.byref(distance)) != k5r.OK:
             raise KinematicsError(f"point out of reach of a chain (distance {distance.value:.6g} m)")
         return tuple(angles)
 
@@ -91,7 +67,7 @@ class Kinematics:
 
         Same measure as :func:`plant.fivebar.singularity` ``.margin``.
         """
-        return _margin((_d * 4)(*self.inverse(x, y)))
+        return k5r.margin((_d * 4)(*self.inverse(x, y)))
 
     def forward(self, q1: float, q2: float):
         """End effector (x, y) from the actuated angles (002 eq. 7-11), the assembly of
@@ -103,7 +79,7 @@ class Kinematics:
             If the distal links cannot meet.
         """
         x, y, distance = _d(), _d(), _d()
-        if _forward(self.geometry(), q1, q2, ctypes.byref(x), ctypes.byref(y), ctypes.byref(distance)) != _OK:
+        if k5r.forward(self.geometry(), q1, q2, ctypes.byref(x), ctypes.byref(y), ctypes.byref(distance)) != k5r.OK:
             raise KinematicsError(no_assembly(q1, q2, distance.value))
         return x.value, y.value
 
@@ -111,7 +87,7 @@ class Kinematics:
     def jacobians(self, x, y, q1, q2):
         """Entries of J_X = [[a, b], [c, d]] and the diagonal (t1, t2) of J_Theta (002 eq. 15-17)."""
         jx, jt = (_d * 4)(), (_d * 2)()
-        _jacobians(self.geometry(), x, y, q1, q2, jx, jt)
+        k5r.jacobians(self.geometry(), x, y, q1, q2, jx, jt)
         return (*jx, *jt)
 
     def jacobian(self, x, y, q1, q2):
@@ -130,11 +106,11 @@ class Kinematics:
         KinematicsError
             Without assembly, or at a parallel singularity (det J_X = 0).
         """
-        t = Task()
-        rc = _task_state(self.geometry(), q1, q2, dq1, dq2, ddq1, ddq2, ctypes.byref(t))
-        if rc == _NO_ASSEMBLY:
+        t = k5r.Task()
+        rc = k5r.task_state(self.geometry(), q1, q2, dq1, dq2, ddq1, ddq2, ctypes.byref(t))
+        if rc == k5r.NO_ASSEMBLY:
             raise KinematicsError(no_assembly(q1, q2, t.distance))
-        if rc != _OK:
+        if rc != k5r.OK:
             raise KinematicsError(f"q1={q1:.6g}, q2={q2:.6g} rad is a parallel singularity (det J_X = 0)")
         return t.x, t.y, t.dx, t.dy, t.ddx, t.ddy, tuple(t.J), tuple(t.beta)
 
@@ -146,7 +122,7 @@ class Kinematics:
         """
         p11, _, p21, _ = self.inverse(x, y) if angles is None else angles
         joint = (_d * 6)()
-        if _joint_reference(self.geometry(), x, y, dx, dy, ddx, ddy, p11, p21, joint) != _OK:
+        if k5r.joint_reference(self.geometry(), x, y, dx, dy, ddx, ddy, p11, p21, joint) != k5r.OK:
             raise KinematicsError(f"(x, y) = ({x:.6g}, {y:.6g}) m: a chain is stretched or folded (J_Theta singular)")
         return tuple(joint)
 
@@ -161,8 +137,8 @@ class Kinematics:
             If (x, y) is out of reach of a chain.
         """
         q, dq, distance = np.empty(7), np.empty(7), _d()
-        if _thesis_state(self.geometry(), x, y, dx, dy, q.ctypes.data_as(_D), dq.ctypes.data_as(_D),
-                         ctypes.byref(distance)) != _OK:
+        if k5r.thesis_state(self.geometry(), x, y, dx, dy, q.ctypes.data_as(_D), dq.ctypes.data_as(_D),
+                         ctypes.byref(distance)) != k5r.OK:
             raise KinematicsError(f"point out of reach of a chain (distance {distance.value:.6g} m)")
         return q, dq
 

@@ -9,7 +9,8 @@ mirrored by ``E2 = diag(-1, 1, -1)`` (7.4); :func:`world_angles` and
 :func:`thesis_coordinates` convert to and from the world convention of the
 interface (angles counter-clockwise from +x, chain 1 at (+l0, 0)).
 
-The rest is the closed-form kinematics of seed 002 in world coordinates:
+The rest is the closed-form kinematics of seed 002 in world coordinates, computed by the C
+kernel ``kernels/src/kinematics5r.c`` (binding :mod:`plant.kinematics5r`):
 inverse kinematics in the "elbows outward" working mode (002 eq. 1-6),
 direct kinematics (eq. 7-11), passive angles (eq. 12), the Jacobians J_X and
 J_Theta (eq. 15-17; eq. 16 prints ``y_p - l_2 s_11`` where ``l_1`` is meant),
@@ -17,11 +18,13 @@ singularity measures and a workspace map (thesis fig. 11).
 """
 from __future__ import annotations
 
+import ctypes
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from . import kinematics5r as k5r
 from .parallel import ParallelMechanism
 from .presets import ChainParams, FiveBarParams
 from .serial import REVOLUTE, DHJoint, RigidLink, SerialChain, with_point_mass
@@ -104,21 +107,6 @@ def bases(params: FiveBarParams) -> np.ndarray:
     return np.array([[params.l0, 0.0], [-params.l0, 0.0]])
 
 
-def _chain_ik(c: ChainParams, px: float, py: float, elbow_sign: float):
-    """(phi1, phi2): absolute world angles of both links reaching (px, py) from the base.
-
-    ``elbow_sign`` = +1 puts the elbow on the right of the base-to-tip line
-    (chain 1 outward), -1 on the left (chain 2 outward).
-    """
-    r2 = px * px + py * py
-    cos_b = (r2 - c.l1 * c.l1 - c.l2 * c.l2) / (2.0 * c.l1 * c.l2)
-    if not -1.0 <= cos_b <= 1.0:
-        raise KinematicsError(f"point out of reach of a chain (distance {math.sqrt(r2):.6g} m)")
-    beta = elbow_sign * math.acos(cos_b)         # relative angle of the distal link
-    phi1 = math.atan2(py, px) - math.atan2(c.l2 * math.sin(beta), c.l1 + c.l2 * math.cos(beta))
-    return phi1, phi1 + beta
-
-
 def inverse_kinematics(params: FiveBarParams, x: float, y: float) -> np.ndarray:
     """World link angles ``[phi11, phi12, phi21, phi22]`` reaching (x, y), elbows outward.
 
@@ -132,12 +120,12 @@ def inverse_kinematics(params: FiveBarParams, x: float, y: float) -> np.ndarray:
     """
     if not (math.isfinite(x) and math.isfinite(y)):
         raise KinematicsError(f"point ({x!r}, {y!r}) is not finite")
-    try:
-        p11, p12 = _chain_ik(params.chain1, x - params.l0, y, +1.0)
-        p21, p22 = _chain_ik(params.chain2, x + params.l0, y, -1.0)
-    except KinematicsError as exc:
-        raise KinematicsError(f"point (x={x:.6g}, y={y:.6g}) is outside the workspace: {exc}") from None
-    return np.array([p11, p12, p21, p22])
+    # A ctypes array viewed by numpy: cheaper per call than a numpy buffer's ctypes pointer.
+    angles, distance = (ctypes.c_double * 4)(), ctypes.c_double()
+    if k5r.inverse(k5r.geometry(params), x, y, angles, ctypes.byref(distance)) != k5r.OK:
+        raise KinematicsError(f"point (x={x:.6g}, y={y:.6g}) is outside the workspace: "
+                              f"point out of reach of a chain (distance {distance.value:.6g} m)")
+    return np.frombuffer(angles)
 
 
 def elbows(params: FiveBarParams, q1: float, q2: float) -> np.ndarray:
@@ -156,31 +144,17 @@ def direct_kinematics(params: FiveBarParams, q1: float, q2: float) -> np.ndarray
     left of the line from chain 2's elbow to chain 1's elbow (above the
     elbows when chain 1's elbow is on the right).
     """
-    a1, a2 = elbows(params, q1, q2)
-    r1, r2 = params.chain1.l2, params.chain2.l2
-    delta = a1 - a2
-    dist2 = float(delta @ delta)
-    dist = math.sqrt(dist2)
-    if dist == 0.0 or dist > r1 + r2 or dist < abs(r1 - r2):
-        raise KinematicsError(f"no assembly for q1={q1:.6g}, q2={q2:.6g} rad (elbow distance {dist:.6g} m)")
-    # Distance from A2 along A2->A1 to the chord, and half-chord height.
-    along = (dist2 + r2 * r2 - r1 * r1) / (2.0 * dist)
-    height = math.sqrt(max(r2 * r2 - along * along, 0.0))
-    unit = delta / dist
-    normal = np.array([-unit[1], unit[0]])       # left of A2 -> A1
-    return a2 + along * unit + height * normal
+    x, y, distance = ctypes.c_double(), ctypes.c_double(), ctypes.c_double()
+    if k5r.forward(k5r.geometry(params), q1, q2, ctypes.byref(x), ctypes.byref(y), ctypes.byref(distance)) != k5r.OK:
+        raise KinematicsError(f"no assembly for q1={q1:.6g}, q2={q2:.6g} rad (elbow distance {distance.value:.6g} m)")
+    return np.array([x.value, y.value])
 
 
 def jacobians(params: FiveBarParams, x: float, y: float, q1: float, q2: float):
     """J_X and J_Theta of ``J_X dX + J_Theta dTheta = 0`` (002 eq. 15-17), world frame."""
-    a1, a2 = elbows(params, q1, q2)
-    JX = np.array([[x - a1[0], y - a1[1]], [x - a2[0], y - a2[1]]])
-    b = bases(params)
-    JT = np.diag([
-        params.chain1.l1 * ((x - b[0, 0]) * math.sin(q1) - y * math.cos(q1)),
-        params.chain2.l1 * ((x - b[1, 0]) * math.sin(q2) - y * math.cos(q2)),
-    ])
-    return JX, JT
+    jx, jt = (ctypes.c_double * 4)(), (ctypes.c_double * 2)()
+    k5r.jacobians(k5r.geometry(params), x, y, q1, q2, jx, jt)
+    return np.frombuffer(jx).reshape(2, 2), np.diag(np.frombuffer(jt))
 
 
 def joint_rates(params: FiveBarParams, x, y, q1, q2, dx, dy) -> np.ndarray:
@@ -247,12 +221,12 @@ def workspace_map(params: FiveBarParams, step: float = 0.0025, band: float = NEA
     xs = np.arange(extent[0], extent[1] + step / 2, step)
     ys = np.arange(extent[2], extent[3] + step / 2, step)
     margin = np.full((ys.size, xs.size), np.nan)
-    for iy, y in enumerate(ys):
-        for ix, x in enumerate(xs):
-            try:
-                margin[iy, ix] = singularity(params, x, y).margin
-            except KinematicsError:
-                pass
+    # One geometry and one angle buffer for the whole grid: the C calls dominate.
+    g, angles, distance = k5r.geometry(params), (ctypes.c_double * 4)(), ctypes.c_double()
+    for iy, y in enumerate(ys.tolist()):
+        for ix, x in enumerate(xs.tolist()):
+            if k5r.inverse(g, x, y, angles, ctypes.byref(distance)) == k5r.OK:
+                margin[iy, ix] = k5r.margin(angles)
     status = np.where(np.isnan(margin), WorkspaceMap.OUTSIDE,
                       np.where(margin < band, WorkspaceMap.NEAR_SINGULAR, WorkspaceMap.INSIDE))
     return WorkspaceMap(xs, ys, margin, status)

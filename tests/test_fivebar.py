@@ -121,3 +121,24 @@ def test_workspace_map_covers_the_reach():
     assert ws.y[0] == -reach and abs(ws.y[-1] - reach) < step / 2
     top = max(ws.y[iy] for iy, ix in np.argwhere(ws.status != ws.OUTSIDE))
     assert math.sqrt(reach ** 2 - p.l0 ** 2) - step < top <= math.sqrt(reach ** 2 - p.l0 ** 2)
+
+
+def test_parallel_measure_changes_sign_where_the_general_algorithms_determinant_does():
+    """Along x = 0 through the parallel singularity (thesis_sim), the C kinematics' parallel
+    measure (plant.fivebar.singularity) changes sign at the same height as det of the general
+    algorithm's actuated rows of C (5.56): dtheta_actuated = C_a dX, det C_a = -det J_X / det J_Theta.
+    A margin built from the wrong link angles would cross elsewhere or not at all."""
+    p = get_preset("thesis_sim")
+    mech = build_mechanism(p)
+    ys = np.linspace(0.05, 0.20, 301)
+    measure, det_general = [], []
+    for y in ys:
+        measure.append(singularity(p, 0.0, y).parallel)
+        C = mechanism_state(mech, thesis_coordinates(p, 0.0, y), np.zeros(7)).C
+        det_general.append(np.linalg.det(C[[3, 5]]))
+    cross_measure = np.flatnonzero(np.diff(np.sign(measure)))
+    cross_general = np.flatnonzero(np.diff(np.sign(det_general)))
+    assert cross_measure.size == 1
+    np.testing.assert_array_equal(cross_measure, cross_general)
+    q1 = math.acos((p.chain1.l2 - p.l0) / p.chain1.l1)   # the analytic crossing (see above)
+    assert ys[cross_measure[0]] <= p.chain1.l1 * math.sin(q1) <= ys[cross_measure[0] + 1]

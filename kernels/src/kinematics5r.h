@@ -7,8 +7,8 @@
  * clockwise from +x.  The change of variables x = FK(q):
  *   dx = J dq,        J = -J_X^-1 J_Theta,
  *   ddx = J ddq + beta, beta = -J_X^-1 (dJ_X dx + dJ_Theta dq).
- * Python: controller/kinematics.py; the tests hold these against the general algorithm
- * (plant/serial.py + plant/parallel.py).
+ * Python: the binding plant/kinematics5r.py, used by plant/fivebar.py and controller/kinematics.py;
+ * the tests hold these against the general algorithm (plant/serial.py + plant/parallel.py).
  */
 #ifndef PC_KINEMATICS5R_H
 #define PC_KINEMATICS5R_H
