@@ -282,6 +282,17 @@ class Derivator:
             (a ValueError) An angle not finite or beyond ``limit``, or a buffer whose sizes do
             not fit it; the state is not advanced.
         """
+        call = self._advance(q, limit)
+        m = call.q.size
+        return call.out[:m].copy(), call.out[m:].copy()
+
+    def step_values(self, q, limit=math.inf) -> list:
+        """:meth:`step`'s estimates as one list of floats, the velocities then the
+        accelerations (no arrays built: an FMU's doStep)."""
+        return self._advance(q, limit).out.tolist()
+
+    def _advance(self, q, limit):
+        """One ``pc_derivator_step`` (see :meth:`step`); the call whose ``out`` holds the estimates."""
         if self.buf is None:
             raise RuntimeError("Derivator.step called before reset(q0)")
         call = _call(self)
@@ -290,8 +301,7 @@ class Derivator:
         code = _STEP(call.context, call.q_address, limit, call.out_address, call.refusal)
         if code not in (fastderivator.OK, fastderivator.NONFINITE_OUTPUT):
             raise kernels.refused(_REASONS, call.refusal, angles=call.q.tolist(), limit=limit, words=call.buf.size)
-        m = call.q.size
-        return call.out[:m].copy(), call.out[m:].copy()
+        return call
 
     def frequency_response(self, f):
         """Frequency responses of the velocity and acceleration estimates.

@@ -105,11 +105,29 @@ def kernel_context(trajectory) -> _Context:
 
 def _evaluate(trajectory, t):
     """The :class:`ReferenceSample` of ``trajectory`` at ``t`` (s)."""
+    return ReferenceSample(*sample_values(trajectory, t, *sample_buffers()))
+
+
+def sample_buffers():
+    """A values array and a refusal record for :func:`sample_values`, made once by a caller
+    that samples every step (an FMU's doStep)."""
+    return _SAMPLE_VALUES(), kernels.Refusal()
+
+
+def sample_values(trajectory, t, values, refusal) -> list:
+    """The reference of ``trajectory`` at ``t`` (s) as a list of floats in the order of
+    :class:`ReferenceSample`'s fields, computed into ``values`` with ``refusal``
+    (:func:`sample_buffers`): no object built per sample.
+
+    Raises
+    ------
+    kernels.Refused
+        (a ValueError) ``t`` below 0 or a damaged buffer, as :meth:`CircleTrajectory.__call__`.
+    """
     buf = trajectory.buf
-    values, refusal = _SAMPLE_VALUES(), kernels.Refusal()
     if _SAMPLE(_address(trajectory, buf), buf.size, t, values, refusal) != _fast.OK:
         raise kernels.refused(_REASONS, refusal, time=float(t), index=refusal.index)
-    return ReferenceSample(*values[:])
+    return values[:]
 
 
 @dataclass(frozen=True)

@@ -207,6 +207,13 @@ class PlantSimulator:
         def held():
             return f"tau1 = {tau1!r}, tau2 = {tau2!r} N m held"
 
+        settings = self.settings
+        if settings.method == "rk4" and self._fast is not None and not settings.project:
+            # The usual case, integrate's first branch without its array and closure: u* =
+            # (tau1, -tau2) (fivebar.thesis_torques) straight to the C kernel.
+            y, verdict = self._fast_step(self.y, tau1, -tau2, dt, held, fast5r.NO_MOTORS, fast5r.NO_VOLTAGES)
+            self.accept(y, dt, held, verdict)
+            return 4 * settings.substeps
         u_star = fivebar.thesis_torques(tau1, tau2)     # once: held over every derivative call of the step
         y, verdict, evaluations = self.integrate(self.y, dt, u_star[0], u_star[1], held,
                                                  lambda z: self.derivative(z, u_star), max_evaluations=max_evaluations)

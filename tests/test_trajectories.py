@@ -192,3 +192,16 @@ def test_circle_at_another_frequency_is_the_same_circle_in_scaled_time(frequency
     np.testing.assert_allclose(fast(9.0 / frequency)[:2], slow(9.0)[:2], atol=1e-15)
     with pytest.raises(ValueError, match="frequency = 0.0 Hz must be > 0"):
         get_trajectory("circle", frequency=0.0)
+
+
+@pytest.mark.parametrize("kind", ["circle", "triangle", "hold"])
+def test_sample_values_are_the_reference_sample_in_field_order(kind):
+    """The FMU's fast path (buffers reused, no object per sample) gives the fields of
+    ``trajectory(t)`` in order, and refuses a negative time like it."""
+    from controller.trajectories import sample_buffers, sample_values
+
+    trajectory, buffers = from_parameters(kind, PRESET_CYCLES), sample_buffers()
+    for t in (0.0, 0.123, 0.8, 1.7, 100.0):
+        assert sample_values(trajectory, t, *buffers) == list(trajectory(t))
+    with pytest.raises(ValueError, match="trajectory time must be >= 0 s"):
+        sample_values(trajectory, -1.0, *buffers)

@@ -92,8 +92,7 @@ class Derivator(GuardedSlave):
         q1, q2 = self.q1, self.q2
         if not (abs(q1) <= ABSURD and abs(q2) <= ABSURD):   # NaN fails too: named below
             self._refuse_inputs(current_time)
-        dq, ddq = self.derivator.step([q1, q2], ABSURD)
-        estimates = (float(dq[0]), float(dq[1]), float(ddq[0]), float(ddq[1]))
+        estimates = tuple(self.derivator.step_values((q1, q2), ABSURD))    # dq1, dq2, ddq1, ddq2
         if not all(map(math.isfinite, estimates)):
             raise ValueError(f"the estimates (dq1, dq2, ddq1, ddq2) = {estimates!r} at t = {current_time:.6g} s "
                              f"are not finite (inputs q1 = {self.q1!r}, q2 = {self.q2!r} rad)")

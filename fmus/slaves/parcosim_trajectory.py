@@ -11,7 +11,7 @@ process share one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
-from controller.trajectories import BENCH_START, PRESET_CYCLES, from_parameters
+from controller.trajectories import BENCH_START, PRESET_CYCLES, from_parameters, sample_buffers, sample_values
 from fmus.guarded import GuardedSlave
 from fmus.refusals import refuse_absurd, refuse_tiny, require_finite
 
@@ -40,6 +40,7 @@ class Trajectory(GuardedSlave):
         d("x_hold", "parameter", BENCH_START[0], "hold: the point held, x [m] (default x_1, 7.28)")
         d("y_hold", "parameter", BENCH_START[1], "hold: the point held, y [m] (default x_1, 7.28)")
         self.trajectory = None
+        self.__buffers = sample_buffers()   # reused by every sample; "__": not FMU state
 
     def setup(self):
         used_or_not = {"side_time": self.side_time, "x_hold": self.x_hold, "y_hold": self.y_hold,
@@ -55,4 +56,4 @@ class Trajectory(GuardedSlave):
         self._publish(current_time + step_size)
 
     def _publish(self, t):
-        vars(self).update(zip(OUTPUTS, map(float, self.trajectory(t))))
+        vars(self).update(zip(OUTPUTS, sample_values(self.trajectory, t, *self.__buffers)))
