@@ -44,7 +44,7 @@ def _buffer_layout() -> dict:
 
 #: Field -> slice of ``buf``.
 BUFFER = _buffer_layout()
-BUF_SIZE = max(s.stop for s in BUFFER.values())
+BUF_SIZE = kernels.size(BUFFER)
 (B_N, B_NY, B_YAW, B_R_OVER_W, B_RADIUS, B_V_MAX, B_GAIN, B_DISTANCE, B_TURN, B_DRIVE, B_TURNING, B_SMOOTH,
  B_SLOPE, B_STATES, B_K, B_LO, B_C, B_AD, B_BD, B_STARTED, B_X_HAT, B_U) = (
     BUFFER[name].start for name in ("n", "ny", "yaw", "r_over_w", "radius", "v_max", "gain", "distance", "turn",

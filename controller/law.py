@@ -31,10 +31,10 @@ TERMS = kernels.layout("pc_law_terms_fields")
 SCRATCH = kernels.layout("pc_law_scratch_fields")
 TASK = kernels.layout("pc_5r_task_fields")
 
-STATE_SIZE = max(s.stop for s in STATE.values())
-PARAMS_SIZE = max(s.stop for s in PARAMS.values())
-TERMS_SIZE = max(s.stop for s in TERMS.values())
-SCRATCH_SIZE = max(s.stop for s in SCRATCH.values())
+STATE_SIZE = kernels.size(STATE)
+PARAMS_SIZE = kernels.size(PARAMS)
+TERMS_SIZE = kernels.size(TERMS)
+SCRATCH_SIZE = kernels.size(SCRATCH)
 #: Entries of a table row (H00, H01, H11, cxx, cyy, cxy, g).
 N_TERMS = 11
 

@@ -147,7 +147,12 @@ def class_tag(cls) -> str:
 
 
 def opaque_tag(value) -> str | None:
-    """The tag of a value that is code, not data (None for data)."""
+    """The tag of a value that is code, not data (None for data).  An object whose class sets
+    ``FMU_STATE_OPAQUE = True`` (a kernel binding that holds configuration derived from the
+    parameters and scratch, no run state) counts as code: its class is written, never its
+    buffers, and a restored state keeps the instance's own."""
+    if getattr(type(value), "FMU_STATE_OPAQUE", False):
+        return f"kernel:{class_tag(type(value))}"
     if isinstance(value, type):
         return f"class:{class_tag(value)}"
     if isinstance(value, types.ModuleType):

@@ -146,6 +146,11 @@ def layout(symbol: str) -> dict:
     return fields
 
 
+def size(fields: dict) -> int:
+    """The length in doubles of a struct whose :func:`layout` is ``fields``."""
+    return max(s.stop for s in fields.values())
+
+
 def address(array: np.ndarray) -> int:
     """The data address of a C-contiguous float64 (or int) array, for a ``c_void_p`` argument;
     the caller keeps ``array`` alive."""

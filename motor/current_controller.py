@@ -28,6 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+import kernels
 from motor import _checks, kernel
 
 #: Closed-loop poles chosen in the thesis (section 7.2.10); the fourth is the plant zero.
@@ -220,7 +221,7 @@ class CurrentController:
         self.design = design
         self.v_max = _checks.positive("v_max", v_max)
         # Coefficients and state in one array, the C struct pc_controller (kernels/src/drive.h).
-        self.buf = np.zeros(kernel.size(kernel.CONTROLLER))
+        self.buf = np.zeros(kernels.size(kernel.CONTROLLER))
         for name in ("alpha", "beta", "gamma", "delta"):
             self.buf[kernel.CONTROLLER[name]] = getattr(design, name)
         self.buf[kernel.CONTROLLER["v_max"]] = self.v_max
@@ -230,7 +231,7 @@ class CurrentController:
     @staticmethod
     def idle_buffer(v_max):
         """A controller buffer with zero coefficients: the voltage-mode drive's (never sampled)."""
-        b = np.zeros(kernel.size(kernel.CONTROLLER))
+        b = np.zeros(kernels.size(kernel.CONTROLLER))
         b[kernel.CONTROLLER["v_max"]] = v_max
         return b
 

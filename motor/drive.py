@@ -118,7 +118,7 @@ class Drive:
         self._mean = None
         # Constants and state of the step: the C struct pc_drive (kernels/src/drive.h).
         p = params
-        self.buf = np.zeros(kernel.size(kernel.DRIVE))
+        self.buf = np.zeros(kernels.size(kernel.DRIVE))
         values = {"current_mode": 1.0 if self.mode == "current" else 0.0,
                   "mean_torque": 1.0 if self.torque_output == "mean" else 0.0,
                   "ke": p.ke, "kt": p.kt, "b": p.b, "mu": p.mu, "omega_eps": p.omega_eps, "v_max": p.v_max,

@@ -40,7 +40,7 @@ from motor._checks import BadValue
 
 #: Index of the state (the bristle deflection z [rad]) in a friction array.
 F_Z = kernel.index(kernel.LUGRE, "z")
-FRICTION_SIZE = kernel.size(kernel.LUGRE)
+FRICTION_SIZE = kernels.size(kernel.LUGRE)
 
 #: The drive's names (:class:`motor.MotorParams`) of the parameters it calls otherwise.
 _DRIVE_NAMES = {"Fc": "mu", "Fs": "mu_s", "sigma2": "b"}

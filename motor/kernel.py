@@ -38,11 +38,6 @@ def indices(fields: dict) -> dict:
     return {name: s.start for name, s in fields.items() if s.stop - s.start == 1}
 
 
-def size(fields: dict) -> int:
-    """The struct's length in doubles."""
-    return max(s.stop for s in fields.values())
-
-
 controller_update = kernels.function("pc_controller_update", _d, _p, _d, _d)
 shaft_torque = kernels.function("pc_drive_shaft_torque", _d, _d, _d, _d, _d, _d, _d)
 armature_rate = kernels.function("pc_drive_armature_rate", _d, _d, _d, _d, _d, _d, _d)

@@ -45,7 +45,7 @@ class CurrentObserver:
         self._method = "quasi_static" if kind == "static" else "exact"
         self._h = None
         # Constants and state of the step: the C struct pc_observer (kernels/src/observer.h).
-        self.buf = np.zeros(kernel.size(kernel.OBSERVER))
+        self.buf = np.zeros(kernels.size(kernel.OBSERVER))
         self.buf[_O["is_static"]] = 1.0 if kind == "static" else 0.0
         self.buf[_O["ke"]] = params.ke
         self.buf[_O["h"]] = math.nan     # no step prepared

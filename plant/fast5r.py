@@ -31,10 +31,6 @@ from .serial import RigidLink, with_point_mass
 _vp, _d, _i = ctypes.c_void_p, ctypes.c_double, ctypes.c_int
 
 
-def _size(layout: dict) -> int:
-    return max(s.stop for s in layout.values())
-
-
 #: The C structs' fields: {name: slice of a float64 buffer} (kernels/src/fivebar.h).
 PARAMS = kernels.layout("pc_fivebar_params_fields")
 CHAIN = kernels.layout("pc_fivebar_chain_fields")
@@ -43,24 +39,24 @@ SETTINGS = kernels.layout("pc_fivebar_settings_fields")
 REPORT = kernels.layout("pc_fivebar_report_fields")
 INVERSE = kernels.layout("pc_fivebar_inverse_fields")
 STATE = kernels.layout("pc_fivebar_state_fields")
-PARAMS_SIZE, CHAIN_SIZE = _size(PARAMS), _size(CHAIN)
+PARAMS_SIZE, CHAIN_SIZE = kernels.size(PARAMS), kernels.size(CHAIN)
 #: Columns of one motor row (``pc_fivebar_motor``): joint (0: q1, 1: q2), R, L, kt, ke, b, mu, omega_eps.
-MOTOR_COLUMNS = _size(MOTOR)
+MOTOR_COLUMNS = kernels.size(MOTOR)
 NO_MOTORS = np.empty((0, MOTOR_COLUMNS))
 NO_VOLTAGES = np.empty(0)
 #: Places in the report of a state (``pc_fivebar_report``): finite flag, residual norm (5.18), the
 #: three singularity measures, then the outputs q1, q2, dq1, dq2, x, y, dx, dy, q1_enc, q2_enc.
 REPORT_FINITE, REPORT_RESIDUAL = REPORT["finite"].start, REPORT["residual"].start
-REPORT_MEASURES, REPORT_OUTPUTS, REPORT_SIZE = REPORT["measures"].start, REPORT["q1"].start, _size(REPORT)
+REPORT_MEASURES, REPORT_OUTPUTS, REPORT_SIZE = REPORT["measures"].start, REPORT["q1"].start, kernels.size(REPORT)
 #: Places in the inverse dynamics terms (``pc_fivebar_inverse``): M_M, v_M, g_M, Z, c.
 INVERSE_M, INVERSE_V, INVERSE_G = INVERSE["M"].start, INVERSE["v"].start, INVERSE["g"].start
-INVERSE_Z, INVERSE_C, INVERSE_SIZE = INVERSE["Z"].start, INVERSE["c"].start, _size(INVERSE)
+INVERSE_Z, INVERSE_C, INVERSE_SIZE = INVERSE["Z"].start, INVERSE["c"].start, kernels.size(INVERSE)
 #: Places in the settings (``pc_fivebar_settings``): Baumgarte lambda, RK4 steps per step, one
 #: encoder count [rad], the largest residual and the smallest singularity measure accepted, the
 #: encoders' zero errors [rad].
 S_LAMBDA, S_SUBSTEPS, S_COUNT = SETTINGS["lambda"].start, SETTINGS["substeps"].start, SETTINGS["count"].start
 S_RESIDUAL_STOP, S_SINGULAR_STOP = SETTINGS["residual_stop"].start, SETTINGS["singular_stop"].start
-S_OFFSET1, S_OFFSET2, SETTINGS_SIZE = SETTINGS["offset"].start, SETTINGS["offset"].start + 1, _size(SETTINGS)
+S_OFFSET1, S_OFFSET2, SETTINGS_SIZE = SETTINGS["offset"].start, SETTINGS["offset"].start + 1, kernels.size(SETTINGS)
 #: Status codes of a step (fivebar.h's enum); on a refusal the state is unchanged.
 OK, NONFINITE_INPUT, NONFINITE_STATE, DIVERGED, SINGULAR = 0, 1, 2, 3, 4
 #: The plant's state entries before the currents (q and dq, 7.12).
@@ -191,10 +187,13 @@ class FastKernel:
     """The C kernel bound to one parameter set and one set of step settings.
 
     The buffers (parameters, settings, report, scratch, refusal) belong to this object and
-    their addresses are computed once, inside the bound calls (opaque to an FMU state, which
-    lays values over the arrays in place).  A deep copy (an FMU snapshot) is this object: it
-    holds configuration and scratch only, no run state.
+    their addresses are computed once, inside the bound calls.  A deep copy (an FMU snapshot)
+    is this object: it holds configuration and scratch only, no run state, so an FMU state
+    writes its class, not its buffers (``FMU_STATE_OPAQUE``, :func:`fmus.fmustate.opaque_tag`):
+    a refused state cannot have written into them.
     """
+
+    FMU_STATE_OPAQUE = True
 
     def __init__(self, params: FiveBarParams, settings: np.ndarray | None = None):
         self.p = pack_params(params)

@@ -19,7 +19,7 @@ _vp, _d, _i = ctypes.c_void_p, ctypes.c_double, ctypes.c_int
 #: Field -> slice of the parameter buffer (seed 000's symbols; ``nonholonomic`` 1.0 for the
 #: exact model, 0.0 for the seed's; ``yaw`` 0.0 locks the yaw).
 PARAMS = kernels.layout("pc_wheeled_params_fields")
-PARAMS_SIZE = max(s.stop for s in PARAMS.values())
+PARAMS_SIZE = kernels.size(PARAMS)
 #: Field -> slice of the state buffer.
 STATE = kernels.layout("pc_wheeled_state_fields")
 STATE_NAMES = tuple(sorted(STATE, key=lambda name: STATE[name].start))
@@ -29,7 +29,7 @@ THETA, PSI, PHI, X, Y, DTHETA, DPSI, DPHI = (STATE[name].start for name in
 #: The compiled loop's settings (``pc_wheeled_settings``): RK4 substeps, encoder count [rad],
 #: push torque [N m], push start and duration [s], input limit.
 SETTINGS = kernels.layout("pc_wheeled_settings_fields")
-SETTINGS_SIZE = max(s.stop for s in SETTINGS.values())
+SETTINGS_SIZE = kernels.size(SETTINGS)
 S_SUBSTEPS, S_COUNT, S_PUSH_TORQUE, S_PUSH_START, S_PUSH_DURATION, S_LIMIT = (
     SETTINGS[name].start for name in ("substeps", "count", "push_torque", "push_start", "push_duration", "limit"))
 MAX_SUBSTEPS = _i.in_dll(kernels.library(), "pc_wheeled_max_substeps").value
