@@ -454,6 +454,20 @@ def test_a_forged_state_is_refused_or_continues_cleanly(model, where, flip):
     _refused_or_clean(model, bytes(body) + hashlib.sha256(body).digest())
 
 
+@pytest.mark.parametrize("model", ["Derivator", "FiveBarPlant", "DCMotorDrive", "Trajectory", "BalanceController",
+                                   "WheeledPendulum", "CurrentObserver", "PositionController"])
+def test_a_state_whose_arrays_name_another_dtype_is_refused_and_changes_nothing(model):
+    """Each array's dtype forged in turn ('<f8' -> '<g8', the checksum recomputed): refused
+    with the instance unchanged.  Found by the property above: the plant's kernel binding was
+    shared by the template a state is laid over, so a refused state had written its scratch."""
+    good = _state_bytes(model)[:-32]
+    places = [k for k in range(len(good)) if good.startswith(b"<f8", k)]
+    assert places, "the state holds float64 arrays"
+    for k in places:
+        body = good[:k] + b"<g8" + good[k + 3:]
+        _refused_or_clean(model, body + hashlib.sha256(body).digest())
+
+
 # --- through the FMI wrapper ---------------------------------------------------------------
 
 from test_fmu_state import system_fmus  # noqa: E402,F401 - the ClosedLoop and ControlChain FMUs (a fixture)
