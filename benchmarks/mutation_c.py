@@ -296,7 +296,7 @@ def table(record: dict) -> str:
     hangs = [m for m in record["mutants"] if m.get("timeout")]
     rows.append(f"\nkilled by a hang (over {record['timeout_seconds']:.0f} s): {len(hangs)}")
     rows.append("\nsurvivors:")
-    rows += [f"- {m['file']}:{m['line']} ({m['operator']}) {m['before']!r} -> {m['after']!r}"
+    rows += [f"- {m['file']}:{m['line']}:{m['column']} ({m['operator']}) {m['before']!r} -> {m['after']!r}"
              for m in record["mutants"] if m["outcome"] == "survived"]
     return "\n".join(rows)
 
