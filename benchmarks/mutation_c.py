@@ -108,7 +108,7 @@ def _literal_end(line: str, start: int) -> int:
     i = start + 1
     while i < len(line) and line[i] != line[start]:
         i += 2 if line[i] == "\\" else 1
-    return min(i, len(line) - 1) if i < len(line) else len(line) - 1
+    return min(i, len(line) - 1)
 
 
 def mutable(code: str) -> bool:
@@ -308,7 +308,7 @@ def main(argv=None) -> int:
     parser.add_argument("--timeout", type=float, default=120.0, help="seconds a test run may take (a hang: killed)")
     parser.add_argument("--results", type=Path, default=RESULTS)
     parser.add_argument("--report", action="store_true", help="reprint the table from --results")
-    parser.add_argument("--pool", action="store_true", help="print the pool's size per file and operator")
+    parser.add_argument("--pool", action="store_true", help="list every mutant of the pool (file:line:column)")
     args = parser.parse_args(argv)
     if args.pool:
         for m in pool():
