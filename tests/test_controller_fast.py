@@ -20,6 +20,7 @@ from controller.position import PositionController
 from controller.strategies import get_strategy
 from plant import fast5r, fivebar, get_preset
 from plant.parallel import inverse_dynamics_terms, mechanism_state
+from tests.support.poses import random_poses
 
 BENCH = get_preset("bench")
 #: Reaches the near-singular band at the top and bottom: cells with left-out corners.
@@ -30,19 +31,6 @@ NAMES = ("q1", "q2", "dq1", "dq2", "ddq1", "ddq2", "x_d", "y_d", "dx_d", "dy_d",
 def loaded(preset):
     """The preset with an end-effector mass, in-plane gravity and rotors: every term non-zero."""
     return replace(get_preset(preset), m0=0.031, gravity=(1.3, -9.81, 0.0)).with_rotors(1.469e-4, 1.887e-4)
-
-
-def random_poses(params, rng, n, band=fivebar.NEAR_SINGULAR_MARGIN):
-    """n (x, y) in the workspace with singularity margin >= band."""
-    poses = []
-    while len(poses) < n:
-        x, y = rng.uniform(-0.12, 0.12), rng.uniform(0.03, 0.29)
-        try:
-            if fivebar.singularity(params, x, y).margin >= band:
-                poses.append((x, y))
-        except fivebar.KinematicsError:
-            pass
-    return poses
 
 
 def rel_err(a, b):

@@ -62,30 +62,16 @@ def test_trajectory_refuses_negative_time_and_is_continuous_at_its_end(trajector
 
 @pytest.mark.parametrize("yaw", [True, False])
 def test_balance_kernel_is_the_observer_and_lqr_written_with_numpy(yaw):
-    # The matrix form of controller/balance.py's docstring, evaluated independently with numpy,
-    # on the real design; the route's smooth steps (7.27) in closed form.
+    # The BalanceController object against the numpy oracle (tests/test_kernels_wheeled.py),
+    # on the real design.
     from controller import fastbalance
     from controller.balance import BalanceController, BalanceSettings, design_balance, get_route
-    from tests.test_kernels_wheeled import _smooth
+    from tests.test_kernels_wheeled import numpy_balance
 
     design = design_balance(BalanceSettings(yaw=yaw, v_battery=2.0))
     controller = BalanceController(design, get_route("forward_turn"))
-    rng = np.random.default_rng(4)
-    x_hat, states = None, list(design.states)
-    for k in range(400):
-        t = 0.02 * k
-        enc_l, enc_r, gyro = rng.normal(0.0, 0.05, 3) + (0.3 * t, 0.35 * t, 0.0)
-        y = np.array([0.5 * (enc_l + enc_r), gyro] + ([0.04 / 0.14 * (enc_r - enc_l)] if yaw else []))
-        if x_hat is None:
-            x_hat = np.array([y[0], 0.0, y[2] if yaw else 0.0, 0.0, gyro, 0.0])[states]
-        x_hat = x_hat + design.Lo @ (y - design.C @ x_hat)
-        route = controller.route
-        (s, ds), (a, da) = _smooth(t, *route.drive), _smooth(t, *route.turning)
-        th, ph, dth, dph, x_d = s * route.distance / 0.04, a * route.turn, ds * route.distance / 0.04, \
-            da * route.turn, s * route.distance
-        u = np.clip(-design.K @ (x_hat - np.array([th, 0.0, ph, dth, 0.0, dph])[states]), -2.0, 2.0)
-        x_hat = design.Ad @ x_hat + design.Bd @ u
-        assert controller.sample(t, enc_l, enc_r, gyro) == pytest.approx(tuple(u), rel=1e-12, abs=1e-12)
+    for t, sensors, u, x_hat, x_d in numpy_balance(design, controller.route, yaw, 400):
+        assert controller.sample(t, *sensors) == pytest.approx(tuple(u), rel=1e-12, abs=1e-12)
         np.testing.assert_allclose(controller.x_hat, x_hat, rtol=1e-12, atol=1e-12)
         assert controller.io[fastbalance.O_REF] == pytest.approx(x_d, rel=1e-12, abs=1e-15)
     saved = controller.buf.copy()

@@ -26,6 +26,7 @@ from controller.position import PositionController
 from controller.strategies import ALL_STRATEGY_NAMES, get_strategy
 from plant import fast5r, fivebar, get_preset
 from plant.parallel import inverse_dynamics_terms, mechanism_state
+from tests.support.poses import random_poses
 
 BENCH = get_preset("bench")
 MECH = fivebar.build_mechanism(BENCH)
@@ -54,25 +55,13 @@ def joint_motion(x, y, dx, dy, ddx, ddy):
 
 
 # --- kinematics ----------------------------------------------------------------------------------
-def random_poses(rng, n, band=0.15):
-    poses = []
-    while len(poses) < n:
-        x, y = rng.uniform(-0.12, 0.12), rng.uniform(0.05, 0.28)
-        try:
-            if fivebar.singularity(BENCH, x, y).margin >= band:
-                poses.append((x, y))
-        except fivebar.KinematicsError:
-            pass
-    return poses
-
-
 def test_kinematics_close_the_general_algorithms_chains():
     """The kernel's inverse and direct kinematics give a pose where both DH chains of the general
     algorithm meet (residual 5.18 = 0) with the actuated angles asked for; its J, beta and thesis
     rates are the general algorithm's C and c (5.56, 5.69)."""
     kin = Kinematics(BENCH)
     rng = np.random.default_rng(5)
-    for x, y in random_poses(rng, 25):
+    for x, y in random_poses(BENCH, rng, 25, band=0.15, ys=(0.05, 0.28)):
         p11, p12, p21, p22 = kin.inverse(x, y)
         q7 = np.array([x, y, 0.0, p11, p12 - p11, math.pi - p21, p21 - p22])
         state = mechanism_state(MECH, q7, np.zeros(7))

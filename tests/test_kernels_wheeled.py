@@ -157,6 +157,28 @@ def _design(yaw: bool, seed: int = 5):
     return design, route
 
 
+def numpy_balance(design, route, yaw: bool, samples: int):
+    """controller/balance.py's docstring in matrix form, written with numpy: per sample (every
+    20 ms, noisy encoders and gyro), ``(t, (enc_l, enc_r, gyro), u, x_hat, x_d)`` with the
+    command u (saturated at 2 V) and the predicted estimate x_hat after it; the first sample
+    starts at rest at the encoders' theta - psi; the route's smooth steps (7.27) in closed form."""
+    rng = np.random.default_rng(4)
+    states, x_hat = list(design.states), None
+    for k in range(samples):
+        t = 0.02 * k
+        enc_l, enc_r, gyro = rng.normal(0.0, 0.05, 3) + (0.3 * t, 0.35 * t, 0.0)
+        y = np.array([0.5 * (enc_l + enc_r), gyro] + ([0.04 / 0.14 * (enc_r - enc_l)] if yaw else []))
+        if x_hat is None:
+            x_hat = np.array([y[0], 0.0, y[2] if yaw else 0.0, 0.0, gyro, 0.0])[states]
+        x_hat = x_hat + design.Lo @ (y - design.C @ x_hat)
+        (s, ds), (a, da) = _smooth(t, *route.drive), _smooth(t, *route.turning)
+        reference = np.array([s * route.distance / 0.04, 0.0, a * route.turn, ds * route.distance / 0.04, 0.0,
+                              da * route.turn])[states]
+        u = np.clip(-design.K @ (x_hat - reference), -2.0, 2.0)
+        x_hat = design.Ad @ x_hat + design.Bd @ u
+        yield t, (enc_l, enc_r, gyro), u, x_hat, s * route.distance
+
+
 def _buffer(yaw: bool = True) -> np.ndarray:
     from controller.trajectories import SMOOTHSTEP_COEFFICIENTS, SMOOTHSTEP_SLOPE_COEFFICIENTS
 
@@ -170,21 +192,9 @@ def test_the_balance_sample_is_the_observer_and_lqr_written_with_numpy(yaw):
     predict; the first sample starts at rest at the encoders' theta - psi."""
     design, route = _design(yaw)
     buf, x, refusal = _buffer(yaw), np.zeros(fastbalance.IO_SIZE), kernels.Refusal()
-    rng = np.random.default_rng(4)
-    states, x_hat = list(design.states), None
-    for k in range(450):
-        t = 0.02 * k
-        enc_l, enc_r, gyro = rng.normal(0.0, 0.05, 3) + (0.3 * t, 0.35 * t, 0.0)
-        y = np.array([0.5 * (enc_l + enc_r), gyro] + ([0.04 / 0.14 * (enc_r - enc_l)] if yaw else []))
-        if x_hat is None:
-            x_hat = np.array([y[0], 0.0, y[2] if yaw else 0.0, 0.0, gyro, 0.0])[states]
-        x_hat = x_hat + design.Lo @ (y - design.C @ x_hat)
-        s, ds = _smooth(t, *route.drive)
-        a, da = _smooth(t, *route.turning)
-        reference = np.array([s / 0.04, 0.0, a * route.turn, ds / 0.04, 0.0, da * route.turn])[states]
-        u = np.clip(-design.K @ (x_hat - reference), -2.0, 2.0)
-        x_hat = design.Ad @ x_hat + design.Bd @ u
-        x[:3] = enc_l, enc_r, gyro
+    states = list(design.states)
+    for t, sensors, u, x_hat, x_d in numpy_balance(design, route, yaw, 450):
+        x[:3] = sensors
         assert fastbalance.sample(buf, x, t, 1e6, refusal) == fastbalance.OK
         out = dict(zip(fastbalance.OUTPUTS, x[3:]))
         np.testing.assert_allclose([out["v_l"], out["v_r"], out["tau_l"], out["tau_r"]], [*u, *(0.35 * u)],
@@ -192,7 +202,7 @@ def test_the_balance_sample_is_the_observer_and_lqr_written_with_numpy(yaw):
         full = np.zeros(6)
         full[states] = x_hat
         np.testing.assert_allclose(x[fastbalance.O_HAT:], full, rtol=1e-10, atol=1e-11)
-        assert out["x_d"] == pytest.approx(s, rel=1e-12, abs=1e-15) and out["y_d"] == 0.0
+        assert out["x_d"] == pytest.approx(x_d, rel=1e-12, abs=1e-15) and out["y_d"] == 0.0
     assert np.any(np.abs(u) == 2.0), "the run should reach the saturation"
 
 
