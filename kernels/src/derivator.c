@@ -71,15 +71,30 @@ int pc_derivator_reset(const pc_derivator_context *c, const double *q0, pc_refus
     return PC_OK;
 }
 
-/* Row `row` of the step matrix times [state_ch; q_ch], in index order; not started, the state
- * is the rest state at q_ch. */
-static double product(const double *matrix, const double *rest, const double *state, long n, long m, long row,
-                      long ch, double q, int started)
+/* Entry j of channel ch's state: the state, or not started the rest state at q_ch. */
+static inline double entry(const double *rest, const double *state, long m, long j, long ch, const double *q,
+                           int started)
+{
+    return started ? state[j * m + ch] : rest[j] * q[ch];
+}
+
+/* Row `row` of the step matrix times [state_ch; q_ch] for every channel into out[m], each sum in
+ * index order (numpy's BLAS may differ in the last bit), two channels at a time: the two sums
+ * are independent, so they run side by side instead of waiting on each other's additions. */
+static void row_times(const double *matrix, const double *rest, const double *state, long n, long m, long row,
+                      const double *q, int started, double *out)
 {
     const double *w = matrix + row * (n + 1);
-    double sum = 0.0;
-    for (long j = 0; j < n; ++j) sum += w[j] * (started ? state[j * m + ch] : rest[j] * q);
-    return sum + w[n] * q;
+    for (long ch = 0; ch < m; ch += 2) {
+        const long other = ch + 1 < m ? ch + 1 : ch;   /* an odd last channel pairs with itself */
+        double sum0 = 0.0, sum1 = 0.0;
+        for (long j = 0; j < n; ++j) {
+            sum0 += w[j] * entry(rest, state, m, j, ch, q, started);
+            sum1 += w[j] * entry(rest, state, m, j, other, q, started);
+        }
+        out[ch] = sum0 + w[n] * q[ch];
+        out[other] = sum1 + w[n] * q[other];
+    }
 }
 
 int pc_derivator_step(const pc_derivator_context *c, const double *q, double limit, double *out, pc_refusal *r)
@@ -94,13 +109,11 @@ int pc_derivator_step(const pc_derivator_context *c, const double *q, double lim
     double *state = d->data + (2 + n) * (n + 1) + n;
     const int started = d->started != 0.0;
     for (long row = 0; row < 2; ++row)           /* the estimates: rows C and D */
-        for (long ch = 0; ch < m; ++ch)
-            out[row * m + ch] = product(matrix, rest, state, n, m, row, ch, q[ch], started);
+        row_times(matrix, rest, state, n, m, row, q, started, out + row * m);
     for (long k = 0; k < 2 * m; ++k)
         if (!isfinite(out[k])) return pc_refuse(r, PC_DERIVATOR_NONFINITE_OUTPUT, (int)k, out[k]);
     for (long j = 0; j < n; ++j)                  /* the next state: rows A and B, kept apart first */
-        for (long ch = 0; ch < m; ++ch)
-            c->scratch[j * m + ch] = product(matrix, rest, state, n, m, 2 + j, ch, q[ch], started);
+        row_times(matrix, rest, state, n, m, 2 + j, q, started, c->scratch + j * m);
     for (long k = 0; k < n * m; ++k) state[k] = c->scratch[k];
     for (long ch = 0; ch < m; ++ch) state[n * m + ch] = q[ch];
     d->started = 1.0;
