@@ -208,14 +208,24 @@ void pc_fivebar_advance(const pc_fivebar_held *held, double *z, double dt, int s
     pc_rk4(pc_fivebar_actuated_derivative, held, z, N_Y + held->n_motors, dt, substeps, work);
 }
 
+/* Chain k's tip (E_k applied) at joint angles (a, b): the tip rows of pc_fivebar_chain_terms
+ * alone (the same expressions, so the same bits), for the residual. */
+static void chain_tip(const pc_fivebar_params *p, int k, double a, double b, double tip[2])
+{
+    const pc_fivebar_chain *c = &p->chain[k];
+    const double c1 = cos(a), s1 = sin(a), c12 = cos(a + b), s12 = sin(a + b);
+    tip[0] = chain_sign(k) * (c->l1 * c1 + c->l2 * c12);
+    tip[1] = c->l1 * s1 + c->l2 * s12;
+}
+
 /* The position constraint residual q̄ (5.18, 7.7): 6 entries. */
 void pc_fivebar_residual(const pc_fivebar_params *p, const double *y, double *out)
 {
-    pc_fivebar_terms t;
+    double tip[2];
     for (int k = 0; k < 2; ++k) {
-        terms_at(p, k, y, 0, &t);
-        out[3 * k] = y[0] - chain_base(p, k) - t.tip[0];
-        out[3 * k + 1] = y[1] - t.tip[1];
+        chain_tip(p, k, y[3 + 2 * k], y[4 + 2 * k], tip);
+        out[3 * k] = y[0] - chain_base(p, k) - tip[0];
+        out[3 * k + 1] = y[1] - tip[1];
         out[3 * k + 2] = y[2];
     }
 }

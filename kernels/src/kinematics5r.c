@@ -36,11 +36,23 @@ double pc_5r_margin(const double angles[4])
     return fmin(fmin(serial1, serial2), parallel);
 }
 
-int pc_5r_forward(const pc_5r_geometry *g, double q1, double q2, double *x, double *y, double *distance)
+/* cos and sin of the two actuated angles, computed once for the forward kinematics, the
+ * Jacobians and the bias of one task state. */
+typedef struct {
+    double c1, s1, c2, s2;
+} actuated_trig;
+
+static actuated_trig trig_of(double q1, double q2)
+{
+    const actuated_trig t = {cos(q1), sin(q1), cos(q2), sin(q2)};
+    return t;
+}
+
+static int forward(const pc_5r_geometry *g, const actuated_trig *t, double *x, double *y, double *distance)
 {
     /* Elbows A1, A2 (eq. 7-8); the tip is where circles of radii l12, l22 about them meet. */
-    const double a1x = g->l0 + g->l11 * cos(q1), a1y = g->l11 * sin(q1);
-    const double a2x = -g->l0 + g->l21 * cos(q2), a2y = g->l21 * sin(q2);
+    const double a1x = g->l0 + g->l11 * t->c1, a1y = g->l11 * t->s1;
+    const double a2x = -g->l0 + g->l21 * t->c2, a2y = g->l21 * t->s2;
     const double dx = a1x - a2x, dy = a1y - a2y;
     const double dist2 = dx * dx + dy * dy;
     const double dist = sqrt(dist2);
@@ -57,10 +69,16 @@ int pc_5r_forward(const pc_5r_geometry *g, double q1, double q2, double *x, doub
     return PC_5R_OK;
 }
 
-void pc_5r_jacobians(const pc_5r_geometry *g, double x, double y, double q1, double q2, double jx[4],
-                     double jt[2])
+int pc_5r_forward(const pc_5r_geometry *g, double q1, double q2, double *x, double *y, double *distance)
 {
-    const double c1 = cos(q1), s1 = sin(q1), c2 = cos(q2), s2 = sin(q2);
+    const actuated_trig t = trig_of(q1, q2);
+    return forward(g, &t, x, y, distance);
+}
+
+static void jacobians(const pc_5r_geometry *g, double x, double y, const actuated_trig *t, double jx[4],
+                      double jt[2])
+{
+    const double c1 = t->c1, s1 = t->s1, c2 = t->c2, s2 = t->s2;
     jx[0] = x - g->l0 - g->l11 * c1;                    /* (eq. 16: l1 where l2 is printed) */
     jx[1] = y - g->l11 * s1;
     jx[2] = x + g->l0 - g->l21 * c2;
@@ -69,10 +87,17 @@ void pc_5r_jacobians(const pc_5r_geometry *g, double x, double y, double q1, dou
     jt[1] = g->l21 * ((x + g->l0) * s2 - y * c2);
 }
 
-void pc_5r_bias_rhs(const pc_5r_geometry *g, double x, double y, double q1, double q2, double dx, double dy,
-                    double dq1, double dq2, double rhs[2])
+void pc_5r_jacobians(const pc_5r_geometry *g, double x, double y, double q1, double q2, double jx[4],
+                     double jt[2])
 {
-    const double c1 = cos(q1), s1 = sin(q1), c2 = cos(q2), s2 = sin(q2);
+    const actuated_trig t = trig_of(q1, q2);
+    jacobians(g, x, y, &t, jx, jt);
+}
+
+static void bias_rhs(const pc_5r_geometry *g, double x, double y, const actuated_trig *t, double dx, double dy,
+                     double dq1, double dq2, double rhs[2])
+{
+    const double c1 = t->c1, s1 = t->s1, c2 = t->c2, s2 = t->s2;
     const double da1x = -g->l11 * dq1 * s1, da1y = g->l11 * dq1 * c1;     /* elbow velocities */
     const double da2x = -g->l21 * dq2 * s2, da2y = g->l21 * dq2 * c2;
     double r1 = (dx - da1x) * dx + (dy - da1y) * dy;                      /* dJ_X dx */
@@ -83,12 +108,20 @@ void pc_5r_bias_rhs(const pc_5r_geometry *g, double x, double y, double q1, doub
     rhs[1] = r2;
 }
 
+void pc_5r_bias_rhs(const pc_5r_geometry *g, double x, double y, double q1, double q2, double dx, double dy,
+                    double dq1, double dq2, double rhs[2])
+{
+    const actuated_trig t = trig_of(q1, q2);
+    bias_rhs(g, x, y, &t, dx, dy, dq1, dq2, rhs);
+}
+
 int pc_5r_task_state(const pc_5r_geometry *g, double q1, double q2, double dq1, double dq2, double ddq1,
                      double ddq2, pc_5r_task *t)
 {
-    int rc = pc_5r_forward(g, q1, q2, &t->x, &t->y, &t->distance);
+    const actuated_trig trig = trig_of(q1, q2);
+    int rc = forward(g, &trig, &t->x, &t->y, &t->distance);
     if (rc != PC_5R_OK) return rc;
-    pc_5r_jacobians(g, t->x, t->y, q1, q2, t->jx, t->jt);
+    jacobians(g, t->x, t->y, &trig, t->jx, t->jt);
     const double a = t->jx[0], b = t->jx[1], c = t->jx[2], d = t->jx[3];
     const double det = a * d - b * c;
     t->det = det;
@@ -100,7 +133,7 @@ int pc_5r_task_state(const pc_5r_geometry *g, double q1, double q2, double dq1, 
     t->dx = t->J[0] * dq1 + t->J[1] * dq2;
     t->dy = t->J[2] * dq1 + t->J[3] * dq2;
     double r[2];
-    pc_5r_bias_rhs(g, t->x, t->y, q1, q2, t->dx, t->dy, dq1, dq2, r);
+    bias_rhs(g, t->x, t->y, &trig, t->dx, t->dy, dq1, dq2, r);
     t->beta[0] = -(d * r[0] - b * r[1]) / det;
     t->beta[1] = -(-c * r[0] + a * r[1]) / det;
     t->ddx = t->J[0] * ddq1 + t->J[1] * ddq2 + t->beta[0];
@@ -112,11 +145,12 @@ int pc_5r_joint_reference(const pc_5r_geometry *g, double x, double y, double dx
                           double ddy, double p11, double p21, double joint[6])
 {
     double jx[4], jt[2], r[2];
-    pc_5r_jacobians(g, x, y, p11, p21, jx, jt);
+    const actuated_trig trig = trig_of(p11, p21);
+    jacobians(g, x, y, &trig, jx, jt);
     if (jt[0] == 0.0 || jt[1] == 0.0) return PC_5R_SINGULAR;
     const double dq1 = -(jx[0] * dx + jx[1] * dy) / jt[0];
     const double dq2 = -(jx[2] * dx + jx[3] * dy) / jt[1];
-    pc_5r_bias_rhs(g, x, y, p11, p21, dx, dy, dq1, dq2, r);
+    bias_rhs(g, x, y, &trig, dx, dy, dq1, dq2, r);
     joint[0] = p11;
     joint[1] = p21;
     joint[2] = dq1;
