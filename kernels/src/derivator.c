@@ -78,22 +78,29 @@ static inline double entry(const double *rest, const double *state, long m, long
     return started ? state[j * m + ch] : rest[j] * q[ch];
 }
 
-/* Row `row` of the step matrix times [state_ch; q_ch] for every channel into out[m], each sum in
- * index order (numpy's BLAS may differ in the last bit), two channels at a time: the two sums
- * are independent, so they run side by side instead of waiting on each other's additions. */
-static void row_times(const double *matrix, const double *rest, const double *state, long n, long m, long row,
-                      const double *q, int started, double *out)
+/* Rows `row` and `row2` of the step matrix times [state_ch; q_ch] for every channel into out[m]
+ * and out2[m], each sum in index order (numpy's BLAS may differ in the last bit).  Two rows and
+ * two channels at a time: the four sums are independent, so they run side by side instead of
+ * each waiting on its own additions.  An odd last row or channel pairs with itself. */
+static void rows_times(const double *matrix, const double *rest, const double *state, long n, long m, long row,
+                       long row2, const double *q, int started, double *out, double *out2)
 {
-    const double *w = matrix + row * (n + 1);
+    const double *w = matrix + row * (n + 1), *w2 = matrix + row2 * (n + 1);
     for (long ch = 0; ch < m; ch += 2) {
-        const long other = ch + 1 < m ? ch + 1 : ch;   /* an odd last channel pairs with itself */
-        double sum0 = 0.0, sum1 = 0.0;
+        const long other = ch + 1 < m ? ch + 1 : ch;
+        double sum0 = 0.0, sum1 = 0.0, sum2 = 0.0, sum3 = 0.0;
         for (long j = 0; j < n; ++j) {
-            sum0 += w[j] * entry(rest, state, m, j, ch, q, started);
-            sum1 += w[j] * entry(rest, state, m, j, other, q, started);
+            const double x0 = entry(rest, state, m, j, ch, q, started);
+            const double x1 = entry(rest, state, m, j, other, q, started);
+            sum0 += w[j] * x0;
+            sum1 += w[j] * x1;
+            sum2 += w2[j] * x0;
+            sum3 += w2[j] * x1;
         }
         out[ch] = sum0 + w[n] * q[ch];
         out[other] = sum1 + w[n] * q[other];
+        out2[ch] = sum2 + w2[n] * q[ch];
+        out2[other] = sum3 + w2[n] * q[other];
     }
 }
 
@@ -108,12 +115,13 @@ int pc_derivator_step(const pc_derivator_context *c, const double *q, double lim
     const double *matrix = d->data, *rest = d->data + (2 + n) * (n + 1);
     double *state = d->data + (2 + n) * (n + 1) + n;
     const int started = d->started != 0.0;
-    for (long row = 0; row < 2; ++row)           /* the estimates: rows C and D */
-        row_times(matrix, rest, state, n, m, row, q, started, out + row * m);
+    rows_times(matrix, rest, state, n, m, 0, 1, q, started, out, out + m);   /* the estimates: rows C, D */
     for (long k = 0; k < 2 * m; ++k)
         if (!isfinite(out[k])) return pc_refuse(r, PC_DERIVATOR_NONFINITE_OUTPUT, (int)k, out[k]);
-    for (long j = 0; j < n; ++j)                  /* the next state: rows A and B, kept apart first */
-        row_times(matrix, rest, state, n, m, 2 + j, q, started, c->scratch + j * m);
+    for (long j = 0; j < n; j += 2) {             /* the next state: rows A and B, kept apart first */
+        const long j2 = j + 1 < n ? j + 1 : j;
+        rows_times(matrix, rest, state, n, m, 2 + j, 2 + j2, q, started, c->scratch + j * m, c->scratch + j2 * m);
+    }
     for (long k = 0; k < n * m; ++k) state[k] = c->scratch[k];
     for (long ch = 0; ch < m; ++ch) state[n * m + ch] = q[ch];
     d->started = 1.0;
