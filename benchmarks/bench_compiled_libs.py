@@ -6,9 +6,10 @@
 Each round runs, for every library in turn (so load from elsewhere hits them alike), a fresh
 process with ``$PARCOSIM_KERNELS_LIB`` set to it that
 
-* runs ``--scene`` (default bench_circle_TCMDx) with ``simulate(system, mode="compiled")`` and
-  times its stepping (the C loop, ``Result.extra["cpu_s"]``: CPU time of the thread, and
-  ``wall_s``), per communication step;
+* runs ``--scene`` (default bench_circle_TCMDx) :data:`RUNS` times with
+  ``simulate(system, mode="compiled")`` and times the stepping of the run of least CPU time
+  (the C loop, ``Result.extra["cpu_s"]``: CPU time of the thread, and ``wall_s``), per
+  communication step;
 * times each instance's C I/O step alone in the C loop (``bench_components.kernel_us``: 500
   calls from the state reached at the end of the run, its last inputs held, best of 5), in ns;
 * checks that the run's recorded rows are the same (bit for bit) for every library, and
@@ -29,6 +30,8 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+#: Runs of the scene per process; its figure is the run of least CPU time.
+RUNS = 3
 
 
 def child(scene: str, stop_time: float | None) -> dict:
@@ -50,7 +53,8 @@ def child(scene: str, stop_time: float | None) -> dict:
         the_scene = replace(the_scene, system=replace(the_scene.system, stop_time=stop_time))
     system = the_scene.system
     simulate(replace(system, stop_time=min(system.stop_time, 0.1)), mode="compiled")   # warm-up
-    result = simulate(system, mode="compiled")
+    runs = [simulate(system, mode="compiled") for _ in range(RUNS)]
+    result = min(runs, key=lambda r: r.extra["cpu_s"])
     if result.error or result.extra.get("fallback"):
         raise RuntimeError(f"compiled run: {result.error or result.extra.get('fallback')}")
     steps = system.steps
