@@ -18,6 +18,10 @@ process with ``$PARCOSIM_KERNELS_LIB`` set to it that
 The Python side (the adapters, the plan) is this checkout's for every library, so the
 libraries must share the structs' layouts.  Printed: the median over the rounds of each
 figure, and the ratios to the first library.
+
+``--digests`` instead runs every scene of ``parcosim list`` compiled once with each library
+and prints the scenes whose recorded rows differ (SHA-256 of the result columns): a change
+meant to leave every result alone (flags, reordered loops) must list none.
 """
 from __future__ import annotations
 
@@ -36,13 +40,11 @@ RUNS = 3
 
 def child(scene: str, stop_time: float | None) -> dict:
     """One measurement in this process (the library is ``$PARCOSIM_KERNELS_LIB``)."""
-    import hashlib
     from dataclasses import replace
 
     sys.path.insert(0, str(ROOT))
     sys.path.insert(0, str(ROOT / "benchmarks"))
     import bench_components
-    import numpy as np
     from fmus.master import simulate
     from scenarios.metrics import scene_metrics
     from scenarios.run import result_columns
@@ -61,19 +63,63 @@ def child(scene: str, stop_time: float | None) -> dict:
     plan = bench_components.compiled_plans(system)
     kernel_ns = {a.name: 1e3 * bench_components.kernel_us(plan, n, 5) for n, a in enumerate(plan.adapters)}
     columns = result_columns(the_scene, result)
-    digest = hashlib.sha256(b"".join(np.ascontiguousarray(columns[k]).tobytes() for k in sorted(columns)))
     e_ef = scene_metrics(the_scene, columns, result.wall_s, result.completed)["e_ef_mm"]
     return {"cpu_ns_per_step": 1e9 * result.extra["cpu_s"] / steps, "wall_ns_per_step": 1e9 * result.wall_s / steps,
-            "kernel_ns": kernel_ns, "rows_sha256": digest.hexdigest()[:16], "e_ef_mm": e_ef, "step": system.step}
+            "kernel_ns": kernel_ns, "rows_sha256": _digest(the_scene, result), "e_ef_mm": e_ef, "step": system.step}
+
+
+def _digest(the_scene, result) -> str:
+    import hashlib
+
+    import numpy as np
+    from scenarios.run import result_columns
+
+    columns = result_columns(the_scene, result)
+    return hashlib.sha256(b"".join(np.ascontiguousarray(columns[k]).tobytes() for k in sorted(columns))).hexdigest()[:16]
+
+
+def digest_child() -> dict:
+    """Scene -> digest of its compiled run's rows (or the error), every scene, this process's library."""
+    import warnings
+
+    sys.path.insert(0, str(ROOT))
+    from fmus.master import simulate
+    from scenarios.scenes import get_scene, scene_names
+
+    warnings.simplefilter("ignore")   # fall-back warnings: the mode that ran is in the digest's line
+    out = {}
+    for name in scene_names():
+        scene = get_scene(name)
+        try:
+            result = simulate(scene.system, mode="compiled")
+            out[name] = f"{_digest(scene, result)} {result.mode}" + (f" error: {result.error}" if result.error else "")
+        except Exception as exc:  # noqa: BLE001 - a scene that cannot run is a line of the comparison
+            out[name] = f"{type(exc).__name__}: {exc}"
+    return out
+
+
+def _child_json(path: str, flag: str, *extra) -> dict:
+    env = dict(os.environ, PARCOSIM_KERNELS_LIB=str(Path(path).resolve()))
+    out = subprocess.run([sys.executable, __file__, flag, *extra], env=env, cwd=ROOT, check=True,
+                         capture_output=True, text=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def compare_digests(libs: dict) -> int:
+    """Print the scenes whose compiled rows differ between the libraries; 1 if any does."""
+    digests = {label: _child_json(path, "--digest-child") for label, path in libs.items()}
+    first, *others = digests
+    differ = [name for name in digests[first] if any(digests[o].get(name) != digests[first][name] for o in others)]
+    modes = sorted({line.split()[1] for line in digests[first].values() if len(line.split()) > 1})
+    print(f"{len(digests[first])} scenes compiled ({', '.join(modes)}), {len(differ)} with different rows")
+    for name in differ:
+        print(f"  {name}: " + "; ".join(f"{label} {d[name]}" for label, d in digests.items()))
+    return 1 if differ else 0
 
 
 def measure_once(path: str, scene: str, stop_time) -> dict:
-    env = dict(os.environ, PARCOSIM_KERNELS_LIB=str(Path(path).resolve()))
-    args = [sys.executable, __file__, "--child", "--scene", scene]
-    if stop_time is not None:
-        args += ["--stop-time", str(stop_time)]
-    out = subprocess.run(args, env=env, cwd=ROOT, check=True, capture_output=True, text=True).stdout
-    return json.loads(out.strip().splitlines()[-1])
+    extra = ["--scene", scene] + (["--stop-time", str(stop_time)] if stop_time is not None else [])
+    return _child_json(path, "--child", *extra)
 
 
 def main(argv=None) -> int:
@@ -83,14 +129,21 @@ def main(argv=None) -> int:
     parser.add_argument("--scene", default="bench_circle_TCMDx")
     parser.add_argument("--stop-time", type=float, default=None, help="seconds of the scene (default: all)")
     parser.add_argument("--rounds", type=int, default=5)
+    parser.add_argument("--digests", action="store_true", help="compare every scene's compiled rows instead")
     parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
+    parser.add_argument("--digest-child", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.child:
         print(json.dumps(child(args.scene, args.stop_time)))
         return 0
+    if args.digest_child:
+        print(json.dumps(digest_child()))
+        return 0
     if len(args.lib) < 1 or any("=" not in s for s in args.lib):
         parser.error("give --lib LABEL=PATH at least once")
     libs = dict(s.split("=", 1) for s in args.lib)
+    if args.digests:
+        return compare_digests(libs)
     runs = {label: [] for label in libs}
     for _ in range(args.rounds):
         for label, path in libs.items():
