@@ -149,6 +149,22 @@ def test_the_step_changes_only_at_a_period_start(model):
     assert "h = 0.0005 s" in slave.error and "T = 0.001 s" in slave.error
 
 
+def test_the_actuated_plant_samples_its_drives_on_its_phase():
+    """ActuatedFiveBarPlant's two current loops share its sample_phase (the drive kernel counts)."""
+    parameters, inputs = GOOD["ActuatedFiveBarPlant"]
+    slave = slave_class("ActuatedFiveBarPlant")(instance_name="plant")
+    set_variables(slave, {**parameters, "sample_phase": 3})
+    set_variables(slave, inputs, initialise=False)
+    voltages = []
+    for k in range(8):
+        assert slave.do_step(k * T / 4, T / 4), slave.error
+        voltages.append(slave.v1)
+    assert voltages[:3] == [0.0] * 3 and voltages[3] != 0.0 and voltages[3:7] == [voltages[3]] * 4
+    late = slave_class("ActuatedFiveBarPlant")(instance_name="plant")
+    set_variables(late, {**parameters, "sample_phase": 4})
+    assert not late.do_step(0.0, T / 4) and "sample_phase = 4" in late.error
+
+
 # --- the drive: only the voltage is sampled ----------------------------------------------------
 
 def new_drive(parameters=None):
@@ -249,3 +265,111 @@ def test_accumulated_time_does_not_move_the_sample_instants(model):
         last = value
     assert abs(t - steps * h) > 0.0                             # the sum did drift from k h
     assert changed == list(range(phase, steps, n))
+
+
+# --- the built FMUs in the three tools -------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def sampled_fmus(tmp_path_factory):
+    from fmus.build import build_fmu
+
+    out = tmp_path_factory.mktemp("sampled_fmus")
+    return {model: build_fmu(model, out) for model in ("Derivator", "DCMotorDrive", "Trajectory")}
+
+
+@pytest.mark.parametrize("model", ["Derivator", "DCMotorDrive"])
+def test_the_fmus_declare_their_period_and_fmpy_steps_by_it(model, sampled_fmus):
+    """DefaultExperiment stepSize T, no variable steps: fmpy's simulate_fmu without a step
+    size runs its default second at T (with a longer stop time it doubles its step: the
+    docs tell users to pass output_interval)."""
+    from fmpy import read_model_description, simulate_fmu
+
+    md = read_model_description(str(sampled_fmus[model]))
+    assert float(md.defaultExperiment.stepSize) == T
+    assert md.coSimulation.canHandleVariableCommunicationStepSize is False
+    phase = next(v for v in md.modelVariables if v.name == "sample_phase")
+    assert (phase.type, phase.causality, phase.variability, phase.start) == ("Integer", "parameter", "fixed", "0")
+    result = simulate_fmu(str(sampled_fmus[model]))
+    np.testing.assert_allclose(np.diff(result["time"]), T, rtol=1e-9)
+    assert result["time"][-1] == pytest.approx(1.0)
+
+
+def test_the_derivator_fmu_in_fmpy_samples_on_its_phase(sampled_fmus):
+    """Through fmpy, h = T / 4, phase 1, inputs delayed one step: the h = T run (in process)
+    repeated four times, one step later."""
+    from tests.fmi_support import FmuInstance
+
+    n, p, periods = 4, 1, 6
+    _, inputs, outputs = SAMPLED["Derivator"]
+    fmu = FmuInstance(sampled_fmus["Derivator"], {"sample_phase": p})
+    rows = []
+    for k in range(periods * n):
+        m, j = divmod(max(k - p, 0), n)
+        fmu.step(T / n, **{name: input_value(base, amplitude, m, j, index)
+                           for index, (name, (base, amplitude)) in enumerate(inputs.items())})
+        rows.append([fmu.get(name) for name in outputs])
+    assert fmu.get("error") == ""
+    refused = FmuInstance(sampled_fmus["Derivator"], {"sample_phase": n})
+    assert "sample_phase = 4" in refused.refused_step(T / n, q1=0.1)
+    refused.close()
+    fmu.close()
+    np.testing.assert_array_equal(np.array(rows)[p:], np.repeat(run("Derivator", 1, periods), n, axis=0)[:-p])
+
+
+def _phase_changes(values) -> list:
+    return [k for k in range(1, len(values)) if values[k] != values[k - 1]]
+
+
+def test_libcosim_and_ecos_step_a_sub_stepped_derivator(sampled_fmus):
+    """A Trajectory feeding a Derivator (sample_phase 2) at a plain 0.25 ms step in libcosim
+    and in Ecos: the estimate changes on sub-step 2 of every period, no refusal."""
+    from fmpy import read_model_description
+
+    from fmus.libcosim_runner import libcosim_available
+    from fmus.ssp_run import ecos_available
+
+    refs = {m: {v.name: v.valueReference for v in read_model_description(str(sampled_fmus[m])).modelVariables}
+            for m in ("Derivator", "Trajectory")}
+    h, steps, expected = T / 4, 24, list(range(2, 24, 4))
+    ran = 0
+    if libcosim_available() is None:
+        from libcosimpy.CosimExecution import CosimExecution
+        from libcosimpy.CosimObserver import CosimObserver
+        from libcosimpy.CosimSlave import CosimLocalSlave
+
+        execution = CosimExecution.from_step_size(step_size=int(round(h * 1e9)))
+        traj = execution.add_local_slave(CosimLocalSlave(str(sampled_fmus["Trajectory"]), "traj"))
+        deriv = execution.add_local_slave(CosimLocalSlave(str(sampled_fmus["Derivator"]), "deriv"))
+        execution.connect_real_variables(traj, refs["Trajectory"]["x_d"], deriv, refs["Derivator"]["q1"])
+        execution.integer_initial_value(deriv, refs["Derivator"]["sample_phase"], 2)
+        last = CosimObserver.create_last_value()
+        execution.add_observer(last)
+        values = []
+        for _ in range(steps):
+            assert execution.step()
+            values.append(last.last_real_values(deriv, [refs["Derivator"]["dq1"]])[0])
+        assert _phase_changes(values) == expected
+        assert last.last_string_values(deriv, [refs["Derivator"]["error"]]) == [b""]
+        ran += 1
+    if ecos_available() is None:
+        from ecospy import EcosSimulation, EcosSimulationStructure
+
+        structure = EcosSimulationStructure()
+        structure.add_model("traj", str(sampled_fmus["Trajectory"]))
+        structure.add_model("deriv", str(sampled_fmus["Derivator"]))
+        structure.make_real_connection("traj::x_d", "deriv::q1")
+        structure.add_parameter_set("init", {"deriv::sample_phase": 2})
+        sim = EcosSimulation(structure=structure, step_size=h)
+        try:
+            assert sim.init(0.0, "init")
+            values = []
+            for _ in range(steps):
+                sim.step(1)
+                values.append(sim.get_real("deriv::dq1"))
+            assert _phase_changes(values) == expected and sim.get_string("deriv::error") == ""
+        finally:
+            sim.terminate()
+            sim.free()
+        ran += 1
+    if not ran:
+        pytest.skip("neither libcosim nor Ecos loads")
