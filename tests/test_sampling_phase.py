@@ -316,6 +316,32 @@ def test_the_derivator_fmu_in_fmpy_samples_on_its_phase(sampled_fmus):
     np.testing.assert_array_equal(np.array(rows)[p:], np.repeat(run("Derivator", 1, periods), n, axis=0)[:-p])
 
 
+def test_the_drive_fmu_state_taken_mid_period_continues_exactly(sampled_fmus):
+    """fmi2GetFMUstate one sub-step into a period (fmpy), then the same steps twice."""
+    from tests.fmi_support import FmuInstance
+
+    fmu = FmuInstance(sampled_fmus["DCMotorDrive"], {"sample_phase": 2})
+    h = T / 4
+
+    def advance(k0, k1):
+        rows = []
+        for k in range(k0, k1):
+            fmu.time = k * h
+            fmu.step(h, i_ref=1.0 + 0.5 * math.sin(k), i_hat=fmu.get("i"), omega=3.0)
+            rows.append((fmu.get("v"), fmu.get("i"), fmu.get("tau")))
+        return rows
+
+    advance(0, 5)
+    state = fmu.fmu.getFMUstate()
+    first = advance(5, 16)
+    fmu.fmu.setFMUstate(state)
+    again = advance(5, 16)
+    fmu.fmu.freeFMUstate(state)
+    fmu.close()
+    assert again == first
+    assert [k for k in range(1, 11) if first[k][0] != first[k - 1][0]] == [1, 5, 9]   # sub-step 2 of 4
+
+
 def _phase_changes(values) -> list:
     return [k for k in range(1, len(values)) if values[k] != values[k - 1]]
 
