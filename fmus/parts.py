@@ -311,10 +311,6 @@ class CurrentLoopSteps:
         super().check_step_size(current_time, step_size)
         if self.mode != "current":
             return
-        n = sampling.substeps_of(self.T, step_size)
-        if n is None:
-            raise ValueError(self.step_size_message(current_time, step_size,
-                                                    f"does not divide the sample time T = {self.T!r} s"))
-        sampling.check_phase(self, current_time, step_size, n)
+        n = sampling.checked_substeps(self, current_time, step_size)
         for drive in self.current_loops():
             sampling.check_period_change(self, current_time, step_size, n, drive.substeps, drive.substep)

@@ -43,6 +43,17 @@ def substeps_of(T: float, h: float) -> int | None:
     return None
 
 
+def checked_substeps(slave, current_time: float, step_size: float) -> int:
+    """n = T / h of a step the sampled ``slave`` can take with its ``sample_phase``; a
+    ValueError naming h, T and t (and the phase) otherwise."""
+    n = substeps_of(slave.T, step_size)
+    if n is None:
+        raise ValueError(slave.step_size_message(current_time, step_size,
+                                                 f"does not divide the sample time T = {slave.T!r} s"))
+    check_phase(slave, current_time, step_size, n)
+    return n
+
+
 def check_phase(slave, current_time: float, step_size: float, n: int) -> None:
     """Raise ValueError unless ``slave.sample_phase`` is a whole number in [0, n)."""
     phase = getattr(slave, PHASE_PARAMETER)
@@ -105,11 +116,7 @@ class SampledSteps:
 
     def check_step_size(self, current_time, step_size):
         GuardedSlave.check_step_size(self, current_time, step_size)   # T itself is checked by setup
-        n = substeps_of(self.T, step_size)
-        if n is None:
-            raise ValueError(self.step_size_message(current_time, step_size,
-                                                    f"does not divide the sample time T = {self.T!r} s"))
-        check_phase(self, current_time, step_size, n)
+        n = checked_substeps(self, current_time, step_size)
         check_period_change(self, current_time, step_size, n, self._substeps, self._substep)
         self._substeps = n
 
