@@ -224,17 +224,16 @@ def test_the_drive_phase_shifts_its_sample_by_phase_steps():
 def test_a_state_restored_mid_period_continues_bit_for_bit(model):
     inst = InProcessInstance(model, "x")
     inst.initialize({"sample_phase": 2}, 0.0)
-    slave = inst.slave
     n, h = 4, T / 4
     name = {"Derivator": "q1", "CurrentObserver": "v", "DCMotorDrive": "i_ref"}[model]
     output = {"Derivator": "dq1", "CurrentObserver": "i_hat", "DCMotorDrive": "v"}[model]
 
-    def advance(k0, k1):
+    def advance(k0, k1, inst=inst):
         values = []
         for k in range(k0, k1):
-            setattr(slave, name, 0.3 + 0.1 * math.sin(k))
+            setattr(inst.slave, name, 0.3 + 0.1 * math.sin(k))
             inst.do_step(k * h, h)
-            values.append(getattr(slave, output))
+            values.append(getattr(inst.slave, output))
         return values
 
     advance(0, n + 1)                       # mid-period: sub-step 1 of the second period
@@ -243,6 +242,10 @@ def test_a_state_restored_mid_period_continues_bit_for_bit(model):
     inst.set_state(state)
     assert advance(n + 1, 4 * n) == first
     assert len(set(first)) > 2              # samples taken after the restore
+    fresh = InProcessInstance(model, "x")   # serialised, into another instance
+    fresh.initialize({"sample_phase": 2}, 0.0)
+    fresh.set_state(fresh.deserialize_state(inst.serialize_state(state)))
+    assert advance(n + 1, 4 * n, fresh) == first
 
 
 @pytest.mark.parametrize("model", ["CurrentObserver", "DCMotorDrive"])
