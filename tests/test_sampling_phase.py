@@ -273,11 +273,9 @@ def test_accumulated_time_does_not_move_the_sample_instants(model):
 # --- the built FMUs in the three tools -------------------------------------------------------
 
 @pytest.fixture(scope="module")
-def sampled_fmus(tmp_path_factory):
-    from fmus.build import build_fmu
-
-    out = tmp_path_factory.mktemp("sampled_fmus")
-    return {model: build_fmu(model, out) for model in ("Derivator", "DCMotorDrive", "Trajectory")}
+def sampled_fmus(built_fmus):
+    """The FMUs of ``parcosim build`` (the session's, built once into a temporary directory)."""
+    return built_fmus
 
 
 @pytest.mark.parametrize("model", ["Derivator", "DCMotorDrive"])
