@@ -54,6 +54,12 @@ class SystemSlave(GuardedSlave):
         self.core.initialize()
         self.publish()
 
+    def accepted_steps(self):
+        """Its system's communication step (a whole multiple of it with ``takes_multiples``):
+        its sampled components sample at the system's own steps, not at sub-steps of them."""
+        h = self.system.step
+        return f"a whole multiple of its system's step h = {h!r} s" if self.takes_multiples else f"its system's step h = {h!r} s"
+
     def check_step_size(self, current_time, step_size):
         """The base's rule, then the work limit (:mod:`fmus.budget`): the step's communication
         steps times its components' inner steps must fit one call, refused before any is taken."""
