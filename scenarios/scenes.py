@@ -29,7 +29,7 @@ from motor.drive import FRICTION_MODELS
 REFERENCE_SIGNALS = ("x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
 #: Time the bench scenes run on after the reference stops, for the steady-state error [s]:
 #: the slowest of the 16 bench scenes (bench_triangle_PDMDq) settles 1.9 s after the stop
-#: (docs/twin.md "Settled steady-state error"), and :data:`scenarios.metrics.SETTLE_HOLD`
+#: (docs/twin_method.md "Settled steady-state error"), and :data:`scenarios.metrics.SETTLE_HOLD`
 #: must follow.
 SETTLE_TIME = 3.0
 #: The final position (the settling band's centre) is the mean over this last part of the run [s].
