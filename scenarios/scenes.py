@@ -298,7 +298,7 @@ def bench(strategy: str, kind: str = "circle", model: str = "tabulated",
     return Scene(name, description, system, columns, window, trajectory.duration, strategy)
 
 
-#: Gravity of the vertical scenes: the mechanism's plane vertical, world y up (SYSTEM.md §2).
+#: Gravity of the vertical scenes: the mechanism's plane vertical, world y up (the brief ../shared/spec/SYSTEM.md §2).
 VERTICAL_GRAVITY = (0.0, -9.81, 0.0)
 #: Counter-masses of the balanced vertical scenes [kg] on each chain's proximal and distal
 #: link, placed by seed 001 (64): 0.4 kg 0.107 m (chain 1) / 0.098 m (chain 2) behind the
