@@ -112,7 +112,8 @@ def _parser() -> argparse.ArgumentParser:
                           "step; jacobi: every input is the last step's output, a step of delay per connection "
                           "(the bench circle's e_ef grows to about 40 mm; docs/master.md)")
     run.add_argument("--out", default=None, help="output directory (default: out/SCENE)")
-    run.add_argument("--fmu-dir", default=None, help="where the FMUs are (built when missing or stale)")
+    run.add_argument("--fmu-dir", default=None,
+                     help="where the FMUs of --mode fmu are, built when missing or stale (default: fmus/build/)")
     run.add_argument("--retry-substeps", type=_at_least(2, "retry_substeps"), default=None, metavar="N",
                      help="retry a refused step from the saved FMU states in N >= 2 sub-steps; saving every "
                           "state at every step makes the run much slower: use it after a refusal (docs/master.md)")
@@ -139,8 +140,10 @@ def _parser() -> argparse.ArgumentParser:
     sweep.add_argument("--seed", type=_at_least(0, "--seed"), default=0, metavar="S",
                        help="random seed (default: 0)")
     sweep.add_argument("--distribution", choices=("uniform", "normal"), default=None,
-                       help="uniform factor in [1-U, 1+U] (default) or normal, sigma U, truncated at 3 sigma")
-    sweep.add_argument("--perturb", default=None, metavar="FILE.toml", help="per-parameter uncertainties")
+                       help="uniform factor in [1-U, 1+U] or normal, sigma U, truncated at 3 sigma "
+                            "(default: the perturb file's, else uniform)")
+    sweep.add_argument("--perturb", default=None, metavar="FILE.toml",
+                       help="per-parameter uncertainties (docs/sweeps.md)")
     sweep.add_argument("--mode", choices=_modes(), default="inprocess",
                        help="how each sample runs, as `parcosim run --mode` (default: inprocess)")
     sweep.add_argument("--scheduler", default=None, metavar="ADDRESS",
@@ -148,13 +151,15 @@ def _parser() -> argparse.ArgumentParser:
     sweep.add_argument("--workers", type=_at_least(1, "--workers"), default=None, metavar="K",
                        help="local worker processes (default: one per core)")
     sweep.add_argument("--stop-time", type=float, default=None, metavar="S",
-                       help="end every run at S seconds (quick checks; unreached metric windows give NaN)")
+                       help="end every run at S seconds, for quick checks; unreached metric windows give NaN "
+                            "(default: the scene's end)")
     sweep.add_argument("--out", default=None, help="output directory (default: out/sweep_SCENE_U)")
     ssp = sub.add_parser("export-ssp", help="write a scene as an SSP 1.0 package for Jacobi masters "
                                             "(Ecos, libcosim, fmpy): control chain + plant")
     ssp.add_argument("scene", help="a scene name (see `parcosim list`)")
     ssp.add_argument("path", help="the .ssp file to write")
-    ssp.add_argument("--fmu-dir", default=None, help="where the FMUs are (built when missing or stale)")
+    ssp.add_argument("--fmu-dir", default=None,
+                     help="where the component FMUs are, built when missing or stale (default: fmus/build/)")
     ssp.add_argument("--drives-in-plant", type=_at_least(1, "--drives-in-plant"), default=None, metavar="N",
                      help="export the scene with its drives inside the plant, RK4 N steps per sample")
     ssp.add_argument("--per-component", action="store_true",

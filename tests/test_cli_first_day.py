@@ -110,8 +110,11 @@ def _actions(parser: argparse.ArgumentParser, prefix: str = "parcosim"):
 
 
 def test_every_option_and_command_has_help():
+    from motor.cli import _parser as identify_parser
+
     parser = _parser()
-    missing = [f"{where} {action.option_strings or action.dest}" for where, action in _actions(parser)
+    actions = [*_actions(parser), *_actions(identify_parser(), "parcosim identify-motor")]
+    missing = [f"{where} {action.option_strings or action.dest}" for where, action in actions
                if not (action.help and action.help.strip())]
     assert not missing, missing
     commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
