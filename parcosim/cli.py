@@ -35,7 +35,9 @@ rows recorded so far and metrics with ``"completed": false``, prints one line an
 from __future__ import annotations
 
 import argparse
+import contextlib
 import difflib
+import io
 import math
 import os
 import sys
@@ -310,7 +312,7 @@ def main(argv: list[str] | None = None) -> int:
     with warnings.catch_warnings():
         warnings.showwarning = _show_warning
         try:
-            status = _command(args)
+            status = _busy(args) if args.command in _BUSY and sys.stderr.isatty() else _command(args)
         except KeyboardInterrupt:
             print("parcosim: interrupted", file=sys.stderr)
             return EXIT_INTERRUPTED
@@ -319,15 +321,34 @@ def main(argv: list[str] | None = None) -> int:
     return status
 
 
+#: Commands that work for seconds to minutes with nothing to count: on a terminal they say so first.
+_BUSY = {"export-ssp": "building the FMUs and the package", "export-fmu": "building the FMU",
+         "build-plant": "building the FMU", "build": "building the FMUs", "workspace": "mapping the workspace",
+         "demo": "simulating and drawing"}
+
+
+def _busy(args) -> int:
+    """Run the command with a status line on stderr, replaced by its output when it ends."""
+    print(f"parcosim {args.command}: {_BUSY[args.command]} ...", end="", file=sys.stderr, flush=True)
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        status = _command(args)
+    print("\r\033[K", end="", file=sys.stderr, flush=True)
+    sys.stdout.write(out.getvalue())
+    return status
+
+
 def _refuse(exc: Exception) -> int:
     """Print ``exc`` as the one line of a refused command; its exit status."""
     text = " ".join(str(exc).split())
-    print(text if text.startswith("parcosim") else f"parcosim: error: {text}", file=sys.stderr)
+    clear = "\r\033[K" if sys.stderr.isatty() else ""      # over a progress line, if one is shown
+    print(clear + (text if text.startswith("parcosim") else f"parcosim: error: {text}"), file=sys.stderr)
     return EXIT_REFUSED
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
-    print(f"parcosim: warning: {message}", file=sys.stderr)
+    clear = "\r\033[K" if sys.stderr.isatty() else ""
+    print(f"{clear}parcosim: warning: {message}", file=sys.stderr)
 
 
 def _command(args) -> int:

@@ -178,3 +178,19 @@ def test_a_sweep_exits_1_only_when_every_sample_failed_and_writes_rows_by_sample
     assert ("every sample failed; the first: refused" in captured.err) == (status == 1)
     lines = (tmp_path / "sweep.csv").read_text().splitlines()
     assert [int(line.split(",")[0]) for line in lines[1:]] == [0, 1, 2, 3]
+
+
+def test_the_workspace_figure_holds_the_whole_workspace(tmp_path):
+    """Every point the 5R reaches in its working mode lies inside the drawn map, also below the
+    bases (the figure was cropped at y = -0.1 m, leaving out a quarter of the bench's workspace
+    and a branch of det J_X = 0)."""
+    from plant import fivebar, get_preset
+    from scenarios.workspace import plot_workspace
+
+    plot_workspace("bench", tmp_path, step=0.005)
+    x0, x1, y0, y1 = json.loads((tmp_path / "workspace.json").read_text())["map_extent"]
+    wide = fivebar.workspace_map(get_preset("bench"), step=0.005, extent=(-0.6, 0.6, -0.6, 0.6))
+    iy, ix = (wide.status != fivebar.WorkspaceMap.OUTSIDE).nonzero()
+    xs, ys = wide.x[ix], wide.y[iy]
+    assert len(xs) > 1000 and (ys < -0.1).mean() > 0.2         # a quarter of it lies below y = -0.1 m
+    assert xs.min() >= x0 and xs.max() <= x1 and ys.min() >= y0 and ys.max() <= y1
