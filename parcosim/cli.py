@@ -29,21 +29,23 @@ printed and nothing left behind (folders the command made are removed while empt
 arguments (a misspelled command or scene gets a suggestion), an output that cannot be written
 (checked before any work), a file that cannot be written (named).  A run that a component
 stops early writes what it recorded, prints the component's message and exits 1; so does a
-sweep whose every sample failed (one with some failures exits 0 and says how many).  SIGINT (Ctrl-C) during ``parcosim run`` writes the whole
-rows recorded so far and metrics with ``"completed": false``, prints one line and exits 130.
+sweep whose every sample failed (one with some failures exits 0 and says how many).  SIGINT
+(Ctrl-C) during ``parcosim run`` writes the whole rows recorded so far and metrics with
+``"completed": false``, prints one line and exits 130.
 """
 from __future__ import annotations
 
 import argparse
 import contextlib
-import difflib
 import io
 import math
-import os
 import sys
 import warnings
 import zipfile
 from pathlib import Path
+
+from .checks import (CommandError, Parser, at_least, check_output, first_missing, non_negative, remove_if_empty,
+                     suggestion)
 
 
 #: Exit status after SIGINT (128 + 2, as shells report it).
@@ -54,45 +56,8 @@ EXIT_REFUSED = 2
 DEFAULT_SCENE = "bench_circle_TCMDx"
 
 
-class CommandError(ValueError):
-    """A command refused before it did anything: printed as one line, exit status 2."""
-
-
-class _Parser(argparse.ArgumentParser):
-    """argparse's parser whose refusal is one line (no usage block): :class:`CommandError`."""
-
-    def error(self, message):
-        raise CommandError(f"{self.prog}: {message} (`{self.prog} --help` lists the options)")
-
-
-def _at_least(least: int, name: str):
-    """An argparse type: an integer >= ``least``, refused naming the option and the value."""
-    def check(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            value = None
-        if value is None or value < least:
-            raise argparse.ArgumentTypeError(f"{name} = {text} must be an integer >= {least}")
-        return value
-    return check
-
-
-def _non_negative(name: str):
-    """An argparse type: a finite float >= 0."""
-    def check(text: str) -> float:
-        try:
-            value = float(text)
-        except ValueError:
-            value = math.nan
-        if not (math.isfinite(value) and value >= 0.0):
-            raise argparse.ArgumentTypeError(f"{name} = {text} must be a finite number >= 0")
-        return value
-    return check
-
-
 def _parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="parcosim", description=f"Co-simulate the 5R robot's and the wheeled pendulum's scenes, "
+    parser = Parser(prog="parcosim", description=f"Co-simulate the 5R robot's and the wheeled pendulum's scenes, "
                      f"export them as FMUs and SSP packages. Bare `parcosim` runs `parcosim run {DEFAULT_SCENE}` "
                      f"(the bench circle; files in out/{DEFAULT_SCENE}/). Full reference: docs/index.md")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -116,10 +81,10 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--out", default=None, help="output directory (default: out/SCENE)")
     run.add_argument("--fmu-dir", default=None,
                      help="where the FMUs of --mode fmu are, built when missing or stale (default: fmus/build/)")
-    run.add_argument("--retry-substeps", type=_at_least(2, "retry_substeps"), default=None, metavar="N",
+    run.add_argument("--retry-substeps", type=at_least(2, "retry_substeps"), default=None, metavar="N",
                      help="retry a refused step from the saved FMU states in N >= 2 sub-steps; saving every "
                           "state at every step makes the run much slower: use it after a refusal (docs/master.md)")
-    run.add_argument("--drives-in-plant", type=_at_least(1, "--drives-in-plant"), default=None, metavar="N",
+    run.add_argument("--drives-in-plant", type=at_least(1, "--drives-in-plant"), default=None, metavar="N",
                      help="integrate the drives inside the plant (ActuatedFiveBarPlant), RK4 N steps per "
                           "sample; 8 is 2.2e4x more accurate than separate drives (docs/actuated.md)")
     _replace_option(run)
@@ -129,17 +94,17 @@ def _parser() -> argparse.ArgumentParser:
     report.add_argument("--out", default="out/report", help="output directory (default: out/report)")
     report.add_argument("--scheduler", default=None, metavar="ADDRESS",
                         help="run the scenes on this dask scheduler (default: a local cluster)")
-    report.add_argument("--workers", type=_at_least(1, "--workers"), default=None, metavar="K",
+    report.add_argument("--workers", type=at_least(1, "--workers"), default=None, metavar="K",
                         help="local worker processes (default: one per core)")
     sweep = sub.add_parser("sweep", help="Monte Carlo: N runs of a scene with its plant and drives perturbed "
                                          "(dask.distributed; docs/sweeps.md)")
     sweep.add_argument("scene", help="a scene name (see `parcosim list`)")
-    sweep.add_argument("--samples", type=_at_least(1, "--samples"), required=True, metavar="N",
+    sweep.add_argument("--samples", type=at_least(1, "--samples"), required=True, metavar="N",
                        help="number of samples")
-    sweep.add_argument("--uncertainty", type=_non_negative("--uncertainty"), required=True, metavar="U",
+    sweep.add_argument("--uncertainty", type=non_negative("--uncertainty"), required=True, metavar="U",
                        help="uncertainty: 0.2 = masses, inertias, motor constants, friction +-20 %%; "
                             "lengths U/100, encoder zero U x 10 mrad (docs/sweeps.md)")
-    sweep.add_argument("--seed", type=_at_least(0, "--seed"), default=0, metavar="S",
+    sweep.add_argument("--seed", type=at_least(0, "--seed"), default=0, metavar="S",
                        help="random seed (default: 0)")
     sweep.add_argument("--distribution", choices=("uniform", "normal"), default=None,
                        help="uniform factor in [1-U, 1+U] or normal, sigma U, truncated at 3 sigma "
@@ -150,7 +115,7 @@ def _parser() -> argparse.ArgumentParser:
                        help="how each sample runs, as `parcosim run --mode` (default: inprocess)")
     sweep.add_argument("--scheduler", default=None, metavar="ADDRESS",
                        help="an existing dask scheduler, e.g. tcp://host:8786 (default: a local cluster)")
-    sweep.add_argument("--workers", type=_at_least(1, "--workers"), default=None, metavar="K",
+    sweep.add_argument("--workers", type=at_least(1, "--workers"), default=None, metavar="K",
                        help="local worker processes (default: one per core)")
     sweep.add_argument("--stop-time", type=float, default=None, metavar="S",
                        help="end every run at S seconds, for quick checks; unreached metric windows give NaN "
@@ -162,7 +127,7 @@ def _parser() -> argparse.ArgumentParser:
     ssp.add_argument("path", help="the .ssp file to write")
     ssp.add_argument("--fmu-dir", default=None,
                      help="where the component FMUs are, built when missing or stale (default: fmus/build/)")
-    ssp.add_argument("--drives-in-plant", type=_at_least(1, "--drives-in-plant"), default=None, metavar="N",
+    ssp.add_argument("--drives-in-plant", type=at_least(1, "--drives-in-plant"), default=None, metavar="N",
                      help="export the scene with its drives inside the plant, RK4 N steps per sample")
     ssp.add_argument("--per-component", action="store_true",
                      help="one FMU instance per component (for masters that order components by their "
@@ -171,7 +136,7 @@ def _parser() -> argparse.ArgumentParser:
     fmu = sub.add_parser("export-fmu", help="write a scene's whole closed loop as one FMI 2.0 co-simulation FMU")
     fmu.add_argument("scene", help="a scene name (see `parcosim list`)")
     fmu.add_argument("path", help="the .fmu file to write")
-    fmu.add_argument("--drives-in-plant", type=_at_least(1, "--drives-in-plant"), default=None, metavar="N",
+    fmu.add_argument("--drives-in-plant", type=at_least(1, "--drives-in-plant"), default=None, metavar="N",
                      help="the scene with its drives inside the plant, RK4 N steps per sample")
     _replace_option(fmu)
     trade = sub.add_parser("trade", help="speed against accuracy: sweep the settings, table and Pareto plot")
@@ -198,12 +163,6 @@ _OUTPUTS = {"run": ("out", False), "sweep": ("out", False), "report": ("out", Fa
             "export-ssp": ("path", True), "export-fmu": ("path", True), "build-plant": ("path", True)}
 
 
-def suggestion(name: str, names) -> str:
-    """'; did you mean X?' for the closest of ``names`` to a misspelled ``name`` (difflib), or ''."""
-    close = difflib.get_close_matches(name, list(names), n=1, cutoff=0.6)
-    return f"; did you mean {close[0]!r}?" if close else ""
-
-
 def _check_command(argv: list, parser) -> None:
     """Refuse a misspelled command, with the closest one, before argparse's 'invalid choice'."""
     commands = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)][0].choices
@@ -222,30 +181,6 @@ def _check_scene(name: str) -> None:
                            f"(`parcosim list` prints the {len(names)} scenes)")
 
 
-def _first_missing(path: Path) -> Path | None:
-    """The outermost folder of ``path`` that does not exist yet (what the command will make), or None."""
-    missing = None
-    for folder in (path, *path.parents):
-        if folder.exists() or folder.is_symlink():
-            break
-        missing = folder
-    return missing
-
-
-def check_output(path, is_file: bool) -> None:
-    """Refuse, before any work, an output the command could not write: an existing folder where
-    a file goes, a file where a folder goes, a folder we may not write in.  Makes nothing."""
-    path = Path(path)
-    if is_file and path.is_dir():
-        raise CommandError(f"{path} is a folder; give the file to write")
-    folder = path.parent if is_file else path
-    existing = next((f for f in (folder, *folder.parents) if f.exists()), Path.cwd())
-    if not existing.is_dir():
-        raise CommandError(f"{path} is not writable: {existing} is a file, not a folder")
-    if not os.access(existing, os.W_OK | os.X_OK):
-        raise CommandError(f"{path} is not writable: no permission to write in folder {existing}")
-
-
 def _output(args) -> tuple:
     """(path, is_file) of the command's output, or (None, False)."""
     attribute, is_file = _OUTPUTS.get(args.command, (None, False))
@@ -258,24 +193,6 @@ def _output(args) -> tuple:
         from fmus.build import DEFAULT_OUT
         value = DEFAULT_OUT
     return (Path(value), is_file) if value is not None else (None, False)
-
-
-def _remove_if_empty(folder: Path | None) -> None:
-    """Remove ``folder`` (made by a refused command) if it holds no file, its empty sub-folders too."""
-    if folder is None or not folder.is_dir():
-        return
-    for root, dirs, files in os.walk(folder, topdown=False):
-        if files:
-            return
-        for d in dirs:
-            try:
-                os.rmdir(os.path.join(root, d))
-            except OSError:
-                return
-    try:
-        os.rmdir(folder)
-    except OSError:
-        pass
 
 
 def _modes() -> tuple:
@@ -306,7 +223,7 @@ def main(argv: list[str] | None = None) -> int:
         path, is_file = _output(args)
         if path is not None:
             check_output(path, is_file)
-            made = _first_missing(path.parent if is_file else path)
+            made = first_missing(path.parent if is_file else path)
     except CommandError as exc:
         return _refuse(exc)
     with warnings.catch_warnings():
@@ -317,7 +234,7 @@ def main(argv: list[str] | None = None) -> int:
             print("parcosim: interrupted", file=sys.stderr)
             return EXIT_INTERRUPTED
     if status == EXIT_REFUSED:
-        _remove_if_empty(made)
+        remove_if_empty(made)
     return status
 
 

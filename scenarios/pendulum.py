@@ -161,7 +161,8 @@ def plot_pendulum(scene, columns: dict, out_dir) -> list:
 
     out_dir, t = Path(out_dir), columns["t"]
     panels = {"pitch.png": [(("psi", "psi_hat"), "pitch [deg]", np.degrees)],
-              "wheel_speeds.png": [(("omega_l",), "left wheel [rad/s]", None), (("omega_r",), "right wheel [rad/s]", None)],
+              "wheel_speeds.png": [(("omega_l",), "left wheel [rad/s]", None),
+                                   (("omega_r",), "right wheel [rad/s]", None)],
               "voltages.png": [(("v_l", "v_r"), "voltage [V]", None)]}
     if "i_l" in columns:
         panels["voltages.png"].append((("i_l", "i_r"), "current [A]", None))
