@@ -388,6 +388,9 @@ def _run(args) -> int:
     if outcome.result.error:
         print(f"parcosim: {outcome.result.error} (recorded so far: {out})", file=sys.stderr)
         return 1
+    if args.retry_substeps is not None and not m["retried_steps"]:
+        print("parcosim: note: no step was refused, so --retry-substeps retried nothing; it only slowed the run "
+              "(every state saved at every step): leave it out unless a step is refused", file=sys.stderr)
     compiled = f", compiled in {m['compile_s']:.2f} s" if "compile_s" in m else ""
     speed = f"{m['wall_s']:.2f} s wall ({m['realtime_factor']:.1f}x real time{compiled}) -> {out}"
     if "peak_pitch_deg" in m:     # a wheeled pendulum's scene: its own metrics

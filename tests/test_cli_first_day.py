@@ -195,3 +195,12 @@ def test_the_workspace_figure_holds_the_whole_workspace(tmp_path):
     xs, ys = wide.x[ix], wide.y[iy]
     assert len(xs) > 1000 and (ys < -0.1).mean() > 0.2         # a quarter of it lies below y = -0.1 m
     assert xs.min() >= x0 and xs.max() <= x1 and ys.min() >= y0 and ys.max() <= y1
+
+
+def test_a_retry_that_retried_nothing_says_so(tmp_path, short_runs, capsys):
+    """--retry-substeps saves every state at every step: a run that needed no retry says the option
+    only cost time (a user otherwise keeps paying for it)."""
+    assert main(["run", "thesis_sim_circle", "--retry-substeps", "4", "--out", str(tmp_path)]) == 0
+    err = capsys.readouterr().err
+    assert "no step was refused, so --retry-substeps retried nothing" in err
+    assert json.loads((tmp_path / "metrics.json").read_text())["retried_steps"] == []
