@@ -18,7 +18,7 @@ import pytest
 
 from fmus import designs
 
-pytestmark = [pytest.mark.fmu]
+pytestmark = [pytest.mark.slow, pytest.mark.fmu]
 
 ROOT = Path(__file__).resolve().parent.parent
 #: Packages an FMU started with its parameters as built must not import (they are for

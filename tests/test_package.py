@@ -19,7 +19,7 @@ from scenarios.metrics import rms_norm
 from scenarios.package import CONTROL, PLANT, package_scene, run_jacobi
 from scenarios.scenes import Fidelity, bench, drives_in_plant, get_scene
 
-pytestmark = [pytest.mark.fmu]
+pytestmark = [pytest.mark.slow, pytest.mark.fmu]
 
 
 def _short(scene, stop):

@@ -14,7 +14,7 @@ from plant import spec as plant_spec  # noqa: E402
 from plant.parallel import mechanism_state  # noqa: E402
 from plant.specsim import assemble  # noqa: E402
 
-pytestmark = [pytest.mark.tools]
+pytestmark = [pytest.mark.slow, pytest.mark.tools]
 
 
 @pytest.mark.parametrize("name", ["delta3", "bench_5r", "balanced_5r"])
