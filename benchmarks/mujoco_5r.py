@@ -2,7 +2,7 @@
 
 The mechanism is built as two planar serial chains of hinge joints about z,
 closed at the tip by a ``connect`` equality between a site on each distal
-link. Bodies, parameters and world frame follow SYSTEM.md and the independent
+link. Bodies, parameters and world frame follow the brief ../shared/spec/SYSTEM.md and the independent
 reference ``tests/support/lagrange5r.py``, whose parameter dictionaries this
 module takes. MuJoCo enforces the closure as a soft constraint; the
 ``CLOSURE_SOLREF``/``CLOSURE_SOLIMP`` defaults were tuned against the

@@ -4,7 +4,7 @@ Every trajectory is an immutable object called with the time ``t`` >= 0 (s) and
 returning a :class:`ReferenceSample` ``(x, y, dx, dy, ddx, ddy)`` in the world frame
 (m, m/s, m/s^2). It also carries
 
-* ``start_point``: where the mechanism starts at rest (7.17, 7.28, SYSTEM.md section 4);
+* ``start_point``: where the mechanism starts at rest (7.17, 7.28, the brief ../shared/spec/SYSTEM.md section 4);
   for ``circle`` it is not the reference's first point;
 * ``duration``: the length of the reference's motion, s. ``circle`` and ``triangle``
   hold their last point (velocity and acceleration zero) from then on; a scene runs

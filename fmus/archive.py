@@ -12,6 +12,19 @@ import zipfile
 from pathlib import Path
 
 
+def umask_mode() -> int:
+    """The mode ``open`` gives a new file under the process's umask (0o666 & ~umask): what
+    a temporary file renamed into place is set to, since ``mkstemp`` makes it 0600.  Read from
+    /proc where it can be (setting the umask to read it is process-wide, not thread-safe)."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as status:
+            mask = next(int(line.split()[1], 8) for line in status if line.startswith("Umask:"))
+    except (OSError, StopIteration, ValueError, IndexError):
+        mask = os.umask(0o022)
+        os.umask(mask)
+    return 0o666 & ~mask
+
+
 def rewrite(source, target, members: dict) -> Path:
     """Write ``target`` as a copy of the zip ``source`` whose members ``members`` (name ->
     bytes or str, or name -> (ZipInfo, bytes) to set its attributes) replace or add to the
@@ -30,6 +43,7 @@ def rewrite(source, target, members: dict) -> Path:
                 if data is not None:
                     info, data = data if isinstance(data, tuple) else (name, data)
                     dst.writestr(info, data)
+        os.chmod(tmp, umask_mode())
         os.replace(tmp, target)
     finally:
         if os.path.exists(tmp):

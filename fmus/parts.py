@@ -116,7 +116,7 @@ def declare_plant(slave) -> None:
 
 
 def declare_counter_masses(slave) -> None:
-    """``counter_mass1``, ``counter_mass2``: the balanced 5R of seed 001 (SYSTEM.md §7)."""
+    """``counter_mass1``, ``counter_mass2``: the balanced 5R of seed 001 (the brief ../shared/spec/SYSTEM.md §7)."""
     for j, link in (("1", "proximal"), ("2", "distal")):
         slave.declare(f"counter_mass{j}", "parameter", 0.0,
                       f"Counter-mass on each chain's {link} link, behind its joint where seed 001 (64) puts it "

@@ -38,6 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .archive import umask_mode
 from .system import System, split_signal
 
 NS = {
@@ -138,6 +139,7 @@ def export_ssp(system: System, path, fmu_dir=None, fmus: dict | None = None, bak
             for c in system.components:
                 if values[c.name]:
                     zf.writestr(f"resources/{c.name}.ssv", _xml_bytes(_ssv(values[c.name])))
+        os.chmod(tmp, umask_mode())
         os.replace(tmp, path)
     except BaseException:
         with contextlib.suppress(OSError):

@@ -4,7 +4,7 @@ Every subcommand is a thin shell over a documented Python call:
 
 =====================  ==============================================
 ``parcosim``           ``parcosim run bench_circle_TCMDx`` (the default job)
-``parcosim demo``      same, with ``--out`` and ``--preset``
+``parcosim demo``      ``scenarios.plant_demo.run(out_dir, preset)``: the plant alone, a table and a PNG
 ``parcosim build``     ``fmus.build.build_all(out_dir)``
 ``parcosim sweep``     ``scenarios.sweep.run_sweep(scene, samples, uncertainty, seed, distribution,
                        perturb, mode, out_dir, scheduler, workers)``
@@ -24,30 +24,48 @@ Every subcommand is a thin shell over a documented Python call:
 ``parcosim workspace``  ``scenarios.workspace.plot_workspace(preset_or_spec, out_dir)`` (docs/workspace.md)
 =====================  ==============================================
 
-Errors end the command with exit status 2 and one readable line on stderr (an output
-directory that cannot be written is reported before the run; a file that cannot be written
-is named); a run that a component stops early writes what it recorded, prints the
-component's message and exits 1.  SIGINT (Ctrl-C) during ``parcosim run`` writes the whole
-rows recorded so far and metrics with ``"completed": false``, prints one line and exits 130.
+Errors end the command with exit status 2 and one readable line on stderr, nothing else
+printed and nothing left behind (folders the command made are removed while empty): bad
+arguments (a misspelled command or scene gets a suggestion), an output that cannot be written
+(checked before any work), a file that cannot be written (named).  A run that a component
+stops early writes what it recorded, prints the component's message and exits 1; so does a
+sweep whose every sample failed (one with some failures exits 0 and says how many).  SIGINT
+(Ctrl-C) during ``parcosim run`` writes the whole rows recorded so far and metrics with
+``"completed": false``, prints one line and exits 130.
 """
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
 import math
 import sys
 import warnings
+import zipfile
+from pathlib import Path
+
+from .checks import (CommandError, Parser, at_least, check_output, first_missing, non_negative, remove_if_empty,
+                     suggestion)
 
 
 #: Exit status after SIGINT (128 + 2, as shells report it).
 EXIT_INTERRUPTED = 130
+#: Exit status of a refused command (bad arguments, an output that cannot be written).
+EXIT_REFUSED = 2
+#: The default job: bare ``parcosim`` is ``parcosim run DEFAULT_SCENE``.
+DEFAULT_SCENE = "bench_circle_TCMDx"
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="parcosim", description=__doc__.splitlines()[0])
-    sub = parser.add_subparsers(dest="command")
-    demo = sub.add_parser("demo", help="plant demo: a short table and a PNG of the workspace and a path")
+    parser = Parser(prog="parcosim", description=f"Co-simulate the 5R robot's and the wheeled pendulum's scenes, "
+                     f"export them as FMUs and SSP packages. Bare `parcosim` runs `parcosim run {DEFAULT_SCENE}` "
+                     f"(the bench circle; files in out/{DEFAULT_SCENE}/). Full reference: docs/index.md")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    demo = sub.add_parser("demo", help="the plant alone (no drives, no controller): a short table and a PNG of "
+                                       "the workspace and a path; not the default job")
     demo.add_argument("--out", default="out", help="output directory (default: out)")
-    demo.add_argument("--preset", default="thesis_sim", help="thesis_sim or bench")
+    demo.add_argument("--preset", default="thesis_sim", choices=("thesis_sim", "bench"),
+                      help="the plant's parameters (default: thesis_sim)")
     build = sub.add_parser("build", help="build every FMU")
     build.add_argument("--out", default=None, help="output directory (default: fmus/build/)")
     sub.add_parser("list", help="print the scenes")
@@ -56,47 +74,60 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--mode", choices=("inprocess", "fmu", "compiled"), default="inprocess",
                      help="slaves in process (default), the built FMUs through fmpy, or the whole step loop "
                           "compiled (docs/benchmarks.md; falls back to in process with a warning)")
-    run.add_argument("--coupling", choices=("gauss-seidel", "jacobi"), default="gauss-seidel")
+    run.add_argument("--coupling", choices=("gauss-seidel", "jacobi"), default="gauss-seidel",
+                     help="gauss-seidel (default): each component reads what the ones before it computed this "
+                          "step; jacobi: every input is the last step's output, a step of delay per connection "
+                          "(the bench circle's e_ef grows to about 40 mm; docs/master.md)")
     run.add_argument("--out", default=None, help="output directory (default: out/SCENE)")
-    run.add_argument("--fmu-dir", default=None, help="where the FMUs are (built when missing or stale)")
-    run.add_argument("--retry-substeps", type=int, default=None, metavar="N",
-                     help="retry a refused step from the saved FMU states in N sub-steps (docs/master.md)")
-    run.add_argument("--drives-in-plant", type=int, default=None, metavar="N",
+    run.add_argument("--fmu-dir", default=None,
+                     help="where the FMUs of --mode fmu are, built when missing or stale (default: fmus/build/)")
+    run.add_argument("--retry-substeps", type=at_least(2, "retry_substeps"), default=None, metavar="N",
+                     help="retry a refused step from the saved FMU states in N >= 2 sub-steps; saving every "
+                          "state at every step makes the run much slower: use it after a refusal (docs/master.md)")
+    run.add_argument("--drives-in-plant", type=at_least(1, "--drives-in-plant"), default=None, metavar="N",
                      help="integrate the drives inside the plant (ActuatedFiveBarPlant), RK4 N steps per "
                           "sample; 8 is 2.2e4x more accurate than separate drives (docs/actuated.md)")
     _replace_option(run)
     report = sub.add_parser("report", help="run the 16 bench scenes; markdown report beside the thesis' Tables 9-14")
-    report.add_argument("--mode", choices=("inprocess", "fmu"), default="inprocess")
+    report.add_argument("--mode", choices=("inprocess", "fmu"), default="inprocess",
+                        help="slaves in process (default) or the built FMUs through fmpy")
     report.add_argument("--out", default="out/report", help="output directory (default: out/report)")
     report.add_argument("--scheduler", default=None, metavar="ADDRESS",
                         help="run the scenes on this dask scheduler (default: a local cluster)")
-    report.add_argument("--workers", type=int, default=None, metavar="K",
+    report.add_argument("--workers", type=at_least(1, "--workers"), default=None, metavar="K",
                         help="local worker processes (default: one per core)")
     sweep = sub.add_parser("sweep", help="Monte Carlo: N runs of a scene with its plant and drives perturbed "
                                          "(dask.distributed; docs/sweeps.md)")
     sweep.add_argument("scene", help="a scene name (see `parcosim list`)")
-    sweep.add_argument("--samples", type=int, required=True, metavar="N", help="number of samples")
-    sweep.add_argument("--uncertainty", type=float, required=True, metavar="U",
+    sweep.add_argument("--samples", type=at_least(1, "--samples"), required=True, metavar="N",
+                       help="number of samples")
+    sweep.add_argument("--uncertainty", type=non_negative("--uncertainty"), required=True, metavar="U",
                        help="uncertainty: 0.2 = masses, inertias, motor constants, friction +-20 %%; "
                             "lengths U/100, encoder zero U x 10 mrad (docs/sweeps.md)")
-    sweep.add_argument("--seed", type=int, default=0, metavar="S", help="random seed (default 0)")
+    sweep.add_argument("--seed", type=at_least(0, "--seed"), default=0, metavar="S",
+                       help="random seed (default: 0)")
     sweep.add_argument("--distribution", choices=("uniform", "normal"), default=None,
-                       help="uniform factor in [1-U, 1+U] (default) or normal, sigma U, truncated at 3 sigma")
-    sweep.add_argument("--perturb", default=None, metavar="FILE.toml", help="per-parameter uncertainties")
-    sweep.add_argument("--mode", choices=_modes(), default="inprocess")
+                       help="uniform factor in [1-U, 1+U] or normal, sigma U, truncated at 3 sigma "
+                            "(default: the perturb file's, else uniform)")
+    sweep.add_argument("--perturb", default=None, metavar="FILE.toml",
+                       help="per-parameter uncertainties (docs/sweeps.md)")
+    sweep.add_argument("--mode", choices=_modes(), default="inprocess",
+                       help="how each sample runs, as `parcosim run --mode` (default: inprocess)")
     sweep.add_argument("--scheduler", default=None, metavar="ADDRESS",
                        help="an existing dask scheduler, e.g. tcp://host:8786 (default: a local cluster)")
-    sweep.add_argument("--workers", type=int, default=None, metavar="K",
+    sweep.add_argument("--workers", type=at_least(1, "--workers"), default=None, metavar="K",
                        help="local worker processes (default: one per core)")
     sweep.add_argument("--stop-time", type=float, default=None, metavar="S",
-                       help="end every run at S seconds (quick checks; unreached metric windows give NaN)")
+                       help="end every run at S seconds, for quick checks; unreached metric windows give NaN "
+                            "(default: the scene's end)")
     sweep.add_argument("--out", default=None, help="output directory (default: out/sweep_SCENE_U)")
     ssp = sub.add_parser("export-ssp", help="write a scene as an SSP 1.0 package for Jacobi masters "
                                             "(Ecos, libcosim, fmpy): control chain + plant")
     ssp.add_argument("scene", help="a scene name (see `parcosim list`)")
     ssp.add_argument("path", help="the .ssp file to write")
-    ssp.add_argument("--fmu-dir", default=None, help="where the FMUs are (built when missing or stale)")
-    ssp.add_argument("--drives-in-plant", type=int, default=None, metavar="N",
+    ssp.add_argument("--fmu-dir", default=None,
+                     help="where the component FMUs are, built when missing or stale (default: fmus/build/)")
+    ssp.add_argument("--drives-in-plant", type=at_least(1, "--drives-in-plant"), default=None, metavar="N",
                      help="export the scene with its drives inside the plant, RK4 N steps per sample")
     ssp.add_argument("--per-component", action="store_true",
                      help="one FMU instance per component (for masters that order components by their "
@@ -105,11 +136,11 @@ def _parser() -> argparse.ArgumentParser:
     fmu = sub.add_parser("export-fmu", help="write a scene's whole closed loop as one FMI 2.0 co-simulation FMU")
     fmu.add_argument("scene", help="a scene name (see `parcosim list`)")
     fmu.add_argument("path", help="the .fmu file to write")
-    fmu.add_argument("--drives-in-plant", type=int, default=None, metavar="N",
+    fmu.add_argument("--drives-in-plant", type=at_least(1, "--drives-in-plant"), default=None, metavar="N",
                      help="the scene with its drives inside the plant, RK4 N steps per sample")
     _replace_option(fmu)
     trade = sub.add_parser("trade", help="speed against accuracy: sweep the settings, table and Pareto plot")
-    trade.add_argument("scene", nargs="?", default="bench_circle_TCMDx",
+    trade.add_argument("scene", nargs="?", default=DEFAULT_SCENE,
                        help="a scene name (default: bench_circle_TCMDx)")
     trade.add_argument("--quick", action="store_true", help="1 s and fewer settings (under a minute)")
     trade.add_argument("--out", default="out/trade", help="output directory (default: out/trade)")
@@ -124,6 +155,44 @@ def _parser() -> argparse.ArgumentParser:
     sub.add_parser("identify-motor", help="identify DC motor parameters from u,i,omega data",
                    add_help=False)
     return parser
+
+
+#: Each command's output: (attribute, its default; a file when ``is_file``), checked before any work.
+_OUTPUTS = {"run": ("out", False), "sweep": ("out", False), "report": ("out", False), "trade": ("out", False),
+            "demo": ("out", False), "workspace": ("out", False), "build": ("out", False),
+            "export-ssp": ("path", True), "export-fmu": ("path", True), "build-plant": ("path", True)}
+
+
+def _check_command(argv: list, parser) -> None:
+    """Refuse a misspelled command, with the closest one, before argparse's 'invalid choice'."""
+    commands = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)][0].choices
+    if argv and not argv[0].startswith("-") and argv[0] not in commands:
+        raise CommandError(f"parcosim: unknown command {argv[0]!r}{suggestion(argv[0], commands)} "
+                           f"(`parcosim --help` lists them)")
+
+
+def _check_scene(name: str) -> None:
+    """Refuse an unknown scene naming the closest one."""
+    from scenarios.scenes import scene_names
+
+    names = scene_names()
+    if name not in names:
+        raise CommandError(f"unknown scene {name!r}{suggestion(name, names)} "
+                           f"(`parcosim list` prints the {len(names)} scenes)")
+
+
+def _output(args) -> tuple:
+    """(path, is_file) of the command's output, or (None, False)."""
+    attribute, is_file = _OUTPUTS.get(args.command, (None, False))
+    value = getattr(args, attribute, None) if attribute else None
+    if args.command == "run" and value is None:
+        value = Path("out") / _run_folder(args)
+    elif args.command == "sweep" and value is None:
+        value = _sweep_folder(args)
+    elif args.command == "build" and value is None:
+        from fmus.build import DEFAULT_OUT
+        value = DEFAULT_OUT
+    return (Path(value), is_file) if value is not None else (None, False)
 
 
 def _modes() -> tuple:
@@ -142,27 +211,68 @@ def main(argv: list[str] | None = None) -> int:
     if argv and argv[0] == "identify-motor":
         from motor.cli import identify_main
         return identify_main(argv[1:])
-    args = _parser().parse_args(argv)
+    if not argv:
+        argv = ["run", DEFAULT_SCENE]
+    made = None
+    try:
+        parser = _parser()
+        _check_command(argv, parser)
+        args = parser.parse_args(argv)
+        if getattr(args, "scene", None) is not None:
+            _check_scene(args.scene)
+        path, is_file = _output(args)
+        if path is not None:
+            check_output(path, is_file)
+            made = first_missing(path.parent if is_file else path)
+    except CommandError as exc:
+        return _refuse(exc)
     with warnings.catch_warnings():
         warnings.showwarning = _show_warning
         try:
-            return _command(args)
+            status = _busy(args) if args.command in _BUSY and sys.stderr.isatty() else _command(args)
         except KeyboardInterrupt:
             print("parcosim: interrupted", file=sys.stderr)
             return EXIT_INTERRUPTED
+    if status == EXIT_REFUSED:
+        remove_if_empty(made)
+    return status
+
+
+#: Commands that work for seconds to minutes with nothing to count: on a terminal they say so first.
+_BUSY = {"export-ssp": "building the FMUs and the package", "export-fmu": "building the FMU",
+         "build-plant": "building the FMU", "build": "building the FMUs", "workspace": "mapping the workspace",
+         "demo": "simulating and drawing"}
+
+
+def _busy(args) -> int:
+    """Run the command with a status line on stderr, replaced by its output when it ends."""
+    print(f"parcosim {args.command}: {_BUSY[args.command]} ...", end="", file=sys.stderr, flush=True)
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        status = _command(args)
+    print("\r\033[K", end="", file=sys.stderr, flush=True)
+    sys.stdout.write(out.getvalue())
+    return status
+
+
+def _refuse(exc: Exception) -> int:
+    """Print ``exc`` as the one line of a refused command; its exit status."""
+    text = " ".join(str(exc).split())
+    clear = "\r\033[K" if sys.stderr.isatty() else ""      # over a progress line, if one is shown
+    print(clear + (text if text.startswith("parcosim") else f"parcosim: error: {text}"), file=sys.stderr)
+    return EXIT_REFUSED
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
-    print(f"parcosim: warning: {message}", file=sys.stderr)
+    clear = "\r\033[K" if sys.stderr.isatty() else ""
+    print(f"{clear}parcosim: warning: {message}", file=sys.stderr)
 
 
 def _command(args) -> int:
     try:
-        if args.command is None:
-            return main(["run", "bench_circle_TCMDx"])
         if args.command == "demo":
             from scenarios.plant_demo import run
-            run(getattr(args, "out", "out"), getattr(args, "preset", "thesis_sim"))
+            run(args.out, args.preset)
         elif args.command == "list":
             from scenarios.scenes import get_scene, scene_names
             width = max(len(name) for name in scene_names())
@@ -203,9 +313,8 @@ def _command(args) -> int:
             from fmus.build import DEFAULT_OUT, build_all
             for path in build_all(args.out or DEFAULT_OUT):
                 print(path)
-    except (ValueError, OSError, RuntimeError) as exc:
-        print(f"parcosim: error: {exc}", file=sys.stderr)
-        return 2
+    except (ValueError, OSError, RuntimeError, zipfile.BadZipFile) as exc:
+        return _refuse(exc)
     return 0
 
 
@@ -240,20 +349,35 @@ def _replacements(items) -> dict:
             raise ValueError(f"--replace {item}: write INSTANCE=PATH.fmu")
         if instance in result:
             raise ValueError(f"--replace {instance}: given twice")
+        if Path(path).is_file() and not _is_fmu_archive(path):
+            raise ValueError(f"--replace {item}: {path} is not an FMU (no zip archive with a modelDescription.xml)")
         result[instance] = path
     return result
 
 
-def _run(args) -> int:
-    from pathlib import Path
+def _is_fmu_archive(path) -> bool:
+    """Whether ``path`` is a zip archive holding a modelDescription.xml."""
+    try:
+        with zipfile.ZipFile(path) as archive:
+            return "modelDescription.xml" in archive.namelist()
+    except (OSError, zipfile.BadZipFile):
+        return False
 
+
+def _run_folder(args) -> str:
+    """``parcosim run``'s default folder name under out/."""
+    return args.scene + ("" if args.drives_in_plant is None else "_drives_in_plant") + \
+        ("_replaced" if args.replace else "")
+
+
+def _run(args) -> int:
     from scenarios.run import run_scene
 
     scene = _scene(args)
-    default = scene.name + ("" if args.drives_in_plant is None else "_drives_in_plant") + \
-        ("_replaced" if args.replace else "")
-    out = Path(args.out) if args.out else Path("out") / default
+    out = Path(args.out) if args.out else Path("out") / _run_folder(args)
     bar = progress_bar(scene.name) if sys.stderr.isatty() else None
+    if bar is not None:
+        print(f"{scene.name}: loading and initialising ({args.mode})...", end="", file=sys.stderr, flush=True)
     outcome = run_scene(scene, mode=args.mode, out_dir=out, coupling=args.coupling,
                         fmu_dir=args.fmu_dir, progress=bar, retry_substeps=args.retry_substeps)
     m = outcome.metrics
@@ -264,19 +388,32 @@ def _run(args) -> int:
     if outcome.result.error:
         print(f"parcosim: {outcome.result.error} (recorded so far: {out})", file=sys.stderr)
         return 1
+    if args.retry_substeps is not None and not m["retried_steps"]:
+        print("parcosim: note: no step was refused, so --retry-substeps retried nothing; it only slowed the run "
+              "(every state saved at every step): leave it out unless a step is refused", file=sys.stderr)
     compiled = f", compiled in {m['compile_s']:.2f} s" if "compile_s" in m else ""
+    speed = f"{m['wall_s']:.2f} s wall ({m['realtime_factor']:.1f}x real time{compiled}) -> {out}"
+    if "peak_pitch_deg" in m:     # a wheeled pendulum's scene: its own metrics
+        from scenarios.pendulum import pendulum_line
+
+        print(f"{scene.name} [{m['mode']}]: {pendulum_line(m)}, {speed}")
+        return 0
     settled = (f" (settled {m['t_settle_s']:.2f} s after the stop)" if m.get("settled")
                else " (not settled)" if math.isfinite(m.get("e_ss_mm", math.nan)) else "")
     print(f"{scene.name} [{m['mode']}]: e_ef {m['e_ef_mm']:.4g} mm, tau_ef {m['tau_ef_Nm']:.4g} N m, "
-          f"e_ss {m['e_ss_mm']:.4g} mm{settled}, {m['wall_s']:.2f} s wall ({m['realtime_factor']:.1f}x real time"
-          f"{compiled}) -> {out}")
+          f"e_ss {m['e_ss_mm']:.4g} mm{settled}, {speed}")
     return 0
+
+
+def _sweep_folder(args) -> str:
+    """``parcosim sweep``'s default folder."""
+    return f"out/sweep_{args.scene}_U{args.uncertainty:g}"
 
 
 def _sweep(args) -> int:
     from scenarios.sweep import run_sweep
 
-    out = args.out or f"out/sweep_{args.scene}_U{args.uncertainty:g}"
+    out = args.out or _sweep_folder(args)
     sweep = run_sweep(args.scene, args.samples, args.uncertainty, seed=args.seed, distribution=args.distribution,
                       perturb=args.perturb, mode=args.mode, out_dir=out, scheduler=args.scheduler,
                       workers=args.workers, stop_time=args.stop_time, progress=progress_bar(f"sweep {args.scene}"))
@@ -285,6 +422,10 @@ def _sweep(args) -> int:
     median = f"e_ef median {e['median']:.4g} mm (5-95 %: {e['p05']:.4g}-{e['p95']:.4g})" if e["n"] else "no e_ef"
     print(f"{sweep.scene} U={args.uncertainty:g}: {s['samples']} samples ({len(sweep.computed)} run now), "
           f"{s['completed']} completed, {s['failed']} failed; {median} -> {out}/sweep.csv")
+    if not s["completed"]:
+        first = next(r["error"] for r in sweep.rows if not r["completed"])
+        print(f"parcosim: every sample failed; the first: {first}", file=sys.stderr)
+        return 1
     return 0
 
 

@@ -7,7 +7,7 @@ rolling constraints by Lagrange-d'Alembert; ``model="seed"`` is seed 000's equat
 (16)-(18) with its printed typos corrected but without the two nonholonomic terms
 (docs/pendulum.md).
 
-Conventions (docs/contract.md, SYSTEM.md section 7): theta is the mean wheel angle from the
+Conventions (docs/contract.md, the brief ../shared/spec/SYSTEM.md section 7): theta is the mean wheel angle from the
 vertical (x' = R theta' cos phi), psi the pitch (0 upright, + leaning toward the heading),
 phi the yaw (CCW from +x); theta_l,r = theta -+ W/(2R) phi (10); the motors turn the wheels
 relative to the body: omega_l,r = theta_l,r' - psi'.

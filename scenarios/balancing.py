@@ -34,7 +34,7 @@ from .scenes import VERTICAL_COUNTER_MASSES, vertical_circle
 
 DEFAULT_FREQUENCIES = (0.25, 0.5, 0.75, 1.0, 1.25, 1.5, 2.0)
 DEFAULT_STRATEGIES = ("TCMDx",)
-#: The bench's driver: 12 A continuous, 30 A peak; supply 24 V (SYSTEM.md §3).
+#: The bench's driver: 12 A continuous, 30 A peak; supply 24 V (the brief ../shared/spec/SYSTEM.md §3).
 CONTINUOUS_A, PEAK_A = 12.0, 30.0
 COLUMNS = ("strategy", "frequency_Hz", "balanced", "e_ef_mm", "tau_ef_Nm", "tau1_peak_Nm", "tau2_peak_Nm",
            "i1_rms_A", "i2_rms_A", "i_peak_A", "v_peak_V", "saturated_pct", "i_peak_run_A", "error")

@@ -4,7 +4,7 @@
 of the scene's window (circle: steady state, t in [1, 8] s; triangle: the whole
 trajectory).
 
-``e_ss`` (SYSTEM.md §5: "the end-effector error after the stop, once settled"; thesis
+``e_ss`` (the brief ../shared/spec/SYSTEM.md §5: "the end-effector error after the stop, once settled"; thesis
 Tables 13-14) is the RMS error from the settling time to the end of the run
 (:func:`settling`).  The end effector has **settled** at the first sample after the stop
 from which it stays for good within :data:`SETTLE_BAND` of its final position (the mean

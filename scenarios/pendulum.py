@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -138,3 +139,58 @@ def pendulum_metrics(columns: dict, step: float) -> dict:
         "final_yaw_deg": float(np.degrees(columns["phi"][-1])),
         "energy_J": energy,
     }
+
+
+def pendulum_line(metrics: dict) -> str:
+    """What ``parcosim run`` says of a pendulum run: its pitch, settling and position error."""
+    settle = metrics.get("settling_time_s", float("nan"))
+    settled = f"settled within {BALANCED_DEG:g} deg at {settle:.2f} s" if math.isfinite(settle) else \
+        f"not within {BALANCED_DEG:g} deg at the end"
+    return (f"pitch peak {metrics['peak_pitch_deg']:.3g} deg, last second {metrics['last_second_pitch_deg']:.3g} deg "
+            f"({settled}), final position error {metrics['final_position_error_mm']:.3g} mm")
+
+
+def plot_pendulum(scene, columns: dict, out_dir) -> list:
+    """The pendulum's figures: ``pitch.png`` (psi and the observer's estimate), ``wheel_speeds.png``,
+    ``voltages.png`` (and the currents when the drives are modelled), ``path.png`` (the axle
+    against its reference, at least 10 cm wide: a balance scene hardly moves)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out_dir, t = Path(out_dir), columns["t"]
+    panels = {"pitch.png": [(("psi", "psi_hat"), "pitch [deg]", np.degrees)],
+              "wheel_speeds.png": [(("omega_l",), "left wheel [rad/s]", None),
+                                   (("omega_r",), "right wheel [rad/s]", None)],
+              "voltages.png": [(("v_l", "v_r"), "voltage [V]", None)]}
+    if "i_l" in columns:
+        panels["voltages.png"].append((("i_l", "i_r"), "current [A]", None))
+    files = []
+    for name, rows in panels.items():
+        fig, axes = plt.subplots(len(rows), 1, figsize=(7, 2.5 * len(rows) + 0.5), sharex=True, squeeze=False)
+        for ax, (keys, label, scale) in zip(axes[:, 0], rows):
+            for key in keys:
+                ax.plot(t, columns[key] if scale is None else scale(columns[key]), lw=0.8, label=key)
+            ax.set_ylabel(label)
+            ax.grid(True, alpha=0.3)
+            ax.legend(loc="upper right")
+        axes[-1, 0].set_xlabel("t [s]")
+        axes[0, 0].set_title(scene.name)
+        files.append(out_dir / name)
+        fig.savefig(files[-1], dpi=120, bbox_inches="tight")
+        plt.close(fig)
+    fig, ax = plt.subplots(figsize=(5, 5))
+    ax.plot(1e3 * columns["x_d"], 1e3 * columns["y_d"], "k--", lw=1, label="reference")
+    ax.plot(1e3 * columns["x"], 1e3 * columns["y"], "C0", lw=1, label="axle")
+    xs = 1e3 * np.concatenate([columns["x"], columns["x_d"]])
+    ys = 1e3 * np.concatenate([columns["y"], columns["y_d"]])
+    half = max(50.0, 0.55 * max(np.ptp(xs), np.ptp(ys)))
+    cx, cy = 0.5 * (xs.min() + xs.max()), 0.5 * (ys.min() + ys.max())
+    ax.set(xlabel="x [mm]", ylabel="y [mm]", title=scene.name, aspect="equal",
+           xlim=(cx - half, cx + half), ylim=(cy - half, cy + half))
+    ax.legend()
+    files.append(out_dir / "path.png")
+    fig.savefig(files[-1], dpi=120, bbox_inches="tight")
+    plt.close(fig)
+    return files

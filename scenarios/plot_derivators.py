@@ -21,7 +21,7 @@ import numpy as np  # noqa: E402
 from controller.derivators import DEFAULT_FC_ACC, DEFAULT_FC_VEL, SAMPLE_TIME, Derivator  # noqa: E402
 
 ENCODER_STEP = 2 * np.pi / 20000
-"""One quadrature count of the bench encoders, rad (SYSTEM.md section 3)."""
+"""One quadrature count of the bench encoders, rad (the brief ../shared/spec/SYSTEM.md section 3)."""
 LOOP_LAMBDAS = (35.0, 60.0, 70.0)
 """Position-loop parameters of Tables 6-8, rad/s."""
 REPORT_FREQUENCIES = (1.0, 5.0, 11.0)

@@ -1,4 +1,5 @@
-"""Full-length regression of the 16 bench scenes and thesis_sim_circle against stored metrics.
+"""Full-length regression of 21 scenes against stored metrics: thesis_sim_circle, the thesis' 16
+bench scenes and the 4 of seed 001's sliding-mode law (:func:`regression_scenes`).
 
     python -m scenarios.regression              # compare with tests/data/scene_metrics.json
     python -m scenarios.regression --write      # regenerate it (after a change you mean)
@@ -14,7 +15,7 @@ master is deterministic), so the tolerance only has to absorb what another machi
 numpy build or C compiler can change: last-bit differences in sin, cos, sqrt and
 sums.  ``--sensitivity`` measures what such differences grow into over a whole run by moving
 the start point by 1e-12 m (10^4 times more than a last-bit change of x0): the largest
-relative change of a metric over the 17 scenes (docs/testing.md).  The tolerance is that
+relative change of a metric over the scenes (docs/testing.md; measured when they were the first 17).  The tolerance is that
 spread times 10, and at least 1e-9.
 """
 from __future__ import annotations

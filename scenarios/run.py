@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fmus.archive import umask_mode
 from fmus.master import Result, simulate
 
 from .metrics import scene_metrics
@@ -84,6 +85,7 @@ def atomic_write(path: Path, write) -> Path:
             write(f)
             f.flush()
             os.fsync(f.fileno())
+        os.chmod(tmp, umask_mode())       # mkstemp's 0600 -> what open() would give
         os.replace(tmp, path)
     except OSError as exc:
         try:
@@ -130,7 +132,12 @@ def write_json(path: Path, value) -> Path:
 
 
 def plot_run(scene: Scene, columns: dict, out_dir: Path) -> list:
-    """The thesis' figures: path against reference; e_x, e_y; tau1, tau2 (figures 12-23, 27-)."""
+    """The thesis' figures: path against reference; e_x, e_y; tau1, tau2 (figures 12-23, 27-); a
+    wheeled pendulum's scene (a ``psi`` column) has its own (:func:`scenarios.pendulum.plot_pendulum`)."""
+    if "psi" in columns:
+        from .pendulum import plot_pendulum
+
+        return plot_pendulum(scene, columns, out_dir)
     import matplotlib
 
     matplotlib.use("Agg")

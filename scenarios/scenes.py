@@ -29,7 +29,7 @@ from motor.drive import FRICTION_MODELS
 REFERENCE_SIGNALS = ("x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
 #: Time the bench scenes run on after the reference stops, for the steady-state error [s]:
 #: the slowest of the 16 bench scenes (bench_triangle_PDMDq) settles 1.9 s after the stop
-#: (docs/twin.md "Settled steady-state error"), and :data:`scenarios.metrics.SETTLE_HOLD`
+#: (docs/twin_method.md "Settled steady-state error"), and :data:`scenarios.metrics.SETTLE_HOLD`
 #: must follow.
 SETTLE_TIME = 3.0
 #: The final position (the settling band's centre) is the mean over this last part of the run [s].
@@ -298,7 +298,7 @@ def bench(strategy: str, kind: str = "circle", model: str = "tabulated",
     return Scene(name, description, system, columns, window, trajectory.duration, strategy)
 
 
-#: Gravity of the vertical scenes: the mechanism's plane vertical, world y up (SYSTEM.md §2).
+#: Gravity of the vertical scenes: the mechanism's plane vertical, world y up (the brief ../shared/spec/SYSTEM.md §2).
 VERTICAL_GRAVITY = (0.0, -9.81, 0.0)
 #: Counter-masses of the balanced vertical scenes [kg] on each chain's proximal and distal
 #: link, placed by seed 001 (64): 0.4 kg 0.107 m (chain 1) / 0.098 m (chain 2) behind the

@@ -14,11 +14,13 @@ scene, bit for bit ``parcosim run SCENE`` with the same mode.
 
 Files in DIR:
 
-* ``sweep.csv``: one row per sample, in completion order: ``sample``, one column per
+* ``sweep.csv``: one row per sample, in sample order: ``sample``, one column per
   perturbed parameter (its value), ``e_ef_mm``, ``tau_ef_Nm``, ``e_ss_mm`` (once settled),
-  ``e_ss_1s_mm``, ``t_settle_s`` (:mod:`scenarios.metrics`), ``completed``, ``error``, ``wall_s``.  Each row is appended and flushed to disk as its run finishes, in one
+  ``e_ss_1s_mm``, ``t_settle_s`` (:mod:`scenarios.metrics`), ``completed``, ``error``, ``wall_s``.
+  While the sweep runs, each row is appended and flushed to disk as its run finishes, in one
   write: a sweep killed at any point leaves every finished row whole (a torn last line, if
-  any, is dropped when the sweep starts again).
+  any, is dropped when the sweep starts again); when it ends, the file is rewritten
+  (atomically) in sample order.
 * ``sweep.json``: the sweep's settings.  Started again with the same DIR and settings, the
   sweep computes only the samples missing from ``sweep.csv`` (also after raising N); other
   settings are refused, naming the one that differs.
@@ -314,6 +316,9 @@ def run_sweep(scene, samples: int, uncertainty: float, seed: int = 0, distributi
     finally:
         if appender is not None:
             appender.close()
+    if out_dir is not None:       # the rows came in completion order; a reader wants them by sample
+        ordered = "".join(_line(header, done[i]) for i in sorted(done))
+        atomic_write(csv_path, lambda f: f.write(",".join(header) + "\n" + ordered))
     rows = [done[i] for i in range(samples)]
     sweep = Sweep(base.name, names, rows, summarize(rows), sorted(values), settings, files)
     if out_dir is not None:

@@ -668,7 +668,7 @@ def run_trade(scene=DEFAULT_SCENE, quick: bool = False, out_dir=None, stop_time:
     stop_time : float, optional
         Simulated time (default: the scene's, or :data:`QUICK_STOP_TIME` with ``quick``).
     rounds : int, optional
-        Timing rounds (default 1 quick, 2 full).
+        Timing rounds (default :data:`QUICK_ROUNDS` quick, :data:`FULL_ROUNDS` full).
     progress : callable, optional
         Called with one line of text per step of the sweep.
     """

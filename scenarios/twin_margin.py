@@ -13,7 +13,7 @@ sample) and the derivator's velocity cut-off ``fc_vel`` (the thesis gives none; 
 100 Hz, docs/derivators.md), in compiled mode, and prints e_ef, τ_ef, e_max and the peak
 drive voltage of both: a twin with the bench's margin would degrade at λ + 5; one that tracks
 better there has a wider margin than the bench.
-Figures: docs/twin.md ("Stability margin").
+Figures: docs/twin_method.md ("Stability margin").
 """
 from __future__ import annotations
 

@@ -153,15 +153,15 @@ def plot_workspace(mechanism="bench", out_dir="out/workspace", band=fivebar.NEAR
     for cx, cy, r in circles:
         refs[f"circle ({cx:g}, {cy:g}) r {r:g}"] = (user_circle(cx, cy, r), 1.0)
     checks = [check_trajectory(params, name, ref, duration, band) for name, (ref, duration) in refs.items()]
-    extent = (-0.3, 0.3, -0.1, 0.32)
-    ws = fivebar.workspace_map(params, step=step, band=band, extent=extent)
+    ws = fivebar.workspace_map(params, step=step, band=band)     # the whole reach: every branch, below the bases too
     det_x, det_t = signed_measures(params, ws)
     png = out / "workspace.png"
     _draw(ws, det_x, det_t, checks, band, f"5R workspace, preset {mechanism} (elbows outward)", png,
           table=DEFAULT_EXTENT)
     report = WorkspaceReport(mechanism, png, band, checks)
     (out / "workspace.json").write_text(json.dumps(
-        {"mechanism": mechanism, "band": band, "table_extent": DEFAULT_EXTENT, "table_step": DEFAULT_GRID_STEP,
+        {"mechanism": mechanism, "band": band, "map_extent": [ws.x[0], ws.x[-1], ws.y[0], ws.y[-1]],
+         "table_extent": DEFAULT_EXTENT, "table_step": DEFAULT_GRID_STEP,
          "trajectories": [c.summary() for c in checks]}, indent=2) + "\n")
     return report
 
@@ -175,7 +175,7 @@ def _draw(ws, det_x, det_t, checks, band, title, png, table=None, labels=("det J
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch, Rectangle
 
-    fig, ax = plt.subplots(figsize=(10, 5.2))
+    fig, ax = plt.subplots(figsize=(10, 7))
     ax.pcolormesh(ws.x, ws.y, ws.status, cmap=ListedColormap(["#ffffff", "#cfe3ff", "#ffd34d"]),
                   vmin=0, vmax=2, shading="nearest")
     ax.contour(ws.x, ws.y, det_x, levels=[0.0], colors="#c0392b", linewidths=1.6)
@@ -207,5 +207,5 @@ def _draw(ws, det_x, det_t, checks, band, title, png, table=None, labels=("det J
     ax.set_title(title)
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
     fig.tight_layout()
-    fig.savefig(png, dpi=120)
+    fig.savefig(png, dpi=120, bbox_inches="tight")     # the legend sits outside the axes
     plt.close(fig)

@@ -1,4 +1,10 @@
-"""Shared fixtures: the FMUs are built once per test session."""
+"""Shared fixtures: the FMUs are built once per test session.
+
+Markers (pyproject.toml): ``slow`` on whole files by their ``pytestmark`` (``pytest -m "not
+slow"`` is the quick subset), ``fmu`` on files about FMUs and, here, on every test that uses
+:func:`built_fmus`, ``tools`` on files that drive a third-party tool (Ecos, libcosim, MuJoCo,
+cosmic-ray, a sanitizer build).
+"""
 import pytest
 
 
@@ -9,3 +15,10 @@ def built_fmus(tmp_path_factory):
 
     out = tmp_path_factory.mktemp("fmus")
     return {path.stem: path for path in build_all(out)}
+
+
+def pytest_collection_modifyitems(config, items):
+    """A test that uses the built FMUs (directly or through another fixture) is an ``fmu`` test."""
+    for item in items:
+        if "built_fmus" in getattr(item, "fixturenames", ()):
+            item.add_marker(pytest.mark.fmu)

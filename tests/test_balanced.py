@@ -16,6 +16,8 @@ from plant.serial import chain_dynamics
 from tests.support import lagrange5r as ref
 from tests.test_plant_dynamics import reference_params
 
+pytestmark = [pytest.mark.slow]
+
 GRAVITY = (1.3, -9.81, 0.5)      # in-plane x and y parts, and a z part that must not matter
 COUNTER = (0.4, 0.2)             # kg on the proximal and on the distal links
 

@@ -13,6 +13,8 @@ from scenarios.scenes import Fidelity, bench
 from tests.fmi_support import FmuInstance
 from tests.test_fmu_controller import SMALL_GRID, controller_inputs
 
+pytestmark = [pytest.mark.slow]
+
 NAMES = ("q1", "q2", "dq1", "dq2", "ddq1", "ddq2", "x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
 
 

@@ -20,6 +20,8 @@ from fmus.ssp_run import ecos_available
 from fmus.system import Component, System
 from scenarios.scenes import get_scene
 
+pytestmark = [pytest.mark.fmu]
+
 STOP = {"thesis_sim_circle": 2.0, "bench_circle_TCMDx": 1.0}
 TOL = 1e-9   # m: what the issue allows; the runs are bit-identical
 

@@ -28,7 +28,7 @@ def workspace_points(params, n=40, seed=1):
 
 
 def test_contract_angles():
-    """SYSTEM.md section 2: elbows outward, angles CCW from +x."""
+    """The brief ../shared/spec/SYSTEM.md section 2: elbows outward, angles CCW from +x."""
     p = get_preset("thesis_sim")
     q = inverse_kinematics(p, 0.0, 0.17)
     assert math.degrees(q[0]) == pytest.approx(49.6, abs=0.05)

@@ -23,6 +23,8 @@ from fmus.bundle import PACKAGES, REWRITTEN, bundle_name, rewrite_imports
 from fmus.wrapper import compiled_wrapper
 from tests.test_wrapper import run_case, unzip
 
+pytestmark = [pytest.mark.fmu]
+
 ROOT = Path(__file__).resolve().parent.parent
 #: The names the bundle must never add to an importer's sys.modules.
 PLAIN = ("plant", "motor", "controller", "fmus", "scenarios", "parcosim")

@@ -27,6 +27,8 @@ from scenarios.scenes import get_scene, with_fmu_files
 sys.path.insert(0, str(Path(__file__).parent / "support" / "cfmu"))
 from build import build_c_fmu, compiler  # noqa: E402
 
+pytestmark = [pytest.mark.slow, pytest.mark.fmu]
+
 #: The path of the bench scene with the C drives may differ from ours by at most this [m].
 PATH_TOLERANCE = 1e-9
 

@@ -27,6 +27,8 @@ from fmus.build import SLAVES
 from fmus.guarded import WRAPPER_SYMBOL
 from scenarios import hostile
 
+pytestmark = [pytest.mark.slow, pytest.mark.fmu]
+
 CASES_PER_FMU = 30
 #: A batch of consecutive case seeds (derandomised with one example: 0 ... 29; each FMU mixes
 #: its name into the seed).

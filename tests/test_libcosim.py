@@ -25,6 +25,8 @@ from fmus.ssp_run import ecos_available, simulate_ssp_ecos
 from fmus.system import Component, System
 from scenarios.scenes import get_scene
 
+pytestmark = [pytest.mark.slow, pytest.mark.fmu, pytest.mark.tools]
+
 STOP = 0.2          # s: a short copy of the scene keeps the file fast
 TOL = 1e-9          # m
 SIGNALS = ("plant.x", "plant.y")

@@ -11,6 +11,8 @@ from memory_loop import loop  # noqa: E402
 
 from scenarios.scenes import get_scene  # noqa: E402
 
+pytestmark = [pytest.mark.slow]
+
 #: Allowed growth of the resident set over the measured runs [MB]: one run's slaves, table and
 #: arrays are about 1 MB, so keeping each run's objects alive would exceed it.
 BOUND_MB = 3.0

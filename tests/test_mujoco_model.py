@@ -17,6 +17,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from benchmarks import mujoco_5r  # noqa: E402
 from tests.support import lagrange5r as ref  # noqa: E402
 
+pytestmark = [pytest.mark.tools]
+
 #: Loose bound on the tip deviation caused by MuJoCo's soft closure [m].
 SOFT_CLOSURE_TOLERANCE = 1e-6
 

@@ -10,6 +10,8 @@ pytest.importorskip("cosmic_ray")
 
 from benchmarks import mutation  # noqa: E402
 
+pytestmark = [pytest.mark.tools]
+
 OPERATOR = "core/ReplaceBinaryOperator_Add_Sub"
 SOURCE = """def f(a, b):
     x = a + b

@@ -19,6 +19,8 @@ from scenarios.metrics import rms_norm
 from scenarios.package import CONTROL, PLANT, package_scene, run_jacobi
 from scenarios.scenes import Fidelity, bench, drives_in_plant, get_scene
 
+pytestmark = [pytest.mark.slow, pytest.mark.fmu]
+
 
 def _short(scene, stop):
     return dataclasses.replace(scene, system=dataclasses.replace(scene.system, stop_time=stop))

@@ -2,7 +2,7 @@
 
 The reference is the truth the project's plant is compared against, so it is
 itself checked here against a symbolic derivation (sympy.physics.mechanics),
-energy and work balances, the world-frame conventions of SYSTEM.md §2 and a
+energy and work balances, the world-frame conventions of the brief ../shared/spec/SYSTEM.md §2 and a
 tolerance-refinement study of its integrator.
 """
 
@@ -32,7 +32,7 @@ def _total_energy(params, q, dq):
     return ref.kinetic_energy(params, phi, dphi) + ref.potential_energy(params, phi)
 
 
-# Tolerance: half a unit of the last digit SYSTEM.md quotes.
+# Tolerance: half a unit of the last digit the brief ../shared/spec/SYSTEM.md quotes.
 @pytest.mark.parametrize("x, y, q1_deg, q2_deg, tolerance_deg",
                          [(0.0, 0.17, 49.6, 130.4, 0.05), (0.07, 0.17, 24.36, 99.97, 0.005)])
 def test_world_frame_working_mode(x, y, q1_deg, q2_deg, tolerance_deg):

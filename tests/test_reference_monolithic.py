@@ -20,6 +20,8 @@ from scenarios.reference import (ReferenceError, _mean_torque, deviation, refere
                                  with_parameters)
 from scenarios.scenes import get_scene
 
+pytestmark = [pytest.mark.slow]
+
 BENCH = "bench_circle_TCMDx"
 THESIS = "thesis_sim_circle"
 SHORT = 0.3

@@ -38,7 +38,8 @@ ASAN = _runtime("libasan.so")
 #: C++ extension that throws (matplotlib's, which python-control imports with ``plant``)
 #: otherwise stops the process in ASan's CHECK.
 STDCXX = _runtime("libstdc++.so.6")
-pytestmark = pytest.mark.skipif(ASAN is None, reason="the C compiler has no AddressSanitizer runtime")
+pytestmark = [pytest.mark.slow, pytest.mark.tools,
+              pytest.mark.skipif(ASAN is None, reason="the C compiler has no AddressSanitizer runtime")]
 
 
 def _sanitized_env(library: Path) -> dict:

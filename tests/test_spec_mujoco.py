@@ -14,6 +14,8 @@ from plant import spec as plant_spec  # noqa: E402
 from plant.parallel import mechanism_state  # noqa: E402
 from plant.specsim import assemble  # noqa: E402
 
+pytestmark = [pytest.mark.slow, pytest.mark.tools]
+
 
 @pytest.mark.parametrize("name", ["delta3", "bench_5r", "balanced_5r"])
 def test_mass_matrix_and_bias_forces_equal_mujoco(name):

@@ -13,6 +13,8 @@ from plant.parallel import inverse_dynamics_terms
 from plant.specsim import AssemblyError, SpecSimulator, assemble
 from tests.fmi_support import FmuInstance
 
+pytestmark = [pytest.mark.slow]
+
 START = (0.07, 0.17)
 
 

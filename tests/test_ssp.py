@@ -15,6 +15,8 @@ from fmus.ssp_run import ecos_available, simulate_ssp_ecos, simulate_ssp_fmpy
 from fmus.system import Component, Connection, System
 from scenarios.scenes import drives_in_plant, get_scene
 
+pytestmark = [pytest.mark.slow, pytest.mark.fmu, pytest.mark.tools]
+
 #: The bench with its drives inside the plant (ActuatedFiveBarPlant, RK4 x8) is exported too.
 IN_PLANT = "bench_circle_TCMDx, drives in plant"
 SCENES = ("thesis_sim_circle", "bench_circle_TCMDx", IN_PLANT)

@@ -17,6 +17,8 @@ from scenarios.run import run_scene
 from scenarios.scenes import get_scene
 from scenarios.sweep import METRICS, read_rows, run_sweep, with_stop_time
 
+pytestmark = [pytest.mark.slow]
+
 SCENE = "bench_triangle_TCx"
 SHORT = 0.3      # [s] of simulated time for the runs whose metrics do not matter
 

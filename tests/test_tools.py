@@ -18,6 +18,8 @@ from fmus.ssp_run import ecos_available
 from scenarios.scenes import get_scene
 from scenarios.tools import compare, short
 
+pytestmark = [pytest.mark.slow, pytest.mark.fmu, pytest.mark.tools]
+
 SCENES = ("thesis_sim_circle", "bench_circle_TCMDx", "bench_circle_PDq", "bench_triangle_TCMDx")
 STOP = 2.0
 

@@ -19,6 +19,8 @@ import functools
 import numpy as np
 import pytest
 
+pytestmark = [pytest.mark.slow]
+
 sp = pytest.importorskip("sympy")
 
 t = sp.Symbol("t")

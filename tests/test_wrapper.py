@@ -20,8 +20,8 @@ import pytest
 from fmus.wrapper import compiled_wrapper, has_wrapper, install_wrapper
 
 ROOT = Path(__file__).resolve().parent.parent
-pytestmark = pytest.mark.skipif(compiled_wrapper(quiet=True) is None,
-                                reason="no C compiler: the FMUs keep pythonfmu's wrapper")
+pytestmark = [pytest.mark.fmu, pytest.mark.skipif(compiled_wrapper(quiet=True) is None,
+                                                   reason="no C compiler: the FMUs keep pythonfmu's wrapper")]
 
 PRELUDE = """
 import json, os, sys

@@ -7,7 +7,7 @@ chains with architecture matrices.
 
 Model
 -----
-World frame of SYSTEM.md §2: x right, y up, origin midway between the bases.
+World frame of the brief ../shared/spec/SYSTEM.md §2: x right, y up, origin midway between the bases.
 Chain 1 (index 0) has its base joint at (+l0, 0), chain 2 (index 1) at
 (-l0, 0). Generalized coordinates, all measured counter-clockwise from +x::
 
