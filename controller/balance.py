@@ -32,7 +32,6 @@ import numpy as np
 import kernels
 from controller import fastbalance
 from controller.trajectories import SMOOTHSTEP_COEFFICIENTS, SMOOTHSTEP_SLOPE_COEFFICIENTS
-from plant.wheeled_kernel import bound
 
 #: Bryson's rule: the largest acceptable excursion of each state, (theta [rad], psi [rad],
 #: phi [rad], theta' [rad/s], psi' [rad/s], phi' [rad/s]); Q = diag(1/scale^2).
@@ -266,14 +265,20 @@ class BalanceController:
         kernels.Refused
             An input that is not finite (named, with the time), or a buffer word out of range.
         """
-        b = bound(self, (self.buf, self.io))
+        sample, refusal = kernels.owned(self, (self.buf, self.io), self._bind)
         io = self.io
         io[0], io[1], io[2] = enc_l, enc_r, gyro
-        buf, x = b.addresses
-        code = fastbalance.c_sample(buf, x, t, math.inf, b.refusal_address)
+        code = sample(t, math.inf)
         if code != fastbalance.OK:
-            raise kernels.refused(REASONS, b.refusal, t, limit=math.inf)
+            raise kernels.refused(REASONS, refusal, t, limit=math.inf)
         return float(io[fastbalance.O_V]), float(io[fastbalance.O_V + 1])
+
+    def _bind(self):
+        """(sample(t, limit), its refusal record): ``pc_balance_sample`` on ``buf`` and ``io``,
+        kept outside this object (:func:`kernels.owned`)."""
+        refusal = kernels.Refusal()
+        return kernels.bind(fastbalance.c_sample, self.buf, self.io, kernels.PER_CALL, kernels.PER_CALL,
+                            refusal), refusal
 
     def ideal_torques(self) -> tuple:
         """(K_t/R_m) (v_l, v_r): the wheel torques of ideal drives for the last voltages [N m]."""

@@ -80,10 +80,10 @@ def test_a_fall_changes_nothing_and_names_the_substep():
             falls_at, psi = k, exc.value
             break
     sim = WheeledPendulum(initial=start, substeps=4)
-    before, refusal, b = sim.y.copy(), kernels.Refusal(), sim._bound()
-    code = K.c_step(*b.addresses, 0.0, 0.0, 0.0, 4 * h, 4, b.taken_address, ctypes.addressof(refusal))
+    before, b = sim.y.copy(), K.calls(sim)
+    code = b.step(0.0, 0.0, 0.0, 4 * h, 4)
     assert code == K.FALLEN_PITCH and b.taken.value == falls_at and 1 < falls_at
-    assert refusal.value == psi and abs(psi) >= math.pi / 2 and np.array_equal(sim.y, before)
+    assert b.refusal.value == psi and abs(psi) >= math.pi / 2 and np.array_equal(sim.y, before)
 
 
 @pytest.mark.parametrize("index, value, code", [(0, math.nan, K.BAD_INPUT), (1, math.inf, K.BAD_INPUT),
