@@ -30,11 +30,13 @@ thread (``time.thread_time``: not counting the time other jobs on a shared machi
 CPU, so steadier there; cache effects of their load remain).
 
 Where the time goes: each round also runs every case once more with timers (not in the table
-above): every instance's ``set_inputs``, ``do_step`` and ``get_outputs`` as the master calls
-them, and inside ``do_step`` the slave's own Python ``do_step`` (``fmus.guarded.GuardedSlave``;
-the FMUs loaded in this process share that module, so this also times the Python side of an
-FMU's ``fmi2DoStep``).  The timers wrap ``fmus.master._instantiate`` and
-``GuardedSlave.do_step`` for the duration of the run and add about 0.3 µs a call.
+above): every instance's inputs set, step and outputs read as the master's stepper calls them
+(``fmus.stepper.member_calls``: in process the slave's attributes and its ``do_step``; through
+FMUs ``fmi2SetReal``, ``fmi2DoStep``, ``fmi2GetReal``), and inside the step the slave's own
+Python ``do_step`` (``fmus.guarded.GuardedSlave``; the FMUs loaded in this process share that
+module, so this also times the Python side of an FMU's ``fmi2DoStep``).  The timers wrap
+``fmus.stepper.member_calls`` and ``GuardedSlave.do_step`` for the duration of the run and add
+about 0.3 µs a call.
 
 The in-process floor runs through the unchanged ``simulate(mode="inprocess")``:
 :func:`passthrough.registered` adds the pass-through classes to ``fmus.build.SLAVES`` for the
@@ -63,7 +65,6 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from fmus import master  # noqa: E402
 from fmus.master import simulate  # noqa: E402
 import passthrough  # noqa: E402
 
@@ -124,27 +125,29 @@ CELLS = METHODS + ("python_do_step",)
 
 @contextmanager
 def timed_instances():
-    """Time every instance's ``set_inputs``, ``do_step`` and ``get_outputs``, and the slave's
-    own Python ``do_step``, while the block runs.
+    """Time every instance's inputs set, step and outputs read as the master's stepper calls
+    them, and the slave's own Python ``do_step``, while the block runs.
 
-    ``fmus.master._instantiate`` is wrapped so that each instance it makes gets instance
-    attributes that time the bound methods; ``fmus.guarded.GuardedSlave.do_step`` (the base of
-    every slave, shared by the FMUs loaded in this process: they import ``fmus.guarded`` from
-    its module cache) is wrapped at class level.  Both are restored afterwards.  Yields a dict
-    instance name -> cell -> [calls, seconds].
+    ``fmus.stepper.member_calls`` (what the stepper calls per instance: the in-process slaves'
+    attributes moved directly, an FMU's ``set_inputs``/``do_step``/``get_outputs``) is wrapped
+    so that each call is timed; ``fmus.guarded.GuardedSlave.do_step`` (the base of every slave,
+    shared by the FMUs loaded in this process: they import ``fmus.guarded`` from its module
+    cache) is wrapped at class level.  Both are restored afterwards.  Yields a dict instance
+    name -> cell -> [calls, seconds].
     """
-    from fmus import guarded
+    from fmus import guarded, stepper
 
-    original_instantiate = master._instantiate
+    original_member_calls = stepper.member_calls
     original_do_step = guarded.GuardedSlave.__dict__["do_step"]
     clock = time.perf_counter
     table = {}
 
-    def instantiate(*args, **kwargs):
-        instances = original_instantiate(*args, **kwargs)
-        for name, inst in instances.items():
-            table.setdefault(name, {}).update({m: _time_method(inst, m) for m in METHODS})
-        return instances
+    def member_calls(inst, in_slots, out_slots):
+        pull, step, read, source, out, owner = original_member_calls(inst, in_slots, out_slots)
+        cells = table.setdefault(inst.name, {})
+        cells.update({m: [0, 0.0] for m in METHODS})
+        timed_pull = None if pull is None else _timed(pull, cells["set_inputs"])
+        return (timed_pull, _timed(step, cells["do_step"]), _timed(read, cells["get_outputs"]), source, out, owner)
 
     def do_step(self, current_time, step_size):
         t0 = clock()
@@ -156,59 +159,44 @@ def timed_instances():
             cell[0] += 1
         return ok
 
-    master._instantiate = instantiate
+    stepper.member_calls = member_calls
     guarded.GuardedSlave.do_step = do_step
     try:
         yield table
     finally:
-        master._instantiate = original_instantiate
+        stepper.member_calls = original_member_calls
         guarded.GuardedSlave.do_step = original_do_step
 
 
-def _time_method(inst, method):
-    """Replace ``inst.<method>`` by a timed closure; return its [calls, seconds] cell."""
-    clock, bound, cell = time.perf_counter, getattr(inst, method), [0, 0.0]
-    if method == "do_step":
-        def timed(t, h):
-            t0 = clock()
-            bound(t, h)
-            cell[1] += clock() - t0
-            cell[0] += 1
-    elif method == "set_inputs":
-        def timed(values):
-            t0 = clock()
-            bound(values)
-            cell[1] += clock() - t0
-            cell[0] += 1
-    else:
-        def timed():
-            t0 = clock()
-            out = bound()
-            cell[1] += clock() - t0
-            cell[0] += 1
-            return out
-    setattr(inst, method, timed)
-    return cell
+def _timed(function, cell):
+    """``function`` timed into ``cell`` ([calls, seconds])."""
+    clock = time.perf_counter
+
+    def timed(*args):
+        t0 = clock()
+        out = function(*args)
+        cell[1] += clock() - t0
+        cell[0] += 1
+        return out
+    return timed
 
 
 def timer_overhead(n=100_000) -> tuple:
     """(µs a timed call adds in all, µs of it inside the timed window), on a no-op."""
-    class Noop:
-        def do_step(self, t, h):
-            pass
+    def noop(t, h):
+        pass
 
-    plain = Noop()
-    timed = Noop()
-    cell = _time_method(timed, "do_step")
+    cell = [0, 0.0]
+    timed = _timed(noop, cell)
     best = (float("inf"), float("inf"))
     for _ in range(5):
         t0 = time.perf_counter()
         for _ in range(n):
-            plain.do_step(0.0, 1.0)
+            noop(0.0, 1.0)
         t1 = time.perf_counter()
         cell[1] = 0.0
         for _ in range(n):
-            timed.do_step(0.0, 1.0)
+            timed(0.0, 1.0)
         t2 = time.perf_counter()
         call = (t1 - t0) / n
         best = min(best, (1e6 * ((t2 - t1) / n - call), 1e6 * (cell[1] / n - call)))
