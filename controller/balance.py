@@ -216,6 +216,13 @@ REASONS = {
 }
 
 
+def _bind_sample(buf, io):
+    """(sample(t, limit), its refusal record): ``pc_balance_sample`` on a controller's ``buf``
+    and ``io``, kept outside the controller (:func:`kernels.owned`)."""
+    refusal = kernels.Refusal()
+    return kernels.bind(fastbalance.c_sample, buf, io, kernels.PER_CALL, kernels.PER_CALL, refusal), refusal
+
+
 class BalanceController:
     """The sampled controller: observer, LQR, saturation (see the module docstring).
 
@@ -265,20 +272,13 @@ class BalanceController:
         kernels.Refused
             An input that is not finite (named, with the time), or a buffer word out of range.
         """
-        sample, refusal = kernels.owned(self, (self.buf, self.io), self._bind)
+        sample, refusal = kernels.owned(self, (self.buf, self.io), _bind_sample)
         io = self.io
         io[0], io[1], io[2] = enc_l, enc_r, gyro
         code = sample(t, math.inf)
         if code != fastbalance.OK:
             raise kernels.refused(REASONS, refusal, t, limit=math.inf)
         return float(io[fastbalance.O_V]), float(io[fastbalance.O_V + 1])
-
-    def _bind(self):
-        """(sample(t, limit), its refusal record): ``pc_balance_sample`` on ``buf`` and ``io``,
-        kept outside this object (:func:`kernels.owned`)."""
-        refusal = kernels.Refusal()
-        return kernels.bind(fastbalance.c_sample, self.buf, self.io, kernels.PER_CALL, kernels.PER_CALL,
-                            refusal), refusal
 
     def ideal_torques(self) -> tuple:
         """(K_t/R_m) (v_l, v_r): the wheel torques of ideal drives for the last voltages [N m]."""

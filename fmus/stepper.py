@@ -39,11 +39,12 @@ def member_calls(inst, in_slots, out_slots) -> tuple:
     from the slots ``in_slots``; ``step`` steps (False: refused, ``inst.step_refused(t)`` says
     why); ``values[out] = read(source)`` stores the outputs (``out`` a slice, or an index for
     one output read as a value).  An instance offers its own (``inst.step_calls``: the
-    in-process slaves' attributes moved without a Python call); otherwise its ``set_inputs``,
-    ``do_step`` and ``get_outputs``.  :mod:`benchmarks.bench_master` times these."""
-    own = getattr(inst, "step_calls", None)
+    in-process slaves' attributes moved without a Python call: its class's, so that a wrapper
+    delegating its attributes, whose ``do_step`` is another, is not bypassed); otherwise its
+    ``set_inputs``, ``do_step`` and ``get_outputs``.  :mod:`benchmarks.bench_master` times these."""
+    own = getattr(type(inst), "step_calls", None)
     if own is not None:
-        return own(in_slots, out_slots)
+        return own(inst, in_slots, out_slots)
     pull = None
     if in_slots:
         gather, set_inputs = _gatherer(in_slots), inst.set_inputs

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import ctypes
 import functools
+import operator
 import os
 import weakref
 from pathlib import Path
@@ -180,15 +181,7 @@ def bind(function, *arguments):
         elif isinstance(a, (int, float)):
             a = argtype(a)
         args.append(a)
-    if not slots:
-        call = functools.partial(raw, *args)
-    else:
-        slots = tuple(slots)
-
-        def call(*values):
-            for slot, value in zip(slots, values):
-                slot.value = value
-            return raw(*args)
+    call = functools.partial(raw, *args) if not slots else _setting(raw, args, tuple(slots))
     call.buffers = tuple(buffers)
     return call
 
@@ -197,19 +190,48 @@ _OWNED: dict = {}
 
 
 def owned(owner, buffers: tuple, make):
-    """``make()`` (an owner's bound calls, e.g. of :func:`bind`) made once per ``owner`` and kept
-    OUTSIDE it, made again when the owner holds other ``buffers`` (compared by identity).  An FMU
-    state writes the owner's fields, so a stored address would be a forgeable pointer, and a deep
-    copy's would name the original's arrays; kept here, neither can happen."""
-    key = id(owner)
-    entry = _OWNED.get(key)
-    if entry is not None and len(entry[0]) == len(buffers) and all(a is b for a, b in zip(entry[0], buffers)):
+    """``make(*buffers)`` (an owner's bound calls on its ``buffers``, e.g. of :func:`bind`) made
+    once per ``owner`` and kept OUTSIDE it, made again when the owner holds other buffers
+    (compared by identity; the entry keeps them).  An FMU state writes the owner's fields, so a
+    stored address would be a forgeable pointer, and a deep copy's would name the original's
+    arrays; kept here, neither can happen."""
+    entry = _OWNED.get(id(owner))
+    if entry is not None and all(map(operator.is_, entry[0], buffers)):
         return entry[1]
     if entry is None:
-        weakref.finalize(owner, _OWNED.pop, key, None)
-    made = make()
-    _OWNED[key] = (tuple(buffers), made)
+        weakref.finalize(owner, _OWNED.pop, id(owner), None)
+    made = make(*buffers)
+    _OWNED[id(owner)] = (tuple(buffers), made)
     return made
+
+
+def _setting(raw, args, slots):
+    """``raw(*args)`` after the per-call values go into ``slots`` (one to three set one by one:
+    a loop costs about as much as the call)."""
+    if len(slots) == 1:
+        (a,) = slots
+
+        def call(x):
+            a.value = x
+            return raw(*args)
+    elif len(slots) == 2:
+        a, b = slots
+
+        def call(x, y):
+            a.value, b.value = x, y
+            return raw(*args)
+    elif len(slots) == 3:
+        a, b, c = slots
+
+        def call(x, y, z):
+            a.value, b.value, c.value = x, y, z
+            return raw(*args)
+    else:
+        def call(*values):
+            for slot, value in zip(slots, values):
+                slot.value = value
+            return raw(*args)
+    return call
 
 
 def layout(symbol: str) -> dict:

@@ -140,7 +140,8 @@ class Calls:
 
     def observer_estimate(self, v, omega, h):
         """``pc_observer_estimate_x``: the code; i_hat in ``x[3]`` (also a non-finite one)."""
-        self.x[0:3] = (v, omega, h)
+        x = self.x
+        x[0], x[1], x[2] = v, omega, h
         return self._estimate()
 
 

@@ -220,7 +220,7 @@ class ActuatedPlant:
         d1.prepare_step(dt)
         d2.prepare_step(dt)
         k = kernels.owned(self, (d1.buf, d1._controller_buf, d1.lugre, d2.buf, d2._controller_buf, d2.lugre),
-                          lambda: KernelStep(self))
+                          lambda *_: KernelStep(self))
         x, z = k.x, k.z
         x[:_FIRST] = (i_ref[0], i_hat[0], v_ref[0], i_ref[1], i_hat[1], v_ref[1])
         z[:fast5r.PLANT_STATES] = plant.y

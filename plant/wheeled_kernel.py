@@ -73,7 +73,7 @@ class Calls:
 
 def calls(owner) -> Calls:
     """The :class:`Calls` on ``owner.prm`` and ``owner.y`` (a :class:`plant.wheeled.WheeledPendulum`)."""
-    return kernels.owned(owner, (owner.prm, owner.y), lambda: Calls(owner.prm, owner.y))
+    return kernels.owned(owner, (owner.prm, owner.y), Calls)
 
 
 def new_params() -> np.ndarray:
