@@ -9,8 +9,6 @@ from __future__ import annotations
 
 import ctypes
 
-import numpy as np
-
 import kernels
 from motor import _checks
 

@@ -7,7 +7,6 @@ Cheap and free of sympy and FMUs, so that they also run against the sanitizer bu
 (``$PARCOSIM_KERNELS_LIB``)."""
 from __future__ import annotations
 
-import ctypes
 import math
 
 import numpy as np
