@@ -273,7 +273,7 @@ def report(scene_name, system, runs, breakdowns, info_before, info_after, overhe
                    f"after {la1[0]:.2f}/{la1[1]:.2f}/{la1[2]:.2f}")
     out += ["", "| case | wall [s] | real-time factor | µs/step | µs/step, best round | µs/step, CPU time "
             "| setup [s] | load (1 min) | goal |", "|---|---:|---:|---:|---:|---:|---:|---:|---|"]
-    for key, label, mode, floor in CASES:
+    for key, label, mode, floor in (c for c in CASES if c[0] in med):
         m = med[key]
         goal = ""
         if not floor:
@@ -290,15 +290,18 @@ def report(scene_name, system, runs, breakdowns, info_before, info_after, overhe
             ("FMI cost alone (FMU floor - in-process floor)", "floor_fmu", "floor_inprocess"),
             ("FMUs - in-process (real models)", "fmu", "inprocess"))
     out += ["", "| µs per step | medians | best rounds |", "|---|---:|---:|"]
-    for label, a, b in rows:
+    for label, a, b in (r for r in rows if r[1] in us and r[2] in us):
         out.append(f"| {label} | {us[a] - us[b]:.0f} | {best[a] - best[b]:.0f} |")
     cpu = {k: statistics.median(r["cpu_us_per_step"] for r in rs) for k, rs in runs.items()}
     for label, a, b in (("FMUs / FMU floor (goal <= 1.3)", "fmu", "floor_fmu"),
                         ("in-process / in-process floor", "inprocess", "floor_inprocess")):
-        out.append(f"| {label}, ratio (CPU time: {cpu[a] / cpu[b]:.2f}) | {us[a] / us[b]:.2f} | {best[a] / best[b]:.2f} |")
-    out.append(f"| share of the FMU step that is our compute | {100 * (us['fmu'] - us['floor_fmu']) / us['fmu']:.0f} % "
-               f"| {100 * (best['fmu'] - best['floor_fmu']) / best['fmu']:.0f} % |")
-    for key in ("fmu", "inprocess"):
+        if a in us and b in us:
+            out.append(f"| {label}, ratio (CPU time: {cpu[a] / cpu[b]:.2f}) | {us[a] / us[b]:.2f} | "
+                       f"{best[a] / best[b]:.2f} |")
+    if "fmu" in us and "floor_fmu" in us:
+        out.append(f"| share of the FMU step that is our compute | {100 * (us['fmu'] - us['floor_fmu']) / us['fmu']:.0f} % "
+                   f"| {100 * (best['fmu'] - best['floor_fmu']) / best['fmu']:.0f} % |")
+    for key in (k for k in ("fmu", "inprocess") if k in us):
         g = GOAL_RTF[key]
         out.append(f"| budget for {g:g}x {'through FMUs' if key == 'fmu' else 'in process'} "
                    f"(now {us[key]:.0f}, best {best[key]:.0f}) | {1e6 * system.step / g:.0f} | |")
@@ -311,28 +314,29 @@ def report(scene_name, system, runs, breakdowns, info_before, info_after, overhe
                 "FMUs: ctypes, pythonfmu's C wrapper, the GIL); **set/get**: inputs written and outputs "
                 "read (in process: attributes; through FMUs: fmi2SetReal + fmi2GetReal); **master**: the "
                 "loop itself (copies between slots, the recorded row)."]
-        for title, (a, b) in (("Real models", ("inprocess", "fmu")),
-                              ("Pass-through floor", ("floor_inprocess", "floor_fmu"))):
-            if a not in breakdowns or b not in breakdowns:
+        for title, pair in (("Real models", ("inprocess", "fmu")),
+                            ("Pass-through floor", ("floor_inprocess", "floor_fmu"))):
+            keys = [k for k in pair if k in breakdowns]     # both, or the one --cases ran
+            if not keys:
                 continue
+            sides = ["in-process" if "inprocess" in k else "FMU" for k in keys]
             out += ["", f"{title}:", "",
-                    "| instance | model | in-process model | in-process call | in-process set/get "
-                    "| FMU model | FMU call | FMU set/get |",
-                    "|---|---|---:|---:|---:|---:|---:|---:|"]
-            totals = {k: [0.0, 0.0, 0.0] for k in (a, b)}
-            for n in breakdowns[a]["order"]:
+                    "| instance | model | " + " | ".join(f"{s} model | {s} call | {s} set/get" for s in sides) + " |",
+                    "|---|---|" + "---:|---:|---:|" * len(keys)]
+            totals = {k: [0.0, 0.0, 0.0] for k in keys}
+            for n in breakdowns[keys[0]]["order"]:
                 cells = []
-                for k in (a, b):
+                for k in keys:
                     c = breakdowns[k]["components"][n]
                     parts = (c["python_do_step"], c["do_step"] - c["python_do_step"],
                              c["set_inputs"] + c["get_outputs"])
                     totals[k] = [x + y for x, y in zip(totals[k], parts)]
                     cells.append(" | ".join(f"{x:.1f}" for x in parts))
                 out.append(f"| {n} | {models[n]} | " + " | ".join(cells) + " |")
-            out.append("| **sum** | | " + " | ".join(" | ".join(f"{x:.1f}" for x in totals[k]) for k in (a, b)) + " |")
-            out.append("| master | | " + " | ".join(f"{breakdowns[k]['rest_us']:.1f} | |" for k in (a, b)) + " |")
+            out.append("| **sum** | | " + " | ".join(" | ".join(f"{x:.1f}" for x in totals[k]) for k in keys) + " |")
+            out.append("| master | | " + " | ".join(f"{breakdowns[k]['rest_us']:.1f} | |" for k in keys) + " |")
             out.append("| **total** | timers on | "
-                       + " | ".join(f"{breakdowns[k]['us_per_step']:.1f} | |" for k in (a, b)) + " |")
+                       + " | ".join(f"{breakdowns[k]['us_per_step']:.1f} | |" for k in keys) + " |")
     return "\n".join(out)
 
 
@@ -401,12 +405,18 @@ def main(argv=None) -> int:
     ap.add_argument("--fmu-dir", type=Path, default=None,
                     help="directory of the real FMUs (default fmus/build; built when missing or stale)")
     ap.add_argument("--no-breakdown", action="store_true", help="skip the timed per-component runs")
+    ap.add_argument("--cases", default=None,
+                    help="comma-separated cases to run (default all: " + ",".join(c[0] for c in CASES) + ")")
     ap.add_argument("--json", type=Path, default=None, help="also write every measurement to this file")
     ap.add_argument("--drives-in-plant", type=int, default=None, metavar="N",
                     help="the scene with its drives inside the plant, RK4 N steps per sample (docs/actuated.md)")
     args = ap.parse_args(argv)
     if args.repeats < 1:
         ap.error("--repeats must be >= 1")
+    keys = None if args.cases is None else tuple(args.cases.split(","))
+    unknown = sorted(set(keys or ()) - {c[0] for c in CASES})
+    if unknown:
+        ap.error(f"--cases: unknown {', '.join(unknown)}; valid: {', '.join(c[0] for c in CASES)}")
 
     from scenarios.scenes import drives_in_plant, get_scene
 
@@ -418,7 +428,7 @@ def main(argv=None) -> int:
     if args.quick:
         system = replace(system, stop_time=min(system.stop_time, QUICK_STOP_TIME))
     runs, timed, overhead, info_before, info_after = measure(system, args.repeats, args.fmu_dir,
-                                                             not args.no_breakdown)
+                                                             not args.no_breakdown, keys)
     breakdowns = {} if args.no_breakdown else {k: _median_breakdown(v) for k, v in timed.items() if v}
     print(report(args.scene, system, runs, breakdowns, info_before, info_after, overhead))
     if args.json is not None:
