@@ -2,7 +2,7 @@
 beside the floor of pass-through FMUs in the same topology, measured in one run.
 
     python benchmarks/bench_master.py [--quick] [--repeats N] [--scene NAME] [--drives-in-plant N] [--fmu-dir DIR]
-                                      [--json FILE]
+                                      [--json FILE] [--cases inprocess,floor_inprocess,...]
 
 Four cases run the same system (same instances, connections, recorded signals and step
 count, Gauss-Seidel):
