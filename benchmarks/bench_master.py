@@ -2,7 +2,7 @@
 beside the floor of pass-through FMUs in the same topology, measured in one run.
 
     python benchmarks/bench_master.py [--quick] [--repeats N] [--scene NAME] [--drives-in-plant N] [--fmu-dir DIR]
-                                      [--json FILE]
+                                      [--json FILE] [--cases inprocess,floor_inprocess,...]
 
 Four cases run the same system (same instances, connections, recorded signals and step
 count, Gauss-Seidel):
@@ -30,11 +30,13 @@ thread (``time.thread_time``: not counting the time other jobs on a shared machi
 CPU, so steadier there; cache effects of their load remain).
 
 Where the time goes: each round also runs every case once more with timers (not in the table
-above): every instance's ``set_inputs``, ``do_step`` and ``get_outputs`` as the master calls
-them, and inside ``do_step`` the slave's own Python ``do_step`` (``fmus.guarded.GuardedSlave``;
-the FMUs loaded in this process share that module, so this also times the Python side of an
-FMU's ``fmi2DoStep``).  The timers wrap ``fmus.master._instantiate`` and
-``GuardedSlave.do_step`` for the duration of the run and add about 0.3 µs a call.
+above): every instance's inputs set, step and outputs read as the master's stepper calls them
+(``fmus.stepper.member_calls``: in process the slave's attributes and its ``do_step``; through
+FMUs ``fmi2SetReal``, ``fmi2DoStep``, ``fmi2GetReal``), and inside the step the slave's own
+Python ``do_step`` (``fmus.guarded.GuardedSlave``; the FMUs loaded in this process share that
+module, so this also times the Python side of an FMU's ``fmi2DoStep``).  The timers wrap
+``fmus.stepper.member_calls`` and ``GuardedSlave.do_step`` for the duration of the run and add
+about 0.3 µs a call.
 
 The in-process floor runs through the unchanged ``simulate(mode="inprocess")``:
 :func:`passthrough.registered` adds the pass-through classes to ``fmus.build.SLAVES`` for the
@@ -63,7 +65,6 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from fmus import master  # noqa: E402
 from fmus.master import simulate  # noqa: E402
 import passthrough  # noqa: E402
 
@@ -124,27 +125,29 @@ CELLS = METHODS + ("python_do_step",)
 
 @contextmanager
 def timed_instances():
-    """Time every instance's ``set_inputs``, ``do_step`` and ``get_outputs``, and the slave's
-    own Python ``do_step``, while the block runs.
+    """Time every instance's inputs set, step and outputs read as the master's stepper calls
+    them, and the slave's own Python ``do_step``, while the block runs.
 
-    ``fmus.master._instantiate`` is wrapped so that each instance it makes gets instance
-    attributes that time the bound methods; ``fmus.guarded.GuardedSlave.do_step`` (the base of
-    every slave, shared by the FMUs loaded in this process: they import ``fmus.guarded`` from
-    its module cache) is wrapped at class level.  Both are restored afterwards.  Yields a dict
-    instance name -> cell -> [calls, seconds].
+    ``fmus.stepper.member_calls`` (what the stepper calls per instance: the in-process slaves'
+    attributes moved directly, an FMU's ``set_inputs``/``do_step``/``get_outputs``) is wrapped
+    so that each call is timed; ``fmus.guarded.GuardedSlave.do_step`` (the base of every slave,
+    shared by the FMUs loaded in this process: they import ``fmus.guarded`` from its module
+    cache) is wrapped at class level.  Both are restored afterwards.  Yields a dict instance
+    name -> cell -> [calls, seconds].
     """
-    from fmus import guarded
+    from fmus import guarded, stepper
 
-    original_instantiate = master._instantiate
+    original_member_calls = stepper.member_calls
     original_do_step = guarded.GuardedSlave.__dict__["do_step"]
     clock = time.perf_counter
     table = {}
 
-    def instantiate(*args, **kwargs):
-        instances = original_instantiate(*args, **kwargs)
-        for name, inst in instances.items():
-            table.setdefault(name, {}).update({m: _time_method(inst, m) for m in METHODS})
-        return instances
+    def member_calls(inst, in_slots, out_slots):
+        pull, step, read, source, out, owner = original_member_calls(inst, in_slots, out_slots)
+        cells = table.setdefault(inst.name, {})
+        cells.update({m: [0, 0.0] for m in METHODS})
+        timed_pull = None if pull is None else _timed(pull, cells["set_inputs"])
+        return (timed_pull, _timed(step, cells["do_step"]), _timed(read, cells["get_outputs"]), source, out, owner)
 
     def do_step(self, current_time, step_size):
         t0 = clock()
@@ -156,59 +159,44 @@ def timed_instances():
             cell[0] += 1
         return ok
 
-    master._instantiate = instantiate
+    stepper.member_calls = member_calls
     guarded.GuardedSlave.do_step = do_step
     try:
         yield table
     finally:
-        master._instantiate = original_instantiate
+        stepper.member_calls = original_member_calls
         guarded.GuardedSlave.do_step = original_do_step
 
 
-def _time_method(inst, method):
-    """Replace ``inst.<method>`` by a timed closure; return its [calls, seconds] cell."""
-    clock, bound, cell = time.perf_counter, getattr(inst, method), [0, 0.0]
-    if method == "do_step":
-        def timed(t, h):
-            t0 = clock()
-            bound(t, h)
-            cell[1] += clock() - t0
-            cell[0] += 1
-    elif method == "set_inputs":
-        def timed(values):
-            t0 = clock()
-            bound(values)
-            cell[1] += clock() - t0
-            cell[0] += 1
-    else:
-        def timed():
-            t0 = clock()
-            out = bound()
-            cell[1] += clock() - t0
-            cell[0] += 1
-            return out
-    setattr(inst, method, timed)
-    return cell
+def _timed(function, cell):
+    """``function`` timed into ``cell`` ([calls, seconds])."""
+    clock = time.perf_counter
+
+    def timed(*args):
+        t0 = clock()
+        out = function(*args)
+        cell[1] += clock() - t0
+        cell[0] += 1
+        return out
+    return timed
 
 
 def timer_overhead(n=100_000) -> tuple:
     """(µs a timed call adds in all, µs of it inside the timed window), on a no-op."""
-    class Noop:
-        def do_step(self, t, h):
-            pass
+    def noop(t, h):
+        pass
 
-    plain = Noop()
-    timed = Noop()
-    cell = _time_method(timed, "do_step")
+    cell = [0, 0.0]
+    timed = _timed(noop, cell)
     best = (float("inf"), float("inf"))
     for _ in range(5):
         t0 = time.perf_counter()
         for _ in range(n):
-            plain.do_step(0.0, 1.0)
+            noop(0.0, 1.0)
         t1 = time.perf_counter()
         cell[1] = 0.0
         for _ in range(n):
-            timed.do_step(0.0, 1.0)
+            timed(0.0, 1.0)
         t2 = time.perf_counter()
         call = (t1 - t0) / n
         best = min(best, (1e6 * ((t2 - t1) / n - call), 1e6 * (cell[1] / n - call)))
@@ -285,7 +273,7 @@ def report(scene_name, system, runs, breakdowns, info_before, info_after, overhe
                    f"after {la1[0]:.2f}/{la1[1]:.2f}/{la1[2]:.2f}")
     out += ["", "| case | wall [s] | real-time factor | µs/step | µs/step, best round | µs/step, CPU time "
             "| setup [s] | load (1 min) | goal |", "|---|---:|---:|---:|---:|---:|---:|---:|---|"]
-    for key, label, mode, floor in CASES:
+    for key, label, mode, floor in (c for c in CASES if c[0] in med):
         m = med[key]
         goal = ""
         if not floor:
@@ -302,15 +290,18 @@ def report(scene_name, system, runs, breakdowns, info_before, info_after, overhe
             ("FMI cost alone (FMU floor - in-process floor)", "floor_fmu", "floor_inprocess"),
             ("FMUs - in-process (real models)", "fmu", "inprocess"))
     out += ["", "| µs per step | medians | best rounds |", "|---|---:|---:|"]
-    for label, a, b in rows:
+    for label, a, b in (r for r in rows if r[1] in us and r[2] in us):
         out.append(f"| {label} | {us[a] - us[b]:.0f} | {best[a] - best[b]:.0f} |")
     cpu = {k: statistics.median(r["cpu_us_per_step"] for r in rs) for k, rs in runs.items()}
     for label, a, b in (("FMUs / FMU floor (goal <= 1.3)", "fmu", "floor_fmu"),
                         ("in-process / in-process floor", "inprocess", "floor_inprocess")):
-        out.append(f"| {label}, ratio (CPU time: {cpu[a] / cpu[b]:.2f}) | {us[a] / us[b]:.2f} | {best[a] / best[b]:.2f} |")
-    out.append(f"| share of the FMU step that is our compute | {100 * (us['fmu'] - us['floor_fmu']) / us['fmu']:.0f} % "
-               f"| {100 * (best['fmu'] - best['floor_fmu']) / best['fmu']:.0f} % |")
-    for key in ("fmu", "inprocess"):
+        if a in us and b in us:
+            out.append(f"| {label}, ratio (CPU time: {cpu[a] / cpu[b]:.2f}) | {us[a] / us[b]:.2f} | "
+                       f"{best[a] / best[b]:.2f} |")
+    if "fmu" in us and "floor_fmu" in us:
+        out.append(f"| share of the FMU step that is our compute | {100 * (us['fmu'] - us['floor_fmu']) / us['fmu']:.0f} % "
+                   f"| {100 * (best['fmu'] - best['floor_fmu']) / best['fmu']:.0f} % |")
+    for key in (k for k in ("fmu", "inprocess") if k in us):
         g = GOAL_RTF[key]
         out.append(f"| budget for {g:g}x {'through FMUs' if key == 'fmu' else 'in process'} "
                    f"(now {us[key]:.0f}, best {best[key]:.0f}) | {1e6 * system.step / g:.0f} | |")
@@ -323,28 +314,29 @@ def report(scene_name, system, runs, breakdowns, info_before, info_after, overhe
                 "FMUs: ctypes, pythonfmu's C wrapper, the GIL); **set/get**: inputs written and outputs "
                 "read (in process: attributes; through FMUs: fmi2SetReal + fmi2GetReal); **master**: the "
                 "loop itself (copies between slots, the recorded row)."]
-        for title, (a, b) in (("Real models", ("inprocess", "fmu")),
-                              ("Pass-through floor", ("floor_inprocess", "floor_fmu"))):
-            if a not in breakdowns or b not in breakdowns:
+        for title, pair in (("Real models", ("inprocess", "fmu")),
+                            ("Pass-through floor", ("floor_inprocess", "floor_fmu"))):
+            keys = [k for k in pair if k in breakdowns]     # both, or the one --cases ran
+            if not keys:
                 continue
+            sides = ["in-process" if "inprocess" in k else "FMU" for k in keys]
             out += ["", f"{title}:", "",
-                    "| instance | model | in-process model | in-process call | in-process set/get "
-                    "| FMU model | FMU call | FMU set/get |",
-                    "|---|---|---:|---:|---:|---:|---:|---:|"]
-            totals = {k: [0.0, 0.0, 0.0] for k in (a, b)}
-            for n in breakdowns[a]["order"]:
+                    "| instance | model | " + " | ".join(f"{s} model | {s} call | {s} set/get" for s in sides) + " |",
+                    "|---|---|" + "---:|---:|---:|" * len(keys)]
+            totals = {k: [0.0, 0.0, 0.0] for k in keys}
+            for n in breakdowns[keys[0]]["order"]:
                 cells = []
-                for k in (a, b):
+                for k in keys:
                     c = breakdowns[k]["components"][n]
                     parts = (c["python_do_step"], c["do_step"] - c["python_do_step"],
                              c["set_inputs"] + c["get_outputs"])
                     totals[k] = [x + y for x, y in zip(totals[k], parts)]
                     cells.append(" | ".join(f"{x:.1f}" for x in parts))
                 out.append(f"| {n} | {models[n]} | " + " | ".join(cells) + " |")
-            out.append("| **sum** | | " + " | ".join(" | ".join(f"{x:.1f}" for x in totals[k]) for k in (a, b)) + " |")
-            out.append("| master | | " + " | ".join(f"{breakdowns[k]['rest_us']:.1f} | |" for k in (a, b)) + " |")
+            out.append("| **sum** | | " + " | ".join(" | ".join(f"{x:.1f}" for x in totals[k]) for k in keys) + " |")
+            out.append("| master | | " + " | ".join(f"{breakdowns[k]['rest_us']:.1f} | |" for k in keys) + " |")
             out.append("| **total** | timers on | "
-                       + " | ".join(f"{breakdowns[k]['us_per_step']:.1f} | |" for k in (a, b)) + " |")
+                       + " | ".join(f"{breakdowns[k]['us_per_step']:.1f} | |" for k in keys) + " |")
     return "\n".join(out)
 
 
@@ -413,12 +405,18 @@ def main(argv=None) -> int:
     ap.add_argument("--fmu-dir", type=Path, default=None,
                     help="directory of the real FMUs (default fmus/build; built when missing or stale)")
     ap.add_argument("--no-breakdown", action="store_true", help="skip the timed per-component runs")
+    ap.add_argument("--cases", default=None,
+                    help="comma-separated cases to run (default all: " + ",".join(c[0] for c in CASES) + ")")
     ap.add_argument("--json", type=Path, default=None, help="also write every measurement to this file")
     ap.add_argument("--drives-in-plant", type=int, default=None, metavar="N",
                     help="the scene with its drives inside the plant, RK4 N steps per sample (docs/actuated.md)")
     args = ap.parse_args(argv)
     if args.repeats < 1:
         ap.error("--repeats must be >= 1")
+    keys = None if args.cases is None else tuple(args.cases.split(","))
+    unknown = sorted(set(keys or ()) - {c[0] for c in CASES})
+    if unknown:
+        ap.error(f"--cases: unknown {', '.join(unknown)}; valid: {', '.join(c[0] for c in CASES)}")
 
     from scenarios.scenes import drives_in_plant, get_scene
 
@@ -430,7 +428,7 @@ def main(argv=None) -> int:
     if args.quick:
         system = replace(system, stop_time=min(system.stop_time, QUICK_STOP_TIME))
     runs, timed, overhead, info_before, info_after = measure(system, args.repeats, args.fmu_dir,
-                                                             not args.no_breakdown)
+                                                             not args.no_breakdown, keys)
     breakdowns = {} if args.no_breakdown else {k: _median_breakdown(v) for k, v in timed.items() if v}
     print(report(args.scene, system, runs, breakdowns, info_before, info_after, overhead))
     if args.json is not None:

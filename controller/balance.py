@@ -32,7 +32,6 @@ import numpy as np
 import kernels
 from controller import fastbalance
 from controller.trajectories import SMOOTHSTEP_COEFFICIENTS, SMOOTHSTEP_SLOPE_COEFFICIENTS
-from plant.wheeled_kernel import bound
 
 #: Bryson's rule: the largest acceptable excursion of each state, (theta [rad], psi [rad],
 #: phi [rad], theta' [rad/s], psi' [rad/s], phi' [rad/s]); Q = diag(1/scale^2).
@@ -217,6 +216,13 @@ REASONS = {
 }
 
 
+def _bind_sample(buf, io):
+    """(sample(t, limit), its refusal record): ``pc_balance_sample`` on a controller's ``buf``
+    and ``io``, kept outside the controller (:func:`kernels.owned`)."""
+    refusal = kernels.Refusal()
+    return kernels.bind(fastbalance.c_sample, buf, io, kernels.PER_CALL, kernels.PER_CALL, refusal), refusal
+
+
 class BalanceController:
     """The sampled controller: observer, LQR, saturation (see the module docstring).
 
@@ -266,13 +272,12 @@ class BalanceController:
         kernels.Refused
             An input that is not finite (named, with the time), or a buffer word out of range.
         """
-        b = bound(self, (self.buf, self.io))
+        sample, refusal = kernels.owned(self, (self.buf, self.io), _bind_sample)
         io = self.io
         io[0], io[1], io[2] = enc_l, enc_r, gyro
-        buf, x = b.addresses
-        code = fastbalance.c_sample(buf, x, t, math.inf, b.refusal_address)
+        code = sample(t, math.inf)
         if code != fastbalance.OK:
-            raise kernels.refused(REASONS, b.refusal, t, limit=math.inf)
+            raise kernels.refused(REASONS, refusal, t, limit=math.inf)
         return float(io[fastbalance.O_V]), float(io[fastbalance.O_V + 1])
 
     def ideal_torques(self) -> tuple:

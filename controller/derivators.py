@@ -298,7 +298,7 @@ class Derivator:
         call = _call(self)
         if call.scratch.size:       # else the buffer is damaged: refused before q is read
             call.q[:] = q
-        code = _STEP(call.context, call.q_address, limit, call.out_address, call.refusal)
+        code = call.step(limit)
         if code not in (fastderivator.OK, fastderivator.NONFINITE_OUTPUT):
             raise kernels.refused(_REASONS, call.refusal, angles=call.q.tolist(), limit=limit, words=call.buf.size)
         return call
@@ -356,7 +356,7 @@ class _Call:
     buffers' addresses), the input, output and scratch arrays and the refusal record.  Kept
     out of the Derivator (whose attributes are its FMU state), in :data:`_CALLS`."""
 
-    __slots__ = ("buf", "q", "out", "scratch", "context", "refusal", "q_address", "out_address")
+    __slots__ = ("buf", "q", "out", "scratch", "context", "refusal", "step")
 
     def __init__(self, buf):
         # Sized by the kernel's own check of the buffer: none for sizes that do not fit it
@@ -367,7 +367,8 @@ class _Call:
         self.context = _Context(kernels.address(buf), kernels.address(self.scratch), buf.size, self.scratch.size,
                                 math.inf)
         self.refusal = kernels.Refusal()
-        self.q_address, self.out_address = kernels.address(self.q), kernels.address(self.out)
+        #: step(limit) -> the code: ``pc_derivator_step`` from ``q`` into ``out`` (:func:`kernels.bind`)
+        self.step = kernels.bind(_STEP, self.context, self.q, kernels.PER_CALL, self.out, self.refusal)
 
 
 def kernel_context(derivator, limit: float) -> _Context:

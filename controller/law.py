@@ -151,7 +151,7 @@ class Binding:
     """One controller's context and refusal record, made once per set of buffers (the
     controller keeps no address: an FMU state restored over it must carry none)."""
 
-    __slots__ = ("arrays", "context", "address", "refusal", "refusal_address", "inputs", "outputs")
+    __slots__ = ("arrays", "context", "address", "refusal", "refusal_address", "inputs", "outputs", "_run")
 
     def __init__(self, buf, scratch, terms, table):
         self.arrays = (buf, scratch, terms, table)
@@ -161,6 +161,7 @@ class Binding:
         self.address = ctypes.addressof(self.context)
         self.refusal = kernels.Refusal()
         self.refusal_address = ctypes.addressof(self.refusal)
+        self._run = kernels.bind(_run, self.context, kernels.PER_CALL, self.refusal)   # run(h) -> the code
         # scratch's inputs and outputs as ctypes arrays: one slice copies them (numpy would convert each)
         first = kernels.address(scratch)
         self.inputs = (_d * 12).from_address(first + 8 * SCRATCH["in"].start)
@@ -170,7 +171,7 @@ class Binding:
         """``pc_law_run`` on ``inputs`` (the 12 of ``pc_law_inputs``): the code; the outputs in
         :attr:`outputs`."""
         self.inputs[:] = inputs
-        return _run(self.address, h, self.refusal_address)
+        return self._run(h)
 
     def resume(self, h):
         """``pc_law_resume``: the rest of the sample with the terms in place."""

@@ -73,19 +73,22 @@ _REASONS = {
 }
 
 
-#: id(trajectory) -> (its buffer, the buffer's address), while the trajectory lives: kept out
-#: of the frozen trajectory, whose fields are its FMU state and configuration.
-_ADDRESSES = {}
+#: id(trajectory) -> (its buffer, the values array, the refusal, sample(t) on them: :func:`kernels.bind`),
+#: while the trajectory lives: kept out of the frozen trajectory, whose fields are its FMU
+#: state and configuration.
+_SAMPLERS = {}
 
 
-def _address(trajectory, buf) -> int:
-    known = _ADDRESSES.get(id(trajectory))
-    if known is not None and known[0] is buf:
-        return known[1]
+def _sampler(trajectory, buf, values, refusal):
+    """``pc_trajectory_sample`` of ``buf`` into ``values`` with ``refusal``: a call of t."""
+    known = _SAMPLERS.get(id(trajectory))
+    if known is not None and known[0] is buf and known[1] is values and known[2] is refusal:
+        return known[3]
     if known is None:
-        weakref.finalize(trajectory, _ADDRESSES.pop, id(trajectory), None)
-    _ADDRESSES[id(trajectory)] = (buf, kernels.address(buf))
-    return _ADDRESSES[id(trajectory)][1]
+        weakref.finalize(trajectory, _SAMPLERS.pop, id(trajectory), None)
+    sample = kernels.bind(_SAMPLE, buf, buf.size, kernels.PER_CALL, values, refusal)
+    _SAMPLERS[id(trajectory)] = (buf, values, refusal, sample)
+    return sample
 
 
 class _Context(ctypes.Structure):
@@ -124,8 +127,7 @@ def sample_values(trajectory, t, values, refusal) -> list:
     kernels.Refused
         (a ValueError) ``t`` below 0 or a damaged buffer, as :meth:`CircleTrajectory.__call__`.
     """
-    buf = trajectory.buf
-    if _SAMPLE(_address(trajectory, buf), buf.size, t, values, refusal) != _fast.OK:
+    if _sampler(trajectory, trajectory.buf, values, refusal)(t) != _fast.OK:
         raise kernels.refused(_REASONS, refusal, time=float(t), index=refusal.index)
     return values[:]
 

@@ -106,12 +106,19 @@ class CallBudget:
         self.left -= seconds
 
 
-_active = threading.local()
+class _Active(threading.local):
+    """This thread's budget; None (the class's) until a call sets one: read without the
+    AttributeError a missing one would raise (every plant step asks)."""
+
+    budget = None
+
+
+_active = _Active()
 
 
 def active() -> CallBudget | None:
     """The budget of the call running on this thread, None outside any counted call."""
-    return getattr(_active, "budget", None)
+    return _active.budget
 
 
 @contextmanager

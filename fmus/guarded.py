@@ -454,11 +454,12 @@ class GuardedSlave(SlaveState, Fmi2Slave):
                     self._check_communication_point(current_time)
                 # The step-size rule depends on h and fixed parameters alone (and on t through
                 # t + h <= MAX_TIME): an h accepted since initialisation is not checked again.
-                if step_size != self.__accepted_step or not current_time + step_size <= MAX_TIME:
+                end = current_time + step_size
+                if step_size != self.__accepted_step or not end <= MAX_TIME:
                     self.check_step_size(current_time, step_size)
                     self.__accepted_step = step_size
                 self.step(current_time, step_size)
-                self._next_time, self._last_step = current_time + step_size, step_size
+                self._next_time, self._last_step = end, step_size
                 return True
             except KeyboardInterrupt:
                 self._refuse(f"step {INTERRUPTED_MARK} at t = {current_time!r} s", current_time)

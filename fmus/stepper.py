@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import operator
 
+from .instances import CoSimulationError
 from .system import System, split_signal
 
 
@@ -30,6 +31,27 @@ def _span(slots) -> slice:
     if list(slots) != list(range(first, first + len(slots))):
         raise AssertionError(f"output slots {slots} are not consecutive")
     return slice(first, first + len(slots))
+
+
+def member_calls(inst, in_slots, out_slots) -> tuple:
+    """What one communication step of ``inst`` takes from the stepper's values:
+    (pull(values) or None, step(t, h), read, source, out, inst).  ``pull`` sets the inputs
+    from the slots ``in_slots``; ``step`` steps (False: refused, ``inst.step_refused(t)`` says
+    why); ``values[out] = read(source)`` stores the outputs (``out`` a slice, or an index for
+    one output read as a value).  An instance offers its own (``inst.step_calls``: the
+    in-process slaves' attributes moved without a Python call: its class's, so that a wrapper
+    delegating its attributes, whose ``do_step`` is another, is not bypassed); otherwise its
+    ``set_inputs``, ``do_step`` and ``get_outputs``.  :mod:`benchmarks.bench_master` times these."""
+    own = getattr(type(inst), "step_calls", None)
+    if own is not None:
+        return own(inst, in_slots, out_slots)
+    pull = None
+    if in_slots:
+        gather, set_inputs = _gatherer(in_slots), inst.set_inputs
+
+        def pull(values):
+            set_inputs(gather(values))
+    return pull, inst.do_step, operator.call, inst.get_outputs, _span(out_slots), inst
 
 
 def rate_groups(plan) -> list:
@@ -72,6 +94,9 @@ class Stepper:
         A recorded signal that is neither an output nor a connected input.
     """
 
+    #: Each member's calls (:func:`member_calls`) when one flat loop steps the system, else None.
+    _members = None
+
     def __init__(self, system: System, instances: dict, order, jacobi: bool = False):
         self.system, self.instances, self.order, self.jacobi = system, instances, tuple(order), jacobi
         self.slots = {}
@@ -105,6 +130,9 @@ class Stepper:
         self.plan = plan
         self.groups = rate_groups(plan)
         self._exchanges = _exchanges_of(self.groups)
+        # Gauss-Seidel at one rate (the usual system): one flat loop over the members' calls.
+        self._members = None if jacobi or any(n > 1 for n, _ in self.groups) else \
+            tuple(member_calls(inst, ins, outs) for inst, ins, outs, _ in plan)
         self.values = [0.0] * len(self.slots)
         self.time = 0.0
 
@@ -181,6 +209,23 @@ class Stepper:
         """The present value of a connected or recorded ``signal``."""
         return self.values[self.slots[signal]]
 
+    def _step_members(self) -> None:
+        """:meth:`step` of a Gauss-Seidel system at one rate: each member pulls its inputs,
+        steps and stores its outputs (:func:`member_calls`)."""
+        h, t, values = self.system.step, self.time, self.values
+        try:
+            for pull, step, read, source, out, inst in self._members:
+                if pull is not None:
+                    pull(values)
+                if step(t, h) is False:
+                    raise inst.step_refused(t)
+                values[out] = read(source)
+        except CoSimulationError:
+            raise
+        except Exception as exc:  # noqa: BLE001 - as the instance's do_step reports it
+            raise CoSimulationError(inst.name, t, str(exc)) from None
+        self.time = t + h
+
     def free_state(self, state: dict) -> None:
         """Release the instances' states in ``state`` (FMU states live in the FMU)."""
         for name, inst in self.instances.items():
@@ -194,6 +239,9 @@ class Stepper:
         (group, member, sub-step) takes only the rest of the step from there on, as the
         compiled mode does when a kernel declined a step (Gauss-Seidel).  A refusal raises
         the instance's :class:`fmus.master.CoSimulationError`."""
+        if self._members is not None and not split and start == (0, 0, 0):
+            self._step_members()
+            return
         h, t, jacobi, values = self.system.step, self.time, self.jacobi, self.values
         groups = self.groups
         if split:

@@ -14,7 +14,10 @@ build of the same sources to load instead (the sanitizer build of the tests).
 from __future__ import annotations
 
 import ctypes
+import functools
+import operator
 import os
+import weakref
 from pathlib import Path
 
 import numpy as np
@@ -132,6 +135,103 @@ def function(name: str, restype, *argtypes):
     f = getattr(library(), name)
     f.restype, f.argtypes = restype, list(argtypes)
     return f
+
+
+class _PerCall:
+    def __repr__(self):
+        return "kernels.PER_CALL"
+
+
+#: In :func:`bind`'s arguments: the place of a value given at each call.
+PER_CALL = _PerCall()
+
+
+def bind(function, *arguments):
+    """``function`` (of :func:`function`) with its fixed arguments converted once: the callable
+    returned takes only the per-call values (the places given as :data:`PER_CALL`, in order)
+    and returns the function's result.  The one way the model bindings cache their buffers'
+    addresses (``plant.fast5r``, ``plant.wheeled_kernel``, ``motor.kernel``).
+
+    A fixed argument is a numpy array (passed as its data address; the callable's ``buffers``
+    keep it alive), a ctypes structure or array (its address), a ctypes scalar (passed as it is:
+    its holder may change its value), None (NULL) or a number (converted to the argument type).
+    The call passes ctypes objects to a copy of the function without argument types, so ctypes
+    converts nothing (its cost grows with every argument it converts); a per-call value goes
+    into a ctypes object of its argument type (TypeError: not a number of that type).  With no
+    per-call value the callable is a ``functools.partial`` (no Python frame at all).
+
+    The callable is code, not data, to an FMU state (:func:`fmus.fmustate.opaque_tag`); a copy
+    of its owner binds its own (a deep copy of a function is the same function).
+    """
+    raw = library()[function.__name__]    # a new function object: ``function`` keeps its argtypes
+    raw.restype = function.restype
+    if len(arguments) != len(function.argtypes):
+        raise TypeError(f"{function.__name__} takes {len(function.argtypes)} arguments, {len(arguments)} bound")
+    args, slots, buffers = [], [], []
+    for argtype, a in zip(function.argtypes, arguments):
+        if a is PER_CALL:
+            a = argtype()
+            slots.append(a)
+        elif isinstance(a, np.ndarray):
+            buffers.append(a)
+            a = ctypes.c_void_p(address(a))
+        elif isinstance(a, (ctypes.Structure, ctypes.Array)):
+            buffers.append(a)
+            a = ctypes.c_void_p(ctypes.addressof(a))
+        elif isinstance(a, (int, float)):
+            a = argtype(a)
+        args.append(a)
+    call = functools.partial(raw, *args) if not slots else _setting(raw, args, tuple(slots))
+    call.buffers = tuple(buffers)
+    return call
+
+
+_OWNED: dict = {}
+
+
+def owned(owner, buffers: tuple, make):
+    """``make(*buffers)`` (an owner's bound calls on its ``buffers``, e.g. of :func:`bind`) made
+    once per ``owner`` and kept OUTSIDE it, made again when the owner holds other buffers
+    (compared by identity; the entry keeps them).  An FMU state writes the owner's fields, so a
+    stored address would be a forgeable pointer, and a deep copy's would name the original's
+    arrays; kept here, neither can happen."""
+    entry = _OWNED.get(id(owner))
+    if entry is not None and all(map(operator.is_, entry[0], buffers)):
+        return entry[1]
+    if entry is None:
+        weakref.finalize(owner, _OWNED.pop, id(owner), None)
+    made = make(*buffers)
+    _OWNED[id(owner)] = (tuple(buffers), made)
+    return made
+
+
+def _setting(raw, args, slots):
+    """``raw(*args)`` after the per-call values go into ``slots`` (one to three set one by one:
+    a loop costs about as much as the call)."""
+    if len(slots) == 1:
+        (a,) = slots
+
+        def call(x):
+            a.value = x
+            return raw(*args)
+    elif len(slots) == 2:
+        a, b = slots
+
+        def call(x, y):
+            a.value, b.value = x, y
+            return raw(*args)
+    elif len(slots) == 3:
+        a, b, c = slots
+
+        def call(x, y, z):
+            a.value, b.value, c.value = x, y, z
+            return raw(*args)
+    else:
+        def call(*values):
+            for slot, value in zip(slots, values):
+                slot.value = value
+            return raw(*args)
+    return call
 
 
 def layout(symbol: str) -> dict:

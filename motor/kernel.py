@@ -9,8 +9,6 @@ from __future__ import annotations
 
 import ctypes
 
-import numpy as np
-
 import kernels
 from motor import _checks
 
@@ -84,9 +82,9 @@ class ObserverContext(ctypes.Structure):
 
 
 class Calls:
-    """The C calls on one owner's buffers through a context struct (the compiled loop's) and an
-    I/O array ``x`` (inputs and the step length, then outputs), both made once: a call sets
-    the inputs in ``x`` and passes three pointers (ctypes' cost grows with the arguments).
+    """The C calls on one owner's buffers (:func:`kernels.bind`) through a context struct (the
+    compiled loop's) and an I/O array ``x`` (inputs and the step length, then outputs), both
+    made once: a call writes the inputs into ``x`` and passes three fixed pointers.
 
     An owner (:class:`motor.Drive`, ...) keeps its bound methods as attributes, which FMU
     state treats as code (fmus.fmustate.opaque_tag), never as data; a copy of the owner makes
@@ -100,62 +98,59 @@ class Calls:
         The length of ``x``.
     """
 
-    __slots__ = ("context", "_context", "x", "_x", "refusal", "_refusal")
+    __slots__ = ("context", "x", "refusal", "_step", "_sample", "_torque", "_estimate")
 
     def __init__(self, context, n):
-        # the pointer arguments as c_void_p objects: ctypes passes them without converting
         self.context = context
-        self._context = ctypes.c_void_p(ctypes.addressof(context))
         self.x = (ctypes.c_double * n)()
-        self._x = ctypes.c_void_p(ctypes.addressof(self.x))
         self.refusal = kernels.Refusal()
-        self._refusal = ctypes.c_void_p(ctypes.addressof(self.refusal))
 
     @classmethod
     def drive(cls, drive, controller, lugre=None):
         """The calls of a drive's buffers (``lugre`` None: B.2's tanh friction)."""
-        return cls(DriveContext(*(None if b is None else kernels.address(b) for b in (drive, controller, lugre))), 8)
+        calls = cls(DriveContext(*(None if b is None else kernels.address(b) for b in (drive, controller, lugre))), 8)
+        calls._step = kernels.bind(drive_step_x, calls.context, calls.x, calls.refusal)
+        calls._sample = kernels.bind(drive_sample_x, calls.context, calls.x, calls.refusal)
+        calls._torque = kernels.bind(drive_torque, drive, lugre, kernels.PER_CALL)
+        return calls
 
     @classmethod
     def observer(cls, observer):
         """The calls of an observer's buffer."""
-        return cls(ObserverContext(kernels.address(observer)), 4)
+        calls = cls(ObserverContext(kernels.address(observer)), 4)
+        calls._estimate = kernels.bind(observer_estimate_x, calls.context, calls.x, calls.refusal)
+        return calls
 
     def drive_step(self, i_ref, v_ref, omega, i_hat, h):
         """``pc_drive_step_x``: the code; tau, v, i in ``x[5:8]``.  TypeError: an input is not a number."""
-        x = self.x
-        x[0], x[1], x[2], x[3], x[4] = i_ref, v_ref, omega, i_hat, h
-        return drive_step_x(self._context, self._x, self._refusal)
+        self.x[0:5] = (i_ref, v_ref, omega, i_hat, h)
+        return self._step()
 
     def sample_voltage(self, i_ref, v_ref, i_hat, h):
         """``pc_drive_sample_x``: the code; v in ``x[6]``."""
         x = self.x
         x[0], x[1], x[3], x[4] = i_ref, v_ref, i_hat, h
-        return drive_sample_x(self._context, self._x, self._refusal)
+        return self._sample()
 
     def torque(self, omega):
         """``pc_drive_torque``: the shaft torque of the present current at speed omega."""
-        c = self.context
-        return drive_torque(c.drive, c.lugre, omega)
+        return self._torque(omega)
 
     def observer_estimate(self, v, omega, h):
         """``pc_observer_estimate_x``: the code; i_hat in ``x[3]`` (also a non-finite one)."""
         x = self.x
         x[0], x[1], x[2] = v, omega, h
-        return observer_estimate_x(self._context, self._x, self._refusal)
+        return self._estimate()
 
 
 class Controller:
-    """``pc_controller_update`` on one controller buffer (its address made once; see :class:`Calls`)."""
+    """``pc_controller_update`` on one controller buffer (:func:`kernels.bind`; see :class:`Calls`)."""
 
-    __slots__ = ("_address",)
+    __slots__ = ("update",)
 
     def __init__(self, buf):
-        self._address = kernels.address(buf)
-
-    def update(self, i_ref, i_meas):
-        """One sample of K(z): the voltage."""
-        return controller_update(self._address, i_ref, i_meas)
+        #: update(i_ref, i_meas) -> one sample of K(z): the voltage
+        self.update = kernels.bind(controller_update, buf, kernels.PER_CALL, kernels.PER_CALL)
 
 
 #: Why a drive or observer step is refused: the input's name and the message (motor._checks.finite's).

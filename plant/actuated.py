@@ -44,6 +44,11 @@ from .integrators import WorkLimitError
 from .simulator import RK4_REAL_STABILITY, PlantError, PlantSimulator
 
 _PAIR = ctypes.c_void_p * 2
+#: ``pc_actuated_step(context, x, h, refusal)`` (kernels/src/actuated.h).
+_step = kernels.function("pc_actuated_step", ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double,
+                         ctypes.c_void_p)
+#: Where the plant's outputs start in the step's x (after i_ref, i_hat, v_ref of each drive).
+_FIRST = 6
 
 
 class KernelContext(ctypes.Structure):
@@ -69,6 +74,24 @@ def kernel_context(actuated, state, first: int) -> KernelContext:
                                        for d, f in zip(drives, actuated.lugre_models)]))
     context.buffers = (plant, drives, actuated.lugre_models)
     return context
+
+
+class KernelStep:
+    """The in-process step of an :class:`ActuatedPlant` with drives on joints 1 and 2: one call
+    of ``pc_actuated_step`` on its own z and x arrays (:func:`kernel_context`), bound once."""
+
+    def __init__(self, actuated):
+        self.z = np.empty(fast5r.PLANT_STATES + 2)
+        self.x = np.zeros(_FIRST + fast5r.PLANT_OUTPUT_COUNT + 6)
+        self.context = kernel_context(actuated, self.z, _FIRST)
+        self.trial = self.context.buffers[0].buffers[5]    # the plant's scratch: a refused trial state there
+        self.refusal = kernels.Refusal()
+        #: call(h) -> the status
+        self.call = kernels.bind(_step, self.context, self.x, kernels.PER_CALL, self.refusal)
+
+
+#: The plant's report of an accepted state as far as ``PlantSimulator.outputs`` reads it.
+_OUTPUTS = slice(fast5r.REPORT_OUTPUTS, fast5r.REPORT_OUTPUTS + fast5r.PLANT_OUTPUT_COUNT - 1)
 
 
 class ActuatedPlant:
@@ -112,6 +135,11 @@ class ActuatedPlant:
         self._motors = np.array([[j - 1, p.R, p.L, p.kt, p.ke, p.b, p.mu, p.omega_eps]
                                  for (j, _), p in zip(self.drives, self._shaft)]).reshape(-1, fast5r.MOTOR_COLUMNS)
         self._stable_for = None     # the step RK4 was last found stable for
+        s = plant.settings
+        #: The step is one C call (:class:`KernelStep`): RK4 with the C kernel, no projection,
+        #: both drives; otherwise the same kernels composed here (dopri5, the general kernel, ...).
+        self._one_call = (s.method == "rk4" and plant._fast is not None and not s.project
+                          and joints == [1, 2])
 
     @property
     def currents(self) -> list:
@@ -165,10 +193,9 @@ class ActuatedPlant:
         s = plant.settings
         if s.method == "rk4" and dt != self._stable_for:
             self._check_rk4_stability(dt, s.substeps)
-        for name, values in (("i_ref", i_ref), ("i_hat", i_hat), ("v_ref", v_ref)):
-            for (j, _), value in zip(self.drives, values):   # all before any controller samples
-                if not math.isfinite(value):
-                    raise ValueError(f"input {name}{j} = {value!r} is not finite")
+        if self._one_call:
+            return self._step_in_c(i_ref, i_hat, v_ref, dt)
+        self._check_inputs(i_ref, i_hat, v_ref)
         # With a work limit (dopri5) the step may stop unfinished: the controllers go back too.
         snapshots = None if max_evaluations is None else [d.controller_state() for _, d in self.drives]
         voltages = [d.sample_voltage(i_ref[n], v_ref[n], i_hat[n], dt) for n, (_, d) in enumerate(self.drives)]
@@ -179,6 +206,68 @@ class ActuatedPlant:
                 d.restore_controller_state(snapshot)
             raise
 
+    def _check_inputs(self, i_ref, i_hat, v_ref) -> None:
+        """Refuse (ValueError naming it with its joint, e.g. ``i_ref2``) an input that is not finite."""
+        for name, values in (("i_ref", i_ref), ("i_hat", i_hat), ("v_ref", v_ref)):
+            for (j, _), value in zip(self.drives, values):   # all before any controller samples
+                if not math.isfinite(value):
+                    raise ValueError(f"input {name}{j} = {value!r} is not finite")
+
+    def _step_in_c(self, i_ref, i_hat, v_ref, dt: float) -> int:
+        """:meth:`step` as one ``pc_actuated_step`` (:class:`KernelStep`): RK4 with the C kernel,
+        no projection, drives on joints 1 and 2.  A refusal changes nothing."""
+        plant, ((_, d1), (_, d2)) = self.plant, self.drives
+        d1.prepare_step(dt)
+        d2.prepare_step(dt)
+        k = kernels.owned(self, (d1.buf, d1._controller_buf, d1.lugre, d2.buf, d2._controller_buf, d2.lugre),
+                          lambda *_: KernelStep(self))
+        x, z = k.x, k.z
+        x[:_FIRST] = (i_ref[0], i_hat[0], v_ref[0], i_ref[1], i_hat[1], v_ref[1])
+        z[:fast5r.PLANT_STATES] = plant.y
+        z[fast5r.PLANT_STATES:] = d1.i, d2.i
+        status = k.call(dt)
+        if status != fast5r.OK:
+            self._refuse_kernel_step(k, status, i_ref, i_hat, v_ref, dt)
+        outputs = x[_FIRST:_FIRST + fast5r.PLANT_OUTPUT_COUNT].tolist()   # ..., q2_enc, residual
+        report = [0.0] * fast5r.REPORT_SIZE     # what PlantSimulator.outputs reads; the rest 0
+        report[_OUTPUTS], report[fast5r.REPORT_RESIDUAL] = outputs[:-1], outputs[-1]
+        plant.accept(z[:fast5r.PLANT_STATES].copy(), dt, None, (fast5r.OK, 0, outputs[-1], report))
+        return 4 * plant.settings.substeps
+
+    def _refuse_kernel_step(self, k: KernelStep, status: int, i_ref, i_hat, v_ref, dt: float):
+        """Raise the refusal of a ``pc_actuated_step`` that returned ``status``, with :meth:`advance`'s
+        messages (the voltages held named as the drives would have sampled them)."""
+        if status == fast5r.NONFINITE_INPUT:
+            self._check_inputs(i_ref, i_hat, v_ref)     # a drive's input: named as ever
+        snapshots = [d.controller_state() for _, d in self.drives]
+        voltages = [d.sample_voltage(i_ref[n], v_ref[n], i_hat[n], dt) for n, (_, d) in enumerate(self.drives)]
+        for (_, d), snapshot in zip(self.drives, snapshots):
+            d.restore_controller_state(snapshot)
+        plant, r = self.plant, k.refusal
+
+        def held():
+            return self._held_text(voltages)
+
+        if status == fast5r.NONFINITE_INPUT:
+            raise plant._record(f"integration failed in the step from t = {plant.time:.6g} s ({held()}): the held "
+                                f"input {r.index} = {r.value!r} is not finite", status, f"input {r.index}", r.value,
+                                plant.time)
+        trial = k.trial[:k.z.size].copy()
+        if status == fast5r.NONFINITE_STATE and r.index >= fast5r.PLANT_STATES:
+            raise self._currents_refusal(trial[fast5r.PLANT_STATES:].tolist(), held)
+        plant.accept(trial[:fast5r.PLANT_STATES], dt, held, (status, r.index, r.value, None))
+
+    def _held_text(self, voltages) -> str:
+        return ", ".join(f"v{j} = {v!r} V" for (j, _), v in zip(self.drives, voltages)) + " held"
+
+    def _currents_refusal(self, currents: list, held):
+        """The refusal of a step whose armature ``currents`` are not all finite."""
+        plant = self.plant
+        bad = next(n for n, i in enumerate(currents) if not math.isfinite(i))
+        return plant._record(f"armature currents {currents} after the step from t = {plant.time:.6g} s "
+                             f"({held()}) are not finite", fast5r.NONFINITE_STATE, f"i{self.drives[bad][0]}",
+                             currents[bad], plant.time)
+
     def advance(self, voltages, dt: float, max_evaluations: int | None = None) -> int:
         """Integrate the whole state over dt with the drives' ``voltages`` held (the part of
         :meth:`step` after the controllers sampled); each drive's ``v`` becomes its voltage.
@@ -186,7 +275,7 @@ class ActuatedPlant:
         plant = self.plant
 
         def held():
-            return ", ".join(f"v{j} = {v!r} V" for (j, _), v in zip(self.drives, voltages)) + " held"
+            return self._held_text(voltages)
 
         external, bristles = self.held_friction(dt)
         u_star = fivebar.thesis_torques(*external) if any(b is not None for b in bristles) else (0.0, 0.0)
@@ -194,11 +283,8 @@ class ActuatedPlant:
                                                  lambda w: self.derivative(w, voltages, external),
                                                  self._motors, np.array(voltages, dtype=float), max_evaluations)
         currents = z[14:].tolist()
-        bad = [n for n, i in enumerate(currents) if not math.isfinite(i)]
-        if bad:
-            raise plant._record(f"armature currents {currents} after the step from t = {plant.time:.6g} s "
-                                f"({held()}) are not finite", fast5r.NONFINITE_STATE,
-                                f"i{self.drives[bad[0]][0]}", currents[bad[0]], plant.time)
+        if not all(map(math.isfinite, currents)):
+            raise self._currents_refusal(currents, held)
         plant.accept(z[:14], dt, held, verdict)
         for (_, d), i, v, b in zip(self.drives, currents, voltages, bristles):
             d.i, d.v = i, v

@@ -18,7 +18,6 @@ refusals and layouts.
 from __future__ import annotations
 
 import ctypes
-import functools
 import math
 
 import numpy as np
@@ -207,31 +206,17 @@ class FastKernel:
         self._bind()
 
     def _bind(self) -> None:
-        """The kernel calls with this object's buffer addresses (closures: code, not state)."""
-        p, s, scratch, rep, z, v = (_address(a) for a in (self.p, self.s, self.scratch, self.report, self.z,
-                                                          self.voltages))
-        ref, res = ctypes.addressof(self.refusal), _address(self._res)
-        # The step is the hot call: its arguments as ctypes objects made once, passed to a
-        # function object without argtypes (no conversion per call; 2-3x less overhead).
-        fixed = [ctypes.c_void_p(a) for a in (p, s, z, v, scratch, rep, ref)]
-        u1, u2, dt = _d(), _d(), _d()
-        call = kernels.library()["pc_fivebar_step"]
-        call.restype = _i
-        motors = {}      # id -> (rows, their address, their count)
+        """The kernel calls on this object's buffers (:func:`kernels.bind`: code, not state)."""
+        self._steps = {}      # id(motor rows) -> (rows, the step bound to them)
+        self._residual = kernels.bind(_residual, self.p, kernels.PER_CALL, self._res)
+        self._derivative = kernels.bind(_derivative, self.p, *(kernels.PER_CALL,) * 5)
 
-        def step(rows, u1_value, u2_value, dt_value):
-            known = motors.get(id(rows))
-            if known is None or known[0] is not rows:
-                known = motors[id(rows)] = (rows, ctypes.c_void_p(_address(rows)), _i(rows.shape[0]))
-            u1.value, u2.value, dt.value = u1_value, u2_value, dt_value
-            return call(fixed[0], fixed[1], known[1], known[2], fixed[2], fixed[3], u1, u2, dt, fixed[4], fixed[5],
-                        fixed[6])
-
-        def residual(y):
-            _residual(p, y, res)
-
-        self._step, self._residual = step, residual
-        self._derivative = functools.partial(_derivative, p)
+    def _bind_step(self, rows):
+        """``pc_fivebar_step`` from ``self.z`` with the motor ``rows``, bound (once per array)."""
+        known = self._steps[id(rows)] = (rows, kernels.bind(
+            _step, self.p, self.s, rows, rows.shape[0], self.z, self.voltages, kernels.PER_CALL, kernels.PER_CALL,
+            kernels.PER_CALL, self.scratch, self.report, self.refusal))
+        return known
 
     def __deepcopy__(self, memo):
         return self
@@ -263,7 +248,10 @@ class FastKernel:
         self.z[:n] = z
         if n > PLANT_STATES:
             self.voltages[:n - PLANT_STATES] = voltages
-        return self._step(motors, u1, u2, dt)
+        known = self._steps.get(id(motors))
+        if known is None or known[0] is not motors:
+            known = self._bind_step(motors)
+        return known[1](u1, u2, dt)
 
     def advance(self, z, u1, u2, baumgarte, dt, substeps, motors=NO_MOTORS, voltages=NO_VOLTAGES):
         """RK4 of the actuated derivative from z over dt (a new array), no checks."""

@@ -173,6 +173,11 @@ class PlantSimulator:
         # (state, its residual norm, the compiled step's report or None) after the last step
         self._last = None
         self._fast = None
+        s = self.settings
+        #: A step is one C step (:meth:`_kernel_step`): RK4 with the C kernel, no projection.
+        self._one_call = s.method == "rk4" and s.kernel == "fast" and not s.project
+        self._evaluations = 4 * s.substeps
+        self._accepted_step = None    # the step length last found good (check_step)
         if self.settings.kernel == "fast":
             s = self.settings
             self._fast = fast5r.FastKernel(params, fast5r.pack_settings(
@@ -198,27 +203,51 @@ class PlantSimulator:
         :data:`RESIDUAL_STOP`; the message gives the torques held), a singular pose.  dopri5
         stops at ``max_evaluations`` (None: unbounded) with :class:`plant.integrators.WorkLimitError`.
         """
-        if not (math.isfinite(tau1) and math.isfinite(tau2)):
-            name, value = ("tau1", tau1) if not math.isfinite(tau1) else ("tau2", tau2)
-            raise self._record(f"input {name} = {value!r} at t = {self.time:.6g} s is not finite",
-                               fast5r.NONFINITE_INPUT, name, value, self.time)
+        if self._one_call:
+            return self._kernel_step(tau1, tau2, dt)
+        self._check_torques(tau1, tau2)
         self.check_step(dt)
 
         def held():
             return f"tau1 = {tau1!r}, tau2 = {tau2!r} N m held"
 
-        settings = self.settings
-        if settings.method == "rk4" and self._fast is not None and not settings.project:
-            # The usual case, integrate's first branch without its array and closure: u* =
-            # (tau1, -tau2) (fivebar.thesis_torques) straight to the C kernel.
-            y, verdict = self._fast_step(self.y, tau1, -tau2, dt, held, fast5r.NO_MOTORS, fast5r.NO_VOLTAGES)
-            self.accept(y, dt, held, verdict)
-            return 4 * settings.substeps
         u_star = fivebar.thesis_torques(tau1, tau2)     # once: held over every derivative call of the step
         y, verdict, evaluations = self.integrate(self.y, dt, u_star[0], u_star[1], held,
                                                  lambda z: self.derivative(z, u_star), max_evaluations=max_evaluations)
         self.accept(y, dt, held, verdict)
         return evaluations
+
+    def _check_torques(self, tau1, tau2) -> None:
+        """Refuse (:class:`PlantRefused`, naming it) a torque that is not finite."""
+        if not (math.isfinite(tau1) and math.isfinite(tau2)):
+            name, value = ("tau1", tau1) if not math.isfinite(tau1) else ("tau2", tau2)
+            raise self._record(f"input {name} = {value!r} at t = {self.time:.6g} s is not finite",
+                               fast5r.NONFINITE_INPUT, name, value, self.time)
+
+    def _kernel_step(self, tau1, tau2, dt: float) -> int:
+        """:meth:`step` as one C step (RK4, the C kernel, no projection): u* = (tau1, -tau2)
+        (fivebar.thesis_torques) straight to the kernel, which refuses a non-finite one first;
+        a step length once accepted is not checked again (it depends on the settings alone)."""
+        if dt != self._accepted_step:
+            self._check_torques(tau1, tau2)     # as ever, a torque is named before the step
+            self.check_step(dt)
+            self._accepted_step = dt
+        fast = self._fast
+        status = fast.step(self.y, tau1, -tau2, dt)
+        if status != fast5r.OK:
+            self._check_torques(tau1, tau2)
+
+            def held():
+                return f"tau1 = {tau1!r}, tau2 = {tau2!r} N m held"
+
+            r = fast.refusal
+            self.accept(fast.scratch[:fast5r.PLANT_STATES].copy(), dt, held, (status, r.index, r.value, None))
+        y = fast.scratch[:fast5r.PLANT_STATES].copy()
+        report = fast.report.tolist()
+        self.y = y
+        self._last = (y, report[fast5r.REPORT_RESIDUAL], report)
+        self.time += dt
+        return self._evaluations
 
     def evaluations_per_step(self) -> int | None:
         """Right-hand-side evaluations of one step when known before it: 4 per RK4 substep;

@@ -188,8 +188,8 @@ class WheeledPendulum:
         self.time = 0.0
         self.fallen = False
 
-    def _bound(self) -> kernel.Bound:
-        return kernel.bound(self, (self.prm, self.y), len(kernel.OUTPUT_NAMES))
+    def _calls(self) -> kernel.Calls:
+        return kernel.calls(self)
 
     def derivative(self, y, tau_l: float = 0.0, tau_r: float = 0.0, tau_d: float = 0.0) -> np.ndarray:
         """dy/dt at state y (layout :data:`plant.wheeled_kernel.STATE`)."""
@@ -208,9 +208,8 @@ class WheeledPendulum:
             The robot fell within the step (:attr:`fallen` becomes True, the state stays the
             last good one).
         """
-        b = self._bound()
-        prm, y = b.addresses
-        code = kernel.c_step(prm, y, tau_l, tau_r, tau_d, dt, self.substeps, b.taken_address, b.refusal_address)
+        b = self._calls()
+        code = b.step(tau_l, tau_r, tau_d, dt, self.substeps)
         if code != kernel.OK:
             if code in kernel.FALLS:
                 self.fallen = True
@@ -222,14 +221,12 @@ class WheeledPendulum:
 
     def energy(self) -> float:
         """Kinetic plus potential energy [J]."""
-        prm, y = self._bound().addresses
-        return kernel.c_energy(prm, y)
+        return self._calls().energy()
 
     def outputs(self) -> dict:
         """The WheeledPendulum outputs (docs/contract.md), as Python floats (:func:`plant.wheeled_kernel.sensors`)."""
-        b = self._bound()
-        prm, y = b.addresses
-        kernel.c_sensors(prm, y, self.count, b.out_address)
+        b = self._calls()
+        b.sensors(self.count)
         return dict(zip(kernel.OUTPUT_NAMES, b.out.tolist()))
 
 

@@ -8,7 +8,6 @@ parameters (:data:`PARAMS`, ``pc_wheeled_params``), the state (:data:`STATE`, in
 from __future__ import annotations
 
 import ctypes
-import weakref
 
 import numpy as np
 
@@ -55,43 +54,26 @@ c_sensors = kernels.function("pc_wheeled_sensors", None, _vp, _vp, _d, _vp)
 _step_io = kernels.function("pc_wheeled_step_io", _i, _vp, _vp, _vp, _vp, _d, _d, _vp)
 
 
-class Bound:
-    """The C addresses of an owner's buffers, its refusal record and an output scratch
-    array, kept OUTSIDE the owner (an FMU state writes the owner's fields: a stored address
-    would be a forgeable pointer, and a deep copy's would name the original's arrays).
-    :func:`bound` hands them out while the owner still holds the same arrays."""
+class Calls:
+    """A pendulum's C calls on its parameter and state buffers (:func:`kernels.bind`), with the
+    refusal record, the substep count taken and the sensors' output array they fill.  Kept
+    outside the pendulum by :func:`calls` (:func:`kernels.owned`)."""
 
-    __slots__ = ("buffers", "addresses", "refusal", "refusal_address", "taken", "taken_address", "out",
-                 "out_address")
+    __slots__ = ("refusal", "taken", "out", "step", "energy", "sensors")
 
-    def __init__(self, buffers: tuple, scratch: int):
-        self.buffers = buffers
-        self.addresses = tuple(kernels.address(b) for b in buffers)
-        self.out = np.zeros(scratch)
-        self.out_address = kernels.address(self.out)
-        self.refusal = kernels.Refusal()
-        self.refusal_address = ctypes.addressof(self.refusal)
-        self.taken = _i()
-        self.taken_address = ctypes.addressof(self.taken)
+    def __init__(self, prm: np.ndarray, y: np.ndarray):
+        P = kernels.PER_CALL
+        self.refusal, self.taken, self.out = kernels.Refusal(), _i(), np.zeros(len(OUTPUT_NAMES))
+        #: step(tau_l, tau_r, tau_d, dt, substeps) -> code
+        self.step = kernels.bind(c_step, prm, y, P, P, P, P, P, ctypes.addressof(self.taken), self.refusal)
+        self.energy = kernels.bind(c_energy, prm, y)
+        #: sensors(count): the outputs into ``out``
+        self.sensors = kernels.bind(c_sensors, prm, y, P, self.out)
 
 
-_BOUND: dict = {}
-
-
-def bound(owner, buffers: tuple, scratch: int = 0) -> Bound:
-    """The :class:`Bound` of ``owner``'s ``buffers`` with ``scratch`` output words (made
-    again when the owner holds other arrays)."""
-    entry = _BOUND.get(id(owner))
-    if entry is not None:
-        for kept, now in zip(entry.buffers, buffers):
-            if kept is not now:
-                break
-        else:
-            return entry
-    if entry is None:
-        weakref.finalize(owner, _BOUND.pop, id(owner), None)
-    entry = _BOUND[id(owner)] = Bound(buffers, scratch)
-    return entry
+def calls(owner) -> Calls:
+    """The :class:`Calls` on ``owner.prm`` and ``owner.y`` (a :class:`plant.wheeled.WheeledPendulum`)."""
+    return kernels.owned(owner, (owner.prm, owner.y), Calls)
 
 
 def new_params() -> np.ndarray:

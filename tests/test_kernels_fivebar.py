@@ -203,12 +203,15 @@ _ACTUATED_X = [0.5, 0.45, 0.0, -0.4, -0.35, 0.0]   # i_ref1, i_hat1, v_ref1, i_r
 
 
 def test_pc_actuated_io_is_the_actuated_plants_step():
-    """One step of pc_actuated_io equals ActuatedPlant.step (the Python composition of the
-    same kernels): state, currents, voltages, bristles and the torques minus the bristles'.
-    Catches a wrong input order, bristle sign, or the bristle torque at the wrong speed."""
+    """One step of pc_actuated_io, and of the in-process ActuatedPlant.step (one
+    pc_actuated_step), equals the same kernels composed step by step in Python (each drive's
+    sample_voltage, then ActuatedPlant.advance: the bristles, the plant's RK4, the drives kept):
+    state, currents, voltages, bristles and the torques minus the bristles'.  Catches a wrong
+    input order, bristle sign, the bristle torque at the wrong speed, or a binding that reads
+    its state or inputs from the wrong place."""
     from plant.actuated import kernel_context
 
-    a, b = _actuated_lugre(), _actuated_lugre()
+    a, b, c = _actuated_lugre(), _actuated_lugre(), _actuated_lugre()
     state = a.state()
     context = kernel_context(a, state, 6)
     x = np.array(_ACTUATED_X + [0.0] * 17)
@@ -216,12 +219,18 @@ def test_pc_actuated_io_is_the_actuated_plants_step():
     assert kernels.library().pc_actuated_io(ctypes.c_void_p(ctypes.addressof(context)),
                                             ctypes.c_void_p(kernels.address(x)), ctypes.c_double(0.0),
                                             ctypes.c_double(DT), ctypes.byref(refusal)) == 0
-    b.step(_ACTUATED_X[0::3], _ACTUATED_X[1::3], _ACTUATED_X[2::3], DT)
-    assert np.array_equal(state, b.state())
-    for (_, da), (_, db) in zip(a.drives, b.drives):
-        assert np.array_equal(da.buf, db.buf) and np.array_equal(da._controller_buf, db._controller_buf)
-        assert np.array_equal(da.lugre, db.lugre) and da.z != 0.0
-    assert x[6 + 11:6 + 13].tolist() == b.shaft_torques()
+    voltages = [d.sample_voltage(_ACTUATED_X[3 * n], _ACTUATED_X[3 * n + 2], _ACTUATED_X[3 * n + 1], DT)
+                for n, (_, d) in enumerate(b.drives)]
+    b.advance(voltages, DT)
+    assert c._one_call
+    c.step(_ACTUATED_X[0::3], _ACTUATED_X[1::3], _ACTUATED_X[2::3], DT)
+    assert np.array_equal(state, b.state()) and np.array_equal(c.state(), b.state())
+    for one in (a, c):
+        for (_, da), (_, db) in zip(one.drives, b.drives):
+            assert np.array_equal(da.buf, db.buf) and np.array_equal(da._controller_buf, db._controller_buf)
+            assert np.array_equal(da.lugre, db.lugre) and da.z != 0.0
+    assert c.plant.time == b.plant.time == DT and c.plant.outputs() == b.plant.outputs()
+    assert x[6 + 11:6 + 13].tolist() == b.shaft_torques() == c.shaft_torques()
     assert x[6 + 13:].tolist() == [d.v for _, d in b.drives] + b.currents
 
 

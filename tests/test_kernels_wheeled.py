@@ -7,7 +7,6 @@ Cheap and free of sympy and FMUs, so that they also run against the sanitizer bu
 (``$PARCOSIM_KERNELS_LIB``)."""
 from __future__ import annotations
 
-import ctypes
 import math
 
 import numpy as np
@@ -80,10 +79,10 @@ def test_a_fall_changes_nothing_and_names_the_substep():
             falls_at, psi = k, exc.value
             break
     sim = WheeledPendulum(initial=start, substeps=4)
-    before, refusal, b = sim.y.copy(), kernels.Refusal(), sim._bound()
-    code = K.c_step(*b.addresses, 0.0, 0.0, 0.0, 4 * h, 4, b.taken_address, ctypes.addressof(refusal))
+    before, b = sim.y.copy(), K.calls(sim)
+    code = b.step(0.0, 0.0, 0.0, 4 * h, 4)
     assert code == K.FALLEN_PITCH and b.taken.value == falls_at and 1 < falls_at
-    assert refusal.value == psi and abs(psi) >= math.pi / 2 and np.array_equal(sim.y, before)
+    assert b.refusal.value == psi and abs(psi) >= math.pi / 2 and np.array_equal(sim.y, before)
 
 
 @pytest.mark.parametrize("index, value, code", [(0, math.nan, K.BAD_INPUT), (1, math.inf, K.BAD_INPUT),

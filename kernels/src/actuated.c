@@ -7,9 +7,8 @@ static double joint_speed(const double *z, int n)
     return n == 0 ? z[10] : -z[12];
 }
 
-int pc_actuated_io(void *context, double *x, double t, double h, pc_refusal *refusal)
+int pc_actuated_step(const pc_actuated_context *c, double *x, double h, pc_refusal *refusal)
 {
-    const pc_actuated_context *c = context;
     pc_drive_sample samples[2];
     double voltages[2], held[2] = {0.0, 0.0}, bristle[2][3];
     for (int n = 0; n < 2; ++n) {   /* x[3n]: i_ref, x[3n + 1]: i_hat, x[3n + 2]: v_ref */
@@ -28,7 +27,7 @@ int pc_actuated_io(void *context, double *x, double t, double h, pc_refusal *ref
     pc_fivebar_context plant = *c->plant;
     plant.voltages = voltages;
     plant.held = held;
-    const int status = pc_fivebar_actuated_io(&plant, x, t, h, refusal);
+    const int status = pc_fivebar_actuated_io(&plant, x, 0.0, h, refusal);
     if (status != PC_OK) return status;
     const int first = plant.first;
     for (int n = 0; n < 2; ++n) {
@@ -41,4 +40,10 @@ int pc_actuated_io(void *context, double *x, double t, double h, pc_refusal *ref
         x[first + 11 + n] -= pc_lugre_force(c->friction[n], bristle[n][0], joint_speed(z, n));
     }
     return PC_OK;
+}
+
+int pc_actuated_io(void *context, double *x, double t, double h, pc_refusal *refusal)
+{
+    (void)t;
+    return pc_actuated_step(context, x, h, refusal);
 }

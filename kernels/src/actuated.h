@@ -19,9 +19,14 @@ typedef struct {
     pc_lugre *bristles[2];
 } pc_actuated_context;
 
-/* x = [i_ref1, i_hat1, v_ref1, i_ref2, i_hat2, v_ref2 | the plant's outputs (pc_fivebar_actuated_io,
- * from x[plant->first]), tau1, tau2 minus the bristles' torque, v1, v2, i1, i2].  A refusal (a
- * drive's: its code and index; the plant's otherwise) changes nothing: state, drives, bristles. */
+/* One step of h: x = [i_ref1, i_hat1, v_ref1, i_ref2, i_hat2, v_ref2 | the plant's outputs
+ * (pc_fivebar_actuated_io, from x[plant->first]), tau1, tau2 minus the bristles' torque, v1, v2, i1,
+ * i2].  A refusal (a drive's: its code and index; the plant's otherwise) changes nothing: state,
+ * drives, bristles, x; the plant's refused trial state is left in its context's scratch.  The one
+ * composition: the in-process ActuatedPlant (plant/actuated.py) and the compiled loop call it. */
+int pc_actuated_step(const pc_actuated_context *c, double *x, double h, pc_refusal *refusal);
+
+/* The compiled loop's step (pc_io_fn): pc_actuated_step. */
 int pc_actuated_io(void *context, double *x, double t, double h, pc_refusal *refusal);
 
 #endif
