@@ -5,13 +5,15 @@ Every subcommand is a thin shell over a documented Python call:
 =====================  ==============================================
 ``parcosim``           ``parcosim run bench_circle_TCMDx`` (the default job)
 ``parcosim demo``      ``scenarios.plant_demo.run(out_dir, preset)``: the plant alone, a table and a PNG
-``parcosim build``     ``fmus.build.build_all(out_dir)``
+``parcosim build``     ``fmus.build.build_all(out_dir)``; with ``--native``
+                       ``fmus.native.build.build_native_all(out_dir)`` (docs/native.md)
 ``parcosim sweep``     ``scenarios.sweep.run_sweep(scene, samples, uncertainty, seed, distribution,
                        perturb, mode, out_dir, scheduler, workers)``
 ``parcosim identify-motor``  ``motor.cli.identify_main(argv)``
 ``parcosim list``      ``scenarios.scenes.scene_names()``
 ``parcosim run``       ``scenarios.run.run_scene(name, mode, out_dir)`` (mode inprocess, fmu or
-                       compiled); with ``--drives-in-plant N``
+                       compiled); with ``--native`` (``--mode fmu``)
+                       ``run_scene(fmus.native.run.with_native_fmus(scene, fmu_dir), "fmu", ...)``; with ``--drives-in-plant N``
                        ``run_scene(drives_in_plant(get_scene(name), substeps=N), ...)``; with
                        ``--replace I=F.fmu`` ``run_scene(with_fmu_files(scene, {I: F}), ...)``
 ``parcosim report``    ``scenarios.report.write_report(out_dir, mode)``
@@ -67,7 +69,10 @@ def _parser() -> argparse.ArgumentParser:
     demo.add_argument("--preset", default="thesis_sim", choices=("thesis_sim", "bench"),
                       help="the plant's parameters (default: thesis_sim)")
     build = sub.add_parser("build", help="build every FMU")
-    build.add_argument("--out", default=None, help="output directory (default: fmus/build/)")
+    build.add_argument("--out", default=None, help="output directory (default: fmus/build/, with --native "
+                                                   "fmus/build/native/)")
+    build.add_argument("--native", action="store_true",
+                       help="build the native FMUs (C only, no Python in the importer; docs/native.md)")
     sub.add_parser("list", help="print the scenes")
     run = sub.add_parser("run", help="run a scene: result.csv, metrics.json and plots")
     run.add_argument("scene", help="a scene name (see `parcosim list`)")
@@ -81,6 +86,10 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--out", default=None, help="output directory (default: out/SCENE)")
     run.add_argument("--fmu-dir", default=None,
                      help="where the FMUs of --mode fmu are, built when missing or stale (default: fmus/build/)")
+    run.add_argument("--native", action="store_true",
+                     help="with --mode fmu: the models that have a native FMU run as native FMUs built with "
+                          "each instance's parameters (in FMU_DIR/native, default fmus/build/native; "
+                          "docs/native.md)")
     run.add_argument("--retry-substeps", type=at_least(2, "retry_substeps"), default=None, metavar="N",
                      help="retry a refused step from the saved FMU states in N >= 2 sub-steps; saving every "
                           "state at every step makes the run much slower: use it after a refusal (docs/master.md)")
@@ -189,6 +198,9 @@ def _output(args) -> tuple:
         value = Path("out") / _run_folder(args)
     elif args.command == "sweep" and value is None:
         value = _sweep_folder(args)
+    elif args.command == "build" and value is None and args.native:
+        from fmus.native.build import DEFAULT_NATIVE_OUT
+        value = DEFAULT_NATIVE_OUT
     elif args.command == "build" and value is None:
         from fmus.build import DEFAULT_OUT
         value = DEFAULT_OUT
@@ -220,6 +232,8 @@ def main(argv: list[str] | None = None) -> int:
         args = parser.parse_args(argv)
         if getattr(args, "scene", None) is not None:
             _check_scene(args.scene)
+        if getattr(args, "native", False) and args.command == "run" and args.mode != "fmu":
+            raise CommandError(f"--native runs native FMUs: it needs --mode fmu, not --mode {args.mode}")
         path, is_file = _output(args)
         if path is not None:
             check_output(path, is_file)
@@ -309,6 +323,10 @@ def _command(args) -> int:
             if any(len(c) != 3 for c in circles):
                 raise ValueError(f"--circle {args.circle}: write CX,CY,R in metres")
             print(plot_workspace(args.mechanism, args.out, circles=circles).summary())
+        elif args.command == "build" and args.native:
+            from fmus.native.build import DEFAULT_NATIVE_OUT, build_native_all
+            for path in build_native_all(args.out or DEFAULT_NATIVE_OUT):
+                print(path)
         elif args.command == "build":
             from fmus.build import DEFAULT_OUT, build_all
             for path in build_all(args.out or DEFAULT_OUT):
@@ -367,13 +385,17 @@ def _is_fmu_archive(path) -> bool:
 def _run_folder(args) -> str:
     """``parcosim run``'s default folder name under out/."""
     return args.scene + ("" if args.drives_in_plant is None else "_drives_in_plant") + \
-        ("_replaced" if args.replace else "")
+        ("_replaced" if args.replace else "") + ("_native" if args.native else "")
 
 
 def _run(args) -> int:
     from scenarios.run import run_scene
 
     scene = _scene(args)
+    if args.native:
+        from fmus.native.build import DEFAULT_NATIVE_OUT
+        from fmus.native.run import with_native_fmus
+        scene = with_native_fmus(scene, Path(args.fmu_dir) / "native" if args.fmu_dir else DEFAULT_NATIVE_OUT)
     out = Path(args.out) if args.out else Path("out") / _run_folder(args)
     bar = progress_bar(scene.name) if sys.stderr.isatty() else None
     if bar is not None:
