@@ -69,8 +69,8 @@ def _parser() -> argparse.ArgumentParser:
     demo.add_argument("--preset", default="thesis_sim", choices=("thesis_sim", "bench"),
                       help="the plant's parameters (default: thesis_sim)")
     build = sub.add_parser("build", help="build every FMU")
-    build.add_argument("--out", default=None, help="output directory (default: fmus/build/, with --native "
-                                                   "fmus/build/native/)")
+    build.add_argument("--out", default=None, help="output directory (default: fmus/build/); with --native, "
+                                                   "fmus/build/native/")
     build.add_argument("--native", action="store_true",
                        help="build the native FMUs (C only, no Python in the importer; docs/native.md)")
     sub.add_parser("list", help="print the scenes")
