@@ -167,7 +167,11 @@ def _design(s: BalanceSettings, params) -> BalanceDesign:
     # Process noise: the voltages through Bd, a body torque through its column of B (times T).
     G = np.column_stack([Bd, s.T * _body_torque_column(params)[list(states)]])
     QN = np.diag([VOLTAGE_NOISE ** 2, VOLTAGE_NOISE ** 2, BODY_TORQUE_NOISE ** 2])
-    Lo, _, _ = control.dlqe(Ad, G, C, QN, np.diag(noise))
+    # dlqe gives the predictor gain Ad M and the a-priori covariance P; the sample corrects first
+    # (x += Lo (y - C x)) and then predicts, so it needs the filter gain M = P C' (C P C' + V)^-1.
+    V = np.diag(noise)
+    _, P, _ = control.dlqe(Ad, G, C, QN, V)
+    Lo = P @ C.T @ np.linalg.inv(C @ P @ C.T + V)
     observer_poles = np.linalg.eigvals(Ad - Ad @ Lo @ C)
     return BalanceDesign(states, Ad, Bd, np.asarray(K), C, np.asarray(Lo), np.asarray(poles), observer_poles, s)
 

@@ -116,11 +116,13 @@ def test_balance_scene_recovers_from_5_degrees_and_fmus_equal_in_process(built_f
     a = run_scene(scene)
     m = a.metrics
     assert m["completed"] and m["last_second_pitch_deg"] <= BALANCED_DEG
-    assert m["peak_pitch_deg"] == pytest.approx(5.0, abs=0.2)
+    # released at 5 degrees with psi_hat = 0, it tilts a little further while the observer finds the
+    # tilt (5.23 degrees with the Kalman filter gain), and never falls away
+    assert 5.0 <= m["peak_pitch_deg"] <= 5.5
     # the observer found the 5 degree tilt it never measured
     t, psi, psi_hat = a.columns["t"], a.columns["psi"], a.columns["psi_hat"]
-    late = t > 1.0
-    assert np.max(np.abs(psi_hat[late] - psi[late])) < math.radians(0.2)
+    late = t > 2.0
+    assert np.max(np.abs(psi_hat[late] - psi[late])) < math.radians(0.1)
     short = replace(scene, system=replace(scene.system, stop_time=0.5))
     fmu_dir = next(iter(built_fmus.values())).parent
     b, c = run_scene(short, mode="fmu", fmu_dir=fmu_dir), run_scene(short)
