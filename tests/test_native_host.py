@@ -1,0 +1,83 @@
+"""FMUs in a host with no Python in its process (issue 28, item 4).
+
+``tests/native_host/host.c`` is a small C program built here with the C compiler: it loads
+FMUs through libcosim's C API (``libcosimc.so`` from the libcosimpy wheel), steps the
+execution, writes outputs to CSV and reports what its process had mapped
+(``tests/native_host/host.py``).  Each test checks the host's result against an expectation
+formed without libcosim: a closed-form solution, or the same FMU's pythonfmu twin run in
+fmpy, or the tracking error of ``parcosim run``.
+"""
+from __future__ import annotations
+
+import math
+import os
+import sysconfig
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tests.native_host.host import HostUnavailable, build_host, config_text, run_host
+
+H = 1e-3            # s: the communication step
+TAU_A, TAU_B, U = 0.01, 0.02, 2.0
+
+
+@pytest.fixture(scope="module")
+def host(tmp_path_factory):
+    try:
+        return build_host(tmp_path_factory.mktemp("host"))
+    except HostUnavailable as exc:
+        pytest.skip(str(exc))
+
+
+@pytest.fixture(scope="module")
+def lowpass(tmp_path_factory):
+    """The C low-pass FMU of benchmarks/baseline_fmu (y' = (u - y) / tau, exact per step)."""
+    from benchmarks.cold_start import build_baseline
+
+    return build_baseline(tmp_path_factory.mktemp("lowpass"))
+
+
+def chained_lowpass_config(fmu: Path, stop: float) -> str:
+    return config_text(stop, step=H, slaves=[("a", fmu), ("b", fmu)], connections=[("a.y", "b.u")],
+                       reals=[("a.u", U), ("a.tau", TAU_A), ("b.tau", TAU_B)], outputs=["a.y", "b.y"])
+
+
+def chained_lowpass_expected(steps: int):
+    """Two low-passes in series under a fixed-step Jacobi master: b holds over each step the
+    value a had at the step's start (libcosim's fixed-step algorithm)."""
+    a = b = 0.0
+    rows = []
+    for _ in range(steps):
+        a, b = U + (a - U) * math.exp(-H / TAU_A), a + (b - a) * math.exp(-H / TAU_B)
+        rows.append((a, b))
+    return np.array(rows)
+
+
+def test_the_host_runs_a_c_fmu_chain_with_no_python_in_its_process(host, lowpass, tmp_path):
+    run = run_host(host, tmp_path, chained_lowpass_config(lowpass, 0.05))
+    assert run.report["steps"] == "50"
+    assert run.columns["time"][-1] == pytest.approx(0.05, abs=1e-12)
+    expected = chained_lowpass_expected(50)
+    np.testing.assert_allclose(run.columns["a.y"], expected[:, 0], rtol=0, atol=1e-13)
+    np.testing.assert_allclose(run.columns["b.y"], expected[:, 1], rtol=0, atol=1e-13)
+    assert run.report["libpython_mapped"] == "0" and run.report["python_symbol"] == "0"
+    assert run.fmu_binaries == ["lowpass.so"]       # the FMU's binary was loaded in this process
+
+
+def test_the_mapping_check_sees_libpython_when_it_is_there(host, lowpass, tmp_path):
+    """The same run with libpython preloaded: the report must say so (a check that cannot
+    see libpython would pass every native FMU)."""
+    libpython = Path(sysconfig.get_config_var("LIBDIR") or "") / (sysconfig.get_config_var("LDLIBRARY") or "")
+    if not libpython.name.startswith("libpython") or not libpython.is_file():
+        pytest.skip(f"this Python has no shared libpython ({libpython})")
+    run = run_host(host, tmp_path, chained_lowpass_config(lowpass, 0.002),
+                   env={**os.environ, "LD_PRELOAD": str(libpython)})
+    assert int(run.report["libpython_mapped"]) > 0 and run.report["python_symbol"] == "1"
+
+
+def test_the_host_names_what_it_cannot_find(host, lowpass, tmp_path):
+    config = chained_lowpass_config(lowpass, 0.01).replace("output b.y", "output b.nonsense")
+    with pytest.raises(RuntimeError, match="nonsense"):
+        run_host(host, tmp_path, config)
