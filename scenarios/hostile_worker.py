@@ -15,6 +15,7 @@ import os
 import pickle
 import random
 import signal
+import struct
 import sys
 import tempfile
 import time
@@ -27,6 +28,18 @@ from scenarios.hostile import CALL_LIMIT
 
 #: Bytes of the checksum that ends a serialised parcosim state (docs/state.md).
 CHECKSUM_BYTES = 32
+#: A native FMU's state (issue 28) starts with this and ends with a 64-bit FNV-1a of the
+#: bytes before it, in host byte order (fmus/native/pcn_state.c).
+NATIVE_STATE_MAGIC = b"PCNSTATE"
+NATIVE_CHECKSUM_BYTES = 8
+
+
+def fnv1a64(data: bytes) -> int:
+    """The 64-bit FNV-1a hash of ``data`` (what forges a native state's checksum)."""
+    h = 0xCBF29CE484222325
+    for byte in data:
+        h = ((h ^ byte) * 0x100000001B3) & 0xFFFFFFFFFFFFFFFF
+    return h
 
 
 class _Exploit:
@@ -228,6 +241,8 @@ class Runner:
             return data
         if variant == "truncated":
             return data[:rng.randrange(len(data))]
+        if variant == "forged" and data.startswith(NATIVE_STATE_MAGIC):
+            return forged_native_state(data, rng)
         altered = bytearray(data)
         altered[rng.randrange(len(data) - (CHECKSUM_BYTES if variant == "forged" else 0))] ^= rng.randrange(1, 256)
         if variant == "forged":
@@ -272,6 +287,16 @@ class Runner:
         status, _ = self.call(f"setFMUstate ({variant})", self.fmu.setFMUState, state)
         self.call(f"freeFMUstate ({variant})", self.fmu.freeFMUState, state)
         return now if status == 0 else None
+
+
+def forged_native_state(data: bytes, rng: random.Random) -> bytes:
+    """A native state with one to three bytes altered and its checksum recomputed: only the
+    FMU's checks of the fields (lengths, counts, flags, identifier) stand between the bytes
+    and its memory."""
+    body = bytearray(data[:-NATIVE_CHECKSUM_BYTES])
+    for _ in range(rng.randint(1, 3)):
+        body[rng.randrange(len(body))] ^= rng.randrange(1, 256)
+    return bytes(body) + struct.pack("=Q", fnv1a64(bytes(body)))
 
 
 def main() -> int:

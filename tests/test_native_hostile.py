@@ -76,3 +76,79 @@ def test_the_sanitized_campaign_sees_an_fmu_write_past_its_allocation(tmp_path, 
         assert "heap-buffer-overflow" in reports[0].read_text()
     else:
         assert [r.outcome for r in results] == ["ok"] * 4 and not reports
+
+
+# --- the native FMUs (fmus.native: parcosim build --native) ------------------------------------
+
+try:
+    from fmus.native.models import NATIVE
+except ImportError:          # before the native FMUs exist in this tree
+    NATIVE = {}
+
+CASES_PER_FMU = 18           # every kind twice
+SEED = 280                   # fixed: CI runs the same cases every time
+
+
+@pytest.fixture(scope="module")
+def native_sanitized(tmp_path_factory):
+    """Model -> its native FMU rebuilt from its own sources with the sanitizers, extracted."""
+    from fmus.native.build import build_native_all
+
+    work = tmp_path_factory.mktemp("native")
+    _sanitizer_env_or_skip(None)
+    built = {p.stem: p for p in build_native_all(work / "built")}
+    sanitized = {m: hostile.sanitized_from_sources(p, work / "sanitized") for m, p in built.items()}
+    return hostile.extract_fmus(sanitized, work / "fmus")
+
+
+def failures(results) -> list:
+    return [f"{r.outcome}: {r.problems} -- {r.case['kind']} seed {r.case['seed']} -- last calls {r.statuses[-4:]}"
+            for r in results if r.outcome not in ("ok", "refused") or r.problems]
+
+
+@pytest.mark.parametrize("model", list(NATIVE))
+def test_native_fmu_under_hostile_use_and_sanitizers(model, native_sanitized, tmp_path):
+    """No crash (ASan, UBSan), no hang, no fmi2Fatal, no NaN with fmi2OK, every refusal with
+    a message: every kind of case, the strict ones (sets FMI refuses, state bytes, start
+    times, call orders) included."""
+    assert hostile.is_native(native_sanitized[model])
+    cases = hostile.cases_for(model, native_sanitized[model], range(SEED, SEED + CASES_PER_FMU), wrapper=True,
+                              kinds=list(hostile.KINDS))
+    results = hostile.run_cases(cases, native_sanitized, env=hostile.sanitizer_env(tmp_path / "logs"))
+    reports = [p.read_text()[:1500] for p in (tmp_path / "logs").glob("*san.*")]
+    assert not failures(results) and not reports, "\n".join(failures(results) + reports)
+    assert {r.case["kind"] for r in results} == set(hostile.KINDS)
+    assert all(any(s[1] == "Error" for s in r.statuses) for r in results
+               if r.case["kind"] == "sets" and any(op[0] == "set_vr" for op in r.case["ops"]))
+
+
+@pytest.mark.parametrize("model", list(NATIVE))
+def test_native_state_bytes_that_are_not_its_state_are_refused(model, native_sanitized, tmp_path):
+    """Random, truncated, altered (checksum left wrong), pickled (the issue-30 exploit and a
+    legacy state) and another model's bytes: fmi2Error, no command run, no crash; forged bytes
+    (altered, checksum recomputed) refused or, if taken, the steps after them clean."""
+    others = [m for m in native_sanitized if m != model] or [model]
+    base = hostile.cases_for(model, native_sanitized[model], range(SEED, SEED + 3), wrapper=True, kinds=["state"])
+    cases = []
+    for i, variant in enumerate(hostile.STATE_VARIANTS + ("forged", "forged")):
+        case = json_copy(base[i % len(base)])
+        case["seed"] = SEED + i
+        case["ops"] = [["state_bytes", variant, SEED + i, others[i % len(others)]] if op[0] == "state_bytes" else op
+                       for op in case["ops"]]
+        cases.append(case)
+    results = hostile.run_cases(cases, native_sanitized, env=hostile.sanitizer_env(tmp_path / "logs"))
+    reports = [p.read_text()[:1500] for p in (tmp_path / "logs").glob("*san.*")]
+    assert not failures(results) and not reports, "\n".join(failures(results) + reports)
+    for r in results:
+        variant = next(op[1] for op in r.case["ops"] if op[0] == "state_bytes")
+        statuses = [s[1] for s in r.statuses if s[0].startswith("deSerializeFMUstate")]
+        if variant == "forged":
+            assert statuses in (["Error"], ["OK"]), r.statuses
+        elif variant != "foreign" or others != [model]:
+            assert statuses == ["Error"], (variant, r.statuses)
+
+
+def json_copy(value):
+    import json
+
+    return json.loads(json.dumps(value))
