@@ -85,6 +85,12 @@ def test_the_host_names_what_it_cannot_find(host, lowpass, tmp_path):
 
 # --- the native FMUs (fmus.native: parcosim build --native) ------------------------------------
 
+try:
+    from fmus.native.models import NATIVE as NATIVE_MODELS
+except ImportError:          # before the native FMUs exist in this tree
+    NATIVE_MODELS = {}
+
+
 def native_fmu(model: str, out: Path) -> Path:
     build = pytest.importorskip("fmus.native.build", reason="no native FMUs in this tree (fmus.native)")
     return build.build_native_fmu(model, out)
@@ -136,3 +142,40 @@ def test_a_native_derivator_in_the_c_host_equals_its_pythonfmu_twin_in_fmpy(host
         peak = np.max(np.abs(twin[:, j]))
         assert peak > 1.0                         # the filters moved
         np.testing.assert_allclose(run.columns[f"deriv.{name}"], twin[:, j], rtol=0, atol=1e-12 * peak)
+
+
+SCENE = "bench_circle_TCMDx"
+
+
+def test_the_native_bench_loop_in_the_c_host_tracks_as_a_jacobi_master(host, tmp_path):
+    """The bench loop (plant, drives, observers, derivator, controller, trajectory), every
+    component a native FMU, wired as ``parcosim export-ssp --per-component`` wires it, loaded
+    by libcosim from the SSP package in the C host: libcosim steps Jacobi (every FMU, then
+    every connection; docs/ssp_tools.md), so the loop must track as our in-process master does
+    with ``coupling="jacobi"`` (Python objects, no FMU): e_ef and tau_ef within 5 %.  (The
+    Gauss-Seidel run, ``parcosim run``, tracks to 0.447 mm; a Jacobi tool adds a step of delay
+    per connection: 40.0 mm.)"""
+    from fmus.master import simulate
+    from fmus.ssp import export_ssp
+    from scenarios.metrics import scene_metrics
+    from scenarios.run import result_columns
+    from scenarios.scenes import get_scene
+
+    scene = get_scene(SCENE)
+    models = sorted({c.model for c in scene.system.components})
+    missing = [m for m in models if m not in NATIVE_MODELS]
+    if missing:
+        pytest.skip(f"no native FMU of {missing} yet")
+    native = {m: native_fmu(m, tmp_path / "native") for m in models}
+    package = export_ssp(scene.system, tmp_path / "bench.ssp", fmus=native)
+    run = run_host(host, tmp_path / "run", config_text(scene.system.stop_time, ssp=package,
+                                                        outputs=list(scene.columns.values())))
+    assert run.report["libpython_mapped"] == "0" and run.report["python_symbol"] == "0"
+    assert set(run.fmu_binaries) == {f"{m}.so" for m in models}
+    columns = {"t": np.array(run.columns["time"])}
+    columns.update({name: np.array(run.columns[signal]) for name, signal in scene.columns.items()})
+    ours = scene_metrics(scene, columns, 0.0, True)
+    jacobi = simulate(scene.system, mode="inprocess", coupling="jacobi")
+    expected = scene_metrics(scene, result_columns(scene, jacobi), jacobi.wall_s, jacobi.completed)
+    for metric in ("e_ef_mm", "tau_ef_Nm"):
+        assert 1 / 1.05 <= ours[metric] / expected[metric] <= 1.05, (metric, ours[metric], expected[metric])
