@@ -5,7 +5,8 @@ Every subcommand is a thin shell over a documented Python call:
 =====================  ==============================================
 ``parcosim``           ``parcosim run bench_circle_TCMDx`` (the default job)
 ``parcosim demo``      same, with ``--out`` and ``--preset``
-``parcosim build``     ``fmus.build.build_all(out_dir)``
+``parcosim build``     ``fmus.build.build_all(out_dir)``; with ``--native``
+                       ``fmus.native.build.build_native_all(out_dir)`` (docs/native.md)
 ``parcosim sweep``     ``scenarios.sweep.run_sweep(scene, samples, uncertainty, seed, distribution,
                        perturb, mode, out_dir, scheduler, workers)``
 ``parcosim identify-motor``  ``motor.cli.identify_main(argv)``
@@ -49,7 +50,10 @@ def _parser() -> argparse.ArgumentParser:
     demo.add_argument("--out", default="out", help="output directory (default: out)")
     demo.add_argument("--preset", default="thesis_sim", help="thesis_sim or bench")
     build = sub.add_parser("build", help="build every FMU")
-    build.add_argument("--out", default=None, help="output directory (default: fmus/build/)")
+    build.add_argument("--out", default=None, help="output directory (default: fmus/build/, with --native "
+                                                   "fmus/build/native/)")
+    build.add_argument("--native", action="store_true",
+                       help="build the native FMUs (C only, no Python in the importer; docs/native.md)")
     sub.add_parser("list", help="print the scenes")
     run = sub.add_parser("run", help="run a scene: result.csv, metrics.json and plots")
     run.add_argument("scene", help="a scene name (see `parcosim list`)")
@@ -199,6 +203,10 @@ def _command(args) -> int:
             if any(len(c) != 3 for c in circles):
                 raise ValueError(f"--circle {args.circle}: write CX,CY,R in metres")
             print(plot_workspace(args.mechanism, args.out, circles=circles).summary())
+        elif args.command == "build" and args.native:
+            from fmus.native.build import DEFAULT_NATIVE_OUT, build_native_all
+            for path in build_native_all(args.out or DEFAULT_NATIVE_OUT):
+                print(path)
         elif args.command == "build":
             from fmus.build import DEFAULT_OUT, build_all
             for path in build_all(args.out or DEFAULT_OUT):

@@ -1,0 +1,139 @@
+/* Native Derivator (fmus/slaves/parcosim_derivator.py) over the kernel pc_derivator_step.
+ *
+ * The Bessel filters are designed with scipy at the FMU's build, for its parameters then
+ * (fc_vel, fc_acc, T): the design travels as the kernel's buffer, not started
+ * (pcn_design_buffer).  Other values of those three are refused by name at initialisation
+ * (docs/native.md); every check the pythonfmu slave makes before its design comes first, with
+ * its words.  Model data (FMU state): the kernel's buffer; scratch: its n m doubles.
+ */
+#include <math.h>
+#include <string.h>
+
+#include "derivator.h"
+#include "model_config.h"
+#include "pcn_model.h"
+
+#define ABSURD 1e6      /* fmus/refusals.py */
+#define MIN_FC_T 1e-6   /* the slave's lowest fc T */
+#define CHANNELS 2
+
+static pc_derivator_context context(pcn_instance *in)
+{
+    pc_derivator_context c = {(pc_derivator *)in->data, in->scratch, PCN_DESIGN_BUFFER_WORDS,
+                              PCN_DERIVATOR_STATES * CHANNELS, ABSURD};
+    return c;
+}
+
+/* The slave's parameter checks (require_finite, refuse_absurd, > 0, T, Nyquist, fc T). */
+static int check_parameters(const double *r, pcn_text *why)
+{
+    const char *names[] = {"fc_vel", "fc_acc", "T", "q1_0", "q2_0"};
+    const double values[] = {r[PCN_SLOT_fc_vel], r[PCN_SLOT_fc_acc], r[PCN_SLOT_T], r[PCN_SLOT_q1_0],
+                             r[PCN_SLOT_q2_0]};
+    for (int k = 0; k < 5; ++k)
+        if (!isfinite(values[k])) return pcn_addf(why, "%s = %r is not finite", names[k], values[k]), 1;
+    for (int k = 0; k < 5; ++k)
+        if (fabs(values[k]) > ABSURD)
+            return pcn_addf(why, "parameter %s = %r is absurd: |%s| must be <= %G (SI units)", names[k], values[k],
+                            names[k], ABSURD), 1;
+    for (int k = 0; k < 3; ++k)
+        if (values[k] <= 0.0) return pcn_addf(why, "parameter %s = %r must be > 0", names[k], values[k]), 1;
+    double T = values[2], nyquist = 0.5 / T, lowest = MIN_FC_T / T;
+    if (T < 1e-9) return pcn_addf(why, "parameter T = %r s is below the shortest step %G s", T, 1e-9), 1;
+    for (int k = 0; k < 2; ++k) {
+        if (values[k] >= nyquist)
+            return pcn_addf(why, "parameter %s = %r Hz must be below 1/(2T) = %G Hz", names[k], values[k], nyquist), 1;
+        if (values[k] < lowest)
+            return pcn_addf(why, "parameter %s = %r Hz is below %G/T = %G Hz: the filter discretised at T = %r s "
+                            "would be singular", names[k], values[k], MIN_FC_T, lowest, T), 1;
+    }
+    return 0;
+}
+
+static int setup(pcn_instance *in, pcn_text *why)
+{
+    const double *r = in->real;
+    if (check_parameters(r, why)) return 1;
+    if (r[PCN_SLOT_fc_vel] != PCN_DESIGN_FC_VEL || r[PCN_SLOT_fc_acc] != PCN_DESIGN_FC_ACC ||
+        r[PCN_SLOT_T] != PCN_DESIGN_T)
+        return pcn_addf(why, "parameters fc_vel = %r Hz, fc_acc = %r Hz, T = %r s: this native FMU carries the "
+                        "filter design for fc_vel = %r Hz, fc_acc = %r Hz, T = %r s only (the Bessel design needs "
+                        "scipy: build the native FMU with these values as its start values, or use the pythonfmu "
+                        "FMU)", r[PCN_SLOT_fc_vel], r[PCN_SLOT_fc_acc], r[PCN_SLOT_T], PCN_DESIGN_FC_VEL,
+                        PCN_DESIGN_FC_ACC, PCN_DESIGN_T), 1;
+    memcpy(in->data, pcn_design_buffer, sizeof(double) * PCN_DESIGN_BUFFER_WORDS);
+    if (in->boolean[PCN_SLOT_start_from_input]) return 0;
+    pc_derivator_context c = context(in);
+    const double q0[CHANNELS] = {r[PCN_SLOT_q1_0], r[PCN_SLOT_q2_0]};
+    pc_refusal refusal;
+    if (pc_derivator_reset(&c, q0, &refusal) == PC_OK) return 0;
+    return pcn_addf(why, "the derivator refused its start angles (code %d, value %r)", refusal.code, refusal.value), 1;
+}
+
+static int check_step(pcn_instance *in, double t, double h, pcn_text *why)
+{
+    double T = in->real[PCN_SLOT_T];
+    if (!(isfinite(T) && T > 0.0)) return pcn_addf(why, "parameter T = %r s is not a finite positive sample time", T), 1;
+    if (fabs(h - T) <= 1e-9 * T) return 0;
+    pcn_text because;
+    pcn_clear(&because);
+    pcn_addf(&because, "does not equal the sample time T = %r s", T);
+    pcn_step_size_message(why, t, h, because.text);
+    return 1;
+}
+
+static int step(pcn_instance *in, double t, double h, pcn_text *why)
+{
+    (void)h;
+    double *r = in->real;
+    const double q[CHANNELS] = {r[PCN_SLOT_q1], r[PCN_SLOT_q2]};
+    const char *names[CHANNELS] = {"q1", "q2"};
+    for (int k = 0; k < CHANNELS; ++k) {
+        if (!isfinite(q[k])) return pcn_addf(why, "input %s = %r at t = %G s is not finite", names[k], q[k], t), 1;
+        if (fabs(q[k]) > ABSURD)
+            return pcn_addf(why, "input %s = %r rad at t = %G s is absurd: |%s| must be <= %G rad", names[k], q[k], t,
+                            names[k], ABSURD), 1;
+    }
+    pc_derivator_context c = context(in);
+    double out[2 * CHANNELS];
+    pc_refusal refusal;
+    int code = pc_derivator_step(&c, q, ABSURD, out, &refusal);
+    if (code == PC_DERIVATOR_NONFINITE_OUTPUT)
+        return pcn_addf(why, "the estimates (dq1, dq2, ddq1, ddq2) = (%r, %r, %r, %r) at t = %G s are not finite "
+                        "(inputs q1 = %r, q2 = %r rad)", out[0], out[1], out[2], out[3], t, q[0], q[1]), 1;
+    if (code != PC_OK)
+        return pcn_addf(why, "the derivator's buffer was refused (code %d, word %d = %r) at t = %G s", code,
+                        refusal.index, refusal.value, t), 1;
+    r[PCN_SLOT_dq1] = out[0];
+    r[PCN_SLOT_dq2] = out[1];
+    r[PCN_SLOT_ddq1] = out[2];
+    r[PCN_SLOT_ddq2] = out[3];
+    return 0;
+}
+
+/* A restored buffer may change only the run words (started, the state): the sizes, step
+ * matrix and rest state are the design (configuration). */
+static int check_data(const pcn_instance *in, const double *data, pcn_text *why)
+{
+    (void)in;
+    const long state = PCN_DESIGN_BUFFER_WORDS - (PCN_DERIVATOR_STATES + 1) * CHANNELS;
+    for (long k = 0; k < state; ++k) {
+        if (k == 2) continue;   /* started */
+        if (memcmp(&data[k], &pcn_design_buffer[k], sizeof(double)) != 0)
+            return pcn_addf(why, "word %d of the derivator's buffer differs from the design: it is configuration",
+                            (int)k), 1;
+    }
+    if (data[2] != 0.0 && data[2] != 1.0) return pcn_addf(why, "the derivator's started word is %r", data[2]), 1;
+    return 0;
+}
+
+const pcn_model pcn_this_model = {
+    .identifier = PCN_IDENTIFIER,
+    .accepted_steps = "h = T (the sample time the filters are discretised at; 1e-9 relative)",
+    .data_words = PCN_DESIGN_BUFFER_WORDS,
+    .scratch_words = PCN_DERIVATOR_STATES * CHANNELS,
+    .setup = setup,
+    .check_step = check_step,
+    .step = step,
+    .check_data = check_data,
+};

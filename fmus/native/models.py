@@ -1,0 +1,40 @@
+"""Which models have a native FMU: the adapter, the kernels and the build-time data of each.
+
+A model's ``data`` function gets the pythonfmu slave after a successful initialisation with
+its start values and returns what its adapter reads as constants: ``{name: float}`` scalars
+(``#define PCN_<NAME>``) and ``{name: array}`` arrays (``pcn_<name>[]``, with
+``PCN_<NAME>_WORDS``).  Designs that need scipy or python-control are made here, at build
+time, for the FMU's parameters (docs/native.md says which parameters are then fixed).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class NativeModel:
+    """A native FMU's C parts: ``adapter`` (in fmus/native/adapters, named pcn_<model>.c: sources/ is flat), ``kernels`` (C files of
+    kernels/src; their headers follow), ``data`` (slave -> (scalars, arrays)) and
+    ``feedthrough`` (output -> inputs, as the slave's)."""
+
+    adapter: str
+    kernels: tuple
+    data: Callable = field(default=lambda slave: ({}, {}))
+
+
+def _derivator(slave):
+    buf = slave.derivator.__class__(slave.fc_vel, slave.fc_acc, slave.T)
+    buf.start_at_first_sample(2)
+    n = int(buf.buf[0])
+    return ({"derivator_states": n, "design_fc_vel": float(slave.fc_vel), "design_fc_acc": float(slave.fc_acc),
+             "design_t": float(slave.T)},
+            {"design_buffer": np.asarray(buf.buf, dtype=np.float64)})
+
+
+#: Model name -> its native parts; one line a model.
+NATIVE = {
+    "Derivator": NativeModel("pcn_derivator.c", ("derivator.c",), _derivator),
+}

@@ -1,0 +1,33 @@
+/* Messages of the native FMUs, worded and formatted as the pythonfmu FMUs' (docs/native.md).
+ *
+ * Python formats a float in a message with repr() (the shortest string that reads back to the
+ * same double) or with format(x, ".6g"); pcn_repr and pcn_g6 give the same characters, so a
+ * native FMU's refusal is the pythonfmu twin's, byte for byte.  Locale: the C locale's '.'.
+ */
+#ifndef PCN_TEXT_H
+#define PCN_TEXT_H
+
+#include <stddef.h>
+
+#define PCN_TEXT_SIZE 1024
+/* Enough for any double's repr ("-2.2250738585072014e-308": 24) and its terminator. */
+#define PCN_REPR_SIZE 32
+
+/* A message being written: appends past the capacity are cut (the text stays terminated). */
+typedef struct {
+    char text[PCN_TEXT_SIZE];
+    size_t length;
+} pcn_text;
+
+/* Python's repr(float(x)) into out[PCN_REPR_SIZE]; returns out. */
+char *pcn_repr(double x, char *out);
+
+void pcn_clear(pcn_text *t);
+/* Append printf-formatted text, where two conversions of Python are added:
+ *   %r  a double, as Python's repr(float),
+ *   %G  a double, as Python's format(x, ".6g"),
+ *   %B  an int, as Python's repr(bool) (True / False),
+ *   %s, %d, %u, %%  as printf. */
+void pcn_addf(pcn_text *t, const char *format, ...);
+
+#endif

@@ -1,0 +1,121 @@
+"""The native FMUs as files (issue 28, items 1, 2, 4): what their binaries link, `fmpy
+validate`, a rebuild from the sources they carry, their GUIDs and states against the twins'."""
+from __future__ import annotations
+
+import shutil
+import subprocess
+import zipfile
+
+import numpy as np
+import pytest
+from fmpy import extract, read_model_description, simulate_fmu
+from fmpy.validation import validate_fmu
+
+from fmus.native.build import compile_command, platform_folder
+from fmus.native.models import NATIVE
+from native_fixtures import native_fmus, twin_fmus  # noqa: F401 - fixtures
+from support.fmu_calls import Driver
+
+MODELS = sorted(NATIVE)
+#: What a native FMU's binary may need: the C library and libm (and the loader itself).
+ALLOWED = {"libc.so.6", "libm.so.6", "ld-linux-x86-64.so.2"}
+#: The strict warnings of the kernels' own build: the sources must pass them on any compiler.
+STRICT = ("-Wall", "-Wextra", "-Werror", "-Wshadow")
+
+
+def needed(binary) -> set:
+    out = subprocess.run(["readelf", "-d", str(binary)], capture_output=True, text=True, check=True).stdout
+    return {line.split("[")[1].split("]")[0] for line in out.splitlines() if "(NEEDED)" in line}
+
+
+@pytest.mark.parametrize("model", MODELS)
+def test_binary_needs_only_libc_and_libm_and_the_fmu_validates(model, native_fmus, tmp_path):
+    unzipped = extract(str(native_fmus[model]), str(tmp_path))
+    binary = tmp_path / "binaries" / platform_folder() / f"{model}.so"
+    assert needed(binary) <= ALLOWED
+    assert "libpython" not in subprocess.run(["ldd", str(binary)], capture_output=True, text=True).stdout
+    assert validate_fmu(str(native_fmus[model])) == []
+    md = read_model_description(unzipped)
+    assert md.coSimulation.needsExecutionTool is False
+
+
+def _rebuilt(fmu, tmp_path):
+    """An unzipped copy of ``fmu`` whose binary was compiled from its sources/ alone (plus
+    fmpy's standard FMI 2.0 headers), with the kernels' strict warnings as errors."""
+    folder = tmp_path / "rebuilt"
+    with zipfile.ZipFile(fmu) as z:
+        z.extractall(folder)
+    sources = tmp_path / "only_sources"
+    shutil.copytree(folder / "sources", sources)
+    model = read_model_description(str(fmu)).coSimulation.modelIdentifier
+    binary = folder / "binaries" / platform_folder() / f"{model}.so"
+    binary.unlink()
+    command = compile_command(sources, binary)
+    subprocess.run([command[0], *STRICT, *command[1:]], check=True, capture_output=True)
+    return folder
+
+
+@pytest.mark.parametrize("model", MODELS)
+def test_fmu_compiled_from_its_own_sources_runs_as_shipped(model, native_fmus, tmp_path):
+    fmu = native_fmus[model]
+    rebuilt = _rebuilt(fmu, tmp_path)
+    shipped = simulate_fmu(str(fmu), stop_time=0.2, output_interval=1e-3, step_size=1e-3)
+    again = simulate_fmu(str(rebuilt), stop_time=0.2, output_interval=1e-3, step_size=1e-3)
+    for name in shipped.dtype.names:
+        if np.issubdtype(shipped[name].dtype, np.number):
+            assert np.array_equal(shipped[name], again[name]), name
+
+
+def test_cmake_builds_the_binary_from_the_sources(native_fmus, tmp_path):
+    cmake = shutil.which("cmake")
+    if cmake is None:
+        pytest.skip("no cmake")
+    from fmus.native.build import fmi_headers
+
+    model = MODELS[0]
+    with zipfile.ZipFile(native_fmus[model]) as z:
+        z.extractall(tmp_path / "fmu")
+    build = tmp_path / "build"
+    subprocess.run([cmake, f"-DFMI_HEADERS={fmi_headers()}", "-S", str(tmp_path / "fmu" / "sources"), "-B",
+                    str(build)], check=True, capture_output=True)
+    subprocess.run([cmake, "--build", str(build)], check=True, capture_output=True)
+    assert (build / f"{model}.so").exists()
+
+
+@pytest.mark.parametrize("model", MODELS)
+def test_states_of_the_twin_and_damaged_states_are_refused(model, native_fmus, twin_fmus):
+    twin, native = Driver(twin_fmus[model]), Driver(native_fmus[model])
+    assert twin.md.guid != native.md.guid
+    for d in (twin, native):
+        d.run([("setup", 0.0), ("enter",), ("exit",)])
+    twin_bytes = twin.fmu.serializeFMUstate(twin.fmu.getFMUstate())
+    own = native.fmu.serializeFMUstate(native.fmu.getFMUstate())
+    flipped = bytearray(own)
+    flipped[len(own) // 2] ^= 0x40
+    other_guid = bytes(own).replace(native.md.guid.encode(), twin.md.guid.encode())
+    for data, says in ((twin_bytes, "not a serialised parcosim native FMU state"), (bytes(flipped), "checksum"),
+                       (own[:-9], "long"), (other_guid, "")):
+        step = native.call("bytes", "x", data)
+        step = native.call("deserialize", "x")
+        assert step.status == 3 and says in step.messages[0][2], step.messages
+    # the twin refuses the native state just as well
+    twin.call("bytes", "n", own)
+    assert twin.call("deserialize", "n").status == 3
+    twin.close()
+    native.close()
+
+
+def test_state_with_a_changed_configuration_word_is_refused(native_fmus):
+    """A forged state whose design words differ (checksum recomputed) is refused by name."""
+    from fmus.native import state_bytes
+
+    native = Driver(native_fmus["Derivator"])
+    native.run([("setup", 0.0), ("enter",), ("exit",)])
+    own = native.fmu.serializeFMUstate(native.fmu.getFMUstate())
+    forged = state_bytes.with_data_word(own, 5, 123.0)
+    native.call("bytes", "f", forged)
+    step = native.call("deserialize", "f")
+    assert step.status == 3 and "word 5 of the derivator's buffer" in step.messages[0][2]
+    native.call("bytes", "g", state_bytes.with_data_word(own, 5, state_bytes.data_words(own)[5]))
+    assert native.call("deserialize", "g").status == 0    # the same bytes, checksum recomputed: accepted
+    native.close()
