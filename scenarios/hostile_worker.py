@@ -29,14 +29,16 @@ from scenarios.hostile import CALL_LIMIT
 #: Bytes of the checksum that ends a serialised parcosim state (docs/state.md).
 CHECKSUM_BYTES = 32
 #: A native FMU's state (issue 28) starts with this and ends with a 64-bit FNV-1a of the
-#: bytes before it, in host byte order (fmus/native/pcn_state.c).
+#: bytes before it, in host byte order (fmus/native/pcn_state.c), whose start value is
+#: 1469598103934665603 (FNV's offset basis is 14695981039346656037: a digit short).
 NATIVE_STATE_MAGIC = b"PCNSTATE"
 NATIVE_CHECKSUM_BYTES = 8
+NATIVE_CHECKSUM_START = 1469598103934665603
 
 
-def fnv1a64(data: bytes) -> int:
-    """The 64-bit FNV-1a hash of ``data`` (what forges a native state's checksum)."""
-    h = 0xCBF29CE484222325
+def fnv1a64(data: bytes, start: int = NATIVE_CHECKSUM_START) -> int:
+    """The 64-bit FNV-1a hash of ``data`` from ``start`` (what forges a native state's checksum)."""
+    h = start
     for byte in data:
         h = ((h ^ byte) * 0x100000001B3) & 0xFFFFFFFFFFFFFFFF
     return h
