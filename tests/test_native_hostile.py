@@ -152,3 +152,36 @@ def json_copy(value):
     import json
 
     return json.loads(json.dumps(value))
+
+
+#: Prints (hex) the serialised state of an FMU just initialised: argv unzip dir, GUID, identifier.
+SERIALISE = """import sys
+from fmpy.fmi2 import FMU2Slave
+slave = FMU2Slave(guid=sys.argv[2], unzipDirectory=sys.argv[1], modelIdentifier=sys.argv[3], instanceName="forger")
+slave.instantiate(); slave.setupExperiment(startTime=0.0)
+slave.enterInitializationMode(); slave.exitInitializationMode()
+sys.stdout.write(bytes(slave.serializeFMUstate(slave.getFMUState())).hex())
+"""
+
+
+@pytest.mark.parametrize("model", list(NATIVE))
+def test_the_forger_writes_the_checksum_a_native_state_carries(model, native_sanitized):
+    """Forged states are only worth their name if their checksum passes: the worker's
+    checksum of a real state's bytes must be the one the state ends with.  (The sanitized
+    binary loads only with the ASan runtime first: a child process.)"""
+    import os
+    import struct
+    import sys
+
+    from fmpy import read_model_description
+
+    from scenarios.hostile_worker import NATIVE_CHECKSUM_BYTES, NATIVE_STATE_MAGIC, fnv1a64
+
+    unzip_dir = str(native_sanitized[model])
+    md = read_model_description(unzip_dir)
+    run = subprocess.run([sys.executable, "-c", SERIALISE, unzip_dir, md.guid, md.coSimulation.modelIdentifier],
+                         capture_output=True, text=True, env={**os.environ, **hostile.sanitizer_env(None)}, check=True)
+    data = bytes.fromhex(run.stdout)
+    assert data.startswith(NATIVE_STATE_MAGIC)
+    body, checksum = data[:-NATIVE_CHECKSUM_BYTES], data[-NATIVE_CHECKSUM_BYTES:]
+    assert struct.unpack("=Q", checksum)[0] == fnv1a64(body)
