@@ -111,7 +111,7 @@ static void start_values(native *in)
     }
     in->initialising = in->initialised = in->terminated = in->ready = 0;
     in->initial_outputs = in->built_for_exit = in->has_last = in->has_accepted = 0;
-    in->start_time = in->next_time = in->last_step = in->time = 0.0;
+    in->pub.start_time = in->next_time = in->last_step = in->time = 0.0;
 }
 
 /* The path of a file: URI (file:///p, file:/p, file://localhost/p), %XX decoded; NULL if
@@ -283,7 +283,7 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
         else pcn_addf(&why, "stopTime = %r s is before startTime = %r s; nothing was set", stopTime, startTime);
     }
     if (why.length) return pcn_call_error(in, "fmi2SetupExperiment", why.text);
-    in->start_time = in->time = startTime;
+    in->pub.start_time = in->time = startTime;
     in->initial_outputs = in->built_for_exit = 0;
     return fmi2OK;
 }
@@ -312,7 +312,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c)
     in->initialising = 0;
     in->has_accepted = 0;
     in->initialised = 1;
-    in->next_time = in->start_time;
+    in->next_time = in->pub.start_time;
     in->has_last = 0;
     pcn_text why;
     pcn_clear(&why);
@@ -323,7 +323,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c)
         in->ready = 0;
         pcn_text message;
         pcn_clear(&message);
-        pcn_addf(&message, "initialisation refused: %s (t = %G s)", why.text, in->start_time);
+        pcn_addf(&message, "initialisation refused: %s (t = %G s)", why.text, in->pub.start_time);
         refuse(in, message.text, 0, 0.0, 0, 0);
     }
     return fmi2OK;

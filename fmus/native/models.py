@@ -34,7 +34,22 @@ def _derivator(slave):
             {"design_buffer": np.asarray(buf.buf, dtype=np.float64)})
 
 
+def _trajectory(slave):
+    from controller.trajectories import TRAJECTORY_KINDS, from_parameters
+
+    used = {"side_time": slave.side_time, "frequency": slave.frequency, "x_hold": slave.x_hold,
+            "y_hold": slave.y_hold}
+    scalars = {"built_cycles": int(slave.cycles), **{f"built_{k}": float(v) for k, v in used.items()}}
+    arrays = {}
+    for kind in TRAJECTORY_KINDS:
+        trajectory = from_parameters(kind, slave.cycles, **used)
+        arrays[f"buffer_{kind}"] = trajectory.buf
+        scalars[f"start_x_{kind}"], scalars[f"start_y_{kind}"] = (float(v) for v in trajectory.start_point)
+    return scalars, arrays
+
+
 #: Model name -> its native parts; one line a model.
 NATIVE = {
     "Derivator": NativeModel("pcn_derivator.c", ("derivator.c",), _derivator),
+    "Trajectory": NativeModel("pcn_trajectory.c", ("trajectory.c",), _trajectory),
 }

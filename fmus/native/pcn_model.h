@@ -64,6 +64,7 @@ struct pcn_instance {
     double *data;          /* the model data (saved in the FMU state) */
     double *scratch;       /* the model scratch (not saved) */
     const char *resources; /* the resources folder (a path), "" if none was given */
+    double start_time;     /* fmi2SetupExperiment's startTime */
 };
 
 /* The step-size message of GuardedSlave.step_size_message. */

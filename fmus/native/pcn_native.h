@@ -21,7 +21,7 @@ typedef struct {
     size_t n_categories;
     /* GuardedSlave's flags and times (saved in the FMU state) */
     int initialising, initialised, terminated, ready, initial_outputs, built_for_exit, has_last;
-    double start_time, next_time, last_step;
+    double next_time, last_step;   /* and pub.start_time */
     double time;            /* the wrapper's time for messages */
     /* derived, not saved */
     int has_accepted;

@@ -81,7 +81,7 @@ static void write_state(writer *w, const native *in)
     for (int t = 0; t < 4; ++t) put_u32(w, (uint32_t)pcn_n_slots[t]);
     put_u64(w, (uint64_t)in->model->data_words);
     for (int k = 0; k < FLAGS; ++k) put_u8(w, (unsigned)flag(in, k));
-    put_f64(w, in->start_time);
+    put_f64(w, in->pub.start_time);
     put_f64(w, in->next_time);
     put_f64(w, in->last_step);
     put_f64(w, in->time);
@@ -252,7 +252,7 @@ static void apply(native *in, contents *c)
     int *flags[FLAGS] = {&in->initialising, &in->initialised, &in->terminated, &in->ready,
                          &in->initial_outputs, &in->built_for_exit, &in->has_last};
     for (int k = 0; k < FLAGS; ++k) *flags[k] = c->flags[k];
-    in->start_time = c->times[0];
+    in->pub.start_time = c->times[0];
     in->next_time = c->times[1];
     in->last_step = c->times[2];
     in->time = c->times[3];

@@ -112,11 +112,15 @@ static int step(pcn_instance *in, double t, double h, pcn_text *why)
 }
 
 /* A restored buffer may change only the run words (started, the state): the sizes, step
- * matrix and rest state are the design (configuration). */
+ * matrix and rest state are the design (configuration), or all zero in a state taken before
+ * the model was built. */
 static int check_data(const pcn_instance *in, const double *data, pcn_text *why)
 {
     (void)in;
     const long state = PCN_DESIGN_BUFFER_WORDS - (PCN_DERIVATOR_STATES + 1) * CHANNELS;
+    int unbuilt = 1;
+    for (long k = 0; k < PCN_DESIGN_BUFFER_WORDS; ++k) unbuilt &= data[k] == 0.0;
+    if (unbuilt) return 0;
     for (long k = 0; k < state; ++k) {
         if (k == 2) continue;   /* started */
         if (memcmp(&data[k], &pcn_design_buffer[k], sizeof(double)) != 0)
