@@ -12,7 +12,8 @@ Every subcommand is a thin shell over a documented Python call:
 ``parcosim identify-motor``  ``motor.cli.identify_main(argv)``
 ``parcosim list``      ``scenarios.scenes.scene_names()``
 ``parcosim run``       ``scenarios.run.run_scene(name, mode, out_dir)`` (mode inprocess, fmu or
-                       compiled); with ``--drives-in-plant N``
+                       compiled); with ``--native`` (``--mode fmu``)
+                       ``run_scene(fmus.native.run.with_native_fmus(scene, fmu_dir), "fmu", ...)``; with ``--drives-in-plant N``
                        ``run_scene(drives_in_plant(get_scene(name), substeps=N), ...)``; with
                        ``--replace I=F.fmu`` ``run_scene(with_fmu_files(scene, {I: F}), ...)``
 ``parcosim report``    ``scenarios.report.write_report(out_dir, mode)``
@@ -63,6 +64,10 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--coupling", choices=("gauss-seidel", "jacobi"), default="gauss-seidel")
     run.add_argument("--out", default=None, help="output directory (default: out/SCENE)")
     run.add_argument("--fmu-dir", default=None, help="where the FMUs are (built when missing or stale)")
+    run.add_argument("--native", action="store_true",
+                     help="with --mode fmu: the models that have a native FMU run as native FMUs built with "
+                          "each instance's parameters (in FMU_DIR/native, default fmus/build/native; "
+                          "docs/native.md)")
     run.add_argument("--retry-substeps", type=int, default=None, metavar="N",
                      help="retry a refused step from the saved FMU states in N sub-steps (docs/master.md)")
     run.add_argument("--drives-in-plant", type=int, default=None, metavar="N",
@@ -258,8 +263,14 @@ def _run(args) -> int:
     from scenarios.run import run_scene
 
     scene = _scene(args)
+    if args.native:
+        if args.mode != "fmu":
+            raise ValueError(f"--native runs native FMUs: it needs --mode fmu, not --mode {args.mode}")
+        from fmus.native.build import DEFAULT_NATIVE_OUT
+        from fmus.native.run import with_native_fmus
+        scene = with_native_fmus(scene, Path(args.fmu_dir) / "native" if args.fmu_dir else DEFAULT_NATIVE_OUT)
     default = scene.name + ("" if args.drives_in_plant is None else "_drives_in_plant") + \
-        ("_replaced" if args.replace else "")
+        ("_replaced" if args.replace else "") + ("_native" if args.native else "")
     out = Path(args.out) if args.out else Path("out") / default
     bar = progress_bar(scene.name) if sys.stderr.isatty() else None
     outcome = run_scene(scene, mode=args.mode, out_dir=out, coupling=args.coupling,

@@ -23,6 +23,7 @@ from xml.etree import ElementTree as ET
 import numpy as np
 
 from ..foreign import built_by_parcosim
+from ..guarded import START_VALUES_FILE
 from ..identity import IDENTITY_FILE
 from ..modeldescription import model_structure
 from ..registry import SLAVES
@@ -188,18 +189,23 @@ def model_description(slave, model: str, guid: str, sources: list[str], feedthro
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
 
-def build_native_fmu(model: str, out_dir=DEFAULT_NATIVE_OUT, compiler: str = "cc") -> Path:
-    """Build ``<out_dir>/<model>.fmu``, the native FMU of ``model``, and return its path."""
+def build_native_fmu(model: str, out_dir=DEFAULT_NATIVE_OUT, compiler: str = "cc", start_values=None,
+                     file_name=None) -> Path:
+    """Build ``<out_dir>/<file_name or model>.fmu``, the native FMU of ``model``, and return
+    its path.  ``start_values`` (name -> value) replace the slave's start values: the FMU's
+    defaults and the designs it carries are then theirs (an instance's parameters baked in)."""
     if model not in NATIVE:
         raise ValueError(f"no native FMU of {model!r}; native: {', '.join(NATIVE)}")
     native = NATIVE[model]
     out_dir = Path(out_dir)
-    target = out_dir / f"{model}.fmu"
+    target = out_dir / f"{file_name or model}.fmu"
     if target.exists() and not built_by_parcosim(target, model):
         raise NativeBuildError(f"{target} was not built by parcosim: left alone")
     with tempfile.TemporaryDirectory(prefix="parcosim_native_") as tmp:
         tmp = Path(tmp)
         (tmp / "resources").mkdir()
+        if start_values:
+            (tmp / "resources" / START_VALUES_FILE).write_text(json.dumps(start_values))
         slave = initialised_slave(model, tmp / "resources")
         rows = variables(slave)
         scalars, arrays = native.data(slave)
@@ -238,6 +244,16 @@ def build_native_fmu(model: str, out_dir=DEFAULT_NATIVE_OUT, compiler: str = "cc
                     z.write(path, path.relative_to(fmu).as_posix())
         partial.replace(target)
     return target
+
+
+def source_digest() -> str:
+    """SHA-256 of everything a native FMU is made from (C sources, kernels, generator, slaves)."""
+    files = sorted([*HERE.rglob("*.c"), *HERE.rglob("*.h"), *HERE.glob("*.py"), *KERNELS.glob("*.[ch]"),
+                    *(HERE.parent / "slaves").glob("*.py")])
+    digest = hashlib.sha256()
+    for path in files:
+        digest.update(path.name.encode() + b"\0" + path.read_bytes())
+    return digest.hexdigest()
 
 
 def build_native_all(out_dir=DEFAULT_NATIVE_OUT) -> list[Path]:
