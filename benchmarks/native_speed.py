@@ -1,11 +1,11 @@
 """Speed of the native FMUs beside the pythonfmu ones, in other people's hosts (issue 28, item 6).
 
-    python benchmarks/native_speed.py --native-dir DIR [--python-dir DIR] [--rounds 3] [--stop 11]
+    python benchmarks/native_speed.py [--native-dir DIR] [--python-dir DIR] [--rounds 3] [--stop 11]
 
 The scene (``bench_circle_TCMDx``: plant, two drives, two current observers, derivator,
 controller, trajectory) is exported per component (``fmus.ssp.export_ssp``, as ``parcosim
 export-ssp --per-component`` does) twice: once with the native FMUs of ``--native-dir``
-(``parcosim build --native``), once with the pythonfmu FMUs of ``--python-dir`` (built there
+(``parcosim build --native``, built when not given), once with the pythonfmu FMUs of ``--python-dir`` (built there
 when missing).  Each package then runs, side by side in one invocation, in:
 
 * ``C host``: tests/native_host/host.c, libcosim's C API in a C program, stepping one step at
@@ -14,9 +14,10 @@ when missing).  Each package then runs, side by side in one invocation, in:
 * ``libcosimpy``: ``CosimExecution.from_ssp_file(...).simulate_until(stop)`` in a Python child;
 * ``ecospy``: ``EcosSimulation(step, ssp_path).step(n)`` in a Python child, on one CPU (as
   ``fmus.ssp_run.simulate_ssp_ecos`` runs it);
-* our master, ``fmus.master.simulate(mode="fmu")`` (fmpy), with ``--native-mode`` naming the
-  native variant of ``--mode fmu`` if ``fmus.master`` has one; its stepping CPU is that of a
-  full run less that of a 2-step run (loading and initialising are inside ``simulate``).
+* our master, ``parcosim run --mode fmu`` (fmpy) and ``--mode fmu --native``
+  (``fmus.native.run.native_system``: the models with a native FMU run as one, the others
+  stay pythonfmu); its stepping CPU is that of a full run less that of a 2-step run
+  (loading and initialising are inside ``simulate``).
 
 Figures: CPU (user + system, all threads, of the stepping only: loading and initialising
 apart) in microseconds per simulated millisecond, the best of ``--rounds``; real-time factor
@@ -81,12 +82,15 @@ MASTER_CHILD = textwrap.dedent("""
     from fmus.master import simulate
     from scenarios.scenes import get_scene
     import dataclasses
-    scene, mode, fmu_dir, stop = sys.argv[1], sys.argv[2], sys.argv[3], float(sys.argv[4])
+    scene, native, fmu_dir, stop = sys.argv[1], sys.argv[2] == "native", sys.argv[3], float(sys.argv[4])
     system = get_scene(scene).system
+    if native:                                 # parcosim run --mode fmu --native
+        from fmus.native.run import native_system
+        system = native_system(system, out_dir=fmu_dir)
     cpu = []
     for length in (2 * system.step, stop):    # the stepping's CPU: a full run less a 2-step run
         c0 = time.process_time()
-        result = simulate(dataclasses.replace(system, stop_time=length), mode=mode, fmu_dir=fmu_dir)
+        result = simulate(dataclasses.replace(system, stop_time=length), mode="fmu", fmu_dir=fmu_dir)
         cpu.append(time.process_time() - c0)
     print(json.dumps({"setup_cpu_s": cpu[0], "cpu_s": cpu[1] - cpu[0], "ok": bool(result.completed)}))
 """)
@@ -133,8 +137,7 @@ def run_child(code: str, *args) -> dict:
     return json.loads(lines[-1])
 
 
-def measurements(program, packages: dict, stop: float, work: Path, native_mode: str | None,
-                 native_dir: Path, python_dir: Path) -> list:
+def measurements(program, packages: dict, stop: float, work: Path, python_dir: Path) -> list:
     """One round: [(host, kind, result dict)] for every host and package."""
     rows = []
     for kind, package in packages.items():
@@ -145,10 +148,9 @@ def measurements(program, packages: dict, stop: float, work: Path, native_mode: 
             rows.append(("C host (libcosimc)", kind, {"ok": False, "error": str(exc)[-500:]}))
         rows.append(("libcosimpy", kind, run_child(LIBCOSIMPY_CHILD, package, stop)))
         rows.append(("ecospy (1 CPU)", kind, run_child(ECOSPY_CHILD, package, stop)))
-    rows.append(("our master --mode fmu", "pythonfmu", run_child(MASTER_CHILD, SCENE, "fmu", python_dir, stop)))
-    if native_mode:
-        rows.append((f"our master --mode {native_mode}", "native",
-                     run_child(MASTER_CHILD, SCENE, native_mode, native_dir, stop)))
+    rows.append(("our master --mode fmu", "pythonfmu", run_child(MASTER_CHILD, SCENE, "pythonfmu", python_dir, stop)))
+    rows.append(("our master --mode fmu --native", "native",
+                 run_child(MASTER_CHILD, SCENE, "native", work / "master_native", stop)))
     return rows
 
 
@@ -178,12 +180,11 @@ def table(rows: list, stop: float) -> str:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--native-dir", required=True, help="the native FMUs (parcosim build --native --out DIR)")
+    parser.add_argument("--native-dir", default=None,
+                        help="the native FMUs (default: parcosim build --native into a temporary folder)")
     parser.add_argument("--python-dir", default=None, help="the pythonfmu FMUs (built there when missing)")
     parser.add_argument("--stop", type=float, default=11.0, help="simulated seconds (default: the scene's 11)")
     parser.add_argument("--rounds", type=int, default=3)
-    parser.add_argument("--native-mode", default=None,
-                        help="fmus.master.simulate's mode for native FMUs, if it has one (e.g. fmu-native)")
     parser.add_argument("--out", default=str(RESULTS))
     args = parser.parse_args(argv)
 
@@ -191,11 +192,14 @@ def main(argv=None) -> int:
 
     work = Path(tempfile.mkdtemp(prefix="native_speed_"))
     python_dir = Path(args.python_dir) if args.python_dir else work / "pythonfmu"
-    packages = export_packages(work, Path(args.native_dir), python_dir, SCENE)
+    native_dir = Path(args.native_dir) if args.native_dir else work / "native"
+    if not args.native_dir:
+        from fmus.native.build import build_native_all
+        build_native_all(native_dir)
+    packages = export_packages(work, native_dir, python_dir, SCENE)
     program = build_host(work)
     load = os.getloadavg()[0]
-    rounds = [measurements(program, packages, args.stop, work, args.native_mode, Path(args.native_dir), python_dir)
-              for _ in range(args.rounds)]
+    rounds = [measurements(program, packages, args.stop, work, python_dir) for _ in range(args.rounds)]
     rows = best_of(rounds)
     text = table(rows, args.stop)
     stamp = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
