@@ -14,6 +14,8 @@ when missing).  Each package then runs, side by side in one invocation, in:
 * ``libcosimpy``: ``CosimExecution.from_ssp_file(...).simulate_until(stop)`` in a Python child;
 * ``ecospy``: ``EcosSimulation(step, ssp_path).step(n)`` in a Python child, on one CPU (as
   ``fmus.ssp_run.simulate_ssp_ecos`` runs it);
+* the same hosts on a floor package: as many instances of the C low-pass of
+  benchmarks/baseline_fmu, chained, next to nothing to compute: what the host costs;
 * our master, ``parcosim run --mode fmu`` (fmpy) and ``--mode fmu --native``
   (``fmus.native.run.native_system``: the models with a native FMU run as one, the others
   stay pythonfmu); its stepping CPU is that of a full run less that of a 2-step run
@@ -41,6 +43,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 SCENE = "bench_circle_TCMDx"
+#: The kind of the floor package (:func:`floor_package`).
+FLOOR = "floor: 8 C low-passes"
 RESULTS = ROOT / "benchmarks" / "results" / "native_speed.json"
 
 LIBCOSIMPY_CHILD = textwrap.dedent("""
@@ -110,7 +114,23 @@ def export_packages(work: Path, native_dir: Path, python_dir: Path, scene: str) 
     if missing:
         raise FileNotFoundError(f"native FMUs missing (parcosim build --native --out {native_dir}): {missing}")
     return {"native": export_ssp(system, work / "native.ssp", fmus=native_fmus),
-            "pythonfmu": export_ssp(system, work / "pythonfmu.ssp", fmus=python_fmus)}
+            "pythonfmu": export_ssp(system, work / "pythonfmu.ssp", fmus=python_fmus),
+            FLOOR: floor_package(work, len(system.components), system.step)}
+
+
+def floor_package(work: Path, count: int, step: float) -> Path:
+    """``count`` instances of the C low-pass of benchmarks/baseline_fmu in a chain, as one
+    package: what each host costs per instance and step with next to nothing to compute."""
+    from benchmarks.cold_start import build_baseline
+    from fmus.ssp import export_ssp
+    from fmus.system import Component, Connection, System
+
+    names = [f"lp{i}" for i in range(count)]
+    system = System(components=tuple(Component(n, "LowPass") for n in names),
+                    connections=tuple(Connection(f"{a}.y", f"{b}.u") for a, b in zip(names, names[1:])),
+                    record=(f"{names[-1]}.y",), stop_time=1.0, step=step)
+    (work / "floor").mkdir(exist_ok=True)
+    return export_ssp(system, work / "floor.ssp", fmus={"LowPass": build_baseline(work / "floor")})
 
 
 def libpython() -> str | None:
@@ -141,7 +161,7 @@ def measurements(program, packages: dict, stop: float, work: Path, python_dir: P
     """One round: [(host, kind, result dict)] for every host and package."""
     rows = []
     for kind, package in packages.items():
-        preload = libpython() if kind == "pythonfmu" else None
+        preload = libpython() if kind == "pythonfmu" else None      # its FMUs load only so
         try:
             rows.append(("C host (libcosimc)", kind, run_c_host(program, package, stop, work / f"c_{kind}", preload)))
         except RuntimeError as exc:
