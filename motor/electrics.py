@@ -20,8 +20,10 @@ and only the pair (a, g) differs between methods
 the electrical model, used by the drive and by the dynamic current observer.
 """
 
+import ctypes
 import math
 
+import kernels
 from motor import _checks, kernel
 
 #: Names accepted by :func:`electrical_step_coefficients`.
@@ -64,14 +66,24 @@ def electrical_step_coefficients(R, L, h, method="exact"):
     L = _checks.non_negative("L", L)
     h = _checks.positive("h", h)
     _checks.choice("method", method, ELECTRICAL_METHODS)
-    if method == "quasi_static" or (method == "exact" and L == 0.0):
-        return 0.0, 1.0 / R
-    if method == "exact":
-        x = R * h / L
-        return math.exp(-x), -math.expm1(-x) / R
-    if L == 0.0:
+    if method == "euler" and L == 0.0:
         raise ValueError(f"method 'euler' needs L > 0, got L = {L!r}; use 'quasi_static'")
-    return 1.0 - h * R / L, h / L
+    ag = (ctypes.c_double * 2)()
+    _step_coefficients()(R, L, h, ELECTRICAL_METHODS.index(method), ag)   # kernels/src/electrics.c
+    return ag[0], ag[1]
+
+
+def _step_coefficients():
+    """The kernel ``pc_electrical_step_coefficients`` (bound once)."""
+    global _STEP_COEFFICIENTS
+    if _STEP_COEFFICIENTS is None:
+        _STEP_COEFFICIENTS = kernels.function("pc_electrical_step_coefficients", ctypes.c_int, ctypes.c_double,
+                                              ctypes.c_double, ctypes.c_double, ctypes.c_int,
+                                              ctypes.POINTER(ctypes.c_double))
+    return _STEP_COEFFICIENTS
+
+
+_STEP_COEFFICIENTS = None
 
 
 def mean_current_coefficients(R, L, h, method="exact"):

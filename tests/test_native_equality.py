@@ -38,6 +38,11 @@ SCENARIOS = {
         1e-3, lambda k, t: {"q1": 0.4 * math.sin(7.0 * t) + 0.1, "q2": -0.3 + 2.0 * t * t},
         [{}, {"start_from_input": False, "q1_0": 0.25, "q2_0": -0.5}, {"T": -1.0}, {"fc_vel": 600.0}],
         "q2", ("fc_acc", 1.5)),
+    "CurrentObserver": Scenario(
+        5e-4, lambda k, t: {"v": 12.0 * math.sin(40.0 * t) + 0.5, "omega": 30.0 * math.cos(15.0 * t)},
+        [{}, {"kind": "dynamic"}, {"kind": "dynamic", "preset": "motor2", "R": 1.3, "L": 0.0},
+         {"preset": "nope"}, {"R": -2.0}, {"ke": math.nan}, {"L": math.inf}, {"kind": "both"}, {"T": 0.0}],
+        "omega", ("R", 1.5)),
     "Trajectory": Scenario(
         1e-3, lambda k, t: {}, [{}, {"kind": "triangle"}, {"kind": "thesis_circle"}, {"kind": "hold"},
                                 {"kind": "square"}, {"cycles": 0}, {"side_time": float("inf")}],

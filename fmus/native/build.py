@@ -117,6 +117,10 @@ def generate(model: str, rows: list[dict], scalars: dict, arrays: dict, guid: st
         literal = str(value) if isinstance(value, int) else _c_double(value)
         header.append(f"#define PCN_{name.upper()} {literal}")
     for name, array in arrays.items():
+        if isinstance(array, (list, tuple)) and all(isinstance(x, str) for x in array):   # names
+            header += [f"#define PCN_{name.upper()}_COUNT {len(array)}", f"extern const char *const pcn_{name}[];"]
+            table += [f"const char *const pcn_{name}[] = {{{', '.join(map(_c_string, array))}}};", ""]
+            continue
         flat = np.asarray(array, dtype=np.float64).ravel()
         header += [f"#define PCN_{name.upper()}_WORDS {flat.size}", f"extern const double pcn_{name}[];"]
         body = ",\n    ".join(", ".join(_c_double(x) for x in flat[k:k + 4]) for k in range(0, flat.size, 4))

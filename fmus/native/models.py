@@ -48,8 +48,22 @@ def _trajectory(slave):
     return scalars, arrays
 
 
+def _motor_presets(fields=("R", "L", "ke")):
+    """Every motor preset by name, and each field's values in that order (arrays ``preset_<field>``)."""
+    from motor.presets import MOTOR_PRESETS
+
+    names = sorted(MOTOR_PRESETS)
+    return {"preset_names": names,
+            **{f"preset_{f}": np.array([getattr(MOTOR_PRESETS[n], f) for n in names]) for f in fields}}
+
+
+def _observer(slave):
+    return {}, _motor_presets()
+
+
 #: Model name -> its native parts; one line a model.
 NATIVE = {
     "Derivator": NativeModel("pcn_derivator.c", ("derivator.c",), _derivator),
     "Trajectory": NativeModel("pcn_trajectory.c", ("trajectory.c",), _trajectory),
+    "CurrentObserver": NativeModel("pcn_currentobserver.c", ("observer.c", "electrics.c"), _observer),
 }
