@@ -18,8 +18,8 @@ when missing).  Each package then runs, side by side in one invocation, in:
   benchmarks/baseline_fmu, chained, next to nothing to compute: what the host costs;
 * our master, ``parcosim run --mode fmu`` (fmpy) and ``--mode fmu --native``
   (``fmus.native.run.native_system``: the models with a native FMU run as one, the others
-  stay pythonfmu); its stepping CPU is that of a full run less that of a 2-step run
-  (loading and initialising are inside ``simulate``).
+  stay pythonfmu); its stepping CPU is that of a full run less that of a 2-step run, both
+  after a first 2-step run (loading and initialising are inside ``simulate``).
 
 Figures: CPU (user + system, all threads, of the stepping only: loading and initialising
 apart) in microseconds per simulated millisecond, the best of ``--rounds``; real-time factor
@@ -92,11 +92,12 @@ MASTER_CHILD = textwrap.dedent("""
         from fmus.native.run import native_system
         system = native_system(system, out_dir=fmu_dir)
     cpu = []
-    for length in (2 * system.step, stop):    # the stepping's CPU: a full run less a 2-step run
+    # the stepping's CPU: a full run less a 2-step run, after a first run (builds, extractions)
+    for length in (2 * system.step, 2 * system.step, stop):
         c0 = time.process_time()
         result = simulate(dataclasses.replace(system, stop_time=length), mode="fmu", fmu_dir=fmu_dir)
         cpu.append(time.process_time() - c0)
-    print(json.dumps({"setup_cpu_s": cpu[0], "cpu_s": cpu[1] - cpu[0], "ok": bool(result.completed)}))
+    print(json.dumps({"setup_cpu_s": cpu[1], "cpu_s": cpu[2] - cpu[1], "ok": bool(result.completed)}))
 """)
 
 
@@ -110,12 +111,14 @@ def export_packages(work: Path, native_dir: Path, python_dir: Path, scene: str) 
     models = sorted({c.model for c in system.components})
     python_fmus = ensure_built(models, python_dir)
     native_fmus = {m: native_dir / f"{m}.fmu" for m in models}
-    missing = [str(p) for p in native_fmus.values() if not p.is_file()]
+    packages = {"pythonfmu": export_ssp(system, work / "pythonfmu.ssp", fmus=python_fmus),
+                FLOOR: floor_package(work, len(system.components), system.step)}
+    missing = sorted(m for m, p in native_fmus.items() if not p.is_file())
     if missing:
-        raise FileNotFoundError(f"native FMUs missing (parcosim build --native --out {native_dir}): {missing}")
-    return {"native": export_ssp(system, work / "native.ssp", fmus=native_fmus),
-            "pythonfmu": export_ssp(system, work / "pythonfmu.ssp", fmus=python_fmus),
-            FLOOR: floor_package(work, len(system.components), system.step)}
+        print(f"no native package: no native FMU of {missing} in {native_dir}", file=sys.stderr)
+    else:
+        packages["native"] = export_ssp(system, work / "native.ssp", fmus=native_fmus)
+    return packages
 
 
 def floor_package(work: Path, count: int, step: float) -> Path:
