@@ -24,24 +24,14 @@ from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave
 
+from fmus.native.state_bytes import MAGIC as NATIVE_STATE_MAGIC
+from fmus.native.state_bytes import fnv1a
 from scenarios.hostile import CALL_LIMIT
 
 #: Bytes of the checksum that ends a serialised parcosim state (docs/state.md).
 CHECKSUM_BYTES = 32
-#: A native FMU's state (issue 28) starts with this and ends with a 64-bit FNV-1a of the
-#: bytes before it, in host byte order (fmus/native/pcn_state.c), whose start value is
-#: 1469598103934665603 (FNV's offset basis is 14695981039346656037: a digit short).
-NATIVE_STATE_MAGIC = b"PCNSTATE"
+#: Bytes of the checksum that ends a native FMU's state (issue 28: fmus/native/state_bytes.py).
 NATIVE_CHECKSUM_BYTES = 8
-NATIVE_CHECKSUM_START = 1469598103934665603
-
-
-def fnv1a64(data: bytes, start: int = NATIVE_CHECKSUM_START) -> int:
-    """The 64-bit FNV-1a hash of ``data`` from ``start`` (what forges a native state's checksum)."""
-    h = start
-    for byte in data:
-        h = ((h ^ byte) * 0x100000001B3) & 0xFFFFFFFFFFFFFFFF
-    return h
 
 
 class _Exploit:
@@ -298,7 +288,7 @@ def forged_native_state(data: bytes, rng: random.Random) -> bytes:
     body = bytearray(data[:-NATIVE_CHECKSUM_BYTES])
     for _ in range(rng.randint(1, 3)):
         body[rng.randrange(len(body))] ^= rng.randrange(1, 256)
-    return bytes(body) + struct.pack("=Q", fnv1a64(bytes(body)))
+    return bytes(body) + struct.pack("=Q", fnv1a(bytes(body)))
 
 
 def main() -> int:

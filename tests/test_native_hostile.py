@@ -175,7 +175,7 @@ def test_the_forger_writes_the_checksum_a_native_state_carries(model, native_san
 
     from fmpy import read_model_description
 
-    from scenarios.hostile_worker import NATIVE_CHECKSUM_BYTES, NATIVE_STATE_MAGIC, fnv1a64
+    from scenarios.hostile_worker import NATIVE_CHECKSUM_BYTES, NATIVE_STATE_MAGIC, fnv1a
 
     unzip_dir = str(native_sanitized[model])
     md = read_model_description(unzip_dir)
@@ -184,4 +184,4 @@ def test_the_forger_writes_the_checksum_a_native_state_carries(model, native_san
     data = bytes.fromhex(run.stdout)
     assert data.startswith(NATIVE_STATE_MAGIC)
     body, checksum = data[:-NATIVE_CHECKSUM_BYTES], data[-NATIVE_CHECKSUM_BYTES:]
-    assert struct.unpack("=Q", checksum)[0] == fnv1a64(body)
+    assert struct.unpack("=Q", checksum)[0] == fnv1a(body)
