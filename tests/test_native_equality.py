@@ -17,7 +17,10 @@ from typing import Callable
 import pytest
 
 from native_fixtures import native_fmus, twin_fmus  # noqa: F401 - fixtures
+from controller.balance import BalanceSettings
 from support.fmu_calls import Driver
+
+BALANCE_T = BalanceSettings().T
 
 
 @dataclass
@@ -38,6 +41,10 @@ SCENARIOS = {
         1e-3, lambda k, t: {"q1": 0.4 * math.sin(7.0 * t) + 0.1, "q2": -0.3 + 2.0 * t * t},
         [{}, {"start_from_input": False, "q1_0": 0.25, "q2_0": -0.5}, {"T": -1.0}, {"fc_vel": 600.0}],
         "q2", ("fc_acc", 1.5)),
+    "BalanceController": Scenario(
+        BALANCE_T, lambda k, t: {"enc_l": 0.3 * math.sin(3.0 * t), "enc_r": 0.2 * t, "gyro": 0.05 * math.cos(9.0 * t)},
+        [{}, {"route": "forward_turn"}, {"route": "sideways"}, {"T": 0.0}, {"v_battery": math.nan}],
+        "gyro", ("yaw", False), steps=200),
     "CurrentObserver": Scenario(
         5e-4, lambda k, t: {"v": 12.0 * math.sin(40.0 * t) + 0.5, "omega": 30.0 * math.cos(15.0 * t)},
         [{}, {"kind": "dynamic"}, {"kind": "dynamic", "preset": "motor2", "R": 1.3, "L": 0.0},
@@ -126,6 +133,7 @@ def test_native_fmu_equals_its_pythonfmu_twin(model, native_fmus, twin_fmus):
 #: Per model: a parameter set whose design the native FMU does not carry, and what its refusal names.
 UNBUILT = {
     "Derivator": ({"fc_vel": 50.0}, "fc_vel = 50.0 Hz"),
+    "BalanceController": ({"yaw": False}, "parameter yaw = False: this native FMU carries the balance design"),
     "Trajectory": ({"kind": "circle", "cycles": 3}, "parameter cycles = 3: this native FMU carries the circle"),
 }
 

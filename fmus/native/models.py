@@ -61,9 +61,23 @@ def _observer(slave):
     return {}, _motor_presets()
 
 
+def _balance(slave):
+    from controller.balance import ROUTES, BalanceController, get_route
+
+    design = slave.controller.design
+    scalars = {"built_t": float(slave.T), "built_v_battery": float(slave.v_battery),
+               "built_friction": int(bool(slave.friction)), "built_yaw": int(bool(slave.yaw)),
+               "built_encoder_counts": int(slave.encoder_counts)}
+    arrays = {"built_electrics": [str(slave.electrics)]}
+    for route in ROUTES:
+        arrays[f"buffer_{route}"] = BalanceController(design, get_route(route)).buf
+    return scalars, arrays
+
+
 #: Model name -> its native parts; one line a model.
 NATIVE = {
     "Derivator": NativeModel("pcn_derivator.c", ("derivator.c",), _derivator),
     "Trajectory": NativeModel("pcn_trajectory.c", ("trajectory.c",), _trajectory),
+    "BalanceController": NativeModel("pcn_balancecontroller.c", ("balance.c",), _balance),
     "CurrentObserver": NativeModel("pcn_currentobserver.c", ("observer.c", "electrics.c"), _observer),
 }
