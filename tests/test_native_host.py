@@ -17,6 +17,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from fmus.native.models import NATIVE
+from native_fixtures import native_fmus, twin_fmus  # noqa: F401 - fixtures
 from tests.native_host.host import HostUnavailable, build_host, config_text, run_host
 
 H = 1e-3            # s: the communication step
@@ -85,17 +87,6 @@ def test_the_host_names_what_it_cannot_find(host, lowpass, tmp_path):
 
 # --- the native FMUs (fmus.native: parcosim build --native) ------------------------------------
 
-try:
-    from fmus.native.models import NATIVE as NATIVE_MODELS
-except ImportError:          # before the native FMUs exist in this tree
-    NATIVE_MODELS = {}
-
-
-def native_fmu(model: str, out: Path) -> Path:
-    build = pytest.importorskip("fmus.native.build", reason="no native FMUs in this tree (fmus.native)")
-    return build.build_native_fmu(model, out)
-
-
 def twin_outputs(fmu: Path, inputs: dict, outputs: list, steps: int) -> np.ndarray:
     """The FMU run in fmpy, ``steps`` doSteps of H, ``inputs`` (name -> values) set before
     each; the ``outputs`` after initialisation (row 0) and after each step."""
@@ -120,14 +111,13 @@ def twin_outputs(fmu: Path, inputs: dict, outputs: list, steps: int) -> np.ndarr
     return np.array(rows)
 
 
-def test_a_native_derivator_in_the_c_host_equals_its_pythonfmu_twin_in_fmpy(host, lowpass, tmp_path):
+def test_a_native_derivator_in_the_c_host_equals_its_pythonfmu_twin_in_fmpy(host, lowpass, native_fmus, twin_fmus,
+                                                                             tmp_path):
     """Two low-passes (step responses of different time constants) feed the native
     Derivator in libcosim; the pythonfmu Derivator, fed in fmpy the samples libcosim gave
     (each step holds the source's output at the step's start, 0 before the first), must give
     the same velocities and accelerations within 1e-12 of their peaks."""
-    from fmus.build import build_fmu
-
-    derivator = native_fmu("Derivator", tmp_path / "native")
+    derivator = native_fmus["Derivator"]
     config = config_text(0.3, step=H, slaves=[("src1", lowpass), ("src2", lowpass), ("deriv", derivator)],
                          connections=[("src1.y", "deriv.q1"), ("src2.y", "deriv.q2")],
                          reals=[("src1.u", 0.5), ("src1.tau", 0.05), ("src2.u", -1.0), ("src2.tau", 0.02)],
@@ -137,29 +127,28 @@ def test_a_native_derivator_in_the_c_host_equals_its_pythonfmu_twin_in_fmpy(host
     assert "Derivator.so" in run.fmu_binaries
     held = {q: np.concatenate([[0.0], run.columns[f"src{j}.y"][:-1]]) for j, q in ((1, "q1"), (2, "q2"))}
     names = ["dq1", "ddq1", "dq2", "ddq2"]
-    twin = twin_outputs(build_fmu("Derivator", tmp_path / "pythonfmu"), held, names, len(held["q1"]))[1:]
+    twin = twin_outputs(twin_fmus["Derivator"], held, names, len(held["q1"]))[1:]
     for j, name in enumerate(names):
         peak = np.max(np.abs(twin[:, j]))
         assert peak > 1.0                         # the filters moved
         np.testing.assert_allclose(run.columns[f"deriv.{name}"], twin[:, j], rtol=0, atol=1e-12 * peak)
 
 
-def test_a_native_trajectory_feeds_a_native_derivator_in_the_c_host_as_their_twins_do(host, tmp_path):
+def test_a_native_trajectory_feeds_a_native_derivator_in_the_c_host_as_their_twins_do(host, native_fmus, twin_fmus,
+                                                                                      tmp_path):
     """The reference circle (native Trajectory) differentiated by the native Derivator in
     libcosim, against the pythonfmu Trajectory run in fmpy, and the pythonfmu Derivator fed
     the samples libcosim gave the native one (each held over the step after it; the first,
     after initialisation, the twin's): every output within 1e-12 of its peak.  (The twins'
     circles differ in the last bits; the acceleration filter would magnify that by 1/h².)"""
-    from fmus.build import build_fmu
-
-    native = {m: native_fmu(m, tmp_path / "native") for m in ("Trajectory", "Derivator")}
+    native = {m: native_fmus[m] for m in ("Trajectory", "Derivator")}
     steps = 1500
     config = config_text(steps * H, step=H, slaves=[("traj", native["Trajectory"]), ("deriv", native["Derivator"])],
                          connections=[("traj.x_d", "deriv.q1"), ("traj.y_d", "deriv.q2")],
                          outputs=["traj.x_d", "traj.y_d", "deriv.dq1", "deriv.ddq1", "deriv.dq2", "deriv.ddq2"])
     run = run_host(host, tmp_path / "run", config)
     assert run.report["libpython_mapped"] == "0" and set(run.fmu_binaries) == {"Trajectory.so", "Derivator.so"}
-    python = {m: build_fmu(m, tmp_path / "pythonfmu") for m in native}
+    python = {m: twin_fmus[m] for m in native}
     reference = twin_outputs(python["Trajectory"], {}, ["x_d", "y_d"], steps)
     held = {q: np.concatenate([[reference[0, j]], run.columns[f"traj.{name}"][:-1]])
             for j, (q, name) in enumerate((("q1", "x_d"), ("q2", "y_d")))}
@@ -174,7 +163,7 @@ def test_a_native_trajectory_feeds_a_native_derivator_in_the_c_host_as_their_twi
 SCENE = "bench_circle_TCMDx"
 
 
-def test_the_native_bench_loop_in_the_c_host_tracks_as_a_jacobi_master(host, tmp_path):
+def test_the_native_bench_loop_in_the_c_host_tracks_as_a_jacobi_master(host, native_fmus, tmp_path):
     """The bench loop (plant, drives, observers, derivator, controller, trajectory), every
     component a native FMU, wired as ``parcosim export-ssp --per-component`` wires it, loaded
     by libcosim from the SSP package in the C host: libcosim steps Jacobi (every FMU, then
@@ -190,10 +179,10 @@ def test_the_native_bench_loop_in_the_c_host_tracks_as_a_jacobi_master(host, tmp
 
     scene = get_scene(SCENE)
     models = sorted({c.model for c in scene.system.components})
-    missing = [m for m in models if m not in NATIVE_MODELS]
+    missing = [m for m in models if m not in NATIVE]
     if missing:
         pytest.skip(f"no native FMU of {missing} yet")
-    native = {m: native_fmu(m, tmp_path / "native") for m in models}
+    native = {m: native_fmus[m] for m in models}
     package = export_ssp(scene.system, tmp_path / "bench.ssp", fmus=native)
     run = run_host(host, tmp_path / "run", config_text(scene.system.stop_time, ssp=package,
                                                         outputs=list(scene.columns.values())))
