@@ -184,7 +184,7 @@ class WheeledPendulum:
                            "initial {name} = {value!r} with the yaw locked (yaw = false) must be 0")
         code = kernel.condition(self.prm, self.y)
         if code != kernel.OK:
-            raise ValueError(f"initial state: {kernel.CODES[code]} (psi0 = {self.y[kernel.PSI]!r} rad)")
+            raise ValueError(f"initial state: {kernel.CODES[code]} (psi0 = {float(self.y[kernel.PSI])!r} rad)")
         self.time = 0.0
         self.fallen = False
 

@@ -1,4 +1,4 @@
-"""``parcosim run SCENE --mode fmu --native`` (issue 28, item 3): a bench scene whose natively
+"""``parcosim run SCENE --mode fmu --native`` (issue 28, item 3): a scene whose natively
 built models run as native FMUs gives the run of the pythonfmu FMUs, every recorded signal
 within 1e-12 of its peak (measured: bit for bit).  Wrong code it catches: a native FMU that
 drifts from its twin over a closed loop, parameters not baked into the native FMU, a native
@@ -8,6 +8,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+import pytest
 
 from fmus.master import simulate
 from fmus.native.models import NATIVE
@@ -15,8 +16,11 @@ from fmus.native.run import native_system
 from scenarios.scenes import get_scene
 
 
-def test_bench_scene_with_native_fmus_equals_the_pythonfmu_run(built_fmus, tmp_path):
-    system = replace(get_scene("bench_circle_TCMDx").system, stop_time=1.5)
+@pytest.mark.parametrize("scene", ["bench_circle_TCMDx", "pendulum_push"])
+def test_scene_with_native_fmus_equals_the_pythonfmu_run(scene, built_fmus, tmp_path):
+    """Native: the bench's Derivators and Trajectory; the pendulum's plant and balance
+    controller (with a push at 1 s)."""
+    system = replace(get_scene(scene).system, stop_time=1.5)
     fmu_dir = next(iter(built_fmus.values())).parent
     native = native_system(system, tmp_path / "native")
     swapped = [c for c in native.components if c.model.endswith(".fmu")]

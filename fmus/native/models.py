@@ -78,6 +78,7 @@ def _balance(slave):
 NATIVE = {
     "Derivator": NativeModel("pcn_derivator.c", ("derivator.c",), _derivator),
     "Trajectory": NativeModel("pcn_trajectory.c", ("trajectory.c",), _trajectory),
+    "WheeledPendulum": NativeModel("pcn_wheeledpendulum.c", ("wheeled.c",)),
     "BalanceController": NativeModel("pcn_balancecontroller.c", ("balance.c",), _balance),
     "CurrentObserver": NativeModel("pcn_currentobserver.c", ("observer.c", "electrics.c"), _observer),
 }
