@@ -21,22 +21,26 @@ def fnv1a(data: bytes) -> int:
 
 def layout(data: bytes) -> dict:
     """Where the fields are: identifier, guid, counts (Real, Integer, Boolean, String),
-    data_words, and ``data_offset`` (the model data's first byte)."""
+    data_words, ``data_offset`` (the model data's first byte) and ``sizes`` (offset and
+    struct format of every length or count field: what a forged state would lie about)."""
     if data[:8] != MAGIC:
         raise ValueError("not a native FMU state")
     at = 8 + 4 + 8
-    fields = {}
+    fields, sizes = {}, [(12, "=Q")]
     for name in ("identifier", "guid"):
         (n,) = struct.unpack_from("=H", data, at)
+        sizes.append((at, "=H"))
         fields[name] = data[at + 2:at + 2 + n].decode()
         at += 2 + n
     counts = struct.unpack_from("=4I", data, at)
     (words,) = struct.unpack_from("=Q", data, at + 16)
+    sizes += [(at + 4 * k, "=I") for k in range(4)] + [(at + 16, "=Q")]
     at += 16 + 8 + FLAGS + 4 * 8 + 8 * counts[0] + 4 * counts[1] + counts[2]
     for _ in range(counts[3]):
         (n,) = struct.unpack_from("=I", data, at)
+        sizes.append((at, "=I"))
         at += 4 + n
-    fields.update(counts=counts, data_words=words, data_offset=at)
+    fields.update(counts=counts, data_words=words, data_offset=at, sizes=sizes)
     return fields
 
 

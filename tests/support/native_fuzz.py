@@ -1,0 +1,103 @@
+"""Run in a subprocess under AddressSanitizer (tests/test_native_sanitized.py): drive one
+unzipped native FMU through fmpy with careless calls and forged states; any memory error
+ends the process with ASan's exit status.  Usage: python native_fuzz.py UNZIPPED_DIR SEED"""
+from __future__ import annotations
+
+import random
+import struct
+import sys
+
+from fmpy import read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import FMU2Slave
+
+from fmus.native.state_bytes import fnv1a, layout
+
+
+def quiet(call, *args):
+    try:
+        return call(*args)
+    except FMICallException:
+        return None
+
+
+def with_checksum(data: bytearray) -> bytes:
+    struct.pack_into("=Q", data, len(data) - 8, fnv1a(bytes(data[:-8])))
+    return bytes(data)
+
+
+def main(folder: str, seed: int) -> None:
+    rng = random.Random(seed)
+    md = read_model_description(folder)
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=folder, modelIdentifier=md.coSimulation.modelIdentifier,
+                    instanceName="fuzz")
+    fmu.instantiate()
+    by_type = {}
+    for v in md.modelVariables:
+        by_type.setdefault(v.type, []).append(v.valueReference)
+    everything = [v.valueReference for v in md.modelVariables] + [10_000, 2 ** 32 - 1]
+    for kind in ("Real", "Integer", "Boolean", "String"):   # every type at every reference: refused or read
+        quiet(getattr(fmu, f"get{kind}"), everything)
+    quiet(fmu.doStep, 0.0, 1e-3)                             # before initialisation
+    strings = [v.valueReference for v in md.modelVariables if v.type == "String" and v.causality == "parameter"]
+    long_text = "%s%n" * 2000                                 # messages cut at their buffer's end, no format read
+    for vr in strings:                                        # an instance that refuses its initialisation
+        other = FMU2Slave(guid=md.guid, unzipDirectory=folder, modelIdentifier=md.coSimulation.modelIdentifier,
+                          instanceName="long" * 500)
+        other.instantiate()
+        other.setString([vr], [long_text])
+        other.setupExperiment(startTime=0.0)
+        other.enterInitializationMode()
+        quiet(other.getReal, by_type.get("Real", []))
+        other.exitInitializationMode()
+        quiet(other.doStep, 0.0, 1e-3)
+        quiet(other.getString, by_type["String"])
+        other.freeInstance()
+    quiet(fmu.exitInitializationMode)
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    quiet(fmu.setupExperiment, 0.0)
+    fmu.exitInitializationMode()
+    reals = [v.valueReference for v in md.modelVariables if v.type == "Real" and v.causality == "input"]
+    for k in range(30):
+        quiet(fmu.setReal, reals, [rng.uniform(-0.1, 0.1) for _ in reals])
+        quiet(fmu.doStep, k * 1e-3, 1e-3)
+    for kind, vrs in by_type.items():
+        quiet(getattr(fmu, f"get{kind}"), vrs)
+    quiet(fmu.setString, strings, [long_text] * len(strings))   # refused after initialisation, named
+    state = fmu.getFMUstate()
+    good = fmu.serializeFMUstate(state)
+    forged = [good[:n] for n in range(0, len(good))]                       # every truncation
+    forged += [good + bytes(rng.randrange(256) for _ in range(rng.randrange(1, 64)))]
+    for offset, form in layout(good)["sizes"]:      # each length or count near the bytes left, and huge
+        limit = 256 ** struct.calcsize(form) - 1
+        for value in [*range(80), *range(max(80, len(good) - offset - 80), len(good) - offset + 80), limit,
+                      limit // 2 + 1]:
+            data = bytearray(good)
+            struct.pack_into(form, data, offset, min(value, limit))
+            forged.append(with_checksum(data) if offset != 12 else bytes(data))
+    for _ in range(300):                                                    # flips, checksum made right
+        data = bytearray(good)
+        for _ in range(rng.randrange(1, 4)):
+            data[rng.randrange(len(data) - 8)] = rng.randrange(256)
+        forged.append(with_checksum(data))
+    for data in forged:
+        restored = quiet(fmu.deSerializeFMUstate, data)
+        if restored is not None:
+            quiet(fmu.setFMUstate, restored)
+            for kind, vrs in by_type.items():
+                quiet(getattr(fmu, f"get{kind}"), vrs)
+            quiet(fmu.doStep, 0.03, 1e-3)
+            fmu.freeFMUstate(restored)
+    fmu.setFMUstate(state)
+    quiet(fmu.doStep, 0.03, 1e-3)
+    fmu.freeFMUstate(state)
+    fmu.terminate()
+    quiet(fmu.doStep, 0.031, 1e-3)
+    fmu.reset()
+    fmu.freeInstance()
+    print("survived", len(forged), "forged states")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1], int(sys.argv[2]))

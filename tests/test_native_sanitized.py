@@ -1,0 +1,38 @@
+"""The native FMUs' C (generic part, state parser, adapters) under AddressSanitizer and
+UBSan: each FMU is rebuilt from its sources with the sanitizers and driven by
+tests/support/native_fuzz.py in a subprocess: careless calls, every truncation of a saved
+state and 300 forged ones whose checksum is made right, so the parser's checks past the
+checksum are reached.  Wrong code it catches: a read past the state's end, a string length
+taken on trust, a slot out of range, undefined arithmetic."""
+from __future__ import annotations
+
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from fmus.native.build import compile_command, platform_folder
+from fmus.native.models import NATIVE
+from native_fixtures import native_fmus  # noqa: F401 - fixture
+from test_sanitizers import ASAN, _sanitized_env
+
+SANITIZE = ("-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer", "-g")
+pytestmark = pytest.mark.skipif(ASAN is None, reason="the C compiler has no AddressSanitizer runtime")
+
+
+@pytest.mark.parametrize("model", sorted(NATIVE))
+def test_native_fmu_survives_careless_calls_and_forged_states_under_asan(model, native_fmus, tmp_path):
+    folder = tmp_path / "fmu"
+    with zipfile.ZipFile(native_fmus[model]) as z:
+        z.extractall(folder)
+    binary = folder / "binaries" / platform_folder() / f"{model}.so"
+    command = compile_command(folder / "sources", binary)
+    subprocess.run([command[0], *SANITIZE, *command[1:]], check=True, capture_output=True)
+    worker = Path(__file__).parent / "support" / "native_fuzz.py"
+    env = _sanitized_env(binary)
+    env["PYTHONPATH"] = str(Path(__file__).resolve().parent.parent)
+    run = subprocess.run([sys.executable, str(worker), str(folder), "28"], env=env, capture_output=True, text=True,
+                         timeout=300)
+    assert run.returncode == 0 and "survived" in run.stdout, run.stderr[-3000:]
