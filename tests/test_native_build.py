@@ -13,7 +13,6 @@ from fmpy.validation import validate_fmu
 
 from fmus.native.build import compile_command, platform_folder
 from fmus.native.models import NATIVE
-from native_fixtures import native_fmus, twin_fmus  # noqa: F401 - fixtures
 from support.fmu_calls import Driver
 
 MODELS = sorted(NATIVE)

@@ -16,7 +16,6 @@ from typing import Callable
 
 import pytest
 
-from native_fixtures import native_fmus, twin_fmus  # noqa: F401 - fixtures
 from controller.balance import BalanceSettings
 from support.fmu_calls import Driver
 

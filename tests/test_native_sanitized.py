@@ -15,7 +15,6 @@ import pytest
 
 from fmus.native.build import compile_command, platform_folder
 from fmus.native.models import NATIVE
-from native_fixtures import native_fmus  # noqa: F401 - fixture
 from test_sanitizers import ASAN, _sanitized_env
 
 SANITIZE = ("-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer", "-g")
