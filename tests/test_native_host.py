@@ -18,7 +18,6 @@ import numpy as np
 import pytest
 
 from fmus.native.models import NATIVE
-from native_fixtures import native_fmus, twin_fmus  # noqa: F401 - fixtures
 from tests.native_host.host import HostUnavailable, build_host, config_text, run_host
 
 H = 1e-3            # s: the communication step

@@ -82,7 +82,6 @@ def test_the_sanitized_campaign_sees_an_fmu_write_past_its_allocation(tmp_path, 
 # --- the native FMUs (fmus.native: parcosim build --native) ------------------------------------
 
 from fmus.native.models import NATIVE
-from native_fixtures import native_fmus  # noqa: F401 - fixture
 
 CASES_PER_FMU = 9            # every kind once
 SEED = 280                   # fixed: CI runs the same cases every time
