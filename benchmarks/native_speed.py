@@ -124,7 +124,26 @@ def export_packages(work: Path, native_dir: Path, python_dir: Path, scene: str) 
         print(f"no native package: no native FMU of {missing} in {native_dir}", file=sys.stderr)
     else:
         packages["native"] = export_ssp(system, work / "native.ssp", fmus=native_fmus)
+    part = subsystem(system, [c.name for c in system.components if c.model not in missing])
+    if missing and part.components:
+        label = ", ".join(c.name for c in part.components)
+        packages[f"native: {label}"] = export_ssp(part, work / "part_native.ssp",
+                                                  fmus={c.model: native_fmus[c.model] for c in part.components})
+        packages[f"pythonfmu: {label}"] = export_ssp(part, work / "part_pythonfmu.ssp",
+                                                     fmus={c.model: python_fmus[c.model] for c in part.components})
     return packages
+
+
+def subsystem(system, names):
+    """The components ``names`` of ``system`` and the connections between them (the inputs
+    the others fed keep their start values): the part that has native FMUs."""
+    import dataclasses
+
+    keep = set(names)
+    inside = [c for c in system.connections if c.source.split(".")[0] in keep and c.target.split(".")[0] in keep]
+    return dataclasses.replace(system, components=tuple(c for c in system.components if c.name in keep),
+                               connections=tuple(inside),
+                               record=tuple(r for r in system.record if r.split(".")[0] in keep))
 
 
 def floor_package(work: Path, count: int, step: float) -> Path:
@@ -170,7 +189,7 @@ def measurements(program, packages: dict, stop: float, work: Path, python_dir: P
     """One round: [(host, kind, result dict)] for every host and package."""
     rows = []
     for kind, package in packages.items():
-        preload = libpython() if kind == "pythonfmu" else None      # its FMUs load only so
+        preload = libpython() if kind.startswith("pythonfmu") else None      # its FMUs load only so
         try:
             rows.append(("C host (libcosimc)", kind, run_c_host(program, package, stop, work / f"c_{kind}", preload)))
         except RuntimeError as exc:
