@@ -32,7 +32,7 @@ from .models import NATIVE
 HERE = Path(__file__).resolve().parent
 KERNELS = HERE.parent.parent / "kernels" / "src"
 #: The generic part every native FMU compiles.
-GENERIC = ("fmi2_native.c", "pcn_state.c", "pcn_text.c", "pcn_text.h", "pcn_model.h", "pcn_native.h")
+GENERIC = ("fmi2_native.c", "pcn_values.c", "pcn_state.c", "pcn_text.c", "pcn_text.h", "pcn_model.h", "pcn_native.h")
 #: As the kernels' library (kernels/build.py): no FMA contraction, so results match it bit for bit.
 CFLAGS = ("-std=c11", "-O2", "-fPIC", "-fvisibility=hidden", "-ffp-contract=off", "-fno-fast-math")
 DEFAULT_NATIVE_OUT = HERE.parent / "build" / "native"
@@ -88,7 +88,9 @@ def _c_string(text: str) -> str:
 
 
 def _c_double(x: float) -> str:
-    return repr(float(x)) if np.isfinite(x) else ("(1.0 / 0.0)" if x > 0 else "(-1.0 / 0.0)" if x < 0 else "(0.0 / 0.0)")
+    if np.isfinite(x):
+        return repr(float(x))
+    return "(1.0 / 0.0)" if x > 0 else "(-1.0 / 0.0)" if x < 0 else "(0.0 / 0.0)"
 
 
 def generate(model: str, rows: list[dict], scalars: dict, arrays: dict, guid: str) -> tuple[str, str]:

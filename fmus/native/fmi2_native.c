@@ -15,9 +15,6 @@
 
 #include "pcn_native.h"
 
-static const char *const TYPE_NAME[] = {"Real", "Integer", "Boolean", "String"};
-static const char *const CAUSALITY_NAME[] = {"input", "output", "parameter"};
-
 /* ---- logging ---- */
 
 static int wants(const native *in, const char *category)
@@ -30,7 +27,7 @@ static int wants(const native *in, const char *category)
 }
 
 /* Forward one message as a printf format with every '%' doubled (the wrapper's rule). */
-static void emit(const native *in, fmi2Status status, const char *category, const char *message)
+void pcn_emit(const native *in, fmi2Status status, const char *category, const char *message)
 {
     if (in->logger == NULL || (status < fmi2Error && !wants(in, category))) return;
     size_t n = 0;
@@ -54,7 +51,7 @@ fmi2Status pcn_call_error(const native *in, const char *function, const char *wh
     char time[PCN_REPR_SIZE];
     snprintf(time, sizeof time, "%.9g", in->time);
     pcn_addf(&t, "%s: %s (t = %s s)", function, why, time);
-    emit(in, fmi2Error, "logStatusError", t.text);
+    pcn_emit(in, fmi2Error, "logStatusError", t.text);
     return fmi2Error;
 }
 
@@ -79,7 +76,7 @@ static void refuse(native *in, const char *message, int has_time, double time, i
     pcn_text line;
     pcn_clear(&line);
     pcn_addf(&line, "%s: %s", in->name, text.text);
-    emit(in, fmi2Error, "logStatusError", line.text);
+    pcn_emit(in, fmi2Error, "logStatusError", line.text);
     fprintf(stderr, "[parcosim] %s\n", line.text);
 }
 
@@ -91,7 +88,7 @@ void pcn_step_size_message(pcn_text *why, double t, double h, const char *becaus
 
 /* ---- instances ---- */
 
-static const pcn_variable *variable(unsigned vr)
+const pcn_variable *pcn_variable_of(unsigned vr)
 {
     for (int k = 0; k < pcn_n_variables; ++k)
         if (pcn_variables[k].vr == vr) return &pcn_variables[k];
@@ -208,7 +205,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         pcn_addf(&why, "fmi2Instantiate: out of memory");
     }
     free(resources);
-    if (probe.logger) emit(&probe, fmi2Error, "logStatusError", why.text);
+    if (probe.logger) pcn_emit(&probe, fmi2Error, "logStatusError", why.text);
     return NULL;
 }
 
@@ -425,247 +422,4 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSet
 fmi2Status fmi2CancelStep(fmi2Component c)
 {
     return c ? pcn_call_error(c, "fmi2CancelStep", "not supported: doStep never returns fmi2Pending") : fmi2Error;
-}
-
-/* ---- values ---- */
-
-/* The wrapper's check: each vr a variable of this type; else logs the first, nonzero. */
-static int check_vrs(native *in, const char *fn, const fmi2ValueReference vr[], size_t nvr, const void *values,
-                     pcn_type type)
-{
-    pcn_text why;
-    pcn_clear(&why);
-    if (nvr > 0 && (vr == NULL || values == NULL)) {
-        pcn_addf(&why, "%s (NULL) with %d values refused", vr == NULL ? "the value reference array" : "the value array",
-                 (int)nvr);
-        pcn_call_error(in, fn, why.text);
-        return 1;
-    }
-    for (size_t k = 0; k < nvr; ++k) {
-        const pcn_variable *v = variable(vr[k]);
-        if (v == NULL) pcn_addf(&why, "value reference %u is not a variable of this FMU", vr[k]);
-        else if (v->type != type)
-            pcn_addf(&why, "value reference %u ('%s') is a %s variable, not a %s", vr[k], v->name,
-                     TYPE_NAME[v->type], TYPE_NAME[type]);
-        if (why.length) {
-            pcn_call_error(in, fn, why.text);
-            return 1;
-        }
-    }
-    return 0;
-}
-
-/* A get of an output before initialisation builds the model first (GuardedSlave._calculate_outputs_for). */
-static void calculate_outputs(native *in, const fmi2ValueReference vr[], size_t nvr)
-{
-    if (in->initialised || in->initial_outputs) return;
-    int wanted = 0;
-    for (size_t k = 0; k < nvr; ++k) {
-        const pcn_variable *v = variable(vr[k]);
-        wanted |= v->causality == PCN_OUTPUT && strcmp(v->name, "error") != 0;
-    }
-    if (!wanted) return;
-    pcn_text why;
-    pcn_clear(&why);
-    if (in->model->setup(&in->pub, &why) == 0) {
-        in->initial_outputs = in->built_for_exit = 1;
-        return;
-    }
-    pcn_text message;
-    pcn_clear(&message);
-    pcn_addf(&message, "%s: the outputs read in Initialization Mode keep their start values: %s; "
-             "fmi2ExitInitializationMode will refuse the initialisation", in->name, why.text);
-    if (in->initial_warning && strcmp(in->initial_warning, message.text) == 0) return;
-    pcn_set_string(&in->initial_warning, message.text);
-    emit(in, fmi2Warning, "logStatusWarning", message.text);
-}
-
-/* The old or new value of a variable in a message, as Python's repr. */
-static void value_text(pcn_text *t, pcn_type type, const void *values, size_t k)
-{
-    switch (type) {
-    case PCN_REAL: pcn_addf(t, "%r", ((const fmi2Real *)values)[k]); break;
-    case PCN_INTEGER: pcn_addf(t, "%d", (int)((const fmi2Integer *)values)[k]); break;
-    case PCN_BOOLEAN: pcn_addf(t, "%B", (int)((const fmi2Boolean *)values)[k]); break;
-    case PCN_STRING: pcn_addf(t, "'%s'", ((const fmi2String *)values)[k]); break;
-    }
-}
-
-static void current_text(pcn_text *t, const native *in, const pcn_variable *v)
-{
-    switch (v->type) {
-    case PCN_REAL: pcn_addf(t, "%r", in->pub.real[v->slot]); break;
-    case PCN_INTEGER: pcn_addf(t, "%d", in->pub.integer[v->slot]); break;
-    case PCN_BOOLEAN: pcn_addf(t, "%B", in->pub.boolean[v->slot]); break;
-    case PCN_STRING: pcn_addf(t, "'%s'", in->pub.string[v->slot]); break;
-    }
-}
-
-/* GuardedSlave._refuse_set: nonzero (logged) unless every variable may be set now. */
-static int refuse_set(native *in, const char *fn, const fmi2ValueReference vr[], size_t nvr, const void *values,
-                      pcn_type type)
-{
-    for (size_t k = 0; k < nvr; ++k) {
-        const pcn_variable *v = variable(vr[k]);
-        if (v->causality == PCN_INPUT || (v->causality == PCN_PARAMETER && (!in->initialised || v->tunable))) continue;
-        pcn_text why, now;
-        pcn_clear(&why);
-        pcn_clear(&now);
-        if (in->initialised) pcn_addf(&now, "at t = %r s", in->next_time);
-        else pcn_addf(&now, "before initialisation");
-        if (v->causality == PCN_PARAMETER) {
-            pcn_addf(&why, "%s: parameter %s = ", fn, v->name);
-            value_text(&why, type, values, k);
-            pcn_addf(&why, " refused after initialisation (%s): a fixed parameter keeps its value ", now.text);
-        } else {
-            pcn_addf(&why, "%s: %s is an output (%s), value ", fn, v->name, CAUSALITY_NAME[v->causality]);
-            value_text(&why, type, values, k);
-            pcn_addf(&why, " refused (%s): it keeps ", now.text);
-        }
-        current_text(&why, in, v);
-        pcn_addf(&why, "; nothing was set");
-        pcn_call_error(in, fn, why.text);
-        return 1;
-    }
-    return 0;
-}
-
-static fmi2Status get_values(fmi2Component c, const char *fn, const fmi2ValueReference vr[], size_t nvr,
-                             void *values, pcn_type type)
-{
-    native *in = c;
-    if (in == NULL) return fmi2Error;
-    if (check_vrs(in, fn, vr, nvr, values, type)) return fmi2Error;
-    calculate_outputs(in, vr, nvr);
-    for (size_t k = 0; k < nvr; ++k) {
-        int slot = variable(vr[k])->slot;
-        switch (type) {
-        case PCN_REAL: ((fmi2Real *)values)[k] = in->pub.real[slot]; break;
-        case PCN_INTEGER: ((fmi2Integer *)values)[k] = in->pub.integer[slot]; break;
-        case PCN_BOOLEAN: ((fmi2Boolean *)values)[k] = in->pub.boolean[slot]; break;
-        case PCN_STRING: ((fmi2String *)values)[k] = in->pub.string[slot]; break;
-        }
-    }
-    return fmi2OK;
-}
-
-static fmi2Status set_values(fmi2Component c, const char *fn, const fmi2ValueReference vr[], size_t nvr,
-                             const void *values, pcn_type type)
-{
-    native *in = c;
-    if (in == NULL) return fmi2Error;
-    if (check_vrs(in, fn, vr, nvr, values, type) || refuse_set(in, fn, vr, nvr, values, type)) return fmi2Error;
-    if (type == PCN_STRING)
-        for (size_t k = 0; k < nvr; ++k)
-            if (((const fmi2String *)values)[k] == NULL) {
-                pcn_text why;
-                pcn_clear(&why);
-                pcn_addf(&why, "%s (value reference %u): NULL refused; nothing was set", variable(vr[k])->name, vr[k]);
-                return pcn_call_error(in, fn, why.text);
-            }
-    int parameter = 0;
-    for (size_t k = 0; k < nvr; ++k) {
-        const pcn_variable *v = variable(vr[k]);
-        parameter |= v->causality == PCN_PARAMETER;
-        switch (type) {
-        case PCN_REAL: in->pub.real[v->slot] = ((const fmi2Real *)values)[k]; break;
-        case PCN_INTEGER: in->pub.integer[v->slot] = ((const fmi2Integer *)values)[k]; break;
-        case PCN_BOOLEAN: in->pub.boolean[v->slot] = ((const fmi2Boolean *)values)[k] != 0; break;
-        case PCN_STRING: pcn_set_string(&in->pub.string[v->slot], ((const fmi2String *)values)[k]); break;
-        }
-    }
-    if (!in->initialised) {   /* GuardedSlave._parameters_set */
-        in->built_for_exit = 0;
-        if (parameter) in->initial_outputs = 0;
-    }
-    return fmi2OK;
-}
-
-fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[])
-{
-    return get_values(c, "fmi2GetReal", vr, nvr, value, PCN_REAL);
-}
-fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Integer value[])
-{
-    return get_values(c, "fmi2GetInteger", vr, nvr, value, PCN_INTEGER);
-}
-fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Boolean value[])
-{
-    return get_values(c, "fmi2GetBoolean", vr, nvr, value, PCN_BOOLEAN);
-}
-fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[])
-{
-    return get_values(c, "fmi2GetString", vr, nvr, (void *)value, PCN_STRING);
-}
-fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[])
-{
-    return set_values(c, "fmi2SetReal", vr, nvr, value, PCN_REAL);
-}
-fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Integer value[])
-{
-    return set_values(c, "fmi2SetInteger", vr, nvr, value, PCN_INTEGER);
-}
-fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Boolean value[])
-{
-    return set_values(c, "fmi2SetBoolean", vr, nvr, value, PCN_BOOLEAN);
-}
-fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[])
-{
-    return set_values(c, "fmi2SetString", vr, nvr, (const void *)value, PCN_STRING);
-}
-
-/* ---- co-simulation functions this FMU does not provide ---- */
-
-static fmi2Status unsupported(fmi2Component c, const char *fn)
-{
-    return c ? pcn_call_error(c, fn, "not supported by this FMU") : fmi2Error;
-}
-
-fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
-                                        const fmi2ValueReference vKnown_ref[], size_t nKnown,
-                                        const fmi2Real dvKnown[], fmi2Real dvUnknown[])
-{
-    (void)vUnknown_ref, (void)nUnknown, (void)vKnown_ref, (void)nKnown, (void)dvKnown, (void)dvUnknown;
-    return unsupported(c, "fmi2GetDirectionalDerivative");
-}
-fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                                       const fmi2Integer order[], const fmi2Real value[])
-{
-    (void)vr, (void)nvr, (void)order, (void)value;
-    return unsupported(c, "fmi2SetRealInputDerivatives");
-}
-fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                                        const fmi2Integer order[], fmi2Real value[])
-{
-    (void)vr, (void)nvr, (void)order, (void)value;
-    return unsupported(c, "fmi2GetRealOutputDerivatives");
-}
-static fmi2Status no_status(fmi2Component c, const char *fn)
-{
-    return c ? pcn_call_error(c, fn, "no asynchronous doStep: there is no status to ask for") : fmi2Error;
-}
-fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value)
-{
-    (void)s, (void)value;
-    return no_status(c, "fmi2GetStatus");
-}
-fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value)
-{
-    (void)s, (void)value;
-    return no_status(c, "fmi2GetRealStatus");
-}
-fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value)
-{
-    (void)s, (void)value;
-    return no_status(c, "fmi2GetIntegerStatus");
-}
-fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value)
-{
-    (void)s, (void)value;
-    return no_status(c, "fmi2GetBooleanStatus");
-}
-fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value)
-{
-    (void)s, (void)value;
-    return no_status(c, "fmi2GetStringStatus");
 }

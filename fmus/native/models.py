@@ -16,9 +16,9 @@ import numpy as np
 
 @dataclass(frozen=True)
 class NativeModel:
-    """A native FMU's C parts: ``adapter`` (in fmus/native/adapters, named pcn_<model>.c: sources/ is flat), ``kernels`` (C files of
-    kernels/src; their headers follow), ``data`` (slave -> (scalars, arrays)) and
-    ``feedthrough`` (output -> inputs, as the slave's)."""
+    """A native FMU's C parts: ``adapter`` (in fmus/native/adapters, named pcn_<model>.c:
+    sources/ is flat), ``kernels`` (C files of kernels/src; their headers follow) and
+    ``data`` (slave -> (scalars, arrays), module docstring)."""
 
     adapter: str
     kernels: tuple

@@ -32,6 +32,10 @@ typedef struct {
 
 /* A refused FMI call: logs "<function>: <why> (t = %.9g s)"; returns fmi2Error. */
 fmi2Status pcn_call_error(const native *in, const char *function, const char *why);
+/* Forward one message to the logger (errors always, the rest if logging is on for its category). */
+void pcn_emit(const native *in, fmi2Status status, const char *category, const char *message);
+/* The variable of a value reference, NULL if none. */
+const pcn_variable *pcn_variable_of(unsigned vr);
 /* The string slot's value replaced by a copy of `value`. */
 void pcn_set_string(char **slot, const char *value);
 

@@ -74,7 +74,8 @@ static int setup(pcn_instance *in, pcn_text *why)
 static int check_step(pcn_instance *in, double t, double h, pcn_text *why)
 {
     double T = in->real[PCN_SLOT_T];
-    if (!(isfinite(T) && T > 0.0)) return pcn_addf(why, "parameter T = %r s is not a finite positive sample time", T), 1;
+    if (!(isfinite(T) && T > 0.0))
+        return pcn_addf(why, "parameter T = %r s is not a finite positive sample time", T), 1;
     if (fabs(h - T) <= 1e-9 * T) return 0;
     pcn_text because;
     pcn_clear(&because);
