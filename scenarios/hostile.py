@@ -209,18 +209,19 @@ class CaseResult:
 
 
 def run_cases(cases: list, unzipped: dict, batch: int = 30, case_timeout: float = CASE_TIMEOUT,
-              progress=None) -> list:
+              progress=None, env: dict | None = None) -> list:
     """Run ``cases`` in worker subprocesses, ``batch`` cases a worker; a crashed, hung or
     fatal case ends its worker and the next cases go to a new one.
 
     ``unzipped`` maps a model to its FMU extracted once (all workers import the same
-    sources).
+    sources); ``env`` adds to the workers' environment (:func:`sanitizer_env` for FMUs
+    built with AddressSanitizer).
     """
     results = [None] * len(cases)
     pending = list(range(len(cases)))
     while pending:
         chunk = pending[:batch]
-        done = _run_worker([cases[i] for i in chunk], unzipped, case_timeout)
+        done = _run_worker([cases[i] for i in chunk], unzipped, case_timeout, env)
         for offset, result in enumerate(done):
             results[chunk[offset]] = result
             if progress is not None:
@@ -229,11 +230,11 @@ def run_cases(cases: list, unzipped: dict, batch: int = 30, case_timeout: float 
     return results
 
 
-def _run_worker(cases: list, unzipped: dict, case_timeout: float) -> list:
+def _run_worker(cases: list, unzipped: dict, case_timeout: float, extra_env: dict | None = None) -> list:
     """Run ``cases`` in one worker; the results of those it finished, the last one a crash,
     hang or fatal if the worker ended there."""
     read_fd, write_fd = os.pipe()
-    env = {**os.environ, "HOSTILE_RESULT_FD": str(write_fd),
+    env = {**os.environ, **(extra_env or {}), "HOSTILE_RESULT_FD": str(write_fd),
            "PYTHONPATH": os.pathsep.join(filter(None, [str(Path(__file__).resolve().parents[1]),
                                                         os.environ.get("PYTHONPATH")]))}
     payload = json.dumps({"unzipped": {k: str(v) for k, v in unzipped.items()}, "cases": cases})
@@ -361,3 +362,104 @@ def cases_for(model: str, unzip_dir, seeds, wrapper: bool = False, kinds=None) -
     return [make_case(model, variables, seed, kind=kinds[i % len(kinds)] if kinds else None, wrapper=wrapper,
                       models=models)
             for i, seed in enumerate(seeds)]
+
+
+# --- native FMUs (issue 28) ----------------------------------------------------------------------
+
+#: Exit statuses of a worker stopped by AddressSanitizer / UndefinedBehaviorSanitizer (a crash).
+ASAN_EXIT, UBSAN_EXIT = 99, 98
+
+
+def sanitizer_env(log_dir=None) -> dict:
+    """The environment of a worker that loads FMUs built with ``-fsanitize=address,undefined``:
+    the ASan runtime preloaded (Python is not built with it; libstdc++ after it, as in
+    tests/test_sanitizers.py), Python's allocations through malloc and not checked for leaks,
+    and any report ending the worker (a crash of the case), written under ``log_dir`` if
+    given (files ``asan.PID``, ``ubsan.PID``)."""
+    from kernels import build
+
+    def runtime(name):
+        path = subprocess.run([build.compiler(), f"-print-file-name={name}"], capture_output=True, text=True,
+                              check=True).stdout.strip()
+        return path if os.path.isabs(path) and os.path.exists(path) else None
+
+    asan = runtime("libasan.so")
+    if asan is None:
+        raise RuntimeError("the C compiler has no AddressSanitizer runtime (libasan.so)")
+    asan_log = ubsan_log = ""
+    if log_dir is not None:
+        Path(log_dir).mkdir(parents=True, exist_ok=True)
+        asan_log, ubsan_log = (f":log_path={Path(log_dir).resolve() / name}" for name in ("asan", "ubsan"))
+    return {"LD_PRELOAD": " ".join(filter(None, (asan, runtime("libstdc++.so.6")))), "PYTHONMALLOC": "malloc",
+            "ASAN_OPTIONS": f"detect_leaks=0:exitcode={ASAN_EXIT}{asan_log}",
+            "UBSAN_OPTIONS": f"halt_on_error=1:print_stacktrace=1:exitcode={UBSAN_EXIT}{ubsan_log}"}
+
+
+def is_native(unzip_dir) -> bool:
+    """Whether the extracted FMU is one of parcosim's native FMUs (its build identity says
+    ``"native": true``): a C binary that answers every kind of case with FMI 2.0's statuses,
+    as parcosim's wrapper does (:data:`WRAPPER_KINDS` included)."""
+    from fmus.identity import IDENTITY_FILE
+
+    identity = Path(unzip_dir) / "resources" / IDENTITY_FILE
+    try:
+        return bool(json.loads(identity.read_text(encoding="utf-8")).get("native"))
+    except (OSError, ValueError):
+        return False
+
+
+def sanitized_from_sources(fmu, out_dir) -> Path:
+    """A copy of the native FMU ``fmu`` in ``out_dir`` whose binary is compiled again from the
+    FMU's own ``sources/*.c`` (and the FMI 2.0 headers fmpy ships) with
+    ``-fsanitize=address,undefined`` (:data:`kernels.build.SANITIZE`): what the campaign
+    drives under :func:`sanitizer_env`.  Raises RuntimeError if the sources do not compile."""
+    import shutil
+    import tempfile
+    import zipfile
+
+    import fmpy
+    from fmpy import read_model_description
+
+    from kernels import build
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix="hostile-asan-") as tmp:
+        unzip = Path(tmp) / "fmu"
+        with zipfile.ZipFile(fmu) as z:
+            z.extractall(unzip)
+        identifier = read_model_description(str(unzip)).coSimulation.modelIdentifier
+        sources = sorted((unzip / "sources").glob("*.c"))
+        if not sources:
+            raise RuntimeError(f"{fmu} carries no sources/*.c to compile")
+        binary = unzip / "binaries" / fmpy.platform / f"{identifier}.so"
+        command = [build.compiler(), "-std=c11", "-fPIC", "-shared", "-ffp-contract=off", *build.SANITIZE,
+                   f"-I{unzip / 'sources'}", f"-I{Path(fmpy.__file__).resolve().parent / 'c-code'}",
+                   *map(str, sources), "-o", str(binary), "-lm"]
+        done = subprocess.run(command, capture_output=True, text=True)
+        if done.returncode != 0:
+            raise RuntimeError(f"{fmu}: its sources do not compile with the sanitizers:\n{done.stderr[-2000:]}")
+        target = out_dir / Path(fmu).name
+        archive = shutil.make_archive(str(Path(tmp) / "copy"), "zip", unzip)
+        shutil.move(archive, target)
+    return target
+
+
+def prepared_native_fmus(fmu_dir, models, work, sanitize: bool = True) -> dict:
+    """The native FMUs to drive, extracted under ``work``: those of ``fmu_dir`` (every
+    ``*.fmu``) or, without it, all of ``parcosim build --native`` built under ``work``;
+    with ``sanitize`` each rebuilt from its own sources by :func:`sanitized_from_sources`.
+    Model -> its directory."""
+    if fmu_dir:
+        paths = {p.stem: p for p in Path(fmu_dir).glob("*.fmu")}
+    else:
+        from fmus.native.build import build_native_all
+        paths = {p.stem: p for p in build_native_all(Path(work) / "native")}
+    if models:
+        unknown = [m for m in models.split(",") if m not in paths]
+        if unknown:
+            raise ValueError(f"no FMU {unknown}; available: {', '.join(sorted(paths))}")
+        paths = {m: paths[m] for m in models.split(",")}
+    if sanitize:
+        paths = {m: sanitized_from_sources(p, Path(work) / "sanitized") for m, p in paths.items()}
+    return extract_fmus(paths, Path(work) / "fmus")

@@ -1,6 +1,7 @@
 """The long hostile-use campaign (issue 13): thousands of cases through fmpy, a summary table.
 
     python -m scenarios.hostile_campaign --cases 3000 [--fmu-dir DIR] [--out out/hostile] [--seed 0]
+    python -m scenarios.hostile_campaign --native --cases 3000 [--fmu-dir DIR]   # issue 28
 
 Runs ``--cases`` cases (spread evenly over the FMUs, every kind in turn) from
 :func:`scenarios.hostile.make_case` in worker subprocesses (:func:`scenarios.hostile.run_cases`),
@@ -8,6 +9,12 @@ then writes ``summary.md`` (outcome counts per FMU and kind: the table of docs/e
 ``cases.jsonl`` (every case with its outcome, statuses and problems: a failing case can be
 replayed from it) and prints the summary.  Exit status 1 if any case crashed, hung, returned
 fmi2Fatal or broke a property.
+
+With ``--native`` the FMUs are parcosim's native ones (of ``--fmu-dir``, or built with
+``parcosim build --native``), each compiled again from its own sources with
+``-fsanitize=address,undefined`` and driven with the sanitizers' runtime
+(:func:`scenarios.hostile.sanitizer_env`; their reports go to ``OUT/sanitizer``), every
+kind of case; ``--no-sanitize`` drives the FMUs as built.
 """
 from __future__ import annotations
 
@@ -29,11 +36,21 @@ def main(argv=None) -> int:
     parser.add_argument("--seed", type=int, default=0, help="first case seed (default 0)")
     parser.add_argument("--batch", type=int, default=30, help="cases per worker process (default 30)")
     parser.add_argument("--models", default=None, help="comma-separated FMUs (default: all)")
+    parser.add_argument("--native", action="store_true",
+                        help="parcosim's native FMUs, rebuilt with AddressSanitizer and UBSan (issue 28)")
+    parser.add_argument("--no-sanitize", action="store_true", help="with --native: the FMUs as built")
     args = parser.parse_args(argv)
 
     work = Path(tempfile.mkdtemp(prefix="parcosim-hostile-"))
-    unzipped = hostile.prepared_fmus(args.fmu_dir, args.models, work)
-    wrapper = {model: hostile.wrapper_is_ours(path, model) for model, path in unzipped.items()}
+    env = None
+    if args.native:
+        sanitize = not args.no_sanitize
+        unzipped = hostile.prepared_native_fmus(args.fmu_dir, args.models, work, sanitize=sanitize)
+        env = hostile.sanitizer_env(Path(args.out) / "sanitizer") if sanitize else None
+        wrapper = {model: hostile.is_native(path) for model, path in unzipped.items()}
+    else:
+        unzipped = hostile.prepared_fmus(args.fmu_dir, args.models, work)
+        wrapper = {model: hostile.wrapper_is_ours(path, model) for model, path in unzipped.items()}
     per_model = -(-args.cases // len(unzipped))
     cases = []
     for model, path in unzipped.items():
@@ -51,7 +68,7 @@ def main(argv=None) -> int:
                      f"  {result.outcome}: {result.case['model']} {result.case['kind']} seed {result.case['seed']} "
                      f"{result.problems[:1]}"), file=sys.stderr, flush=True)
 
-    results = hostile.run_cases(cases, unzipped, batch=args.batch, progress=progress)
+    results = hostile.run_cases(cases, unzipped, batch=args.batch, progress=progress, env=env)
     wall = time.perf_counter() - start
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -60,8 +77,11 @@ def main(argv=None) -> int:
             f.write(json.dumps({"case": r.case, "outcome": r.outcome, "problems": r.problems,
                                 "statuses": r.statuses, "seconds": r.seconds}) + "\n")
     binaries = ", ".join(sorted({"parcosim's FMI wrapper" if w else "pythonfmu 0.7's binary" for w in wrapper.values()}))
+    if args.native:
+        binaries = "native FMUs" + (", rebuilt with -fsanitize=address,undefined" if env else "")
     text = (f"{len(results)} cases, {wall:.0f} s wall ({binaries}); "
-            f"`python -m scenarios.hostile_campaign --cases {args.cases} --seed {args.seed}`\n\n"
+            f"`python -m scenarios.hostile_campaign{' --native' if args.native else ''} --cases {args.cases} "
+            f"--seed {args.seed}`\n\n"
             + hostile.markdown_summary(results) + "\n")
     (out / "summary.md").write_text(text, encoding="utf-8")
     print(text)

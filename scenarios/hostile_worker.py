@@ -15,6 +15,7 @@ import os
 import pickle
 import random
 import signal
+import struct
 import sys
 import tempfile
 import time
@@ -23,10 +24,14 @@ from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave
 
+from fmus.native.state_bytes import MAGIC as NATIVE_STATE_MAGIC
+from fmus.native.state_bytes import fnv1a
 from scenarios.hostile import CALL_LIMIT
 
 #: Bytes of the checksum that ends a serialised parcosim state (docs/state.md).
 CHECKSUM_BYTES = 32
+#: Bytes of the checksum that ends a native FMU's state (issue 28: fmus/native/state_bytes.py).
+NATIVE_CHECKSUM_BYTES = 8
 
 
 class _Exploit:
@@ -228,6 +233,8 @@ class Runner:
             return data
         if variant == "truncated":
             return data[:rng.randrange(len(data))]
+        if variant == "forged" and data.startswith(NATIVE_STATE_MAGIC):
+            return forged_native_state(data, rng)
         altered = bytearray(data)
         altered[rng.randrange(len(data) - (CHECKSUM_BYTES if variant == "forged" else 0))] ^= rng.randrange(1, 256)
         if variant == "forged":
@@ -272,6 +279,16 @@ class Runner:
         status, _ = self.call(f"setFMUstate ({variant})", self.fmu.setFMUState, state)
         self.call(f"freeFMUstate ({variant})", self.fmu.freeFMUState, state)
         return now if status == 0 else None
+
+
+def forged_native_state(data: bytes, rng: random.Random) -> bytes:
+    """A native state with one to three bytes altered and its checksum recomputed: only the
+    FMU's checks of the fields (lengths, counts, flags, identifier) stand between the bytes
+    and its memory."""
+    body = bytearray(data[:-NATIVE_CHECKSUM_BYTES])
+    for _ in range(rng.randint(1, 3)):
+        body[rng.randrange(len(body))] ^= rng.randrange(1, 256)
+    return bytes(body) + struct.pack("=Q", fnv1a(bytes(body)))
 
 
 def main() -> int:

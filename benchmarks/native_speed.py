@@ -1,0 +1,263 @@
+"""Speed of the native FMUs beside the pythonfmu ones, in other people's hosts (issue 28, item 6).
+
+    python benchmarks/native_speed.py [--native-dir DIR] [--python-dir DIR] [--rounds 3] [--stop 11]
+
+The scene (``bench_circle_TCMDx``: plant, two drives, two current observers, derivator,
+controller, trajectory) is exported per component (``fmus.ssp.export_ssp``, as ``parcosim
+export-ssp --per-component`` does) twice: once with the native FMUs of ``--native-dir``
+(``parcosim build --native``, built when not given), once with the pythonfmu FMUs of ``--python-dir`` (built there
+when missing).  Each package then runs, side by side in one invocation, in:
+
+* ``C host``: tests/native_host/host.c, libcosim's C API in a C program, stepping one step at
+  a time (no CSV rows); the pythonfmu package there only with libpython preloaded
+  (``LD_PRELOAD``: without it its FMUs cannot load, "undefined symbol: PyExc_ValueError");
+* ``libcosimpy``: ``CosimExecution.from_ssp_file(...).simulate_until(stop)`` in a Python child;
+* ``ecospy``: ``EcosSimulation(step, ssp_path).step(n)`` in a Python child, on one CPU (as
+  ``fmus.ssp_run.simulate_ssp_ecos`` runs it);
+* the same hosts on a floor package: as many instances of the C low-pass of
+  benchmarks/baseline_fmu, chained, next to nothing to compute: what the host costs;
+* our master, ``parcosim run --mode fmu`` (fmpy) and ``--mode fmu --native``
+  (``fmus.native.run.native_system``: the models with a native FMU run as one, the others
+  stay pythonfmu); its stepping CPU is that of a full run less that of a 2-step run, both
+  after a first 2-step run (loading and initialising are inside ``simulate``).
+
+Figures: CPU (user + system, all threads) of the stepping after the first step (loading,
+initialising, which libcosim does in the first step, and that step are "setup") in
+microseconds per simulated millisecond, the best of ``--rounds``; real-time factor =
+simulated time / that CPU.  Written to ``benchmarks/results/native_speed.json`` and printed
+as a markdown table (docs/benchmarks.md).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import sysconfig
+import tempfile
+import textwrap
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+SCENE = "bench_circle_TCMDx"
+#: The kind of the floor package (:func:`floor_package`).
+FLOOR = "floor: 8 C low-passes"
+RESULTS = ROOT / "benchmarks" / "results" / "native_speed.json"
+
+LIBCOSIMPY_CHILD = textwrap.dedent("""
+    import json, sys, time
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    log_output_level(CosimLogLevel.ERROR)
+    path, stop = sys.argv[1], float(sys.argv[2])
+    c0 = time.process_time()
+    execution = CosimExecution.from_ssp_file(path)
+    first = execution.step()                   # libcosim initialises the FMUs here
+    now = execution.status().current_time
+    c1 = time.process_time()
+    ok = first and execution.simulate_until(int(round(stop * 1e9)))
+    c2 = time.process_time()
+    print(json.dumps({"setup_cpu_s": c1 - c0, "cpu_s": c2 - c1, "timed_s": stop - now * 1e-9, "ok": bool(ok)}))
+""")
+
+ECOSPY_CHILD = textwrap.dedent("""
+    import json, os, sys, time
+    os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
+    from ecospy import EcosLib, EcosSimulation
+    from fmus.ssp import PARAMETER_SET, read_ssp_experiment
+    EcosLib.set_log_level("err")
+    path, stop = sys.argv[1], float(sys.argv[2])
+    step = read_ssp_experiment(path)[2]
+    c0 = time.process_time()
+    sim = EcosSimulation(step, ssp_path=path)
+    ok = sim.init(0.0, PARAMETER_SET)
+    sim.step(1)                                # as the other hosts: the first step is set-up
+    c1 = time.process_time()
+    sim.step(int(round(stop / step)) - 1)
+    c2 = time.process_time()
+    reached = sim.get_time()
+    sim.terminate()
+    sim.free()
+    print(json.dumps({"setup_cpu_s": c1 - c0, "cpu_s": c2 - c1, "timed_s": stop - step,
+                      "ok": bool(ok) and reached >= stop - step / 2}))
+""")
+
+MASTER_CHILD = textwrap.dedent("""
+    import json, sys, time
+    from fmus.master import simulate
+    from scenarios.scenes import get_scene
+    import dataclasses
+    scene, native, fmu_dir, stop = sys.argv[1], sys.argv[2] == "native", sys.argv[3], float(sys.argv[4])
+    system = get_scene(scene).system
+    if native:                                 # parcosim run --mode fmu --native
+        from fmus.native.run import native_system
+        system = native_system(system, out_dir=fmu_dir)
+    cpu = []
+    # the stepping's CPU: a full run less a 2-step run, after a first run (builds, extractions)
+    for length in (2 * system.step, 2 * system.step, stop):
+        c0 = time.process_time()
+        result = simulate(dataclasses.replace(system, stop_time=length), mode="fmu", fmu_dir=fmu_dir)
+        cpu.append(time.process_time() - c0)
+    print(json.dumps({"setup_cpu_s": cpu[1], "cpu_s": cpu[2] - cpu[1], "timed_s": stop - 2 * system.step,
+                      "ok": bool(result.completed)}))
+""")
+
+
+def export_packages(work: Path, native_dir: Path, python_dir: Path, scene: str) -> dict:
+    """The scene per component with each set of FMUs: kind ("native", "pythonfmu") -> .ssp."""
+    from fmus.build import ensure_built
+    from fmus.ssp import export_ssp
+    from scenarios.scenes import get_scene
+
+    system = get_scene(scene).system
+    models = sorted({c.model for c in system.components})
+    python_fmus = ensure_built(models, python_dir)
+    native_fmus = {m: native_dir / f"{m}.fmu" for m in models}
+    packages = {"pythonfmu": export_ssp(system, work / "pythonfmu.ssp", fmus=python_fmus),
+                FLOOR: floor_package(work, len(system.components), system.step)}
+    missing = sorted(m for m, p in native_fmus.items() if not p.is_file())
+    if missing:
+        print(f"no native package: no native FMU of {missing} in {native_dir}", file=sys.stderr)
+    else:
+        packages["native"] = export_ssp(system, work / "native.ssp", fmus=native_fmus)
+    part = subsystem(system, [c.name for c in system.components if c.model not in missing])
+    if missing and part.components:
+        label = ", ".join(c.name for c in part.components)
+        packages[f"native: {label}"] = export_ssp(part, work / "part_native.ssp",
+                                                  fmus={c.model: native_fmus[c.model] for c in part.components})
+        packages[f"pythonfmu: {label}"] = export_ssp(part, work / "part_pythonfmu.ssp",
+                                                     fmus={c.model: python_fmus[c.model] for c in part.components})
+    return packages
+
+
+def subsystem(system, names):
+    """The components ``names`` of ``system`` and the connections between them (the inputs
+    the others fed keep their start values): the part that has native FMUs."""
+    import dataclasses
+
+    keep = set(names)
+    inside = [c for c in system.connections if c.source.split(".")[0] in keep and c.target.split(".")[0] in keep]
+    return dataclasses.replace(system, components=tuple(c for c in system.components if c.name in keep),
+                               connections=tuple(inside),
+                               record=tuple(r for r in system.record if r.split(".")[0] in keep))
+
+
+def floor_package(work: Path, count: int, step: float) -> Path:
+    """``count`` instances of the C low-pass of benchmarks/baseline_fmu in a chain, as one
+    package: what each host costs per instance and step with next to nothing to compute."""
+    from benchmarks.cold_start import build_baseline
+    from fmus.ssp import export_ssp
+    from fmus.system import Component, Connection, System
+
+    names = [f"lp{i}" for i in range(count)]
+    system = System(components=tuple(Component(n, "LowPass") for n in names),
+                    connections=tuple(Connection(f"{a}.y", f"{b}.u") for a, b in zip(names, names[1:])),
+                    record=(f"{names[-1]}.y",), stop_time=1.0, step=step)
+    (work / "floor").mkdir(exist_ok=True)
+    return export_ssp(system, work / "floor.ssp", fmus={"LowPass": build_baseline(work / "floor")})
+
+
+def libpython() -> str | None:
+    path = Path(sysconfig.get_config_var("LIBDIR") or "") / (sysconfig.get_config_var("LDLIBRARY") or "")
+    return str(path) if path.name.startswith("libpython") and path.is_file() else None
+
+
+def run_c_host(program: Path, package: Path, stop: float, work: Path, preload: str | None = None) -> dict:
+    from tests.native_host.host import config_text, run_host
+
+    env = {**os.environ, "LD_PRELOAD": preload} if preload else None
+    run = run_host(program, work, config_text(stop, ssp=package, every=0), env=env)
+    return {"setup_cpu_s": run.number("setup_cpu_s"), "cpu_s": run.number("cpu_s"), "timed_s": run.number("timed_s"),
+            "ok": abs(run.number("simulated_s") - stop) < 1e-9, "libpython_mapped": int(run.report["libpython_mapped"])}
+
+
+def run_child(code: str, *args) -> dict:
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))}
+    run = subprocess.run([sys.executable, "-c", code, *map(str, args)], capture_output=True, text=True, env=env,
+                         cwd=ROOT, timeout=3600)
+    lines = [line for line in run.stdout.splitlines() if line.startswith("{")]
+    if run.returncode != 0 or not lines:
+        return {"ok": False, "error": (run.stderr.strip() or run.stdout.strip())[-500:]}
+    return json.loads(lines[-1])
+
+
+def measurements(program, packages: dict, stop: float, work: Path, python_dir: Path) -> list:
+    """One round: [(host, kind, result dict)] for every host and package."""
+    rows = []
+    for kind, package in packages.items():
+        preload = libpython() if kind.startswith("pythonfmu") else None      # its FMUs load only so
+        try:
+            rows.append(("C host (libcosimc)", kind, run_c_host(program, package, stop, work / f"c_{kind}", preload)))
+        except RuntimeError as exc:
+            rows.append(("C host (libcosimc)", kind, {"ok": False, "error": str(exc)[-500:]}))
+        rows.append(("libcosimpy", kind, run_child(LIBCOSIMPY_CHILD, package, stop)))
+        rows.append(("ecospy (1 CPU)", kind, run_child(ECOSPY_CHILD, package, stop)))
+    rows.append(("our master --mode fmu", "pythonfmu", run_child(MASTER_CHILD, SCENE, "pythonfmu", python_dir, stop)))
+    rows.append(("our master --mode fmu --native", "native",
+                 run_child(MASTER_CHILD, SCENE, "native", work / "master_native", stop)))
+    return rows
+
+
+def best_of(rounds: list) -> list:
+    """Per (host, kind): the round with the least stepping CPU (the machine is shared)."""
+    best = {}
+    for rows in rounds:
+        for host, kind, r in rows:
+            key = (host, kind)
+            if key not in best or (r.get("ok") and r.get("cpu_s", 1e99) < best[key].get("cpu_s", 1e99)):
+                best[key] = r
+    return [(host, kind, r) for (host, kind), r in best.items()]
+
+
+def table(rows: list, stop: float) -> str:
+    lines = ["| host | FMUs | CPU µs per simulated ms | × real time | setup CPU [s] | completed |",
+             "|---|---|---|---|---|---|"]
+    for host, kind, r in rows:
+        if not r.get("ok") or "cpu_s" not in r:
+            lines.append(f"| {host} | {kind} | - | - | - | no: {r.get('error', '')[:120]} |")
+            continue
+        timed = r.get("timed_s", stop)
+        per_ms = 1e6 * r["cpu_s"] / (1e3 * timed)
+        setup = "-" if r.get("setup_cpu_s") is None else f"{r['setup_cpu_s']:.3f}"
+        lines.append(f"| {host} | {kind} | {per_ms:.2f} | {timed / r['cpu_s']:.0f} | {setup} | yes |")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--native-dir", default=None,
+                        help="the native FMUs (default: parcosim build --native into a temporary folder)")
+    parser.add_argument("--python-dir", default=None, help="the pythonfmu FMUs (built there when missing)")
+    parser.add_argument("--stop", type=float, default=11.0, help="simulated seconds (default: the scene's 11)")
+    parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--out", default=str(RESULTS))
+    args = parser.parse_args(argv)
+
+    from tests.native_host.host import build_host
+
+    work = Path(tempfile.mkdtemp(prefix="native_speed_"))
+    python_dir = Path(args.python_dir) if args.python_dir else work / "pythonfmu"
+    native_dir = Path(args.native_dir) if args.native_dir else work / "native"
+    if not args.native_dir:
+        from fmus.native.build import build_native_all
+        build_native_all(native_dir)
+    packages = export_packages(work, native_dir, python_dir, SCENE)
+    program = build_host(work)
+    load = os.getloadavg()[0]
+    rounds = [measurements(program, packages, args.stop, work, python_dir) for _ in range(args.rounds)]
+    rows = best_of(rounds)
+    text = table(rows, args.stop)
+    stamp = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
+    print(f"{SCENE}, {args.stop:g} s simulated, best of {args.rounds} rounds, {stamp}, load {load:.1f}\n\n{text}")
+    Path(args.out).parent.mkdir(parents=True, exist_ok=True)
+    Path(args.out).write_text(json.dumps({"scene": SCENE, "stop_s": args.stop, "rounds": rounds, "date": stamp,
+                                          "load": load, "best": rows}, indent=1), encoding="utf-8")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
