@@ -7,6 +7,7 @@
  * Variables (value references): 0 u (input), 1 y (output), 2 tau (parameter, > 0).
  */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -19,7 +20,7 @@ typedef struct {
     double values[VR_COUNT];
     double time;
     fmi2CallbackFunctions callbacks;
-    fmi2String name;
+    char name[128];   /* a copy: FMI 2.0 does not keep the importer's string alive */
 } LowPass;
 
 /* The start values of modelDescription.xml. */
@@ -66,7 +67,7 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid, f
     if (!m)
         return NULL;
     m->callbacks = *callbacks;
-    m->name = name;
+    snprintf(m->name, sizeof m->name, "%s", name ? name : "");
     set_start_values(m);
     return m;
 }
@@ -117,6 +118,11 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
     if (!valid(m, vr, nvr))
         return fmi2Error;
     for (size_t i = 0; i < nvr; i++)
+        if (!isfinite(value[i])) {   /* refused whole: nothing is written */
+            report(m, fmi2Error, "a value that is not finite");
+            return fmi2Error;
+        }
+    for (size_t i = 0; i < nvr; i++)
         m->values[vr[i]] = value[i];
     return fmi2OK;
 }
@@ -142,8 +148,8 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean no_pr
 {
     (void)no_prior;
     LowPass *m = c;
-    if (!(h >= 0.0)) {
-        report(m, fmi2Error, "step size must be >= 0");
+    if (!(h >= 0.0) || !isfinite(h)) {
+        report(m, fmi2Error, "step size must be finite and >= 0");
         return fmi2Error;
     }
     double u = m->values[VR_U];
