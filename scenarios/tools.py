@@ -21,7 +21,8 @@ spent per simulated ms, from its start (Python, imports, loading, initialisation
 what a fresh importing process pays).  With no scene: all 16 bench scenes and
 thesis_sim_circle.  Every finished run is stored in ``--results`` (default
 ``benchmarks/results/tools.json``) as soon as it ends, and a run stored there is not run
-again: an interrupted measurement resumes.  ``--docs`` puts the tables into docs/ssp.md.
+again: an interrupted measurement resumes.  ``--docs`` puts the tables into docs/ssp.md and
+the summary into the README.
 """
 from __future__ import annotations
 
@@ -308,13 +309,15 @@ def measure(scenes, tools, kinds, stop_time=None, results=RESULTS, progress=prin
     c_drive = None
     with tempfile.TemporaryDirectory(prefix="parcosim_tools_") as tmp:
         for name in scenes:
-            scene = short(get_scene(name), stop_time)
-            ours_key = _key("ours", name, "parcosim", stop_time)
+            full = get_scene(name)
+            scene = short(full, stop_time)
+            stop = stop_time if scene is not full else None    # a scene shorter than stop_time runs whole
+            ours_key = _key("ours", name, "parcosim", stop)
             for kind in kinds:
                 if kind.startswith("internal-observer") or kind.endswith("c-drive"):
                     if not {"drive1", "drive2"} <= {c.name for c in scene.system.components}:
                         continue
-                todo = [t for t in tools if _key(kind, name, t, stop_time) not in stored]
+                todo = [t for t in tools if _key(kind, name, t, stop) not in stored]
                 if todo:
                     if ours_key not in stored:
                         stored[ours_key] = run_scene(scene, mode="inprocess").metrics
@@ -324,13 +327,13 @@ def measure(scenes, tools, kinds, stop_time=None, results=RESULTS, progress=prin
                     start = _time.perf_counter()
                     for tool, m, _, error in compare(scene, todo, kind=kind, c_drive=c_drive,
                                                      ours=stored[ours_key]):
-                        stored[_key(kind, name, tool, stop_time)] = {"metrics": m, "error": error}
+                        stored[_key(kind, name, tool, stop)] = {"metrics": m, "error": error}
                         _store(results, stored)
                         progress(f"{kind} {name} {tool}: " + (f"e_ef x{_ratio(m['e_ef_mm'], stored[ours_key]['e_ef_mm']):.4f}"
                                  if m else f"failed ({error})") + f" [{_time.perf_counter() - start:.0f} s]")
                 table_rows[(kind, name)] = [
-                    (t, stored[_key(kind, name, t, stop_time)]["metrics"], stored[ours_key],
-                     stored[_key(kind, name, t, stop_time)]["error"]) for t in tools]
+                    (t, stored[_key(kind, name, t, stop)]["metrics"], stored[ours_key],
+                     stored[_key(kind, name, t, stop)]["error"]) for t in tools]
     return table_rows
 
 
@@ -368,11 +371,14 @@ def main(argv=None) -> int:
         Path(args.out).write_text(text)
     if args.docs:
         write_docs_table(text)
+        write_docs_table(summary(results), README)
     return 0
 
 
-#: Where :func:`write_docs_table` puts the table: between these lines of docs/ssp.md.
+#: Where :func:`write_docs_table` puts the tables: between these lines of docs/ssp.md (all
+#: rows) and of the README (the summary).
 DOCS = ROOT / "docs" / "ssp.md"
+README = ROOT / "README.md"
 TABLE_START, TABLE_END = "<!-- tools table: python -m scenarios.tools --docs -->", "<!-- end of tools table -->"
 
 
