@@ -20,8 +20,19 @@ from plant.fast5r import TERMS_OF
 from .compiled import Adapter, NotCompilable, register
 from .refusals import ABSURD
 from .parts import PLANT_OUTPUTS
+from .sampling import PHASE_PARAMETER, substeps_of
 
 _PLANT_OUTPUTS = tuple(name for name, _ in PLANT_OUTPUTS)
+
+
+def _samples_every_step(name, slave, h) -> None:
+    """Raise NotCompilable unless the sampled ``slave`` samples on every step (h = T,
+    ``sample_phase`` 0): its kernel has no sub-step counter (:mod:`fmus.sampling`), the
+    Python path counts, holds, or refuses by name."""
+    phase = getattr(slave, PHASE_PARAMETER)
+    if substeps_of(slave.T, h) != 1 or phase != 0:
+        raise NotCompilable(f"component {name}: steps h = {h!r} s with T = {slave.T!r} s, {PHASE_PARAMETER} = "
+                            f"{phase!r}: the compiled kernel samples on every step (h = T, {PHASE_PARAMETER} 0 only)")
 
 
 @register
@@ -45,6 +56,10 @@ class DerivatorAdapter(Adapter):
     outputs = ("dq1", "dq2", "ddq1", "ddq2")
     kernel = "pc_derivator_io"
 
+    def __init__(self, name, slave, h):
+        super().__init__(name, slave, h)
+        _samples_every_step(name, slave, h)
+
     def context(self):
         return derivators.kernel_context(self.slave.derivator, ABSURD)
 
@@ -62,6 +77,7 @@ class PositionControllerAdapter(Adapter):
 
     def __init__(self, name, slave, h):
         super().__init__(name, slave, h)
+        _samples_every_step(name, slave, h)
         c = slave.controller
         if not c.compiled:
             raise NotCompilable(f"component {name}: the controller's kernel {c.kernel!r} is not compiled")
@@ -88,6 +104,7 @@ class CurrentObserverAdapter(Adapter):
 
     def __init__(self, name, slave, h):
         super().__init__(name, slave, h)
+        _samples_every_step(name, slave, h)
         slave.observer.prepare_step(h)
         self.buffers = [slave.observer.buf]
 
@@ -236,6 +253,7 @@ class BalanceControllerAdapter(Adapter):
 
     def __init__(self, name, slave, h):
         super().__init__(name, slave, h)
+        _samples_every_step(name, slave, h)
         self.buf = slave.controller.buf
 
     def context(self):

@@ -129,9 +129,12 @@ def build_fmu(model: str, out_dir: Path = DEFAULT_OUT) -> Path | None:
         return None
     module_name = SLAVES[model]
     slave_class = getattr(importlib.import_module(f"fmus.slaves.{module_name}"), model)
+    # A component with a sample period takes steps dividing it, changed only at a period's
+    # start (fmus.sampling): FMI's flag cannot say that, "false" is its safe side.
+    variable = "false" if getattr(slave_class, "has_sample_period", False) else "true"
     return build_bundled_fmu(ROOT / "fmus" / "slaves" / f"{module_name}.py", model, target,
                              feedthrough=getattr(slave_class, "feedthrough", {}),
-                             canHandleVariableCommunicationStepSize="true", **STATE_OPTIONS)
+                             canHandleVariableCommunicationStepSize=variable, **STATE_OPTIONS)
 
 
 def _sources() -> list[Path]:

@@ -29,7 +29,8 @@ PACKAGES = ("kernels", "plant", "motor", "controller")
 #: (``ClosedLoop``, ``ControlChain``) steps its components with; plus ``fmus/slaves``.
 FMUS_MODULES = ("__init__.py", "guarded.py", "slavestate.py", "fmustate.py", "stateformat.py", "budget.py", "parts.py",
                 "refusals.py", "identity.py", "designs.py", "embedded.py", "foreign.py", "instances.py", "master.py",
-                "registry.py", "stepper.py", "system.py", "systemslave.py", "compiled.py", "adapters.py")
+                "registry.py", "stepper.py", "system.py", "systemslave.py", "compiled.py", "adapters.py",
+                "sampling.py")
 #: Top-level names whose imports the bundle rewrites to its private package.
 REWRITTEN = frozenset(PACKAGES + ("fmus",))
 #: The private package's name: this prefix and 12 hex digits of the sources' hash.

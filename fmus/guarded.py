@@ -32,7 +32,7 @@ docs/extremes.md, "The FMI calls under hostile use"):
   the value and the time, and changes nothing;
 * ``doStep`` refuses (fmi2Discard) a step size that is not finite, is below
   :data:`MIN_STEP`, ends after :data:`MAX_TIME`, or that the FMU's model cannot honour
-  (:meth:`GuardedSlave.check_step_size`: a sampled component's sample time), a
+  (:meth:`GuardedSlave.check_step_size`: a sampled component's sample time, :mod:`fmus.sampling`), a
   communication point that does not follow the last one (the time of the state after
   ``fmi2SetFMUstate``), a step before initialisation or after ``fmi2Terminate``;
 * after a refused step (fmi2Discard) every later step is refused, as FMI 2.0's
@@ -87,8 +87,9 @@ class GuardedSlave(SlaveState, Fmi2Slave):
     :meth:`setup` (called once parameters are final) and advance it in
     :meth:`step`; both may raise, the base turns that into a logged refusal.
 
-    A sampled component (``sampled = True``: derivator, observer, controller) computes
-    its outputs in ``doStep(t, h)`` from the inputs at t and holds them over the step;
+    A sampled component (``sampled = True``: derivator, observer, controller;
+    :mod:`fmus.sampling`) computes its outputs in ``doStep(t, h)`` from the inputs at t and
+    holds them over the step (sub-steps h = T / n: until its next sample);
     its Real outputs are declared ``variability="discrete"``, which tells a master
     (:mod:`fmus.master`) to step it before the components that read those outputs.
     Other outputs are values at the end of the step (t + h).
@@ -208,22 +209,6 @@ class GuardedSlave(SlaveState, Fmi2Slave):
         """'step size h = ... s at t = ... s <why>; <Model> accepts <accepted_steps()>'."""
         return (f"step size h = {step_size!r} s at t = {current_time!r} s {why}; "
                 f"{type(self).__name__} accepts {self.accepted_steps()}")
-
-    def check_sample_time(self, current_time: float, step_size: float, T: float, divides: bool) -> None:
-        """The rule of a sampled model with sample time ``T``: h = T, or (``divides``) T / h a
-        whole number (the multi-rate sub-steps of the drives)."""
-        GuardedSlave.check_step_size(self, current_time, step_size)
-        if not (math.isfinite(T) and T > 0.0):
-            raise ValueError(f"parameter T = {T!r} s is not a finite positive sample time")
-        n = T / step_size
-        whole = round(n)
-        if divides:
-            ok = whole >= 1 and abs(n - whole) <= 1e-6 * n
-        else:
-            ok = abs(step_size - T) <= 1e-9 * T
-        if not ok:
-            rule = f"divide the sample time T = {T!r} s" if divides else f"equal the sample time T = {T!r} s"
-            raise ValueError(self.step_size_message(current_time, step_size, f"does not {rule}"))
 
     # --- hooks of the FMU state (fmus.slavestate) ---------------------------------------
     def new_instance(self):

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
-from fmus import budget
+from fmus import budget, sampling
 from fmus.refusals import (PRESET_VALUE, TINY, motor_preset, refuse_absurd, refuse_tiny, require_finite,
                            with_overrides)
 
@@ -286,17 +286,35 @@ class CurrentLoopSteps:
     """The step sizes of a slave whose drives' current controllers sample at ``T`` (mixed
     in before :class:`fmus.guarded.GuardedSlave`: ``DCMotorDrive``, ``ActuatedFiveBarPlant``).
 
-    In current mode a step must divide T (T / h a whole number: the multi-rate sub-steps of
-    the master); in voltage mode any step the base accepts.
+    In current mode a step must divide T (T / h = n a whole number, the same n within a
+    period) and ``sample_phase`` be below n: the controllers sample on that sub-step of each
+    period (:mod:`fmus.sampling`; the counting is the drive kernel's); in voltage mode any
+    step the base accepts.  The subclass lists its drives in :meth:`current_loops`.
     """
+
+    #: Declared with DefaultExperiment stepSize T, not variable steps (:mod:`fmus.sampling`).
+    has_sample_period = True
+
+    def to_xml(self, model_options=None):
+        return sampling.model_description_with_period(self, super().to_xml, model_options or {})
+
+    def current_loops(self) -> list:
+        """The slave's :class:`motor.Drive` objects."""
+        raise NotImplementedError
 
     def accepted_steps(self):
         if self.mode == "current":
-            return "in current mode h dividing the sample time T (T / h a whole number: the multi-rate sub-steps)"
+            return f"in current mode {sampling.accepted_steps_text()}"
         return super().accepted_steps() + " (voltage mode)"
 
     def check_step_size(self, current_time, step_size):
-        if self.mode == "current":
-            self.check_sample_time(current_time, step_size, self.T, divides=True)
-        else:
-            super().check_step_size(current_time, step_size)
+        super().check_step_size(current_time, step_size)
+        if self.mode != "current":
+            return
+        n = sampling.substeps_of(self.T, step_size)
+        if n is None:
+            raise ValueError(self.step_size_message(current_time, step_size,
+                                                    f"does not divide the sample time T = {self.T!r} s"))
+        sampling.check_phase(self, current_time, step_size, n)
+        for drive in self.current_loops():
+            sampling.check_period_change(self, current_time, step_size, n, drive.substeps, drive.substep)

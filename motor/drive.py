@@ -23,8 +23,9 @@ FRICTION_MODELS = ("tanh", "lugre")
 #: Largest noise seed (a double holds integers exactly up to 2**53).
 MAX_SEED = 2 ** 53
 
-# Relative tolerance used to decide that h divides T.
-_PHASE_TOL = 1e-6
+#: Relative tolerance deciding that h divides T: |T / h - n| <= SAMPLE_TOLERANCE n
+#: (the FMUs' rule, :mod:`fmus.sampling`).
+SAMPLE_TOLERANCE = 1e-9
 
 
 _D = kernel.indices(kernel.DRIVE)
@@ -49,8 +50,10 @@ class Drive:
         Motor and driver parameters.
     mode : {"current", "voltage"}
         ``"current"``: the discrete controller K(z) (appendix C) samples
-        ``i_ref`` and ``i_hat`` at the start of each controller period T and
-        holds its saturated voltage over the period. ``"voltage"``: the
+        ``i_ref`` and ``i_hat`` once per controller period T, on the step
+        ``sample_phase`` of the period's steps h = T / n (0: its start), and holds
+        its saturated voltage until the next sample; the electrics and the torque
+        advance on every step. ``"voltage"``: the
         commanded ``v_ref``, saturated at +-v_max, is applied over the step in
         which it is given (for voltage-driven plants).
     method : {"exact", "euler", "quasi_static"}
@@ -83,6 +86,9 @@ class Drive:
     noise_seed, noise_instance : int
         The noise of sample k is :func:`motor.drive.gaussian` (noise_seed,
         noise_instance, k): give each drive of a system its own instance.
+    sample_phase : int
+        Current mode: the step of each period (counted from 0 in steps h) on which the
+        controller samples; must be below T / h (checked with h, :meth:`prepare_step`).
 
     Raises
     ------
@@ -93,7 +99,7 @@ class Drive:
 
     def __init__(self, params, mode="current", method="exact", T=THESIS_T, poles=THESIS_POLES,
                  torque_output="end", design_params=None, friction="tanh", pwm_counts=0, current_offset=0.0,
-                 current_noise=0.0, noise_seed=0, noise_instance=0):
+                 current_noise=0.0, noise_seed=0, noise_instance=0, sample_phase=0):
         params.validate()
         self.params = params
         self.friction = _checks.choice("friction", friction, FRICTION_MODELS)
@@ -101,6 +107,7 @@ class Drive:
         pwm_counts = _checks.count("pwm_counts", pwm_counts)
         seed = _checks.count("noise_seed", noise_seed, MAX_SEED)
         instance = _checks.count("noise_instance", noise_instance, MAX_SEED)
+        self.sample_phase = _checks.count("sample_phase", sample_phase)
         offset = _checks.finite("current_offset", current_offset)
         noise = _checks.non_negative("current_noise", current_noise)
         self.torque_output = _checks.choice("torque_output", torque_output, TORQUE_OUTPUTS)
@@ -122,7 +129,7 @@ class Drive:
         values = {"current_mode": 1.0 if self.mode == "current" else 0.0,
                   "mean_torque": 1.0 if self.torque_output == "mean" else 0.0,
                   "ke": p.ke, "kt": p.kt, "b": p.b, "mu": p.mu, "omega_eps": p.omega_eps, "v_max": p.v_max,
-                  "T": self.T, "h": math.nan,     # no step prepared (prepare_step)
+                  "T": self.T, "sample_phase": self.sample_phase, "h": math.nan,   # no step prepared (prepare_step)
                   "pwm_quantum": p.v_max / pwm_counts if pwm_counts else 0.0, "i_offset": offset,
                   "i_noise": noise, "noise_seed": seed, "noise_instance": instance}
         for name, value in values.items():
@@ -202,8 +209,18 @@ class Drive:
         omega = _checks.finite("omega", omega)
         return self._kernel_torque(omega)
 
+    @property
+    def substeps(self) -> int:
+        """n = T / h of the steps prepared (1 in voltage mode, 0 before the first)."""
+        return int(self.buf[_D["substeps"]])
+
+    @property
+    def substep(self) -> int:
+        """The next step's index in its controller period (0: the period's start)."""
+        return int(self.buf[_D["phase"]])
+
     def controller_state(self):
-        """A copy of the drive's per-step state (current, voltage, controller, phase) for
+        """A copy of the drive's per-step state (current, voltage, controller, sub-step) for
         :meth:`restore_controller_state`: a plant that samples the voltage and then refuses
         its step (:class:`plant.actuated.ActuatedPlant`) puts the drive back as it was."""
         return self.buf.copy(), self._controller_buf.copy()
@@ -218,30 +235,43 @@ class Drive:
         Raises
         ------
         ValueError
-            h not finite and > 0, or, in current mode, h not dividing T.
+            h not finite and > 0, or, in current mode, h not dividing T, ``sample_phase``
+            not below T / h, or T / h changed within a controller period.
         """
         h = _checks.positive("h", h)
         if h != self._h:
-            if self.mode == "current":
-                n = self.T / h
-                if n < 1.0 - _PHASE_TOL or abs(n - round(n)) > _PHASE_TOL * n:
-                    raise ValueError(f"in current mode the step h must divide the controller period "
-                                     f"T={self.T!r}; got h={h!r}")
+            b = self.buf
+            b[_D["substeps"]] = self._substeps(h) if self.mode == "current" else 1.0
             self._coefficients = electrical_step_coefficients(self.params.R, self.params.L, h, self.method)
             self._mean = mean_current_coefficients(self.params.R, self.params.L, h, self.method)
-            b = self.buf
             b[_D["a"]], b[_D["g"]] = self._coefficients
             b[_D["w_i"]], b[_D["w_u"]] = self._mean
-            b[_D["phase_step"]] = h / self.T
             b[_D["h"]] = h
             self._h = h
+
+    def _substeps(self, h) -> int:
+        """n = T / h of a step h in current mode, checked (see :meth:`prepare_step`)."""
+        ratio = self.T / h
+        n = round(ratio)
+        if n < 1 or abs(ratio - n) > SAMPLE_TOLERANCE * n:
+            raise ValueError(f"in current mode the step h must divide the controller period "
+                             f"T={self.T!r}; got h={h!r}")
+        if self.sample_phase >= n:
+            raise ValueError(f"sample_phase = {self.sample_phase!r} must be below T / h = {n} "
+                             f"(h = {h!r}, T = {self.T!r})")
+        counted = int(self.buf[_D["substeps"]])
+        if self.substep and n != counted:
+            raise ValueError(f"the step h = {h!r} s changes T / h from {counted} to {n} within a controller "
+                             f"period (T = {self.T!r} s, at its sub-step {self.substep}): change it at a "
+                             "period's start")
+        return n
 
     def sample_voltage(self, i_ref, v_ref, i_hat, h):
         """The voltage applied over the next step of length h [V].
 
-        Current mode: at the start of a controller period T the controller samples
-        ``i_ref`` and ``i_hat`` (appendix C) and its saturated output is held over the
-        period; within a period the held voltage.  Voltage mode: ``v_ref`` saturated at
+        Current mode: on the step ``sample_phase`` of a controller period T the
+        controller samples ``i_ref`` and ``i_hat`` (appendix C) and its saturated output
+        is held until the next sample; on the other steps the held voltage.  Voltage mode: ``v_ref`` saturated at
         +-v_max.  :meth:`step` uses it; so does a plant that integrates the armature
         current itself (:class:`plant.actuated.ActuatedPlant`), which then sets
         ``i`` and ``v`` after its step.

@@ -121,8 +121,10 @@ NEVER = (math.nan, 0.0, -1e-3, math.inf, -math.inf, 1e300, 5e-324, 0.5 * MIN_STE
 STEP_CASES = [
     ("FiveBarPlant", 2.5e-4, True), ("FiveBarPlant", 1e-2, True),
     ("Trajectory", 0.5, True), ("Trajectory", 10.0, True),
-    ("Derivator", 5e-4, False), ("Derivator", 2e-3, False), ("Derivator", 1e-3 * (1 + 1e-12), True),
-    ("PositionController", 5e-4, False), ("PositionController", 0.5, False), ("PositionController", 10.0, False),
+    ("Derivator", 5e-4, True), ("Derivator", 3e-4, False), ("Derivator", 2e-3, False),
+    ("Derivator", 1e-3 * (1 + 1e-12), True), ("Derivator", 1e-3 / 4 * (1 + 1e-7), False),
+    ("PositionController", 5e-4, True), ("PositionController", 3e-4, False), ("PositionController", 0.5, False),
+    ("PositionController", 10.0, False), ("BalanceController", 1e-3, True), ("BalanceController", 3e-4, False),
     ("CurrentObserver", 2.5e-4, True), ("CurrentObserver", 3e-4, False), ("CurrentObserver", 0.5, False),
     ("DCMotorDrive", 2.5e-4, True), ("DCMotorDrive", 1e-4, True), ("DCMotorDrive", 3e-4, False),
     ("DCMotorDrive", 2e-3, False),

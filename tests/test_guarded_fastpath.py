@@ -30,11 +30,11 @@ def test_an_accepted_step_size_is_refused_when_the_step_ends_after_max_time():
 
 
 def test_another_step_size_is_checked_again():
-    slave = make_slave("Derivator")            # h must equal its sample time T = 1 ms
+    slave = make_slave("Derivator")            # h must divide its sample time T = 1 ms
     assert slave.do_step(0.0, 1e-3)
     assert slave.do_step(1e-3, 1e-3)
     assert slave.do_step(2e-3, 2e-3) is False
-    assert "does not equal the sample time" in slave.error
+    assert "does not divide the sample time" in slave.error
 
 
 def test_a_communication_point_off_the_last_step_is_refused():

@@ -291,7 +291,7 @@ def _system_sample(model: str) -> list:
     """(name, value): the first parameter of each type of every component at the value of
     :data:`REFUSED` (or both Booleans); for the ControlChain every parameter of its plant (the
     model it predicts the real plant by) at :data:`CHAIN_PLANT_EXTREMES`; and ``deriv.T`` at
-    2 ms, refused at the first step (the step size must equal it), not at initialisation."""
+    1.5 ms, refused at the first step (the step size must divide it), not at initialisation."""
     sample, seen = [], set()
     for name, kind in _parameters(new_system_slave(model)):
         component = name.split(".")[0]
@@ -300,7 +300,7 @@ def _system_sample(model: str) -> list:
         elif (component, kind) not in seen:
             seen.add((component, kind))
             sample += [(name, REFUSED[kind])] if kind in REFUSED else [(name, False), (name, True)]
-    return [*sample, ("deriv.T", 2e-3)]
+    return [*sample, ("deriv.T", 1.5e-3)]
 
 
 def _system_cases():

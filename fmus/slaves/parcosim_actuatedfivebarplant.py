@@ -23,6 +23,7 @@ from __future__ import annotations
 from fmus import budget
 from fmus import designs
 from fmus.guarded import MIN_STEP, GuardedSlave
+from fmus.sampling import declare_sample_phase
 from fmus.refusals import PRESET_VALUE, TINY, refuse_absurd
 from fmus.parts import (PLANT_OUTPUTS, CurrentLoopSteps, build_drive, build_plant, correct_plant, declare_drive_options,
                         declare_motor, declare_plant, publish_plant)
@@ -59,6 +60,7 @@ class ActuatedFiveBarPlant(CurrentLoopSteps, GuardedSlave):
         d("mode", "parameter", "current",
           "Both drives: 'current' (controller K(z) on i_ref, i_hat) or 'voltage' (v_ref applied)")
         d("T", "parameter", 1e-3, "Current-controller sample time [s]; in current mode the step must divide it")
+        declare_sample_phase(self)
         self.actuated = None
         self.idle_steps = 0    # a model in a controller: steps with the drives at 0 V (ChainCore)
 
@@ -73,9 +75,13 @@ class ActuatedFiveBarPlant(CurrentLoopSteps, GuardedSlave):
                                  "the armature current (use a separate DCMotorDrive with method 'quasi_static' "
                                  "for L = 0)")
         sim = build_plant(self)     # first: a bad plant parameter is refused before the drives' designs
-        drives = [(int(j), build_drive(self, j, mode=self.mode, T=self.T)) for j in JOINTS]
+        drives = [(int(j), build_drive(self, j, mode=self.mode, T=self.T, sample_phase=self.sample_phase))
+                  for j in JOINTS]
         self.actuated = ActuatedPlant(sim, drives)
         self._publish()
+
+    def current_loops(self):
+        return [drive for _, drive in self.actuated.drives]
 
     def step(self, current_time, step_size):
         a = self.actuated

@@ -1,9 +1,10 @@
 """FMI slave ``BalanceController``: the wheeled pendulum's discrete balance controller.
 
 A thin adapter over :class:`controller.balance.BalanceController` (observer + LQR designed
-with python-control at initialisation).  Each ``doStep(t, h)`` (h = T) reads the encoders
+with python-control at initialisation).  The sample's ``doStep(t, h)`` reads the encoders
 and the gyro at t and outputs the motor voltages held over [t, t + T], saturated at
-``v_battery``; outputs change only in ``doStep``: no direct feedthrough.
+``v_battery``; steps h = T / n sample once per period, on sub-step ``sample_phase``, and
+hold in between (:mod:`fmus.sampling`); outputs change only in ``doStep``: no direct feedthrough.
 
 The module name is unique among parcosim slaves: all FMUs loaded in one
 process share one Python interpreter and its module cache.
@@ -14,15 +15,15 @@ from controller.balance import ROUTES, BalanceController as _Controller
 from controller.balance import BalanceSettings, design_balance, get_route
 from controller.fastbalance import INPUTS, OUTPUTS
 from fmus.guarded import MIN_STEP, GuardedSlave
+from fmus.sampling import SampledSteps, declare_sample_phase
 from fmus.refusals import refuse_absurd, refuse_absurd_inputs, require_finite
 
 ESTIMATES = OUTPUTS[6:]
 
 
-class BalanceController(GuardedSlave):
+class BalanceController(SampledSteps, GuardedSlave):
     """Observer + discrete LQR on pitch, wheel position and yaw (seed 000's robot)."""
 
-    sampled = True
     author = "parcosim"
     description = ("Balance controller of the wheeled pendulum (seed 000): encoders and gyro in, "
                    "motor voltages out; Kalman observer + discrete LQR")
@@ -42,7 +43,8 @@ class BalanceController(GuardedSlave):
         d("y_d", "output", 0.0, "Reference axle position y at the sample [m]")
         for name in ESTIMATES:
             d(name, "output", 0.0, f"Observer's prediction of {name[:-4]} for the next sample")
-        d("T", "parameter", defaults.T, "Sample time; doStep sizes must equal it [s]")
+        d("T", "parameter", defaults.T, "Sample time; doStep sizes must divide it [s]")
+        declare_sample_phase(self)
         d("v_battery", "parameter", defaults.v_battery, "Voltage saturation [V] (an assumption: seed 000 gives none)")
         d("electrics", "parameter", defaults.electrics, "Design model of the drives: 'quasi_static' (seed 000 (22)) "
           "or 'ideal' (torque sources, no back-EMF)")
@@ -65,13 +67,7 @@ class BalanceController(GuardedSlave):
                                    encoder_counts=self.encoder_counts)
         self.controller = _Controller(design_balance(settings), get_route(self.route))
 
-    def accepted_steps(self):
-        return "h = T (the sample time the controller is designed for; 1e-9 relative)"
-
-    def check_step_size(self, current_time, step_size):
-        self.check_sample_time(current_time, step_size, self.T, divides=False)
-
-    def step(self, current_time, step_size):
+    def sample(self, current_time, step_size):
         c = self.controller
         refuse_absurd_inputs(current_time, enc_l=self.enc_l, enc_r=self.enc_r, gyro=self.gyro)
         c.sample(current_time, self.enc_l, self.enc_r, self.gyro)

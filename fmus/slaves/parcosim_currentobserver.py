@@ -9,12 +9,17 @@ input ``i_hat`` at the start of its next step.  A master loop
 in-process loop ``drive.step(...); i_hat = observer.estimate(v, omega, h)``.
 Outputs change only in ``doStep``: no direct feedthrough.
 
+Sub-steps h = T / n: the estimate advances on every step (the dynamic kind integrates
+over each, as the drive's electrics do) and the output ``i_hat`` is published once per
+period, at the end of sub-step ``sample_phase``, held in between (:mod:`fmus.sampling`).
+
 The module name is unique among parcosim slaves: all FMUs loaded in one
 process share one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
 from fmus.guarded import MIN_STEP, GuardedSlave
+from fmus.sampling import SampledSteps, declare_sample_phase
 from fmus.refusals import PRESET_VALUE, motor_preset, refuse_absurd, require_finite, with_overrides
 from motor import CurrentObserver as _Observer
 
@@ -27,10 +32,9 @@ MOTOR_PARAMETERS = (
 OUTPUTS = ("i_hat",)
 
 
-class CurrentObserver(GuardedSlave):
+class CurrentObserver(SampledSteps, GuardedSlave):
     """Current estimate from voltage and speed, i_hat = (v - ke omega)/R (thesis 7.20)."""
 
-    sampled = True
     author = "parcosim"
     description = "Current observer (Coutinho 2019, 7.20): applied voltage and speed in, estimated current out"
 
@@ -48,7 +52,8 @@ class CurrentObserver(GuardedSlave):
         d("i0", "parameter", 0.0, "Estimate before the first step [A]")
         d("omega0", "parameter", 0.0,
           "Speed at the start time [rad/s]: the speed the drive holds over the first step (dynamic kind)")
-        d("T", "parameter", 1e-3, "Sample time [s]: the step must divide it (the drives' sub-steps)")
+        d("T", "parameter", 1e-3, "Sample time [s]: the step must divide it; i_hat is published once per period")
+        declare_sample_phase(self)
         self.observer = None
 
     def setup(self):
@@ -64,11 +69,8 @@ class CurrentObserver(GuardedSlave):
         self.observer.reset(self.i0, self.omega0)
         self.i_hat = self.observer.i_hat
 
-    def accepted_steps(self):
-        return "h dividing the sample time T (T / h a whole number: the drives' multi-rate sub-steps)"
-
-    def check_step_size(self, current_time, step_size):
-        self.check_sample_time(current_time, step_size, self.T, divides=True)
-
-    def step(self, current_time, step_size):
+    def sample(self, current_time, step_size):
         self.i_hat = self.observer.estimate(self.v, self.omega, step_size, current_time)
+
+    def between_samples(self, current_time, step_size):
+        self.observer.estimate(self.v, self.omega, step_size, current_time)

@@ -2,7 +2,9 @@
 
 Timing (one communication step from t to t + h, inputs held over it):
 ``v`` is the voltage applied over [t, t + h] (in current mode the controller
-samples ``i_ref`` and ``i_hat`` at t and holds its voltage), ``i`` and
+samples ``i_ref`` and ``i_hat`` at t on the sub-step ``sample_phase`` of each period T,
+steps h = T / n, and holds its voltage until the next sample; the electrics and the
+torque advance on every step), ``i`` and
 ``tau`` are the current and shaft torque at t + h (with ``torque_output = "mean"``,
 ``tau`` is the shaft torque averaged over [t, t + h]).  Outputs change only in
 ``doStep``: no direct feedthrough.
@@ -16,6 +18,7 @@ from fmus import designs
 from fmus.guarded import MIN_STEP, GuardedSlave
 from fmus.refusals import refuse_absurd
 from fmus.parts import CurrentLoopSteps, build_drive, declare_drive_options, declare_motor
+from fmus.sampling import declare_sample_phase
 
 OUTPUTS = ("tau", "v", "i")
 
@@ -47,6 +50,7 @@ class DCMotorDrive(CurrentLoopSteps, GuardedSlave):
           "'end': tau is the shaft torque at the step's end; 'mean': its average over the step "
           "(what a plant holding tau over the step should get)")
         d("T", "parameter", 1e-3, "Current-controller sample time [s]; in current mode the step must divide it")
+        declare_sample_phase(self)
         d("omega0", "parameter", 0.0, "Start in electrical steady state at this speed [rad/s]")
         d("i0", "parameter", 0.0, "Start in electrical steady state with this current [A]")
         self.drive = None
@@ -56,11 +60,14 @@ class DCMotorDrive(CurrentLoopSteps, GuardedSlave):
         if 0.0 < self.T < MIN_STEP:
             raise ValueError(f"parameter T = {self.T!r} s must be >= {MIN_STEP:g} s")
         self.drive = build_drive(self, mode=self.mode, method=self.method, T=self.T,
-                                 torque_output=self.torque_output)
+                                 torque_output=self.torque_output, sample_phase=self.sample_phase)
         self.drive.start(self.omega0, self.i0)
         self.tau = self.drive.torque(self.omega0)
         self.v = self.drive.v
         self.i = self.drive.i
+
+    def current_loops(self):
+        return [self.drive]
 
     def step(self, current_time, step_size):
         self.tau, self.v, self.i = self.drive.step(self.i_ref, self.v_ref, self.omega, self.i_hat, step_size)

@@ -3,7 +3,8 @@
 Each ``doStep(t, h)`` takes the inputs ``q1``, ``q2`` as the newest sample and outputs the
 estimates at that sample (:class:`controller.derivators.Derivator`: backward difference,
 2nd-order Bessel low-pass for velocity, 8th-order for acceleration, discretised at
-``T``; the step size must equal ``T``).  Wiring: feed the plant's (encoder) angles at t and
+``T``).  Steps h = T / n sample once per period, on sub-step ``sample_phase``, and hold the
+estimates in between (:mod:`fmus.sampling`).  Wiring: feed the plant's (encoder) angles at t and
 read the estimates for t after this step, before the controller's step at t.  Outputs
 change only in ``doStep``: no direct feedthrough.
 
@@ -24,6 +25,7 @@ from controller.derivators import DEFAULT_FC_ACC, DEFAULT_FC_VEL, SAMPLE_TIME
 from controller.derivators import Derivator as _Derivator
 from fmus import designs
 from fmus.guarded import MIN_STEP, GuardedSlave
+from fmus.sampling import SampledSteps, declare_sample_phase
 from fmus.refusals import ABSURD, refuse_absurd, require_finite
 
 OUTPUTS = ("dq1", "dq2", "ddq1", "ddq2")
@@ -31,10 +33,9 @@ OUTPUTS = ("dq1", "dq2", "ddq1", "ddq2")
 MIN_FC_T = 1e-6
 
 
-class Derivator(GuardedSlave):
+class Derivator(SampledSteps, GuardedSlave):
     """Numerical differentiator of the two actuated angles (7.2.3)."""
 
-    sampled = True
     author = "parcosim"
     description = "Derivator (Coutinho 2019, 7.2.3): angles in, Bessel-filtered velocity and acceleration out"
 
@@ -50,7 +51,8 @@ class Derivator(GuardedSlave):
         d("ddq2", "output", 0.0, "Acceleration estimate of q2 [rad/s2]")
         d("fc_vel", "parameter", DEFAULT_FC_VEL, "-3 dB frequency of the 2nd-order Bessel velocity low-pass [Hz]")
         d("fc_acc", "parameter", DEFAULT_FC_ACC, "-3 dB frequency of the 8th-order Bessel acceleration low-pass [Hz]")
-        d("T", "parameter", SAMPLE_TIME, "Sample time the filters are discretised at; doStep sizes must equal it [s]")
+        d("T", "parameter", SAMPLE_TIME, "Sample time the filters are discretised at; doStep sizes must divide it [s]")
+        declare_sample_phase(self)
         d("start_from_input", "parameter", True, "Start at rest at the first step's input angles (else at q1_0, q2_0)")
         d("q1_0", "parameter", 0.0, "Start angle of q1 when start_from_input is false [rad]")
         d("q2_0", "parameter", 0.0, "Start angle of q2 when start_from_input is false [rad]")
@@ -82,13 +84,7 @@ class Derivator(GuardedSlave):
         else:
             self.derivator.reset([self.q1_0, self.q2_0])
 
-    def accepted_steps(self):
-        return "h = T (the sample time the filters are discretised at; 1e-9 relative)"
-
-    def check_step_size(self, current_time, step_size):
-        self.check_sample_time(current_time, step_size, self.T, divides=False)
-
-    def step(self, current_time, step_size):
+    def sample(self, current_time, step_size):
         q1, q2 = self.q1, self.q2
         if not (abs(q1) <= ABSURD and abs(q2) <= ABSURD):   # NaN fails too: named below
             self._refuse_inputs(current_time)

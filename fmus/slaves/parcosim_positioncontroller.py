@@ -5,7 +5,8 @@ seed 001's sliding-mode law (SMCq, SMCx).  ``gravity_x``, ``gravity_y``, ``count
 Timing: ``doStep(t, h)`` reads the measurements and references set before it (the samples
 at t), computes the torques and current references and holds them as outputs; the master
 applies them to the drives/plant over [t, t + h].  Outputs change only in ``doStep``: no
-direct feedthrough.  ``h`` is the integration step of the sliding term.  ``delay_steps`` = n > 0
+direct feedthrough.  Steps h = T / n sample once per period, on sub-step ``sample_phase``,
+and hold in between (:mod:`fmus.sampling`); T is the integration step of the sliding term.  ``delay_steps`` = n > 0
 models a computation delay (docs/twin.md: on the bench of 7.2.1 a Raspberry Pi 2 reads the
 encoders at a sample and computes the law; the thesis does not say when the commands reach
 the driver, the twin assumes at the next sample): the outputs ``tau1``,
@@ -36,6 +37,7 @@ from controller.position import PositionController as _Controller
 from controller.strategies import get_strategy
 from fmus import designs
 from fmus.guarded import MIN_STEP, GuardedSlave
+from fmus.sampling import SampledSteps, declare_sample_phase
 from fmus.refusals import PRESET_VALUE, refuse_absurd, refuse_tiny, require_finite
 from fmus.parts import declare_counter_masses, with_counter_masses
 from plant import get_preset
@@ -53,10 +55,9 @@ MAX_DELAY_STEPS = 100
 MAX_TABLE_POINTS = 6e4
 
 
-class PositionController(GuardedSlave):
+class PositionController(SampledSteps, GuardedSlave):
     """Discrete position controller of the 5R (Coutinho 2019, 7.2.6, 7.21-7.22)."""
 
-    sampled = True
     author = "parcosim"
     description = "Position controller (Coutinho 2019, 7.21-7.22): PD/TC +- sliding modes, joint or task space"
 
@@ -99,7 +100,8 @@ class PositionController(GuardedSlave):
         d("cache", "parameter", True, "Tabulated model: load/save the table in the user cache directory")
         d("kt1", "parameter", PRESET_VALUE, "Torque constant of motor 1 [N m/A]; -1: Table 16")
         d("kt2", "parameter", PRESET_VALUE, "Torque constant of motor 2 [N m/A]; -1: Table 18")
-        d("T", "parameter", 1e-3, "Sample time [s]; doStep sizes must equal it")
+        d("T", "parameter", 1e-3, "Sample time [s]; doStep sizes must divide it")
+        declare_sample_phase(self)
         d("gravity_x", "parameter", 0.0, "Gravity the model assumes, world x [m/s2]")
         d("gravity_y", "parameter", 0.0, "Gravity the model assumes, world y [m/s2]")
         d("delay_steps", "parameter", 0, "Computation delay: tau1, tau2, i_ref1, i_ref2 are applied this many "
@@ -170,19 +172,13 @@ class PositionController(GuardedSlave):
                              f"y_min = {self.y_min!r}, y_max = {self.y_max!r} m give a table of {points:.3g} points, "
                              f"more than {MAX_TABLE_POINTS:g} (building it would take initialisation over 10 s)")
 
-    def accepted_steps(self):
-        return "h = T (the sample time; 1e-9 relative)"
-
-    def check_step_size(self, current_time, step_size):
-        self.check_sample_time(current_time, step_size, self.T, divides=False)
-
-    def step(self, current_time, step_size):
+    def sample(self, current_time, step_size):
         # One call: outputs and errors together; the controller refuses non-finite outputs
         # (finite but absurd inputs, e.g. a speed of 1e300 rad/s, overflow the law), naming the
         # largest input.
         out = self.controller.step_with_errors(
             current_time, self.q1, self.q2, self.dq1, self.dq2, self.ddq1, self.ddq2,
-            self.x_d, self.y_d, self.dx_d, self.dy_d, self.ddx_d, self.ddy_d, step_size)
+            self.x_d, self.y_d, self.dx_d, self.dy_d, self.ddx_d, self.ddy_d, self.T)
         if len(self.delayed):
             out = (*delay(self.delayed, out[:4]), *out[4:])   # the queue in C (pc_law_delay), as the compiled loop
         self.tau1, self.tau2, self.i_ref1, self.i_ref2, self.e1, self.e2 = out

@@ -17,8 +17,8 @@ const pc_field pc_controller_fields[] = {
 const pc_field pc_drive_fields[] = {
     PC_FIELD(pc_drive, current_mode), PC_FIELD(pc_drive, mean_torque), PC_FIELD(pc_drive, ke),
     PC_FIELD(pc_drive, kt), PC_FIELD(pc_drive, b), PC_FIELD(pc_drive, mu), PC_FIELD(pc_drive, omega_eps),
-    PC_FIELD(pc_drive, v_max), PC_FIELD(pc_drive, T), PC_FIELD(pc_drive, h), PC_FIELD(pc_drive, a),
-    PC_FIELD(pc_drive, g), PC_FIELD(pc_drive, w_i), PC_FIELD(pc_drive, w_u), PC_FIELD(pc_drive, phase_step),
+    PC_FIELD(pc_drive, v_max), PC_FIELD(pc_drive, T), PC_FIELD(pc_drive, sample_phase), PC_FIELD(pc_drive, h), PC_FIELD(pc_drive, a),
+    PC_FIELD(pc_drive, g), PC_FIELD(pc_drive, w_i), PC_FIELD(pc_drive, w_u), PC_FIELD(pc_drive, substeps),
     PC_FIELD(pc_drive, i), PC_FIELD(pc_drive, v), PC_FIELD(pc_drive, phase), PC_FIELD(pc_drive, pwm_quantum),
     PC_FIELD(pc_drive, i_offset), PC_FIELD(pc_drive, i_noise), PC_FIELD(pc_drive, noise_seed),
     PC_FIELD(pc_drive, noise_instance), PC_FIELD(pc_drive, sample), {0, 0, 0}};
@@ -222,12 +222,13 @@ static void voltage(const pc_drive *d, const pc_controller *c, double i_ref, dou
         s->phase = d->phase;
         return;
     }
-    int sampled = d->phase == 0.0;
+    /* A whole-number counter of the period's sub-steps (never the time: t + h drifts). */
+    int sampled = d->phase == d->sample_phase;
     s->e = i_ref - (sampled ? measured_current(d, i_hat) : i_hat);
     s->v = sampled ? applied(d, controller_output(c, s->e)) : d->v;
     s->sampled = sampled ? 1.0 : 0.0;
-    double phase = d->phase + d->phase_step;
-    s->phase = phase > 1.0 - PC_DRIVE_PHASE_TOL ? 0.0 : phase;
+    double next = d->phase + 1.0;
+    s->phase = next >= d->substeps ? 0.0 : next;
 }
 
 static int check_inputs(double omega, double i_ref, double v_ref, double i_hat, pc_refusal *r)

@@ -6,7 +6,7 @@
  *   pc_controller  K(z) of C.5: its coefficients, then its state (last outputs and errors);
  *   pc_drive       the motor's constants, the step's coefficients (set by prepare_step in
  *                  Python: a, g of i(t+h) = a i + g (v - ke omega) and the mean weights), the
- *                  imperfections, then the run state (current, voltage, phase, sample count);
+ *                  imperfections, then the run state (current, voltage, sub-step, sample count);
  *   pc_lugre       the LuGre parameters, then the bristle deflection z.
  * Design-time work (pole placement, the step coefficients) stays in Python (motor/).
  *
@@ -26,9 +26,6 @@
 /* The drive's inputs as pc_refusal.index names them (the order its checks run). */
 enum { PC_DRIVE_OMEGA = 0, PC_DRIVE_I_REF = 1, PC_DRIVE_V_REF = 2, PC_DRIVE_I_HAT = 3 };
 
-/* Relative tolerance deciding that a controller period is over (motor.drive._PHASE_TOL). */
-#define PC_DRIVE_PHASE_TOL 1e-6
-
 /* K(z) = (alpha z^2 + beta z + gamma) / ((z - 1)(z - delta)) (C.5), saturated at +-v_max. */
 typedef struct {
     double alpha, beta, gamma, delta;   /* C.5, placed by motor.current_controller (C.8-C.12) */
@@ -42,14 +39,15 @@ typedef struct {
     double mean_torque;     /* 1: tau over the step's mean current; 0: at the step's end */
     double ke, kt, b, mu, omega_eps, v_max;   /* B.2, 4.162 [V s/rad, N m/A, N m s/rad, N m, rad/s, V] */
     double T;               /* controller period [s] */
+    double sample_phase;    /* the sub-step of each period that samples, 0 <= sample_phase < substeps */
     double h;               /* the step length the coefficients below are for [s] (NaN: none) */
     double a, g;            /* i(t+h) = a i + g (v - ke omega)  (4.162 over the step) */
     double w_i, w_u;        /* mean current over the step = w_i i + w_u (v - ke omega) */
-    double phase_step;      /* h / T */
+    double substeps;        /* n = T / h, whole: the steps of a controller period */
     /* state */
     double i;               /* armature current [A] */
     double v;               /* voltage applied over the last step [V] */
-    double phase;           /* controller phase (fraction of T) */
+    double phase;           /* the next step's sub-step in its period, 0 ... substeps - 1 (whole) */
     /* the bench's imperfections (0: ideal) */
     double pwm_quantum;     /* v_max / pwm_counts [V] */
     double i_offset;        /* offset of the current the loop reads [A] */
@@ -75,7 +73,7 @@ typedef struct {
     double v;        /* the voltage applied over the step [V] */
     double e;        /* the controller's error at this sample [A] */
     double sampled;  /* 1: the controller sampled at this step */
-    double phase;    /* the phase after the step */
+    double phase;    /* the sub-step after the step */
 } pc_drive_sample;
 
 /* The drive's buffers for the compiled loop's pc_drive_io (lugre NULL: the tanh friction of B.2). */
