@@ -21,8 +21,9 @@ spent per simulated ms, from its start (Python, imports, loading, initialisation
 what a fresh importing process pays).  With no scene: all 16 bench scenes and
 thesis_sim_circle.  Every finished run is stored in ``--results`` (default
 ``benchmarks/results/tools.json``) as soon as it ends, and a run stored there is not run
-again: an interrupted measurement resumes.  ``--docs`` puts the tables into docs/ssp.md and
-the summary into the README.
+again: an interrupted measurement resumes.  ``--docs`` puts the tables of every run stored
+there (this call's and earlier ones, e.g. whole default packages and 3 s copies of the
+per-component ones) into docs/ssp.md and the summary into the README.
 """
 from __future__ import annotations
 
@@ -59,6 +60,8 @@ KINDS = ("default", "per-component", "per-component+c-drive", "internal-observer
 #: strategies (any other scene of ``scene_names()`` runs when named).
 TABLE_SCENES = ("thesis_sim_circle",) + tuple(f"bench_{kind}_{s}" for kind in ("circle", "triangle")
                                               for s in STRATEGY_NAMES)
+#: The scene's columns the metrics read (what each run records).
+METRIC_COLUMNS = ("x", "y", "x_d", "y_d", "tau1", "tau2")
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results" / "tools.json"
 #: The swapped-in drive's source (the foreign-FMU tests build it the same way).
@@ -117,10 +120,10 @@ def export_kind(kind: str, scene: Scene, directory, c_drive=None) -> Exported:
     if kind == "default":
         packaged = package_scene(scene).scene
         return Exported(export_package(scene, path), scene.system.step,
-                        {signal: name for name, signal in packaged.columns.items()})
+                        {signal: name for name, signal in packaged.columns.items() if name in METRIC_COLUMNS})
     if kind not in KINDS:
         raise ValueError(f"kind = {kind!r}; valid: {', '.join(KINDS)}")
-    columns = {signal: name for name, signal in scene.columns.items()}
+    columns = {signal: name for name, signal in scene.columns.items() if name in METRIC_COLUMNS}
     if kind.startswith("internal-observer"):
         path = export_per_component(scene, path, substeps=1 if kind.endswith("1ms") else None,
                                     internal_observer=True)
@@ -198,8 +201,7 @@ def tool_metrics(scene: Scene, run: SspRun, columns: dict, period: float | None 
     k = np.round(run.time / period)
     at = np.abs(run.time - k * period) <= 1e-6 * period
     data = {"t": run.time[at]}
-    data.update({name: np.asarray(run[signal])[at] for signal, name in columns.items() if name in
-                 ("x", "y", "x_d", "y_d", "tau1", "tau2")})
+    data.update({name: np.asarray(run[signal])[at] for signal, name in columns.items() if name in METRIC_COLUMNS})
     reached = len(run.time) and run.time[-1] >= scene.system.stop_time - 1e-6
     return scene_metrics(scene, data, run.wall_s, run.error is None and bool(reached))
 
@@ -243,11 +245,11 @@ def _cpu_text(m: dict) -> str:
 
 
 def table(results: dict) -> str:
-    """Markdown table of ``{(kind, scene): compare(...)}`` (or ``{scene: ...}``: kind default)."""
+    """Markdown table of ``{(kind, scene[, stop]): compare(...)}`` (or ``{scene: ...}``: kind default)."""
     lines = ["| package | scene | tool | step [ms] | e_ef [mm] (ours) | e_ef ratio | τ_ef ratio | completed | "
              "CPU µs per simulated ms |", "|---|---|---|---|---|---|---|---|---|"]
     for key, rows in results.items():
-        kind, name = key if isinstance(key, tuple) else ("default", key)
+        kind, name = key[:2] if isinstance(key, tuple) else ("default", key)
         for tool, m, ours, error in rows:
             if m is None:
                 lines.append(f"| {kind} | {name} | {tool} | – | – ({ours['e_ef_mm']:.4g}) | – | – | no: {error} | – |")
@@ -268,15 +270,18 @@ def summary(results: dict) -> str:
         kind = key[0] if isinstance(key, tuple) else "default"
         for tool, m, ours, _ in rows:
             groups.setdefault((kind, tool), []).append((m, ours))
-    lines = ["| package | tool | e_ef / ours | τ_ef / ours | runs completed | CPU µs per simulated ms (median) |",
-             "|---|---|---|---|---|---|"]
+    lines = ["| package | tool | e_ef / ours | τ_ef / ours | runs completed | simulated [s] | "
+             "CPU µs per simulated ms (median) |", "|---|---|---|---|---|---|---|"]
     for (kind, tool), items in groups.items():
         done = [(m, o) for m, o in items if m is not None and m["completed"]]
         e = [_ratio(m["e_ef_mm"], o["e_ef_mm"]) for m, o in done]
         t = [_ratio(m["tau_ef_Nm"], o["tau_ef_Nm"]) for m, o in done]
         cpu = [_cpu_per_ms(m) for m, _ in done if math.isfinite(_cpu_per_ms(m))]
         span = (lambda v: f"{min(v):.4f}-{max(v):.4f}" if v else "–")
-        lines.append(f"| {kind} | {tool} | {span(e)} | {span(t)} | {len(done)}/{len(items)} | "
+        lengths = sorted({round(m["simulated_s"], 3) for m, _ in done})
+        length = "–" if not lengths else (f"{lengths[0]:g}" if len(lengths) == 1 else
+                                          f"{lengths[0]:g}-{lengths[-1]:g}")
+        lines.append(f"| {kind} | {tool} | {span(e)} | {span(t)} | {len(done)}/{len(items)} | {length} | "
                      f"{f'{np.median(cpu):.0f}' if cpu else '–'} |")
     return "\n".join(lines) + "\n"
 
@@ -337,6 +342,30 @@ def measure(scenes, tools, kinds, stop_time=None, results=RESULTS, progress=prin
     return table_rows
 
 
+def stored_rows(stored: dict, tools=TOOLS) -> dict:
+    """Every run in ``stored`` (:func:`load_results`) as ``{(kind, scene, stop): rows}``, in
+    the order of :data:`KINDS` and :data:`TABLE_SCENES` (a copy shortened to ``stop`` s
+    named ``scene (stop s)``)."""
+    found = {}
+    for key, value in stored.items():
+        kind, scene, tool, stop = key.split("|")
+        if kind == "ours" or tool not in tools:
+            continue
+        ours = stored.get(_key("ours", scene, "parcosim", None if stop == "full" else float(stop)))
+        if ours is None:
+            continue
+        label = scene if stop == "full" else f"{scene} ({float(stop):g} s)"
+        found.setdefault((kind, label, scene), []).append((tool, value["metrics"], ours, value["error"]))
+
+    def order(item):
+        (kind, label, scene), _ = item
+        rank = TABLE_SCENES.index(scene) if scene in TABLE_SCENES else len(TABLE_SCENES)
+        return (KINDS.index(kind) if kind in KINDS else len(KINDS), rank, label)
+
+    return {(kind, label): sorted(rows, key=lambda r: tools.index(r[0]))
+            for (kind, label, _), rows in sorted(found.items(), key=order)}
+
+
 def _child(argv) -> None:
     tool, path, out, stop, step, bindings, *signals = argv
     run = run_tool(tool, path, signals, float(stop), float(step), bindings=bindings == "1")
@@ -356,7 +385,8 @@ def main(argv=None) -> int:
     parser.add_argument("--stop-time", type=float, default=None, help="shorten every scene to this [s]")
     parser.add_argument("--results", default=str(RESULTS), help="the runs stored so far (resumes from it)")
     parser.add_argument("--out", default=None, help="also write the markdown tables here")
-    parser.add_argument("--docs", action="store_true", help="also put the tables into docs/ssp.md")
+    parser.add_argument("--docs", action="store_true",
+                        help="put the tables of every stored run into docs/ssp.md, the summary into the README")
     args = parser.parse_args(argv)
     tools = [t for t in args.tools.split(",") if t]
     kinds = [k for k in args.kinds.split(",") if k]
@@ -365,6 +395,8 @@ def main(argv=None) -> int:
             parser.error(f"--kinds {k}: one of {', '.join(KINDS)}")
     results = measure(args.scenes or TABLE_SCENES, tools, kinds, args.stop_time, args.results,
                       progress=lambda line: print(line, file=sys.stderr, flush=True))
+    if args.docs:   # the tables hold every stored run, this call's and earlier ones
+        results = stored_rows(load_results(args.results), tools)
     text = summary(results) + "\n" + table(results)
     print(text)
     if args.out:
