@@ -16,7 +16,9 @@ Integer parameter ``sample_phase``, docs/contract.md):
   at its period's start fits in), the earlier ones one sub-step per stage before it:
   ``phase = (stage - last) mod n`` (derivator n - 2, controller and observers n - 1,
   drives 0); each connection then delivers its sample exactly when the next stage takes
-  its own;
+  its own.  So no stage that reads the plant samples on the run's first step, where fmpy
+  feeds 0.0 to every input; a one-stage chain (thesis_sim's controller) therefore samples
+  on sub-step 1;
 * n: the Jacobi master adds one sub-step per stage and one into the plant to our
   master's loop, (last + 1) h, and the tracking error grows with that delay (measured:
   thesis_sim_circle e_ef x(1 + 2.03/n), the bench x1.005 at n = 4).  Exporting a scene,
@@ -141,7 +143,10 @@ def component_timing(system: System, variables: dict, substeps: int | None = Non
                              if c.name not in adjustable and _foreign(c.model) and stage[c.name] > 0]
     last = max((stage[n] for n in samplers), default=0)
     n = choose_substeps(last, substeps)
-    return Timing(system.step, n, stage, {name: (stage[name] - last) % n for name in adjustable})
+    # A one-stage chain (thesis_sim's controller reads the plant directly) samples on the
+    # period's second sub-step: fmpy feeds 0.0 to every input on the run's first step.
+    shift = 1 if last == 0 and n >= 2 else 0
+    return Timing(system.step, n, stage, {name: (stage[name] - last + shift) % n for name in adjustable})
 
 
 def _tracking(scene: Scene, result, every: int) -> tuple:

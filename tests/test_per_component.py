@@ -66,6 +66,17 @@ def test_the_last_stage_samples_at_the_period_start_and_each_earlier_one_a_sub_s
     assert (timing.phases["a"] + 1) % n == timing.phases["b"] and (timing.phases["b"] + 1) % n == timing.phases["c"]
 
 
+def test_no_stage_that_reads_the_plant_samples_on_the_runs_first_step():
+    """fmpy feeds 0.0 to every input on the first step: a one-stage chain samples on sub-step 1."""
+    system = System((Component("c", "C", {}), Component("p", "P", {})),
+                    (Connection("p.y", "c.u"), Connection("c.y", "p.u")), ("p.y",), 1.0, 1e-3)
+    variables = {"c": {"u": _var("input"), "y": _var("output", "discrete"), PHASE: _var("parameter", "fixed")},
+                 "p": {"u": _var("input"), "y": _var("output")}}
+    assert component_timing(system, variables, 4).phases == {"c": 1}
+    assert component_timing(system, variables, 1).phases == {"c": 0}
+    assert component_timing(_chain_system(), _chain_variables(), 4).phases["a"] >= 1
+
+
 def test_a_foreign_reader_of_samples_counts_as_sampling_at_its_period_start():
     system = _chain_system()
     system = dataclasses.replace(system, components=tuple(
