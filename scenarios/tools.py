@@ -343,9 +343,9 @@ def measure(scenes, tools, kinds, stop_time=None, results=RESULTS, progress=prin
 
 
 def stored_rows(stored: dict, tools=TOOLS) -> dict:
-    """Every run in ``stored`` (:func:`load_results`) as ``{(kind, scene, stop): rows}``, in
-    the order of :data:`KINDS` and :data:`TABLE_SCENES` (a copy shortened to ``stop`` s
-    named ``scene (stop s)``)."""
+    """Every run in ``stored`` (:func:`load_results`) as ``{(kind, scene): rows}``, in the
+    order of :data:`KINDS` and :data:`TABLE_SCENES`; runs of copies shortened to ``stop`` s
+    under the kind ``"<kind>, <stop> s copies"``."""
     found = {}
     for key, value in stored.items():
         kind, scene, tool, stop = key.split("|")
@@ -354,16 +354,15 @@ def stored_rows(stored: dict, tools=TOOLS) -> dict:
         ours = stored.get(_key("ours", scene, "parcosim", None if stop == "full" else float(stop)))
         if ours is None:
             continue
-        label = scene if stop == "full" else f"{scene} ({float(stop):g} s)"
-        found.setdefault((kind, label, scene), []).append((tool, value["metrics"], ours, value["error"]))
+        found.setdefault((kind, stop, scene), []).append((tool, value["metrics"], ours, value["error"]))
 
     def order(item):
-        (kind, label, scene), _ = item
+        (kind, stop, scene), _ = item
         rank = TABLE_SCENES.index(scene) if scene in TABLE_SCENES else len(TABLE_SCENES)
-        return (KINDS.index(kind) if kind in KINDS else len(KINDS), rank, label)
+        return (KINDS.index(kind) if kind in KINDS else len(KINDS), stop != "full", stop, rank)
 
-    return {(kind, label): sorted(rows, key=lambda r: tools.index(r[0]))
-            for (kind, label, _), rows in sorted(found.items(), key=order)}
+    return {(kind if stop == "full" else f"{kind}, {float(stop):g} s copies", scene):
+            sorted(rows, key=lambda r: tools.index(r[0])) for (kind, stop, scene), rows in sorted(found.items(), key=order)}
 
 
 def _child(argv) -> None:

@@ -70,7 +70,7 @@ def test_a_stored_run_is_not_run_again(tmp_path, monkeypatch):
     monkeypatch.setattr(tools, "run_scene", no_run)
     rows = tools.measure(["bench_circle_PDq"], tools.TOOLS, ["default"], 3.0, path, progress=lambda _: None)
     assert [r[0] for r in rows[("default", "bench_circle_PDq")]] == list(tools.TOOLS)
-    assert "| default | bench_circle_PDq (3 s) | fmpy | 1 | 1 (1) | 1.0000 | 1.0000 | yes | 1000 |" in \
+    assert "| default, 3 s copies | bench_circle_PDq | fmpy | 1 | 1 (1) | 1.0000 | 1.0000 | yes | 1000 |" in \
         tools.table(tools.stored_rows(tools.load_results(path)))
 
 
