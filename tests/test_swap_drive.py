@@ -45,12 +45,17 @@ def scene():
 
 
 @pytest.fixture(scope="module")
-def swapped(scene, tmp_path_factory, built_fmus):
+def package(scene, tmp_path_factory, built_fmus):
+    return export_per_component(scene, tmp_path_factory.mktemp("pc") / "bench.ssp",
+                                next(iter(built_fmus.values())).parent)
+
+
+@pytest.fixture(scope="module")
+def swapped(package, tmp_path_factory):
     if compiler() is None:
         pytest.skip("no C compiler (cc or gcc) on the PATH: the supplier's drive is built from C")
     tmp = tmp_path_factory.mktemp("swap")
     drive = build_c_fmu("DCDrive", tmp / "c").read_bytes()
-    package = export_per_component(scene, tmp / "bench.ssp", next(iter(built_fmus.values())).parent)
     out = tmp / "bench_c_drives.ssp"
     # What a user does with any zip tool: the same package, two files replaced.
     with zipfile.ZipFile(package) as src, zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as dst:
@@ -65,19 +70,33 @@ def ours(scene):
     return run_scene(scene, mode="inprocess").metrics
 
 
+def _tracking_ratios(scene, path, tool, bindings=False):
+    from fmus.ssp import read_ssp_experiment
+
+    step = read_ssp_experiment(path)[2]
+    columns = {signal: name for name, signal in scene.columns.items()}
+    run = run_tool(tool, path, list(columns), STOP, step, bindings=bindings)
+    assert run.error is None, run.error
+    return tool_metrics(scene, run, columns)
+
+
+@pytest.mark.parametrize("tool", ("fmpy", "ecos", "libcosim"))
+def test_the_per_component_package_tracks_in_the_tool_used_plainly(scene, package, ours, tool):
+    if UNAVAILABLE[tool] is not None:
+        pytest.skip(f"{tool} cannot be loaded here: {UNAVAILABLE[tool]}")
+    m = _tracking_ratios(scene, package, tool)
+    assert m["completed"]
+    assert abs(m["e_ef_mm"] / ours["e_ef_mm"] - 1) <= BOUND, (m["e_ef_mm"], ours["e_ef_mm"])
+    assert abs(m["tau_ef_Nm"] / ours["tau_ef_Nm"] - 1) <= BOUND, (m["tau_ef_Nm"], ours["tau_ef_Nm"])
+
+
 @pytest.mark.parametrize("tool", ("fmpy", "ecos", "libcosim"))
 def test_a_supplier_drive_swapped_into_the_package_tracks_in_the_tool(scene, swapped, ours, tool):
     if UNAVAILABLE[tool] is not None:
         pytest.skip(f"{tool} cannot be loaded here: {UNAVAILABLE[tool]}")
-    from fmus.ssp import read_ssp_experiment
-
-    step = read_ssp_experiment(swapped)[2]
     # fmpy ignores the package's bindings and cannot set a String: the C drive's own start
     # preset is motor1, so fmpy gets the bindings as its parameter_set (docs/ssp.md).
-    columns = {signal: name for name, signal in scene.columns.items()}
-    run = run_tool(tool, swapped, list(columns), STOP, step, bindings=tool == "fmpy")
-    assert run.error is None, run.error
-    m = tool_metrics(scene, run, columns)
+    m = _tracking_ratios(scene, swapped, tool, bindings=tool == "fmpy")
     assert m["completed"]
     assert abs(m["e_ef_mm"] / ours["e_ef_mm"] - 1) <= BOUND, (m["e_ef_mm"], ours["e_ef_mm"])
     assert abs(m["tau_ef_Nm"] / ours["tau_ef_Nm"] - 1) <= BOUND, (m["tau_ef_Nm"], ours["tau_ef_Nm"])
