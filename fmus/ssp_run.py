@@ -12,6 +12,7 @@ import contextlib
 import os
 import shutil
 import time as _time
+import warnings
 import zipfile
 from dataclasses import dataclass, field
 
@@ -73,7 +74,8 @@ def _fmpy_patches(path, initial_outputs: bool):
 
     * ``set_value`` also sets String variables (fmpy 0.3 raises "Unsupported type: String");
     * ``set_parameters`` matches "instance." exactly (fmpy's bare prefix match would give
-      instance "drive" the parameters of "drive2" as well);
+      instance "drive" the parameters of "drive2" as well) and skips, with a warning, a
+      bound parameter the FMU lacks (a replacement FMU; libcosim and Ecos skip it too);
     * with ``initial_outputs``, the first step reads the outputs after initialisation
       through the connections (fmpy starts every connector at 0.0).
     """
@@ -97,9 +99,17 @@ def _fmpy_patches(path, initial_outputs: bool):
     def set_parameters(component, parameter_set):
         # fmpy matches by bare prefix: "drive" would also take the parameters of "drive2".
         prefix = component.name + "."
+        missing = []
         for parameter in parameter_set.parameters:
             if parameter.name.startswith(prefix):
-                set_value(component, parameter.name[len(prefix):], parameter.value)
+                name = parameter.name[len(prefix):]
+                if name in component.variables:
+                    set_value(component, name, parameter.value)
+                else:
+                    missing.append(name)
+        if missing:   # a replacement FMU without them: skipped, as libcosim and Ecos do
+            warnings.warn(f"{component.name}: its FMU has no {', '.join(missing)}; the bindings are skipped",
+                          stacklevel=2)
 
     def instantiate_fmu(component, *args, **kwargs):
         original_inst(component, *args, **kwargs)

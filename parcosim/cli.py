@@ -20,7 +20,9 @@ Every subcommand is a thin shell over a documented Python call:
 ``parcosim trade``     ``scenarios.trade.run_trade(scene, quick, out_dir)``; for a pendulum scene
                        ``scenarios.pendulum_trade.run_pendulum_trade(scene, quick, out_dir)``
 ``parcosim export-ssp``  ``scenarios.package.export_package(get_scene(name), path, fmu_dir)``;
-                       with ``--per-component`` ``fmus.ssp.export_ssp(get_scene(name).system, path, fmu_dir)``
+                       with ``--per-component [--substeps N] [--internal-observer]``
+                       ``scenarios.per_component.export_per_component(get_scene(name), path, fmu_dir,
+                       substeps, internal_observer)``
 ``parcosim export-fmu``  ``fmus.export.export_fmu(get_scene(name).system, path)``
 ``parcosim build-plant``  ``fmus.specfmu.build_plant_fmu(spec, path)`` (docs/spec.md)
 ``parcosim workspace``  ``scenarios.workspace.plot_workspace(preset_or_spec, out_dir)`` (docs/workspace.md)
@@ -139,8 +141,12 @@ def _parser() -> argparse.ArgumentParser:
     ssp.add_argument("--drives-in-plant", type=at_least(1, "--drives-in-plant"), default=None, metavar="N",
                      help="export the scene with its drives inside the plant, RK4 N steps per sample")
     ssp.add_argument("--per-component", action="store_true",
-                     help="one FMU instance per component (for masters that order components by their "
-                          "dependencies; in Jacobi masters each connection adds a step of delay: docs/ssp.md)")
+                     help="one FMU instance per component, stepped at a base step T/N with each sampled "
+                          "component's sample phase set so that it tracks in Jacobi masters (docs/ssp.md)")
+    ssp.add_argument("--substeps", type=int, default=None, metavar="N",
+                     help="with --per-component: N base steps per 1 ms period (default: chosen from the chain)")
+    ssp.add_argument("--internal-observer", action="store_true",
+                     help="with --per-component: each drive estimates its own current (no obs1/obs2 instances)")
     _replace_option(ssp)
     fmu = sub.add_parser("export-fmu", help="write a scene's whole closed loop as one FMI 2.0 co-simulation FMU")
     fmu.add_argument("scene", help="a scene name (see `parcosim list`)")
@@ -302,11 +308,12 @@ def _command(args) -> int:
             return _sweep(args)
         elif args.command == "export-ssp":
             if args.per_component:
-                from fmus.foreign import named_models
-                from fmus.ssp import export_ssp
-                system, fmus = named_models(_scene(args).system)
-                print(export_ssp(system, args.path, args.fmu_dir, fmus=fmus))
+                from scenarios.per_component import export_per_component
+                print(export_per_component(_scene(args), args.path, args.fmu_dir, args.substeps,
+                                           args.internal_observer))
             else:
+                if args.substeps is not None or args.internal_observer:
+                    raise ValueError("--substeps and --internal-observer go with --per-component")
                 from scenarios.package import export_package
                 print(export_package(_scene(args), args.path, args.fmu_dir))
         elif args.command == "export-fmu":

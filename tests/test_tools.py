@@ -5,8 +5,8 @@ over [1, 2] s and the RMS torque of a 2 s copy of each scene, against ``parcosim
 The package (scenarios.package) models one thing differently from our master: the drives
 integrated in the plant instead of separate (docs/actuated.md: 6.5e-6 m RMS apart over the
 bench circle); the ratio is then 1 within 0.2 % on these scenes (docs/ssp.md).  The
-bound asserted, 5 %, is the issue's goal; the per-component package, 90 times worse in
-these tools, is far outside it.
+bound asserted, 5 %, is the issue's goal.  The per-component package in the tools:
+tests/test_swap_drive.py.
 """
 from __future__ import annotations
 
@@ -49,3 +49,47 @@ def test_the_package_tracks_in_the_tool_as_in_our_master(compared, tool):
     assert m is not None and error is None and m["completed"], error
     assert 0.95 <= m["e_ef_mm"] / ours["e_ef_mm"] <= 1.05, (m["e_ef_mm"], ours["e_ef_mm"])
     assert 0.95 <= m["tau_ef_Nm"] / ours["tau_ef_Nm"] <= 1.05, (m["tau_ef_Nm"], ours["tau_ef_Nm"])
+
+
+# --- the measurement's bookkeeping (no tool runs) ----------------------------------------------
+
+def test_a_stored_run_is_not_run_again(tmp_path, monkeypatch):
+    import json
+
+    import scenarios.tools as tools
+
+    metrics = {"e_ef_mm": 1.0, "tau_ef_Nm": 2.0, "simulated_s": 3.0, "completed": True, "cpu_s": 3.0, "step": 1e-3}
+    ours = {"e_ef_mm": 1.0, "tau_ef_Nm": 2.0}
+    stored = {"ours|bench_circle_PDq|parcosim|3.0": ours,
+              **{f"default|bench_circle_PDq|{t}|3.0": {"metrics": metrics, "error": None} for t in tools.TOOLS}}
+    path = tmp_path / "tools.json"
+    path.write_text(json.dumps(stored))
+
+    def no_run(*args, **kwargs):
+        raise AssertionError("a stored run was run again")
+
+    monkeypatch.setattr(tools, "compare", no_run)
+    monkeypatch.setattr(tools, "run_scene", no_run)
+    rows = tools.measure(["bench_circle_PDq"], tools.TOOLS, ["default"], 3.0, path, progress=lambda _: None)
+    assert [r[0] for r in rows[("default", "bench_circle_PDq")]] == list(tools.TOOLS)
+    assert "| default, 3 s copies | bench_circle_PDq | fmpy | 1 | 1 (1) | 1.0000 | 1.0000 | yes | 1000 |" in \
+        tools.table(tools.stored_rows(tools.load_results(path)))
+
+
+def test_swap_fmus_replaces_only_the_named_member(tmp_path):
+    import zipfile
+
+    from scenarios.tools import swap_fmus
+
+    package, fmu = tmp_path / "p.ssp", tmp_path / "theirs.fmu"
+    with zipfile.ZipFile(package, "w") as zf:
+        zf.writestr("SystemStructure.ssd", b"<ssd/>")
+        zf.writestr("resources/drive1.fmu", b"ours")
+        zf.writestr("resources/drive2.fmu", b"ours too")
+    fmu.write_bytes(b"theirs")
+    out = swap_fmus(package, {"drive1": fmu}, tmp_path / "out.ssp")
+    with zipfile.ZipFile(out) as zf:
+        assert {n: zf.read(n) for n in zf.namelist()} == {
+            "SystemStructure.ssd": b"<ssd/>", "resources/drive1.fmu": b"theirs", "resources/drive2.fmu": b"ours too"}
+    with pytest.raises(ValueError, match="resources/plant.fmu"):
+        swap_fmus(package, {"plant": fmu}, tmp_path / "bad.ssp")

@@ -9,6 +9,12 @@ torque advance on every step), ``i`` and
 ``tau`` is the shaft torque averaged over [t, t + h]).  Outputs change only in
 ``doStep``: no direct feedthrough.
 
+``internal_observer``: the current loop closed inside the drive, on the estimate of
+:class:`motor.CurrentObserver` from the voltage applied over the step just taken and the
+speed input ``omega`` (thesis 7.20, as the instance ``CurrentObserver`` wired
+``drive.v -> obs.v``, ``obs.i_hat -> drive.i_hat`` gives it; the input ``i_hat`` unused): no
+connection of a Jacobi master inside the 1 ms current loop (docs/ssp.md).
+
 The module name is unique among parcosim slaves: all FMUs loaded in one
 process share one Python interpreter and its module cache.
 """
@@ -51,9 +57,16 @@ class DCMotorDrive(CurrentLoopSteps, GuardedSlave):
           "(what a plant holding tau over the step should get)")
         d("T", "parameter", 1e-3, "Current-controller sample time [s]; in current mode the step must divide it")
         declare_sample_phase(self)
+        d("internal_observer", "parameter", False,
+          "Current mode: the controller reads the drive's own current estimate, the observer of 7.20 on the "
+          "voltage it applied over the last step and the speed input omega, instead of the input i_hat "
+          "(the current loop closed inside the drive FMU)")
+        d("observer_kind", "parameter", "static",
+          "The internal observer: 'static' ((v - ke omega)/R, 7.20) or 'dynamic' (motor.CurrentObserver)")
         d("omega0", "parameter", 0.0, "Start in electrical steady state at this speed [rad/s]")
         d("i0", "parameter", 0.0, "Start in electrical steady state with this current [A]")
         self.drive = None
+        self.observer = None
 
     def setup(self):
         refuse_absurd(T=self.T, omega0=self.omega0, i0=self.i0)
@@ -62,6 +75,7 @@ class DCMotorDrive(CurrentLoopSteps, GuardedSlave):
         self.drive = build_drive(self, mode=self.mode, method=self.method, T=self.T,
                                  torque_output=self.torque_output, sample_phase=self.sample_phase)
         self.drive.start(self.omega0, self.i0)
+        self.observer = self._internal_observer()
         self.tau = self.drive.torque(self.omega0)
         self.v = self.drive.v
         self.i = self.drive.i
@@ -69,5 +83,25 @@ class DCMotorDrive(CurrentLoopSteps, GuardedSlave):
     def current_loops(self):
         return [self.drive]
 
+    def _internal_observer(self):
+        """The drive's own :class:`motor.CurrentObserver` (``internal_observer``), or None."""
+        if not self.internal_observer:
+            return None
+        if self.mode != "current":
+            raise ValueError(f"parameter internal_observer = true needs mode = 'current' (mode = {self.mode!r}: "
+                             "no current controller reads an estimate)")
+        from motor import CurrentObserver
+        from motor._checks import BadValue
+
+        try:
+            observer = CurrentObserver(self.drive.params, self.observer_kind)
+        except BadValue as exc:
+            raise exc.renamed({"kind": "observer_kind"}) from None
+        observer.reset(self.i0, self.omega0)
+        return observer
+
     def step(self, current_time, step_size):
-        self.tau, self.v, self.i = self.drive.step(self.i_ref, self.v_ref, self.omega, self.i_hat, step_size)
+        i_hat = self.i_hat
+        if self.observer is not None:   # from the voltage of the step just taken and the speed now
+            i_hat = self.observer.estimate(self.v, self.omega, step_size, current_time)
+        self.tau, self.v, self.i = self.drive.step(self.i_ref, self.v_ref, self.omega, i_hat, step_size)
