@@ -9,7 +9,7 @@ that operator's mutants (so no operator crowds out the others), without repetiti
 mutant runs in a copy of the source tree (one per worker; the worktree is never written)
 against the tests that import its module, directly or through one other module (computed
 from the import statements and the module names in strings of the tests and the product;
-the nearest 15, direct importers first, then the smaller files), with ``pytest -x`` and a
+the nearest 8, direct importers first, then the smaller files), with ``pytest -x`` and a
 time limit.  A C mutant is built into its own library (mutation_c) and runs
 the kernel tests and the oracle tests.
 
@@ -65,7 +65,7 @@ NOT_RUN = ("tests/test_mutation", "tests/test_sanitizers.py")
 C_TESTS = ("tests/test_kernels_*.py", "tests/test_oracles_*.py")
 #: How many imports away a test may reach a module and still run for its mutants, and how
 #: many test files (the nearest, then the smallest) a mutant runs at most.
-NEAR, MOST_TESTS = 2, 15
+NEAR, MOST_TESTS = 2, 8
 
 
 @dataclass(frozen=True)
@@ -591,7 +591,7 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks.mutation_py", description=__doc__.splitlines()[0])
     parser.add_argument("--seed", type=int, default=3101)
     parser.add_argument("--sample", type=int, default=300)
-    parser.add_argument("--timeout", type=float, default=150.0, help="seconds a test run may take")
+    parser.add_argument("--timeout", type=float, default=60.0, help="seconds a test run may take")
     parser.add_argument("--workers", type=int, default=1, help="mutants run at once (one tree copy each)")
     parser.add_argument("--results", type=Path, default=RESULTS)
     parser.add_argument("--report", action="store_true", help="reprint the table from --results")
