@@ -515,7 +515,9 @@ def campaign(seed: int, sample: int, timeout: float, workers: int, results: Path
             print(f"[{done}/{len(chosen)}] {name}:{mutant.line} {mutant.operator} {mutant.before[:50]!r} -> "
                   f"{mutant.after[:50]!r}: {result['outcome']} ({result['seconds']} s)", flush=True)
 
-    pending = [k for k, m in enumerate(record["mutants"]) if m is None]
+    # not run yet, or stopped by a shorter time limit than this run's
+    pending = [k for k, m in enumerate(record["mutants"])
+               if m is None or m["outcome"] == "timeout" and m["seconds"] < timeout]
     try:
         with ThreadPoolExecutor(workers) as pool_:
             list(pool_.map(one, pending))
