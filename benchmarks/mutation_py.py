@@ -9,7 +9,7 @@ that operator's mutants (so no operator crowds out the others), without repetiti
 mutant runs in a copy of the source tree (one per worker; the worktree is never written)
 against the tests that import its module, directly or through one other module (computed
 from the import statements and the module names in strings of the tests and the product;
-the nearest 8, direct importers first, then the smaller files), with ``pytest -x`` and a
+the nearest 6, direct importers first, then the light and the smaller files), with ``pytest -x`` and a
 time limit.  A C mutant is built into its own library (mutation_c) and runs
 the kernel tests and the oracle tests.
 
@@ -65,7 +65,10 @@ NOT_RUN = ("tests/test_mutation", "tests/test_sanitizers.py")
 C_TESTS = ("tests/test_kernels_*.py", "tests/test_oracles_*.py")
 #: How many imports away a test may reach a module and still run for its mutants, and how
 #: many test files (the nearest, then the smallest) a mutant runs at most.
-NEAR, MOST_TESTS = 2, 8
+NEAR, MOST_TESTS = 2, 6
+#: Words of a test file that builds FMUs or starts processes: it runs after the others of its
+#: distance (``-x`` stops at the first failure, so a cheap test that fails saves the rest).
+HEAVY = ("built_fmus", "subprocess", "build_all", "ensure_built")
 
 
 @dataclass(frozen=True)
@@ -389,8 +392,8 @@ def _named_in_strings(tree, package: str) -> set:
 def test_map() -> dict:
     """Product module -> the test files that import it, or import a module that imports it
     (:data:`NEAR` imports away at most: a package's ``__init__`` names all its modules, so the
-    full closure is nearly every test), the nearer first, then the smaller, at most
-    :data:`MOST_TESTS` of them."""
+    full closure is nearly every test), the nearer first, then those that build no FMU and
+    start no process, then the smaller, at most :data:`MOST_TESTS` of them."""
     graph = {}
     for path in [ROOT / f for f in python_files()] + sorted((ROOT / "tests").rglob("*.py")):
         own = module_name(str(path.relative_to(ROOT)))
@@ -405,9 +408,11 @@ def test_map() -> dict:
             frontier = {m for m in frontier if m not in distance}
             distance.update((m, step) for m in frontier)
             frontier = {n for m in frontier for n in graph.get(m, ())}
+        text = test.read_text()
+        heavy = any(word in text for word in HEAVY)
         for m, d in distance.items():
-            mapping.setdefault(m, []).append((d, test.stat().st_size, str(test.relative_to(ROOT))))
-    return {m: [t for _, _, t in sorted(entries)][:MOST_TESTS] for m, entries in mapping.items()}
+            mapping.setdefault(m, []).append((d, heavy, test.stat().st_size, str(test.relative_to(ROOT))))
+    return {m: [entry[-1] for entry in sorted(entries)][:MOST_TESTS] for m, entries in mapping.items()}
 
 
 # --- running -------------------------------------------------------------------------------
