@@ -9,8 +9,9 @@ that operator's mutants (so no operator crowds out the others), without repetiti
 mutant runs in a copy of the source tree (one per worker; the worktree is never written)
 against the tests that import its module, directly or through one other module (computed
 from the import statements and the module names in strings of the tests and the product;
-the nearest 6, direct importers first, then the light and the smaller files), with ``pytest -x`` and a
-time limit.  A C mutant is built into its own library (mutation_c) and runs
+the nearest 6, direct importers first, then the light and the smaller files), with
+``pytest -x`` and a CPU-time limit (the wall clock's is 8 times longer: on shared cores a
+run mostly waits for one).  A C mutant is built into its own library (mutation_c) and runs
 the kernel tests and the oracle tests.
 
     python -m benchmarks.mutation_py --seed 3101 --sample 300 --workers 2   # run (resumes)
@@ -19,7 +20,7 @@ the kernel tests and the oracle tests.
 
 Outcomes: ``killed`` (a test failed or errored), ``survived`` (every selected test passed,
 or no test imports the module), ``not viable`` (the mutant does not compile), ``timeout``
-(the time limit ended the run: not decided, listed apart).  A killed mutant's first failing
+(a time limit ended the run: not decided, listed apart).  A killed mutant's first failing
 test is recorded; ``--confirm`` re-runs those tests on the unmutated tree, so a test that
 fails anyway cannot count as a kill.
 
@@ -44,7 +45,9 @@ import json
 import os
 import random
 import re
+import resource
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -66,6 +69,8 @@ C_TESTS = ("tests/test_kernels_*.py", "tests/test_oracles_*.py")
 #: How many imports away a test may reach a module and still run for its mutants, and how
 #: many test files (the nearest, then the smallest) a mutant runs at most.
 NEAR, MOST_TESTS = 2, 6
+#: A test run's wall-clock limit, in multiples of its CPU-time limit (``--timeout``).
+WALL_FACTOR = 8
 #: Words of a test file that builds FMUs or starts processes: it runs after the others of its
 #: distance (``-x`` stops at the first failure, so a cheap test that fails saves the rest).
 HEAVY = ("built_fmus", "subprocess", "build_all", "ensure_built")
@@ -426,19 +431,31 @@ def make_copy(where: Path) -> Path:
     return where
 
 
+def _cpu_limit(seconds: float):
+    """The child's CPU-time limit (SIGXCPU past it): on shared cores a wall-clock limit ends
+    runs that were only waiting for a core."""
+    def limit():
+        resource.setrlimit(resource.RLIMIT_CPU, (int(seconds), int(seconds) + 5))
+    return limit
+
+
 def _pytest(copy: Path, tests: list, timeout: float, env: dict) -> dict:
     env = dict(env, PYTHONDONTWRITEBYTECODE="1", PARCOSIM_CACHE=tempfile.mkdtemp(prefix="parcosim_mutcache_"))
     start = time.monotonic()
     try:
         done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-x", "-p", "no:cacheprovider", "-rf", *tests],
-                              cwd=copy, env=env, timeout=timeout, capture_output=True, text=True)
+                              cwd=copy, env=env, timeout=WALL_FACTOR * timeout, capture_output=True, text=True,
+                              preexec_fn=_cpu_limit(timeout))
     except subprocess.TimeoutExpired:
-        return {"outcome": "timeout", "seconds": timeout}
+        return {"outcome": "timeout", "seconds": WALL_FACTOR * timeout}
     finally:
         shutil.rmtree(env["PARCOSIM_CACHE"], ignore_errors=True)
+    seconds = round(time.monotonic() - start, 1)
+    if done.returncode == -signal.SIGXCPU:
+        return {"outcome": "timeout", "seconds": seconds, "cpu_limit": timeout}
     failed = re.findall(r"^(?:FAILED|ERROR) (\S+)", done.stdout, re.M)
     outcome = {0: "survived", 1: "killed", 2: "killed", 5: "survived"}.get(done.returncode, "error")
-    return {"outcome": outcome, "seconds": round(time.monotonic() - start, 1), "returncode": done.returncode,
+    return {"outcome": outcome, "seconds": seconds, "returncode": done.returncode,
             "failed": failed[:1]}
 
 
@@ -481,7 +498,8 @@ def _record(name, mutant) -> dict:
     return {**asdict(mutant), "file": name, "language": "c" if name.endswith(".c") else "python"}
 
 
-def campaign(seed: int, sample: int, timeout: float, workers: int, results: Path) -> dict:
+def campaign(seed: int, sample: int, timeout: float, workers: int, results: Path,
+             retry_timeouts: bool = False) -> dict:
     """Draw and run (resuming from ``results`` when it holds the same draw)."""
     pool = pool_by_file()
     chosen = draw(pool, seed, sample)
@@ -520,9 +538,9 @@ def campaign(seed: int, sample: int, timeout: float, workers: int, results: Path
             print(f"[{done}/{len(chosen)}] {name}:{mutant.line} {mutant.operator} {mutant.before[:50]!r} -> "
                   f"{mutant.after[:50]!r}: {result['outcome']} ({result['seconds']} s)", flush=True)
 
-    # not run yet, or stopped by a shorter time limit than this run's
-    pending = [k for k, m in enumerate(record["mutants"])
-               if m is None or m["outcome"] == "timeout" and m["seconds"] < timeout]
+    pending = [k for k, m in enumerate(record["mutants"]) if m is None]
+    if retry_timeouts:     # after the rest
+        pending += [k for k, m in enumerate(record["mutants"]) if m is not None and m["outcome"] == "timeout"]
     try:
         with ThreadPoolExecutor(workers) as pool_:
             list(pool_.map(one, pending))
@@ -598,7 +616,9 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m benchmarks.mutation_py", description=__doc__.splitlines()[0])
     parser.add_argument("--seed", type=int, default=3101)
     parser.add_argument("--sample", type=int, default=300)
-    parser.add_argument("--timeout", type=float, default=60.0, help="seconds a test run may take")
+    parser.add_argument("--timeout", type=float, default=90.0,
+                        help="CPU seconds a test run may take (wall clock: 8 times as many)")
+    parser.add_argument("--retry-timeouts", action="store_true", help="run the timed-out mutants again, last")
     parser.add_argument("--workers", type=int, default=1, help="mutants run at once (one tree copy each)")
     parser.add_argument("--results", type=Path, default=RESULTS)
     parser.add_argument("--report", action="store_true", help="reprint the table from --results")
@@ -615,7 +635,7 @@ def main(argv=None) -> int:
     elif args.report:
         record = json.loads(args.results.read_text())
     else:
-        record = campaign(args.seed, args.sample, args.timeout, args.workers, args.results)
+        record = campaign(args.seed, args.sample, args.timeout, args.workers, args.results, args.retry_timeouts)
     print(table(record))
     return 0
 
