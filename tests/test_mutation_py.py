@@ -1,0 +1,94 @@
+"""benchmarks/mutation_py.py's operators on snippets (nothing is run): each makes the change
+it names, every mutant applies to its file and compiles, and docstrings, annotations and
+f-strings are left alone; the draw is seeded; the test map finds importers."""
+from __future__ import annotations
+
+import ast
+
+from benchmarks import mutation_py as mp
+
+SNIPPET = '''"""Module docstring: a + b."""
+from __future__ import annotations
+
+
+def torque(kt: float, i: float, omega: float, b=0.1) -> float:
+    """kt i - b omega."""
+    scale = 2.0
+    offset = 0.5
+    rows = make(3)
+    label = f"{kt + i}"
+    x = kt * i - b * omega + offset
+    if x < 0.0 and not rows:
+        x = -x
+    rows[0][1] = rows[1, 2]
+    total = combine(kt, i, limit=scale)
+    return x / scale + total
+'''
+
+
+def _mutants(operator=None):
+    found = mp.mutants_of_python("snippet.py", SNIPPET)
+    return [m for m in found if operator is None or m.operator == operator]
+
+
+def _changes(operator):
+    return {(m.before, m.after) for m in _mutants(operator)}
+
+
+def test_every_mutant_applies_and_compiles_and_changes_the_tree():
+    found = _mutants()
+    assert {m.operator for m in found} == set(mp.PY_OPERATORS) | {"replace_var"}
+    original = ast.dump(ast.parse(SNIPPET))
+    for m in found:
+        mutated = m.apply(SNIPPET)
+        compile(mutated, "snippet.py", "exec")
+        assert ast.dump(ast.parse(mutated)) != original, m
+
+
+def test_docstrings_annotations_and_f_strings_are_not_mutated():
+    for m in _mutants():
+        assert "docstring" not in m.before and "kt i - b omega" not in m.before
+        assert m.line not in (1, 5, 6, 10) or "float" not in m.before and "{" not in m.before, m
+
+
+def test_the_new_operators_make_their_changes():
+    assert ("kt * i - b * omega + offset", "(kt * i - b * omega)") in _changes("drop_term")
+    assert ("kt * i", "(kt)") in _changes("drop_term")
+    assert ("combine(kt, i, limit=scale)", "(combine(i, kt, limit=scale))") in _changes("swap_args")
+    dropped = _changes("drop_arg")
+    assert ("combine(kt, i, limit=scale)", "(combine(kt, limit=scale))") in dropped
+    assert ("combine(kt, i, limit=scale)", "(combine(kt, i))") in dropped
+    assert ("rows[0][1]", "(rows[1][0])") in _changes("swap_index")
+    assert ("rows[1, 2]", "(rows[2, 1])") in _changes("swap_index")
+    assert ("0.5", "(1.0)") in _changes("constant") and ("0.0", "(1.0)") in _changes("constant")
+
+
+def test_replace_var_takes_a_local_of_the_same_kind_defined_before():
+    changes = _changes("replace_var")
+    assert ("scale", "(offset)") in changes            # both assigned numbers; offset defined before use
+    assert ("kt", "(i)") in changes                    # both annotated float
+    assert not any(after == "(rows)" for before, after in changes if before in ("scale", "kt", "i", "offset"))
+    assert not any(before == "omega" and after == "(b)" for before, after in changes)   # annotated vs not
+
+
+def test_classic_operators():
+    assert ("x < 0.0", "(x <= 0.0)") in _changes("compare")
+    assert ("x < 0.0 and not rows", "(x < 0.0 or not rows)") in _changes("boolean")
+    assert ("not rows", "(rows)") in _changes("boolean")
+    assert ("x / scale", "(x * scale)") in _changes("arith")
+
+
+def test_the_draw_is_seeded_and_distinct(monkeypatch):
+    monkeypatch.setattr(mp, "line_count", lambda name: {"a.py": 900, "b.py": 100}[name])
+    pool = {"a.py": mp.mutants_of_python("a.py", SNIPPET), "b.py": mp.mutants_of_python("b.py", SNIPPET)}
+    first, again = mp.draw(pool, 7, 40), mp.draw(pool, 7, 40)
+    assert first == again and len(set(map(repr, first))) == 40
+    assert sum(name == "a.py" for name, _ in first) > 25          # weighted by lines (expected 36 of 40)
+
+
+def test_the_map_finds_direct_importers_and_modules_named_in_strings():
+    mapping = mp.test_map()
+    assert mapping["fmus.ssp"][:2] and "tests/test_oracles_export.py" in mapping["fmus.ssp"]
+    assert mapping["fmus.slaves.parcosim_derivator"]          # loaded by importlib from a "fmus.slaves." name
+    assert all(not t.startswith(mp.NOT_RUN) for tests in mapping.values() for t in tests)
+    assert all(len(tests) <= mp.MOST_TESTS for tests in mapping.values())
