@@ -85,10 +85,16 @@ class DCMotorDrive(CurrentLoopSteps, GuardedSlave):
 
     def _internal_observer(self):
         """The drive's own :class:`motor.CurrentObserver` (``internal_observer``), or None."""
+        from motor import OBSERVER_KINDS
+
+        if self.observer_kind not in OBSERVER_KINDS:   # checked even when unused: a typo is not silent
+            raise ValueError(f"parameter observer_kind = {self.observer_kind!r} must be one of "
+                             f"{', '.join(map(repr, OBSERVER_KINDS))}")
         if not self.internal_observer:
             return None
         if self.mode != "current":
-            raise ValueError(f"parameter internal_observer = true needs mode = 'current' (mode = {self.mode!r}: "
+            raise ValueError(f"parameter internal_observer = {self.internal_observer!r} needs mode = 'current' (mode = "
+                             f"{self.mode!r}: "
                              "no current controller reads an estimate)")
         from motor import CurrentObserver
         from motor._checks import BadValue
