@@ -14,16 +14,30 @@ The step size may change only at a period's start (k = 0), to another divisor of
 a period a step whose T / h differs is refused, naming h, T and the time.  The counter is
 FMU state (``_substep``, ``_substeps`` are plain attributes: :mod:`fmus.fmustate` keeps
 them), so a state restored mid-period goes on exactly.
+
+The counting rule itself (n = T / h, the period change, which sub-step samples, the next
+one) is C, ``kernels/src/pc_sampling.c``: the drive's kernel and the native FMUs count with
+the same functions.
 """
 from __future__ import annotations
 
+import ctypes
+
 from pythonfmu import DefaultExperiment
 
+import kernels
 from fmus.guarded import GuardedSlave
+
+_d = ctypes.c_double
+_SUBSTEPS = kernels.function("pc_sampling_substeps", _d, _d, _d)
+_CHANGES_PERIOD = kernels.function("pc_sampling_changes_period", ctypes.c_int, _d, _d, _d)
+_SAMPLES = kernels.function("pc_sampling_samples", ctypes.c_int, _d, _d)
+_NEXT = kernels.function("pc_sampling_next", _d, _d, _d)
 
 #: The phase parameter's name (docs/contract.md): the sub-step of each period that samples.
 PHASE_PARAMETER = "sample_phase"
-#: Relative tolerance of "h divides T": |T / h - n| <= SAMPLE_TOLERANCE n.
+#: Relative tolerance of "h divides T": |T / h - n| <= SAMPLE_TOLERANCE n (pc_sampling.h's
+#: PC_SAMPLING_TOLERANCE, which decides).
 SAMPLE_TOLERANCE = 1e-9
 
 
@@ -36,11 +50,8 @@ def declare_sample_phase(slave) -> None:
 
 def substeps_of(T: float, h: float) -> int | None:
     """n = T / h when h divides T (a whole number n >= 1, 1e-9 relative), else None."""
-    n = T / h
-    whole = round(n)
-    if whole >= 1 and abs(n - whole) <= SAMPLE_TOLERANCE * whole:
-        return whole
-    return None
+    whole = _SUBSTEPS(T, h)
+    return int(whole) if whole else None
 
 
 def checked_substeps(slave, current_time: float, step_size: float) -> int:
@@ -64,7 +75,7 @@ def check_phase(slave, current_time: float, step_size: float, n: int) -> None:
 
 def check_period_change(slave, current_time: float, step_size: float, n: int, counted: int, substep: int) -> None:
     """Raise ValueError if T / h changes (``counted`` -> ``n``) within a period (``substep`` > 0)."""
-    if substep and n != counted:
+    if _CHANGES_PERIOD(substep, counted, n):
         raise ValueError(f"step size h = {step_size!r} s at t = {current_time!r} s changes the step within a "
                          f"sample period (T = {slave.T!r} s, sub-step {substep} of {counted}, steps of "
                          f"{slave.T / counted!r} s): {type(slave).__name__} accepts a new step size only at a "
@@ -122,11 +133,11 @@ class SampledSteps:
 
     def step(self, current_time, step_size):
         k = self._substep
-        if k == self.sample_phase:
+        if _SAMPLES(k, self.sample_phase):
             self.sample(current_time, step_size)
         else:
             self.between_samples(current_time, step_size)
-        self._substep = k + 1 if k + 1 < self._substeps else 0
+        self._substep = int(_NEXT(k, self._substeps))
 
     def sample(self, current_time: float, step_size: float) -> None:
         """Take the sample at ``current_time`` (the model's step of a period T; ``step_size``
