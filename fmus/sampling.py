@@ -15,9 +15,11 @@ a period a step whose T / h differs is refused, naming h, T and the time.  The c
 FMU state (``_substep``, ``_substeps`` are plain attributes: :mod:`fmus.fmustate` keeps
 them), so a state restored mid-period goes on exactly.
 
-The counting rule itself (n = T / h, the period change, which sub-step samples, the next
-one) is C, ``kernels/src/pc_sampling.c``: the drive's kernel and the native FMUs count with
-the same functions.
+The rule of the step sizes (n = T / h with its tolerance and rounding, the period change) is
+C, ``kernels/src/pc_sampling.c``, which the drive's kernel and the native FMUs use too.  Per
+step, :meth:`SampledSteps.step` does pc_sampling's two integer comparisons in Python: two
+ctypes calls would make a sampled slave's step (h = T / 4) 2.1 to 3.5 times as slow
+(``benchmarks/bench_sampling_counting.py``).
 """
 from __future__ import annotations
 
@@ -31,8 +33,6 @@ from fmus.guarded import GuardedSlave
 _d = ctypes.c_double
 _SUBSTEPS = kernels.function("pc_sampling_substeps", _d, _d, _d)
 _CHANGES_PERIOD = kernels.function("pc_sampling_changes_period", ctypes.c_int, _d, _d, _d)
-_SAMPLES = kernels.function("pc_sampling_samples", ctypes.c_int, _d, _d)
-_NEXT = kernels.function("pc_sampling_next", _d, _d, _d)
 
 #: The phase parameter's name (docs/contract.md): the sub-step of each period that samples.
 PHASE_PARAMETER = "sample_phase"
@@ -132,12 +132,12 @@ class SampledSteps:
         self._substeps = n
 
     def step(self, current_time, step_size):
-        k = self._substep
-        if _SAMPLES(k, self.sample_phase):
+        k = self._substep   # pc_sampling_samples and pc_sampling_next, in Python (module docstring)
+        if k == self.sample_phase:
             self.sample(current_time, step_size)
         else:
             self.between_samples(current_time, step_size)
-        self._substep = int(_NEXT(k, self._substeps))
+        self._substep = k + 1 if k + 1 < self._substeps else 0
 
     def sample(self, current_time: float, step_size: float) -> None:
         """Take the sample at ``current_time`` (the model's step of a period T; ``step_size``
