@@ -14,16 +14,30 @@ The step size may change only at a period's start (k = 0), to another divisor of
 a period a step whose T / h differs is refused, naming h, T and the time.  The counter is
 FMU state (``_substep``, ``_substeps`` are plain attributes: :mod:`fmus.fmustate` keeps
 them), so a state restored mid-period goes on exactly.
+
+The rule of the step sizes (n = T / h with its tolerance and rounding, the period change) is
+C, ``kernels/src/pc_sampling.c``, which the drive's kernel and the native FMUs use too.  Per
+step, :meth:`SampledSteps.step` does pc_sampling's two integer comparisons in Python: two
+ctypes calls would make a sampled slave's step (h = T / 4) 2.1 to 3.5 times as slow
+(``benchmarks/bench_sampling_counting.py``).
 """
 from __future__ import annotations
 
+import ctypes
+
 from pythonfmu import DefaultExperiment
 
+import kernels
 from fmus.guarded import GuardedSlave
+
+_d = ctypes.c_double
+_SUBSTEPS = kernels.function("pc_sampling_substeps", _d, _d, _d)
+_CHANGES_PERIOD = kernels.function("pc_sampling_changes_period", ctypes.c_int, _d, _d, _d)
 
 #: The phase parameter's name (docs/contract.md): the sub-step of each period that samples.
 PHASE_PARAMETER = "sample_phase"
-#: Relative tolerance of "h divides T": |T / h - n| <= SAMPLE_TOLERANCE n.
+#: Relative tolerance of "h divides T": |T / h - n| <= SAMPLE_TOLERANCE n (pc_sampling.h's
+#: PC_SAMPLING_TOLERANCE, which decides).
 SAMPLE_TOLERANCE = 1e-9
 
 
@@ -36,11 +50,8 @@ def declare_sample_phase(slave) -> None:
 
 def substeps_of(T: float, h: float) -> int | None:
     """n = T / h when h divides T (a whole number n >= 1, 1e-9 relative), else None."""
-    n = T / h
-    whole = round(n)
-    if whole >= 1 and abs(n - whole) <= SAMPLE_TOLERANCE * whole:
-        return whole
-    return None
+    whole = _SUBSTEPS(T, h)
+    return int(whole) if whole else None
 
 
 def checked_substeps(slave, current_time: float, step_size: float) -> int:
@@ -64,7 +75,7 @@ def check_phase(slave, current_time: float, step_size: float, n: int) -> None:
 
 def check_period_change(slave, current_time: float, step_size: float, n: int, counted: int, substep: int) -> None:
     """Raise ValueError if T / h changes (``counted`` -> ``n``) within a period (``substep`` > 0)."""
-    if substep and n != counted:
+    if _CHANGES_PERIOD(substep, counted, n):
         raise ValueError(f"step size h = {step_size!r} s at t = {current_time!r} s changes the step within a "
                          f"sample period (T = {slave.T!r} s, sub-step {substep} of {counted}, steps of "
                          f"{slave.T / counted!r} s): {type(slave).__name__} accepts a new step size only at a "
@@ -121,7 +132,7 @@ class SampledSteps:
         self._substeps = n
 
     def step(self, current_time, step_size):
-        k = self._substep
+        k = self._substep   # pc_sampling_samples and pc_sampling_next, in Python (module docstring)
         if k == self.sample_phase:
             self.sample(current_time, step_size)
         else:

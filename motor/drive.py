@@ -23,10 +23,6 @@ FRICTION_MODELS = ("tanh", "lugre")
 #: Largest noise seed (a double holds integers exactly up to 2**53).
 MAX_SEED = 2 ** 53
 
-#: Relative tolerance deciding that h divides T: |T / h - n| <= SAMPLE_TOLERANCE n
-#: (the FMUs' rule, :mod:`fmus.sampling`).
-SAMPLE_TOLERANCE = 1e-9
-
 
 _D = kernel.indices(kernel.DRIVE)
 
@@ -251,16 +247,15 @@ class Drive:
 
     def _substeps(self, h) -> int:
         """n = T / h of a step h in current mode, checked (see :meth:`prepare_step`)."""
-        ratio = self.T / h
-        n = round(ratio)
-        if n < 1 or abs(ratio - n) > SAMPLE_TOLERANCE * n:
+        n = int(kernel.sampling_substeps(self.T, h))   # 0: h does not divide T (kernels/src/pc_sampling.c)
+        if n == 0:
             raise ValueError(f"in current mode the step h must divide the controller period "
                              f"T={self.T!r}; got h={h!r}")
         if self.sample_phase >= n:
             raise ValueError(f"sample_phase = {self.sample_phase!r} must be below T / h = {n} "
                              f"(h = {h!r}, T = {self.T!r})")
         counted = int(self.buf[_D["substeps"]])
-        if self.substep and n != counted:
+        if kernel.sampling_changes_period(self.substep, counted, n):
             raise ValueError(f"the step h = {h!r} s changes T / h from {counted} to {n} within a controller "
                              f"period (T = {self.T!r} s, at its sub-step {self.substep}): change it at a "
                              "period's start")

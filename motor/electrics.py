@@ -21,7 +21,6 @@ the electrical model, used by the drive and by the dynamic current observer.
 """
 
 import ctypes
-import math
 
 import kernels
 from motor import _checks, kernel
@@ -97,14 +96,23 @@ def mean_current_coefficients(R, L, h, method="exact"):
     The plant holds the torque it is given over the step, so handing it the mean torque
     transfers the drive's impulse over the step exactly (for the held speed).
     """
-    a, g = electrical_step_coefficients(R, L, h, method)
-    if method == "quasi_static" or (method == "exact" and L == 0.0):
-        return 0.0, 1.0 / R
-    if method == "exact":
-        x = R * h / L
-        w_i = -math.expm1(-x) / x
-        return w_i, (1.0 - w_i) / R
-    return 0.5 * (1.0 + a), 0.5 * g
+    electrical_step_coefficients(R, L, h, method)   # its checks and messages
+    w = (ctypes.c_double * 2)()
+    _mean_coefficients()(R, L, h, ELECTRICAL_METHODS.index(method), w)   # kernels/src/electrics.c
+    return w[0], w[1]
+
+
+def _mean_coefficients():
+    """The kernel ``pc_mean_current_coefficients`` (bound once)."""
+    global _MEAN_COEFFICIENTS
+    if _MEAN_COEFFICIENTS is None:
+        _MEAN_COEFFICIENTS = kernels.function("pc_mean_current_coefficients", ctypes.c_int, ctypes.c_double,
+                                              ctypes.c_double, ctypes.c_double, ctypes.c_int,
+                                              ctypes.POINTER(ctypes.c_double))
+    return _MEAN_COEFFICIENTS
+
+
+_MEAN_COEFFICIENTS = None
 
 
 def advance_current(i, v, omega, ke, coefficients):

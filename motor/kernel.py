@@ -42,6 +42,9 @@ armature_rate = kernels.function("pc_drive_armature_rate", _d, _d, _d, _d, _d, _
 splitmix64 = kernels.function("pc_splitmix64", _u64, _u64)
 uniform = kernels.function("pc_drive_uniform", _d, _u64, _u64, _u64)
 gaussian = kernels.function("pc_drive_gaussian", _d, _u64, _u64, _u64)
+#: The sub-step counting rule of sampled components (kernels/src/pc_sampling.c).
+sampling_substeps = kernels.function("pc_sampling_substeps", _d, _d, _d)
+sampling_changes_period = kernels.function("pc_sampling_changes_period", _int, _d, _d, _d)
 lugre_stribeck = kernels.function("pc_lugre_stribeck", _d, _p, _d)
 lugre_bristle_rate = kernels.function("pc_lugre_bristle_rate", _d, _p, _d, _d)
 lugre_force = kernels.function("pc_lugre_force", _d, _p, _d, _d)

@@ -2,6 +2,7 @@
 validate`, a rebuild from the sources they carry, their GUIDs and states against the twins'."""
 from __future__ import annotations
 
+import math
 import shutil
 import subprocess
 import zipfile
@@ -117,4 +118,29 @@ def test_state_with_a_changed_configuration_word_is_refused(native_fmus):
     assert step.status == 3 and "word 5 of the derivator's buffer" in step.messages[0][2]
     native.call("bytes", "g", state_bytes.with_data_word(own, 5, state_bytes.data_words(own)[5]))
     assert native.call("deserialize", "g").status == 0    # the same bytes, checksum recomputed: accepted
+    native.close()
+
+
+@pytest.mark.parametrize("model", ["BalanceController", "CurrentObserver", "Derivator"])
+def test_state_with_a_forged_substep_counter_is_refused(model, native_fmus):
+    """The sub-step counter (the model data's last two words: sub-step k, n = T / h) must be
+    whole with 0 <= k < n, or both 0; a forged one (checksum recomputed) is refused by name,
+    the true one (taken mid-period at h = T / 4) accepted and stepped on."""
+    from fmus.native import state_bytes
+
+    native = Driver(native_fmus[model])
+    h = float(native.variables["T"].start) / 4
+    native.run([("setup", 0.0), ("enter",), ("exit",), ("step", 0.0, h), ("step", h, h)])
+    own = native.fmu.serializeFMUstate(native.fmu.getFMUstate())
+    words = state_bytes.data_words(own)
+    last = len(words) - 2
+    assert (words[last], words[last + 1]) == (2.0, 4.0)   # the next sub-step, n
+    for k, n in ((4.0, 4.0), (1.5, 4.0), (-1.0, 4.0), (1.0, 0.0), (0.0, 2.5), (math.nan, 4.0)):
+        native.call("bytes", "f", state_bytes.with_data_word(state_bytes.with_data_word(own, last, k), last + 1, n))
+        step = native.call("deserialize", "f")
+        assert step.status == 3 and "sub-step counter" in step.messages[0][2], (k, n)
+    native.call("bytes", "g", own)
+    assert native.call("deserialize", "g").status == 0
+    assert native.call("setstate", "g").status == 0
+    assert native.call("step", 2 * h, h).status == 0
     native.close()

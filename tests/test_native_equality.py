@@ -120,21 +120,71 @@ def assert_same(twin_trace, native_trace, outs):
                 assert a == b, (twin.call, name)
 
 
+def compare(twin_path, native_path, scenario: Scenario, parameters: dict, extra=lambda outs: []) -> list:
+    """Run the script (and ``extra(outs)`` before its terminate) on both; return the twin's trace."""
+    twin, native = Driver(twin_path), Driver(native_path)
+    outs = outputs(twin)
+    assert outputs(native) == outs
+    real = next(v.name for v in twin.md.modelVariables if v.causality == "output" and v.type == "Real")
+    calls = script(scenario, parameters, outs, real)
+    end = calls.index(("terminate",))
+    calls[end:end] = extra(outs)
+    twin_trace, native_trace = run(twin, calls), run(native, calls)
+    statuses = [s.status for s in twin_trace]
+    assert statuses.count(2) >= 2 and statuses.count(3) >= 2   # the script does reach the refusals
+    assert_same(twin_trace, native_trace, outs)
+    twin.close()
+    native.close()
+    return twin_trace
+
+
 @pytest.mark.parametrize("model", sorted(SCENARIOS))
 def test_native_fmu_equals_its_pythonfmu_twin(model, native_fmus, twin_fmus):
     scenario = SCENARIOS[model]
     for parameters in scenario.parameters:
-        twin, native = Driver(twin_fmus[model]), Driver(native_fmus[model])
-        outs = outputs(twin)
-        assert outputs(native) == outs
-        real = next(v.name for v in twin.md.modelVariables if v.causality == "output" and v.type == "Real")
-        calls = script(scenario, parameters, outs, real)
-        twin_trace, native_trace = run(twin, calls), run(native, calls)
-        statuses = [s.status for s in twin_trace]
-        assert statuses.count(2) >= 2 and statuses.count(3) >= 2   # the script does reach the refusals
-        assert_same(twin_trace, native_trace, outs)
-        twin.close()
-        native.close()
+        compare(twin_fmus[model], native_fmus[model], scenario, parameters)
+
+
+#: The sampled models (fmus/sampling.py), run again with steps h = T / 4.
+SAMPLED = ("BalanceController", "CurrentObserver", "Derivator")
+
+
+@pytest.mark.parametrize("model", SAMPLED)
+def test_substepped_native_fmu_equals_its_pythonfmu_twin(model, native_fmus, twin_fmus):
+    """h = T / 4 sampled on sub-step 2 (the state is taken and restored mid-period, a step
+    changing h mid-period is refused), and sample phases out of [0, 4) refused at the first
+    step.  Wrong code it catches: a native counter that is not FMU state, samples on another
+    sub-step, advances on a refused step, or words a refusal otherwise."""
+    base = SCENARIOS[model]
+    T = float(Driver(twin_fmus[model]).variables["T"].start)
+    h = T / 4
+    scenario = Scenario(h, base.inputs, bad_input=base.bad_input, fixed=base.fixed, steps=base.steps)
+    mark = (scenario.steps // 3 + 1) * h
+    assert round(mark / h) % 4 != 0   # the state is taken mid-period
+
+    def period_change(outs):
+        return [("setstate", "s"), ("step", mark, h / 2), ("get", outs),
+                ("setstate", "s"), ("step", mark, h), ("get", outs)]
+
+    for parameters in ({"sample_phase": 2}, {**base.parameters[1], "sample_phase": 3}, {"sample_phase": 4},
+                       {"sample_phase": -1}):
+        trace = compare(twin_fmus[model], native_fmus[model], scenario, parameters, period_change)
+        said = " ".join(m[2] for s in trace for m in s.messages)
+        if parameters["sample_phase"] in (2, 3):
+            assert "changes the step within a sample period" in said and "does not divide" in said
+        else:
+            assert f"parameter sample_phase = {parameters['sample_phase']} must be a whole number" in said
+
+
+@pytest.mark.parametrize("model", SAMPLED)
+def test_sampled_native_fmu_declares_its_period(model, native_fmus, twin_fmus):
+    """As the twin: no variable step size, DefaultExperiment stepSize T, the sample_phase parameter."""
+    twin, native = Driver(twin_fmus[model]).md, Driver(native_fmus[model]).md
+    assert native.coSimulation.canHandleVariableCommunicationStepSize is False
+    assert twin.coSimulation.canHandleVariableCommunicationStepSize is False
+    assert float(native.defaultExperiment.stepSize) == float(twin.defaultExperiment.stepSize)
+    phase = {v.name: v for v in native.modelVariables}["sample_phase"]
+    assert (phase.type, phase.causality, phase.start) == ("Integer", "parameter", "0")
 
 
 #: Per model: a parameter set whose design the native FMU does not carry, and what its refusal names.

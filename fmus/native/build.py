@@ -35,6 +35,9 @@ KERNELS = HERE.parent.parent / "kernels" / "src"
 GENERIC = ("fmi2_native.c", "pcn_values.c", "pcn_state.c", "pcn_text.c", "pcn_text.h", "pcn_model.h", "pcn_native.h")
 #: As the kernels' library (kernels/build.py): no FMA contraction, so results match it bit for bit.
 CFLAGS = ("-std=c11", "-O2", "-fPIC", "-fvisibility=hidden", "-ffp-contract=off", "-fno-fast-math")
+#: What a sampled model adds (fmus/sampling.py's sub-stepping): its generic part and the kernels' counting rule.
+SAMPLED = ("pcn_sampling.c", "pcn_sampling.h")
+SAMPLED_KERNELS = ("pc_sampling.c",)
 DEFAULT_NATIVE_OUT = HERE.parent / "build" / "native"
 _TYPE = {"Real": "PCN_REAL", "Integer": "PCN_INTEGER", "Boolean": "PCN_BOOLEAN", "String": "PCN_STRING"}
 _CAUSALITY = {"input": "PCN_INPUT", "output": "PCN_OUTPUT", "parameter": "PCN_PARAMETER"}
@@ -179,7 +182,8 @@ def compile_command(sources_dir: Path, output: Path, compiler: str = "cc") -> li
 def model_description(slave, model: str, guid: str, sources: list[str], feedthrough: dict) -> bytes:
     """The native FMU's modelDescription.xml: the slave's (pythonfmu's writer), with its own
     GUID, no execution tool, the ModelStructure and the source files."""
-    root = slave.to_xml({"canHandleVariableCommunicationStepSize": "true", "canGetAndSetFMUstate": "true",
+    variable = "false" if getattr(type(slave), "has_sample_period", False) else "true"   # as fmus/build.py
+    root = slave.to_xml({"canHandleVariableCommunicationStepSize": variable, "canGetAndSetFMUstate": "true",
                          "canSerializeFMUstate": "true", "needsExecutionTool": "false"})
     root.set("guid", guid)
     root.set("generationTool", "parcosim native (fmus/native)")
@@ -215,7 +219,9 @@ def build_native_fmu(model: str, out_dir=DEFAULT_NATIVE_OUT, compiler: str = "cc
         slave = initialised_slave(model, tmp / "resources")
         rows = variables(slave)
         scalars, arrays = native.data(slave)
-        files = [HERE / name for name in GENERIC] + [HERE / "adapters" / native.adapter] + kernel_files(native.kernels)
+        generic = GENERIC + (SAMPLED if native.sampled else ())
+        kernels = native.kernels + (SAMPLED_KERNELS if native.sampled else ())
+        files = [HERE / name for name in generic] + [HERE / "adapters" / native.adapter] + kernel_files(kernels)
         if len({f.name for f in files}) != len(files):   # sources/ is flat: one name, one file
             raise NativeBuildError(f"{model}: two source files share a name: {sorted(f.name for f in files)}")
         digest = hashlib.sha256(repr((model, rows, scalars, {k: np.asarray(v).tobytes() for k, v in arrays.items()},

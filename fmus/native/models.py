@@ -18,11 +18,13 @@ import numpy as np
 class NativeModel:
     """A native FMU's C parts: ``adapter`` (in fmus/native/adapters, named pcn_<model>.c:
     sources/ is flat), ``kernels`` (C files of kernels/src; their headers follow) and
-    ``data`` (slave -> (scalars, arrays), module docstring)."""
+    ``data`` (slave -> (scalars, arrays), module docstring); ``sampled``: sub-stepped at a
+    sample time T (fmus/sampling.py), with ``pcn_sampling.c`` and the kernels' counting rule."""
 
     adapter: str
     kernels: tuple
     data: Callable = field(default=lambda slave: ({}, {}))
+    sampled: bool = False
 
 
 def _derivator(slave):
@@ -76,9 +78,9 @@ def _balance(slave):
 
 #: Model name -> its native parts; one line a model.
 NATIVE = {
-    "Derivator": NativeModel("pcn_derivator.c", ("derivator.c",), _derivator),
+    "Derivator": NativeModel("pcn_derivator.c", ("derivator.c",), _derivator, sampled=True),
     "Trajectory": NativeModel("pcn_trajectory.c", ("trajectory.c",), _trajectory),
     "WheeledPendulum": NativeModel("pcn_wheeledpendulum.c", ("wheeled.c",)),
-    "BalanceController": NativeModel("pcn_balancecontroller.c", ("balance.c",), _balance),
-    "CurrentObserver": NativeModel("pcn_currentobserver.c", ("observer.c", "electrics.c"), _observer),
+    "BalanceController": NativeModel("pcn_balancecontroller.c", ("balance.c",), _balance, sampled=True),
+    "CurrentObserver": NativeModel("pcn_currentobserver.c", ("observer.c", "electrics.c"), _observer, sampled=True),
 }

@@ -4,6 +4,7 @@
 #include "drive.h"
 
 #include "pc_motor.h"
+#include "pc_sampling.h"
 
 #define PC_PI 3.14159265358979323846
 /* Below this r h, phi2 by its series (the closed form loses all digits to cancellation). */
@@ -222,13 +223,11 @@ static void voltage(const pc_drive *d, const pc_controller *c, double i_ref, dou
         s->phase = d->phase;
         return;
     }
-    /* A whole-number counter of the period's sub-steps (never the time: t + h drifts). */
-    int sampled = d->phase == d->sample_phase;
+    int sampled = pc_sampling_samples(d->phase, d->sample_phase);
     s->e = i_ref - (sampled ? measured_current(d, i_hat) : i_hat);
     s->v = sampled ? applied(d, controller_output(c, s->e)) : d->v;
     s->sampled = sampled ? 1.0 : 0.0;
-    double next = d->phase + 1.0;
-    s->phase = next >= d->substeps ? 0.0 : next;
+    s->phase = pc_sampling_next(d->phase, d->substeps);
 }
 
 static int check_inputs(double omega, double i_ref, double v_ref, double i_hat, pc_refusal *r)

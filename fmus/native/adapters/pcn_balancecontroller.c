@@ -4,7 +4,9 @@
  * v_battery, electrics, friction, yaw and encoder_counts then; both routes are packed
  * (pcn_buffer_<route>), so `route` is free.  A design parameter away from its build value is
  * refused by name at initialisation, after the slave's own first checks (docs/native.md).
- * Model data (FMU state): the kernel's pc_balance (configuration, then run state).
+ * Steps h = T / n sample on sub-step sample_phase of each period and hold the outputs in
+ * between (pcn_sampling.h).  Model data (FMU state): the kernel's pc_balance (configuration,
+ * then run state), then the sub-step counter.
  */
 #include <math.h>
 #include <string.h>
@@ -12,11 +14,14 @@
 #include "balance.h"
 #include "model_config.h"
 #include "pcn_model.h"
+#include "pcn_sampling.h"
 
 #define ABSURD 1e6   /* fmus/refusals.py */
 #define MIN_STEP 1e-9
 #define WORDS ((long)(sizeof(pc_balance) / sizeof(double)))
 #define CONFIGURATION ((long)(sizeof(pc_balance_params) / sizeof(double)))
+
+static pcn_sampling *counter(pcn_instance *in) { return (pcn_sampling *)(in->data + WORDS); }
 
 static const char *const ROUTES[] = {"hold", "forward_turn"};
 static const double *const BUFFERS[] = {pcn_buffer_hold, pcn_buffer_forward_turn};
@@ -68,25 +73,18 @@ static int setup(pcn_instance *in, pcn_text *why)
                         ROUTES[1]), 1;
     if (refuse_unbuilt(in, why)) return 1;
     memcpy(in->data, BUFFERS[k], sizeof(double) * WORDS);
+    *counter(in) = (pcn_sampling){0.0, 0.0};
     return 0;
 }
 
 static int check_step(pcn_instance *in, double t, double h, pcn_text *why)
 {
-    double T = in->real[PCN_SLOT_T];
-    if (!(isfinite(T) && T > 0.0))
-        return pcn_addf(why, "parameter T = %r s is not a finite positive sample time", T), 1;
-    if (fabs(h - T) <= 1e-9 * T) return 0;
-    pcn_text because;
-    pcn_clear(&because);
-    pcn_addf(&because, "does not equal the sample time T = %r s", T);
-    pcn_step_size_message(why, t, h, because.text);
-    return 1;
+    return pcn_sampling_check(counter(in), in->real[PCN_SLOT_T], in->integer[PCN_SLOT_sample_phase], t, h, why);
 }
 
-static int step(pcn_instance *in, double t, double h, pcn_text *why)
+/* The controller's sample at t (the slave's sample). */
+static int sample(pcn_instance *in, double t, pcn_text *why)
 {
-    (void)h;
     static const char *const inputs[3] = {"enc_l", "enc_r", "gyro"};
     double *r = in->real, x[15] = {r[PCN_SLOT_enc_l], r[PCN_SLOT_enc_r], r[PCN_SLOT_gyro]};
     for (int k = 0; k < 3; ++k)   /* refuse_absurd_inputs: NaN passes, the kernel names it */
@@ -107,10 +105,21 @@ static int step(pcn_instance *in, double t, double h, pcn_text *why)
     return 0;
 }
 
+/* Sample on sub-step sample_phase, hold the outputs on the others. */
+static int step(pcn_instance *in, double t, double h, pcn_text *why)
+{
+    (void)h;
+    pcn_sampling *s = counter(in);
+    if (pc_sampling_samples(s->substep, in->integer[PCN_SLOT_sample_phase]) && sample(in, t, why)) return 1;
+    s->substep = pc_sampling_next(s->substep, s->substeps);
+    return 0;
+}
+
 /* Restored data: the configuration words are the instance's route's design (or all zero,
  * a state taken before set-up); started is 0 or 1. */
 static int check_data(const pcn_instance *in, const double *data, pcn_text *why)
 {
+    if (pcn_sampling_check_data((const pcn_sampling *)(data + WORDS), why)) return 1;
     int zero = 1;
     for (long k = 0; k < WORDS; ++k) zero &= data[k] == 0.0;
     if (zero) return 0;
@@ -124,8 +133,8 @@ static int check_data(const pcn_instance *in, const double *data, pcn_text *why)
 
 const pcn_model pcn_this_model = {
     .identifier = PCN_IDENTIFIER,
-    .accepted_steps = "h = T (the sample time the controller is designed for; 1e-9 relative)",
-    .data_words = WORDS,
+    .accepted_steps = PCN_SAMPLING_ACCEPTS,
+    .data_words = WORDS + PCN_SAMPLING_WORDS,
     .scratch_words = 0,
     .setup = setup,
     .check_step = check_step,

@@ -4,7 +4,9 @@
  * override them (-1: the preset's value), checked as fmus.refusals.with_overrides and
  * motor.MotorParams do, with their messages.  A new step length's coefficients come from
  * pc_electrical_step_coefficients, as motor.CurrentObserver.prepare_step gets them.
- * Model data (FMU state): the kernel's pc_observer.
+ * Steps h = T / n advance the estimate on every sub-step and publish i_hat on sub-step
+ * sample_phase of each period (pcn_sampling.h).  Model data (FMU state): the kernel's
+ * pc_observer, then the sub-step counter.
  */
 #include <math.h>
 #include <string.h>
@@ -13,11 +15,15 @@
 #include "model_config.h"
 #include "observer.h"
 #include "pcn_model.h"
+#include "pcn_sampling.h"
 
 #define ABSURD 1e6   /* fmus/refusals.py */
 #define TINY 1e-12
 #define PRESET_VALUE (-1.0)
 #define MIN_STEP 1e-9
+#define OBSERVER_WORDS ((long)(sizeof(pc_observer) / sizeof(double)))
+
+static pcn_sampling *counter(pcn_instance *in) { return (pcn_sampling *)(in->data + OBSERVER_WORDS); }
 
 /* The motor's R, L, ke: the preset's, overridden; nonzero (why written) when refused. */
 static int motor(const pcn_instance *in, double *R, double *L, double *ke, pcn_text *why)
@@ -87,22 +93,14 @@ static int setup(pcn_instance *in, pcn_text *why)
     pc_observer *o = (pc_observer *)in->data;
     *o = (pc_observer){.is_static = is_static(in), .ke = ke, .h = NAN, .a = 0.0, .g = 0.0,
                        .i_hat = values[0], .omega_prev = values[1], .has_prev = 1.0};
+    *counter(in) = (pcn_sampling){0.0, 0.0};
     r[PCN_SLOT_i_hat] = o->i_hat;
     return 0;
 }
 
 static int check_step(pcn_instance *in, double t, double h, pcn_text *why)
 {
-    double T = in->real[PCN_SLOT_T];
-    if (!(isfinite(T) && T > 0.0))
-        return pcn_addf(why, "parameter T = %r s is not a finite positive sample time", T), 1;
-    double n = T / h, whole = nearbyint(n);   /* Python's round(): half to even */
-    if (whole >= 1 && fabs(n - whole) <= 1e-6 * n) return 0;
-    pcn_text because;
-    pcn_clear(&because);
-    pcn_addf(&because, "does not divide the sample time T = %r s", T);
-    pcn_step_size_message(why, t, h, because.text);
-    return 1;
+    return pcn_sampling_check(counter(in), in->real[PCN_SLOT_T], in->integer[PCN_SLOT_sample_phase], t, h, why);
 }
 
 /* motor.CurrentObserver.prepare_step: the coefficients of a new step length. */
@@ -131,7 +129,9 @@ static int step(pcn_instance *in, double t, double h, pcn_text *why)
         code = pc_observer_estimate(o, v, omega, h, &i_hat, &refusal);
     }
     if (code == PC_OK) {
-        r[PCN_SLOT_i_hat] = i_hat;
+        pcn_sampling *s = counter(in);
+        if (pc_sampling_samples(s->substep, in->integer[PCN_SLOT_sample_phase])) r[PCN_SLOT_i_hat] = i_hat;
+        s->substep = pc_sampling_next(s->substep, s->substeps);
         return 0;
     }
     if (code == PC_OBSERVER_NONFINITE_INPUT)
@@ -148,8 +148,9 @@ static int check_data(const pcn_instance *in, const double *data, pcn_text *why)
     double R, L, ke, ag[2];
     pcn_text ignored;
     pcn_clear(&ignored);
+    if (pcn_sampling_check_data((const pcn_sampling *)(data + OBSERVER_WORDS), why)) return 1;
     int zero = 1;
-    for (size_t k = 0; k < sizeof *o / sizeof(double); ++k) zero &= data[k] == 0.0;
+    for (long k = 0; k < OBSERVER_WORDS; ++k) zero &= data[k] == 0.0;
     if (zero) return 0;
     if (motor(in, &R, &L, &ke, &ignored) || o->is_static != (double)is_static(in) || o->ke != ke)
         return pcn_addf(why, "the observer's configuration words (kind, ke) differ from this instance's"), 1;
@@ -164,8 +165,8 @@ static int check_data(const pcn_instance *in, const double *data, pcn_text *why)
 
 const pcn_model pcn_this_model = {
     .identifier = PCN_IDENTIFIER,
-    .accepted_steps = "h dividing the sample time T (T / h a whole number: the drives' multi-rate sub-steps)",
-    .data_words = sizeof(pc_observer) / sizeof(double),
+    .accepted_steps = PCN_SAMPLING_ACCEPTS,
+    .data_words = OBSERVER_WORDS + PCN_SAMPLING_WORDS,
     .scratch_words = 0,
     .setup = setup,
     .check_step = check_step,

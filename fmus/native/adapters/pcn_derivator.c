@@ -4,7 +4,9 @@
  * (fc_vel, fc_acc, T): the design travels as the kernel's buffer, not started
  * (pcn_design_buffer).  Other values of those three are refused by name at initialisation
  * (docs/native.md); every check the pythonfmu slave makes before its design comes first, with
- * its words.  Model data (FMU state): the kernel's buffer; scratch: its n m doubles.
+ * its words.  Steps h = T / n sample on sub-step sample_phase of each period and hold the
+ * outputs in between (pcn_sampling.h).  Model data (FMU state): the kernel's buffer, then the
+ * sub-step counter; scratch: its n m doubles.
  */
 #include <math.h>
 #include <string.h>
@@ -12,10 +14,13 @@
 #include "derivator.h"
 #include "model_config.h"
 #include "pcn_model.h"
+#include "pcn_sampling.h"
 
 #define ABSURD 1e6      /* fmus/refusals.py */
 #define MIN_FC_T 1e-6   /* the slave's lowest fc T */
 #define CHANNELS 2
+
+static pcn_sampling *counter(pcn_instance *in) { return (pcn_sampling *)(in->data + PCN_DESIGN_BUFFER_WORDS); }
 
 static pc_derivator_context context(pcn_instance *in)
 {
@@ -62,6 +67,7 @@ static int setup(pcn_instance *in, pcn_text *why)
                         "FMU)", r[PCN_SLOT_fc_vel], r[PCN_SLOT_fc_acc], r[PCN_SLOT_T], PCN_DESIGN_FC_VEL,
                         PCN_DESIGN_FC_ACC, PCN_DESIGN_T), 1;
     memcpy(in->data, pcn_design_buffer, sizeof(double) * PCN_DESIGN_BUFFER_WORDS);
+    *counter(in) = (pcn_sampling){0.0, 0.0};
     if (in->boolean[PCN_SLOT_start_from_input]) return 0;
     pc_derivator_context c = context(in);
     const double q0[CHANNELS] = {r[PCN_SLOT_q1_0], r[PCN_SLOT_q2_0]};
@@ -72,20 +78,12 @@ static int setup(pcn_instance *in, pcn_text *why)
 
 static int check_step(pcn_instance *in, double t, double h, pcn_text *why)
 {
-    double T = in->real[PCN_SLOT_T];
-    if (!(isfinite(T) && T > 0.0))
-        return pcn_addf(why, "parameter T = %r s is not a finite positive sample time", T), 1;
-    if (fabs(h - T) <= 1e-9 * T) return 0;
-    pcn_text because;
-    pcn_clear(&because);
-    pcn_addf(&because, "does not equal the sample time T = %r s", T);
-    pcn_step_size_message(why, t, h, because.text);
-    return 1;
+    return pcn_sampling_check(counter(in), in->real[PCN_SLOT_T], in->integer[PCN_SLOT_sample_phase], t, h, why);
 }
 
-static int step(pcn_instance *in, double t, double h, pcn_text *why)
+/* The model's step at a sample (the slave's sample). */
+static int sample(pcn_instance *in, double t, pcn_text *why)
 {
-    (void)h;
     double *r = in->real;
     const double q[CHANNELS] = {r[PCN_SLOT_q1], r[PCN_SLOT_q2]};
     const char *names[CHANNELS] = {"q1", "q2"};
@@ -112,6 +110,16 @@ static int step(pcn_instance *in, double t, double h, pcn_text *why)
     return 0;
 }
 
+/* Sample on sub-step sample_phase, hold the estimates on the others. */
+static int step(pcn_instance *in, double t, double h, pcn_text *why)
+{
+    (void)h;
+    pcn_sampling *s = counter(in);
+    if (pc_sampling_samples(s->substep, in->integer[PCN_SLOT_sample_phase]) && sample(in, t, why)) return 1;
+    s->substep = pc_sampling_next(s->substep, s->substeps);
+    return 0;
+}
+
 /* A restored buffer may change only the run words (started, the state): the sizes, step
  * matrix and rest state are the design (configuration), or all zero in a state taken before
  * the model was built. */
@@ -121,7 +129,7 @@ static int check_data(const pcn_instance *in, const double *data, pcn_text *why)
     const long state = PCN_DESIGN_BUFFER_WORDS - (PCN_DERIVATOR_STATES + 1) * CHANNELS;
     int unbuilt = 1;
     for (long k = 0; k < PCN_DESIGN_BUFFER_WORDS; ++k) unbuilt &= data[k] == 0.0;
-    if (unbuilt) return 0;
+    if (unbuilt) return pcn_sampling_check_data((const pcn_sampling *)(data + PCN_DESIGN_BUFFER_WORDS), why);
     for (long k = 0; k < state; ++k) {
         if (k == 2) continue;   /* started */
         if (memcmp(&data[k], &pcn_design_buffer[k], sizeof(double)) != 0)
@@ -129,13 +137,13 @@ static int check_data(const pcn_instance *in, const double *data, pcn_text *why)
                             (int)k), 1;
     }
     if (data[2] != 0.0 && data[2] != 1.0) return pcn_addf(why, "the derivator's started word is %r", data[2]), 1;
-    return 0;
+    return pcn_sampling_check_data((const pcn_sampling *)(data + PCN_DESIGN_BUFFER_WORDS), why);
 }
 
 const pcn_model pcn_this_model = {
     .identifier = PCN_IDENTIFIER,
-    .accepted_steps = "h = T (the sample time the filters are discretised at; 1e-9 relative)",
-    .data_words = PCN_DESIGN_BUFFER_WORDS,
+    .accepted_steps = PCN_SAMPLING_ACCEPTS,
+    .data_words = PCN_DESIGN_BUFFER_WORDS + PCN_SAMPLING_WORDS,
     .scratch_words = PCN_DERIVATOR_STATES * CHANNELS,
     .setup = setup,
     .check_step = check_step,
