@@ -13,7 +13,12 @@
 #ifndef PC_TRIG_H
 #define PC_TRIG_H
 
+#include <float.h>
 #include <math.h>
+
+#if FLT_EVAL_METHOD != 0
+#error "pc_trig.h rounds 2 x / pi to a whole number by adding 1.5 * 2^52: it needs double evaluation"
+#endif
 
 /* The fast path's range, rad. */
 #define PC_TRIG_FAST 1e3
