@@ -144,3 +144,28 @@ def test_state_with_a_forged_substep_counter_is_refused(model, native_fmus):
     assert native.call("setstate", "g").status == 0
     assert native.call("step", 2 * h, h).status == 0
     native.close()
+
+
+def test_plant_state_with_forged_configuration_or_state_words_is_refused(native_fmus):
+    """FiveBarPlant's model data: the kernel's parameters and settings (configuration: equal to
+    what the instance's parameters give) and the state q, dq (finite).  A forged l0 word, a
+    forged RK4 substep count and a NaN in the state are refused by name (checksum recomputed);
+    the true state, taken after two steps, is accepted and stepped on."""
+    from fmus.native import state_bytes
+
+    native = Driver(native_fmus["FiveBarPlant"])
+    native.run([("setup", 0.0), ("enter",), ("exit",), ("step", 0.0, 1e-3), ("step", 1e-3, 1e-3)])
+    own = native.fmu.serializeFMUstate(native.fmu.getFMUstate())
+    words = state_bytes.data_words(own)
+    assert words[0] == 0.05 and words.size == 22 + 7 + 14     # l0 first; params, settings, q, dq
+    substeps, x = 22 + 1, 22 + 7
+    for index, value, says in ((0, 0.06, "configuration words"), (substeps, 2.0, "configuration words"),
+                               (x + 3, math.nan, "state word 3 = nan")):
+        native.call("bytes", "f", state_bytes.with_data_word(own, index, value))
+        step = native.call("deserialize", "f")
+        assert step.status == 3 and says in step.messages[0][2], (index, step.messages)
+    native.call("bytes", "g", state_bytes.with_data_word(own, x, words[x]))
+    assert native.call("deserialize", "g").status == 0
+    assert native.call("setstate", "g").status == 0
+    assert native.call("step", 2e-3, 1e-3).status == 0
+    native.close()

@@ -19,12 +19,15 @@ class NativeModel:
     """A native FMU's C parts: ``adapter`` (in fmus/native/adapters, named pcn_<model>.c:
     sources/ is flat), ``kernels`` (C files of kernels/src; their headers follow) and
     ``data`` (slave -> (scalars, arrays), module docstring); ``sampled``: sub-stepped at a
-    sample time T (fmus/sampling.py), with ``pcn_sampling.c`` and the kernels' counting rule."""
+    sample time T (fmus/sampling.py), with ``pcn_sampling.c`` and the kernels' counting rule;
+    ``parts``: adapter-side C files that several adapters share (in fmus/native/adapters,
+    each with its header)."""
 
     adapter: str
     kernels: tuple
     data: Callable = field(default=lambda slave: ({}, {}))
     sampled: bool = False
+    parts: tuple = ()
 
 
 def _derivator(slave):
@@ -76,6 +79,20 @@ def _balance(slave):
     return scalars, arrays
 
 
+#: plant.presets.ChainParams' fields as pcn_plant_setup.c reads a preset's chain (9 words).
+PLANT_CHAIN_FIELDS = ("l1", "l2", "lg1", "lg2", "m1", "m2", "Jz1", "Jz2", "J_rotor")
+
+
+def _plant(slave):
+    """The plant presets (plant/presets.py) by name: ``plant_preset_chains`` holds each
+    preset's two chains, :data:`PLANT_CHAIN_FIELDS` each."""
+    from plant.presets import PRESET_NAMES, get_preset
+
+    presets = [get_preset(name) for name in PRESET_NAMES]
+    chains = [[getattr(chain, f) for chain in (p.chain1, p.chain2) for f in PLANT_CHAIN_FIELDS] for p in presets]
+    return {}, {"plant_preset_names": list(PRESET_NAMES), "plant_preset_chains": np.array(chains)}
+
+
 #: Model name -> its native parts; one line a model.
 NATIVE = {
     "Derivator": NativeModel("pcn_derivator.c", ("derivator.c",), _derivator, sampled=True),
@@ -83,4 +100,6 @@ NATIVE = {
     "WheeledPendulum": NativeModel("pcn_wheeledpendulum.c", ("wheeled.c",)),
     "BalanceController": NativeModel("pcn_balancecontroller.c", ("balance.c",), _balance, sampled=True),
     "CurrentObserver": NativeModel("pcn_currentobserver.c", ("observer.c", "electrics.c"), _observer, sampled=True),
+    "FiveBarPlant": NativeModel("pcn_fivebarplant.c", ("fivebar.c", "kinematics5r.c"), _plant,
+                                parts=("pcn_plant_setup.c",)),
 }
