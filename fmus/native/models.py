@@ -20,8 +20,7 @@ class NativeModel:
     sources/ is flat), ``kernels`` (C files of kernels/src; their headers follow) and
     ``data`` (slave -> (scalars, arrays), module docstring); ``sampled``: sub-stepped at a
     sample time T (fmus/sampling.py), with ``pcn_sampling.c`` and the kernels' counting rule;
-    ``parts``: adapter-side C files that several adapters share (in fmus/native/adapters,
-    each with its header)."""
+    ``parts``: more files of fmus/native/adapters it compiles (``pcn_drive_setup.c|h``)."""
 
     adapter: str
     kernels: tuple
@@ -101,5 +100,5 @@ NATIVE = {
     "BalanceController": NativeModel("pcn_balancecontroller.c", ("balance.c",), _balance, sampled=True),
     "CurrentObserver": NativeModel("pcn_currentobserver.c", ("observer.c", "electrics.c"), _observer, sampled=True),
     "FiveBarPlant": NativeModel("pcn_fivebarplant.c", ("fivebar.c", "kinematics5r.c"), _plant,
-                                parts=("pcn_plant_setup.c",)),
+                                parts=("pcn_plant_setup.c", "pcn_plant_setup.h")),
 }
