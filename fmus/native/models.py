@@ -92,6 +92,43 @@ def _plant(slave):
     return {}, {"plant_preset_names": list(PRESET_NAMES), "plant_preset_chains": np.array(chains)}
 
 
+def drive_presets() -> dict:
+    """Every motor preset by name (``preset_names``) and its fields in
+    :data:`fmus.parts.MOTOR_PARAMETERS`' order, a row each (``preset_motor``): pcn_drive_setup.h's
+    pcn_motor_presets."""
+    from fmus.parts import MOTOR_PARAMETERS
+    from motor.presets import MOTOR_PRESETS
+
+    names = sorted(MOTOR_PRESETS)
+    return {"preset_names": names, "preset_motor": np.array([[getattr(MOTOR_PRESETS[n], f) for f, _, _ in
+                                                               MOTOR_PARAMETERS] for n in names])}
+
+
+def drive_design(slave, suffix: str = "") -> dict:
+    """The current controller of the slave's drive designed for its parameters (app. C,
+    python-control), whatever its mode: ``design<suffix>_key`` (R, L, kt, ke, b, J_rotor of
+    the design's motor, T), ``design<suffix>_coefficients`` (alpha, beta, gamma, delta; 0 if
+    it failed) and ``design<suffix>_error`` (the failure's message, or "")."""
+    from fmus.parts import drive_params
+    from motor.current_controller import THESIS_POLES
+    from motor.drive import _design
+
+    params, design = drive_params(slave, suffix)
+    p = design or params
+    coefficients, error = np.zeros(4), ""
+    try:
+        d = _design(p, slave.T, THESIS_POLES)
+        coefficients = np.array([d.alpha, d.beta, d.gamma, d.delta])
+    except ValueError as exc:
+        error = str(exc)
+    return {f"design{suffix}_key": np.array([p.R, p.L, p.kt, p.ke, p.b, p.J_rotor, slave.T], dtype=np.float64),
+            f"design{suffix}_coefficients": coefficients, f"design{suffix}_error": [error]}
+
+
+def _drive(slave):
+    return {}, {**drive_presets(), **drive_design(slave)}
+
+
 #: Model name -> its native parts; one line a model.
 NATIVE = {
     "Derivator": NativeModel("pcn_derivator.c", ("derivator.c",), _derivator, sampled=True),
@@ -101,4 +138,6 @@ NATIVE = {
     "CurrentObserver": NativeModel("pcn_currentobserver.c", ("observer.c", "electrics.c"), _observer, sampled=True),
     "FiveBarPlant": NativeModel("pcn_fivebarplant.c", ("fivebar.c", "kinematics5r.c"), _plant,
                                 parts=("pcn_plant_setup.c", "pcn_plant_setup.h")),
+    "DCMotorDrive": NativeModel("pcn_dcmotordrive.c", ("drive.c", "observer.c", "electrics.c"), _drive, sampled=True,
+                                parts=("pcn_drive_setup.c", "pcn_drive_setup.h")),
 }
