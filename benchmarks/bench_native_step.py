@@ -8,8 +8,8 @@ values and stepped at h = 1 ms over the same second with the same varying inputs
 from the state saved after initialisation (fmi2SetFMUstate), alternately round after round.
 Per step: ``setReal`` of the inputs, ``doStep``, ``getReal`` of every output (what a master
 does), and ``doStep`` alone; CPU (``time.process_time``) per step in microseconds, the best of
-the rounds.  The inputs (small, zero-mean torques) keep the plant inside its workspace, so no
-step is refused (fmpy raises on any status but fmi2OK).
+the rounds.  The inputs (small, zero-mean torques or currents) keep the plant inside its
+workspace, so no step is refused (fmpy raises on any status but fmi2OK).
 """
 from __future__ import annotations
 
@@ -26,6 +26,8 @@ sys.path.insert(0, str(ROOT))
 #: Per model: its inputs at time t (small: the plant stays well inside its workspace).
 INPUTS = {
     "FiveBarPlant": lambda t: {"tau1": 0.02 * math.sin(9.0 * t), "tau2": 0.01 * math.cos(4.0 * t)},
+    "ActuatedFiveBarPlant": lambda t: {"i_ref1": 0.3 * math.sin(9.0 * t), "i_hat1": 0.3 * math.sin(9.0 * t),
+                                       "i_ref2": 0.2 * math.cos(4.0 * t), "i_hat2": 0.2 * math.cos(4.0 * t)},
 }
 H = 1e-3
 

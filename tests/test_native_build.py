@@ -199,3 +199,31 @@ def test_drive_state_with_forged_words_is_refused_and_its_true_state_goes_on(nat
     assert native.call("setstate", "g").status == 0
     assert native.call("step", 2 * h, h).status == 0
     native.close()
+
+
+def test_actuated_plant_state_with_forged_words_is_refused(native_fmus):
+    """ActuatedFiveBarPlant's model data: the plant's configuration (29 words), z = (q, dq, i1,
+    i2), the two motor rows (8 words each), then the two drives.  A forged motor row (drive 2's
+    R), a NaN current in z and a forged drive word (drive 1's kt) are refused by name; the true
+    state, taken after two steps, is accepted and stepped on."""
+    from fmus.native import state_bytes
+
+    native = Driver(native_fmus["ActuatedFiveBarPlant"])
+    native.run([("setup", 0.0), ("enter",), ("exit",), ("set", {"i_ref1": 0.2, "i_hat1": 0.1}),
+                ("step", 0.0, 1e-3), ("step", 1e-3, 1e-3)])
+    own = native.fmu.serializeFMUstate(native.fmu.getFMUstate())
+    words = state_bytes.data_words(own)
+    z, motors = 29, 29 + 16
+    drive1 = motors + 16
+    assert words[z + 14] != 0.0 and words[motors + 8] == 1.0    # i1 flows; row 2 drives joint 1 (q2)
+    kt1 = next(k for k in range(drive1, words.size) if words[k] == words[motors + 3])   # kt of motor row 1
+    for index, value, says in ((motors + 8 + 1, 2.0, "motor rows"), (z + 15, math.nan, "state word 15 = nan"),
+                               (kt1, 0.07, "drive's configuration words")):
+        native.call("bytes", "f", state_bytes.with_data_word(own, index, value))
+        step = native.call("deserialize", "f")
+        assert step.status == 3 and says in step.messages[0][2], (index, step.messages)
+    native.call("bytes", "g", own)
+    assert native.call("deserialize", "g").status == 0
+    assert native.call("setstate", "g").status == 0
+    assert native.call("step", 2e-3, 1e-3).status == 0
+    native.close()

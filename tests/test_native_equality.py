@@ -94,6 +94,24 @@ SCENARIOS = {
          {"x0": 0.0, "y0": 0.265329}, {"substeps": 0}, {"encoder_counts": 0}, {"rtol": 0.0}, {"J_rotor1": -2.0},
          {"method": "euler"}, {"kernel": "slow"}],
         "tau2", ("x0", 0.05)),
+    "ActuatedFiveBarPlant": Scenario(
+        1e-3, lambda k, t: {"i_ref1": 0.3 * math.sin(9.0 * t), "i_ref2": -0.2 + 0.2 * math.cos(4.0 * t),
+                            "i_hat1": 0.25 * math.sin(9.0 * t - 0.1), "i_hat2": -0.2 + 0.15 * math.cos(4.0 * t),
+                            "v_ref1": math.sin(5.0 * t), "v_ref2": -0.5},
+        [{}, {"preset": "bench", "x0": -0.002, "y0": 0.108, "friction1": "lugre", "friction2": "lugre"},
+         {"mode": "voltage", "substeps": 3, "counter_mass1": 0.3, "gravity_y": -9.81, "chain2_l1": 0.13,
+          "pwm_counts1": 200, "current_noise2": 0.01, "noise_seed2": 4, "encoder_offset2": 0.002},
+         # the bench's imperfections; the run reaches a singular pose
+         {"current_offset1": 0.05, "pwm_counts2": 100, "current_noise1": 0.02, "noise_seed1": 7, "noise_instance1": 1,
+          "friction2": "lugre", "link_inertias": False},
+         {"x0": 0.0, "y0": 0.2653, "mode": "voltage"}, {"baumgarte": 5000.0},
+         # the projection (the twin's composition around the kernels), one with LuGre and m0
+         {"project": True}, {"project": True, "mode": "voltage", "friction1": "lugre", "preset": "bench",
+                             "x0": -0.002, "y0": 0.108, "m0": 0.02},
+         {"T": 2e6}, {"T": 1e-10}, {"L1": 0.0}, {"L2": 1e-13}, {"preset1": "nope"}, {"R2": -2.0},
+         {"friction1": "stick"}, {"sample_phase": 1}, {"preset": "nope"}, {"substeps": 0}, {"x0": 1.0},
+         {"mu_s2": 0.0, "friction2": "lugre"}, {"mode": "both"}, {"counter_mass2": 1e-6}],
+        "i_hat2", ("x0", 0.05)),
 }
 
 
@@ -180,7 +198,7 @@ def test_native_fmu_equals_its_pythonfmu_twin(model, native_fmus, twin_fmus):
 
 
 #: The sampled models (fmus/sampling.py; the drive in current mode), run again with steps h = T / 4.
-SAMPLED = ("BalanceController", "CurrentObserver", "DCMotorDrive", "Derivator")
+SAMPLED = ("ActuatedFiveBarPlant", "BalanceController", "CurrentObserver", "DCMotorDrive", "Derivator")
 
 
 @pytest.mark.parametrize("model", SAMPLED)
@@ -209,7 +227,8 @@ def test_substepped_native_fmu_equals_its_pythonfmu_twin(model, native_fmus, twi
         else:   # motor.Drive refuses a negative phase at initialisation already
             phase = parameters["sample_phase"]
             assert (f"parameter sample_phase = {phase} must be a whole number" in said or
-                    (model, phase) == ("DCMotorDrive", -1) and "sample_phase must be a whole number" in said)
+                    model in ("ActuatedFiveBarPlant", "DCMotorDrive") and phase == -1
+                    and "sample_phase must be a whole number" in said)
 
 
 @pytest.mark.parametrize("model", SAMPLED)
@@ -236,6 +255,10 @@ UNBUILT = [
                                            "'rk4' only (dopri5 has no C implementation)"),
     ("FiveBarPlant", {"kernel": "general"}, "parameter kernel = 'general': the native FiveBarPlant computes with "
                                             "kernel 'fast' only (the general algorithm has no C implementation)"),
+    ("ActuatedFiveBarPlant", {"method": "dopri5"}, "parameter method = 'dopri5': the native ActuatedFiveBarPlant "
+                                                   "integrates with 'rk4' only"),
+    ("ActuatedFiveBarPlant", {"R_design2": 2.0}, "parameter R_design2 = 2.0: this native FMU carries the current "
+                                                 "controller designed (app. C) for R = "),
 ]
 
 

@@ -19,14 +19,14 @@ from scenarios.scenes import get_scene
 #: Per scene, the components that run native (the others: pythonfmu FMUs).
 NATIVE_COMPONENTS = {"bench_circle_TCMDx": {"traj", "deriv", "obs1", "obs2", "drive1", "drive2", "plant"},
                      "bench_real_circle_TCMDx": {"traj", "deriv", "obs1", "obs2", "drive1", "drive2", "plant"},
-                     "pendulum_push": {"ctrl", "plant"}}
+                     "pendulum_push": {"ctrl", "drive_l", "drive_r", "plant"}}
 
 
 @pytest.mark.parametrize("scene", sorted(NATIVE_COMPONENTS))
 def test_scene_with_native_fmus_equals_the_pythonfmu_run(scene, built_fmus, tmp_path):
     """Native: the bench's Trajectory, Derivator, current observers, drives (the bench twin's:
     LuGre friction, PWM, current noise and offset) and FiveBarPlant (the bench preset, started
-    at rest at (x0, y0)); the pendulum's plant and balance controller (with a push at 1 s)."""
+    at rest at (x0, y0)); the pendulum's plant, balance controller and drives (with a push at 1 s)."""
     system = replace(get_scene(scene).system, stop_time=1.5)
     fmu_dir = next(iter(built_fmus.values())).parent
     native = native_system(system, tmp_path / "native")

@@ -129,6 +129,11 @@ def _drive(slave):
     return {}, {**drive_presets(), **drive_design(slave)}
 
 
+def _actuated(slave):
+    """The plant presets, the motor presets and each drive's current controller (suffix 1, 2)."""
+    return {}, {**_plant(slave)[1], **drive_presets(), **drive_design(slave, "1"), **drive_design(slave, "2")}
+
+
 #: Model name -> its native parts; one line a model.
 NATIVE = {
     "Derivator": NativeModel("pcn_derivator.c", ("derivator.c",), _derivator, sampled=True),
@@ -140,4 +145,8 @@ NATIVE = {
                                 parts=("pcn_plant_setup.c", "pcn_plant_setup.h")),
     "DCMotorDrive": NativeModel("pcn_dcmotordrive.c", ("drive.c", "observer.c", "electrics.c"), _drive, sampled=True,
                                 parts=("pcn_drive_setup.c", "pcn_drive_setup.h")),
+    "ActuatedFiveBarPlant": NativeModel(
+        "pcn_actuatedfivebarplant.c", ("actuated.c", "fivebar.c", "kinematics5r.c", "drive.c", "electrics.c"),
+        _actuated, sampled=True,
+        parts=("pcn_plant_setup.c", "pcn_plant_setup.h", "pcn_drive_setup.c", "pcn_drive_setup.h")),
 }

@@ -241,8 +241,7 @@ double pcn_drive_torque(const pcn_drive_data *d, double omega)
     return pc_drive_torque(&d->drive, d->has_lugre != 0.0 ? &d->lugre : NULL, omega);
 }
 
-/* Drive.prepare_step: the coefficients of a new step length h (checked by the FMU's step rule). */
-static void prepare(pcn_drive_data *d, double h)
+void pcn_drive_prepare(pcn_drive_data *d, double h)
 {
     double ag[2], w[2];
     pc_drive *k = &d->drive;
@@ -281,7 +280,7 @@ int pcn_drive_step(pcn_drive_data *d, double i_ref, double v_ref, double omega, 
     pc_refusal r;
     int code = pc_drive_step(&d->drive, &d->controller, friction(d), i_ref, v_ref, omega, i_hat, h, out, &r);
     if (code == PC_DRIVE_UNPREPARED_STEP) {
-        prepare(d, h);
+        pcn_drive_prepare(d, h);
         code = pc_drive_step(&d->drive, &d->controller, friction(d), i_ref, v_ref, omega, i_hat, h, out, &r);
     }
     return code == PC_OK ? 0 : refused(d, &r, out, h, why);
@@ -315,7 +314,7 @@ int pcn_drive_check_data(const pcn_drive_data *built, const pcn_drive_data *data
     if (!(k->h > 0.0 && isfinite(k->h)))
         return pcn_addf(why, "the drive's step length %r is not a finite positive number", k->h), 1;
     pcn_drive_data prepared = *built;
-    prepare(&prepared, k->h);
+    pcn_drive_prepare(&prepared, k->h);
     const pc_drive *p = &prepared.drive;
     if (p->substeps == 0.0)
         return pcn_addf(why, "the drive's step length %r does not divide its period T = %r", k->h, p->T), 1;

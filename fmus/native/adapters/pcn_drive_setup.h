@@ -86,6 +86,10 @@ int pcn_drive_start(pcn_drive_data *d, double omega0, double i0, pcn_text *why);
 /* Drive.torque(omega): the shaft torque of the present current. */
 double pcn_drive_torque(const pcn_drive_data *d, double omega);
 
+/* Drive.prepare_step: the coefficients of a new step length h (checked by the FMU's step rule;
+ * ActuatedFiveBarPlant prepares its drives before pc_actuated_step). */
+void pcn_drive_prepare(pcn_drive_data *d, double h);
+
 /* Drive.step: one step with the inputs held; out = {tau, v, i}.  Refused: DRIVE_REASONS'
  * message (with euler's divergence explained) in `why`, nonzero, nothing changed. */
 int pcn_drive_step(pcn_drive_data *d, double i_ref, double v_ref, double omega, double i_hat, double h,
