@@ -144,3 +144,34 @@ def test_state_with_a_forged_substep_counter_is_refused(model, native_fmus):
     assert native.call("setstate", "g").status == 0
     assert native.call("step", 2 * h, h).status == 0
     native.close()
+
+
+def test_drive_state_with_forged_words_is_refused_and_its_true_state_goes_on(native_fmus):
+    """DCMotorDrive's model data (pcn_drive_data: R, L, method, has_lugre, then the kernel's
+    pc_drive, pc_controller, pc_lugre, then the internal observer): a forged configuration word
+    (kt, the design's alpha), a sub-step past T / h, coefficients not of the step length and
+    a non-finite current are refused by name (checksum recomputed); the true state, taken
+    mid-period at h = T / 4, is accepted and stepped on."""
+    import kernels
+    from fmus.native import state_bytes
+    from motor import kernel
+
+    native = Driver(native_fmus["DCMotorDrive"])
+    h = float(native.variables["T"].start) / 4
+    native.run([("setup", 0.0), ("enter",), ("exit",), ("step", 0.0, h), ("step", h, h)])
+    own = native.fmu.serializeFMUstate(native.fmu.getFMUstate())
+    words = state_bytes.data_words(own)
+    drive = {name: 4 + s.start for name, s in kernel.DRIVE.items()}
+    alpha = 4 + kernels.size(kernel.DRIVE) + kernel.CONTROLLER["alpha"].start
+    assert (words[drive["phase"]], words[drive["substeps"]], words[drive["h"]]) == (2.0, 4.0, h)
+    for index, value, says in ((drive["kt"], 0.07, "configuration words"), (alpha, 1.0, "configuration words"),
+                               (drive["phase"], 4.0, "sub-step 4.0"), (drive["a"], 0.5, "coefficients"),
+                               (drive["i"], math.inf, "state word 0 is inf")):
+        native.call("bytes", "f", state_bytes.with_data_word(own, index, value))
+        step = native.call("deserialize", "f")
+        assert step.status == 3 and says in step.messages[0][2], (index, step.messages)
+    native.call("bytes", "g", own)
+    assert native.call("deserialize", "g").status == 0
+    assert native.call("setstate", "g").status == 0
+    assert native.call("step", 2 * h, h).status == 0
+    native.close()

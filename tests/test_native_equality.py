@@ -20,6 +20,9 @@ from controller.balance import BalanceSettings
 from support.fmu_calls import Driver
 
 BALANCE_T = BalanceSettings().T
+#: The bench twin's drive options (scenarios/twin.py): LuGre friction with stiction, PWM, current noise and offset.
+DRIVE_TWIN = {"friction": "lugre", "mu": 0.06, "mu_s": 0.08, "pwm_counts": 1000, "current_offset": 0.05,
+              "current_noise": 0.1, "noise_seed": 7, "noise_instance": 2}
 
 
 @dataclass
@@ -55,6 +58,22 @@ SCENARIOS = {
         5e-4, lambda k, t: {"v": 12.0 * math.sin(40.0 * t) + 0.5, "omega": 30.0 * math.cos(15.0 * t)},
         [{}, {"kind": "dynamic"}, {"kind": "dynamic", "preset": "motor2", "R": 1.3, "L": 0.0},
          {"preset": "nope"}, {"R": -2.0}, {"ke": math.nan}, {"L": math.inf}, {"kind": "both"}, {"T": 0.0}],
+        "omega", ("R", 1.5)),
+    "DCMotorDrive": Scenario(
+        1e-3, lambda k, t: {"i_ref": 0.5 * math.sin(20.0 * t) + 0.1, "v_ref": 6.0 * math.sin(30.0 * t) + 1.0,
+                            "omega": 30.0 * math.cos(15.0 * t), "i_hat": 0.4 * math.sin(20.0 * t - 0.1)},
+        [{}, {**DRIVE_TWIN, "torque_output": "mean", "omega0": 3.0, "i0": 0.2},
+         {"mode": "voltage", "preset": "motor2", "method": "quasi_static", "L": 0.0, "R": 2.0},
+         {"mode": "voltage", "preset": "seed000"}, {"mode": "voltage", "method": "euler", "L": 2e-6},
+         {"internal_observer": True}, {"internal_observer": True, "observer_kind": "dynamic", "omega0": -2.0},
+         {"method": "euler", "torque_output": "mean"},
+         {"R": -2.0}, {"preset": "nope"}, {"T": 0.0}, {"T": 1e-10}, {"friction": "x"}, {**DRIVE_TWIN, "mu_s": 0.01},
+         {"friction": "lugre", "preset": "seed000", "mode": "voltage"}, {"mode": "voltage", "method": "euler", "L": 0.0},
+         {"internal_observer": True, "mode": "voltage"}, {"observer_kind": "both"}, {"pwm_counts": -1},
+         {"noise_seed": -3}, {"sample_phase": -1}, {"current_noise": -0.1}, {"current_offset": math.nan},
+         {"torque_output": "x"}, {"mode": "x"}, {"method": "x"}, {"J_design": math.nan}, {"kt": 1e-13},
+         {"R_design": -5.0}, {"L_design": 2e6}, {"omega0": math.inf}, {"i0": 2e6}, {"v_max": 0.0},
+         {"preset": "seed000"}],
         "omega", ("R", 1.5)),
     "Trajectory": Scenario(
         1e-3, lambda k, t: {}, [{}, {"kind": "triangle"}, {"kind": "thesis_circle"}, {"kind": "hold"},
@@ -145,8 +164,8 @@ def test_native_fmu_equals_its_pythonfmu_twin(model, native_fmus, twin_fmus):
         compare(twin_fmus[model], native_fmus[model], scenario, parameters)
 
 
-#: The sampled models (fmus/sampling.py), run again with steps h = T / 4.
-SAMPLED = ("BalanceController", "CurrentObserver", "Derivator")
+#: The sampled models (fmus/sampling.py; the drive in current mode), run again with steps h = T / 4.
+SAMPLED = ("BalanceController", "CurrentObserver", "DCMotorDrive", "Derivator")
 
 
 @pytest.mark.parametrize("model", SAMPLED)
@@ -172,8 +191,10 @@ def test_substepped_native_fmu_equals_its_pythonfmu_twin(model, native_fmus, twi
         said = " ".join(m[2] for s in trace for m in s.messages)
         if parameters["sample_phase"] in (2, 3):
             assert "changes the step within a sample period" in said and "does not divide" in said
-        else:
-            assert f"parameter sample_phase = {parameters['sample_phase']} must be a whole number" in said
+        else:   # motor.Drive refuses a negative phase at initialisation already
+            phase = parameters["sample_phase"]
+            assert (f"parameter sample_phase = {phase} must be a whole number" in said or
+                    (model, phase) == ("DCMotorDrive", -1) and "sample_phase must be a whole number" in said)
 
 
 @pytest.mark.parametrize("model", SAMPLED)
@@ -192,6 +213,9 @@ UNBUILT = {
     "Derivator": ({"fc_vel": 50.0}, "fc_vel = 50.0 Hz"),
     "BalanceController": ({"yaw": False}, "parameter yaw = False: this native FMU carries the balance design"),
     "Trajectory": ({"kind": "circle", "cycles": 3}, "parameter cycles = 3: this native FMU carries the circle"),
+    "DCMotorDrive": ({"R_design": 2.0}, "parameter R_design = 2.0: this native FMU carries the current controller "
+                     "designed (app. C) for R = 1.101, L = 0.000667, kt = 0.05598, ke = 0.05138, b = 0.0001226, "
+                     "J_rotor = 0.0001469, T = 0.001 only, not for R = 2.0"),
 }
 
 
@@ -205,3 +229,25 @@ def test_design_parameters_away_from_the_build_are_refused_by_name(model, native
     assert [s.status for s in twin] == [0] * 6 and twin[-1].result == [""]
     assert native[3].status == 0 and says in native[3].messages[0][2]
     assert native[4].status == 2 and says in native[-1].result[0]
+
+
+@pytest.mark.parametrize("parameters, says", [
+    ({"preset": "motor2"}, "parameter preset = 'motor2': this native FMU carries the current controller"),
+    ({"T": 5e-4}, "parameter T = 0.0005 s: this native FMU carries"),
+    ({"L": 1e-3}, "parameter L = 0.001: this native FMU carries"),
+    ({"J_design": 2e-4}, "parameter J_design = 0.0002: this native FMU carries"),
+    ({"b": 0.0, "b_design": 1e-4}, "parameter b_design = 0.0001: this native FMU carries"),
+])
+def test_drive_refuses_each_design_value_away_from_its_build_by_the_parameter_that_set_it(parameters, says,
+                                                                                           native_fmus):
+    """The current controller's design depends on the design's motor (preset, R, L, kt, ke, b,
+    J_design and the *_design overrides) and T: each is named; in voltage mode (no design)
+    the same values are accepted, and so is a design parameter set to the value it has."""
+    calls = [("set", parameters), ("setup", 0.0), ("enter",), ("exit",), ("step", 0.0, 1e-3)]
+    native = Driver(native_fmus["DCMotorDrive"])
+    trace = native.run(calls)
+    assert trace[3].status == 0 and says in trace[3].messages[0][2], trace[3].messages
+    assert trace[4].status == 2
+    for accepted in ({**parameters, "mode": "voltage"}, {"R_design": 1.101, "kt": 0.05598}):
+        trace = Driver(native_fmus["DCMotorDrive"]).run([("set", accepted), *calls[1:]])
+        assert [s.status for s in trace] == [0] * 5 and not trace[3].messages, accepted

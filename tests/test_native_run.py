@@ -16,15 +16,18 @@ from fmus.native.run import native_system
 from scenarios.scenes import get_scene
 
 
-@pytest.mark.parametrize("scene", ["bench_circle_TCMDx", "pendulum_push"])
+@pytest.mark.parametrize("scene", ["bench_circle_TCMDx", "bench_real_circle_TCMDx", "pendulum_push"])
 def test_scene_with_native_fmus_equals_the_pythonfmu_run(scene, built_fmus, tmp_path):
-    """Native: the bench's Derivators and Trajectory; the pendulum's plant and balance
-    controller (with a push at 1 s)."""
+    """Native: the bench's Derivator, Trajectory, current observers and drives (the bench
+    twin's drives: LuGre friction, PWM, current noise and offset); the pendulum's plant and
+    balance controller (with a push at 1 s)."""
     system = replace(get_scene(scene).system, stop_time=1.5)
     fmu_dir = next(iter(built_fmus.values())).parent
     native = native_system(system, tmp_path / "native")
     swapped = [c for c in native.components if c.model.endswith(".fmu")]
     assert swapped and {c.name for c in swapped} == {c.name for c in system.components if c.model in NATIVE}
+    if scene.startswith("bench"):
+        assert {"drive1", "drive2"} <= {c.name for c in swapped}
     a = simulate(system, mode="fmu", fmu_dir=fmu_dir)
     b = simulate(native, mode="fmu", fmu_dir=fmu_dir)
     assert a.error is None and b.error is None

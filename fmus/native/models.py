@@ -19,12 +19,14 @@ class NativeModel:
     """A native FMU's C parts: ``adapter`` (in fmus/native/adapters, named pcn_<model>.c:
     sources/ is flat), ``kernels`` (C files of kernels/src; their headers follow) and
     ``data`` (slave -> (scalars, arrays), module docstring); ``sampled``: sub-stepped at a
-    sample time T (fmus/sampling.py), with ``pcn_sampling.c`` and the kernels' counting rule."""
+    sample time T (fmus/sampling.py), with ``pcn_sampling.c`` and the kernels' counting rule;
+    ``parts``: more files of fmus/native/adapters it compiles (``pcn_drive_setup.c|h``)."""
 
     adapter: str
     kernels: tuple
     data: Callable = field(default=lambda slave: ({}, {}))
     sampled: bool = False
+    parts: tuple = ()
 
 
 def _derivator(slave):
@@ -76,6 +78,43 @@ def _balance(slave):
     return scalars, arrays
 
 
+def drive_presets() -> dict:
+    """Every motor preset by name (``preset_names``) and its fields in
+    :data:`fmus.parts.MOTOR_PARAMETERS`' order, a row each (``preset_motor``): pcn_drive_setup.h's
+    pcn_motor_presets."""
+    from fmus.parts import MOTOR_PARAMETERS
+    from motor.presets import MOTOR_PRESETS
+
+    names = sorted(MOTOR_PRESETS)
+    return {"preset_names": names, "preset_motor": np.array([[getattr(MOTOR_PRESETS[n], f) for f, _, _ in
+                                                               MOTOR_PARAMETERS] for n in names])}
+
+
+def drive_design(slave, suffix: str = "") -> dict:
+    """The current controller of the slave's drive designed for its parameters (app. C,
+    python-control), whatever its mode: ``design<suffix>_key`` (R, L, kt, ke, b, J_rotor of
+    the design's motor, T), ``design<suffix>_coefficients`` (alpha, beta, gamma, delta; 0 if
+    it failed) and ``design<suffix>_error`` (the failure's message, or "")."""
+    from fmus.parts import drive_params
+    from motor.current_controller import THESIS_POLES
+    from motor.drive import _design
+
+    params, design = drive_params(slave, suffix)
+    p = design or params
+    coefficients, error = np.zeros(4), ""
+    try:
+        d = _design(p, slave.T, THESIS_POLES)
+        coefficients = np.array([d.alpha, d.beta, d.gamma, d.delta])
+    except ValueError as exc:
+        error = str(exc)
+    return {f"design{suffix}_key": np.array([p.R, p.L, p.kt, p.ke, p.b, p.J_rotor, slave.T], dtype=np.float64),
+            f"design{suffix}_coefficients": coefficients, f"design{suffix}_error": [error]}
+
+
+def _drive(slave):
+    return {}, {**drive_presets(), **drive_design(slave)}
+
+
 #: Model name -> its native parts; one line a model.
 NATIVE = {
     "Derivator": NativeModel("pcn_derivator.c", ("derivator.c",), _derivator, sampled=True),
@@ -83,4 +122,6 @@ NATIVE = {
     "WheeledPendulum": NativeModel("pcn_wheeledpendulum.c", ("wheeled.c",)),
     "BalanceController": NativeModel("pcn_balancecontroller.c", ("balance.c",), _balance, sampled=True),
     "CurrentObserver": NativeModel("pcn_currentobserver.c", ("observer.c", "electrics.c"), _observer, sampled=True),
+    "DCMotorDrive": NativeModel("pcn_dcmotordrive.c", ("drive.c", "observer.c", "electrics.c"), _drive, sampled=True,
+                                parts=("pcn_drive_setup.c", "pcn_drive_setup.h")),
 }
