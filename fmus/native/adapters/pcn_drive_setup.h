@@ -8,9 +8,9 @@
  * `suffix` every message appends to a variable's name, as build_drive(slave, suffix) does).
  *
  * The current controller's design (app. C, python-control) is made when the FMU is built,
- * for its parameters then, and given here as a pcn_drive_design; a drive in current mode
- * whose design values (R, L, kt, ke, b, J_rotor of the design's motor, T) differ from it is
- * refused by name.  The motor presets travel as data too (pcn_motor_presets).
+ * for its parameters then and for each motor preset at its T, and given here as a
+ * pcn_drive_design; a drive in current mode whose design values (R, L, kt, ke, b, J_rotor of
+ * the design's motor, T) are none of them is refused by name.  The motor presets travel as data too (pcn_motor_presets).
  */
 #ifndef PCN_DRIVE_SETUP_H
 #define PCN_DRIVE_SETUP_H
@@ -38,11 +38,13 @@ typedef struct {
     const double *values;   /* count rows of PCN_MOTOR_FIELDS, in the names' order */
 } pcn_motor_presets;
 
-/* The current controller designed at the FMU's build. */
+/* The current controllers designed at the FMU's build: the first for its parameters then,
+ * the others for the motor presets at its T (fmus.native.models.drive_design). */
 typedef struct {
-    const double *key;            /* PCN_DESIGN_KEY values it was designed for */
-    const double *coefficients;   /* alpha, beta, gamma, delta (C.5) */
-    const char *error;            /* "" or the message its design failed with (motor.drive._design's) */
+    int count;
+    const double *keys;           /* count rows of the PCN_DESIGN_KEY values each was designed for */
+    const double *coefficients;   /* count rows of alpha, beta, gamma, delta (C.5) */
+    const char *error;            /* "" or the message the first's design failed with (motor.drive._design's) */
 } pcn_drive_design;
 
 /* A drive's parameters, as its FMU variables hold them. */
@@ -93,7 +95,7 @@ int pcn_drive_step(pcn_drive_data *d, double i_ref, double v_ref, double omega, 
 
 /* Whether restored model data fits the drive `built` for the same parameters: equal
  * configuration words, the coefficients of its step length, a whole sub-step counter, finite
- * run words; all zero (a state taken before set-up) fits. */
+ * run words. */
 int pcn_drive_check_data(const pcn_drive_data *built, const pcn_drive_data *data, pcn_text *why);
 
 #endif
