@@ -10,7 +10,8 @@
  * The current controller's design (app. C, python-control) is made when the FMU is built,
  * for its parameters then and for each motor preset at its T, and given here as a
  * pcn_drive_design; a drive in current mode whose design values (R, L, kt, ke, b, J_rotor of
- * the design's motor, T) are none of them is refused by name.  The motor presets travel as data too (pcn_motor_presets).
+ * the design's motor, T) are none of them is refused by name.  The motor presets travel as
+ * data too (pcn_motor_presets).
  */
 #ifndef PCN_DRIVE_SETUP_H
 #define PCN_DRIVE_SETUP_H
