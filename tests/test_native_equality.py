@@ -66,9 +66,10 @@ SCENARIOS = {
          {"mode": "voltage", "preset": "motor2", "method": "quasi_static", "L": 0.0, "R": 2.0},
          {"mode": "voltage", "preset": "seed000"}, {"mode": "voltage", "method": "euler", "L": 2e-6},
          {"internal_observer": True}, {"internal_observer": True, "observer_kind": "dynamic", "omega0": -2.0},
-         {"method": "euler", "torque_output": "mean"},
+         {"method": "euler", "torque_output": "mean"}, {"preset": "motor2", "sample_phase": 0},
          {"R": -2.0}, {"preset": "nope"}, {"T": 0.0}, {"T": 1e-10}, {"friction": "x"}, {**DRIVE_TWIN, "mu_s": 0.01},
-         {"friction": "lugre", "preset": "seed000", "mode": "voltage"}, {"mode": "voltage", "method": "euler", "L": 0.0},
+         {"friction": "lugre", "preset": "seed000", "mode": "voltage"},
+         {"mode": "voltage", "method": "euler", "L": 0.0},
          {"internal_observer": True, "mode": "voltage"}, {"observer_kind": "both"}, {"pwm_counts": -1},
          {"noise_seed": -3}, {"sample_phase": -1}, {"current_noise": -0.1}, {"current_offset": math.nan},
          {"torque_output": "x"}, {"mode": "x"}, {"method": "x"}, {"J_design": math.nan}, {"kt": 1e-13},
@@ -251,7 +252,8 @@ UNBUILT = [
     ("Trajectory", {"kind": "circle", "cycles": 3}, "parameter cycles = 3: this native FMU carries the circle"),
     ("DCMotorDrive", {"R_design": 2.0}, "parameter R_design = 2.0: this native FMU carries the current controller "
      "designed (app. C) for R = 1.101, L = 0.000667, kt = 0.05598, ke = 0.05138, b = 0.0001226, "
-     "J_rotor = 0.0001469, T = 0.001 only, not for R = 2.0"),
+     "J_rotor = 0.0001469, T = 0.001 (the nearest of the 2 designs it carries: its build's parameters, "
+     "the motor presets at T = 0.001 s), not for R = 2.0"),
     ("FiveBarPlant", {"method": "dopri5"}, "parameter method = 'dopri5': the native FiveBarPlant integrates with "
                                            "'rk4' only (dopri5 has no C implementation)"),
     ("FiveBarPlant", {"kernel": "general"}, "parameter kernel = 'general': the native FiveBarPlant computes with "
@@ -277,7 +279,10 @@ def test_parameters_the_native_fmu_cannot_honour_are_refused_by_name(model, para
 
 
 @pytest.mark.parametrize("parameters, says", [
-    ({"preset": "motor2"}, "parameter preset = 'motor2': this native FMU carries the current controller"),
+    ({"preset": "motor2", "kt": 0.05}, "parameter kt = 0.05: this native FMU carries the current controller "
+                                       "designed (app. C) for R = 0.829,"),
+    ({"preset": "motor2", "T": 2e-3}, "parameter T = 0.002 s: this native FMU carries the current controller "
+                                      "designed (app. C) for R = 0.829,"),
     ({"T": 5e-4}, "parameter T = 0.0005 s: this native FMU carries"),
     ({"L": 1e-3}, "parameter L = 0.001: this native FMU carries"),
     ({"J_design": 2e-4}, "parameter J_design = 0.0002: this native FMU carries"),
@@ -286,13 +291,32 @@ def test_parameters_the_native_fmu_cannot_honour_are_refused_by_name(model, para
 def test_drive_refuses_each_design_value_away_from_its_build_by_the_parameter_that_set_it(parameters, says,
                                                                                            native_fmus):
     """The current controller's design depends on the design's motor (preset, R, L, kt, ke, b,
-    J_design and the *_design overrides) and T: each is named; in voltage mode (no design)
-    the same values are accepted, and so is a design parameter set to the value it has."""
+    J_design and the *_design overrides) and T: a value away from every design carried (the
+    build's, the motor presets' at its T) is named, against the nearest; in voltage mode (no
+    design) the same values are accepted, and so are another preset and a design parameter
+    set to the value it has."""
     calls = [("set", parameters), ("setup", 0.0), ("enter",), ("exit",), ("step", 0.0, 1e-3)]
     native = Driver(native_fmus["DCMotorDrive"])
     trace = native.run(calls)
     assert trace[3].status == 0 and says in trace[3].messages[0][2], trace[3].messages
     assert trace[4].status == 2
-    for accepted in ({**parameters, "mode": "voltage"}, {"R_design": 1.101, "kt": 0.05598}):
+    for accepted in ({**parameters, "mode": "voltage"}, {"R_design": 1.101, "kt": 0.05598}, {"preset": "motor2"},
+                     {"preset": "motor2", "b": 0.0, "b_design": 2.039e-4}):
         trace = Driver(native_fmus["DCMotorDrive"]).run([("set", accepted), *calls[1:]])
         assert [s.status for s in trace] == [0] * 5 and not trace[3].messages, accepted
+
+
+def test_drive_in_voltage_mode_takes_any_step_as_its_twin(native_fmus, twin_fmus):
+    """Voltage mode: steps of 0.37 ms (not dividing T) run the whole script as the twin's;
+    current mode refuses them, as the twin, with its rule's words."""
+    base = SCENARIOS["DCMotorDrive"]
+    scenario = Scenario(3.7e-4, base.inputs, bad_input=base.bad_input, fixed=base.fixed)
+    for parameters in ({"mode": "voltage", "torque_output": "mean"},
+                       {"mode": "voltage", "friction": "lugre", "pwm_counts": 500, "omega0": 4.0}, {}):
+        trace = compare(twin_fmus["DCMotorDrive"], native_fmus["DCMotorDrive"], scenario, parameters)
+        said = " ".join(m[2] for s in trace for m in s.messages)
+        steps = [s.status for s in trace if s.call[0] == "step"]
+        if parameters:
+            assert steps[:base.steps] == [0] * base.steps
+        else:
+            assert "does not divide the sample time T = 0.001 s; DCMotorDrive accepts in current mode" in said

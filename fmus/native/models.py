@@ -105,24 +105,35 @@ def drive_presets() -> dict:
 
 
 def drive_design(slave, suffix: str = "") -> dict:
-    """The current controller of the slave's drive designed for its parameters (app. C,
-    python-control), whatever its mode: ``design<suffix>_key`` (R, L, kt, ke, b, J_rotor of
-    the design's motor, T), ``design<suffix>_coefficients`` (alpha, beta, gamma, delta; 0 if
-    it failed) and ``design<suffix>_error`` (the failure's message, or "")."""
+    """The current controllers (app. C, python-control) a native FMU carries for the slave's
+    drive, whatever its mode: first the one designed for the slave's parameters, then those of
+    the motor presets at the slave's T (a package's drives of other presets need no FMU of
+    their own).  ``design<suffix>_keys``: a row of R, L, kt, ke, b, J_rotor of the design's
+    motor and T each; ``design<suffix>_coefficients``: alpha, beta, gamma, delta each (0 if
+    the first failed); ``design<suffix>_error``: the first's failure message, or ""."""
     from fmus.parts import drive_params
     from motor.current_controller import THESIS_POLES
     from motor.drive import _design
+    from motor.presets import MOTOR_PRESETS
 
     params, design = drive_params(slave, suffix)
-    p = design or params
-    coefficients, error = np.zeros(4), ""
-    try:
-        d = _design(p, slave.T, THESIS_POLES)
-        coefficients = np.array([d.alpha, d.beta, d.gamma, d.delta])
-    except ValueError as exc:
-        error = str(exc)
-    return {f"design{suffix}_key": np.array([p.R, p.L, p.kt, p.ke, p.b, p.J_rotor, slave.T], dtype=np.float64),
-            f"design{suffix}_coefficients": coefficients, f"design{suffix}_error": [error]}
+    keys, coefficients, error = [], [], ""
+    for k, p in enumerate([design or params, *(MOTOR_PRESETS[name] for name in sorted(MOTOR_PRESETS))]):
+        key = [p.R, p.L, p.kt, p.ke, p.b, p.J_rotor, slave.T]
+        if key in keys:
+            continue
+        try:
+            d = _design(p, slave.T, THESIS_POLES)
+        except ValueError as exc:
+            if k == 0:
+                keys.append(key)
+                coefficients.append([0.0] * 4)
+                error = str(exc)
+            continue
+        keys.append(key)
+        coefficients.append([d.alpha, d.beta, d.gamma, d.delta])
+    return {f"design{suffix}_keys": np.array(keys, dtype=np.float64),
+            f"design{suffix}_coefficients": np.array(coefficients, dtype=np.float64), f"design{suffix}_error": [error]}
 
 
 def _drive(slave):

@@ -95,8 +95,9 @@ static int build(const pcn_instance *in, actuated *a, pcn_text *why)
                             n + 1, L[n]), 1;
     memset(a, 0, sizeof *a);
     if (pcn_plant_setup(in, &a->config, a->z, why)) return 1;
-    const pcn_drive_design designs[2] = {{pcn_design1_key, pcn_design1_coefficients, pcn_design1_error[0]},
-                                         {pcn_design2_key, pcn_design2_coefficients, pcn_design2_error[0]}};
+    const pcn_drive_design designs[2] = {
+        {PCN_DESIGN1_KEYS_WORDS / PCN_DESIGN_KEY, pcn_design1_keys, pcn_design1_coefficients, pcn_design1_error[0]},
+        {PCN_DESIGN2_KEYS_WORDS / PCN_DESIGN_KEY, pcn_design2_keys, pcn_design2_coefficients, pcn_design2_error[0]}};
     for (int n = 0; n < 2; ++n) {
         pcn_drive_parameters p = parameters(in, n);
         if (pcn_drive_build(&p, &PRESETS, &designs[n], &a->drive[n], why)) return 1;

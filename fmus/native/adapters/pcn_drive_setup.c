@@ -147,7 +147,8 @@ static void design_source(const pcn_drive_parameters *p, int k, pcn_text *why)
     else pcn_addf(why, "parameter preset%s = '%s'", s, p->preset);
 }
 
-/* The current controller of the design values `key` (motor.drive._design): the built one, or refused. */
+/* The current controller of the design values `key` (motor.drive._design): a built one, or refused
+ * naming the parameter that set the first value differing from the nearest built design. */
 static int controller(const pcn_drive_parameters *p, const double *key, const pcn_drive_design *design,
                       pc_controller *c, pcn_text *why)
 {
@@ -157,18 +158,32 @@ static int controller(const pcn_drive_parameters *p, const double *key, const pc
         for (int k = 0; k < PCN_DESIGN_KEY; ++k) pcn_addf(why, k ? ", %s = %r" : "%s = %r", NAMES[k], key[k]);
         return pcn_addf(why, ": current controller design needs L > 0, got L=0.0"), 1;
     }
-    for (int k = 0; k < PCN_DESIGN_KEY; ++k) {
-        if (key[k] == design->key[k]) continue;
-        design_source(p, k, why);
-        pcn_addf(why, ": this native FMU carries the current controller designed (app. C) for ");
-        for (int j = 0; j < PCN_DESIGN_KEY; ++j) pcn_addf(why, j ? ", %s = %r" : "%s = %r", NAMES[j], design->key[j]);
-        return pcn_addf(why, " only, not for %s = %r (the ZOH design needs python-control: build the native FMU "
-                        "with these values as its start values, or use the pythonfmu FMU)", NAMES[k], key[k]), 1;
+    int nearest = 0, most = -1;
+    for (int j = 0; j < design->count; ++j) {
+        const double *built = design->keys + j * PCN_DESIGN_KEY;
+        int equal = 0;
+        for (int k = 0; k < PCN_DESIGN_KEY; ++k) equal += key[k] == built[k];
+        if (equal == PCN_DESIGN_KEY) {
+            if (j == 0 && design->error[0]) return pcn_addf(why, "%s", design->error), 1;
+            const double *a = design->coefficients + 4 * j;
+            *c = (pc_controller){.alpha = a[0], .beta = a[1], .gamma = a[2], .delta = a[3]};
+            return 0;
+        }
+        if (equal > most) {
+            most = equal;
+            nearest = j;
+        }
     }
-    if (design->error[0]) return pcn_addf(why, "%s", design->error), 1;
-    *c = (pc_controller){.alpha = design->coefficients[0], .beta = design->coefficients[1],
-                         .gamma = design->coefficients[2], .delta = design->coefficients[3]};
-    return 0;
+    const double *built = design->keys + nearest * PCN_DESIGN_KEY;
+    int k = 0;
+    while (key[k] == built[k]) ++k;
+    design_source(p, k, why);
+    pcn_addf(why, ": this native FMU carries the current controller designed (app. C) for ");
+    for (int j = 0; j < PCN_DESIGN_KEY; ++j) pcn_addf(why, j ? ", %s = %r" : "%s = %r", NAMES[j], built[j]);
+    return pcn_addf(why, " (the nearest of the %d designs it carries: its build's parameters, the motor presets at "
+                    "T = %r s), not for %s = %r (the ZOH design needs python-control: build the native FMU with "
+                    "these values as its start values, or use the pythonfmu FMU)", design->count,
+                    design->keys[PCN_DESIGN_KEY - 1], NAMES[k], key[k]), 1;
 }
 
 int pcn_drive_build(const pcn_drive_parameters *p, const pcn_motor_presets *presets, const pcn_drive_design *design,
@@ -241,6 +256,7 @@ double pcn_drive_torque(const pcn_drive_data *d, double omega)
     return pc_drive_torque(&d->drive, d->has_lugre != 0.0 ? &d->lugre : NULL, omega);
 }
 
+/* Drive.prepare_step: the coefficients of a new step length h (checked by the FMU's step rule). */
 void pcn_drive_prepare(pcn_drive_data *d, double h)
 {
     double ag[2], w[2];

@@ -8,9 +8,10 @@
  * `suffix` every message appends to a variable's name, as build_drive(slave, suffix) does).
  *
  * The current controller's design (app. C, python-control) is made when the FMU is built,
- * for its parameters then, and given here as a pcn_drive_design; a drive in current mode
- * whose design values (R, L, kt, ke, b, J_rotor of the design's motor, T) differ from it is
- * refused by name.  The motor presets travel as data too (pcn_motor_presets).
+ * for its parameters then and for each motor preset at its T, and given here as a
+ * pcn_drive_design; a drive in current mode whose design values (R, L, kt, ke, b, J_rotor of
+ * the design's motor, T) are none of them is refused by name.  The motor presets travel as
+ * data too (pcn_motor_presets).
  */
 #ifndef PCN_DRIVE_SETUP_H
 #define PCN_DRIVE_SETUP_H
@@ -38,11 +39,13 @@ typedef struct {
     const double *values;   /* count rows of PCN_MOTOR_FIELDS, in the names' order */
 } pcn_motor_presets;
 
-/* The current controller designed at the FMU's build. */
+/* The current controllers designed at the FMU's build: the first for its parameters then,
+ * the others for the motor presets at its T (fmus.native.models.drive_design). */
 typedef struct {
-    const double *key;            /* PCN_DESIGN_KEY values it was designed for */
-    const double *coefficients;   /* alpha, beta, gamma, delta (C.5) */
-    const char *error;            /* "" or the message its design failed with (motor.drive._design's) */
+    int count;
+    const double *keys;           /* count rows of the PCN_DESIGN_KEY values each was designed for */
+    const double *coefficients;   /* count rows of alpha, beta, gamma, delta (C.5) */
+    const char *error;            /* "" or the message the first's design failed with (motor.drive._design's) */
 } pcn_drive_design;
 
 /* A drive's parameters, as its FMU variables hold them. */
