@@ -22,6 +22,51 @@ from support.fmu_calls import Driver
 BALANCE_T = BalanceSettings().T
 
 
+def _controller_inputs():
+    """The circle's references, and measured angles of a pose beside them (their derivatives
+    by central differences) that leaves the table (x > x_max = 0.12 m) from step 90 to 140:
+    the tabulated model falls back to the exact one there, or refuses without
+    ``table_fallback``."""
+    from controller.kinematics import Kinematics
+    from controller.trajectories import get_trajectory
+    from plant import get_preset
+
+    kin, circle = Kinematics(get_preset("bench")), get_trajectory("circle")
+
+    def pose(k, t):
+        away = 0.17 * math.sin(math.pi * (k - 90) / 50) ** 2 if 90 <= k <= 140 else 0.0
+        r = circle(t)
+        angles = kin.inverse(r.x + 0.002 * math.sin(11.0 * t) + away, r.y - 0.001 * math.cos(7.0 * t))
+        return angles[0], angles[2]
+
+    def inputs(k, t):
+        d = 1e-4
+        (a1, a2), (b1, b2), (c1, c2) = pose(k, t), pose(k, t + d), pose(k, t + 2 * d)
+        r = circle(t)
+        return {"q1": b1, "q2": b2, "dq1": (c1 - a1) / (2 * d), "dq2": (c2 - a2) / (2 * d),
+                "ddq1": (c1 - 2 * b1 + a1) / d ** 2, "ddq2": (c2 - 2 * b2 + a2) / d ** 2,
+                "x_d": r.x, "y_d": r.y, "dx_d": r.dx, "dy_d": r.dy, "ddx_d": r.ddx, "ddy_d": r.ddy}
+    return inputs
+
+
+#: Every strategy of the slave (the thesis' eight, seed 001's two), the triangle's joint-space
+#: table, the adaptive gain, the exact model, the overrides, the delay, the table's refusal.
+CONTROLLER_PARAMETERS = (
+    [{}] + [{"strategy": s} for s in ("PDq", "PDx", "TCq", "TCx", "PDMDq", "PDMDx", "TCMDq", "TCMDx", "SMCq", "SMCx")]
+    + [{"strategy": "PDMDq", "trajectory": "triangle"}, {"strategy": "TCMDq", "trajectory": "hold"},
+       {"strategy": "TCMDx", "gamma1": 40.0, "gamma2": 15.0}, {"strategy": "PDMDq", "gamma1": 30.0},
+       {"strategy": "TCx", "model": "exact"}, {"strategy": "TCMDq", "model": "exact", "delay_steps": 2},
+       {"strategy": "SMCx", "model": "exact"}, {"strategy": "TCMDx", "delay_steps": 1, "kt1": 0.05},
+       {"strategy": "PDx", "lam": 40.0, "m_star": 0.3, "phi": 3.0, "k1": 20.0, "k2": 5.0, "preset": "thesis_sim"},
+       {"table_fallback": False},
+       # refusals at initialisation, in the slave's order
+       {"strategy": "PD"}, {"trajectory": "square"}, {"T": 0.0}, {"lam": math.nan}, {"phi": 2e6},
+       {"gamma2": -1.0}, {"kt1": -2.0}, {"kt2": 0.0}, {"kt1": 1e-13}, {"grid_step": 0.0},
+       {"y_min": 0.3}, {"grid_step": 1e-4}, {"delay_steps": 101}, {"preset": "nope"},
+       {"counter_mass1": -0.1}, {"counter_mass2": 1e-4}, {"lam": -2.0}, {"strategy": "PDx", "m_star": 0.0},
+       {"k2": -3.0}, {"model": "lookup"}, {"model_error": -1.0}])
+
+
 @dataclass
 class Scenario:
     """A model's run: its step size, inputs at step k (time t), parameter sets to try, an input
@@ -56,6 +101,7 @@ SCENARIOS = {
         [{}, {"kind": "dynamic"}, {"kind": "dynamic", "preset": "motor2", "R": 1.3, "L": 0.0},
          {"preset": "nope"}, {"R": -2.0}, {"ke": math.nan}, {"L": math.inf}, {"kind": "both"}, {"T": 0.0}],
         "omega", ("R", 1.5)),
+    "PositionController": Scenario(1e-3, _controller_inputs(), CONTROLLER_PARAMETERS, "q1", ("strategy", "PDx")),
     "Trajectory": Scenario(
         1e-3, lambda k, t: {}, [{}, {"kind": "triangle"}, {"kind": "thesis_circle"}, {"kind": "hold"},
                                 {"kind": "square"}, {"cycles": 0}, {"side_time": float("inf")}],
@@ -146,7 +192,7 @@ def test_native_fmu_equals_its_pythonfmu_twin(model, native_fmus, twin_fmus):
 
 
 #: The sampled models (fmus/sampling.py), run again with steps h = T / 4.
-SAMPLED = ("BalanceController", "CurrentObserver", "Derivator")
+SAMPLED = ("BalanceController", "CurrentObserver", "Derivator", "PositionController")
 
 
 @pytest.mark.parametrize("model", SAMPLED)
@@ -205,3 +251,40 @@ def test_design_parameters_away_from_the_build_are_refused_by_name(model, native
     assert [s.status for s in twin] == [0] * 6 and twin[-1].result == [""]
     assert native[3].status == 0 and says in native[3].messages[0][2]
     assert native[4].status == 2 and says in native[-1].result[0]
+
+
+def test_controller_falls_back_to_the_exact_model_off_the_table(native_fmus, twin_fmus):
+    """The script's measured pose leaves the table (x > 0.12 m): both count the samples that
+    used the exact model (``model_fallbacks``) alike, or refuse the step naming the pose
+    without ``table_fallback``.  Wrong code it catches: a fallback not taken, not counted, or
+    counted on a refused sample."""
+    scenario = SCENARIOS["PositionController"]
+    outs = outputs(Driver(twin_fmus["PositionController"]))
+    trace = compare(twin_fmus["PositionController"], native_fmus["PositionController"], scenario, {})
+    assert max(s.result[outs.index("model_fallbacks")] for s in trace if s.call[0] == "get") > 5
+    trace = compare(twin_fmus["PositionController"], native_fmus["PositionController"], scenario,
+                    {"table_fallback": False})
+    assert any("is outside the tabulated region x in [-0.12, 0.12]" in m[2] for s in trace for m in s.messages)
+
+
+@pytest.mark.parametrize("parameters, says", [
+    ({"model_error": 0.1}, "parameter model_error = 0.1: this native FMU carries the controller's model"),
+    ({"preset": "thesis_sim"}, "parameter preset = 'thesis_sim': this native FMU carries"),
+    ({"grid_step": 0.004}, "parameter grid_step = 0.004: this native FMU carries"),
+    ({"model": "exact", "gravity_y": -9.81}, "parameter gravity_y = -9.81: this native FMU carries"),
+    ({"model": "exact", "grid_step": 0.004}, ""),                  # the exact model needs no table
+    ({"strategy": "PDx", "model_error": 0.5, "gravity_y": -9.81, "counter_mass1": 0.3}, ""),   # PD: no model
+])
+def test_controller_model_away_from_the_build_is_refused_by_name(parameters, says, native_fmus):
+    """The model (H^, h^) and its table are made in Python at the build: a model-based strategy
+    with other plant or table parameters is refused at initialisation by name, and every step
+    after it; what does not use them runs (a reference and pose inside the workspace)."""
+    inputs = _controller_inputs()(0, 0.0)
+    calls = [("set", parameters), ("setup", 0.0), ("enter",), ("exit",), ("set", inputs), ("step", 0.0, 1e-3),
+             ("get", ["error", "tau1"])]
+    native = Driver(native_fmus["PositionController"]).run(calls)
+    assert native[3].status == 0
+    if says:
+        assert says in native[3].messages[0][2] and native[5].status == 2 and says in native[-1].result[0]
+    else:
+        assert native[5].status == 0 and native[-1].result[0] == "" and native[-1].result[1] != 0.0

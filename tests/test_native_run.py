@@ -18,13 +18,15 @@ from scenarios.scenes import get_scene
 
 @pytest.mark.parametrize("scene", ["bench_circle_TCMDx", "pendulum_push"])
 def test_scene_with_native_fmus_equals_the_pythonfmu_run(scene, built_fmus, tmp_path):
-    """Native: the bench's Derivators and Trajectory; the pendulum's plant and balance
-    controller (with a push at 1 s)."""
+    """Native: the bench's Trajectory, Derivator, current observers and position controller
+    (TCMDx on the tabulated model); the pendulum's plant and balance controller (with a push
+    at 1 s)."""
     system = replace(get_scene(scene).system, stop_time=1.5)
     fmu_dir = next(iter(built_fmus.values())).parent
     native = native_system(system, tmp_path / "native")
     swapped = [c for c in native.components if c.model.endswith(".fmu")]
     assert swapped and {c.name for c in swapped} == {c.name for c in system.components if c.model in NATIVE}
+    assert scene != "bench_circle_TCMDx" or "ctrl" in {c.name for c in swapped}
     a = simulate(system, mode="fmu", fmu_dir=fmu_dir)
     b = simulate(native, mode="fmu", fmu_dir=fmu_dir)
     assert a.error is None and b.error is None
