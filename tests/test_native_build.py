@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import shutil
+import struct
 import subprocess
 import zipfile
 
@@ -124,7 +125,9 @@ def test_state_with_a_changed_configuration_word_is_refused(native_fmus):
 def test_controller_state_with_forged_words_is_refused(native_fmus):
     """The position controller's data: the law's state (10 words), its parameters (the set-up
     of this instance's parameters: a gain forged is refused), the delay queue (rows past
-    delay_steps zero, the others finite), the fallback count; checksum recomputed each time."""
+    delay_steps zero, the others finite), the fallback count; and a String value not UTF-8
+    (the fuzz's flips made one of the error text, which a message then echoed); checksum
+    recomputed each time."""
     from controller import law
     from fmus.native import state_bytes
 
@@ -142,6 +145,14 @@ def test_controller_state_with_forged_words_is_refused(native_fmus):
         assert step.status == 3 and says in step.messages[0][2], (word, step.messages)
     native.call("bytes", "g", state_bytes.with_data_word(own, law.BUF_INTEGRAL, 0.25))
     assert native.call("deserialize", "g").status == 0     # the run state may be any finite value
+    # a String value that is not UTF-8 (the error text, which messages echo) is refused
+    assert native.call("step", 0.0, 1e-3).status == 2     # inputs 0: the reference (0, 0) is refused
+    refused = bytearray(native.fmu.serializeFMUstate(native.fmu.getFMUstate()))
+    refused[bytes(refused).index(b"reference (x_d, y_d)")] = 0x9F
+    struct.pack_into("=Q", refused, len(refused) - 8, state_bytes.fnv1a(bytes(refused[:-8])))
+    native.call("bytes", "u", bytes(refused))
+    step = native.call("deserialize", "u")
+    assert step.status == 3 and "do not fit" in step.messages[0][2], step.messages
     native.close()
 
 
