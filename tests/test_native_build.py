@@ -146,9 +146,10 @@ def test_controller_state_with_forged_words_is_refused(native_fmus):
     native.call("bytes", "g", state_bytes.with_data_word(own, law.BUF_INTEGRAL, 0.25))
     assert native.call("deserialize", "g").status == 0     # the run state may be any finite value
     # a String value that is not UTF-8 (the error text, which messages echo) is refused
-    assert native.call("step", 0.0, 1e-3).status == 2     # inputs 0: the reference (0, 0) is refused
+    native.call("set", {"q1": math.nan})
+    assert native.call("step", 0.0, 1e-3).status == 2     # refused: "error" holds why
     refused = bytearray(native.fmu.serializeFMUstate(native.fmu.getFMUstate()))
-    refused[bytes(refused).index(b"reference (x_d, y_d)")] = 0x9F
+    refused[bytes(refused).index(b"input q1 = nan")] = 0x9F
     struct.pack_into("=Q", refused, len(refused) - 8, state_bytes.fnv1a(bytes(refused[:-8])))
     native.call("bytes", "u", bytes(refused))
     step = native.call("deserialize", "u")
