@@ -2,9 +2,9 @@
 
     python benchmarks/native_controller_step.py [--strategy TCMDx] [--model tabulated] [--steps 2000] [--rounds 5]
 
-Both FMUs (``parcosim build`` and ``parcosim build --native``, ``strategy`` set before
-and ``model`` set before initialisation) are instantiated through fmpy in this process and fed the same circle references and measured
-angles near them.  Each round runs, for each FMU in turn, ``--steps`` steps of h = T (set the
+Both FMUs (``parcosim build`` and ``parcosim build --native``; ``strategy`` and ``model`` set
+before initialisation) are instantiated through fmpy in this process and fed the same circle
+references and measured angles near them.  Each round runs, for each FMU in turn, ``--steps`` steps of h = T (set the
 12 inputs, ``doStep``, read the 6 Real outputs); each ``doStep`` is timed (``doStep`` and its
 ctypes call, ``time.process_time_ns``, less a back-to-back timer pair), in CPU microseconds per
 step, the best of ``--rounds``.  A floor beside them: the same loop on the C low-pass of
@@ -108,7 +108,8 @@ def main(argv=None) -> int:
         for slave, _, _ in slaves.values():
             slave.terminate()
             slave.freeInstance()
-    print(f"PositionController {args.strategy}, {args.model} model, h = T = 1 ms, {args.steps} steps a round, best of {args.rounds}")
+    print(f"PositionController {args.strategy}, {args.model} model, h = T = 1 ms, {args.steps} steps a round, "
+          f"best of {args.rounds}")
     floor = best[FLOOR]
     print("| FMU | CPU per doStep (µs) | less the floor (µs) |\n|---|---:|---:|")
     for kind, cpu in best.items():

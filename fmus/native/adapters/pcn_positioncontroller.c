@@ -197,7 +197,8 @@ static int configure(const pcn_instance *in, pc_law_params *p, double k[2], pcn_
     const double *r = in->real;
     const double *row = strategy_row(in, why);
     if (!row) return 1;
-    if (!(r[PCN_SLOT_T] >= MIN_STEP)) return pcn_addf(why, "parameter T = %r s must be >= %G s", r[PCN_SLOT_T], MIN_STEP), 1;
+    if (!(r[PCN_SLOT_T] >= MIN_STEP))
+        return pcn_addf(why, "parameter T = %r s must be >= %G s", r[PCN_SLOT_T], MIN_STEP), 1;
     const double v[N_NUMERIC] = {
         r[PCN_SLOT_lam], r[PCN_SLOT_m_star], r[PCN_SLOT_phi], r[PCN_SLOT_k1], r[PCN_SLOT_k2], r[PCN_SLOT_gamma1],
         r[PCN_SLOT_gamma2], r[PCN_SLOT_model_error], r[PCN_SLOT_kt1], r[PCN_SLOT_kt2], r[PCN_SLOT_grid_step],
@@ -223,7 +224,8 @@ static int configure(const pcn_instance *in, pc_law_params *p, double k[2], pcn_
         if (!(positive[j] > 0.0)) return pcn_addf(why, "%s = %r must be > 0", named[j], positive[j]), 1;
     if (!(m_star >= 0.0)) return pcn_addf(why, "m_star = %r must be >= 0", m_star), 1;
     if (!model_based && m_star <= 0.0)
-        return pcn_addf(why, "m_star = %r must be > 0 for the PD strategy %s", m_star, in->string[PCN_SLOT_strategy]), 1;
+        return pcn_addf(why, "m_star = %r must be > 0 for the PD strategy %s", m_star,
+                        in->string[PCN_SLOT_strategy]), 1;
     for (int j = 0; j < 2; ++j)
         if (!(k[j] >= 0.0)) return pcn_addf(why, "k%d = %r must be >= 0", j + 1, k[j]), 1;
     const char *model = in->string[PCN_SLOT_model];
