@@ -288,3 +288,16 @@ def test_controller_model_away_from_the_build_is_refused_by_name(parameters, say
         assert says in native[3].messages[0][2] and native[5].status == 2 and says in native[-1].result[0]
     else:
         assert native[5].status == 0 and native[-1].result[0] == "" and native[-1].result[1] != 0.0
+
+
+def test_substepped_controller_equals_its_twin_for_every_strategy(native_fmus, twin_fmus):
+    """h = T / 4 for each strategy (and the exact model, the adaptive gain, the delay queue),
+    sampling on sub-steps 1, 2, 3 in turn, the state taken and restored mid-period.  Wrong
+    code it catches: a strategy whose law, model or queue advances on a held sub-step."""
+    base = SCENARIOS["PositionController"]
+    scenario = Scenario(1e-3 / 4, base.inputs, bad_input=base.bad_input, fixed=base.fixed)
+    runs = [{"strategy": s} for s in ("PDq", "PDx", "TCq", "TCx", "PDMDq", "PDMDx", "TCMDq", "TCMDx", "SMCq", "SMCx")]
+    runs += [{"strategy": "TCMDx", "model": "exact", "gamma1": 40.0, "delay_steps": 2}]
+    for k, parameters in enumerate(runs):
+        compare(twin_fmus["PositionController"], native_fmus["PositionController"], scenario,
+                {**parameters, "sample_phase": 1 + k % 3})
