@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import shutil
+import struct
 import subprocess
 import zipfile
 
@@ -121,7 +122,42 @@ def test_state_with_a_changed_configuration_word_is_refused(native_fmus):
     native.close()
 
 
-@pytest.mark.parametrize("model", ["BalanceController", "CurrentObserver", "Derivator"])
+def test_controller_state_with_forged_words_is_refused(native_fmus):
+    """The position controller's data: the law's state (10 words), its parameters (the set-up
+    of this instance's parameters: a gain forged is refused), the delay queue (rows past
+    delay_steps zero, the others finite), the fallback count; and a String value not UTF-8
+    (the fuzz's flips made one of the error text, which a message then echoed); checksum
+    recomputed each time."""
+    from controller import law
+    from fmus.native import state_bytes
+
+    native = Driver(native_fmus["PositionController"])
+    native.run([("set", {"strategy": "TCMDx", "delay_steps": 1}), ("setup", 0.0), ("enter",), ("exit",)])
+    own = native.fmu.serializeFMUstate(native.fmu.getFMUstate())
+    words = state_bytes.data_words(own)
+    assert words[law.BUF_KP] == 60.0 ** 2 and words[law.STATE["k"].start] == 103.0   # TCMDx's (Table 8)
+    queue = law.STATE_SIZE + law.PARAMS_SIZE
+    for word, value, says in ((law.BUF_KP, 3601.0, "configuration words"), (law.BUF_MODEL, 2.0, "configuration"),
+                              (law.BUF_INTEGRAL, math.nan, "state word"), (queue + 1, math.inf, "delay queue"),
+                              (queue + 4, 1.0, "delay queue"), (len(words) - 3, 0.5, "fallback count")):
+        native.call("bytes", "f", state_bytes.with_data_word(own, word, value))
+        step = native.call("deserialize", "f")
+        assert step.status == 3 and says in step.messages[0][2], (word, step.messages)
+    native.call("bytes", "g", state_bytes.with_data_word(own, law.BUF_INTEGRAL, 0.25))
+    assert native.call("deserialize", "g").status == 0     # the run state may be any finite value
+    # a String value that is not UTF-8 (the error text, which messages echo) is refused
+    native.call("set", {"q1": math.nan})
+    assert native.call("step", 0.0, 1e-3).status == 2     # refused: "error" holds why
+    refused = bytearray(native.fmu.serializeFMUstate(native.fmu.getFMUstate()))
+    refused[bytes(refused).index(b"input q1 = nan")] = 0x9F
+    struct.pack_into("=Q", refused, len(refused) - 8, state_bytes.fnv1a(bytes(refused[:-8])))
+    native.call("bytes", "u", bytes(refused))
+    step = native.call("deserialize", "u")
+    assert step.status == 3 and "do not fit" in step.messages[0][2], step.messages
+    native.close()
+
+
+@pytest.mark.parametrize("model", ["BalanceController", "CurrentObserver", "Derivator", "PositionController"])
 def test_state_with_a_forged_substep_counter_is_refused(model, native_fmus):
     """The sub-step counter (the model data's last two words: sub-step k, n = T / h) must be
     whole with 0 <= k < n, or both 0; a forged one (checksum recomputed) is refused by name,

@@ -25,6 +25,51 @@ DRIVE_TWIN = {"friction": "lugre", "mu": 0.06, "mu_s": 0.08, "pwm_counts": 1000,
               "current_noise": 0.1, "noise_seed": 7, "noise_instance": 2}
 
 
+def _controller_inputs():
+    """The circle's references, and measured angles of a pose beside them (their derivatives
+    by central differences) that leaves the table (x > x_max = 0.12 m) from step 90 to 140:
+    the tabulated model falls back to the exact one there, or refuses without
+    ``table_fallback``."""
+    from controller.kinematics import Kinematics
+    from controller.trajectories import get_trajectory
+    from plant import get_preset
+
+    kin, circle = Kinematics(get_preset("bench")), get_trajectory("circle")
+
+    def pose(k, t):
+        away = 0.17 * math.sin(math.pi * (k - 90) / 50) ** 2 if 90 <= k <= 140 else 0.0
+        r = circle(t)
+        angles = kin.inverse(r.x + 0.002 * math.sin(11.0 * t) + away, r.y - 0.001 * math.cos(7.0 * t))
+        return angles[0], angles[2]
+
+    def inputs(k, t):
+        d = 1e-4
+        (a1, a2), (b1, b2), (c1, c2) = pose(k, t), pose(k, t + d), pose(k, t + 2 * d)
+        r = circle(t)
+        return {"q1": b1, "q2": b2, "dq1": (c1 - a1) / (2 * d), "dq2": (c2 - a2) / (2 * d),
+                "ddq1": (c1 - 2 * b1 + a1) / d ** 2, "ddq2": (c2 - 2 * b2 + a2) / d ** 2,
+                "x_d": r.x, "y_d": r.y, "dx_d": r.dx, "dy_d": r.dy, "ddx_d": r.ddx, "ddy_d": r.ddy}
+    return inputs
+
+
+#: Every strategy of the slave (the thesis' eight, seed 001's two), the triangle's joint-space
+#: table, the adaptive gain, the exact model, the overrides, the delay, the table's refusal.
+CONTROLLER_PARAMETERS = (
+    [{}] + [{"strategy": s} for s in ("PDq", "PDx", "TCq", "TCx", "PDMDq", "PDMDx", "TCMDq", "TCMDx", "SMCq", "SMCx")]
+    + [{"strategy": "PDMDq", "trajectory": "triangle"}, {"strategy": "TCMDq", "trajectory": "hold"},
+       {"strategy": "TCMDx", "gamma1": 40.0, "gamma2": 15.0}, {"strategy": "PDMDq", "gamma1": 30.0},
+       {"strategy": "TCx", "model": "exact"}, {"strategy": "TCMDq", "model": "exact", "delay_steps": 2},
+       {"strategy": "SMCx", "model": "exact"}, {"strategy": "TCMDx", "delay_steps": 1, "kt1": 0.05},
+       {"strategy": "PDx", "lam": 40.0, "m_star": 0.3, "phi": 3.0, "k1": 20.0, "k2": 5.0, "preset": "thesis_sim"},
+       {"table_fallback": False},
+       # refusals at initialisation, in the slave's order
+       {"strategy": "PD"}, {"trajectory": "square"}, {"T": 0.0}, {"lam": math.nan}, {"phi": 2e6},
+       {"gamma2": -1.0}, {"kt1": -2.0}, {"kt2": 0.0}, {"kt1": 1e-13}, {"grid_step": 0.0},
+       {"y_min": 0.3}, {"grid_step": 1e-4}, {"delay_steps": 101}, {"preset": "nope"},
+       {"counter_mass1": -0.1}, {"counter_mass2": 1e-4}, {"lam": -2.0}, {"strategy": "PDx", "m_star": 0.0},
+       {"k2": -3.0}, {"model": "lookup"}, {"model_error": -1.0}])
+
+
 @dataclass
 class Scenario:
     """A model's run: its step size, inputs at step k (time t), parameter sets to try, an input
@@ -76,6 +121,7 @@ SCENARIOS = {
          {"R_design": -5.0}, {"L_design": 2e6}, {"omega0": math.inf}, {"i0": 2e6}, {"v_max": 0.0},
          {"preset": "seed000"}],
         "omega", ("R", 1.5)),
+    "PositionController": Scenario(1e-3, _controller_inputs(), CONTROLLER_PARAMETERS, "q1", ("strategy", "PDx")),
     "Trajectory": Scenario(
         1e-3, lambda k, t: {}, [{}, {"kind": "triangle"}, {"kind": "thesis_circle"}, {"kind": "hold"},
                                 {"kind": "square"}, {"cycles": 0}, {"side_time": float("inf")}],
@@ -200,7 +246,8 @@ def test_native_fmu_equals_its_pythonfmu_twin(model, native_fmus, twin_fmus):
 
 
 #: The sampled models (fmus/sampling.py; the drive in current mode), run again with steps h = T / 4.
-SAMPLED = ("ActuatedFiveBarPlant", "BalanceController", "CurrentObserver", "DCMotorDrive", "Derivator")
+SAMPLED = ("ActuatedFiveBarPlant", "BalanceController", "CurrentObserver", "DCMotorDrive", "Derivator",
+           "PositionController")
 
 
 @pytest.mark.parametrize("model", SAMPLED)
@@ -320,3 +367,53 @@ def test_drive_in_voltage_mode_takes_any_step_as_its_twin(native_fmus, twin_fmus
             assert steps[:base.steps] == [0] * base.steps
         else:
             assert "does not divide the sample time T = 0.001 s; DCMotorDrive accepts in current mode" in said
+
+
+def test_controller_falls_back_to_the_exact_model_off_the_table(native_fmus, twin_fmus):
+    """The script's measured pose leaves the table (x > 0.12 m): both count the samples that
+    used the exact model (``model_fallbacks``) alike, or refuse the step naming the pose
+    without ``table_fallback``.  Wrong code it catches: a fallback not taken, not counted, or
+    counted on a refused sample."""
+    scenario = SCENARIOS["PositionController"]
+    outs = outputs(Driver(twin_fmus["PositionController"]))
+    trace = compare(twin_fmus["PositionController"], native_fmus["PositionController"], scenario, {})
+    assert max(s.result[outs.index("model_fallbacks")] for s in trace if s.call[0] == "get") > 5
+    trace = compare(twin_fmus["PositionController"], native_fmus["PositionController"], scenario,
+                    {"table_fallback": False})
+    assert any("is outside the tabulated region x in [-0.12, 0.12]" in m[2] for s in trace for m in s.messages)
+
+
+@pytest.mark.parametrize("parameters, says", [
+    ({"model_error": 0.1}, "parameter model_error = 0.1: this native FMU carries the controller's model"),
+    ({"preset": "thesis_sim"}, "parameter preset = 'thesis_sim': this native FMU carries"),
+    ({"grid_step": 0.004}, "parameter grid_step = 0.004: this native FMU carries"),
+    ({"model": "exact", "gravity_y": -9.81}, "parameter gravity_y = -9.81: this native FMU carries"),
+    ({"model": "exact", "grid_step": 0.004}, ""),                  # the exact model needs no table
+    ({"strategy": "PDx", "model_error": 0.5, "gravity_y": -9.81, "counter_mass1": 0.3}, ""),   # PD: no model
+])
+def test_controller_model_away_from_the_build_is_refused_by_name(parameters, says, native_fmus):
+    """The model (H^, h^) and its table are made in Python at the build: a model-based strategy
+    with other plant or table parameters is refused at initialisation by name, and every step
+    after it; what does not use them runs (a reference and pose inside the workspace)."""
+    inputs = _controller_inputs()(0, 0.0)
+    calls = [("set", parameters), ("setup", 0.0), ("enter",), ("exit",), ("set", inputs), ("step", 0.0, 1e-3),
+             ("get", ["error", "tau1"])]
+    native = Driver(native_fmus["PositionController"]).run(calls)
+    assert native[3].status == 0
+    if says:
+        assert says in native[3].messages[0][2] and native[5].status == 2 and says in native[-1].result[0]
+    else:
+        assert native[5].status == 0 and native[-1].result[0] == "" and native[-1].result[1] != 0.0
+
+
+def test_substepped_controller_equals_its_twin_for_every_strategy(native_fmus, twin_fmus):
+    """h = T / 4 for each strategy (and the exact model, the adaptive gain, the delay queue),
+    sampling on sub-steps 1, 2, 3 in turn, the state taken and restored mid-period.  Wrong
+    code it catches: a strategy whose law, model or queue advances on a held sub-step."""
+    base = SCENARIOS["PositionController"]
+    scenario = Scenario(1e-3 / 4, base.inputs, bad_input=base.bad_input, fixed=base.fixed)
+    runs = [{"strategy": s} for s in ("PDq", "PDx", "TCq", "TCx", "PDMDq", "PDMDx", "TCMDq", "TCMDx", "SMCq", "SMCx")]
+    runs += [{"strategy": "TCMDx", "model": "exact", "gamma1": 40.0, "delay_steps": 2}]
+    for k, parameters in enumerate(runs):
+        compare(twin_fmus["PositionController"], native_fmus["PositionController"], scenario,
+                {**parameters, "sample_phase": 1 + k % 3})

@@ -159,6 +159,40 @@ def test_a_native_trajectory_feeds_a_native_derivator_in_the_c_host_as_their_twi
         np.testing.assert_allclose(run.columns[name], twin[:, j], rtol=0, atol=1e-12 * peak, err_msg=name)
 
 
+def test_a_native_trajectory_drives_a_native_position_controller_in_the_c_host_as_their_twins_do(
+        host, native_fmus, twin_fmus, tmp_path):
+    """The circle (native Trajectory) as the references of the native PositionController
+    (its default, TCx on its table) in libcosim, the measured pose held at the bench's
+    start; the pythonfmu controller, fed in fmpy the references libcosim gave (each held over
+    the step after it, the first the twin Trajectory's after initialisation): torques,
+    current references and errors within 1e-12 of their peaks, no Python in the host."""
+    from controller.kinematics import Kinematics
+    from controller.trajectories import BENCH_START
+    from plant import get_preset
+
+    angles = Kinematics(get_preset("bench")).inverse(*BENCH_START)
+    measured = {"q1": angles[0], "q2": angles[2]}
+    references = ["x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d"]
+    names = ["tau1", "tau2", "i_ref1", "i_ref2", "e1", "e2"]
+    steps = 1500
+    config = config_text(steps * H, step=H, slaves=[("traj", native_fmus["Trajectory"]),
+                                                    ("ctrl", native_fmus["PositionController"])],
+                         connections=[(f"traj.{r}", f"ctrl.{r}") for r in references],
+                         reals=[(f"ctrl.{q}", v) for q, v in measured.items()],
+                         outputs=[f"traj.{r}" for r in references] + [f"ctrl.{n}" for n in names])
+    run = run_host(host, tmp_path / "run", config)
+    assert run.report["libpython_mapped"] == "0" and set(run.fmu_binaries) == {"Trajectory.so",
+                                                                               "PositionController.so"}
+    first = twin_outputs(twin_fmus["Trajectory"], {}, references, 0)[0]
+    held = {r: np.concatenate([[first[j]], run.columns[f"traj.{r}"][:-1]]) for j, r in enumerate(references)}
+    held.update({q: np.full(steps, v) for q, v in measured.items()})
+    twin = twin_outputs(twin_fmus["PositionController"], held, names, steps)[1:]
+    for j, name in enumerate(names):
+        peak = np.max(np.abs(twin[:, j]))
+        assert peak > 1e-3, name                  # the circle moves the law
+        np.testing.assert_allclose(run.columns[f"ctrl.{name}"], twin[:, j], rtol=0, atol=1e-12 * peak, err_msg=name)
+
+
 SCENE = "bench_circle_TCMDx"
 
 

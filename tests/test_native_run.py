@@ -17,11 +17,11 @@ from scenarios.scenes import drives_in_plant, get_scene
 
 
 #: Per scene, the components that run native (the others: pythonfmu FMUs).
-NATIVE_COMPONENTS = {"bench_circle_TCMDx": {"traj", "deriv", "obs1", "obs2", "drive1", "drive2", "plant"},
-                     "bench_real_circle_TCMDx": {"traj", "deriv", "obs1", "obs2", "drive1", "drive2", "plant"},
+NATIVE_COMPONENTS = {"bench_circle_TCMDx": {"traj", "deriv", "ctrl", "obs1", "obs2", "drive1", "drive2", "plant"},
+                     "bench_real_circle_TCMDx": {"traj", "deriv", "ctrl", "obs1", "obs2", "drive1", "drive2", "plant"},
                      "pendulum_push": {"ctrl", "drive_l", "drive_r", "plant"},
                      # the drives inside the plant: an ActuatedFiveBarPlant (parcosim run --drives-in-plant 1)
-                     "bench_circle_TCMDx --drives-in-plant": {"traj", "deriv", "obs1", "obs2", "plant"}}
+                     "bench_circle_TCMDx --drives-in-plant": {"traj", "deriv", "ctrl", "obs1", "obs2", "plant"}}
 
 
 def system_of(key: str):
@@ -35,7 +35,8 @@ def system_of(key: str):
 @pytest.mark.parametrize("scene", sorted(NATIVE_COMPONENTS))
 def test_scene_with_native_fmus_equals_the_pythonfmu_run(scene, built_fmus, tmp_path):
     """Native: the bench's Trajectory, Derivator, current observers, drives (the bench twin's:
-    LuGre friction, PWM, current noise and offset) and FiveBarPlant (the bench preset, started
+    LuGre friction, PWM, current noise and offset), PositionController (TCMDx on
+    the tabulated model) and FiveBarPlant (the bench preset, started
     at rest at (x0, y0)); the pendulum's plant, balance controller and drives (with a push at 1 s);
     the bench with its drives inside an ActuatedFiveBarPlant."""
     system = system_of(scene)

@@ -2,10 +2,12 @@
 UBSan: each FMU is rebuilt from its sources with the sanitizers and driven by
 tests/support/native_fuzz.py in a subprocess: careless calls, every truncation of a saved
 state and 300 forged ones whose checksum is made right, so the parser's checks past the
-checksum are reached.  Wrong code it catches: a read past the state's end, a string length
+checksum are reached; the position controller's steps run its law, on its table and off it
+(the exact model's fallback).  Wrong code it catches: a read past the state's end, a string length
 taken on trust, a slot out of range, undefined arithmetic."""
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 import zipfile
@@ -32,6 +34,15 @@ def test_native_fmu_survives_careless_calls_and_forged_states_under_asan(model, 
     worker = Path(__file__).parent / "support" / "native_fuzz.py"
     env = _sanitized_env(binary)
     env["PYTHONPATH"] = str(Path(__file__).resolve().parent.parent)
-    run = subprocess.run([sys.executable, str(worker), str(folder), "28"], env=env, capture_output=True, text=True,
-                         timeout=300)
+    rows = []
+    if model == "PositionController":   # steps the law runs: on the table, then off it (the exact fallback)
+        from test_native_equality import _controller_inputs
+
+        inputs = _controller_inputs()
+        rows = [tmp_path / "inputs.json"]
+        rows[0].write_text(json.dumps([inputs(90 + k, (90 + k) * 1e-3) for k in range(30)]))
+    run = subprocess.run([sys.executable, str(worker), str(folder), "28", *map(str, rows)], env=env,
+                         capture_output=True, text=True, errors="backslashreplace", timeout=300)
     assert run.returncode == 0 and "survived" in run.stdout, run.stderr[-3000:]
+    if rows:
+        assert "30 of 30 steps accepted" in run.stdout, run.stdout[-300:]

@@ -1,5 +1,5 @@
 """The native FMUs write floats in messages as Python does (fmus/native/pcn_text.c): repr()
-(shortest round trip) and format(x, ".6g"), checked against Python itself on hand-picked
+(shortest round trip), format(x, ".6g") and format(x, ".3g"), checked against Python itself on hand-picked
 edge values, every power of two, random bit patterns and hypothesis' floats."""
 from __future__ import annotations
 
@@ -22,7 +22,7 @@ int main(void)
     while (fread(&x, sizeof x, 1, stdin) == 1) {
         pcn_text t;
         pcn_clear(&t);
-        pcn_addf(&t, "%r|%G", x, x);
+        pcn_addf(&t, "%r|%G|%g", x, x, x);
         puts(t.text);
     }
     return 0;
@@ -49,9 +49,10 @@ def formatter(tmp_path_factory):
 
 
 def check(formatter, values):
-    for value, (r, g) in zip(values, formatter(values), strict=True):
+    for value, (r, g, g3) in zip(values, formatter(values), strict=True):
         assert r == repr(float(value)), value
         assert g == format(float(value), ".6g"), value
+        assert g3 == format(float(value), ".3g"), value
 
 
 def test_edges_and_every_power_of_two(formatter):

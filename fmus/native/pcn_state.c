@@ -8,7 +8,7 @@
  *   checksum u64 (FNV-1a of every byte before it).
  * A state is refused (fmi2Error, the instance unchanged) unless every field fits this FMU: its
  * identifier and GUID, the counts, parameters equal to this instance's (the configuration),
- * flags 0/1, strings without NUL, and the adapter's check of the model data (configuration
+ * flags 0/1, strings UTF-8 without NUL, and the adapter's check of the model data (configuration
  * words equal, sizes).
  */
 #include <stdint.h>
@@ -128,14 +128,40 @@ static int take(reader *r, void *out, size_t n)
     return 1;
 }
 
-/* A str16/str32 field equal to `expected` (NULL: any) copied into out (malloc'd, may be NULL). */
+/* Whether n bytes are UTF-8 (FMI's strings) as Python decodes it: no overlong form, no
+ * surrogate, nothing past U+10FFFF: a string restored from a state is echoed in messages. */
+static int is_utf8(const unsigned char *s, size_t n)
+{
+    for (size_t k = 0; k < n;) {
+        uint32_t c = s[k], least;
+        size_t more;
+        if (c < 0x80) {
+            ++k;
+            continue;
+        }
+        if ((c & 0xE0) == 0xC0) more = 1, least = 0x80, c &= 0x1F;
+        else if ((c & 0xF0) == 0xE0) more = 2, least = 0x800, c &= 0x0F;
+        else if ((c & 0xF8) == 0xF0) more = 3, least = 0x10000, c &= 0x07;
+        else return 0;
+        if (n - k <= more) return 0;
+        for (size_t j = 1; j <= more; ++j) {
+            if ((s[k + j] & 0xC0) != 0x80) return 0;
+            c = (c << 6) | (s[k + j] & 0x3Fu);
+        }
+        if (c < least || c > 0x10FFFF || (c >= 0xD800 && c <= 0xDFFF)) return 0;
+        k += more + 1;
+    }
+    return 1;
+}
+
+/* A str16/str32 field (UTF-8 without NUL) copied into out (malloc'd). */
 static int take_string(reader *r, size_t width, char **out)
 {
     uint32_t n = 0;
     uint16_t n16 = 0;
     if (width == 2 ? !take(r, &n16, 2) : !take(r, &n, 4)) return 0;
     if (width == 2) n = n16;
-    if (r->size - r->at < n || memchr(r->bytes + r->at, '\0', n)) return 0;
+    if (r->size - r->at < n || memchr(r->bytes + r->at, '\0', n) || !is_utf8(r->bytes + r->at, n)) return 0;
     *out = malloc((size_t)n + 1);
     if (*out == NULL) return 0;
     memcpy(*out, r->bytes + r->at, n);

@@ -111,11 +111,11 @@ static void append(pcn_text *t, const char *s)
     t->text[t->length] = '\0';
 }
 
-/* Python's format(x, ".6g"): C's %.6g, but "nan"/"inf" without C's sign of a NaN. */
-static void g6(double x, char *out)
+/* Python's format(x, ".<digits>g"): C's %.*g, but "nan" without C's sign of a NaN. */
+static void general(double x, int digits, char *out)
 {
     if (isnan(x)) strcpy(out, "nan");
-    else snprintf(out, PCN_REPR_SIZE, "%.6g", x);
+    else snprintf(out, PCN_REPR_SIZE, "%.*g", digits, x);
 }
 
 void pcn_addf(pcn_text *t, const char *format, ...)
@@ -134,7 +134,8 @@ void pcn_addf(pcn_text *t, const char *format, ...)
         }
         switch (*++p) {
         case 'r': pcn_repr(va_arg(ap, double), piece); break;
-        case 'G': g6(va_arg(ap, double), piece); break;
+        case 'G': general(va_arg(ap, double), 6, piece); break;
+        case 'g': general(va_arg(ap, double), 3, piece); break;
         case 'B': strcpy(piece, va_arg(ap, int) ? "True" : "False"); break;
         case 's': snprintf(piece, sizeof piece, "%s", va_arg(ap, const char *)); break;
         case 'd': snprintf(piece, sizeof piece, "%d", va_arg(ap, int)); break;

@@ -1,7 +1,7 @@
 /* Messages of the native FMUs, worded and formatted as the pythonfmu FMUs' (docs/native.md).
  *
  * Python formats a float in a message with repr() (the shortest string that reads back to the
- * same double) or with format(x, ".6g"); pcn_repr and pcn_g6 give the same characters, so a
+ * same double) or with format(x, ".6g") or ".3g"; pcn_repr and pcn_addf give the same characters, so a
  * native FMU's refusal is the pythonfmu twin's, byte for byte.  Locale: the C locale's '.'.
  */
 #ifndef PCN_TEXT_H
@@ -26,6 +26,7 @@ void pcn_clear(pcn_text *t);
 /* Append printf-formatted text, where two conversions of Python are added:
  *   %r  a double, as Python's repr(float),
  *   %G  a double, as Python's format(x, ".6g"),
+ *   %g  a double, as Python's format(x, ".3g"),
  *   %B  an int, as Python's repr(bool) (True / False),
  *   %s, %d, %u, %%  as printf. */
 void pcn_addf(pcn_text *t, const char *format, ...);

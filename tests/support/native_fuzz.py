@@ -1,11 +1,14 @@
 """Run in a subprocess under AddressSanitizer (tests/test_native_sanitized.py): drive one
 unzipped native FMU through fmpy with careless calls and forged states; any memory error
-ends the process with ASan's exit status.  Usage: python native_fuzz.py UNZIPPED_DIR SEED"""
+ends the process with ASan's exit status.  Usage: python native_fuzz.py UNZIPPED_DIR SEED [INPUTS.json]
+(INPUTS.json: 30 rows {input name: value} for the steps, in place of random inputs)."""
 from __future__ import annotations
 
+import json
 import random
 import struct
 import sys
+from pathlib import Path
 
 from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
@@ -26,7 +29,7 @@ def with_checksum(data: bytearray) -> bytes:
     return bytes(data)
 
 
-def main(folder: str, seed: int) -> None:
+def main(folder: str, seed: int, rows=None) -> None:
     rng = random.Random(seed)
     md = read_model_description(folder)
     fmu = FMU2Slave(guid=md.guid, unzipDirectory=folder, modelIdentifier=md.coSimulation.modelIdentifier,
@@ -58,10 +61,17 @@ def main(folder: str, seed: int) -> None:
     fmu.enterInitializationMode()
     quiet(fmu.setupExperiment, 0.0)
     fmu.exitInitializationMode()
-    reals = [v.valueReference for v in md.modelVariables if v.type == "Real" and v.causality == "input"]
+    inputs = [v for v in md.modelVariables if v.type == "Real" and v.causality == "input"]
+    reals = [v.valueReference for v in inputs]
+    accepted = 0
     for k in range(30):
-        quiet(fmu.setReal, reals, [rng.uniform(-0.1, 0.1) for _ in reals])
-        quiet(fmu.doStep, k * 1e-3, 1e-3)
+        row = rows[k] if rows else {v.name: rng.uniform(-0.1, 0.1) for v in inputs}
+        quiet(fmu.setReal, reals, [row[v.name] for v in inputs])
+        try:
+            fmu.doStep(k * 1e-3, 1e-3)
+            accepted += 1
+        except FMICallException:
+            pass
     for kind, vrs in by_type.items():
         quiet(getattr(fmu, f"get{kind}"), vrs)
     quiet(fmu.setString, strings, [long_text] * len(strings))   # refused after initialisation, named
@@ -96,8 +106,8 @@ def main(folder: str, seed: int) -> None:
     quiet(fmu.doStep, 0.031, 1e-3)
     fmu.reset()
     fmu.freeInstance()
-    print("survived", len(forged), "forged states")
+    print("survived", len(forged), "forged states;", accepted, "of 30 steps accepted")
 
 
 if __name__ == "__main__":
-    main(sys.argv[1], int(sys.argv[2]))
+    main(sys.argv[1], int(sys.argv[2]), json.loads(Path(sys.argv[3]).read_text()) if len(sys.argv) > 3 else None)
