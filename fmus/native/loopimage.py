@@ -18,6 +18,7 @@ configuration the FMU state's check compares (:attr:`LoopImage.fixed`).
 from __future__ import annotations
 
 import ctypes
+import re
 import subprocess
 from dataclasses import dataclass, field
 
@@ -27,6 +28,7 @@ import kernels
 
 from ..compiled import NotCompilable, Plan, _adapters
 from ..stepper import Stepper
+from .build import KERNELS
 
 WORD = 8
 #: Relocation kinds (fmus/native/pcn_loop.h): into the data arena, the scratch arena, a function.
@@ -237,27 +239,43 @@ def loop_image(system, stepper: Stepper) -> LoopImage:
     return image
 
 
+def refusal_name(kernel: str, code: int) -> str:
+    """``code`` of the kernel ``pc_<model>_io`` as its header names it (``PC_LAW_TABLE_HOLE: its
+    cell has a left-out corner``), else the number."""
+    prefix = f"PC_{kernel.split('_')[1].upper()}_"
+    pattern = re.compile(rf"({prefix}\w+)\s*=\s*{int(code)}\b,?\s*/\*\s*(.*?)\s*\*/")
+    for header in sorted(KERNELS.glob("*.h")):
+        found = pattern.search(header.read_text())
+        if found:
+            return f"refusal {found[1]}: {found[2]}"
+    return f"refusal code {code}"
+
+
 def _run_to_stop(system, plan, stepper, arenas, image) -> list:
     """Run the loop over the system's stop time (Python's side, the same kernels); a
     member that declines a step refuses the build.  Returns the (first word, words) runs of
     data words the run never changed."""
-    def snapshot():
-        data = bytearray(image.data)
-        for b in arenas.blocks:
-            if b.ctype is None:
-                data[b.offset:b.offset + b.size] = ctypes.string_at(b.address, b.size)
-        return np.frombuffer(bytes(data[:image.values_word * WORD]), dtype=np.uint64)
-
-    before = snapshot()
+    blocks = [b for b in arenas.blocks if b.ctype is None]
+    views = [np.frombuffer((ctypes.c_uint8 * b.size).from_address(b.address), dtype=np.uint8) for b in blocks]
+    initial = [v.copy() for v in views]
+    changed = [np.zeros(b.size, dtype=bool) for b in blocks]
     values = np.array(stepper.values, dtype=float)
     record = np.zeros((system.steps + 1, len(stepper.record_slots)))
-    stop = plan.run(values, record, 0, system.steps, 0.0, system.step)
-    if stop.member >= 0:
-        a = plan.adapters[stop.member]
-        raise NotCompilable(f"component {a.name} ({a.model}): its kernel {a.kernel} declines the step from t = "
-                            f"{stop.time!r} s (refusal code {stop.refusal.code}), which the compiled mode takes in "
-                            "Python; a native FMU has no Python to take it")
-    same = before == snapshot()
+    t = 0.0
+    for k in range(system.steps):      # step by step: a word that changes and comes back is run state
+        stop = plan.run(values, record, k, k + 1, t, system.step)
+        if stop.member >= 0:
+            a = plan.adapters[stop.member]
+            raise NotCompilable(f"component {a.name} ({a.model}): its kernel {a.kernel} declines the step from t = "
+                                f"{stop.time!r} s ({refusal_name(a.kernel, stop.refusal.code)}), which the compiled "
+                                "mode takes in Python; a native FMU has no Python to take it")
+        t = stop.time
+        for c, v, v0 in zip(changed, views, initial):
+            c |= v != v0
+    same = np.ones(image.values_word, dtype=bool)
+    for b, c in zip(blocks, changed):
+        words = np.pad(c, (0, -b.size % WORD)).reshape(-1, WORD).any(axis=1)
+        same[b.offset // WORD:b.offset // WORD + words.size] = ~words
     runs, k = [], 0
     while k < same.size:
         if same[k]:
