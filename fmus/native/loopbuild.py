@@ -10,6 +10,7 @@ A system the compiled mode does not run in C is refused, naming why.
 """
 from __future__ import annotations
 
+import ctypes
 import json
 import math
 import sys
@@ -26,6 +27,8 @@ from .loopimage import LoopImage, loop_image
 
 MODEL = "ClosedLoop"
 #: Every kernel (the library's build stamp aside): the members' I/O steps and what they call.
+#: The C types whose sizes the contexts' image was laid out with (this machine's ABI).
+ABI = ("int", "long", "void_p", "double")
 LOOP_KERNELS = tuple(sorted(p.name for p in KERNELS.glob("*.c") if p.name != "pc_version.c"))
 
 
@@ -73,7 +76,8 @@ def loop_table(image: LoopImage, outputs: list, step: float, most: int) -> str:
              f"    {len(image.data) // 8}, {len(image.scratch) // 8}, data_image, scratch_image,",
              f"    {len(image.relocations)}, relocations, functions, {len(image.members)}, members, io,",
              f"    {len(image.groups)}, group_substeps, group_end, in_end, in_x, in_slot, out_end, out_x, out_slot,",
-             f"    {image.values_word}, {image.n_values}, {image.time_word}, {len(outputs)}, output_variable, output_value,",
+             f"    {image.values_word}, {image.n_values}, {image.time_word},",
+             f"    {len(outputs)}, output_variable, output_value,",
              f"    {len(image.fixed)}, fixed, {step!r}, {most}L,", "};", ""]
     return "\n".join(lines)
 
@@ -118,7 +122,8 @@ def export_native_fmu(system, path, compiler: str = "cc") -> Path:
         signals = {"x": "plant.x", "y": "plant.y", **{s: s for s in system.record}}
         outputs = [(slots[name], image.slots[signal]) for name, signal in signals.items()]
         scalars = {"loop_data_words": len(image.data) // 8, "loop_scratch_words": len(image.scratch) // 8,
-                   "loop_members": len(image.members), "loop_accepts": slave.accepted_steps()}
+                   "loop_members": len(image.members), "loop_accepts": slave.accepted_steps(),
+                   **{f"loop_sizeof_{t}": ctypes.sizeof(getattr(ctypes, f"c_{t}")) for t in ABI}}
         files = [HERE / n for n in GENERIC + ("pcn_loop.h",)] + [HERE / "adapters" / "pcn_closedloop.c"]
         files += kernel_files(LOOP_KERNELS)
         table = loop_table(image, outputs, system.step, most)

@@ -1,7 +1,8 @@
 """Run in a subprocess under AddressSanitizer (tests/test_native_sanitized.py): drive one
 unzipped native FMU through fmpy with careless calls and forged states; any memory error
-ends the process with ASan's exit status.  A big state (a whole loop's, 200 kB) is forged
-at a sample of places: its checksum is computed in Python, 40 ms each.  Usage: python native_fuzz.py UNZIPPED_DIR SEED"""
+ends the process with ASan's exit status.  A big state (a whole loop's, 200 kB) is cut at a
+sample of places, and its forgeries checksummed in C (Python's fnv1a takes 0.17 s on it).
+Usage: python native_fuzz.py UNZIPPED_DIR SEED"""
 from __future__ import annotations
 
 import ctypes

@@ -18,6 +18,11 @@ typedef struct {
 
 #define HEAD_WORDS ((long)((sizeof(loop_head) + sizeof(double) - 1) / sizeof(double)))
 
+/* The contexts' image is in the byte layout of the machine that exported it (ctypes' view of
+ * its C ABI): compiled for another (32-bit, or Windows' 4-byte long), it would be misread. */
+_Static_assert(sizeof(int) == PCN_LOOP_SIZEOF_INT && sizeof(long) == PCN_LOOP_SIZEOF_LONG &&
+                   sizeof(void *) == PCN_LOOP_SIZEOF_VOID_P && sizeof(double) == PCN_LOOP_SIZEOF_DOUBLE,
+               "the loop was exported on a machine with other C type sizes: export it again on the target's ABI");
 _Static_assert(sizeof(void *) <= sizeof(double), "a pointer fits a word of the scratch arena");
 
 static loop_head *head(const pcn_instance *in) { return (loop_head *)(in->scratch + PCN_LOOP_SCRATCH_WORDS); }
@@ -55,7 +60,8 @@ static pc_loop_plan *plan_of(pcn_instance *in)
 static void publish(pcn_instance *in)
 {
     const double *values = in->data + pcn_loop.values;
-    for (int k = 0; k < pcn_loop.n_outputs; ++k) in->real[pcn_loop.output_variable[k]] = values[pcn_loop.output_value[k]];
+    for (int k = 0; k < pcn_loop.n_outputs; ++k)
+        in->real[pcn_loop.output_variable[k]] = values[pcn_loop.output_value[k]];
 }
 
 /* A parameter away from the value the loop was built with. */
