@@ -12,7 +12,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from fmpy import simulate_fmu
+from fmpy import read_model_description, simulate_fmu
 
 from conftest import LOOP_SCENE
 from fmus.native import state_bytes
@@ -38,6 +38,20 @@ def test_native_loop_in_fmpy_tracks_as_parcosim_run(native_loop_fmu):
     result = simulate_fmu(str(native_loop_fmu), stop_time=stop, step_size=H, output_interval=H)
     got = scene_metrics(scene, _columns(result), 0.0, True)["e_ef_mm"]
     assert got == pytest.approx(expected, rel=1e-9, abs=0.0)
+
+
+def test_native_loop_declares_what_the_pythonfmu_closed_loop_declares(native_loop_fmu, twin_loop_fmu):
+    native, twin = read_model_description(str(native_loop_fmu)), read_model_description(str(twin_loop_fmu))
+
+    def declared(md):
+        return [(v.name, v.valueReference, v.type, v.causality, v.variability, v.start) for v in md.modelVariables]
+
+    assert declared(native) == declared(twin) and len(declared(native)) > 100
+    assert (native.modelName, native.coSimulation.modelIdentifier) == ("ClosedLoop", "ClosedLoop")
+    for field in ("startTime", "stopTime", "stepSize"):
+        assert getattr(native.defaultExperiment, field) == getattr(twin.defaultExperiment, field)
+    assert native.coSimulation.canHandleVariableCommunicationStepSize
+    assert native.guid != twin.guid and native.coSimulation.needsExecutionTool is False
 
 
 def test_native_loop_equals_the_pythonfmu_closed_loop(native_loop_fmu, twin_loop_fmu):
