@@ -197,3 +197,22 @@ def test_a_component_given_as_an_fmu_file_is_refused_by_name(tmp_path):
                        for c in system.components)
     with pytest.raises(NotNative, match="component deriv is an FMU file"):
         export_native_fmu(replace(system, components=components), tmp_path / "loop.fmu")
+
+
+def test_a_step_a_kernel_declines_after_the_export_run_is_refused_naming_it(tmp_path):
+    """``bench_triangle_SMCx``'s controller meets a hole of its table at 0.755 s (the compiled
+    mode takes that sample in Python): exported with a stop time before it, the FMU runs up
+    to it and refuses that step (fmi2Discard) naming the component, its kernel and the code."""
+    from fmus.native.loopbuild import export_native_fmu
+
+    system = get_scene("bench_triangle_SMCx").system
+    fmu = export_native_fmu(replace(system, stop_time=0.5), tmp_path / "loop.fmu")
+    native = Driver(fmu)
+    native.run([("setup", 0.0), ("enter",), ("exit",)])
+    steps = [native.call("step", k * H, H) for k in range(800)]
+    refused = [s.status for s in steps].index(2)
+    assert {s.status for s in steps[:refused]} == {0} and 740 <= refused <= 760
+    text = " ".join(m[2] for m in steps[refused].messages)
+    assert "component ctrl (PositionController): its kernel pc_law_io declined the step from t = " in text
+    assert "refusal code 8" in text
+    native.close()
