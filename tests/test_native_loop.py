@@ -216,3 +216,35 @@ def test_a_step_a_kernel_declines_after_the_export_run_is_refused_naming_it(tmp_
     assert "component ctrl (PositionController): its kernel pc_law_io declined the step from t = " in text
     assert "refusal code 8" in text
     native.close()
+
+
+def _relocation_kinds(fmu) -> set:
+    """The kinds of the relocations in sources/loop_table.c (0 data, 1 scratch, 2 function)."""
+    with zipfile.ZipFile(fmu) as z:
+        text = z.read("sources/loop_table.c").decode()
+    body = re.search(r"relocations\[\] = \{(.*?)\};", text, re.S)[1]
+    return {int(kind) for kind in re.findall(r"\{\d+, (\d+), \d+\}", body)}
+
+
+@pytest.mark.parametrize("scene, drives_in_plant, stop", [("pendulum_push", None, 1.5),
+                                                          (LOOP_SCENE, 4, 0.3)])
+def test_other_loops_equal_their_pythonfmu_closed_loops(scene, drives_in_plant, stop, tmp_path):
+    """Other kernels, other contexts: the wheeled pendulum and its balance controller (the
+    push at 1 s included), and the bench with its drives inside the plant (the actuated
+    plant's context points to the plant's own: a context relocated into the scratch arena)."""
+    from fmus.export import export_fmu
+    from fmus.native.loopbuild import export_native_fmu
+    from scenarios.scenes import drives_in_plant as inside
+
+    chosen = get_scene(scene) if drives_in_plant is None else inside(get_scene(scene), substeps=drives_in_plant)
+    system = chosen.system
+    native = export_native_fmu(system, tmp_path / "native" / "loop.fmu")
+    twin = export_fmu(system, tmp_path / "twin" / "loop.fmu")
+    if drives_in_plant is not None:
+        assert 1 in _relocation_kinds(native)
+    got = simulate_fmu(str(native), stop_time=stop, step_size=system.step, output_interval=system.step)
+    expected = simulate_fmu(str(twin), stop_time=stop, step_size=system.step, output_interval=system.step)
+    assert got.dtype.names == expected.dtype.names
+    for name in expected.dtype.names:
+        peak = np.max(np.abs(expected[name]))
+        assert np.max(np.abs(got[name] - expected[name])) <= 1e-12 * peak, name
