@@ -1,7 +1,7 @@
 """Speed of the native FMUs beside the pythonfmu ones, in other people's hosts (issue 28, item 6).
 
     python benchmarks/native_speed.py [--native-dir DIR] [--python-dir DIR] [--rounds 3] [--stop 11]
-                                      [--master-only] [--without MODEL ...]
+                                      [--master-only] [--without MODEL ...] [--loop-only]
 
 The scene (``bench_circle_TCMDx``: plant, two drives, two current observers, derivator,
 controller, trajectory) is exported per component (``fmus.ssp.export_ssp``, as ``parcosim
@@ -23,6 +23,12 @@ when missing).  Each package then runs, side by side in one invocation, in:
   after a first 2-step run (loading and initialising are inside ``simulate``); with
   ``--without MODEL``, also ``--native`` with those models left pythonfmu (what making them
   native gave, side by side).  ``--master-only``: our master's rows alone.
+* the whole loop as one FMU, ``ClosedLoop``: the native one (``parcosim export-fmu SCENE
+  OUT.fmu --native``) and the pythonfmu one (``export-fmu``), each in the C host (one slave,
+  no connections; the pythonfmu one with libpython preloaded) and in fmpy (``FMU2Slave``:
+  ``doStep`` and a read of ``x``, ``y`` per step, as a Python host steps it), with doSteps of
+  its own 1 ms and of 10 ms (ten loop steps per doStep: the host's cost per call shared).
+  With ``--loop-only`` only these rows are measured.
 
 Figures: CPU (user + system, all threads) of the stepping after the first step (loading,
 initialising, which libcosim does in the first step, and that step are "setup") in
@@ -87,6 +93,35 @@ ECOSPY_CHILD = textwrap.dedent("""
     sim.free()
     print(json.dumps({"setup_cpu_s": c1 - c0, "cpu_s": c2 - c1, "timed_s": stop - step,
                       "ok": bool(ok) and reached >= stop - step / 2}))
+""")
+
+FMPY_CHILD = textwrap.dedent("""
+    import json, sys, time
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+    path, stop, multiple = sys.argv[1], float(sys.argv[2]), int(sys.argv[3])
+    c0 = time.process_time()
+    md = read_model_description(path)
+    step = multiple * float(md.defaultExperiment.stepSize)
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=extract(path), modelIdentifier=md.coSimulation.modelIdentifier,
+                    instanceName="loop")
+    fmu.instantiate()
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    outputs = [vr["x"], vr["y"]]
+    fmu.doStep(0.0, step)                      # as the other hosts: the first step is set-up
+    fmu.getReal(outputs)
+    c1 = time.process_time()
+    n = int(round(stop / step))
+    for k in range(1, n):
+        fmu.doStep(k * step, step)
+        fmu.getReal(outputs)
+    c2 = time.process_time()
+    fmu.terminate()
+    fmu.freeInstance()
+    print(json.dumps({"setup_cpu_s": c1 - c0, "cpu_s": c2 - c1, "timed_s": stop - step, "ok": True}))
 """)
 
 MASTER_CHILD = textwrap.dedent("""
@@ -181,6 +216,50 @@ def run_c_host(program: Path, package: Path, stop: float, work: Path, preload: s
             "ok": abs(run.number("simulated_s") - stop) < 1e-9, "libpython_mapped": int(run.report["libpython_mapped"])}
 
 
+def export_loops(work: Path, scene: str) -> dict:
+    """The scene's ClosedLoop FMUs: kind ("ClosedLoop native", "ClosedLoop pythonfmu") -> .fmu."""
+    from fmus.export import export_fmu
+    from fmus.native.loopbuild import export_native_fmu
+    from scenarios.scenes import get_scene
+
+    system = get_scene(scene).system
+    return {"ClosedLoop native": export_native_fmu(system, work / "loop_native" / "ClosedLoop.fmu"),
+            "ClosedLoop pythonfmu": export_fmu(system, work / "loop_pythonfmu" / "ClosedLoop.fmu")}
+
+
+def run_c_host_loop(program: Path, fmu: Path, stop: float, work: Path, preload: str | None = None,
+                    multiple: int = 1) -> dict:
+    """The C host stepping one ClosedLoop FMU at ``multiple`` of its communication step, no CSV rows."""
+    from fmpy import read_model_description
+    from tests.native_host.host import config_text, run_host
+
+    step = multiple * float(read_model_description(str(fmu)).defaultExperiment.stepSize)
+    env = {**os.environ, "LD_PRELOAD": preload} if preload else None
+    run = run_host(program, work, config_text(stop, step=step, slaves=[("loop", fmu)], every=0), env=env)
+    return {"setup_cpu_s": run.number("setup_cpu_s"), "cpu_s": run.number("cpu_s"), "timed_s": run.number("timed_s"),
+            "ok": abs(run.number("simulated_s") - stop) < 1e-9, "libpython_mapped": int(run.report["libpython_mapped"])}
+
+
+#: doSteps of the ClosedLoop rows: its own step (1 ms) and 10 of them (it takes whole multiples).
+LOOP_MULTIPLES = (1, 10)
+
+
+def loop_measurements(program, loops: dict, stop: float, work: Path) -> list:
+    """One round of the whole-loop FMUs: [(host, kind, result dict)]."""
+    rows = []
+    for multiple in LOOP_MULTIPLES:
+        each = f", doStep {multiple} ms"
+        for kind, fmu in loops.items():
+            preload = libpython() if "pythonfmu" in kind else None
+            try:
+                result = run_c_host_loop(program, fmu, stop, work / f"c_{kind}", preload, multiple)
+            except RuntimeError as exc:
+                result = {"ok": False, "error": str(exc)[-500:]}
+            rows.append(("C host (libcosimc)", kind + each, result))
+            rows.append(("fmpy (FMU2Slave)", kind + each, run_child(FMPY_CHILD, fmu, stop, multiple)))
+    return rows
+
+
 def run_child(code: str, *args) -> dict:
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))}
     run = subprocess.run([sys.executable, "-c", code, *map(str, args)], capture_output=True, text=True, env=env,
@@ -249,6 +328,7 @@ def main(argv=None) -> int:
     parser.add_argument("--master-only", action="store_true", help="only our master's rows (no packages, hosts)")
     parser.add_argument("--without", nargs="*", default=[],
                         help="models also left pythonfmu in a --native master row (e.g. DCMotorDrive)")
+    parser.add_argument("--loop-only", action="store_true", help="only the whole-loop FMUs (ClosedLoop)")
     args = parser.parse_args(argv)
 
     from tests.native_host.host import build_host
@@ -260,15 +340,18 @@ def main(argv=None) -> int:
         from fmus.build import ensure_built
         from scenarios.scenes import get_scene
         ensure_built(sorted({c.model for c in get_scene(SCENE).system.components}), python_dir)
-        packages, program = {}, None
+        packages, loops, program = {}, {}, None
     else:
-        if not args.native_dir:
+        if not args.native_dir and not args.loop_only:
             from fmus.native.build import build_native_all
             build_native_all(native_dir)
-        packages = export_packages(work, native_dir, python_dir, SCENE)
+        packages = {} if args.loop_only else export_packages(work, native_dir, python_dir, SCENE)
+        loops = export_loops(work, SCENE)
         program = build_host(work)
     load = os.getloadavg()[0]
-    rounds = [measurements(program, packages, args.stop, work, python_dir, args.without) for _ in range(args.rounds)]
+    rounds = [(loop_measurements(program, loops, args.stop, work) if loops else [])
+              + ([] if args.loop_only else measurements(program, packages, args.stop, work, python_dir, args.without))
+              for _ in range(args.rounds)]
     rows = best_of(rounds)
     text = table(rows, args.stop)
     stamp = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())

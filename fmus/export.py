@@ -94,12 +94,17 @@ def export_fmu(system: System, path) -> Path:
     ``y`` and the recorded signals; parameters ``<instance>.<name>`` of every component.
     The system's plant must be the instance ``plant`` (its ``x``, ``y`` are the outputs).
     """
+    return build_system_fmu("loop", closed_loop_system(system), path)
+
+
+def closed_loop_system(system: System) -> System:
+    """``system`` as its ClosedLoop FMU steps it: ``plant.x``, ``plant.y`` recorded first.
+    Raises ValueError when it has no component ``plant``."""
     names = [c.name for c in system.components]
     if "plant" not in names:
         raise ValueError(f"the system needs a component 'plant' (its x, y are the FMU's outputs); it has {names}")
     record = tuple(dict.fromkeys(("plant.x", "plant.y") + tuple(system.record)))
-    system = System(system.components, system.connections, record, system.stop_time, system.step)
-    return build_system_fmu("loop", system, path)
+    return System(system.components, system.connections, record, system.stop_time, system.step)
 
 
 def _start_text(value) -> str:

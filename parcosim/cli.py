@@ -23,7 +23,8 @@ Every subcommand is a thin shell over a documented Python call:
                        with ``--per-component [--substeps N] [--internal-observer]``
                        ``scenarios.per_component.export_per_component(get_scene(name), path, fmu_dir,
                        substeps, internal_observer)``
-``parcosim export-fmu``  ``fmus.export.export_fmu(get_scene(name).system, path)``
+``parcosim export-fmu``  ``fmus.export.export_fmu(get_scene(name).system, path)``; with ``--native``
+                       ``fmus.native.loopbuild.export_native_fmu(get_scene(name).system, path)`` (docs/native.md)
 ``parcosim build-plant``  ``fmus.specfmu.build_plant_fmu(spec, path)`` (docs/spec.md)
 ``parcosim workspace``  ``scenarios.workspace.plot_workspace(preset_or_spec, out_dir)`` (docs/workspace.md)
 =====================  ==============================================
@@ -153,6 +154,8 @@ def _parser() -> argparse.ArgumentParser:
     fmu.add_argument("path", help="the .fmu file to write")
     fmu.add_argument("--drives-in-plant", type=at_least(1, "--drives-in-plant"), default=None, metavar="N",
                      help="the scene with its drives inside the plant, RK4 N steps per sample")
+    fmu.add_argument("--native", action="store_true",
+                     help="a native FMU: the compiled loop in C, no Python in the importer (docs/native.md)")
     _replace_option(fmu)
     trade = sub.add_parser("trade", help="speed against accuracy: sweep the settings, table and Pareto plot")
     trade.add_argument("scene", nargs="?", default=DEFAULT_SCENE,
@@ -317,8 +320,12 @@ def _command(args) -> int:
                 from scenarios.package import export_package
                 print(export_package(_scene(args), args.path, args.fmu_dir))
         elif args.command == "export-fmu":
-            from fmus.export import export_fmu
-            print(export_fmu(_scene(args).system, args.path))
+            if args.native:
+                from fmus.native.loopbuild import export_native_fmu
+                print(export_native_fmu(_scene(args).system, args.path))
+            else:
+                from fmus.export import export_fmu
+                print(export_fmu(_scene(args).system, args.path))
         elif args.command == "trade":
             return _trade(args)
         elif args.command == "build-plant":

@@ -41,3 +41,26 @@ def twin_fmus(tmp_path_factory):
 
     out = tmp_path_factory.mktemp("twins")
     return {model: build_fmu(model, out) for model in NATIVE}
+
+
+#: The scene of the native whole-loop FMU's tests (``parcosim export-fmu SCENE OUT.fmu --native``).
+LOOP_SCENE = "bench_circle_TCMDx"
+
+
+@pytest.fixture(scope="session")
+def native_loop_fmu(tmp_path_factory):
+    """The native ClosedLoop of :data:`LOOP_SCENE`, written by the command line."""
+    from parcosim.cli import main
+
+    path = tmp_path_factory.mktemp("native_loop") / "ClosedLoop.fmu"
+    assert main(["export-fmu", LOOP_SCENE, str(path), "--native"]) == 0
+    return path
+
+
+@pytest.fixture(scope="session")
+def twin_loop_fmu(tmp_path_factory):
+    """The pythonfmu ClosedLoop of :data:`LOOP_SCENE` (``parcosim export-fmu``)."""
+    from fmus.export import export_fmu
+    from scenarios.scenes import get_scene
+
+    return export_fmu(get_scene(LOOP_SCENE).system, tmp_path_factory.mktemp("twin_loop") / "ClosedLoop.fmu")

@@ -18,6 +18,8 @@ from fmus.native.models import NATIVE
 from support.fmu_calls import Driver
 
 MODELS = sorted(NATIVE)
+#: With the native ClosedLoop of a scene (``export-fmu --native``, the fixture ``native_loop_fmu``).
+WITH_LOOP = MODELS + ["ClosedLoop"]
 #: What a native FMU's binary may need: the C library and libm (and the loader itself).
 ALLOWED = {"libc.so.6", "libm.so.6", "ld-linux-x86-64.so.2"}
 #: The strict warnings of the kernels' own build: the sources must pass them on any compiler.
@@ -29,13 +31,22 @@ def needed(binary) -> set:
     return {line.split("[")[1].split("]")[0] for line in out.splitlines() if "(NEEDED)" in line}
 
 
-@pytest.mark.parametrize("model", MODELS)
-def test_binary_needs_only_libc_and_libm_and_the_fmu_validates(model, native_fmus, tmp_path):
-    unzipped = extract(str(native_fmus[model]), str(tmp_path))
+@pytest.fixture
+def fmu_of(request):
+    """model -> its native FMU (the ClosedLoop's fixture for "ClosedLoop"), built on first use."""
+    def of(model):
+        return request.getfixturevalue("native_loop_fmu") if model == "ClosedLoop" else \
+            request.getfixturevalue("native_fmus")[model]
+    return of
+
+
+@pytest.mark.parametrize("model", WITH_LOOP)
+def test_binary_needs_only_libc_and_libm_and_the_fmu_validates(model, fmu_of, tmp_path):
+    unzipped = extract(str(fmu_of(model)), str(tmp_path))
     binary = tmp_path / "binaries" / platform_folder() / f"{model}.so"
     assert needed(binary) <= ALLOWED
     assert "libpython" not in subprocess.run(["ldd", str(binary)], capture_output=True, text=True).stdout
-    assert validate_fmu(str(native_fmus[model])) == []
+    assert validate_fmu(str(fmu_of(model))) == []
     md = read_model_description(unzipped)
     assert md.coSimulation.needsExecutionTool is False
 
@@ -56,9 +67,9 @@ def _rebuilt(fmu, tmp_path):
     return folder
 
 
-@pytest.mark.parametrize("model", MODELS)
-def test_fmu_compiled_from_its_own_sources_runs_as_shipped(model, native_fmus, tmp_path):
-    fmu = native_fmus[model]
+@pytest.mark.parametrize("model", WITH_LOOP)
+def test_fmu_compiled_from_its_own_sources_runs_as_shipped(model, fmu_of, tmp_path):
+    fmu = fmu_of(model)
     rebuilt = _rebuilt(fmu, tmp_path)
     shipped = simulate_fmu(str(fmu), stop_time=0.2, output_interval=1e-3, step_size=1e-3)
     again = simulate_fmu(str(rebuilt), stop_time=0.2, output_interval=1e-3, step_size=1e-3)

@@ -228,3 +228,29 @@ def test_the_native_bench_loop_in_the_c_host_tracks_as_a_jacobi_master(host, nat
     expected = scene_metrics(scene, result_columns(scene, jacobi), jacobi.wall_s, jacobi.completed)
     for metric in ("e_ef_mm", "tau_ef_Nm"):
         assert 1 / 1.05 <= ours[metric] / expected[metric] <= 1.05, (metric, ours[metric], expected[metric])
+
+
+def test_the_native_closed_loop_in_the_c_host_tracks_as_parcosim_run(host, native_loop_fmu, tmp_path):
+    """The scene's whole loop as one native FMU (``parcosim export-fmu SCENE OUT.fmu --native``)
+    stepped by libcosim in the C host over the scene's window: its tracking error is that of
+    ``parcosim run`` (the Gauss-Seidel loop inside the FMU, in process), within 1e-9 relative."""
+    from dataclasses import replace
+
+    from scenarios.metrics import scene_metrics
+    from scenarios.run import run_scene
+    from scenarios.scenes import get_scene
+
+    scene = get_scene(SCENE)
+    stop = scene.window[1] + 1.0
+    scene = replace(scene, system=replace(scene.system, stop_time=stop))
+    signals = {"x": "x", "y": "y", "x_d": "traj.x_d", "y_d": "traj.y_d", "tau1": "ctrl.tau1", "tau2": "ctrl.tau2"}
+    run = run_host(host, tmp_path / "run", config_text(stop, step=H, slaves=[("loop", native_loop_fmu)],
+                                                        outputs=[f"loop.{s}" for s in signals.values()]))
+    assert run.report["libpython_mapped"] == "0" and run.report["python_symbol"] == "0"
+    assert run.fmu_binaries == ["ClosedLoop.so"]
+    columns = {"t": np.array(run.columns["time"])}
+    columns.update({name: np.array(run.columns[f"loop.{s}"]) for name, s in signals.items()})
+    assert columns["t"][-1] == pytest.approx(stop, abs=1e-9)
+    ours = scene_metrics(scene, columns, 0.0, True)["e_ef_mm"]
+    expected = run_scene(scene, "inprocess", plots=False).metrics["e_ef_mm"]
+    assert ours == pytest.approx(expected, rel=1e-9, abs=0.0)

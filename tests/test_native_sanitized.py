@@ -23,10 +23,12 @@ SANITIZE = ("-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-o
 pytestmark = pytest.mark.skipif(ASAN is None, reason="the C compiler has no AddressSanitizer runtime")
 
 
-@pytest.mark.parametrize("model", sorted(NATIVE))
-def test_native_fmu_survives_careless_calls_and_forged_states_under_asan(model, native_fmus, tmp_path):
+@pytest.mark.parametrize("model", sorted(NATIVE) + ["ClosedLoop"])
+def test_native_fmu_survives_careless_calls_and_forged_states_under_asan(model, request, tmp_path):
+    fmu = request.getfixturevalue("native_loop_fmu") if model == "ClosedLoop" else \
+        request.getfixturevalue("native_fmus")[model]
     folder = tmp_path / "fmu"
-    with zipfile.ZipFile(native_fmus[model]) as z:
+    with zipfile.ZipFile(fmu) as z:
         z.extractall(folder)
     binary = folder / "binaries" / platform_folder() / f"{model}.so"
     command = compile_command(folder / "sources", binary)

@@ -6,5 +6,8 @@ the one generic FMI implementation (``fmi2_native.c``, ``pcn_state.c``, ``pcn_te
 model's adapter (``adapters/<model>.c``) over its kernel (``kernels/src``), and a generated
 table of its variables and of the data its build computed.  Names, value references, start
 values and descriptions come from the pythonfmu slave's declarations (the slave is
-instantiated and set up at build time), so they exist once.  docs/native.md.
+instantiated and set up at build time), so they exist once.  ``parcosim export-fmu SCENE
+OUT.fmu --native`` (:func:`fmus.native.loopbuild.export_native_fmu`) writes a scene's whole
+loop the same way: the compiled loop's plan and every component's kernel buffers as build
+data (:mod:`fmus.native.loopimage`), run by ``adapters/pcn_closedloop.c``.  docs/native.md.
 """

@@ -109,7 +109,8 @@ def generate(model: str, rows: list[dict], scalars: dict, arrays: dict, guid: st
         kind = row["type"]
         slot = slots[kind]
         slots[kind] += 1
-        header.append(f"#define PCN_SLOT_{row['name']} {slot}   /* {kind} {row['causality']} */")
+        if row["name"].isidentifier():      # a system's "ctrl.lam" has none: its adapter reads the table
+            header.append(f"#define PCN_SLOT_{row['name']} {slot}   /* {kind} {row['causality']} */")
         start = row["start"]
         number = "0.0" if kind == "String" else _c_double(float(start))
         text = _c_string(start) if kind == "String" else "0"
@@ -119,7 +120,8 @@ def generate(model: str, rows: list[dict], scalars: dict, arrays: dict, guid: st
               "const int pcn_n_slots[4] = {" + ", ".join(str(slots[t]) for t in _TYPE) + "};", ""]
     header.append("")
     for name, value in scalars.items():
-        literal = str(value) if isinstance(value, int) else _c_double(value)
+        literal = (_c_string(value) if isinstance(value, str) else str(value) if isinstance(value, int)
+                   else _c_double(value))
         header.append(f"#define PCN_{name.upper()} {literal}")
     for name, array in arrays.items():
         if isinstance(array, (list, tuple)) and all(isinstance(x, str) for x in array):   # names
@@ -207,8 +209,7 @@ def build_native_fmu(model: str, out_dir=DEFAULT_NATIVE_OUT, compiler: str = "cc
     if model not in NATIVE:
         raise ValueError(f"no native FMU of {model!r}; native: {', '.join(NATIVE)}")
     native = NATIVE[model]
-    out_dir = Path(out_dir)
-    target = out_dir / f"{file_name or model}.fmu"
+    target = Path(out_dir) / f"{file_name or model}.fmu"
     if target.exists() and not built_by_parcosim(target, model):
         raise NativeBuildError(f"{target} was not built by parcosim: left alone")
     with tempfile.TemporaryDirectory(prefix="parcosim_native_") as tmp:
@@ -217,25 +218,34 @@ def build_native_fmu(model: str, out_dir=DEFAULT_NATIVE_OUT, compiler: str = "cc
         if start_values:
             (tmp / "resources" / START_VALUES_FILE).write_text(json.dumps(start_values))
         slave = initialised_slave(model, tmp / "resources")
-        rows = variables(slave)
         scalars, arrays = native.data(slave)
         generic = GENERIC + (SAMPLED if native.sampled else ())
         kernels = native.kernels + (SAMPLED_KERNELS if native.sampled else ())
         adapters = [HERE / "adapters" / name for name in (native.adapter, *native.parts)]
         files = [HERE / name for name in generic] + adapters + kernel_files(kernels)
-        if len({f.name for f in files}) != len(files):   # sources/ is flat: one name, one file
-            raise NativeBuildError(f"{model}: two source files share a name: {sorted(f.name for f in files)}")
-        digest = hashlib.sha256(repr((model, rows, scalars, {k: np.asarray(v).tobytes() for k, v in arrays.items()},
-                                      [f.read_bytes() for f in files])).encode()).hexdigest()
-        guid = str(uuid.uuid5(uuid.NAMESPACE_URL, f"parcosim-native:{model}:{digest}"))
-        config, table = generate(model, rows, scalars, arrays, guid)
-        fmu = tmp / "fmu"
+        return package(model, slave, variables(slave), scalars, arrays, files, {}, target, compiler)
+
+
+def package(model: str, slave, rows: list, scalars: dict, arrays: dict, files: list, generated: dict, target: Path,
+            compiler: str = "cc") -> Path:
+    """Write the native FMU ``target`` of ``model``: ``files`` and the ``generated`` ones
+    (name -> text) besides model_config.h and model_table.c (from ``rows``, ``scalars`` and
+    ``arrays``, :func:`generate`) into ``sources/``, its binary compiled from them, the
+    modelDescription.xml of ``slave`` (the pythonfmu slave, its declarations)."""
+    if len({f.name for f in files} | set(generated)) != len(files) + len(generated):   # sources/ is flat
+        raise NativeBuildError(f"{model}: two source files share a name: {sorted(f.name for f in files)}")
+    digest = hashlib.sha256(repr((model, rows, scalars, {k: np.asarray(v).tobytes() for k, v in arrays.items()},
+                                  [f.read_bytes() for f in files], sorted(generated.items()))).encode()).hexdigest()
+    guid = str(uuid.uuid5(uuid.NAMESPACE_URL, f"parcosim-native:{model}:{digest}"))
+    config, table = generate(model, rows, scalars, arrays, guid)
+    with tempfile.TemporaryDirectory(prefix="parcosim_native_fmu_") as tmp:
+        fmu = Path(tmp)
         sources = fmu / "sources"
         sources.mkdir(parents=True)
         for f in files:
             shutil.copy2(f, sources / f.name)
-        (sources / "model_config.h").write_text(config)
-        (sources / "model_table.c").write_text(table)
+        for name, text in {"model_config.h": config, "model_table.c": table, **generated}.items():
+            (sources / name).write_text(text)
         names = sorted(p.name for p in sources.iterdir() if p.suffix == ".c")
         (sources / "buildDescription.xml").write_text(build_description(model, names))
         (sources / "CMakeLists.txt").write_text(cmake_lists(model, names))
@@ -249,8 +259,8 @@ def build_native_fmu(model: str, out_dir=DEFAULT_NATIVE_OUT, compiler: str = "cc
             {"model": model, "built_by": "parcosim", "native": True, "guid": guid, "model_identifier": model}) + "\n")
         (fmu / "modelDescription.xml").write_bytes(model_description(
             slave, model, guid, names, getattr(type(slave), "feedthrough", {})))
-        out_dir.mkdir(parents=True, exist_ok=True)
-        partial = out_dir / f".{model}.fmu.tmp"
+        target.parent.mkdir(parents=True, exist_ok=True)
+        partial = target.parent / f".{target.name}.tmp"
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
             for path in sorted(fmu.rglob("*")):
                 if path.is_file():
