@@ -273,8 +273,8 @@ static int setup(pcn_instance *in, pcn_text *why)
 
 static int check_step(pcn_instance *in, double t, double h, pcn_text *why)
 {
-    return pcn_sampling_check(&data_of(in)->counter, in->real[PCN_SLOT_T], in->integer[PCN_SLOT_sample_phase], t, h,
-                              why);
+    return pcn_sampling_check(&data_of(in)->counter, in, in->real[PCN_SLOT_T], in->integer[PCN_SLOT_sample_phase], t,
+                              h, why);
 }
 
 /* The refusal of a sample in controller/position.py's words (REASONS). */
