@@ -41,6 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
+import kernels
 from plant import fivebar
 from plant.fast5r import INVERSE_SIZE, inverse_terms, pack_params
 from plant.parallel import inverse_dynamics_terms
@@ -241,8 +242,9 @@ RECORDING = False
 
 
 def _cache_key(params, step, extent, band):
-    # "v2": tables built with the compiled exact model (v1: the general algorithm; equal to round-off).
-    text = repr((params, float(step), tuple(float(e) for e in extent), float(band), N_TERMS, "v2"))
+    # The kernels' code version: a table is the C exact model's output, and a kernel change
+    # (e.g. its sin and cos) moves it by round-off, which a cached table would hide.
+    text = repr((params, float(step), tuple(float(e) for e in extent), float(band), N_TERMS, kernels.code_version()))
     return hashlib.sha256(text.encode()).hexdigest()[:20]
 
 

@@ -118,6 +118,13 @@ def library() -> ctypes.CDLL:
     return _library
 
 
+def code_version() -> str:
+    """The loaded library's hash of its sources and flags (``pc_sources_hash``): what a
+    result computed by the kernels and kept on disk (a controller table) is keyed by, so a
+    change of the C code is never answered from a cache it did not compute."""
+    return library().pc_sources_hash().decode()
+
+
 def _fresh_copy(path: Path) -> Path:
     """A copy of ``path`` under a name no process has loaded (the rebuilt library, when the
     stale one is already mapped)."""

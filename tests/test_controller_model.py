@@ -71,6 +71,21 @@ def test_table_is_cached_where_parcosim_cache_says(tmp_path, monkeypatch):
     assert loaded.build_seconds == 0.0 and np.array_equal(loaded.table, built.table, equal_nan=True)
 
 
+def test_a_table_cached_by_other_kernels_is_built_again(tmp_path, monkeypatch):
+    """The table is the C exact model's output: a table cached by another build of the kernels
+    (``kernels.code_version``, the library's hash of its sources and flags) is not read back but
+    built again.  Wrong code it catches: a cache key without the code version, which served a
+    table from before a kernel change (found when the native controller, building its own
+    table, differed by an ulp from the pythonfmu one reading a stale cache)."""
+    import kernels
+
+    monkeypatch.setenv("PARCOSIM_CACHE", str(tmp_path))
+    TabulatedModel(BENCH, 0.01, REGION)
+    monkeypatch.setattr(kernels, "code_version", lambda: "another build")
+    again = TabulatedModel(BENCH, 0.01, REGION)
+    assert again.build_seconds > 0.0 and len(list(tmp_path.iterdir())) == 2
+
+
 def test_near_singular_grid_points_are_left_out(tmp_path, monkeypatch):
     """Near a singularity H and h grow without bound (det J -> 0): a grid point whose margin
     (plant.fivebar.singularity, sines of the elbow and distal-link angles) is below the band
