@@ -1,7 +1,7 @@
 """A scene's packages run in other people's tools, judged by what a user sees: its tracking.
 
 ``python -m scenarios.tools [SCENE ...] [--tools fmpy,ecos,libcosim] [--kinds K,...]
-[--stop-time S] [--results FILE.json] [--out FILE.md] [--docs]`` exports each scene as each
+[--results FILE.json] [--out FILE.md] [--docs]`` exports each whole scene as each
 package kind (:data:`KINDS`), runs the package in each tool, each run in its own process,
 as the tool's documentation says (nothing but the ``.ssp`` and its step):
 
@@ -19,11 +19,11 @@ and reports, per kind, scene and tool, e_ef and τ_ef (7.31-7.32, at the period'
 communication points) against ``parcosim run SCENE`` and the CPU time the tool's process
 spent per simulated ms, from its start (Python, imports, loading, initialisation included:
 what a fresh importing process pays).  With no scene: all 16 bench scenes and
-thesis_sim_circle.  Every finished run is stored in ``--results`` (default
-``benchmarks/results/tools.json``) as soon as it ends, and a run stored there is not run
-again: an interrupted measurement resumes.  ``--docs`` puts the tables of every run stored
-there (this call's and earlier ones, e.g. whole default packages and 3 s copies of the
-per-component ones) into docs/ssp.md and the summary into the README.
+thesis_sim_circle.  Every finished run is merged into ``--results`` (default
+``benchmarks/results/tools.json``) as soon as it ends, stamped with the commit measured
+and the load average, and a run stored there is not run again: an interrupted measurement
+resumes.  ``--docs`` puts the tables of every run stored there (this call's and earlier
+ones) into docs/ssp.md and the summary into the README; nothing else writes the docs.
 """
 from __future__ import annotations
 
@@ -31,6 +31,7 @@ import argparse
 import dataclasses
 import json
 import math
+import os
 import pickle
 import resource
 import subprocess
@@ -69,7 +70,8 @@ C_DRIVE_DIR = ROOT / "tests" / "support" / "cfmu"
 
 
 def short(scene: Scene, stop_time: float | None) -> Scene:
-    """``scene`` ending at ``stop_time`` (None: as it is); its metric window ends there too."""
+    """``scene`` ending at ``stop_time`` (None: as it is); its metric window ends there too
+    (for the tests' short runs: the measurement runs whole scenes)."""
     if stop_time is None or stop_time >= scene.system.stop_time:
         return scene
     start, end = scene.window
@@ -288,81 +290,95 @@ def summary(results: dict) -> str:
 
 # --- the resumable measurement ---------------------------------------------------------------
 
-def _key(kind, scene, tool, stop_time) -> str:
-    return f"{kind}|{scene}|{tool}|{stop_time if stop_time is not None else 'full'}"
+def _key(kind, scene, tool) -> str:
+    return f"{kind}|{scene}|{tool}"
 
 
 def load_results(path=RESULTS) -> dict:
-    """The runs stored so far (key "kind|scene|tool|stop" -> row), {} without a file."""
+    """The runs stored so far (key "kind|scene|tool" -> row; our master's: "ours|scene|parcosim"),
+    {} without a file."""
     path = Path(path)
     return json.loads(path.read_text()) if path.exists() else {}
 
 
-def _store(path, stored: dict) -> None:
+def _commit() -> str:
+    """The commit measured (with ``+`` when the work tree differs from it)."""
+    try:
+        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+                              cwd=ROOT, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], capture_output=True,
+                               text=True, cwd=ROOT, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+    return head + ("+" if dirty else "")
+
+
+def _store(path, key: str, value: dict) -> dict:
+    """Merge one run into the file ``path`` (read again, so that runs stored meanwhile by
+    another call stay) and return what it holds now."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(".tmp")
+    stored = load_results(path)
+    stored[key] = {**value, "commit": _commit(), "load": round(os.getloadavg()[0], 2)}
+    tmp = path.with_suffix(f".{os.getpid()}.tmp")
     tmp.write_text(json.dumps(stored, indent=1, sort_keys=True, default=float))
     tmp.replace(path)
+    return stored
 
 
-def measure(scenes, tools, kinds, stop_time=None, results=RESULTS, progress=print) -> dict:
-    """Run what ``results`` does not hold yet, storing each run as it ends; return
-    ``{(kind, scene): rows}`` of everything asked for (from the file or new)."""
+def _has_drives(scene: Scene) -> bool:
+    return {"drive1", "drive2"} <= {c.name for c in scene.system.components}
+
+
+def measure(scenes, tools, kinds, results=RESULTS, progress=print) -> dict:
+    """Run, on the whole scenes, what ``results`` does not hold yet, merging each run into it
+    as it ends; return ``{(kind, scene): rows}`` of everything asked for (from the file or new).
+    Kinds that swap or fold the drives skip a scene without ``drive1``/``drive2``."""
     stored = load_results(results)
     table_rows = {}
     c_drive = None
     with tempfile.TemporaryDirectory(prefix="parcosim_tools_") as tmp:
-        for name in scenes:
-            full = get_scene(name)
-            scene = short(full, stop_time)
-            stop = stop_time if scene is not full else None    # a scene shorter than stop_time runs whole
-            ours_key = _key("ours", name, "parcosim", stop)
-            for kind in kinds:
-                if kind.startswith("internal-observer") or kind.endswith("c-drive"):
-                    if not {"drive1", "drive2"} <= {c.name for c in scene.system.components}:
-                        continue
-                todo = [t for t in tools if _key(kind, name, t, stop) not in stored]
+        for kind in kinds:
+            for name in scenes:
+                scene = get_scene(name)
+                if (kind.startswith("internal-observer") or kind.endswith("c-drive")) and not _has_drives(scene):
+                    continue
+                ours_key = _key("ours", name, "parcosim")
+                todo = [t for t in tools if _key(kind, name, t) not in stored]
                 if todo:
                     if ours_key not in stored:
-                        stored[ours_key] = run_scene(scene, mode="inprocess").metrics
-                        _store(results, stored)
+                        stored = _store(results, ours_key, run_scene(scene, mode="inprocess").metrics)
                     if kind.endswith("c-drive") and c_drive is None:
                         c_drive = build_c_drive(Path(tmp) / "c")
                     start = _time.perf_counter()
                     for tool, m, _, error in compare(scene, todo, kind=kind, c_drive=c_drive,
                                                      ours=stored[ours_key]):
-                        stored[_key(kind, name, tool, stop)] = {"metrics": m, "error": error}
-                        _store(results, stored)
+                        stored = _store(results, _key(kind, name, tool), {"metrics": m, "error": error})
                         progress(f"{kind} {name} {tool}: " + (f"e_ef x{_ratio(m['e_ef_mm'], stored[ours_key]['e_ef_mm']):.4f}"
                                  if m else f"failed ({error})") + f" [{_time.perf_counter() - start:.0f} s]")
                 table_rows[(kind, name)] = [
-                    (t, stored[_key(kind, name, t, stop)]["metrics"], stored[ours_key],
-                     stored[_key(kind, name, t, stop)]["error"]) for t in tools]
+                    (t, stored[_key(kind, name, t)]["metrics"], stored[ours_key],
+                     stored[_key(kind, name, t)]["error"]) for t in tools]
     return table_rows
 
 
 def stored_rows(stored: dict, tools=TOOLS) -> dict:
     """Every run in ``stored`` (:func:`load_results`) as ``{(kind, scene): rows}``, in the
-    order of :data:`KINDS` and :data:`TABLE_SCENES`; runs of copies shortened to ``stop`` s
-    under the kind ``"<kind>, <stop> s copies"``."""
+    order of :data:`KINDS` and :data:`TABLE_SCENES`."""
     found = {}
     for key, value in stored.items():
-        kind, scene, tool, stop = key.split("|")
-        if kind == "ours" or tool not in tools:
+        kind, scene, tool = key.split("|")
+        ours = stored.get(_key("ours", scene, "parcosim"))
+        if kind == "ours" or tool not in tools or ours is None:
             continue
-        ours = stored.get(_key("ours", scene, "parcosim", None if stop == "full" else float(stop)))
-        if ours is None:
-            continue
-        found.setdefault((kind, stop, scene), []).append((tool, value["metrics"], ours, value["error"]))
+        found.setdefault((kind, scene), []).append((tool, value["metrics"], ours, value["error"]))
 
     def order(item):
-        (kind, stop, scene), _ = item
+        (kind, scene), _ = item
         rank = TABLE_SCENES.index(scene) if scene in TABLE_SCENES else len(TABLE_SCENES)
-        return (KINDS.index(kind) if kind in KINDS else len(KINDS), stop != "full", stop, rank)
+        return (KINDS.index(kind) if kind in KINDS else len(KINDS), rank)
 
-    return {(kind if stop == "full" else f"{kind}, {float(stop):g} s copies", scene):
-            sorted(rows, key=lambda r: tools.index(r[0])) for (kind, stop, scene), rows in sorted(found.items(), key=order)}
+    return {key: sorted(rows, key=lambda r: tools.index(r[0])) for key, rows in sorted(found.items(), key=order)}
 
 
 def _child(argv) -> None:
@@ -381,7 +397,6 @@ def main(argv=None) -> int:
     parser.add_argument("scenes", nargs="*", help=f"scene names (default: the {len(TABLE_SCENES)} of the table)")
     parser.add_argument("--tools", default=",".join(TOOLS), help="comma-separated, from " + ", ".join(TOOLS))
     parser.add_argument("--kinds", default=",".join(KINDS), help="comma-separated, from " + ", ".join(KINDS))
-    parser.add_argument("--stop-time", type=float, default=None, help="shorten every scene to this [s]")
     parser.add_argument("--results", default=str(RESULTS), help="the runs stored so far (resumes from it)")
     parser.add_argument("--out", default=None, help="also write the markdown tables here")
     parser.add_argument("--docs", action="store_true",
@@ -392,7 +407,7 @@ def main(argv=None) -> int:
     for k in kinds:
         if k not in KINDS:
             parser.error(f"--kinds {k}: one of {', '.join(KINDS)}")
-    results = measure(args.scenes or TABLE_SCENES, tools, kinds, args.stop_time, args.results,
+    results = measure(args.scenes or TABLE_SCENES, tools, kinds, args.results,
                       progress=lambda line: print(line, file=sys.stderr, flush=True))
     if args.docs:   # the tables hold every stored run, this call's and earlier ones
         results = stored_rows(load_results(args.results), tools)
