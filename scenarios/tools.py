@@ -114,8 +114,9 @@ def swap_fmus(package, replacements: dict, out) -> Path:
     return Path(out)
 
 
-def export_kind(kind: str, scene: Scene, directory, c_drive=None) -> Exported:
-    """Export ``scene`` as package ``kind`` (:data:`KINDS`) into ``directory``."""
+def export_kind(kind: str, scene: Scene, directory, c_drive=None, substeps: int | None = None) -> Exported:
+    """Export ``scene`` as package ``kind`` (:data:`KINDS`) into ``directory`` (``substeps``:
+    the per-component kinds' n, None: chosen by the export's trial; the ``-1ms`` kind: 1)."""
     from .per_component import export_per_component
 
     path = Path(directory) / f"{scene.name}.{kind}.ssp"
@@ -127,10 +128,10 @@ def export_kind(kind: str, scene: Scene, directory, c_drive=None) -> Exported:
         raise ValueError(f"kind = {kind!r}; valid: {', '.join(KINDS)}")
     columns = {signal: name for name, signal in scene.columns.items() if name in METRIC_COLUMNS}
     if kind.startswith("internal-observer"):
-        path = export_per_component(scene, path, substeps=1 if kind.endswith("1ms") else None,
+        path = export_per_component(scene, path, substeps=1 if kind.endswith("1ms") else substeps,
                                     internal_observer=True)
     else:
-        path = export_per_component(scene, path)
+        path = export_per_component(scene, path, substeps=substeps)
     from fmus.ssp import read_ssp_experiment
 
     step = read_ssp_experiment(path)[2]
@@ -209,14 +210,14 @@ def tool_metrics(scene: Scene, run: SspRun, columns: dict, period: float | None 
 
 
 def compare(scene: Scene, tools=TOOLS, isolated: bool = True, out_dir=None, kind: str = "default",
-            c_drive=None, ours: dict | None = None) -> list:
-    """Export ``scene`` as ``kind``, run it in each tool and (unless ``ours`` is given) in
-    our master; one row per tool: (tool, tool's metrics, our metrics, error or None).
-    The tool's metrics carry ``cpu_s`` when ``isolated``."""
+            c_drive=None, ours: dict | None = None, substeps: int | None = None) -> list:
+    """Export ``scene`` as ``kind`` (:func:`export_kind`), run it in each tool and (unless
+    ``ours`` is given) in our master; one row per tool: (tool, tool's metrics, our metrics,
+    error or None).  The tool's metrics carry ``cpu_s`` when ``isolated``."""
     ours = run_scene(scene, mode="inprocess").metrics if ours is None else ours
     rows = []
     with tempfile.TemporaryDirectory(prefix="parcosim_pkg_") as tmp:
-        exported = export_kind(kind, scene, out_dir or tmp, c_drive)
+        exported = export_kind(kind, scene, out_dir or tmp, c_drive, substeps)
         for tool in tools:
             runner = run_tool_isolated if isolated else run_tool
             try:
@@ -295,8 +296,8 @@ def _key(kind, scene, tool) -> str:
 
 
 def load_results(path=RESULTS) -> dict:
-    """The runs stored so far (key "kind|scene|tool" -> row; our master's: "ours|scene|parcosim"),
-    {} without a file."""
+    """The runs stored so far (key "kind|scene|tool" -> row; our master's: "ours|scene|parcosim";
+    the export's trial: "trial|scene|per-component"), {} without a file."""
     path = Path(path)
     return json.loads(path.read_text()) if path.exists() else {}
 
@@ -330,6 +331,24 @@ def _has_drives(scene: Scene) -> bool:
     return {"drive1", "drive2"} <= {c.name for c in scene.system.components}
 
 
+def _trial(scene: Scene, kind: str, results, stored: dict) -> tuple:
+    """(the per-component kind's n, the results held): the export's trial
+    (:func:`scenarios.per_component.trial`) run once per scene and observer placement and
+    stored (key "trial|scene|per-component" or "...|internal-observer"); (None, stored) for
+    the kinds without a trial."""
+    from .per_component import trial
+
+    if kind == "default" or kind.endswith("1ms"):
+        return None, stored
+    family = "internal-observer" if kind.startswith("internal-observer") else "per-component"
+    key = _key("trial", scene.name, family)
+    if key not in stored:
+        n, tried, floor = trial(scene, internal_observer=family == "internal-observer")
+        stored = _store(results, key, {"substeps": n, "floor": floor,
+                                       "tried": {str(k): list(v) for k, v in tried.items()}})
+    return stored[key]["substeps"], stored
+
+
 def measure(scenes, tools, kinds, results=RESULTS, progress=print) -> dict:
     """Run, on the whole scenes, what ``results`` does not hold yet, merging each run into it
     as it ends; return ``{(kind, scene): rows}`` of everything asked for (from the file or new).
@@ -350,9 +369,10 @@ def measure(scenes, tools, kinds, results=RESULTS, progress=print) -> dict:
                         stored = _store(results, ours_key, run_scene(scene, mode="inprocess").metrics)
                     if kind.endswith("c-drive") and c_drive is None:
                         c_drive = build_c_drive(Path(tmp) / "c")
+                    substeps, stored = _trial(scene, kind, results, stored)
                     start = _time.perf_counter()
                     for tool, m, _, error in compare(scene, todo, kind=kind, c_drive=c_drive,
-                                                     ours=stored[ours_key]):
+                                                     ours=stored[ours_key], substeps=substeps):
                         stored = _store(results, _key(kind, name, tool), {"metrics": m, "error": error})
                         progress(f"{kind} {name} {tool}: " + (f"e_ef x{_ratio(m['e_ef_mm'], stored[ours_key]['e_ef_mm']):.4f}"
                                  if m else f"failed ({error})") + f" [{_time.perf_counter() - start:.0f} s]")
@@ -369,7 +389,7 @@ def stored_rows(stored: dict, tools=TOOLS) -> dict:
     for key, value in stored.items():
         kind, scene, tool = key.split("|")
         ours = stored.get(_key("ours", scene, "parcosim"))
-        if kind == "ours" or tool not in tools or ours is None:
+        if kind in ("ours", "trial") or tool not in tools or ours is None:
             continue
         found.setdefault((kind, scene), []).append((tool, value["metrics"], ours, value["error"]))
 
