@@ -265,27 +265,30 @@ def table(results: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _span(values, digits: int = 4) -> str:
+    return f"{min(values):.{digits}f}-{max(values):.{digits}f}" if values else "–"
+
+
 def summary(results: dict) -> str:
-    """One line per package kind and tool: the ranges of the ratios over the scenes, runs
-    completed, the median CPU µs per simulated ms."""
+    """One line per package kind and tool: the ranges over the scenes of the ratios, of the
+    step and of the CPU µs per simulated ms (and its median), runs completed."""
     groups = {}
     for key, rows in results.items():
         kind = key[0] if isinstance(key, tuple) else "default"
         for tool, m, ours, _ in rows:
             groups.setdefault((kind, tool), []).append((m, ours))
-    lines = ["| package | tool | e_ef / ours | τ_ef / ours | runs completed | simulated [s] | "
-             "CPU µs per simulated ms (median) |", "|---|---|---|---|---|---|---|"]
+    lines = ["| package | tool | e_ef / ours | τ_ef / ours | runs completed | step [ms] | simulated [s] | "
+             "CPU µs per simulated ms: range (median) |", "|---|---|---|---|---|---|---|---|"]
     for (kind, tool), items in groups.items():
         done = [(m, o) for m, o in items if m is not None and m["completed"]]
         e = [_ratio(m["e_ef_mm"], o["e_ef_mm"]) for m, o in done]
         t = [_ratio(m["tau_ef_Nm"], o["tau_ef_Nm"]) for m, o in done]
         cpu = [_cpu_per_ms(m) for m, _ in done if math.isfinite(_cpu_per_ms(m))]
-        span = (lambda v: f"{min(v):.4f}-{max(v):.4f}" if v else "–")
+        steps = sorted({1e3 * m.get("step", 1e-3) for m, _ in done})
         lengths = sorted({round(m["simulated_s"], 3) for m, _ in done})
-        length = "–" if not lengths else (f"{lengths[0]:g}" if len(lengths) == 1 else
-                                          f"{lengths[0]:g}-{lengths[-1]:g}")
-        lines.append(f"| {kind} | {tool} | {span(e)} | {span(t)} | {len(done)}/{len(items)} | {length} | "
-                     f"{f'{np.median(cpu):.0f}' if cpu else '–'} |")
+        span = (lambda v: "–" if not v else (f"{v[0]:g}" if len(v) == 1 else f"{v[0]:g}-{v[-1]:g}"))
+        lines.append(f"| {kind} | {tool} | {_span(e)} | {_span(t)} | {len(done)}/{len(items)} | {span(steps)} | "
+                     f"{span(lengths)} | {_span(cpu, 0) + f' ({np.median(cpu):.0f})' if cpu else '–'} |")
     return "\n".join(lines) + "\n"
 
 
