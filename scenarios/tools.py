@@ -22,8 +22,8 @@ what a fresh importing process pays).  With no scene: all 16 bench scenes and
 thesis_sim_circle.  Every finished run is merged into ``--results`` (default
 ``benchmarks/results/tools.json``) as soon as it ends, stamped with the commit measured
 and the load average, and a run stored there is not run again: an interrupted measurement
-resumes.  ``--docs`` puts the tables of every run stored there (this call's and earlier
-ones) into docs/ssp.md and the summary into the README; nothing else writes the docs.
+resumes.  ``--docs`` runs nothing: it puts the tables of every run stored there into
+docs/ssp.md and the summary into the README; nothing else writes the docs.
 """
 from __future__ import annotations
 
@@ -423,17 +423,19 @@ def main(argv=None) -> int:
     parser.add_argument("--results", default=str(RESULTS), help="the runs stored so far (resumes from it)")
     parser.add_argument("--out", default=None, help="also write the markdown tables here")
     parser.add_argument("--docs", action="store_true",
-                        help="put the tables of every stored run into docs/ssp.md, the summary into the README")
+                        help="run nothing; put the tables of every stored run into docs/ssp.md, the summary "
+                             "into the README")
     args = parser.parse_args(argv)
     tools = [t for t in args.tools.split(",") if t]
     kinds = [k for k in args.kinds.split(",") if k]
     for k in kinds:
         if k not in KINDS:
             parser.error(f"--kinds {k}: one of {', '.join(KINDS)}")
-    results = measure(args.scenes or TABLE_SCENES, tools, kinds, args.results,
-                      progress=lambda line: print(line, file=sys.stderr, flush=True))
-    if args.docs:   # the tables hold every stored run, this call's and earlier ones
+    if args.docs:   # only writes: the tables of every stored run, nothing is run
         results = stored_rows(load_results(args.results), tools)
+    else:
+        results = measure(args.scenes or TABLE_SCENES, tools, kinds, args.results,
+                          progress=lambda line: print(line, file=sys.stderr, flush=True))
     text = summary(results) + "\n" + table(results)
     print(text)
     if args.out:
