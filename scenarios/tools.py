@@ -1,7 +1,7 @@
 """A scene's packages run in other people's tools, judged by what a user sees: its tracking.
 
 ``python -m scenarios.tools [SCENE ...] [--tools fmpy,ecos,libcosim] [--kinds K,...]
-[--stop-time S] [--results FILE.json] [--out FILE.md] [--docs]`` exports each scene as each
+[--results FILE.json] [--out FILE.md] [--docs]`` exports each whole scene as each
 package kind (:data:`KINDS`), runs the package in each tool, each run in its own process,
 as the tool's documentation says (nothing but the ``.ssp`` and its step):
 
@@ -19,11 +19,11 @@ and reports, per kind, scene and tool, e_ef and τ_ef (7.31-7.32, at the period'
 communication points) against ``parcosim run SCENE`` and the CPU time the tool's process
 spent per simulated ms, from its start (Python, imports, loading, initialisation included:
 what a fresh importing process pays).  With no scene: all 16 bench scenes and
-thesis_sim_circle.  Every finished run is stored in ``--results`` (default
-``benchmarks/results/tools.json``) as soon as it ends, and a run stored there is not run
-again: an interrupted measurement resumes.  ``--docs`` puts the tables of every run stored
-there (this call's and earlier ones, e.g. whole default packages and 3 s copies of the
-per-component ones) into docs/ssp.md and the summary into the README.
+thesis_sim_circle.  Every finished run is merged into ``--results`` (default
+``benchmarks/results/tools.json``) as soon as it ends, stamped with the commit measured
+and the load average, and a run stored there is not run again: an interrupted measurement
+resumes.  ``--docs`` runs nothing: it puts the tables of every run stored there into
+docs/ssp.md and the summary into the README; nothing else writes the docs.
 """
 from __future__ import annotations
 
@@ -31,6 +31,7 @@ import argparse
 import dataclasses
 import json
 import math
+import os
 import pickle
 import resource
 import subprocess
@@ -69,7 +70,8 @@ C_DRIVE_DIR = ROOT / "tests" / "support" / "cfmu"
 
 
 def short(scene: Scene, stop_time: float | None) -> Scene:
-    """``scene`` ending at ``stop_time`` (None: as it is); its metric window ends there too."""
+    """``scene`` ending at ``stop_time`` (None: as it is); its metric window ends there too
+    (for the tests' short runs: the measurement runs whole scenes)."""
     if stop_time is None or stop_time >= scene.system.stop_time:
         return scene
     start, end = scene.window
@@ -112,8 +114,9 @@ def swap_fmus(package, replacements: dict, out) -> Path:
     return Path(out)
 
 
-def export_kind(kind: str, scene: Scene, directory, c_drive=None) -> Exported:
-    """Export ``scene`` as package ``kind`` (:data:`KINDS`) into ``directory``."""
+def export_kind(kind: str, scene: Scene, directory, c_drive=None, substeps: int | None = None) -> Exported:
+    """Export ``scene`` as package ``kind`` (:data:`KINDS`) into ``directory`` (``substeps``:
+    the per-component kinds' n, None: chosen by the export's trial; the ``-1ms`` kind: 1)."""
     from .per_component import export_per_component
 
     path = Path(directory) / f"{scene.name}.{kind}.ssp"
@@ -125,10 +128,10 @@ def export_kind(kind: str, scene: Scene, directory, c_drive=None) -> Exported:
         raise ValueError(f"kind = {kind!r}; valid: {', '.join(KINDS)}")
     columns = {signal: name for name, signal in scene.columns.items() if name in METRIC_COLUMNS}
     if kind.startswith("internal-observer"):
-        path = export_per_component(scene, path, substeps=1 if kind.endswith("1ms") else None,
+        path = export_per_component(scene, path, substeps=1 if kind.endswith("1ms") else substeps,
                                     internal_observer=True)
     else:
-        path = export_per_component(scene, path)
+        path = export_per_component(scene, path, substeps=substeps)
     from fmus.ssp import read_ssp_experiment
 
     step = read_ssp_experiment(path)[2]
@@ -207,14 +210,14 @@ def tool_metrics(scene: Scene, run: SspRun, columns: dict, period: float | None 
 
 
 def compare(scene: Scene, tools=TOOLS, isolated: bool = True, out_dir=None, kind: str = "default",
-            c_drive=None, ours: dict | None = None) -> list:
-    """Export ``scene`` as ``kind``, run it in each tool and (unless ``ours`` is given) in
-    our master; one row per tool: (tool, tool's metrics, our metrics, error or None).
-    The tool's metrics carry ``cpu_s`` when ``isolated``."""
+            c_drive=None, ours: dict | None = None, substeps: int | None = None) -> list:
+    """Export ``scene`` as ``kind`` (:func:`export_kind`), run it in each tool and (unless
+    ``ours`` is given) in our master; one row per tool: (tool, tool's metrics, our metrics,
+    error or None).  The tool's metrics carry ``cpu_s`` when ``isolated``."""
     ours = run_scene(scene, mode="inprocess").metrics if ours is None else ours
     rows = []
     with tempfile.TemporaryDirectory(prefix="parcosim_pkg_") as tmp:
-        exported = export_kind(kind, scene, out_dir or tmp, c_drive)
+        exported = export_kind(kind, scene, out_dir or tmp, c_drive, substeps)
         for tool in tools:
             runner = run_tool_isolated if isolated else run_tool
             try:
@@ -262,107 +265,143 @@ def table(results: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _span(values, digits: int = 4) -> str:
+    return f"{min(values):.{digits}f}-{max(values):.{digits}f}" if values else "–"
+
+
 def summary(results: dict) -> str:
-    """One line per package kind and tool: the ranges of the ratios over the scenes, runs
-    completed, the median CPU µs per simulated ms."""
+    """One line per package kind and tool: the ranges over the scenes of the ratios, of the
+    step and of the CPU µs per simulated ms (and its median), runs completed."""
     groups = {}
     for key, rows in results.items():
         kind = key[0] if isinstance(key, tuple) else "default"
         for tool, m, ours, _ in rows:
             groups.setdefault((kind, tool), []).append((m, ours))
-    lines = ["| package | tool | e_ef / ours | τ_ef / ours | runs completed | simulated [s] | "
-             "CPU µs per simulated ms (median) |", "|---|---|---|---|---|---|---|"]
+    lines = ["| package | tool | e_ef / ours | τ_ef / ours | runs completed | step [ms] | simulated [s] | "
+             "CPU µs per simulated ms: range (median) |", "|---|---|---|---|---|---|---|---|"]
     for (kind, tool), items in groups.items():
         done = [(m, o) for m, o in items if m is not None and m["completed"]]
         e = [_ratio(m["e_ef_mm"], o["e_ef_mm"]) for m, o in done]
         t = [_ratio(m["tau_ef_Nm"], o["tau_ef_Nm"]) for m, o in done]
         cpu = [_cpu_per_ms(m) for m, _ in done if math.isfinite(_cpu_per_ms(m))]
-        span = (lambda v: f"{min(v):.4f}-{max(v):.4f}" if v else "–")
+        steps = sorted({1e3 * m.get("step", 1e-3) for m, _ in done})
         lengths = sorted({round(m["simulated_s"], 3) for m, _ in done})
-        length = "–" if not lengths else (f"{lengths[0]:g}" if len(lengths) == 1 else
-                                          f"{lengths[0]:g}-{lengths[-1]:g}")
-        lines.append(f"| {kind} | {tool} | {span(e)} | {span(t)} | {len(done)}/{len(items)} | {length} | "
-                     f"{f'{np.median(cpu):.0f}' if cpu else '–'} |")
+        span = (lambda v: "–" if not v else (f"{v[0]:g}" if len(v) == 1 else f"{v[0]:g}-{v[-1]:g}"))
+        lines.append(f"| {kind} | {tool} | {_span(e)} | {_span(t)} | {len(done)}/{len(items)} | {span(steps)} | "
+                     f"{span(lengths)} | {_span(cpu, 0) + f' ({np.median(cpu):.0f})' if cpu else '–'} |")
     return "\n".join(lines) + "\n"
 
 
 # --- the resumable measurement ---------------------------------------------------------------
 
-def _key(kind, scene, tool, stop_time) -> str:
-    return f"{kind}|{scene}|{tool}|{stop_time if stop_time is not None else 'full'}"
+def _key(kind, scene, tool) -> str:
+    return f"{kind}|{scene}|{tool}"
 
 
 def load_results(path=RESULTS) -> dict:
-    """The runs stored so far (key "kind|scene|tool|stop" -> row), {} without a file."""
+    """The runs stored so far (key "kind|scene|tool" -> row; our master's: "ours|scene|parcosim";
+    the export's trial: "trial|scene|per-component"), {} without a file."""
     path = Path(path)
     return json.loads(path.read_text()) if path.exists() else {}
 
 
-def _store(path, stored: dict) -> None:
+def _commit() -> str:
+    """The commit measured (with ``+`` when the work tree differs from it)."""
+    try:
+        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+                              cwd=ROOT, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], capture_output=True,
+                               text=True, cwd=ROOT, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+    return head + ("+" if dirty else "")
+
+
+def _store(path, key: str, value: dict) -> dict:
+    """Merge one run into the file ``path`` (read again, so that runs stored meanwhile by
+    another call stay) and return what it holds now."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(".tmp")
+    stored = load_results(path)
+    stored[key] = {**value, "commit": _commit(), "load": round(os.getloadavg()[0], 2)}
+    tmp = path.with_suffix(f".{os.getpid()}.tmp")
     tmp.write_text(json.dumps(stored, indent=1, sort_keys=True, default=float))
     tmp.replace(path)
+    return stored
 
 
-def measure(scenes, tools, kinds, stop_time=None, results=RESULTS, progress=print) -> dict:
-    """Run what ``results`` does not hold yet, storing each run as it ends; return
-    ``{(kind, scene): rows}`` of everything asked for (from the file or new)."""
+def _has_drives(scene: Scene) -> bool:
+    return {"drive1", "drive2"} <= {c.name for c in scene.system.components}
+
+
+def _trial(scene: Scene, kind: str, results, stored: dict) -> tuple:
+    """(the per-component kind's n, the results held): the export's trial
+    (:func:`scenarios.per_component.trial`) run once per scene and observer placement and
+    stored (key "trial|scene|per-component" or "...|internal-observer"); (None, stored) for
+    the kinds without a trial."""
+    from .per_component import trial
+
+    if kind == "default" or kind.endswith("1ms"):
+        return None, stored
+    family = "internal-observer" if kind.startswith("internal-observer") else "per-component"
+    key = _key("trial", scene.name, family)
+    if key not in stored:
+        n, tried, floor = trial(scene, internal_observer=family == "internal-observer")
+        stored = _store(results, key, {"substeps": n, "floor": floor,
+                                       "tried": {str(k): list(v) for k, v in tried.items()}})
+    return stored[key]["substeps"], stored
+
+
+def measure(scenes, tools, kinds, results=RESULTS, progress=print) -> dict:
+    """Run, on the whole scenes, what ``results`` does not hold yet, merging each run into it
+    as it ends; return ``{(kind, scene): rows}`` of everything asked for (from the file or new).
+    Kinds that swap or fold the drives skip a scene without ``drive1``/``drive2``."""
     stored = load_results(results)
     table_rows = {}
     c_drive = None
     with tempfile.TemporaryDirectory(prefix="parcosim_tools_") as tmp:
-        for name in scenes:
-            full = get_scene(name)
-            scene = short(full, stop_time)
-            stop = stop_time if scene is not full else None    # a scene shorter than stop_time runs whole
-            ours_key = _key("ours", name, "parcosim", stop)
-            for kind in kinds:
-                if kind.startswith("internal-observer") or kind.endswith("c-drive"):
-                    if not {"drive1", "drive2"} <= {c.name for c in scene.system.components}:
-                        continue
-                todo = [t for t in tools if _key(kind, name, t, stop) not in stored]
+        for kind in kinds:
+            for name in scenes:
+                scene = get_scene(name)
+                if (kind.startswith("internal-observer") or kind.endswith("c-drive")) and not _has_drives(scene):
+                    continue
+                ours_key = _key("ours", name, "parcosim")
+                todo = [t for t in tools if _key(kind, name, t) not in stored]
                 if todo:
                     if ours_key not in stored:
-                        stored[ours_key] = run_scene(scene, mode="inprocess").metrics
-                        _store(results, stored)
+                        stored = _store(results, ours_key, run_scene(scene, mode="inprocess").metrics)
                     if kind.endswith("c-drive") and c_drive is None:
                         c_drive = build_c_drive(Path(tmp) / "c")
+                    substeps, stored = _trial(scene, kind, results, stored)
                     start = _time.perf_counter()
                     for tool, m, _, error in compare(scene, todo, kind=kind, c_drive=c_drive,
-                                                     ours=stored[ours_key]):
-                        stored[_key(kind, name, tool, stop)] = {"metrics": m, "error": error}
-                        _store(results, stored)
+                                                     ours=stored[ours_key], substeps=substeps):
+                        stored = _store(results, _key(kind, name, tool), {"metrics": m, "error": error})
                         progress(f"{kind} {name} {tool}: " + (f"e_ef x{_ratio(m['e_ef_mm'], stored[ours_key]['e_ef_mm']):.4f}"
                                  if m else f"failed ({error})") + f" [{_time.perf_counter() - start:.0f} s]")
                 table_rows[(kind, name)] = [
-                    (t, stored[_key(kind, name, t, stop)]["metrics"], stored[ours_key],
-                     stored[_key(kind, name, t, stop)]["error"]) for t in tools]
+                    (t, stored[_key(kind, name, t)]["metrics"], stored[ours_key],
+                     stored[_key(kind, name, t)]["error"]) for t in tools]
     return table_rows
 
 
 def stored_rows(stored: dict, tools=TOOLS) -> dict:
     """Every run in ``stored`` (:func:`load_results`) as ``{(kind, scene): rows}``, in the
-    order of :data:`KINDS` and :data:`TABLE_SCENES`; runs of copies shortened to ``stop`` s
-    under the kind ``"<kind>, <stop> s copies"``."""
+    order of :data:`KINDS` and :data:`TABLE_SCENES`."""
     found = {}
     for key, value in stored.items():
-        kind, scene, tool, stop = key.split("|")
-        if kind == "ours" or tool not in tools:
+        kind, scene, tool = key.split("|")
+        ours = stored.get(_key("ours", scene, "parcosim"))
+        if kind in ("ours", "trial") or tool not in tools or ours is None:
             continue
-        ours = stored.get(_key("ours", scene, "parcosim", None if stop == "full" else float(stop)))
-        if ours is None:
-            continue
-        found.setdefault((kind, stop, scene), []).append((tool, value["metrics"], ours, value["error"]))
+        found.setdefault((kind, scene), []).append((tool, value["metrics"], ours, value["error"]))
 
     def order(item):
-        (kind, stop, scene), _ = item
+        (kind, scene), _ = item
         rank = TABLE_SCENES.index(scene) if scene in TABLE_SCENES else len(TABLE_SCENES)
-        return (KINDS.index(kind) if kind in KINDS else len(KINDS), stop != "full", stop, rank)
+        return (KINDS.index(kind) if kind in KINDS else len(KINDS), rank)
 
-    return {(kind if stop == "full" else f"{kind}, {float(stop):g} s copies", scene):
-            sorted(rows, key=lambda r: tools.index(r[0])) for (kind, stop, scene), rows in sorted(found.items(), key=order)}
+    return {key: sorted(rows, key=lambda r: tools.index(r[0])) for key, rows in sorted(found.items(), key=order)}
 
 
 def _child(argv) -> None:
@@ -381,21 +420,22 @@ def main(argv=None) -> int:
     parser.add_argument("scenes", nargs="*", help=f"scene names (default: the {len(TABLE_SCENES)} of the table)")
     parser.add_argument("--tools", default=",".join(TOOLS), help="comma-separated, from " + ", ".join(TOOLS))
     parser.add_argument("--kinds", default=",".join(KINDS), help="comma-separated, from " + ", ".join(KINDS))
-    parser.add_argument("--stop-time", type=float, default=None, help="shorten every scene to this [s]")
     parser.add_argument("--results", default=str(RESULTS), help="the runs stored so far (resumes from it)")
     parser.add_argument("--out", default=None, help="also write the markdown tables here")
     parser.add_argument("--docs", action="store_true",
-                        help="put the tables of every stored run into docs/ssp.md, the summary into the README")
+                        help="run nothing; put the tables of every stored run into docs/ssp.md, the summary "
+                             "into the README")
     args = parser.parse_args(argv)
     tools = [t for t in args.tools.split(",") if t]
     kinds = [k for k in args.kinds.split(",") if k]
     for k in kinds:
         if k not in KINDS:
             parser.error(f"--kinds {k}: one of {', '.join(KINDS)}")
-    results = measure(args.scenes or TABLE_SCENES, tools, kinds, args.stop_time, args.results,
-                      progress=lambda line: print(line, file=sys.stderr, flush=True))
-    if args.docs:   # the tables hold every stored run, this call's and earlier ones
+    if args.docs:   # only writes: the tables of every stored run, nothing is run
         results = stored_rows(load_results(args.results), tools)
+    else:
+        results = measure(args.scenes or TABLE_SCENES, tools, kinds, args.results,
+                          progress=lambda line: print(line, file=sys.stderr, flush=True))
     text = summary(results) + "\n" + table(results)
     print(text)
     if args.out:

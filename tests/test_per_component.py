@@ -185,3 +185,34 @@ def test_without_phases_the_jacobi_master_leaves_the_circle(short_bench, ours):
     start, are far off in a Jacobi master (the issue's 40 mm against 0.45 mm over 9 s)."""
     result = simulate(short_bench.system, mode="inprocess", coupling="jacobi")
     assert _e_ef(short_bench, result) > 3 * ours
+
+
+# --- the export's choice of n: the trial's rule and the scene's own reproducibility -----------
+
+def test_the_trial_scales_n_to_the_deviation_above_the_floor():
+    from scenarios.per_component import SUBSTEP_CHOICES, next_substeps
+
+    assert next_substeps(4, 0.009, 0.01) is None                  # within the goal: taken
+    assert next_substeps(4, 0.02, 0.01) == 8                      # twice the goal: twice n
+    assert next_substeps(4, 0.05, 0.01) == 20                     # 5x: n = 20 of the choices
+    # a scene whose own metrics move by 0.6 % under a 1 nm start shift: 1.3 % is within reach
+    assert next_substeps(4, 0.013, 0.01, floor=0.006) is None
+    # the part above the floor is what shrinks with h: 2.6 % - 0.6 % = twice the goal
+    assert next_substeps(4, 0.026, 0.01, floor=0.006) == 8
+    assert next_substeps(4, float("nan"), 0.01) == 5              # a NaN is never taken
+    with pytest.raises(ValueError, match="deviation 0.5"):
+        next_substeps(SUBSTEP_CHOICES[-1], 0.5, 0.01)
+
+
+def test_reproducibility_sees_a_sensitive_scene_and_not_a_contracting_one():
+    """A 1 nm shift of the plant's start (far below an encoder count) moves
+    bench_triangle_PDMDx's τ_ef measurably and bench_triangle_PDx's not at all (the floor
+    that stopped the trial chasing n = 500, docs/ssp.md)."""
+    from scenarios.per_component import reproducibility
+    from scenarios.tools import short
+
+    sensitive = reproducibility(short(get_scene("bench_triangle_PDMDx"), 3.0))
+    contracting = reproducibility(short(get_scene("bench_triangle_PDx"), 3.0))
+    assert sensitive > 1e-3, sensitive
+    assert contracting < 1e-4, contracting
+    assert reproducibility(short(get_scene("bench_triangle_PDx"), 3.0), shift=0.0) == 0.0

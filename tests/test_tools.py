@@ -53,27 +53,40 @@ def test_the_package_tracks_in_the_tool_as_in_our_master(compared, tool):
 
 # --- the measurement's bookkeeping (no tool runs) ----------------------------------------------
 
-def test_a_stored_run_is_not_run_again(tmp_path, monkeypatch):
+def test_a_stored_run_is_not_run_again_and_a_new_one_is_merged(tmp_path, monkeypatch):
     import json
 
     import scenarios.tools as tools
 
     metrics = {"e_ef_mm": 1.0, "tau_ef_Nm": 2.0, "simulated_s": 3.0, "completed": True, "cpu_s": 3.0, "step": 1e-3}
     ours = {"e_ef_mm": 1.0, "tau_ef_Nm": 2.0}
-    stored = {"ours|bench_circle_PDq|parcosim|3.0": ours,
-              **{f"default|bench_circle_PDq|{t}|3.0": {"metrics": metrics, "error": None} for t in tools.TOOLS}}
+    stored = {"ours|bench_circle_PDq|parcosim": ours,
+              **{f"default|bench_circle_PDq|{t}": {"metrics": metrics, "error": None} for t in ("fmpy", "ecos")}}
     path = tmp_path / "tools.json"
     path.write_text(json.dumps(stored))
+    calls = []
+
+    def one_run(scene, todo, **kwargs):
+        calls.append(list(todo))
+        # another call stores a run meanwhile: the merge keeps it
+        tools._store(path, "default|bench_circle_TCx|fmpy", {"metrics": metrics, "error": None})
+        return [(t, dict(metrics, e_ef_mm=1.5), ours, None) for t in todo]
 
     def no_run(*args, **kwargs):
-        raise AssertionError("a stored run was run again")
+        raise AssertionError("our master was run again")
 
-    monkeypatch.setattr(tools, "compare", no_run)
+    monkeypatch.setattr(tools, "compare", one_run)
     monkeypatch.setattr(tools, "run_scene", no_run)
-    rows = tools.measure(["bench_circle_PDq"], tools.TOOLS, ["default"], 3.0, path, progress=lambda _: None)
+    rows = tools.measure(["bench_circle_PDq"], tools.TOOLS, ["default"], path, progress=lambda _: None)
+    assert calls == [["libcosim"]]   # only the run not stored
     assert [r[0] for r in rows[("default", "bench_circle_PDq")]] == list(tools.TOOLS)
-    assert "| default, 3 s copies | bench_circle_PDq | fmpy | 1 | 1 (1) | 1.0000 | 1.0000 | yes | 1000 |" in \
-        tools.table(tools.stored_rows(tools.load_results(path)))
+    held = tools.load_results(path)
+    assert "default|bench_circle_TCx|fmpy" in held and held["default|bench_circle_PDq|libcosim"]["commit"]
+    text = tools.table(tools.stored_rows(held))
+    assert "| default | bench_circle_PDq | fmpy | 1 | 1 (1) | 1.0000 | 1.0000 | yes | 1000 |" in text
+    assert "| default | bench_circle_PDq | libcosim | 1 | 1.5 (1) | 1.5000 | 1.0000 | yes | 1000 |" in text
+    tools.measure(["bench_circle_PDq"], tools.TOOLS, ["default"], path, progress=lambda _: None)
+    assert calls == [["libcosim"]]   # all stored now: nothing runs
 
 
 def test_swap_fmus_replaces_only_the_named_member(tmp_path):
