@@ -10,10 +10,10 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from fmus.master import simulate
+from fmus.cosim.master import simulate
 from fmus.native.models import NATIVE
 from fmus.native.run import native_system
-from scenarios.scenes import get_scene
+from scenarios.scenes.thesis import get_scene
 
 
 @pytest.mark.parametrize("scene", ["bench_circle_TCMDx", "pendulum_push"])

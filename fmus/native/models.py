@@ -19,7 +19,7 @@ class NativeModel:
     """A native FMU's C parts: ``adapter`` (in fmus/native/adapters, named pcn_<model>.c:
     sources/ is flat), ``kernels`` (C files of kernels/src; their headers follow) and
     ``data`` (slave -> (scalars, arrays), module docstring); ``sampled``: sub-stepped at a
-    sample time T (fmus/sampling.py), with ``pcn_sampling.c`` and the kernels' counting rule."""
+    sample time T (fmus/slave/sampling.py), with ``pcn_sampling.c`` and the kernels' counting rule."""
 
     adapter: str
     kernels: tuple

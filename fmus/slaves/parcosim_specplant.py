@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import os
 
-from fmus import budget
-from fmus.guarded import GuardedSlave
-from fmus.refusals import refuse_absurd, require_finite
+from fmus.slave import budget
+from fmus.slave.base import GuardedSlave
+from fmus.slave.refusals import refuse_absurd, require_finite
 
 #: The spec inside the FMU's resources.
 SPEC_RESOURCE = "plant_spec.toml"
@@ -75,7 +75,7 @@ class SpecPlant(GuardedSlave):
         self._publish()
 
     def known_step_work(self) -> float:
-        """The least CPU [s] a step is charged (:func:`fmus.budget.known_step_work`)."""
+        """The least CPU [s] a step is charged (:func:`fmus.slave.budget.known_step_work`)."""
         return budget.known_step_work(self.sim)
 
     def step(self, current_time, step_size):

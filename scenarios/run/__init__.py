@@ -1,0 +1,1 @@
+"""Running one scene: result.csv, metrics.json, plots; the thesis' metrics."""

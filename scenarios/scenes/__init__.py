@@ -1,0 +1,1 @@
+"""Scenes as data: the thesis' bench scenes, the pendulum's, the bench twin, perturbations."""
