@@ -48,7 +48,7 @@ def child(scene: str, stop_time: float | None) -> dict:
     from fmus.cosim.master import simulate
     from scenarios.run.metrics import scene_metrics
     from scenarios.run.runner import result_columns
-    from scenarios.scenes.thesis import get_scene
+    from scenarios.scenes.catalogue import get_scene
 
     the_scene = get_scene(scene)
     if stop_time is not None:
@@ -84,7 +84,7 @@ def digest_child() -> dict:
 
     sys.path.insert(0, str(ROOT))
     from fmus.cosim.master import simulate
-    from scenarios.scenes.thesis import get_scene, scene_names
+    from scenarios.scenes.catalogue import get_scene, scene_names
 
     warnings.simplefilter("ignore")   # fall-back warnings: the mode that ran is in the digest's line
     out = {}

@@ -43,7 +43,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import bench_master  # noqa: E402
 from fmus.cosim import compiled  # noqa: E402
 from fmus.cosim.master import simulate  # noqa: E402
-from scenarios.scenes.thesis import get_scene  # noqa: E402
+from scenarios.scenes.catalogue import get_scene  # noqa: E402
 
 CALLS = 2000
 #: Calls of a kernel timed per round, from the state at the end of the run with its last inputs

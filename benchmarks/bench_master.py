@@ -419,7 +419,8 @@ def main(argv=None) -> int:
     if unknown:
         ap.error(f"--cases: unknown {', '.join(unknown)}; valid: {', '.join(c[0] for c in CASES)}")
 
-    from scenarios.scenes.thesis import drives_in_plant, get_scene
+    from scenarios.scenes.catalogue import get_scene
+    from scenarios.scenes.transforms import drives_in_plant
 
     scene = get_scene(args.scene)
     if args.drives_in_plant is not None:

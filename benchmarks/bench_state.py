@@ -16,7 +16,8 @@ from fmus.export.build import ensure_built
 from fmus.cosim.backends import _FmuInstance
 from fmus.cosim.master import stepping_order
 from fmus.cosim.stepper import Stepper
-from scenarios.scenes.thesis import drives_in_plant, get_scene
+from scenarios.scenes.catalogue import get_scene
+from scenarios.scenes.transforms import drives_in_plant
 
 
 def _median_us(call, rounds=50):

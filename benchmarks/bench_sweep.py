@@ -20,7 +20,7 @@ import os
 import time
 
 from scenarios.batch.engine import Task, open_client, run_task, run_tasks
-from scenarios.scenes.thesis import get_scene
+from scenarios.scenes.catalogue import get_scene
 from scenarios.batch.sweep import run_sweep, with_stop_time
 
 

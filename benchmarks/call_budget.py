@@ -100,7 +100,7 @@ def inner_step(scene: str, steps: int = 200):
     """CPU of one inner doStep of ``scene``'s ClosedLoop (its components' steps, the plant's
     evaluations included) over ``steps`` communication steps."""
     from fmus.systemfmu.cores import LoopCore
-    from scenarios.scenes.thesis import get_scene
+    from scenarios.scenes.catalogue import get_scene
 
     system = get_scene(scene).system
     per_step = sum(c.substeps for c in system.components)

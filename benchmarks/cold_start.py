@@ -109,7 +109,7 @@ def build_fmus(out: Path) -> dict:
     """Build the baseline and parcosim's three FMUs into ``out``: name -> path."""
     from fmus.export.build import build_fmu
     from fmus.systemfmu.export import export_fmu
-    from scenarios.scenes.thesis import get_scene
+    from scenarios.scenes.catalogue import get_scene
 
     out.mkdir(parents=True, exist_ok=True)
     paths = {"LowPass": build_baseline(out)}

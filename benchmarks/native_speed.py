@@ -89,7 +89,7 @@ ECOSPY_CHILD = textwrap.dedent("""
 MASTER_CHILD = textwrap.dedent("""
     import json, sys, time
     from fmus.cosim.master import simulate
-    from scenarios.scenes.thesis import get_scene
+    from scenarios.scenes.catalogue import get_scene
     import dataclasses
     scene, native, fmu_dir, stop = sys.argv[1], sys.argv[2] == "native", sys.argv[3], float(sys.argv[4])
     system = get_scene(scene).system
@@ -111,7 +111,7 @@ def export_packages(work: Path, native_dir: Path, python_dir: Path, scene: str) 
     """The scene per component with each set of FMUs: kind ("native", "pythonfmu") -> .ssp."""
     from fmus.export.build import ensure_built
     from fmus.ssp.export import export_ssp
-    from scenarios.scenes.thesis import get_scene
+    from scenarios.scenes.catalogue import get_scene
 
     system = get_scene(scene).system
     models = sorted({c.model for c in system.components})

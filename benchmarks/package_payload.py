@@ -20,7 +20,8 @@ import plant.correction as correction
 from fmus.cosim.master import simulate
 from scenarios.run.metrics import rms_norm
 from scenarios.packaging.chain import package_scene, run_jacobi
-from scenarios.scenes.thesis import Fidelity, bench, drives_in_plant
+from scenarios.scenes.thesis import Fidelity, bench
+from scenarios.scenes.transforms import drives_in_plant
 
 CASES = (("TCMDx", "circle"), ("PDq", "circle"), ("TCMDq", "triangle"))
 PAYLOADS = (0.0, 0.04, 0.1)

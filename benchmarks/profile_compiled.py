@@ -29,7 +29,7 @@ def run(scene: str, runs: int) -> None:
     """The workload: ``scene`` compiled ``runs`` times."""
     sys.path.insert(0, str(ROOT))
     from fmus.cosim.master import simulate
-    from scenarios.scenes.thesis import get_scene
+    from scenarios.scenes.catalogue import get_scene
 
     system = get_scene(scene).system
     for _ in range(runs):

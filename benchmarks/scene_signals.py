@@ -15,7 +15,7 @@ import numpy as np
 
 def dump(path: str) -> None:
     from scenarios.run.runner import run_scene
-    from scenarios.scenes.thesis import scene_names
+    from scenarios.scenes.catalogue import scene_names
 
     arrays = {}
     for name in scene_names():

@@ -15,7 +15,7 @@ import numpy as np
 from fmus.cosim.master import simulate
 from fmus.ssp.export import export_ssp
 from fmus.ssp.run import ecos_available, simulate_ssp_ecos, simulate_ssp_fmpy
-from scenarios.scenes.thesis import get_scene
+from scenarios.scenes.catalogue import get_scene
 
 
 def main(scene_name="bench_circle_TCMDx"):

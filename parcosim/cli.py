@@ -10,7 +10,7 @@ Every subcommand is a thin shell over a documented Python call:
 ``parcosim sweep``     ``scenarios.batch.sweep.run_sweep(scene, samples, uncertainty, seed, distribution,
                        perturb, mode, out_dir, scheduler, workers)``
 ``parcosim identify-motor``  ``motor.cli.identify_main(argv)``
-``parcosim list``      ``scenarios.scenes.thesis.scene_names()``
+``parcosim list``      ``scenarios.scenes.catalogue.scene_names()``
 ``parcosim run``       ``scenarios.run.runner.run_scene(name, mode, out_dir)`` (mode inprocess, fmu or
                        compiled); with ``--native`` (``--mode fmu``)
                        ``run_scene(fmus.native.run.with_native_fmus(scene, fmu_dir), "fmu", ...)``; with ``--drives-in-plant N``
@@ -188,7 +188,7 @@ def _check_command(argv: list, parser) -> None:
 
 def _check_scene(name: str) -> None:
     """Refuse an unknown scene naming the closest one."""
-    from scenarios.scenes.thesis import scene_names
+    from scenarios.scenes.catalogue import scene_names
 
     names = scene_names()
     if name not in names:
@@ -294,7 +294,7 @@ def _command(args) -> int:
             from scenarios.examples.plant_demo import run
             run(args.out, args.preset)
         elif args.command == "list":
-            from scenarios.scenes.thesis import get_scene, scene_names
+            from scenarios.scenes.catalogue import get_scene, scene_names
             width = max(len(name) for name in scene_names())
             for name in scene_names():
                 print(f"{name:{width}s} {get_scene(name).description}")
@@ -355,7 +355,8 @@ def progress_bar(label: str):
 
 def _scene(args):
     """The scene ``args.scene``, with its drives inside the plant if ``--drives-in-plant N``."""
-    from scenarios.scenes.thesis import drives_in_plant, get_scene, with_fmu_files
+    from scenarios.scenes.catalogue import get_scene
+    from scenarios.scenes.transforms import drives_in_plant, with_fmu_files
 
     scene = get_scene(args.scene)
     if args.drives_in_plant is not None:

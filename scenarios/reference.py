@@ -293,7 +293,8 @@ def _mean_torque(drive_slave, i_start, v, omega, h):
 # --- the run ------------------------------------------------------------------------------
 
 def _system_of(scene_or_name, stop_time, system_changes):
-    from scenarios.scenes.thesis import Scene, get_scene
+    from scenarios.scenes.catalogue import get_scene
+    from scenarios.scenes.scene import Scene
 
     scene = get_scene(scene_or_name) if isinstance(scene_or_name, str) else scene_or_name
     system = scene.system if isinstance(scene, Scene) else scene
@@ -311,7 +312,7 @@ def _the_plant(system) -> str:
     if len(plants) != 1:
         actuated = [c.name for c in system.components if c.model == "ActuatedFiveBarPlant"]
         hint = (f" ({', '.join(actuated)} is an ActuatedFiveBarPlant: its truth is the reference of the scene "
-                "before scenarios.scenes.thesis.drives_in_plant)") if actuated else ""
+                "before scenarios.scenes.transforms.drives_in_plant)") if actuated else ""
         raise ReferenceError(f"the reference needs exactly one FiveBarPlant, found {len(plants)}{hint}")
     return plants[0]
 
@@ -330,8 +331,8 @@ def _instances(system) -> dict:
 
 
 def _driving(system, plant_name) -> dict:
-    """Drive instance -> the plant joint it drives (:func:`scenarios.scenes.thesis.drive_joints`)."""
-    from scenarios.scenes.thesis import drive_joints
+    """Drive instance -> the plant joint it drives (:func:`scenarios.scenes.transforms.drive_joints`)."""
+    from scenarios.scenes.transforms import drive_joints
 
     try:
         return drive_joints(system, plant_name)
@@ -358,7 +359,7 @@ def _links(system, instances, order, plant_name, coupling) -> dict:
 def reference_run(scene_or_name, rtol: float = RTOL, atol: float = ATOL, stop_time: float | None = None,
                   method: str = METHOD, coupling: str = "monolithic", system_changes=None,
                   progress=None) -> ReferenceResult:
-    """Run the reference of a scene (a name, a :class:`scenarios.scenes.thesis.Scene` or a System).
+    """Run the reference of a scene (a name, a :class:`scenarios.scenes.scene.Scene` or a System).
 
     The components are the master's in-process instances, initialised and stepped by the
     master's own loop (:class:`fmus.cosim.stepper.Stepper`, Gauss-Seidel order); only the plant's
@@ -384,7 +385,7 @@ def reference_run(scene_or_name, rtol: float = RTOL, atol: float = ATOL, stop_ti
     ReferenceResult
         Keeps the rows so far and sets ``error`` when a component refused a step.
     """
-    from scenarios.scenes.thesis import Scene
+    from scenarios.scenes.scene import Scene
 
     if coupling not in COUPLINGS:
         raise ValueError(f"coupling = {coupling!r}; valid: {', '.join(COUPLINGS)}")
@@ -505,7 +506,7 @@ def with_parameters(system: System, instance: str, component_substeps: int | Non
 # --- measurements (docs/reference.md) -----------------------------------------------------
 
 def _windows(stop: float, scene) -> list:
-    from scenarios.scenes.thesis import Scene
+    from scenarios.scenes.scene import Scene
 
     edges = [0.0, min(0.1, stop)]
     if isinstance(scene, Scene) and scene.reference_end < stop:
@@ -521,7 +522,7 @@ def main(argv=None) -> int:
 
     from fmus.cosim.master import simulate
 
-    from scenarios.scenes.thesis import get_scene
+    from scenarios.scenes.catalogue import get_scene
 
     parser = argparse.ArgumentParser(prog="python -m scenarios.reference", description=main.__doc__)
     parser.add_argument("scene", nargs="?", default="bench_circle_TCMDx")

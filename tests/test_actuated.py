@@ -12,7 +12,8 @@ from motor import Drive, friction, get_motor_preset, shaft_torque
 from plant import IntegratorSettings, PlantError, PlantSimulator, fast5r, fivebar, get_preset
 from plant.actuated import ActuatedPlant
 from scenarios.reference import deviation, reference_run
-from scenarios.scenes.thesis import drives_in_plant, get_scene
+from scenarios.scenes.catalogue import get_scene
+from scenarios.scenes.transforms import drives_in_plant
 
 START = (-0.002, 0.108)      # the bench circle's start
 
@@ -165,7 +166,7 @@ def test_the_reference_of_an_in_plant_scene_points_to_its_original():
     from scenarios.reference import ReferenceError
 
     with pytest.raises(ReferenceError, match="plant is an ActuatedFiveBarPlant: its truth is the reference of the "
-                                             "scene before scenarios.scenes.thesis.drives_in_plant"):
+                                             "scene before scenarios.scenes.transforms.drives_in_plant"):
         reference_run(drives_in_plant(_short(get_scene("bench_circle_TCMDx"), 0.01)))
 
 

@@ -10,7 +10,7 @@ from benchmarks import passthrough
 from fmus.export.build import SLAVES
 from fmus.cosim.master import simulate
 from fmus.cosim.system import split_signal
-from scenarios.scenes.thesis import get_scene
+from scenarios.scenes.catalogue import get_scene
 
 SCENE = "bench_circle_TCMDx"
 STEPS = 5

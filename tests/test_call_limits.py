@@ -25,7 +25,7 @@ from fmus.systemfmu.cores import SYSTEM_FILE, system_to_dict
 from fmus.slave.base import FmiError, check_experiment_times
 from plant import IntegratorSettings, PlantSimulator, get_preset
 from plant.wheeled import MAX_SUBSTEPS as WHEELED_MAX_SUBSTEPS
-from scenarios.scenes.thesis import get_scene
+from scenarios.scenes.catalogue import get_scene
 from tests.fmi_support import FmuInstance
 from tests.test_extremes import make_slave, set_variables
 

@@ -84,7 +84,7 @@ def test_a_failed_metrics_write_names_metrics_json(tmp_path, short_runs, monkeyp
 def test_the_master_returns_the_rows_so_far_on_keyboard_interrupt(monkeypatch):
     from fmus.cosim import stepper as stepper_module
     from fmus.cosim.master import simulate
-    from scenarios.scenes.thesis import get_scene
+    from scenarios.scenes.catalogue import get_scene
 
     calls = {"n": 0}
     step = stepper_module.Stepper.step

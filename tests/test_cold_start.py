@@ -62,7 +62,7 @@ def _run_fresh(specs, tmp_path) -> list:
 @pytest.fixture(scope="module")
 def closed_loop(tmp_path_factory):
     from fmus.systemfmu.export import export_fmu
-    from scenarios.scenes.thesis import get_scene
+    from scenarios.scenes.catalogue import get_scene
 
     return export_fmu(get_scene("bench_circle_TCMDx").system, tmp_path_factory.mktemp("loop") / "ClosedLoop.fmu")
 

@@ -12,7 +12,8 @@ from fmus.cosim import compiled
 from fmus.cosim.master import simulate
 from fmus.cosim.system import Component, System
 from scenarios.run.runner import run_scene
-from scenarios.scenes.thesis import drives_in_plant, get_scene
+from scenarios.scenes.catalogue import get_scene
+from scenarios.scenes.transforms import drives_in_plant
 
 
 def _short(scene, stop_time):

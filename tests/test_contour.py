@@ -8,7 +8,7 @@ import pytest
 
 from controller.trajectories import PolygonTrajectory, triangle
 from scenarios.run.metrics import scene_polygon, side_contour_errors
-from scenarios.scenes.thesis import get_scene
+from scenarios.scenes.catalogue import get_scene
 
 H = 1e-3
 

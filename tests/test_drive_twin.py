@@ -227,7 +227,8 @@ def test_lugre_inside_the_actuated_plant_runs_compiled_as_in_process_and_near_th
     in the separate drive; the rest (currents, mechanism, sigma2 = b) is integrated together."""
     from fmus.cosim.master import simulate
     from scenarios.run.metrics import rms_norm
-    from scenarios.scenes.thesis import Fidelity, bench, drives_in_plant
+    from scenarios.scenes.thesis import Fidelity, bench
+    from scenarios.scenes.transforms import drives_in_plant
 
     twin = Fidelity(friction="lugre", pwm_counts=1000, current_noise=0.02, noise_seed=3)
     separate = _short(bench("PDq", "circle", fidelity=twin), 1.0)

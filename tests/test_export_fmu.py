@@ -18,7 +18,7 @@ from fmus.cosim.master import simulate
 from fmus.ssp.export import export_ssp
 from fmus.ssp.run import ecos_available
 from fmus.cosim.system import Component, System
-from scenarios.scenes.thesis import get_scene
+from scenarios.scenes.catalogue import get_scene
 
 pytestmark = [pytest.mark.fmu]
 

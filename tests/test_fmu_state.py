@@ -15,7 +15,8 @@ from fmus.cosim.backends import InProcessInstance, _FmuInstance
 from fmus.cosim.master import simulate, stepping_order
 from fmus.cosim.stepper import Stepper
 from fmus.cosim.system import Component, System
-from scenarios.scenes.thesis import drives_in_plant, get_scene
+from scenarios.scenes.catalogue import get_scene
+from scenarios.scenes.transforms import drives_in_plant
 
 BEFORE, AFTER = 150, 60
 

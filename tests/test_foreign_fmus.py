@@ -22,7 +22,8 @@ import pytest
 from fmus.cosim.master import AlgebraicLoopError, simulate
 from fmus.cosim.system import Component, Connection, System
 from parcosim.cli import main
-from scenarios.scenes.thesis import get_scene, with_fmu_files
+from scenarios.scenes.catalogue import get_scene
+from scenarios.scenes.transforms import with_fmu_files
 
 sys.path.insert(0, str(Path(__file__).parent / "support" / "cfmu"))
 from build import build_c_fmu, compiler  # noqa: E402

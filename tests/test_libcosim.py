@@ -23,7 +23,7 @@ from fmus.cosim.master import simulate
 from fmus.ssp.export import NS, OSP_ANNOTATION, OSP_NS, export_ssp, libcosim_annotation_xml
 from fmus.ssp.run import ecos_available, simulate_ssp_ecos
 from fmus.cosim.system import Component, System
-from scenarios.scenes.thesis import get_scene
+from scenarios.scenes.catalogue import get_scene
 
 pytestmark = [pytest.mark.slow, pytest.mark.fmu, pytest.mark.tools]
 

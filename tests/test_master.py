@@ -8,7 +8,7 @@ from controller.derivators import DEFAULT_FC_ACC, DEFAULT_FC_VEL, SAMPLE_TIME, D
 from fmus.cosim.master import AlgebraicLoopError, simulate
 from fmus.cosim.system import Component, Connection, System
 from plant import PlantSimulator, get_preset
-from scenarios.scenes.thesis import get_scene
+from scenarios.scenes.catalogue import get_scene
 
 
 def _short(scene_name, stop_time):

@@ -174,7 +174,7 @@ def test_the_native_bench_loop_in_the_c_host_tracks_as_a_jacobi_master(host, nat
     from fmus.ssp.export import export_ssp
     from scenarios.run.metrics import scene_metrics
     from scenarios.run.runner import result_columns
-    from scenarios.scenes.thesis import get_scene
+    from scenarios.scenes.catalogue import get_scene
 
     scene = get_scene(SCENE)
     models = sorted({c.model for c in scene.system.components})

@@ -13,7 +13,7 @@ import pytest
 from fmus.cosim.master import simulate
 from fmus.native.models import NATIVE
 from fmus.native.run import native_system
-from scenarios.scenes.thesis import get_scene
+from scenarios.scenes.catalogue import get_scene
 
 
 @pytest.mark.parametrize("scene", ["bench_circle_TCMDx", "pendulum_push"])

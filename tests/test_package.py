@@ -17,7 +17,9 @@ from fmus.systemfmu.cores import chain_interface
 from fmus.cosim.master import simulate
 from scenarios.run.metrics import rms_norm
 from scenarios.packaging.chain import CONTROL, PLANT, package_scene, run_jacobi
-from scenarios.scenes.thesis import Fidelity, bench, drives_in_plant, get_scene
+from scenarios.scenes.catalogue import get_scene
+from scenarios.scenes.thesis import Fidelity, bench
+from scenarios.scenes.transforms import drives_in_plant
 
 pytestmark = [pytest.mark.slow, pytest.mark.fmu]
 

@@ -264,7 +264,7 @@ def _system(model: str):
     from fmus.slaves.parcosim_closedloop import ClosedLoop
     from fmus.slaves.parcosim_controlchain import ControlChain
     from scenarios.packaging.chain import PLANT, package_scene
-    from scenarios.scenes.thesis import get_scene
+    from scenarios.scenes.catalogue import get_scene
 
     scene = get_scene(SCENE)
     if model == "ClosedLoop":
@@ -364,7 +364,7 @@ def chain_fmu(tmp_path_factory):
     """The ControlChain FMU of :data:`SCENE`'s package."""
     from fmus.systemfmu.export import build_system_fmu
     from scenarios.packaging.chain import PLANT, package_scene
-    from scenarios.scenes.thesis import get_scene
+    from scenarios.scenes.catalogue import get_scene
 
     return build_system_fmu("chain", package_scene(get_scene(SCENE)).chain,
                             tmp_path_factory.mktemp("chain") / "chain.fmu", PLANT)

@@ -21,7 +21,7 @@ from fmus.cosim.system import Component, Connection, System
 from scenarios.run.metrics import scene_metrics
 from scenarios.packaging.per_component import (PHASE, choose_substeps, component_timing, export_per_component,
                                      per_component_system, stages, with_internal_observers)
-from scenarios.scenes.thesis import get_scene
+from scenarios.scenes.catalogue import get_scene
 
 STOP = 0.5
 WINDOW = (0.1, STOP)

@@ -18,7 +18,7 @@ from motor import (CurrentController, advance_current, armature_current_rate, el
                    get_motor_preset, shaft_torque)
 from scenarios.reference import (ReferenceError, _mean_torque, deviation, reference_run,
                                  with_parameters)
-from scenarios.scenes.thesis import get_scene
+from scenarios.scenes.catalogue import get_scene
 
 pytestmark = [pytest.mark.slow]
 

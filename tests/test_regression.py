@@ -21,7 +21,7 @@ def _metrics(name):
 
 def test_the_stored_scenes_are_the_bench_scenes_without_the_twin():
     """The twin's scenes (recalibrated when refitted) are left out by the twin's own list."""
-    from scenarios.scenes.thesis import scene_names
+    from scenarios.scenes.catalogue import scene_names
     from scenarios.scenes.twin import twin_scene_names
 
     bench = {n for n in scene_names() if n.startswith("bench_")} - set(twin_scene_names())

@@ -7,10 +7,11 @@ import pytest
 
 from fmus.cosim.system import Component, System
 from parcosim.cli import main
-from scenarios.scenes import thesis as scenes
+from scenarios.scenes import catalogue as scenes
 from scenarios.run.metrics import rms_norm
 from scenarios.run.runner import run_scene
-from scenarios.scenes.thesis import Scene, get_scene, scene_names
+from scenarios.scenes.catalogue import get_scene, scene_names
+from scenarios.scenes.scene import Scene
 from scenarios.batch.regression import STORED as STORED_METRICS
 
 
@@ -186,7 +187,7 @@ def test_with_sample_time_sets_every_sample_time():
 
     from fmus.export.build import SLAVES
     from fmus.cosim.master import simulate
-    from scenarios.scenes.thesis import SAMPLE_TIME_MODELS, with_sample_time
+    from scenarios.scenes.transforms import SAMPLE_TIME_MODELS, with_sample_time
 
     declaring_T = set()
     for model, module in SLAVES.items():

@@ -13,7 +13,8 @@ from fmus.cosim.master import simulate
 from fmus.ssp.export import NS, PARAMETER_SET, export_ssp, read_ssp_experiment, read_ssp_parameters
 from fmus.ssp.run import ecos_available, simulate_ssp_ecos, simulate_ssp_fmpy
 from fmus.cosim.system import Component, Connection, System
-from scenarios.scenes.thesis import drives_in_plant, get_scene
+from scenarios.scenes.catalogue import get_scene
+from scenarios.scenes.transforms import drives_in_plant
 
 pytestmark = [pytest.mark.slow, pytest.mark.fmu, pytest.mark.tools]
 

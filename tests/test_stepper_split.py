@@ -6,7 +6,7 @@ import pytest
 from fmus.cosim.master import _close, _instantiate, stepping_order
 from fmus.cosim.stepper import Stepper
 from scenarios.reference import with_parameters
-from scenarios.scenes.thesis import get_scene
+from scenarios.scenes.catalogue import get_scene
 
 
 def _stepped(system, split=None):

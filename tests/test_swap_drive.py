@@ -18,7 +18,7 @@ import pytest
 from fmus.ssp.run import ecos_available
 from scenarios.packaging.per_component import export_per_component
 from scenarios.run.runner import run_scene
-from scenarios.scenes.thesis import get_scene
+from scenarios.scenes.catalogue import get_scene
 from scenarios.studies.tools import run_tool, tool_metrics
 
 sys.path.insert(0, str(Path(__file__).parent / "support" / "cfmu"))

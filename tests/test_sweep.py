@@ -14,7 +14,7 @@ from scenarios.batch.engine import open_client
 from scenarios.scenes.perturb import (ENCODER_OFFSET_SCALE, TRUNCATE_SIGMA, draw, load_perturb_file, perturbable,
                                perturbed, uncertainties)
 from scenarios.run.runner import run_scene
-from scenarios.scenes.thesis import get_scene
+from scenarios.scenes.catalogue import get_scene
 from scenarios.batch.sweep import METRICS, read_rows, run_sweep, with_stop_time
 
 pytestmark = [pytest.mark.slow]

@@ -15,7 +15,7 @@ import dataclasses
 import pytest
 
 from fmus.ssp.run import ecos_available
-from scenarios.scenes.thesis import get_scene
+from scenarios.scenes.catalogue import get_scene
 from scenarios.studies.tools import compare, short
 
 pytestmark = [pytest.mark.slow, pytest.mark.fmu, pytest.mark.tools]

@@ -11,7 +11,7 @@ from motor import get_motor_preset
 from plant import ENCODER_COUNTS, get_preset
 from scenarios.studies import twin_fit
 from scenarios.batch.report import THESIS_BENCH, THESIS_MD_CHANGE
-from scenarios.scenes.thesis import get_scene, scene_names
+from scenarios.scenes.catalogue import get_scene, scene_names
 from scenarios.scenes.twin import (PARAMETERS, PWM_COUNTS, Twin, bench_real, encoder_phase, load_twin,
                             read_fit, write_twin)
 

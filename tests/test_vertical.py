@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from scenarios.run.runner import run_scene
-from scenarios.scenes.thesis import (VERTICAL_COUNTER_MASSES, VERTICAL_GRAVITY, Fidelity, get_scene, scene_names,
-                              vertical_circle)
+from scenarios.scenes.catalogue import get_scene, scene_names
+from scenarios.scenes.thesis import VERTICAL_COUNTER_MASSES, VERTICAL_GRAVITY, Fidelity, vertical_circle
 from scenarios.studies.tools import compare, short
 
 

@@ -25,7 +25,7 @@ import contextlib
 import os
 from dataclasses import dataclass
 
-from scenarios.scenes.thesis import Scene
+from scenarios.scenes.scene import Scene
 
 #: Metrics of a task that did not produce any (NaN where a number belongs).
 _NO_METRICS = {"e_ef_mm": float("nan"), "tau_ef_Nm": float("nan"), "e_ss_mm": float("nan"),

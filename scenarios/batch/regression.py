@@ -29,7 +29,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from scenarios.run.runner import run_scene
-from scenarios.scenes.thesis import get_scene, scene_names
+from scenarios.scenes.catalogue import get_scene, scene_names
 from scenarios.scenes.twin import twin_scene_names
 
 ROOT = Path(__file__).resolve().parents[2]

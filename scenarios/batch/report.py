@@ -16,7 +16,7 @@ from pathlib import Path
 from controller.strategies import STRATEGY_NAMES
 
 from scenarios.run.runner import _json_safe
-from scenarios.scenes.thesis import get_scene
+from scenarios.scenes.catalogue import get_scene
 
 #: Thesis Tables 9-10 and 13-14 (bench): strategy -> (e_ef mm, tau_ef N m, e_ss_x, e_ss_y, e_ss mm).
 THESIS_BENCH = {

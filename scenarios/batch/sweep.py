@@ -45,7 +45,8 @@ import numpy as np
 from scenarios.batch.engine import Task, run_tasks
 from scenarios.scenes.perturb import DISTRIBUTIONS, draw, load_perturb_file, perturbable, perturbed, uncertainties
 from scenarios.run.runner import atomic_write, check_writable, write_json
-from scenarios.scenes.thesis import Scene, get_scene
+from scenarios.scenes.catalogue import get_scene
+from scenarios.scenes.scene import Scene
 
 #: The metrics of a sweep row, then the bookkeeping columns.
 #: e_ss_mm: once settled; t_settle_s NaN (empty in the summary's n) when a run did not settle.

@@ -3,7 +3,7 @@
     python -m scenarios.examples.accurate_bench [SCENE] [--stop-time S] [--substeps N]
 
 Runs the scene twice, as it is (separate drive FMUs) and with
-:func:`scenarios.scenes.thesis.drives_in_plant` (one ``ActuatedFiveBarPlant``, RK4 ``substeps`` per
+:func:`scenarios.scenes.transforms.drives_in_plant` (one ``ActuatedFiveBarPlant``, RK4 ``substeps`` per
 1 ms), compares both with the scene's monolithic reference
 (:func:`scenarios.reference.reference_run`), and prints the end-effector deviation, the
 samples where an encoder reading differs from the reference's, and the wall time of each.
@@ -16,7 +16,8 @@ from dataclasses import replace
 
 from fmus.cosim.master import simulate
 from scenarios.reference import deviation, encoder_differences, reference_run
-from scenarios.scenes.thesis import drives_in_plant, get_scene
+from scenarios.scenes.catalogue import get_scene
+from scenarios.scenes.transforms import drives_in_plant
 
 
 def main(argv=None) -> int:

@@ -9,7 +9,7 @@ the scene in two instead:
 * ``plant``: the mechanism's FMU, the scene's own plant component: on the bench the
   ``FiveBarPlant`` with its torques ``tau1``, ``tau2`` from the drives; in
   ``thesis_sim_circle`` from the controller; after
-  :func:`scenarios.scenes.thesis.drives_in_plant` (``--drives-in-plant N``) the
+  :func:`scenarios.scenes.transforms.drives_in_plant` (``--drives-in-plant N``) the
   ``ActuatedFiveBarPlant`` in voltage mode, the voltages from the drives' current
   controllers.
 * ``control``: the FMU ``ControlChain`` (:class:`fmus.systemfmu.cores.ChainCore`): every other
@@ -41,7 +41,7 @@ from fmus.ssp.export import export_ssp
 from fmus.cosim.backends import InProcessInstance
 from fmus.cosim.system import Component, Connection, System, split_signal
 
-from scenarios.scenes.thesis import Scene
+from scenarios.scenes.scene import Scene
 
 PLANT = "plant"
 CONTROL = "control"

@@ -47,7 +47,7 @@ from pathlib import Path
 
 from fmus.cosim.system import Component, System, split_signal
 
-from scenarios.scenes.thesis import Scene
+from scenarios.scenes.scene import Scene
 
 #: The Integer parameter of our sampled FMUs: the sub-step of each period they sample on.
 PHASE = "sample_phase"

@@ -33,7 +33,7 @@ import numpy as np
 
 from controller.trajectories import PolygonTrajectory, from_parameters
 
-from scenarios.scenes.thesis import STEADY_STATE_WINDOW, Scene
+from scenarios.scenes.scene import STEADY_STATE_WINDOW, Scene
 
 #: Settling band [m]: one encoder count (2π/20000 rad) of either base joint moves the end
 #: effector by 0.0498-0.0504 mm at the hold points of the circle (0, 0.108) and of the

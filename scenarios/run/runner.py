@@ -29,7 +29,8 @@ from fmus.export.archive import umask_mode
 from fmus.cosim.master import Result, simulate
 
 from scenarios.run.metrics import scene_metrics
-from scenarios.scenes.thesis import Scene, get_scene
+from scenarios.scenes.catalogue import get_scene
+from scenarios.scenes.scene import Scene
 
 
 @dataclass

@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from fmus.cosim.system import Component, Connection, System
+from scenarios.scenes.scene import Scene
 
 #: Release tilt of ``pendulum_balance`` [rad].
 RELEASE_TILT = math.radians(5.0)
@@ -67,8 +68,6 @@ class PendulumFidelity:
 def pendulum_scene(name: str, fidelity: PendulumFidelity = PendulumFidelity(), sample_time: float = 1e-3,
                    v_battery: float = 8.0):
     """The scene called ``name`` (:data:`PENDULUM_SCENES`) with ``fidelity``."""
-    from scenarios.scenes.thesis import Scene
-
     if name not in PENDULUM_SCENES:
         raise ValueError(f"unknown pendulum scene {name!r}; valid: {', '.join(PENDULUM_SCENES)}")
     f = fidelity

@@ -49,7 +49,7 @@ import numpy as np
 
 from fmus.slave.refusals import PRESET_VALUE
 
-from scenarios.scenes.thesis import Scene
+from scenarios.scenes.scene import Scene
 
 DISTRIBUTIONS = ("uniform", "normal")
 #: The normal distribution is truncated at this many standard deviations.

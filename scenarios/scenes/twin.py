@@ -35,7 +35,8 @@ from motor.drive import uniform
 from motor.presets import STICTION_RATIO, motor1
 from plant import ENCODER_COUNTS, get_preset
 
-from scenarios.scenes.thesis import Fidelity, Scene, bench
+from scenarios.scenes.scene import Scene
+from scenarios.scenes.thesis import Fidelity, bench
 
 #: The one source of truth of the twin's parameters (written by :mod:`scenarios.studies.twin_fit`).
 TWIN_FILE = Path(__file__).resolve().parent / "bench_twin.toml"

@@ -24,7 +24,7 @@ from scenarios.batch.engine import open_client
 from scenarios.batch.report import PAIRS
 from scenarios.batch.sweep import columns, read_rows, run_sweep
 from scenarios.scenes.perturb import perturbable
-from scenarios.scenes.thesis import get_scene
+from scenarios.scenes.catalogue import get_scene
 
 STRATEGIES = ("PDq", "PDMDq", "TCq", "TCMDq", "PDx", "PDMDx", "TCx", "TCMDx")
 KINDS = ("circle", "triangle")

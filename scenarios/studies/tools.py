@@ -48,7 +48,8 @@ from fmus.ssp.run import SspRun
 from scenarios.run.metrics import scene_metrics
 from scenarios.packaging.chain import export_package, package_scene
 from scenarios.run.runner import run_scene
-from scenarios.scenes.thesis import Scene, get_scene
+from scenarios.scenes.catalogue import get_scene
+from scenarios.scenes.scene import Scene
 
 TOOLS = ("fmpy", "ecos", "libcosim")
 #: Package kinds: the default two-instance package (scenarios.packaging.chain), the per-component

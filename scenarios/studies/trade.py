@@ -57,7 +57,10 @@ from fmus.cosim.system import System
 
 from scenarios.run.metrics import rms_norm, scene_metrics
 from scenarios.reference import common_rows, deviation, encoder_differences, reference_run
-from scenarios.scenes.thesis import Fidelity, Scene, bench, drives_in_plant, get_scene, with_sample_time
+from scenarios.scenes.catalogue import get_scene
+from scenarios.scenes.scene import Scene
+from scenarios.scenes.thesis import Fidelity, bench
+from scenarios.scenes.transforms import drives_in_plant, with_sample_time
 
 DEFAULT_SCENE = "bench_circle_TCMDx"
 #: Simulated time of the quick sweep [s].
@@ -180,7 +183,7 @@ def _group(n: int, **drive_parameters):
 
 
 def _in_plant(**plant_parameters):
-    """The drives moved into the plant (one ODE, :func:`scenarios.scenes.thesis.drives_in_plant`)."""
+    """The drives moved into the plant (one ODE, :func:`scenarios.scenes.transforms.drives_in_plant`)."""
     def build(scene):
         if not _drives(scene) or _plant(scene) is None:
             return None
