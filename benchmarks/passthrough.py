@@ -152,7 +152,9 @@ def build_fmus(models, out_dir) -> dict:
             package = tmp / "fmus"
             package.mkdir()
             (package / "__init__.py").write_text('"""The slave base bundled into each FMU."""\n')
-            shutil.copy2(ROOT / "fmus" / "guarded.py", package / "guarded.py")
+            (package / "slave").mkdir()
+            (package / "slave" / "__init__.py").write_text('"""The slave base."""\n')
+            shutil.copy2(ROOT / "fmus" / "slave" / "base.py", package / "slave" / "base.py")
             try:
                 fmu = FmuBuilder.build_FMU(script, dest=out_dir, project_files=[package],
                                            canHandleVariableCommunicationStepSize="true")
