@@ -16,6 +16,8 @@ import operator
 from dataclasses import dataclass
 from pathlib import Path
 
+from fmus.cosim.slots import gatherer, span
+
 
 class CoSimulationError(Exception):
     """A component refused a call; carries the instance, the time and its message, and, when
@@ -296,8 +298,6 @@ class InProcessInstance:
         does; the outputs read as the slave holds them, Reals), the slave's ``do_step`` called
         directly.  Variables of another type, or attributes with a setter or a dotted name,
         take :meth:`set_inputs` and :meth:`get_outputs`."""
-        from fmus.cosim.stepper import _gatherer, _span
-
         inputs, outputs = self._bound
         slave, cls = self.slave, type(self.slave)
 
@@ -315,14 +315,14 @@ class InProcessInstance:
                     for name, slot in pairs:
                         attributes[name] = float(values[slot])
             else:
-                set_inputs, gather = self.set_inputs, _gatherer(in_slots)
+                set_inputs, gather = self.set_inputs, gatherer(in_slots)
 
                 def pull(values):
                     set_inputs(gather(values))
         if outputs and plain(outputs):
-            out = out_slots[0] if len(out_slots) == 1 else _span(out_slots)
+            out = out_slots[0] if len(out_slots) == 1 else span(out_slots)
             return pull, slave.do_step, operator.attrgetter(*(v.name for v in outputs)), slave, out, self
-        return pull, slave.do_step, operator.call, self.get_outputs, _span(out_slots), self
+        return pull, slave.do_step, operator.call, self.get_outputs, span(out_slots), self
 
     def step_refused(self, t: float) -> CoSimulationError:
         """The error of a ``do_step`` the slave refused (returned False) at ``t``."""

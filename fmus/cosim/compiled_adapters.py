@@ -1,6 +1,6 @@
 """The compiled adapters of parcosim's models (:mod:`fmus.cosim.compiled`).
 
-One class per model, registered by :func:`fmus.cosim.compiled.register`: which of the slave's
+One class per model, registered by :func:`fmus.cosim.adapter.register`: which of the slave's
 variables the kernel's I/O array ``x`` holds (inputs first), the model arrays the kernel
 steps (taken from the initialised slave's model objects, so the compiled loop and the
 Python path step the same state), the C I/O function (``kernel``) and its ``context``.  A new model
@@ -17,7 +17,7 @@ from plant import wheeled_kernel
 from plant.actuated import kernel_context as actuated_context
 from plant.fast5r import TERMS_OF
 
-from fmus.cosim.compiled import Adapter, NotCompilable, register
+from fmus.cosim.adapter import Adapter, NotCompilable, register
 from fmus.slave.refusals import ABSURD
 from fmus.slave.declarations import PLANT_OUTPUTS
 from fmus.slave.sampling import PHASE_PARAMETER, substeps_of

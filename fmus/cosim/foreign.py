@@ -3,52 +3,19 @@
 A :class:`fmus.cosim.system.Component` whose ``model`` is a path ending in ``.fmu`` names any
 FMI 2.0 co-simulation FMU (a supplier's drive, a Modelica export): the master runs it
 through fmpy in either mode, beside our components (:mod:`fmus.cosim.master`).  The FMUs that
-``parcosim build`` makes carry a mark (:data:`MARK`), so the build never overwrites a
+``parcosim build`` makes carry a mark (:mod:`fmus.export.mark`), so the build never overwrites a
 file it did not make and ``--mode fmu`` never loads a foreign file in place of ours.
 """
 from __future__ import annotations
 
-import json
 import warnings
-import zipfile
 from dataclasses import replace
 from pathlib import Path
-
-from fmus.slave.identity import IDENTITY_FILE
-
-#: The file in an FMU's archive that says parcosim built it, and which model it is (the
-#: FMU's identity, :mod:`fmus.slave.identity`).
-MARK = f"resources/{IDENTITY_FILE}"
 
 
 def is_fmu_file(model) -> bool:
     """True when a component's ``model`` names an FMU file rather than a parcosim model."""
     return str(model).lower().endswith(".fmu")
-
-
-#: What every FMU parcosim built before the mark existed holds: the slave base.
-_LEGACY = "resources/fmus/guarded.py"
-
-
-def built_by_parcosim(path, model: str) -> bool:
-    """True when ``path`` is an FMU that ``parcosim build`` made for ``model``: it carries
-    the mark (or, built before the mark, the slave base and the model's name)."""
-    try:
-        with zipfile.ZipFile(path) as z:
-            names = set(z.namelist())
-            if MARK in names:
-                return json.loads(z.read(MARK)).get("model") == model
-            return _LEGACY in names and f'modelName="{model}"'.encode() in z.read("modelDescription.xml")
-    except (KeyError, OSError, ValueError, zipfile.BadZipFile):
-        return False
-
-
-def mark_file(directory: Path, model: str, package: str) -> Path:
-    """Write the mark for ``model``, whose code runs as the bundle ``package``
-    (:mod:`fmus.export.bundle`), into ``directory`` (bundled as a resource by the build)."""
-    path = Path(directory) / IDENTITY_FILE
-    path.write_text(json.dumps({"model": model, "built_by": "parcosim", "package": package}) + "\n")
-    return path
 
 
 def replace_components(system, replacements: dict):

@@ -13,24 +13,9 @@ from __future__ import annotations
 import operator
 
 from fmus.cosim.backends import CoSimulationError
+from fmus.cosim.slots import gatherer as _gatherer
+from fmus.cosim.slots import span as _span
 from fmus.cosim.system import System, split_signal
-
-
-def _gatherer(slots):
-    """``values -> tuple of values[i] for i in slots`` (one C call: operator.itemgetter)."""
-    if len(slots) == 1:
-        slot = slots[0]
-        return lambda values: (values[slot],)
-    return operator.itemgetter(*slots) if slots else (lambda values: ())
-
-
-def _span(slots) -> slice:
-    """The slice of ``slots``, consecutive by construction (:class:`Stepper` numbers each
-    instance's outputs together)."""
-    first = slots[0] if slots else 0
-    if list(slots) != list(range(first, first + len(slots))):
-        raise AssertionError(f"output slots {slots} are not consecutive")
-    return slice(first, first + len(slots))
 
 
 def member_calls(inst, in_slots, out_slots) -> tuple:

@@ -24,7 +24,7 @@ from pythonfmu import FmuBuilder
 from fmus.slave import designs
 from fmus.export.archive import rewrite
 from fmus.export.bundle import source_files, write_bundle
-from fmus.cosim.foreign import built_by_parcosim, mark_file
+from fmus.export.mark import built_by_parcosim, mark_file
 from fmus.export.modeldescription import fix_model_structure
 from fmus.slave.registry import SLAVES
 from fmus.export.wrapper import SOURCE as WRAPPER_SOURCE
@@ -44,7 +44,7 @@ def build_bundled_fmu(script, model: str, dest, resources=(), feedthrough=None, 
     pythonfmu makes the model description and the archive; the resources then hold the
     bundle (:func:`fmus.export.bundle.write_bundle`, the slave module inside it, named dotted by
     ``slavemodule.txt``, and a copy as ``<that name>.py``, which pythonfmu's binary runs),
-    the mark (:func:`fmus.cosim.foreign.mark_file`), ``resources`` (files or folders) and, for a
+    the mark (:func:`fmus.export.mark.mark_file`), ``resources`` (files or folders) and, for a
     slave of ``fmus/slaves``, the designs its initialisation computes (:func:`precompute`); the
     ModelStructure is fixed (``feedthrough``: output -> inputs,
     :func:`fmus.export.modeldescription.fix_model_structure`) and parcosim's wrapper installed with
@@ -117,7 +117,7 @@ def build_fmu(model: str, out_dir: Path = DEFAULT_OUT) -> Path | None:
     """Build one FMU into out_dir and return its path.
 
     A file ``<model>.fmu`` already there that parcosim did not build (a foreign FMU,
-    :func:`fmus.cosim.foreign.built_by_parcosim`) is left alone, with a warning: returns None.
+    :func:`fmus.export.mark.built_by_parcosim`) is left alone, with a warning: returns None.
     """
     if model not in SLAVES:
         raise ValueError(f"unknown FMU {model!r}; valid: {', '.join(SLAVES)}")

@@ -10,6 +10,7 @@ import tempfile
 from pathlib import Path
 
 from fmus.export.build import ROOT, STATE_OPTIONS, build_bundled_fmu
+from fmus.slave.designs import SPEC_RESOURCE
 
 MODEL = "SpecPlant"
 SLAVE_MODULE = "parcosim_specplant"
@@ -34,8 +35,6 @@ def build_plant_fmu(spec, out) -> Path:
     out = Path(out)
     if out.suffix != ".fmu":
         raise ValueError(f"output {str(out)!r} must end in .fmu")
-    from fmus.slaves.parcosim_specplant import SPEC_RESOURCE
-
     with tempfile.TemporaryDirectory(prefix="parcosim_specplant_") as tmp:
         spec_file = Path(tmp) / SPEC_RESOURCE
         spec_file.write_text(checked.text, encoding="utf-8")

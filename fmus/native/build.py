@@ -22,7 +22,7 @@ from xml.etree import ElementTree as ET
 
 import numpy as np
 
-from fmus.cosim.foreign import built_by_parcosim
+from fmus.export.mark import built_by_parcosim
 from fmus.slave.base import START_VALUES_FILE
 from fmus.slave.identity import IDENTITY_FILE
 from fmus.export.modeldescription import model_structure

@@ -29,6 +29,8 @@ import numpy as np
 
 #: In an FMU's resources: the designs computed at its build.
 DESIGNS_FILE = "designs.npz"
+#: The mechanism spec a ``SpecPlant`` FMU carries in its resources (``parcosim build-plant``).
+SPEC_RESOURCE = "plant_spec.toml"
 #: The model modules that keep designs (each has ``PRECOMPUTED`` and ``RECORDING``).
 MODULES = ("motor.current_controller", "controller.derivators", "controller.model")
 #: This package's prefix: "" in the repository, "parcosim_<hash>." inside an FMU's bundle.

@@ -14,10 +14,8 @@ import os
 
 from fmus.slave import budget
 from fmus.slave.base import GuardedSlave
+from fmus.slave.designs import SPEC_RESOURCE
 from fmus.slave.refusals import refuse_absurd, require_finite
-
-#: The spec inside the FMU's resources.
-SPEC_RESOURCE = "plant_spec.toml"
 
 
 class SpecPlant(GuardedSlave):
