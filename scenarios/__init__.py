@@ -23,7 +23,7 @@ MOVED = {
     "scenarios.twin_margin": "scenarios.studies.twin_margin",
     "scenarios.worker_path": "scenarios.batch.worker_path",
     "scenarios.workspace": "scenarios.studies.workspace",
-    "scenarios.workspace_spec": "scenarios.studies.workspace_spec",
+    "scenarios.workspace_spec": "scenarios.studies.workspace.spec",
 }
 
 install(MOVED)

@@ -14,12 +14,12 @@ at run time: ``compile_s`` is building the plan.
 Refusals: a kernel that cannot do exactly what the Python model would (a refused input,
 a diverged step, a controller sample off its table) returns a non-zero status without
 changing anything; the loop stops there, and the rest of that step runs in Python through
-the same slave objects (:meth:`Adapter.to_python` first), which raise the refusal's
+the same slave objects (:meth:`fmus.cosim.adapter.Adapter.to_python` first), which raise the refusal's
 message or take the sample (e.g. the exact model where the table has a hole); then the
 compiled loop goes on from the next step.
 
 A model without an adapter, a component given as an FMU file, Jacobi coupling, retried
-steps or an adapter that declines its settings (:class:`NotCompilable`) make the run fall
+steps or an adapter that declines its settings (:class:`fmus.cosim.adapter.NotCompilable`) make the run fall
 back to ``mode="inprocess"`` with a warning saying why (``Result.extra["fallback"]``).
 """
 from __future__ import annotations
@@ -35,7 +35,7 @@ from kernels import Refusal
 
 from fmus.slave.base import MAX_TIME
 from fmus.cosim.backends import CoSimulationError
-from fmus.cosim.adapter import ADAPTERS, Adapter, NotCompilable, register  # noqa: F401 (their old home)
+from fmus.cosim.adapter import ADAPTERS, NotCompilable
 from fmus.cosim.system import split_signal
 
 

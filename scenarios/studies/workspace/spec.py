@@ -1,4 +1,4 @@
-"""The workspace figure of :mod:`scenarios.studies.workspace` for any mechanism spec: a slice.
+"""The workspace figure of :mod:`scenarios.studies.workspace.plot` for any mechanism spec: a slice.
 
 The slice is the x-y plane through the platform's start point.  Each grid point is
 assembled by Newton on the loop closure (5.18) from an already solved neighbour (a
@@ -24,7 +24,8 @@ from plant import spec as plant_spec
 from plant.parallel import left_inverse_solve, mechanism_state
 from plant.specsim import assemble
 
-from scenarios.studies.workspace import BAND, OUTSIDE, TrajectoryCheck, WorkspaceReport, _draw, thesis_trajectories
+from scenarios.studies.workspace.figure import (BAND, OUTSIDE, TrajectoryCheck, WorkspaceReport, draw,
+                                                thesis_trajectories)
 
 #: Largest joint change between neighbouring grid points on one branch [rad or m].
 MAX_JUMP = 0.5
@@ -121,7 +122,7 @@ def plot_spec_slice(name, out, band) -> WorkspaceReport:
     where = "" if spec.independent == (0, 1) else f", slice z = {spec.start[2]:g} m"
     # The contours of the measures at a small level trace the loci (the measures are >= 0).
     level = 0.02
-    _draw(ws, np.where(np.isnan(parallel), np.nan, parallel - level), np.where(np.isnan(serial), np.nan, serial - level),
+    draw(ws, np.where(np.isnan(parallel), np.nan, parallel - level), np.where(np.isnan(serial), np.nan, serial - level),
           checks, band, f"{spec.name}: workspace{where}", png,
           labels=(f"parallel measure = {level:g}", f"serial measure = {level:g}"))
     (out / "workspace.json").write_text(json.dumps(
