@@ -232,3 +232,29 @@ def test_an_old_name_is_the_new_module_and_runs_with_python_m():
 def test_a_package_that_was_a_module_keeps_its_public_names(old, attribute):
     assert callable(getattr(importlib.import_module(old), attribute))
     assert importlib.util.find_spec(old).submodule_search_locations is not None
+
+
+def _output_defaults():
+    """(where, default) of every ``--out`` option and every ``out_dir``/``out`` parameter given a
+    string default in ``scenarios/`` (the studies, batch work and examples)."""
+    for module, path in MODULES.items():
+        if not module.startswith("scenarios."):
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            where = f"{path.relative_to(ROOT)}:{getattr(node, 'lineno', 0)}"
+            if isinstance(node, ast.Call) and getattr(node.func, "attr", "") == "add_argument" \
+                    and node.args and isinstance(node.args[0], ast.Constant) and node.args[0].value == "--out":
+                yield from ((where, k.value.value) for k in node.keywords
+                            if k.arg == "default" and isinstance(k.value, ast.Constant) and k.value.value is not None)
+            elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                arguments = node.args.args[len(node.args.args) - len(node.args.defaults):]
+                yield from ((where, d.value) for a, d in zip(arguments, node.args.defaults)
+                            if a.arg in ("out", "out_dir") and isinstance(d, ast.Constant) and isinstance(d.value, str))
+
+
+def test_studies_write_under_out_unless_told_to_write_the_docs():
+    """A study run plainly writes under out/; the repository's docs/ change only through an
+    explicit ``--docs`` (or an explicit path)."""
+    found = list(_output_defaults())
+    assert len(found) >= 5
+    assert not [f"{where}: default {value!r}" for where, value in found if value != "out" and not value.startswith("out/")]

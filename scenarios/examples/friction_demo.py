@@ -1,6 +1,6 @@
 """The LuGre model's published behaviours on the paper's example, and the figure of docs/friction.md.
 
-    python -m scenarios.examples.friction_demo [--out docs/friction_lugre.png]
+    python -m scenarios.examples.friction_demo [--out out/friction_lugre.png | --docs]
 
 Canudas de Wit et al. (IEEE TAC 1995): a 1 kg mass, σ0 = 1e5 N/m, σ1 = √1e5 N s/m,
 σ2 = 0.4 N s/m, Fc = 1 N, Fs = 1.5 N, vs = 0.001 m/s (:data:`PAPER`), stepped the way a drive
@@ -75,8 +75,10 @@ def plot(out: Path) -> Path:
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description="LuGre friction: the paper's behaviours (figure)")
-    parser.add_argument("--out", default="docs/friction_lugre.png")
-    print(plot(Path(parser.parse_args(argv).out)))
+    parser.add_argument("--out", default="out/friction_lugre.png", help="PNG path (default out/friction_lugre.png)")
+    parser.add_argument("--docs", action="store_true", help="write docs/friction_lugre.png instead")
+    args = parser.parse_args(argv)
+    print(plot(Path(__file__).resolve().parents[2] / "docs" / "friction_lugre.png" if args.docs else Path(args.out)))
 
 
 if __name__ == "__main__":

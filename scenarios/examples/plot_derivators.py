@@ -2,7 +2,7 @@
 
 Run from the repository root::
 
-    python -m scenarios.examples.plot_derivators [--out docs/derivators_bode.png]
+    python -m scenarios.examples.plot_derivators [--out out/derivators_bode.png | --docs]
 
 Writes the Bode plot of both estimates relative to ideal differentiation and prints
 the numbers quoted in ``docs/derivators.md``: delays, phase lags, encoder
@@ -11,6 +11,7 @@ same figures for neighbouring cut-offs.
 """
 
 import argparse
+from pathlib import Path
 
 import matplotlib
 
@@ -187,6 +188,7 @@ def plot_bode(derivator, path):
         axes.legend(loc="lower left", fontsize=8)
     magnitude_axes.set_title(f"Derivators at T = {derivator.T * 1e3:g} ms, relative to d/dt and d2/dt2 (dotted: 5, 11 Hz)")
     figure.tight_layout()
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
     figure.savefig(path, dpi=120)
     print(f"wrote {path}")
 
@@ -194,14 +196,16 @@ def plot_bode(derivator, path):
 def main():
     """Parse the arguments, print the figures, write the plot."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", default="docs/derivators_bode.png", help="PNG path")
+    parser.add_argument("--out", default="out/derivators_bode.png", help="PNG path (default out/derivators_bode.png)")
+    parser.add_argument("--docs", action="store_true", help="write docs/derivators_bode.png instead")
     parser.add_argument("--fc-vel", type=float, default=DEFAULT_FC_VEL, help="velocity cut-off, Hz")
     parser.add_argument("--fc-acc", type=float, default=DEFAULT_FC_ACC, help="acceleration cut-off, Hz")
     arguments = parser.parse_args()
     derivator = Derivator(arguments.fc_vel, arguments.fc_acc, SAMPLE_TIME)
     report(derivator)
     compare_cutoffs()
-    plot_bode(derivator, arguments.out)
+    plot_bode(derivator, Path(__file__).resolve().parents[2] / "docs" / "derivators_bode.png" if arguments.docs
+              else arguments.out)
 
 
 if __name__ == "__main__":

@@ -10,7 +10,7 @@ circle) and the sudden stop are outside the window and reported as the run's ove
 current.  Figures in docs/balanced.md::
 
     python -m scenarios.studies.balancing [--strategies TCMDx TCx] [--frequencies 0.25 0.5 1 2]
-                                  [--out docs]
+                                  [--out DIR | --docs]     # default out/balancing
     python -m scenarios.studies.balancing --scenes      # the 20 vertical scenes at 1 Hz, a markdown table
 
 writes ``balanced_speeds.csv``, ``balanced_speeds.png`` (tau_ef and RMS current against the
@@ -175,13 +175,14 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--strategies", nargs="+", default=list(DEFAULT_STRATEGIES))
     parser.add_argument("--frequencies", nargs="+", type=float, default=list(DEFAULT_FREQUENCIES))
-    parser.add_argument("--out", default="docs")
+    parser.add_argument("--out", default="out/balancing", help="where the csv and figures go (default out/balancing)")
+    parser.add_argument("--docs", action="store_true", help="write them into the repository's docs/ instead")
     parser.add_argument("--scenes", action="store_true", help="print the 1 Hz scenes' table and stop")
     args = parser.parse_args(argv)
     if args.scenes:
         print(scene_table())
         return 0
-    out = Path(args.out)
+    out = Path(__file__).resolve().parents[2] / "docs" if args.docs else Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     rows = sweep(args.strategies, args.frequencies)
     write_csv(rows, out / "balanced_speeds.csv")
