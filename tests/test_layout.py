@@ -258,3 +258,14 @@ def test_studies_write_under_out_unless_told_to_write_the_docs():
     found = list(_output_defaults())
     assert len(found) >= 5
     assert not [f"{where}: default {value!r}" for where, value in found if value != "out" and not value.startswith("out/")]
+
+
+def test_fmus_and_scenarios_import_absolutely():
+    """A relative import in a moved file points at the old neighbourhood (``from .guarded import``
+    in fmus/cosim/ looks for fmus.cosim.guarded); ``fmus/`` and ``scenarios/`` name modules in full
+    (fmus/native/, which did not move, keeps its own)."""
+    relative = [f"{MODULES[m].relative_to(ROOT)}:{node.lineno}" for m in MODULES
+                if m.startswith(("fmus.", "scenarios.")) and not m.startswith("fmus.native")
+                for node in ast.walk(ast.parse(MODULES[m].read_text(encoding="utf-8")))
+                if isinstance(node, ast.ImportFrom) and node.level]
+    assert not relative, relative
