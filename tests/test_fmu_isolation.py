@@ -52,7 +52,7 @@ def test_every_import_form_is_rewritten_and_binds_what_it_bound(tmp_path):
         import os, plant.fast5r
         import motor as m, controller
         from fmus.slave.base import (MIN_STEP,
-                                  FmiError)  # a comment stays
+                                     FmiError)  # a comment stays
         from . import sibling
         def lazy():
             from plant.spec import load; return load
@@ -61,9 +61,9 @@ def test_every_import_form_is_rewritten_and_binds_what_it_bound(tmp_path):
     out = rewrite_imports(source, "P").decode()
     assert out.splitlines()[0] == "import os, P.plant.fast5r, P.plant as plant"
     assert "import P.motor as m, P.controller as controller" in out
-    assert "from P.fmus.guarded import (MIN_STEP,\n                          FmiError)  # a comment stays" in out
+    assert "from P.fmus.slave.base import (MIN_STEP,\n                             FmiError)  # a comment stays" in out
     assert "from . import sibling" in out and "from P.plant.spec import load; return load" in out
-    assert "if True: import P.fmus.parts as parts" in out
+    assert "if True: import P.fmus.slave.declarations as parts" in out
     assert out.count("\n") == source.decode().count("\n")        # line numbers kept
     # Executed against a package P holding a plant.fast5r, the names bind to P's modules.
     package = tmp_path / "P" / "plant"
@@ -171,7 +171,7 @@ def test_with_parcosim_imported_the_fmu_runs_its_own_bundle(built_fmus, tmp_path
         mine = (controller.trajectories.__file__, fmus.slave.base.__file__)
         fmpy.simulate_fmu({str(where)!r}, stop_time=0.002, step_size=1e-3)
         theirs = sys.modules["{package}.controller.trajectories"]
-        print(json.dumps([theirs.__file__, sys.modules["{package}.fmus.guarded"].__file__,
+        print(json.dumps([theirs.__file__, sys.modules["{package}.fmus.slave.base"].__file__,
                           (controller.trajectories.__file__, fmus.slave.base.__file__) == mine,
                           sys.modules["controller.trajectories"] is controller.trajectories]))
     """, cwd=ROOT)
