@@ -22,7 +22,7 @@
  *  - value references are checked against the slave's variables and their types, strings
  *    set must be UTF-8, NULL arrays are refused: fmi2Error naming the variable;
  *  - the slave's code is the FMU's own: a parcosim FMU's bundle (resources/<package>, the
- *    package named by resources/parcosim_build.json, fmus/bundle.py) is loaded under its
+ *    package named by resources/parcosim_build.json, fmus/export/bundle.py) is loaded under its
  *    private name without touching sys.path; an instantiation whose GUID (fmuGUID) or binary
  *    (its modelIdentifier: this library's file name) is not the one the resources' identity
  *    names is refused (resources of another FMU).  No Python reference is kept past
