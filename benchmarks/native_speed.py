@@ -1,6 +1,7 @@
 """Speed of the native FMUs beside the pythonfmu ones, in other people's hosts (issue 28, item 6).
 
     python benchmarks/native_speed.py [--native-dir DIR] [--python-dir DIR] [--rounds 3] [--stop 11]
+                                      [--master-only] [--without MODEL ...]
 
 The scene (``bench_circle_TCMDx``: plant, two drives, two current observers, derivator,
 controller, trajectory) is exported per component (``fmus.ssp.export.export_ssp``, as ``parcosim
@@ -19,7 +20,9 @@ when missing).  Each package then runs, side by side in one invocation, in:
 * our master, ``parcosim run --mode fmu`` (fmpy) and ``--mode fmu --native``
   (``fmus.native.run.native_system``: the models with a native FMU run as one, the others
   stay pythonfmu); its stepping CPU is that of a full run less that of a 2-step run, both
-  after a first 2-step run (loading and initialising are inside ``simulate``).
+  after a first 2-step run (loading and initialising are inside ``simulate``); with
+  ``--without MODEL``, also ``--native`` with those models left pythonfmu (what making them
+  native gave, side by side).  ``--master-only``: our master's rows alone.
 
 Figures: CPU (user + system, all threads) of the stepping after the first step (loading,
 initialising, which libcosim does in the first step, and that step are "setup") in
@@ -94,7 +97,10 @@ MASTER_CHILD = textwrap.dedent("""
     scene, native, fmu_dir, stop = sys.argv[1], sys.argv[2] == "native", sys.argv[3], float(sys.argv[4])
     system = get_scene(scene).system
     if native:                                 # parcosim run --mode fmu --native
+        from fmus.native.models import NATIVE
         from fmus.native.run import native_system
+        for model in filter(None, sys.argv[5].split(",")):   # left pythonfmu
+            NATIVE.pop(model)
         system = native_system(system, out_dir=fmu_dir)
     cpu = []
     # the stepping's CPU: a full run less a 2-step run, after a first run (builds, extractions)
@@ -185,8 +191,9 @@ def run_child(code: str, *args) -> dict:
     return json.loads(lines[-1])
 
 
-def measurements(program, packages: dict, stop: float, work: Path, python_dir: Path) -> list:
-    """One round: [(host, kind, result dict)] for every host and package."""
+def measurements(program, packages: dict, stop: float, work: Path, python_dir: Path, without=()) -> list:
+    """One round: [(host, kind, result dict)] for every host and package, then our master's:
+    pythonfmu, native, and native with the models ``without`` left pythonfmu (if any)."""
     rows = []
     for kind, package in packages.items():
         preload = libpython() if kind.startswith("pythonfmu") else None      # its FMUs load only so
@@ -196,9 +203,13 @@ def measurements(program, packages: dict, stop: float, work: Path, python_dir: P
             rows.append(("C host (libcosimc)", kind, {"ok": False, "error": str(exc)[-500:]}))
         rows.append(("libcosimpy", kind, run_child(LIBCOSIMPY_CHILD, package, stop)))
         rows.append(("ecospy (1 CPU)", kind, run_child(ECOSPY_CHILD, package, stop)))
-    rows.append(("our master --mode fmu", "pythonfmu", run_child(MASTER_CHILD, SCENE, "pythonfmu", python_dir, stop)))
+    rows.append(("our master --mode fmu", "pythonfmu",
+                 run_child(MASTER_CHILD, SCENE, "pythonfmu", python_dir, stop, "")))
+    if without:
+        rows.append(("our master --mode fmu --native", f"native but {', '.join(without)}",
+                     run_child(MASTER_CHILD, SCENE, "native", work / "master_native", stop, ",".join(without))))
     rows.append(("our master --mode fmu --native", "native",
-                 run_child(MASTER_CHILD, SCENE, "native", work / "master_native", stop)))
+                 run_child(MASTER_CHILD, SCENE, "native", work / "master_native", stop, "")))
     return rows
 
 
@@ -235,6 +246,9 @@ def main(argv=None) -> int:
     parser.add_argument("--stop", type=float, default=11.0, help="simulated seconds (default: the scene's 11)")
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--out", default=str(RESULTS))
+    parser.add_argument("--master-only", action="store_true", help="only our master's rows (no packages, hosts)")
+    parser.add_argument("--without", nargs="*", default=[],
+                        help="models also left pythonfmu in a --native master row (e.g. DCMotorDrive)")
     args = parser.parse_args(argv)
 
     from tests.native_host.host import build_host
@@ -242,13 +256,19 @@ def main(argv=None) -> int:
     work = Path(tempfile.mkdtemp(prefix="native_speed_"))
     python_dir = Path(args.python_dir) if args.python_dir else work / "pythonfmu"
     native_dir = Path(args.native_dir) if args.native_dir else work / "native"
-    if not args.native_dir:
-        from fmus.native.build import build_native_all
-        build_native_all(native_dir)
-    packages = export_packages(work, native_dir, python_dir, SCENE)
-    program = build_host(work)
+    if args.master_only:
+        from fmus.export.build import ensure_built
+        from scenarios.scenes import get_scene
+        ensure_built(sorted({c.model for c in get_scene(SCENE).system.components}), python_dir)
+        packages, program = {}, None
+    else:
+        if not args.native_dir:
+            from fmus.native.build import build_native_all
+            build_native_all(native_dir)
+        packages = export_packages(work, native_dir, python_dir, SCENE)
+        program = build_host(work)
     load = os.getloadavg()[0]
-    rounds = [measurements(program, packages, args.stop, work, python_dir) for _ in range(args.rounds)]
+    rounds = [measurements(program, packages, args.stop, work, python_dir, args.without) for _ in range(args.rounds)]
     rows = best_of(rounds)
     text = table(rows, args.stop)
     stamp = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())

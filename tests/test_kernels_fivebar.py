@@ -33,21 +33,36 @@ def potential_energy(params, q) -> float:
     return energy
 
 
+#: Distance from a chain's serial singularity (|sin theta_k2|) where the energy check stops.
+SERIAL_MARGIN = 0.05
+
+
 @pytest.mark.parametrize("gravity", [(0.0, 0.0, 0.0), GRAVITY, (9.81, 0.0, 0.0)])
 def test_unactuated_frictionless_5r_keeps_its_energy_under_rk4(gravity):
     """No torque, no friction: kinetic (the general model's M', with the rotors) plus potential
-    energy stays constant over 400 RK4 steps of 1 ms, while the mechanism swings through a
-    good part of its workspace; the loop stays closed.  A wrong inertia, Coriolis or gravity
-    term, or a wrong elimination of the constraints, makes energy drift by far more."""
+    energy stays constant to RK4's truncation (1.8e-10 of the kinetic energy at most here, and
+    16 substeps give 256 times less) while the mechanism swings through a good part of its
+    workspace; the loop stays closed.  A wrong inertia, Coriolis or gravity term, or a wrong
+    elimination of the constraints, makes energy drift by far more.
+
+    The run stops where a chain comes within SERIAL_MARGIN of its serial singularity
+    (sin theta_k2 = 0, after 165-343 steps): the elimination divides by det(E_k J_k), and the
+    energy across the crossing jumps by an amount set by rounding (2e-8 to 3e-6 of the kinetic
+    energy with libm's or the kernels' sin and cos, 2e-7 with libm and 16 substeps)."""
     params = replace(get_preset("bench"), gravity=gravity)
     sim = PlantSimulator(params, 0.0, 0.15, IntegratorSettings(substeps=4), dx0=0.4, dy0=0.3)
     energy = lambda: sim.kinetic_energy() + potential_energy(params, sim.q)   # noqa: E731
     e0, scale, start = energy(), sim.kinetic_energy(), sim.y[:2].copy()
-    for _ in range(400):
+    steps = 0
+    while steps < 400:
         sim.step(0.0, 0.0, DT)
+        if min(abs(math.sin(sim.y[4])), abs(math.sin(sim.y[6]))) < SERIAL_MARGIN:
+            break
+        steps += 1
         assert sim.residual_norm() < 1e-9
-    assert np.linalg.norm(sim.y[:2] - start) > 0.02          # it moved
-    assert abs(energy() - e0) <= 1e-7 * scale
+        assert abs(energy() - e0) <= 1e-9 * scale, steps
+    assert steps >= 150
+    assert np.linalg.norm(sim.y[:2] - start) > 0.1          # it moved
 
 
 def _plant(settings=IntegratorSettings()):

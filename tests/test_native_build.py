@@ -144,3 +144,86 @@ def test_state_with_a_forged_substep_counter_is_refused(model, native_fmus):
     assert native.call("setstate", "g").status == 0
     assert native.call("step", 2 * h, h).status == 0
     native.close()
+
+
+def test_plant_state_with_forged_configuration_or_state_words_is_refused(native_fmus):
+    """FiveBarPlant's model data: the kernel's parameters and settings (configuration: equal to
+    what the instance's parameters give) and the state q, dq (finite).  A forged l0 word, a
+    forged RK4 substep count and a NaN in the state are refused by name (checksum recomputed);
+    the true state, taken after two steps, is accepted and stepped on."""
+    from fmus.native import state_bytes
+
+    native = Driver(native_fmus["FiveBarPlant"])
+    native.run([("setup", 0.0), ("enter",), ("exit",), ("step", 0.0, 1e-3), ("step", 1e-3, 1e-3)])
+    own = native.fmu.serializeFMUstate(native.fmu.getFMUstate())
+    words = state_bytes.data_words(own)
+    assert words[0] == 0.05 and words.size == 22 + 7 + 14     # l0 first; params, settings, q, dq
+    substeps, x = 22 + 1, 22 + 7
+    for index, value, says in ((0, 0.06, "configuration words"), (substeps, 2.0, "configuration words"),
+                               (x + 3, math.nan, "state word 3 = nan")):
+        native.call("bytes", "f", state_bytes.with_data_word(own, index, value))
+        step = native.call("deserialize", "f")
+        assert step.status == 3 and says in step.messages[0][2], (index, step.messages)
+    native.call("bytes", "g", state_bytes.with_data_word(own, x, words[x]))
+    assert native.call("deserialize", "g").status == 0
+    assert native.call("setstate", "g").status == 0
+    assert native.call("step", 2e-3, 1e-3).status == 0
+
+
+def test_drive_state_with_forged_words_is_refused_and_its_true_state_goes_on(native_fmus):
+    """DCMotorDrive's model data (pcn_drive_data: R, L, method, has_lugre, then the kernel's
+    pc_drive, pc_controller, pc_lugre, then the internal observer): a forged configuration word
+    (kt, the design's alpha), a sub-step past T / h, coefficients not of the step length and
+    a non-finite current are refused by name (checksum recomputed); the true state, taken
+    mid-period at h = T / 4, is accepted and stepped on."""
+    import kernels
+    from fmus.native import state_bytes
+    from motor import kernel
+
+    native = Driver(native_fmus["DCMotorDrive"])
+    h = float(native.variables["T"].start) / 4
+    native.run([("setup", 0.0), ("enter",), ("exit",), ("step", 0.0, h), ("step", h, h)])
+    own = native.fmu.serializeFMUstate(native.fmu.getFMUstate())
+    words = state_bytes.data_words(own)
+    drive = {name: 4 + s.start for name, s in kernel.DRIVE.items()}
+    alpha = 4 + kernels.size(kernel.DRIVE) + kernel.CONTROLLER["alpha"].start
+    assert (words[drive["phase"]], words[drive["substeps"]], words[drive["h"]]) == (2.0, 4.0, h)
+    for index, value, says in ((drive["kt"], 0.07, "configuration words"), (alpha, 1.0, "configuration words"),
+                               (drive["phase"], 4.0, "sub-step 4.0"), (drive["a"], 0.5, "coefficients"),
+                               (drive["i"], math.inf, "state word 0 is inf")):
+        native.call("bytes", "f", state_bytes.with_data_word(own, index, value))
+        step = native.call("deserialize", "f")
+        assert step.status == 3 and says in step.messages[0][2], (index, step.messages)
+    native.call("bytes", "g", own)
+    assert native.call("deserialize", "g").status == 0
+    assert native.call("setstate", "g").status == 0
+    assert native.call("step", 2 * h, h).status == 0
+    native.close()
+
+
+def test_actuated_plant_state_with_forged_words_is_refused(native_fmus):
+    """ActuatedFiveBarPlant's model data: the plant's configuration (29 words), z = (q, dq, i1,
+    i2), the two motor rows (8 words each), then the two drives.  A forged motor row (drive 2's
+    R), a NaN current in z and a forged drive word (drive 1's kt) are refused by name; the true
+    state, taken after two steps, is accepted and stepped on."""
+    from fmus.native import state_bytes
+
+    native = Driver(native_fmus["ActuatedFiveBarPlant"])
+    native.run([("setup", 0.0), ("enter",), ("exit",), ("set", {"i_ref1": 0.2, "i_hat1": 0.1}),
+                ("step", 0.0, 1e-3), ("step", 1e-3, 1e-3)])
+    own = native.fmu.serializeFMUstate(native.fmu.getFMUstate())
+    words = state_bytes.data_words(own)
+    z, motors = 29, 29 + 16
+    drive1 = motors + 16
+    assert words[z + 14] != 0.0 and words[motors + 8] == 1.0    # i1 flows; row 2 drives joint 1 (q2)
+    kt1 = next(k for k in range(drive1, words.size) if words[k] == words[motors + 3])   # kt of motor row 1
+    for index, value, says in ((motors + 8 + 1, 2.0, "motor rows"), (z + 15, math.nan, "state word 15 = nan"),
+                               (kt1, 0.07, "drive's configuration words")):
+        native.call("bytes", "f", state_bytes.with_data_word(own, index, value))
+        step = native.call("deserialize", "f")
+        assert step.status == 3 and says in step.messages[0][2], (index, step.messages)
+    native.call("bytes", "g", own)
+    assert native.call("deserialize", "g").status == 0
+    assert native.call("setstate", "g").status == 0
+    assert native.call("step", 2e-3, 1e-3).status == 0
+    native.close()

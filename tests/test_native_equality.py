@@ -20,6 +20,9 @@ from controller.balance import BalanceSettings
 from support.fmu_calls import Driver
 
 BALANCE_T = BalanceSettings().T
+#: The bench twin's drive options (scenarios/twin.py): LuGre friction with stiction, PWM, current noise and offset.
+DRIVE_TWIN = {"friction": "lugre", "mu": 0.06, "mu_s": 0.08, "pwm_counts": 1000, "current_offset": 0.05,
+              "current_noise": 0.1, "noise_seed": 7, "noise_instance": 2}
 
 
 @dataclass
@@ -56,10 +59,61 @@ SCENARIOS = {
         [{}, {"kind": "dynamic"}, {"kind": "dynamic", "preset": "motor2", "R": 1.3, "L": 0.0},
          {"preset": "nope"}, {"R": -2.0}, {"ke": math.nan}, {"L": math.inf}, {"kind": "both"}, {"T": 0.0}],
         "omega", ("R", 1.5)),
+    "DCMotorDrive": Scenario(
+        1e-3, lambda k, t: {"i_ref": 0.5 * math.sin(20.0 * t) + 0.1, "v_ref": 6.0 * math.sin(30.0 * t) + 1.0,
+                            "omega": 30.0 * math.cos(15.0 * t), "i_hat": 0.4 * math.sin(20.0 * t - 0.1)},
+        [{}, {**DRIVE_TWIN, "torque_output": "mean", "omega0": 3.0, "i0": 0.2},
+         {"mode": "voltage", "preset": "motor2", "method": "quasi_static", "L": 0.0, "R": 2.0},
+         {"mode": "voltage", "preset": "seed000"}, {"mode": "voltage", "method": "euler", "L": 2e-6},
+         {"internal_observer": True}, {"internal_observer": True, "observer_kind": "dynamic", "omega0": -2.0},
+         {"method": "euler", "torque_output": "mean"}, {"preset": "motor2", "sample_phase": 0},
+         {"R": -2.0}, {"preset": "nope"}, {"T": 0.0}, {"T": 1e-10}, {"friction": "x"}, {**DRIVE_TWIN, "mu_s": 0.01},
+         {"friction": "lugre", "preset": "seed000", "mode": "voltage"},
+         {"mode": "voltage", "method": "euler", "L": 0.0},
+         {"internal_observer": True, "mode": "voltage"}, {"observer_kind": "both"}, {"pwm_counts": -1},
+         {"noise_seed": -3}, {"sample_phase": -1}, {"current_noise": -0.1}, {"current_offset": math.nan},
+         {"torque_output": "x"}, {"mode": "x"}, {"method": "x"}, {"J_design": math.nan}, {"kt": 1e-13},
+         {"R_design": -5.0}, {"L_design": 2e6}, {"omega0": math.inf}, {"i0": 2e6}, {"v_max": 0.0},
+         {"preset": "seed000"}],
+        "omega", ("R", 1.5)),
     "Trajectory": Scenario(
         1e-3, lambda k, t: {}, [{}, {"kind": "triangle"}, {"kind": "thesis_circle"}, {"kind": "hold"},
                                 {"kind": "square"}, {"cycles": 0}, {"side_time": float("inf")}],
         "", ("kind", "hold"), steps=300),
+    "FiveBarPlant": Scenario(
+        1e-3, lambda k, t: {"tau1": 0.02 * math.sin(9.0 * t), "tau2": -0.015 + 0.01 * math.cos(4.0 * t)},
+        [{}, {"preset": "bench", "x0": -0.002, "y0": 0.108},
+         # chain overrides, counter-masses, gravity, point-mass links, an encoder offset, substeps
+         {"preset": "bench", "chain1_l2": 0.17, "chain2_lg2": 0.07, "counter_mass1": 0.4, "counter_mass2": 0.25,
+          "gravity_y": -9.81, "link_inertias": False, "encoder_offset1": 0.001, "substeps": 3, "J_rotor2": 2e-6},
+         {"project": True, "m0": 0.05, "gravity_x": 1.0, "encoder_counts": 4000, "baumgarte": 50.0},
+         # light point-mass links: the run diverges
+         {f"chain{k}_{f}": 1e-4 if f[0] == "m" else 0.0 for k in (1, 2) for f in ("m1", "m2", "Jz1", "Jz2")},
+         {"x0": 0.0, "y0": 0.2653},   # a singular pose reached
+         {"baumgarte": 5000.0}, {"preset": "nope"}, {"l0": 2e6}, {"l0": 1e-13}, {"l0": 0.0}, {"l0": 0.3},
+         {"chain2_m1": -2.0}, {"chain1_l1": 0.0}, {"chain1_lg1": math.nan}, {"counter_mass1": 1e-6},
+         {"counter_mass2": -1.0}, {"m0": 0.1, "counter_mass1": 0.2}, {"x0": 1.0}, {"x0": math.nan},
+         {"x0": 0.0, "y0": 0.265329}, {"substeps": 0}, {"encoder_counts": 0}, {"rtol": 0.0}, {"J_rotor1": -2.0},
+         {"method": "euler"}, {"kernel": "slow"}],
+        "tau2", ("x0", 0.05)),
+    "ActuatedFiveBarPlant": Scenario(
+        1e-3, lambda k, t: {"i_ref1": 0.3 * math.sin(9.0 * t), "i_ref2": -0.2 + 0.2 * math.cos(4.0 * t),
+                            "i_hat1": 0.25 * math.sin(9.0 * t - 0.1), "i_hat2": -0.2 + 0.15 * math.cos(4.0 * t),
+                            "v_ref1": math.sin(5.0 * t), "v_ref2": -0.5},
+        [{}, {"preset": "bench", "x0": -0.002, "y0": 0.108, "friction1": "lugre", "friction2": "lugre"},
+         {"mode": "voltage", "substeps": 3, "counter_mass1": 0.3, "gravity_y": -9.81, "chain2_l1": 0.13,
+          "pwm_counts1": 200, "current_noise2": 0.01, "noise_seed2": 4, "encoder_offset2": 0.002},
+         # the bench's imperfections; the run reaches a singular pose
+         {"current_offset1": 0.05, "pwm_counts2": 100, "current_noise1": 0.02, "noise_seed1": 7, "noise_instance1": 1,
+          "friction2": "lugre", "link_inertias": False},
+         {"x0": 0.0, "y0": 0.2653, "mode": "voltage"}, {"baumgarte": 5000.0},
+         # the projection (the twin's composition around the kernels), one with LuGre and m0
+         {"project": True}, {"project": True, "mode": "voltage", "friction1": "lugre", "preset": "bench",
+                             "x0": -0.002, "y0": 0.108, "m0": 0.02},
+         {"T": 2e6}, {"T": 1e-10}, {"L1": 0.0}, {"L2": 1e-13}, {"preset1": "nope"}, {"R2": -2.0},
+         {"friction1": "stick"}, {"sample_phase": 1}, {"preset": "nope"}, {"substeps": 0}, {"x0": 1.0},
+         {"mu_s2": 0.0, "friction2": "lugre"}, {"mode": "both"}, {"counter_mass2": 1e-6}],
+        "i_hat2", ("x0", 0.05)),
 }
 
 
@@ -145,8 +199,8 @@ def test_native_fmu_equals_its_pythonfmu_twin(model, native_fmus, twin_fmus):
         compare(twin_fmus[model], native_fmus[model], scenario, parameters)
 
 
-#: The sampled models (fmus/slave/sampling.py), run again with steps h = T / 4.
-SAMPLED = ("BalanceController", "CurrentObserver", "Derivator")
+#: The sampled models (fmus/slave/sampling.py; the drive in current mode), run again with steps h = T / 4.
+SAMPLED = ("ActuatedFiveBarPlant", "BalanceController", "CurrentObserver", "DCMotorDrive", "Derivator")
 
 
 @pytest.mark.parametrize("model", SAMPLED)
@@ -172,8 +226,11 @@ def test_substepped_native_fmu_equals_its_pythonfmu_twin(model, native_fmus, twi
         said = " ".join(m[2] for s in trace for m in s.messages)
         if parameters["sample_phase"] in (2, 3):
             assert "changes the step within a sample period" in said and "does not divide" in said
-        else:
-            assert f"parameter sample_phase = {parameters['sample_phase']} must be a whole number" in said
+        else:   # motor.Drive refuses a negative phase at initialisation already
+            phase = parameters["sample_phase"]
+            assert (f"parameter sample_phase = {phase} must be a whole number" in said or
+                    model in ("ActuatedFiveBarPlant", "DCMotorDrive") and phase == -1
+                    and "sample_phase must be a whole number" in said)
 
 
 @pytest.mark.parametrize("model", SAMPLED)
@@ -187,21 +244,79 @@ def test_sampled_native_fmu_declares_its_period(model, native_fmus, twin_fmus):
     assert (phase.type, phase.causality, phase.start) == ("Integer", "parameter", "0")
 
 
-#: Per model: a parameter set whose design the native FMU does not carry, and what its refusal names.
-UNBUILT = {
-    "Derivator": ({"fc_vel": 50.0}, "fc_vel = 50.0 Hz"),
-    "BalanceController": ({"yaw": False}, "parameter yaw = False: this native FMU carries the balance design"),
-    "Trajectory": ({"kind": "circle", "cycles": 3}, "parameter cycles = 3: this native FMU carries the circle"),
-}
+#: A model, a parameter set the native FMU cannot honour (a design it does not carry, a setting
+#: with no C), and what its refusal names.
+UNBUILT = [
+    ("Derivator", {"fc_vel": 50.0}, "fc_vel = 50.0 Hz"),
+    ("BalanceController", {"yaw": False}, "parameter yaw = False: this native FMU carries the balance design"),
+    ("Trajectory", {"kind": "circle", "cycles": 3}, "parameter cycles = 3: this native FMU carries the circle"),
+    ("DCMotorDrive", {"R_design": 2.0}, "parameter R_design = 2.0: this native FMU carries the current controller "
+     "designed (app. C) for R = 1.101, L = 0.000667, kt = 0.05598, ke = 0.05138, b = 0.0001226, "
+     "J_rotor = 0.0001469, T = 0.001 (the nearest of the 2 designs it carries: its build's parameters, "
+     "the motor presets at T = 0.001 s), not for R = 2.0"),
+    ("FiveBarPlant", {"method": "dopri5"}, "parameter method = 'dopri5': the native FiveBarPlant integrates with "
+                                           "'rk4' only (dopri5 has no C implementation)"),
+    ("FiveBarPlant", {"kernel": "general"}, "parameter kernel = 'general': the native FiveBarPlant computes with "
+                                            "kernel 'fast' only (the general algorithm has no C implementation)"),
+    ("ActuatedFiveBarPlant", {"method": "dopri5"}, "parameter method = 'dopri5': the native ActuatedFiveBarPlant "
+                                                   "integrates with 'rk4' only"),
+    ("ActuatedFiveBarPlant", {"R_design2": 2.0}, "parameter R_design2 = 2.0: this native FMU carries the current "
+                                                 "controller designed (app. C) for R = "),
+]
 
 
-@pytest.mark.parametrize("model", sorted(UNBUILT))
-def test_design_parameters_away_from_the_build_are_refused_by_name(model, native_fmus, twin_fmus):
-    """The twin accepts them (it designs with scipy at initialisation); the native FMU refuses
-    its initialisation naming the parameter and its value, and every step after it."""
-    parameters, says = UNBUILT[model]
+@pytest.mark.parametrize("model, parameters, says", UNBUILT)
+def test_parameters_the_native_fmu_cannot_honour_are_refused_by_name(model, parameters, says, native_fmus,
+                                                                     twin_fmus):
+    """The twin accepts them (it designs with scipy at initialisation, integrates with dopri5
+    or the general algorithm in numpy); the native FMU refuses its initialisation naming the
+    parameter and its value, and every step after it."""
     calls = [("set", parameters), ("setup", 0.0), ("enter",), ("exit",), ("step", 0.0, 1e-3), ("get", ["error"])]
     twin, native = Driver(twin_fmus[model]).run(calls), Driver(native_fmus[model]).run(calls)
     assert [s.status for s in twin] == [0] * 6 and twin[-1].result == [""]
     assert native[3].status == 0 and says in native[3].messages[0][2]
     assert native[4].status == 2 and says in native[-1].result[0]
+
+
+@pytest.mark.parametrize("parameters, says", [
+    ({"preset": "motor2", "kt": 0.05}, "parameter kt = 0.05: this native FMU carries the current controller "
+                                       "designed (app. C) for R = 0.829,"),
+    ({"preset": "motor2", "T": 2e-3}, "parameter T = 0.002 s: this native FMU carries the current controller "
+                                      "designed (app. C) for R = 0.829,"),
+    ({"T": 5e-4}, "parameter T = 0.0005 s: this native FMU carries"),
+    ({"L": 1e-3}, "parameter L = 0.001: this native FMU carries"),
+    ({"J_design": 2e-4}, "parameter J_design = 0.0002: this native FMU carries"),
+    ({"b": 0.0, "b_design": 1e-4}, "parameter b_design = 0.0001: this native FMU carries"),
+])
+def test_drive_refuses_each_design_value_away_from_its_build_by_the_parameter_that_set_it(parameters, says,
+                                                                                           native_fmus):
+    """The current controller's design depends on the design's motor (preset, R, L, kt, ke, b,
+    J_design and the *_design overrides) and T: a value away from every design carried (the
+    build's, the motor presets' at its T) is named, against the nearest; in voltage mode (no
+    design) the same values are accepted, and so are another preset and a design parameter
+    set to the value it has."""
+    calls = [("set", parameters), ("setup", 0.0), ("enter",), ("exit",), ("step", 0.0, 1e-3)]
+    native = Driver(native_fmus["DCMotorDrive"])
+    trace = native.run(calls)
+    assert trace[3].status == 0 and says in trace[3].messages[0][2], trace[3].messages
+    assert trace[4].status == 2
+    for accepted in ({**parameters, "mode": "voltage"}, {"R_design": 1.101, "kt": 0.05598}, {"preset": "motor2"},
+                     {"preset": "motor2", "b": 0.0, "b_design": 2.039e-4}):
+        trace = Driver(native_fmus["DCMotorDrive"]).run([("set", accepted), *calls[1:]])
+        assert [s.status for s in trace] == [0] * 5 and not trace[3].messages, accepted
+
+
+def test_drive_in_voltage_mode_takes_any_step_as_its_twin(native_fmus, twin_fmus):
+    """Voltage mode: steps of 0.37 ms (not dividing T) run the whole script as the twin's;
+    current mode refuses them, as the twin, with its rule's words."""
+    base = SCENARIOS["DCMotorDrive"]
+    scenario = Scenario(3.7e-4, base.inputs, bad_input=base.bad_input, fixed=base.fixed)
+    for parameters in ({"mode": "voltage", "torque_output": "mean"},
+                       {"mode": "voltage", "friction": "lugre", "pwm_counts": 500, "omega0": 4.0}, {}):
+        trace = compare(twin_fmus["DCMotorDrive"], native_fmus["DCMotorDrive"], scenario, parameters)
+        said = " ".join(m[2] for s in trace for m in s.messages)
+        steps = [s.status for s in trace if s.call[0] == "step"]
+        if parameters:
+            assert steps[:base.steps] == [0] * base.steps
+        else:
+            assert "does not divide the sample time T = 0.001 s; DCMotorDrive accepts in current mode" in said

@@ -14,17 +14,37 @@ from fmus.cosim.master import simulate
 from fmus.native.models import NATIVE
 from fmus.native.run import native_system
 from scenarios.scenes.catalogue import get_scene
+from scenarios.scenes.transforms import drives_in_plant
 
 
-@pytest.mark.parametrize("scene", ["bench_circle_TCMDx", "pendulum_push"])
+#: Per scene, the components that run native (the others: pythonfmu FMUs).
+NATIVE_COMPONENTS = {"bench_circle_TCMDx": {"traj", "deriv", "obs1", "obs2", "drive1", "drive2", "plant"},
+                     "bench_real_circle_TCMDx": {"traj", "deriv", "obs1", "obs2", "drive1", "drive2", "plant"},
+                     "pendulum_push": {"ctrl", "drive_l", "drive_r", "plant"},
+                     # the drives inside the plant: an ActuatedFiveBarPlant (parcosim run --drives-in-plant 1)
+                     "bench_circle_TCMDx --drives-in-plant": {"traj", "deriv", "obs1", "obs2", "plant"}}
+
+
+def system_of(key: str):
+    """1.5 s of the system of a scene name, or of "SCENE --drives-in-plant" (its drives inside
+    the plant, as ``parcosim run --drives-in-plant 1`` makes it)."""
+    name, _, variant = key.partition(" ")
+    scene = drives_in_plant(get_scene(name), substeps=1) if variant == "--drives-in-plant" else get_scene(name)
+    return replace(scene.system, stop_time=1.5)
+
+
+@pytest.mark.parametrize("scene", sorted(NATIVE_COMPONENTS))
 def test_scene_with_native_fmus_equals_the_pythonfmu_run(scene, built_fmus, tmp_path):
-    """Native: the bench's Derivators and Trajectory; the pendulum's plant and balance
-    controller (with a push at 1 s)."""
-    system = replace(get_scene(scene).system, stop_time=1.5)
+    """Native: the bench's Trajectory, Derivator, current observers, drives (the bench twin's:
+    LuGre friction, PWM, current noise and offset) and FiveBarPlant (the bench preset, started
+    at rest at (x0, y0)); the pendulum's plant, balance controller and drives (with a push at 1 s);
+    the bench with its drives inside an ActuatedFiveBarPlant."""
+    system = system_of(scene)
     fmu_dir = next(iter(built_fmus.values())).parent
     native = native_system(system, tmp_path / "native")
     swapped = [c for c in native.components if c.model.endswith(".fmu")]
-    assert swapped and {c.name for c in swapped} == {c.name for c in system.components if c.model in NATIVE}
+    assert {c.name for c in swapped} == NATIVE_COMPONENTS[scene]
+    assert NATIVE_COMPONENTS[scene] == {c.name for c in system.components if c.model in NATIVE}
     a = simulate(system, mode="fmu", fmu_dir=fmu_dir)
     b = simulate(native, mode="fmu", fmu_dir=fmu_dir)
     assert a.error is None and b.error is None

@@ -221,7 +221,8 @@ def build_native_fmu(model: str, out_dir=DEFAULT_NATIVE_OUT, compiler: str = "cc
         scalars, arrays = native.data(slave)
         generic = GENERIC + (SAMPLED if native.sampled else ())
         kernels = native.kernels + (SAMPLED_KERNELS if native.sampled else ())
-        files = [HERE / name for name in generic] + [HERE / "adapters" / native.adapter] + kernel_files(kernels)
+        adapters = [HERE / "adapters" / name for name in (native.adapter, *native.parts)]
+        files = [HERE / name for name in generic] + adapters + kernel_files(kernels)
         if len({f.name for f in files}) != len(files):   # sources/ is flat: one name, one file
             raise NativeBuildError(f"{model}: two source files share a name: {sorted(f.name for f in files)}")
         digest = hashlib.sha256(repr((model, rows, scalars, {k: np.asarray(v).tobytes() for k, v in arrays.items()},

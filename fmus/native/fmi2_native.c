@@ -80,10 +80,11 @@ static void refuse(native *in, const char *message, int has_time, double time, i
     fprintf(stderr, "[parcosim] %s\n", line.text);
 }
 
-void pcn_step_size_message(pcn_text *why, double t, double h, const char *because)
+void pcn_step_size_message(const pcn_instance *in, pcn_text *why, double t, double h, const char *because)
 {
-    pcn_addf(why, "step size h = %r s at t = %r s %s; %s accepts %s", h, t, because, pcn_this_model.identifier,
-             pcn_this_model.accepted_steps);
+    const pcn_model *m = &pcn_this_model;
+    pcn_addf(why, "step size h = %r s at t = %r s %s; %s accepts %s", h, t, because, m->identifier,
+             m->accepted_steps_of ? m->accepted_steps_of(in) : m->accepted_steps);
 }
 
 /* ---- instances ---- */
@@ -355,7 +356,7 @@ static int check_step(native *in, double t, double h, pcn_text *why)
         because = text;
     }
     if (because) {
-        pcn_step_size_message(why, t, h, because);
+        pcn_step_size_message(&in->pub, why, t, h, because);
         return 1;
     }
     return in->model->check_step ? in->model->check_step(&in->pub, t, h, why) : 0;

@@ -19,12 +19,14 @@ class NativeModel:
     """A native FMU's C parts: ``adapter`` (in fmus/native/adapters, named pcn_<model>.c:
     sources/ is flat), ``kernels`` (C files of kernels/src; their headers follow) and
     ``data`` (slave -> (scalars, arrays), module docstring); ``sampled``: sub-stepped at a
-    sample time T (fmus/slave/sampling.py), with ``pcn_sampling.c`` and the kernels' counting rule."""
+    sample time T (fmus/slave/sampling.py), with ``pcn_sampling.c`` and the kernels' counting rule;
+    ``parts``: more files of fmus/native/adapters it compiles (``pcn_drive_setup.c|h``)."""
 
     adapter: str
     kernels: tuple
     data: Callable = field(default=lambda slave: ({}, {}))
     sampled: bool = False
+    parts: tuple = ()
 
 
 def _derivator(slave):
@@ -76,6 +78,73 @@ def _balance(slave):
     return scalars, arrays
 
 
+#: plant.presets.ChainParams' fields as pcn_plant_setup.c reads a preset's chain (9 words).
+PLANT_CHAIN_FIELDS = ("l1", "l2", "lg1", "lg2", "m1", "m2", "Jz1", "Jz2", "J_rotor")
+
+
+def _plant(slave):
+    """The plant presets (plant/presets.py) by name: ``plant_preset_chains`` holds each
+    preset's two chains, :data:`PLANT_CHAIN_FIELDS` each."""
+    from plant.presets import PRESET_NAMES, get_preset
+
+    presets = [get_preset(name) for name in PRESET_NAMES]
+    chains = [[getattr(chain, f) for chain in (p.chain1, p.chain2) for f in PLANT_CHAIN_FIELDS] for p in presets]
+    return {}, {"plant_preset_names": list(PRESET_NAMES), "plant_preset_chains": np.array(chains)}
+
+
+def drive_presets() -> dict:
+    """Every motor preset by name (``preset_names``) and its fields in
+    :data:`fmus.slave.declarations.MOTOR_PARAMETERS`' order, a row each (``preset_motor``): pcn_drive_setup.h's
+    pcn_motor_presets."""
+    from fmus.slave.declarations import MOTOR_PARAMETERS
+    from motor.presets import MOTOR_PRESETS
+
+    names = sorted(MOTOR_PRESETS)
+    return {"preset_names": names, "preset_motor": np.array([[getattr(MOTOR_PRESETS[n], f) for f, _, _ in
+                                                               MOTOR_PARAMETERS] for n in names])}
+
+
+def drive_design(slave, suffix: str = "") -> dict:
+    """The current controllers (app. C, python-control) a native FMU carries for the slave's
+    drive, whatever its mode: first the one designed for the slave's parameters, then those of
+    the motor presets at the slave's T (a package's drives of other presets need no FMU of
+    their own).  ``design<suffix>_keys``: a row of R, L, kt, ke, b, J_rotor of the design's
+    motor and T each; ``design<suffix>_coefficients``: alpha, beta, gamma, delta each (0 if
+    the first failed); ``design<suffix>_error``: the first's failure message, or ""."""
+    from fmus.slave.declarations import drive_params
+    from motor.current_controller import THESIS_POLES
+    from motor.drive import _design
+    from motor.presets import MOTOR_PRESETS
+
+    params, design = drive_params(slave, suffix)
+    keys, coefficients, error = [], [], ""
+    for k, p in enumerate([design or params, *(MOTOR_PRESETS[name] for name in sorted(MOTOR_PRESETS))]):
+        key = [p.R, p.L, p.kt, p.ke, p.b, p.J_rotor, slave.T]
+        if key in keys:
+            continue
+        try:
+            d = _design(p, slave.T, THESIS_POLES)
+        except ValueError as exc:
+            if k == 0:
+                keys.append(key)
+                coefficients.append([0.0] * 4)
+                error = str(exc)
+            continue
+        keys.append(key)
+        coefficients.append([d.alpha, d.beta, d.gamma, d.delta])
+    return {f"design{suffix}_keys": np.array(keys, dtype=np.float64),
+            f"design{suffix}_coefficients": np.array(coefficients, dtype=np.float64), f"design{suffix}_error": [error]}
+
+
+def _drive(slave):
+    return {}, {**drive_presets(), **drive_design(slave)}
+
+
+def _actuated(slave):
+    """The plant presets, the motor presets and each drive's current controller (suffix 1, 2)."""
+    return {}, {**_plant(slave)[1], **drive_presets(), **drive_design(slave, "1"), **drive_design(slave, "2")}
+
+
 #: Model name -> its native parts; one line a model.
 NATIVE = {
     "Derivator": NativeModel("pcn_derivator.c", ("derivator.c",), _derivator, sampled=True),
@@ -83,4 +152,12 @@ NATIVE = {
     "WheeledPendulum": NativeModel("pcn_wheeledpendulum.c", ("wheeled.c",)),
     "BalanceController": NativeModel("pcn_balancecontroller.c", ("balance.c",), _balance, sampled=True),
     "CurrentObserver": NativeModel("pcn_currentobserver.c", ("observer.c", "electrics.c"), _observer, sampled=True),
+    "FiveBarPlant": NativeModel("pcn_fivebarplant.c", ("fivebar.c", "kinematics5r.c"), _plant,
+                                parts=("pcn_plant_setup.c", "pcn_plant_setup.h")),
+    "DCMotorDrive": NativeModel("pcn_dcmotordrive.c", ("drive.c", "observer.c", "electrics.c"), _drive, sampled=True,
+                                parts=("pcn_drive_setup.c", "pcn_drive_setup.h")),
+    "ActuatedFiveBarPlant": NativeModel(
+        "pcn_actuatedfivebarplant.c", ("actuated.c", "fivebar.c", "kinematics5r.c", "drive.c", "electrics.c"),
+        _actuated, sampled=True,
+        parts=("pcn_plant_setup.c", "pcn_plant_setup.h", "pcn_drive_setup.c", "pcn_drive_setup.h")),
 }

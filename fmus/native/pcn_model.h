@@ -36,6 +36,8 @@ typedef struct pcn_instance pcn_instance;
 typedef struct {
     const char *identifier;          /* the model name (the slave class) */
     const char *accepted_steps;      /* GuardedSlave.accepted_steps() */
+    /* ... if it depends on the parameters (the drives' mode), or NULL. */
+    const char *(*accepted_steps_of)(const pcn_instance *in);
     long data_words;                 /* doubles of model data the FMU state saves */
     long scratch_words;              /* doubles of scratch (not saved) */
     /* Build the model from the parameters (GuardedSlave.setup). */
@@ -68,6 +70,6 @@ struct pcn_instance {
 };
 
 /* The step-size message of GuardedSlave.step_size_message. */
-void pcn_step_size_message(pcn_text *why, double t, double h, const char *because);
+void pcn_step_size_message(const pcn_instance *in, pcn_text *why, double t, double h, const char *because);
 
 #endif

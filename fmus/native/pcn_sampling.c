@@ -13,7 +13,8 @@ static const char *whole(double x, char *out, size_t size)
     return out;
 }
 
-int pcn_sampling_check(pcn_sampling *s, double T, int phase, double t, double h, pcn_text *why)
+int pcn_sampling_check(pcn_sampling *s, const pcn_instance *in, double T, int phase, double t, double h,
+                       pcn_text *why)
 {
     char n_text[32], substep_text[32], counted_text[32];
     double n = pc_sampling_substeps(T, h);
@@ -21,7 +22,7 @@ int pcn_sampling_check(pcn_sampling *s, double T, int phase, double t, double h,
         pcn_text because;
         pcn_clear(&because);
         pcn_addf(&because, "does not divide the sample time T = %r s", T);
-        pcn_step_size_message(why, t, h, because.text);
+        pcn_step_size_message(in, why, t, h, because.text);
         return 1;
     }
     if (!(phase >= 0 && phase < n))

@@ -5,7 +5,7 @@
 #define PCN_SAMPLING_H
 
 #include "pc_sampling.h"
-#include "pcn_text.h"
+#include "pcn_model.h"
 
 /* fmus.sampling.accepted_steps_text(). */
 #define PCN_SAMPLING_ACCEPTS                                                                                     \
@@ -22,8 +22,10 @@ typedef struct {
 
 /* SampledSteps.check_step_size's own rule for a step h at t (the generic one passed): h
  * divides T, 0 <= phase < n, n unchanged within a period.  Accepted: s->substeps = n, 0
- * returned; refused: the twin's message in `why`, nonzero, nothing changed. */
-int pcn_sampling_check(pcn_sampling *s, double T, int phase, double t, double h, pcn_text *why);
+ * returned; refused: the twin's message (in's step-size message) in `why`, nonzero, nothing
+ * changed. */
+int pcn_sampling_check(pcn_sampling *s, const pcn_instance *in, double T, int phase, double t, double h,
+                       pcn_text *why);
 
 /* Whether a restored counter is whole numbers with 0 <= substep < substeps (or both 0). */
 int pcn_sampling_check_data(const pcn_sampling *s, pcn_text *why);

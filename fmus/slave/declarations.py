@@ -243,11 +243,11 @@ def declare_drive_options(slave, suffix: str = "") -> None:
         slave.declare(f"{name}{suffix}", "parameter", start, text)
 
 
-def build_drive(slave, suffix: str = "", **options):
-    """The :class:`motor.Drive` of the slave's motor parameters and :data:`DRIVE_OPTIONS`
-    with ``suffix``; ``options`` (mode, method, T, torque_output) go to the Drive."""
-    from motor import Drive
-    from motor._checks import BadValue
+def drive_params(slave, suffix: str = ""):
+    """The slave's drive's :class:`motor.MotorParams` (the preset with the
+    :data:`MOTOR_PARAMETERS` followed by ``suffix`` that are not -1) and those its current
+    controller is designed for (:data:`DESIGN_PARAMETERS`; None: the same), checked and named
+    as the slave's variables."""
     from motor.presets import POSITIVE_FIELDS
 
     params = with_overrides(motor_preset(slave, f"preset{suffix}"), slave, motor_variables(suffix),
@@ -261,7 +261,17 @@ def build_drive(slave, suffix: str = "", **options):
         if not (math.isfinite(value) and value >= TINY):
             raise ValueError(f"parameter {var}{suffix} = {value!r} must be > 0 (or -1: the value of {field})")
         changes[field] = value
-    design = params.with_(**changes) if changes else None
+    return params, (params.with_(**changes) if changes else None)
+
+
+def build_drive(slave, suffix: str = "", **options):
+    """The :class:`motor.Drive` of the slave's motor parameters (:func:`drive_params`) and
+    :data:`DRIVE_OPTIONS` with ``suffix``; ``options`` (mode, method, T, torque_output) go
+    to the Drive."""
+    from motor import Drive
+    from motor._checks import BadValue
+
+    params, design = drive_params(slave, suffix)
     values = {name: getattr(slave, f"{name}{suffix}") for name, _, _ in DRIVE_OPTIONS}
     refuse_absurd(**{f"{name}{suffix}": values[name] for name in ("current_offset", "current_noise")})
     try:

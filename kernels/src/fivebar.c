@@ -11,6 +11,7 @@
 
 #include "pc_motor.h"
 #include "pc_rk4.h"
+#include "pc_trig.h"
 
 #define N_Q 7
 #define PI 3.14159265358979323846
@@ -75,9 +76,10 @@ void pc_fivebar_chain_terms(const pc_fivebar_params *p, int k, double a, double 
     const pc_fivebar_chain *c = &p->chain[k];
     const double s = chain_sign(k);
     const double l1 = c->l1, l2 = c->l2, lg1 = c->lg1, lg2 = c->lg2, m1 = c->m1, m2 = c->m2;
-    const double c1 = cos(a), s1 = sin(a);
-    const double c12 = cos(a + b), s12 = sin(a + b);
-    const double cb = cos(b), sb = sin(b);
+    double c1, s1, c12, s12, cb, sb;
+    pc_sincos(a, &s1, &c1);
+    pc_sincos(a + b, &s12, &c12);
+    pc_sincos(b, &sb, &cb);
     const double w1 = da, w12 = da + db;
     /* Tip (4.4) and J_v (4.13) in the chain frame; only the x, y rows are non-zero. */
     t->tip[0] = s * (l1 * c1 + l2 * c12);
@@ -213,7 +215,9 @@ void pc_fivebar_advance(const pc_fivebar_held *held, double *z, double dt, int s
 static void chain_tip(const pc_fivebar_params *p, int k, double a, double b, double tip[2])
 {
     const pc_fivebar_chain *c = &p->chain[k];
-    const double c1 = cos(a), s1 = sin(a), c12 = cos(a + b), s12 = sin(a + b);
+    double c1, s1, c12, s12;
+    pc_sincos(a, &s1, &c1);
+    pc_sincos(a + b, &s12, &c12);
     tip[0] = chain_sign(k) * (c->l1 * c1 + c->l2 * c12);
     tip[1] = c->l1 * s1 + c->l2 * s12;
 }
@@ -247,9 +251,9 @@ void pc_fivebar_report_of(const pc_fivebar_params *p, const pc_fivebar_settings 
     pc_fivebar_residual(p, y, res);
     for (int i = 0; i < 6; ++i) sum += res[i] * res[i];
     out->residual = sqrt(sum);
-    out->measures[0] = sin(y[4]);
-    out->measures[1] = sin(y[6]);
-    out->measures[2] = sin((y[3] + y[4]) - (PI - (y[5] + y[6])));
+    out->measures[0] = pc_sin(y[4]);
+    out->measures[1] = pc_sin(y[6]);
+    out->measures[2] = pc_sin((y[3] + y[4]) - (PI - (y[5] + y[6])));
     out->q1 = y[3];
     out->q2 = PI - y[5];
     out->dq1 = y[10];

@@ -3,6 +3,8 @@
 
 #include <math.h>
 
+#include "pc_trig.h"
+
 #define PC_PI 3.141592653589793   /* math.pi */
 
 int pc_5r_chain_ik(double l1, double l2, double px, double py, double elbow_sign, double *phi1, double *phi2,
@@ -15,7 +17,9 @@ int pc_5r_chain_ik(double l1, double l2, double px, double py, double elbow_sign
         return PC_5R_OUT_OF_REACH;
     }
     const double beta = elbow_sign * acos(cos_b);                     /* the distal link's relative angle */
-    const double p1 = atan2(py, px) - atan2(l2 * sin(beta), l1 + l2 * cos(beta));
+    double sb, cb;
+    pc_sincos(beta, &sb, &cb);
+    const double p1 = atan2(py, px) - atan2(l2 * sb, l1 + l2 * cb);
     *phi1 = p1;
     *phi2 = p1 + beta;
     return PC_5R_OK;
@@ -30,9 +34,9 @@ int pc_5r_inverse(const pc_5r_geometry *g, double x, double y, double angles[4],
 
 double pc_5r_margin(const double angles[4])
 {
-    const double serial1 = fabs(sin(angles[1] - angles[0]));
-    const double serial2 = fabs(sin(angles[3] - angles[2]));
-    const double parallel = fabs(sin(angles[1] - angles[3]));
+    const double serial1 = fabs(pc_sin(angles[1] - angles[0]));
+    const double serial2 = fabs(pc_sin(angles[3] - angles[2]));
+    const double parallel = fabs(pc_sin(angles[1] - angles[3]));
     return fmin(fmin(serial1, serial2), parallel);
 }
 
@@ -44,7 +48,9 @@ typedef struct {
 
 static actuated_trig trig_of(double q1, double q2)
 {
-    const actuated_trig t = {cos(q1), sin(q1), cos(q2), sin(q2)};
+    actuated_trig t;
+    pc_sincos(q1, &t.s1, &t.c1);
+    pc_sincos(q2, &t.s2, &t.c2);
     return t;
 }
 
@@ -162,8 +168,11 @@ int pc_5r_joint_reference(const pc_5r_geometry *g, double x, double y, double dx
 
 void pc_5r_link_rates(double l1, double l2, double p1, double p2, double dx, double dy, double w[2])
 {
-    const double m00 = -l1 * sin(p1), m01 = -l2 * sin(p2);
-    const double m10 = l1 * cos(p1), m11 = l2 * cos(p2);
+    double s1, c1, s2, c2;
+    pc_sincos(p1, &s1, &c1);
+    pc_sincos(p2, &s2, &c2);
+    const double m00 = -l1 * s1, m01 = -l2 * s2;
+    const double m10 = l1 * c1, m11 = l2 * c2;
     const double det = m00 * m11 - m01 * m10;
     w[0] = (m11 * dx - m01 * dy) / det;
     w[1] = (-m10 * dx + m00 * dy) / det;

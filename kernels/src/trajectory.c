@@ -1,6 +1,8 @@
 /* The reference trajectories at a time (thesis 7.18, 7.23-7.27); layouts in trajectory.h. */
 #include "trajectory.h"
 
+#include "pc_trig.h"
+
 /* The most rounds of a polygon, for the Python layer to refuse by name. */
 const int pc_trajectory_max_cycles = PC_TRAJECTORY_MAX_CYCLES;
 
@@ -58,7 +60,8 @@ static void circle(const pc_trajectory_circle *c, double t, double *out)
     const int moving = !(c->stops != 0.0 && t >= c->duration);
     const double w = c->omega;
     const double angle = c->phi0 + w * (moving ? t : c->duration);
-    const double cosine = cos(angle), sine = sin(angle);
+    double sine, cosine;
+    pc_sincos(angle, &sine, &cosine);
     const double r = c->radius;
     const double x = c->cx + r * cosine, y = c->cy + r * sine;
     if (!moving) {

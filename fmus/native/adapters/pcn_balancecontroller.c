@@ -79,7 +79,7 @@ static int setup(pcn_instance *in, pcn_text *why)
 
 static int check_step(pcn_instance *in, double t, double h, pcn_text *why)
 {
-    return pcn_sampling_check(counter(in), in->real[PCN_SLOT_T], in->integer[PCN_SLOT_sample_phase], t, h, why);
+    return pcn_sampling_check(counter(in), in, in->real[PCN_SLOT_T], in->integer[PCN_SLOT_sample_phase], t, h, why);
 }
 
 /* The controller's sample at t (the slave's sample). */
