@@ -45,10 +45,10 @@ def child(scene: str, stop_time: float | None) -> dict:
     sys.path.insert(0, str(ROOT))
     sys.path.insert(0, str(ROOT / "benchmarks"))
     import bench_components
-    from fmus.master import simulate
-    from scenarios.metrics import scene_metrics
-    from scenarios.run import result_columns
-    from scenarios.scenes import get_scene
+    from fmus.cosim.master import simulate
+    from scenarios.run.metrics import scene_metrics
+    from scenarios.run.runner import result_columns
+    from scenarios.scenes.catalogue import get_scene
 
     the_scene = get_scene(scene)
     if stop_time is not None:
@@ -72,7 +72,7 @@ def _digest(the_scene, result) -> str:
     import hashlib
 
     import numpy as np
-    from scenarios.run import result_columns
+    from scenarios.run.runner import result_columns
 
     columns = result_columns(the_scene, result)
     return hashlib.sha256(b"".join(np.ascontiguousarray(columns[k]).tobytes() for k in sorted(columns))).hexdigest()[:16]
@@ -83,8 +83,8 @@ def digest_child() -> dict:
     import warnings
 
     sys.path.insert(0, str(ROOT))
-    from fmus.master import simulate
-    from scenarios.scenes import get_scene, scene_names
+    from fmus.cosim.master import simulate
+    from scenarios.scenes.catalogue import get_scene, scene_names
 
     warnings.simplefilter("ignore")   # fall-back warnings: the mode that ran is in the digest's line
     out = {}

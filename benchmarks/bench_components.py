@@ -13,10 +13,10 @@ kernel), a drive written in C through the master's FMU calls, and MuJoCo's step 
    communication step: the slave's own Python ``do_step`` in process; the master's whole call in
    process (inputs, ``do_step``, outputs) and through the FMU (``fmi2SetReal``, ``fmi2DoStep``,
    ``fmi2GetReal``); the instance's C I/O step (its adapter's ``kernel``,
-   :mod:`fmus.compiled`) timed alone in the C loop, 500 calls from the state reached at
+   :mod:`fmus.cosim.compiled`) timed alone in the C loop, 500 calls from the state reached at
    the end of the run, its last inputs held, best of ``--rounds`` (a timer adds about 0.3 µs a
    call to the first three).
-3. **One step of** a drive through :class:`fmus.instances._FmuInstance` (the master's FMU path):
+3. **One step of** a drive through :class:`fmus.cosim.backends._FmuInstance` (the master's FMU path):
    ``DCMotorDrive``'s FMU and the C drive of the foreign-FMU tests
    (``tests/support/cfmu/dcdrive.c``, built here when a C compiler is present), best of
    ``--rounds`` x 2000 steps; our drive's and plant's kernels (from 2.); MuJoCo's ``mj_step``
@@ -41,9 +41,9 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import bench_master  # noqa: E402
-from fmus import compiled  # noqa: E402
-from fmus.master import simulate  # noqa: E402
-from scenarios.scenes import get_scene  # noqa: E402
+from fmus.cosim import compiled  # noqa: E402
+from fmus.cosim.master import simulate  # noqa: E402
+from scenarios.scenes.catalogue import get_scene  # noqa: E402
 
 CALLS = 2000
 #: Calls of a kernel timed per round, from the state at the end of the run with its last inputs
@@ -52,7 +52,7 @@ KERNEL_CALLS = 500
 
 
 def compiled_plans(system):
-    """Run ``system`` compiled and return its :class:`fmus.compiled.Plan` (state at the end)."""
+    """Run ``system`` compiled and return its :class:`fmus.cosim.compiled.Plan` (state at the end)."""
     plans = []
     original = compiled.Plan.__init__
 
@@ -72,7 +72,7 @@ def compiled_plans(system):
 
 def kernel_us(plan, n: int, rounds: int) -> float:
     """µs per call of the ``n``-th member's C I/O step, alone in the C loop
-    (:class:`fmus.compiled.LoopPlan` of that one member, no connections) for
+    (:class:`fmus.cosim.compiled.LoopPlan` of that one member, no connections) for
     :data:`KERNEL_CALLS` steps from the state reached at the end of the run, its last inputs
     held; best of ``rounds`` (or of the calls before a refusal, if at least 50)."""
     adapter, member = plan.adapters[n], plan.loop.members[n]
@@ -91,7 +91,7 @@ def kernel_us(plan, n: int, rounds: int) -> float:
 def fmu_drive_us(path, rounds: int) -> float:
     """µs per step of a drive FMU (inputs i_ref, v_ref, omega, i_hat; outputs tau, v, i)
     through the master's FMU instance, best of ``rounds`` × :data:`CALLS` steps of 0.25 ms."""
-    from fmus.instances import _FmuInstance
+    from fmus.cosim.backends import _FmuInstance
 
     inst = _FmuInstance(Path(path), "drive")
     try:
@@ -183,7 +183,7 @@ def main(argv=None) -> int:
           f"{breakdowns['fmu']['rest_us']:.1f} | | |")
 
     rows = []
-    from fmus.build import ensure_built
+    from fmus.export.build import ensure_built
 
     ours = ensure_built(["DCMotorDrive"], args.fmu_dir)["DCMotorDrive"]
     rows.append(("DCMotorDrive FMU (ours: parcosim's wrapper, Python slave)", fmu_drive_us(ours, args.rounds), _load()))

@@ -16,7 +16,7 @@ into R interleaved rounds; the median and the best round are reported.  Columns:
   without fmpy's Python wrapper that checks the status (what a C master pays).
 
 The floor: a pass-through slave with the same 12 inputs and 6 outputs on the same slave base
-(:class:`fmus.guarded.GuardedSlave`, built with :mod:`fmus.build`'s staging), whose step only
+(:class:`fmus.slave.base.GuardedSlave`, built with :mod:`fmus.export.build`'s staging), whose step only
 copies inputs to outputs: the cost of the pythonfmu C++ -> Python crossing and the variable
 access, which no controller through pythonfmu can undercut.
 
@@ -50,7 +50,7 @@ OUTPUTS = ("tau1", "tau2", "i_ref1", "i_ref2")
 SLOW = 50
 
 FLOOR_SLAVE = '''"""Floor of the pythonfmu crossing: the PositionController's interface, outputs copied from inputs."""
-from fmus.guarded import GuardedSlave
+from fmus.slave.base import GuardedSlave
 
 INPUTS = {inputs!r}
 OUTPUTS = ("tau1", "tau2", "i_ref1", "i_ref2", "e1", "e2")
@@ -224,12 +224,12 @@ def fmpy_cases(fmus, steps):
 
 def build_fmus(out):
     """The three controller-chain FMUs and the floor's pass-through FMU, built into out."""
-    from fmus.build import build_bundled_fmu, build_fmu
+    from fmus.export.build import build_bundled_fmu, build_fmu
     paths = {name: build_fmu(name, out) for name in ("PositionController", "Derivator", "Trajectory")}
     with tempfile.TemporaryDirectory(prefix="parcosim_floor_") as tmp:
         script = Path(tmp) / "parcosim_passthrough.py"
         script.write_text(FLOOR_SLAVE.format(inputs=INPUTS))
-        # on the same slave base and binary as the three above (the bundle of fmus/bundle.py)
+        # on the same slave base and binary as the three above (the bundle of fmus/export/bundle.py)
         paths["PassThrough"] = build_bundled_fmu(script, "PassThrough", Path(out) / "PassThrough.fmu",
                                                  canHandleVariableCommunicationStepSize="true")
     return paths

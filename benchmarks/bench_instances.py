@@ -13,7 +13,7 @@ For each FMU, in a fresh process each (so one FMU's growth is not another's):
   the binary calls it, and the bytes still allocated by Python after it (``tracemalloc``),
   divided by the cycles;
 * ``len(sys.path)`` before and after the fmpy cycles (pythonfmu's binary inserts the FMU's
-  resources at every instantiation; :class:`fmus.guarded.GuardedSlave` drops the duplicates).
+  resources at every instantiation; :class:`fmus.slave.base.GuardedSlave` drops the duplicates).
 
 Goal: at most 1 kB per cycle after warm-up, ``sys.path`` unchanged.
 """
@@ -95,7 +95,7 @@ def _measure(cycle, warmup: int, cycles: int):
 def _slave_cycles(model: str, warmup: int, cycles: int) -> dict:
     import importlib
 
-    from fmus.registry import SLAVES
+    from fmus.slave.registry import SLAVES
 
     cls = getattr(importlib.import_module(f"fmus.slaves.{SLAVES[model]}"), model)
 
@@ -136,7 +136,7 @@ def main(argv=None) -> int:
         _child(args)
         return 0
 
-    from scenarios.hostile import prepared_fmus
+    from fmus.hostile.cases import prepared_fmus
 
     work = Path(tempfile.mkdtemp(prefix="parcosim-bench-instances-"))
     unzipped = prepared_fmus(args.fmu_dir, args.models, work)

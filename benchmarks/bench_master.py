@@ -12,7 +12,7 @@ count, Gauss-Seidel):
   ``fmi2SetReal/fmi2DoStep/fmi2GetReal`` (real FMUs in ``--fmu-dir``, default ``fmus/build``,
   built when missing or stale);
 * ``compiled loop``: ``simulate(system, mode="compiled")``, the whole step loop compiled
-  (:mod:`fmus.compiled`; compiled or loaded from its cache in the warm-up, ``setup`` includes
+  (:mod:`fmus.cosim.compiled`; compiled or loaded from its cache in the warm-up, ``setup`` includes
   loading it);
 * ``floor, in-process`` and ``floor, through FMUs``: the same, with every model replaced by its
   pass-through stand-in (:mod:`passthrough`: same variables, a ``doStep`` that only copies),
@@ -31,15 +31,15 @@ CPU, so steadier there; cache effects of their load remain).
 
 Where the time goes: each round also runs every case once more with timers (not in the table
 above): every instance's inputs set, step and outputs read as the master's stepper calls them
-(``fmus.stepper.member_calls``: in process the slave's attributes and its ``do_step``; through
+(``fmus.cosim.stepper.member_calls``: in process the slave's attributes and its ``do_step``; through
 FMUs ``fmi2SetReal``, ``fmi2DoStep``, ``fmi2GetReal``), and inside the step the slave's own
-Python ``do_step`` (``fmus.guarded.GuardedSlave``; the FMUs loaded in this process share that
+Python ``do_step`` (``fmus.slave.base.GuardedSlave``; the FMUs loaded in this process share that
 module, so this also times the Python side of an FMU's ``fmi2DoStep``).  The timers wrap
-``fmus.stepper.member_calls`` and ``GuardedSlave.do_step`` for the duration of the run and add
+``fmus.cosim.stepper.member_calls`` and ``GuardedSlave.do_step`` for the duration of the run and add
 about 0.3 µs a call.
 
 The in-process floor runs through the unchanged ``simulate(mode="inprocess")``:
-:func:`passthrough.registered` adds the pass-through classes to ``fmus.build.SLAVES`` for the
+:func:`passthrough.registered` adds the pass-through classes to ``fmus.export.build.SLAVES`` for the
 duration of the run.
 
 Goals (issue 5): >= 10x faster than real time through the FMUs, >= 50x in process; (issue 16)
@@ -65,7 +65,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from fmus.master import simulate  # noqa: E402
+from fmus.cosim.master import simulate  # noqa: E402
 import passthrough  # noqa: E402
 
 GOAL_RTF = {"fmu": 10.0, "inprocess": 50.0, "compiled": 200.0}
@@ -119,7 +119,7 @@ def _nothing():
 
 METHODS = ("set_inputs", "do_step", "get_outputs")
 #: What the breakdown reports per instance: the master's three calls, and inside do_step the
-#: slave's own Python ``do_step`` (fmus.guarded.GuardedSlave.do_step: validation and the model).
+#: slave's own Python ``do_step`` (fmus.slave.base.GuardedSlave.do_step: validation and the model).
 CELLS = METHODS + ("python_do_step",)
 
 
@@ -128,14 +128,15 @@ def timed_instances():
     """Time every instance's inputs set, step and outputs read as the master's stepper calls
     them, and the slave's own Python ``do_step``, while the block runs.
 
-    ``fmus.stepper.member_calls`` (what the stepper calls per instance: the in-process slaves'
+    ``fmus.cosim.stepper.member_calls`` (what the stepper calls per instance: the in-process slaves'
     attributes moved directly, an FMU's ``set_inputs``/``do_step``/``get_outputs``) is wrapped
-    so that each call is timed; ``fmus.guarded.GuardedSlave.do_step`` (the base of every slave,
-    shared by the FMUs loaded in this process: they import ``fmus.guarded`` from its module
+    so that each call is timed; ``fmus.slave.base.GuardedSlave.do_step`` (the base of every slave,
+    shared by the FMUs loaded in this process: they import ``fmus.slave.base`` from its module
     cache) is wrapped at class level.  Both are restored afterwards.  Yields a dict instance
     name -> cell -> [calls, seconds].
     """
-    from fmus import guarded, stepper
+    from fmus.slave import base as guarded
+    from fmus.cosim import stepper
 
     original_member_calls = stepper.member_calls
     original_do_step = guarded.GuardedSlave.__dict__["do_step"]
@@ -348,7 +349,7 @@ def measure(system, repeats: int, fmu_dir=None, with_breakdown: bool = True, key
     :func:`run_case` of each round, ``timed[key]`` the :func:`breakdown` of each round (empty
     without ``with_breakdown``).
     """
-    from fmus.build import ensure_built
+    from fmus.export.build import ensure_built
 
     cases = [c for c in CASES if keys is None or c[0] in keys]
     floor_system = passthrough.passthrough_system(system)
@@ -418,7 +419,8 @@ def main(argv=None) -> int:
     if unknown:
         ap.error(f"--cases: unknown {', '.join(unknown)}; valid: {', '.join(c[0] for c in CASES)}")
 
-    from scenarios.scenes import drives_in_plant, get_scene
+    from scenarios.scenes.catalogue import get_scene
+    from scenarios.scenes.transforms import drives_in_plant
 
     scene = get_scene(args.scene)
     if args.drives_in_plant is not None:

@@ -133,7 +133,7 @@ def main(argv=None):
     with tempfile.TemporaryDirectory(prefix="bench_motor_") as tmp:
         fmu_dir = args.fmu_dir
         if fmu_dir is None:
-            from fmus.build import build_fmu
+            from fmus.export.build import build_fmu
             fmu_dir = Path(tmp)
             for model in ("DCMotorDrive", "CurrentObserver"):
                 build_fmu(model, fmu_dir)

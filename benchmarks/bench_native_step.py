@@ -69,7 +69,7 @@ def run(slave, variables, start_state, inputs, steps: int, with_io: bool) -> flo
 
 
 def bench(model: str, steps: int, rounds: int, folder: Path) -> dict:
-    from fmus.build import build_fmu
+    from fmus.export.build import build_fmu
     from fmus.native.build import build_native_fmu
 
     fmus = {"native": build_native_fmu(model, folder / "native"), "pythonfmu": build_fmu(model, folder / "twin")}

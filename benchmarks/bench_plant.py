@@ -81,7 +81,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=5000)
     args = parser.parse_args()
-    from fmus.build import build_fmu
+    from fmus.export.build import build_fmu
 
     with tempfile.TemporaryDirectory() as tmp:
         fmu = build_fmu("FiveBarPlant", Path(tmp))

@@ -3,18 +3,18 @@
     python benchmarks/bench_sampling_counting.py
 
 A Derivator slave (pythonfmu, no FMI layer) steps at h = T / 4 (one sample, three holds a
-period); its :meth:`fmus.sampling.SampledSteps.step` counts with Python's integer
+period); its :meth:`fmus.slave.sampling.SampledSteps.step` counts with Python's integer
 comparisons, or with the kernels' ``pc_sampling_samples`` and ``pc_sampling_next`` through
 ctypes (the same rule).  Side by side in one run, alternating, 3 rounds of best-of-5 timings
 of 20 000 steps; printed: the best µs per step of each and their ratio.  This is why
-fmus/sampling.py keeps the per-step comparisons in Python.
+fmus/slave/sampling.py keeps the per-step comparisons in Python.
 """
 import ctypes
 import tempfile
 import timeit
 
 import kernels
-from fmus import sampling
+from fmus.slave import sampling
 from fmus.slaves.parcosim_derivator import Derivator
 
 _d = ctypes.c_double

@@ -12,11 +12,12 @@ import argparse
 import statistics
 import time
 
-from fmus.build import ensure_built
-from fmus.instances import _FmuInstance
-from fmus.master import stepping_order
-from fmus.stepper import Stepper
-from scenarios.scenes import drives_in_plant, get_scene
+from fmus.export.build import ensure_built
+from fmus.cosim.backends import _FmuInstance
+from fmus.cosim.master import stepping_order
+from fmus.cosim.stepper import Stepper
+from scenarios.scenes.catalogue import get_scene
+from scenarios.scenes.transforms import drives_in_plant
 
 
 def _median_us(call, rounds=50):

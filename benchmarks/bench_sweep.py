@@ -4,7 +4,7 @@
 [--samples 24]``
 
 * Overhead: ``--tasks`` runs of the scene cut to ``--short`` s, once in a plain loop of
-  :func:`scenarios.engine.run_task` in this process, once through :func:`scenarios.engine.run_tasks`
+  :func:`scenarios.batch.engine.run_task` in this process, once through :func:`scenarios.batch.engine.run_tasks`
   on a LocalCluster of one worker process (warmed up first: kernels compiled, tables loaded);
   overhead per task = (engine wall - loop wall) / tasks.
 * Scaling: a sweep of ``--samples`` full-length samples (U = 0.2) on warmed LocalClusters of 1
@@ -19,9 +19,9 @@ import argparse
 import os
 import time
 
-from scenarios.engine import Task, open_client, run_task, run_tasks
-from scenarios.scenes import get_scene
-from scenarios.sweep import run_sweep, with_stop_time
+from scenarios.batch.engine import Task, open_client, run_task, run_tasks
+from scenarios.scenes.catalogue import get_scene
+from scenarios.batch.sweep import run_sweep, with_stop_time
 
 
 def _timed(call):

@@ -98,7 +98,7 @@ print("RESULT " + json.dumps(globals()[what](**args)), flush=True)
 
 def with_binary(fmu: Path, binary: bytes, dest: Path) -> Path:
     """A copy of ``fmu`` at ``dest`` (unzipped) whose Linux binary is ``binary``."""
-    from fmus.wrapper import model_identifier
+    from fmus.export.wrapper import model_identifier
 
     name = f"binaries/linux64/{model_identifier(fmu)}.so"
     with zipfile.ZipFile(fmu) as z:
@@ -134,8 +134,8 @@ def main(argv=None) -> None:
     parser.add_argument("--memory-models", default="Trajectory,DCMotorDrive,PositionController")
     args = parser.parse_args(argv)
 
-    from fmus.build import build_fmu
-    from fmus.wrapper import compiled_wrapper
+    from fmus.export.build import build_fmu
+    from fmus.export.wrapper import compiled_wrapper
 
     wrapper = compiled_wrapper()
     if wrapper is None:

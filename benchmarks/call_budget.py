@@ -1,10 +1,10 @@
-"""The costs behind the work limit of one FMI call (fmus/budget.py).
+"""The costs behind the work limit of one FMI call (fmus/slave/budget.py).
 
     python -m benchmarks.call_budget [--repeat N]
 
 Measures the CPU (``time.process_time``, the best of N runs) of one unit of every kind of
 work an FMI call counts: a right-hand side of each integrator and kernel, and an inner step
-of a system FMU; prints each beside the cost fmus/budget.py charges for it and the units one
+of a system FMU; prints each beside the cost fmus/slave/budget.py charges for it and the units one
 call may take at that cost (about a second of CPU).  A measured cost above the charged one
 means the limit lets a call run longer than a second here: raise the constant.  The figures
 are in docs/plant.md ("The work of one call").
@@ -17,7 +17,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from fmus import budget
+from fmus.slave import budget
 from plant import IntegratorSettings, PlantSimulator, get_preset
 from plant import spec as plant_spec
 from plant.specsim import SpecSimulator
@@ -99,8 +99,8 @@ def wheeled_step(substeps: int = 10000):
 def inner_step(scene: str, steps: int = 200):
     """CPU of one inner doStep of ``scene``'s ClosedLoop (its components' steps, the plant's
     evaluations included) over ``steps`` communication steps."""
-    from fmus.embedded import LoopCore
-    from scenarios.scenes import get_scene
+    from fmus.systemfmu.cores import LoopCore
+    from scenarios.scenes.catalogue import get_scene
 
     system = get_scene(scene).system
     per_step = sum(c.substeps for c in system.components)

@@ -10,8 +10,8 @@ baseline is the same run of a first-order low-pass FMU written in C
 the interpreter cost anyway.  The goal: at most 1 s of CPU more than the baseline.
 
 Measured: PositionController and FiveBarPlant (as ``parcosim build`` builds them,
-:func:`fmus.build.build_fmu`), the ``ClosedLoop`` of ``bench_circle_TCMDx`` (as ``parcosim
-export-fmu`` exports it, :func:`fmus.export.export_fmu`); for each, a second cold run under
+:func:`fmus.export.build.build_fmu`), the ``ClosedLoop`` of ``bench_circle_TCMDx`` (as ``parcosim
+export-fmu`` exports it, :func:`fmus.systemfmu.export.export_fmu`); for each, a second cold run under
 ``python -X importtime`` names the imports that cost the most; and the ClosedLoop's 9 s run,
 cold, whose e_ef (thesis 7.31 over t in [1, 8] s, from its outputs ``x``, ``y``,
 ``traj.x_d``, ``traj.y_d``) must be ``parcosim run bench_circle_TCMDx``'s 0.4471702325699642 mm::
@@ -107,9 +107,9 @@ def build_baseline(out: Path) -> Path:
 
 def build_fmus(out: Path) -> dict:
     """Build the baseline and parcosim's three FMUs into ``out``: name -> path."""
-    from fmus.build import build_fmu
-    from fmus.export import export_fmu
-    from scenarios.scenes import get_scene
+    from fmus.export.build import build_fmu
+    from fmus.systemfmu.export import export_fmu
+    from scenarios.scenes.catalogue import get_scene
 
     out.mkdir(parents=True, exist_ok=True)
     paths = {"LowPass": build_baseline(out)}

@@ -22,8 +22,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from scenarios.run import run_scene  # noqa: E402
-from scenarios.scenes import drives_in_plant, get_scene, scene_names  # noqa: E402
+from scenarios.run.runner import run_scene  # noqa: E402
+from scenarios.scenes.catalogue import get_scene, scene_names
+from scenarios.scenes.transforms import drives_in_plant  # noqa: E402
 
 
 def compare(scene) -> dict:

@@ -64,8 +64,8 @@ def scene_rows(strategies=("PDq", "TCMDq"), pairs=((100.0, 0.15), (100.0, 0.02),
     """Rows (strategy, σ0, σ1, e_ef_mm, e_ss_mm, chatter, completed) of the circle scenes with
     LuGre drives; chatter: the RMS step-to-step change of drive 1's shaft torque over the last
     0.5 s (at rest after the stop) [N m]."""
-    from scenarios.run import run_scene
-    from scenarios.scenes import Fidelity, bench
+    from scenarios.run.runner import run_scene
+    from scenarios.scenes.thesis import Fidelity, bench
 
     rows = []
     for s in strategies:
@@ -82,8 +82,8 @@ def scene_rows(strategies=("PDq", "TCMDq"), pairs=((100.0, 0.15), (100.0, 0.02),
 def effect_rows():
     """Rows (scene, metrics with tanh friction, metrics with LuGre) of the 16 bench scenes."""
     from controller.strategies import STRATEGY_NAMES
-    from scenarios.run import run_scene
-    from scenarios.scenes import Fidelity, bench
+    from scenarios.run.runner import run_scene
+    from scenarios.scenes.thesis import Fidelity, bench
 
     rows = []
     for kind in ("circle", "triangle"):

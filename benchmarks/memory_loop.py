@@ -20,8 +20,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from fmus.master import simulate  # noqa: E402
-from scenarios.scenes import get_scene  # noqa: E402
+from fmus.cosim.master import simulate  # noqa: E402
+from scenarios.scenes.catalogue import get_scene  # noqa: E402
 
 
 def rss_mb() -> float:

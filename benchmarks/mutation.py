@@ -92,10 +92,10 @@ TARGETS = {
     "fmus/slaves/parcosim_specplant.py": ("test_spec_plant",),
     "fmus/slaves/parcosim_wheeledpendulum.py": ("test_wheeled_fmu",),
     # The FMU state and the call budget (issue 30; their first sample: benchmarks/mutation_state.py)
-    "fmus/stateformat.py": ("test_fmu_state_data",),
-    "fmus/fmustate.py": ("test_fmu_state_data", "test_fmu_state"),
-    "fmus/slavestate.py": ("test_fmu_state_data", "test_fmu_state"),
-    "fmus/budget.py": ("test_call_limits",),
+    "fmus/slave/state_format.py": ("test_fmu_state_data",),
+    "fmus/slave/state.py": ("test_fmu_state_data", "test_fmu_state"),
+    "fmus/slave/state_calls.py": ("test_fmu_state_data", "test_fmu_state"),
+    "fmus/slave/budget.py": ("test_call_limits",),
 }
 #: The control law, whose every mutant runs: functions by name; "f:for" is the for loops in f.
 #: Empty since the law is C (kernels/src/law.c), which this Python mutation tool does not mutate.

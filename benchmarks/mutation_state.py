@@ -3,8 +3,8 @@
     git worktree add --detach /work/wtS <commit> && cd /work/wtS
     PYTHONPATH=$PWD python -m benchmarks.mutation_state [--report]
 
-30 mutants drawn (seed 30) from fmus/stateformat.py, fmus/fmustate.py, fmus/slavestate.py and
-fmus/budget.py with :mod:`benchmarks.mutation`'s machinery, run against their test modules
+30 mutants drawn (seed 30) from fmus/slave/state_format.py, fmus/slave/state.py, fmus/slave/state_calls.py and
+fmus/slave/budget.py with :mod:`benchmarks.mutation`'s machinery, run against their test modules
 before any test is written for what the sample finds (the score is out of sample).
 """
 import os
@@ -13,7 +13,7 @@ import sys
 
 import benchmarks.mutation as m
 
-FILES = ("fmus/stateformat.py", "fmus/fmustate.py", "fmus/slavestate.py", "fmus/budget.py")
+FILES = ("fmus/slave/state_format.py", "fmus/slave/state.py", "fmus/slave/state_calls.py", "fmus/slave/budget.py")
 #: Source -> its test modules (those of the campaign's :data:`benchmarks.mutation.TARGETS`).
 TARGETS = {source: m.TARGETS[source] for source in FILES}
 WORKDIR = m.ROOT / "out" / "mutation30"

@@ -4,7 +4,7 @@
                                       [--master-only] [--without MODEL ...] [--loop-only]
 
 The scene (``bench_circle_TCMDx``: plant, two drives, two current observers, derivator,
-controller, trajectory) is exported per component (``fmus.ssp.export_ssp``, as ``parcosim
+controller, trajectory) is exported per component (``fmus.ssp.export.export_ssp``, as ``parcosim
 export-ssp --per-component`` does) twice: once with the native FMUs of ``--native-dir``
 (``parcosim build --native``, built when not given), once with the pythonfmu FMUs of ``--python-dir`` (built there
 when missing).  Each package then runs, side by side in one invocation, in:
@@ -14,7 +14,7 @@ when missing).  Each package then runs, side by side in one invocation, in:
   (``LD_PRELOAD``: without it its FMUs cannot load, "undefined symbol: PyExc_ValueError");
 * ``libcosimpy``: ``CosimExecution.from_ssp_file(...).simulate_until(stop)`` in a Python child;
 * ``ecospy``: ``EcosSimulation(step, ssp_path).step(n)`` in a Python child, on one CPU (as
-  ``fmus.ssp_run.simulate_ssp_ecos`` runs it);
+  ``fmus.ssp.run.simulate_ssp_ecos`` runs it);
 * the same hosts on a floor package: as many instances of the C low-pass of
   benchmarks/baseline_fmu, chained, next to nothing to compute: what the host costs;
 * our master, ``parcosim run --mode fmu`` (fmpy) and ``--mode fmu --native``
@@ -77,7 +77,7 @@ ECOSPY_CHILD = textwrap.dedent("""
     import json, os, sys, time
     os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
     from ecospy import EcosLib, EcosSimulation
-    from fmus.ssp import PARAMETER_SET, read_ssp_experiment
+    from fmus.ssp.export import PARAMETER_SET, read_ssp_experiment
     EcosLib.set_log_level("err")
     path, stop = sys.argv[1], float(sys.argv[2])
     step = read_ssp_experiment(path)[2]
@@ -126,8 +126,8 @@ FMPY_CHILD = textwrap.dedent("""
 
 MASTER_CHILD = textwrap.dedent("""
     import json, sys, time
-    from fmus.master import simulate
-    from scenarios.scenes import get_scene
+    from fmus.cosim.master import simulate
+    from scenarios.scenes.catalogue import get_scene
     import dataclasses
     scene, native, fmu_dir, stop = sys.argv[1], sys.argv[2] == "native", sys.argv[3], float(sys.argv[4])
     system = get_scene(scene).system
@@ -150,9 +150,9 @@ MASTER_CHILD = textwrap.dedent("""
 
 def export_packages(work: Path, native_dir: Path, python_dir: Path, scene: str) -> dict:
     """The scene per component with each set of FMUs: kind ("native", "pythonfmu") -> .ssp."""
-    from fmus.build import ensure_built
-    from fmus.ssp import export_ssp
-    from scenarios.scenes import get_scene
+    from fmus.export.build import ensure_built
+    from fmus.ssp.export import export_ssp
+    from scenarios.scenes.catalogue import get_scene
 
     system = get_scene(scene).system
     models = sorted({c.model for c in system.components})
@@ -191,8 +191,8 @@ def floor_package(work: Path, count: int, step: float) -> Path:
     """``count`` instances of the C low-pass of benchmarks/baseline_fmu in a chain, as one
     package: what each host costs per instance and step with next to nothing to compute."""
     from benchmarks.cold_start import build_baseline
-    from fmus.ssp import export_ssp
-    from fmus.system import Component, Connection, System
+    from fmus.ssp.export import export_ssp
+    from fmus.cosim.system import Component, Connection, System
 
     names = [f"lp{i}" for i in range(count)]
     system = System(components=tuple(Component(n, "LowPass") for n in names),
@@ -337,7 +337,7 @@ def main(argv=None) -> int:
     python_dir = Path(args.python_dir) if args.python_dir else work / "pythonfmu"
     native_dir = Path(args.native_dir) if args.native_dir else work / "native"
     if args.master_only:
-        from fmus.build import ensure_built
+        from fmus.export.build import ensure_built
         from scenarios.scenes import get_scene
         ensure_built(sorted({c.model for c in get_scene(SCENE).system.components}), python_dir)
         packages, loops, program = {}, {}, None

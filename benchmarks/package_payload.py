@@ -3,7 +3,7 @@
     python benchmarks/package_payload.py [--gains 0,0.1,0.3,1] [--stop-time 2] [--drives-in-plant N]
 
 For three bench scenes and payloads of 0, 40 and 100 g on the real plant only, the package
-is run as a Jacobi master runs it (``scenarios.package.run_jacobi``, fmpy's zeros on the
+is run as a Jacobi master runs it (``scenarios.packaging.chain.run_jacobi``, fmpy's zeros on the
 first step) and its RMS end-effector error over [1, stop] s is divided by our master's
 with the same loaded plant (whose controller does not know the payload either).  One row
 per speed gain of the measurement correction (``plant.correction.VELOCITY_GAIN``): it acts
@@ -17,10 +17,11 @@ import argparse
 import dataclasses
 
 import plant.correction as correction
-from fmus.master import simulate
-from scenarios.metrics import rms_norm
-from scenarios.package import package_scene, run_jacobi
-from scenarios.scenes import Fidelity, bench, drives_in_plant
+from fmus.cosim.master import simulate
+from scenarios.run.metrics import rms_norm
+from scenarios.packaging.chain import package_scene, run_jacobi
+from scenarios.scenes.thesis import Fidelity, bench
+from scenarios.scenes.transforms import drives_in_plant
 
 CASES = (("TCMDx", "circle"), ("PDq", "circle"), ("TCMDq", "triangle"))
 PAYLOADS = (0.0, 0.04, 0.1)

@@ -1,8 +1,8 @@
 """Pass-through stand-ins for the parcosim slaves: the FMI cost of a system without its models.
 
-For each model of :data:`fmus.build.SLAVES` a slave ``Pass<Model>`` is generated as source
+For each model of :data:`fmus.export.build.SLAVES` a slave ``Pass<Model>`` is generated as source
 text: the same variables (names, types, causality, variability, initial, start values,
-declared feedthrough) on the same base (:class:`fmus.guarded.GuardedSlave`, so the same
+declared feedthrough) on the same base (:class:`fmus.slave.base.GuardedSlave`, so the same
 ``get_real``/``set_real``/``do_step`` path), and a ``step`` that only copies: output k takes
 the value of input ``k mod n_inputs`` (in declaration order); a model without inputs
 (``Trajectory``) outputs the step's end time.  No numpy, no model.
@@ -13,10 +13,10 @@ same stepping order, since variabilities and feedthrough are the same) costs wha
 and the FMI calls cost alone: the floor under the real system's time.
 
 * ``fmu`` mode: :func:`build_fmus` builds ``Pass<Model>.fmu`` files (pythonfmu's FmuBuilder,
-  ModelStructure fixed as :mod:`fmus.build` does) into a directory, where
-  :func:`fmus.master.simulate` finds models that are not parcosim models;
-* ``inprocess`` mode: :func:`fmus.master.simulate` only knows the classes of
-  :data:`fmus.build.SLAVES`; :func:`registered` adds the pass-through classes there (and
+  ModelStructure fixed as :mod:`fmus.export.build` does) into a directory, where
+  :func:`fmus.cosim.master.simulate` finds models that are not parcosim models;
+* ``inprocess`` mode: :func:`fmus.cosim.master.simulate` only knows the classes of
+  :data:`fmus.export.build.SLAVES`; :func:`registered` adds the pass-through classes there (and
   their modules to ``sys.modules`` as ``fmus.slaves.<module>``) for the duration of a
   ``with`` block, so the unchanged in-process back end runs them.
 """
@@ -35,9 +35,9 @@ ROOT = Path(__file__).resolve().parent.parent
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from fmus import build as _build  # noqa: E402
-from fmus.modeldescription import fix_model_structure  # noqa: E402
-from fmus.system import System  # noqa: E402
+from fmus.export import build as _build  # noqa: E402
+from fmus.export.modeldescription import fix_model_structure  # noqa: E402
+from fmus.cosim.system import System  # noqa: E402
 
 PREFIX = "Pass"
 
@@ -94,7 +94,7 @@ def slave_source(model: str) -> str:
         "from pythonfmu import Boolean, Fmi2Causality, Fmi2Variability, Integer, Real, String",
         "from pythonfmu.enums import Fmi2Initial",
         "",
-        "from fmus.guarded import GuardedSlave",
+        "from fmus.slave.base import GuardedSlave",
         "",
         "",
         f"class {name}(GuardedSlave):",
@@ -138,7 +138,7 @@ def write_sources(models, directory) -> dict:
 def build_fmus(models, out_dir) -> dict:
     """Build ``Pass<Model>.fmu`` for each model into ``out_dir``; pass-through model -> path.
 
-    Each FMU bundles its generated module and ``fmus/guarded.py`` (nothing else).
+    Each FMU bundles its generated module and ``fmus/slave/base.py`` (nothing else).
     """
     from pythonfmu import FmuBuilder
 
@@ -152,7 +152,9 @@ def build_fmus(models, out_dir) -> dict:
             package = tmp / "fmus"
             package.mkdir()
             (package / "__init__.py").write_text('"""The slave base bundled into each FMU."""\n')
-            shutil.copy2(ROOT / "fmus" / "guarded.py", package / "guarded.py")
+            (package / "slave").mkdir()
+            (package / "slave" / "__init__.py").write_text('"""The slave base."""\n')
+            shutil.copy2(ROOT / "fmus" / "slave" / "base.py", package / "slave" / "base.py")
             try:
                 fmu = FmuBuilder.build_FMU(script, dest=out_dir, project_files=[package],
                                            canHandleVariableCommunicationStepSize="true")
@@ -186,7 +188,7 @@ def load_classes(models, directory) -> dict:
 
 @contextmanager
 def registered(classes: dict):
-    """Within the block, ``fmus.build.SLAVES`` also names the pass-through models, so
+    """Within the block, ``fmus.export.build.SLAVES`` also names the pass-through models, so
     ``simulate(..., mode="inprocess")`` runs them (classes from :func:`load_classes`).
 
     Leave the block before an ``fmu`` mode run: ``ensure_built`` would look for the

@@ -28,8 +28,8 @@ _LINE = re.compile(r"\s+([\d.]+)%\s+(\S+)\s+\[\.\]\s+(\S+)")
 def run(scene: str, runs: int) -> None:
     """The workload: ``scene`` compiled ``runs`` times."""
     sys.path.insert(0, str(ROOT))
-    from fmus.master import simulate
-    from scenarios.scenes import get_scene
+    from fmus.cosim.master import simulate
+    from scenarios.scenes.catalogue import get_scene
 
     system = get_scene(scene).system
     for _ in range(runs):

@@ -14,8 +14,8 @@ import numpy as np
 
 
 def dump(path: str) -> None:
-    from scenarios.run import run_scene
-    from scenarios.scenes import scene_names
+    from scenarios.run.runner import run_scene
+    from scenarios.scenes.catalogue import scene_names
 
     arrays = {}
     for name in scene_names():

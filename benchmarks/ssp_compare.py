@@ -3,7 +3,7 @@
     python benchmarks/ssp_compare.py [SCENE]      (default bench_circle_TCMDx)
 
 Prints, per runner, the number of common communication points, the largest end-effector
-difference to ``fmus.master.simulate(system, mode="fmu", coupling="jacobi")`` and the
+difference to ``fmus.cosim.master.simulate(system, mode="fmu", coupling="jacobi")`` and the
 wall times.
 """
 import sys
@@ -12,10 +12,10 @@ from pathlib import Path
 
 import numpy as np
 
-from fmus.master import simulate
-from fmus.ssp import export_ssp
-from fmus.ssp_run import ecos_available, simulate_ssp_ecos, simulate_ssp_fmpy
-from scenarios.scenes import get_scene
+from fmus.cosim.master import simulate
+from fmus.ssp.export import export_ssp
+from fmus.ssp.run import ecos_available, simulate_ssp_ecos, simulate_ssp_fmpy
+from scenarios.scenes.catalogue import get_scene
 
 
 def main(scene_name="bench_circle_TCMDx"):

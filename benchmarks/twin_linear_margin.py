@@ -34,7 +34,7 @@ from controller.model import ExactModel
 from controller.strategies import get_strategy
 from controller.trajectories import get_trajectory
 from plant import get_preset
-from scenarios.twin import LINK_INERTIAS
+from scenarios.scenes.twin import LINK_INERTIAS
 
 T = 1e-3
 

@@ -243,7 +243,7 @@ class BalanceController:
     """
 
     #: Kernel buffers -> the function giving the words a run changes; a restored FMU state may
-    #: not change the others (:mod:`fmus.fmustate`).
+    #: not change the others (:mod:`fmus.slave.state`).
     KERNEL_BUFFERS = {"buf": fastbalance.run_state_words}
 
     def __init__(self, design: BalanceDesign, route: Route = Route(), R: float = 0.04, W: float = 0.14):

@@ -135,7 +135,7 @@ def bessel_lowpass_sos(order, fc, T=SAMPLE_TIME):
 
 #: Filters computed ahead, ``("bessel_lowpass_sos", order, fc, T)`` -> sos: an FMU's, computed
 #: when it was built for its parameters then and loaded from its resources
-#: (:mod:`fmus.designs`), so that starting it needs no scipy.signal.  While an FMU is built
+#: (:mod:`fmus.slave.designs`), so that starting it needs no scipy.signal.  While an FMU is built
 #: (``RECORDING``), each filter computed is added.
 PRECOMPUTED = {}
 RECORDING = False
@@ -214,7 +214,7 @@ class Derivator:
     """
 
     #: Kernel buffers -> the function giving the words a run changes; a restored FMU state may
-    #: not change the others (:mod:`fmus.fmustate`).
+    #: not change the others (:mod:`fmus.slave.state`).
     KERNEL_BUFFERS = {"buf": fastderivator.run_state_words}
 
     def __init__(self, fc_vel=DEFAULT_FC_VEL, fc_acc=DEFAULT_FC_ACC, T=SAMPLE_TIME):

@@ -2,7 +2,7 @@
 ``balance.h``): the buffer's layout, the I/O layout, the refusal codes and :func:`sample`.
 
 :class:`controller.balance.BalanceController` (in process, the FMU) and the compiled loop
-(:mod:`fmus.adapters`) all run ``pc_balance_sample``: correct the observer's estimate with
+(:mod:`fmus.cosim.compiled_adapters`) all run ``pc_balance_sample``: correct the observer's estimate with
 the encoders and the gyro, u = -K (x_hat - x_ref(t)) saturated at +-v_battery, predict the
 next estimate with the voltage applied (controller/balance.py's module docstring).  The
 design (python-control) stays in Python; :func:`pack` copies its matrices into ``buf``.
@@ -53,7 +53,7 @@ BUF_SIZE = kernels.size(BUFFER)
 _STATE = kernels.layout("pc_balance_fields")["state"]
 #: The words of the buffer a run changes (``pc_balance_state``: started, the estimate, the
 #: last voltages); every other word is configuration (sizes, kept-state indices, gains,
-#: matrices), which a restored FMU state may not change (:mod:`fmus.fmustate`).
+#: matrices), which a restored FMU state may not change (:mod:`fmus.slave.state`).
 RUN_STATE_WORDS = tuple(range(_STATE.start, _STATE.stop))
 #: The name of each word of ``buf`` (``states[2]``), for refusals.
 WORD_NAMES = tuple(name if s.stop - s.start == 1 else f"{name}[{k - s.start}]"

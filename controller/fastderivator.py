@@ -5,7 +5,7 @@ The step is the C kernel ``pc_derivator_step`` (``kernels/src/derivator.c``), wh
 One float64 array holds the sizes, the step matrix, the rest state per unit angle and the
 state with the newest input: the struct ``pc_derivator`` with its flexible array (layout in
 ``kernels/src/derivator.h``; the offsets here come from its exported field list).  The
-compiled loop (:mod:`fmus.compiled`) calls ``pc_derivator_io`` on the same buffer.
+compiled loop (:mod:`fmus.cosim.compiled`) calls ``pc_derivator_io`` on the same buffer.
 """
 from __future__ import annotations
 
@@ -38,7 +38,7 @@ def _offsets(n, m):
 def run_state_words(buf: np.ndarray) -> range:
     """The indices of ``buf`` a run changes: ``V_STARTED`` and the state; every other word is
     configuration (the sizes the kernel's loops run over, the step matrix, the rest state),
-    which a restored FMU state may not change (:mod:`fmus.fmustate`)."""
+    which a restored FMU state may not change (:mod:`fmus.slave.state`)."""
     n, m = int(buf[V_STATES]), int(buf[V_CHANNELS])
     _, state, end = _offsets(n, m)
     return (V_STARTED,) + tuple(range(state, end))

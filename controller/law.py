@@ -62,7 +62,7 @@ TABLE_CODES = (TABLE_OUT, TABLE_HOLE)
 def run_state_words(buf):
     """The indices of ``buf`` a run changes (``pc_law_state``); every other word is
     configuration (modes, gains, the geometry), which a restored FMU state may not change
-    (:mod:`fmus.fmustate`)."""
+    (:mod:`fmus.slave.state`)."""
     return range(STATE_SIZE)
 
 

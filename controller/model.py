@@ -234,7 +234,7 @@ def _save_table(path: Path, xs, ys, table) -> None:
 
 
 #: Tables computed ahead, :func:`_cache_key` -> (xs, ys, table): an FMU's, built when the FMU
-#: was built for its parameters then and loaded from its resources (:mod:`fmus.designs`), so
+#: was built for its parameters then and loaded from its resources (:mod:`fmus.slave.designs`), so
 #: that starting it builds no table and reads no user cache.  While an FMU is built
 #: (``RECORDING``), each table made or loaded is added.
 PRECOMPUTED = {}

@@ -136,7 +136,7 @@ class PositionController:
     """
 
     #: Kernel buffers -> the function giving the words a run changes; a restored FMU state may
-    #: not change the others (:mod:`fmus.fmustate`).
+    #: not change the others (:mod:`fmus.slave.state`).
     KERNEL_BUFFERS = {"_buf": law.run_state_words}
 
     def __init__(self, params: FiveBarParams, strategy: Strategy, model="tabulated", model_error=0.0,

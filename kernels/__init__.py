@@ -7,7 +7,7 @@ the model modules (``plant``, ``motor``, ``controller``), the FMU slaves, the co
 and the monolithic reference all call these functions, through ctypes, on numpy float64
 buffers whose layout is the C structs' (:func:`layout`).
 
-Inside an FMU the library travels in the bundle beside this file (``fmus/bundle.py``) and is
+Inside an FMU the library travels in the bundle beside this file (``fmus/export/bundle.py``) and is
 loaded by path: starting an FMU compiles nothing.  ``$PARCOSIM_KERNELS_LIB`` names another
 build of the same sources to load instead (the sanitizer build of the tests).
 """
@@ -50,7 +50,7 @@ class Field(ctypes.Structure):
 _library = None
 
 
-#: True inside an FMU: the package runs under its bundle's private name (fmus/bundle.py), with
+#: True inside an FMU: the package runs under its bundle's private name (fmus/export/bundle.py), with
 #: the library built from its sources when the FMU was built (never stale, never built here).
 BUNDLED = __name__ != "kernels"
 
@@ -167,7 +167,7 @@ def bind(function, *arguments):
     into a ctypes object of its argument type (TypeError: not a number of that type).  With no
     per-call value the callable is a ``functools.partial`` (no Python frame at all).
 
-    The callable is code, not data, to an FMU state (:func:`fmus.fmustate.opaque_tag`); a copy
+    The callable is code, not data, to an FMU state (:func:`fmus.slave.state.opaque_tag`); a copy
     of its owner binds its own (a deep copy of a function is the same function).
     """
     raw = library()[function.__name__]    # a new function object: ``function`` keeps its argtypes

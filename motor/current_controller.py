@@ -181,7 +181,7 @@ def design_current_controller(params, T=THESIS_T, poles=THESIS_POLES):
 
 #: Designs computed ahead, :func:`design_key` -> :class:`CurrentControllerDesign` (without
 #: ``plant`` and ``controller``): an FMU's, computed when it was built for its parameters then
-#: and loaded from its resources (:mod:`fmus.designs`), so that starting it needs no
+#: and loaded from its resources (:mod:`fmus.slave.designs`), so that starting it needs no
 #: python-control.  While an FMU is built (``RECORDING``), each design computed is added.
 PRECOMPUTED = {}
 RECORDING = False

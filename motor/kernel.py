@@ -90,7 +90,7 @@ class Calls:
     made once: a call writes the inputs into ``x`` and passes three fixed pointers.
 
     An owner (:class:`motor.Drive`, ...) keeps its bound methods as attributes, which FMU
-    state treats as code (fmus.fmustate.opaque_tag), never as data; a copy of the owner makes
+    state treats as code (fmus.slave.state.opaque_tag), never as data; a copy of the owner makes
     its own (the owner's ``__getstate__`` leaves them out, ``__setstate__`` builds them).
 
     Parameters

@@ -4,29 +4,29 @@ Every subcommand is a thin shell over a documented Python call:
 
 =====================  ==============================================
 ``parcosim``           ``parcosim run bench_circle_TCMDx`` (the default job)
-``parcosim demo``      ``scenarios.plant_demo.run(out_dir, preset)``: the plant alone, a table and a PNG
-``parcosim build``     ``fmus.build.build_all(out_dir)``; with ``--native``
+``parcosim demo``      ``scenarios.examples.plant_demo.run(out_dir, preset)``: the plant alone, a table and a PNG
+``parcosim build``     ``fmus.export.build.build_all(out_dir)``; with ``--native``
                        ``fmus.native.build.build_native_all(out_dir)`` (docs/native.md)
-``parcosim sweep``     ``scenarios.sweep.run_sweep(scene, samples, uncertainty, seed, distribution,
+``parcosim sweep``     ``scenarios.batch.sweep.run_sweep(scene, samples, uncertainty, seed, distribution,
                        perturb, mode, out_dir, scheduler, workers)``
 ``parcosim identify-motor``  ``motor.cli.identify_main(argv)``
-``parcosim list``      ``scenarios.scenes.scene_names()``
-``parcosim run``       ``scenarios.run.run_scene(name, mode, out_dir)`` (mode inprocess, fmu or
+``parcosim list``      ``scenarios.scenes.catalogue.scene_names()``
+``parcosim run``       ``scenarios.run.runner.run_scene(name, mode, out_dir)`` (mode inprocess, fmu or
                        compiled); with ``--native`` (``--mode fmu``)
                        ``run_scene(fmus.native.run.with_native_fmus(scene, fmu_dir), "fmu", ...)``; with ``--drives-in-plant N``
                        ``run_scene(drives_in_plant(get_scene(name), substeps=N), ...)``; with
                        ``--replace I=F.fmu`` ``run_scene(with_fmu_files(scene, {I: F}), ...)``
-``parcosim report``    ``scenarios.report.write_report(out_dir, mode)``
-``parcosim trade``     ``scenarios.trade.run_trade(scene, quick, out_dir)``; for a pendulum scene
-                       ``scenarios.pendulum_trade.run_pendulum_trade(scene, quick, out_dir)``
-``parcosim export-ssp``  ``scenarios.package.export_package(get_scene(name), path, fmu_dir)``;
+``parcosim report``    ``scenarios.batch.report.write_report(out_dir, mode)``
+``parcosim trade``     ``scenarios.studies.trade.run_trade(scene, quick, out_dir)``; for a pendulum scene
+                       ``scenarios.studies.pendulum_trade.run_pendulum_trade(scene, quick, out_dir)``
+``parcosim export-ssp``  ``scenarios.packaging.chain.export_package(get_scene(name), path, fmu_dir)``;
                        with ``--per-component [--substeps N] [--internal-observer]``
-                       ``scenarios.per_component.export_per_component(get_scene(name), path, fmu_dir,
+                       ``scenarios.packaging.per_component.export_per_component(get_scene(name), path, fmu_dir,
                        substeps, internal_observer)``
-``parcosim export-fmu``  ``fmus.export.export_fmu(get_scene(name).system, path)``; with ``--native``
+``parcosim export-fmu``  ``fmus.systemfmu.export.export_fmu(get_scene(name).system, path)``; with ``--native``
                        ``fmus.native.loopbuild.export_native_fmu(get_scene(name).system, path)`` (docs/native.md)
-``parcosim build-plant``  ``fmus.specfmu.build_plant_fmu(spec, path)`` (docs/spec.md)
-``parcosim workspace``  ``scenarios.workspace.plot_workspace(preset_or_spec, out_dir)`` (docs/workspace.md)
+``parcosim build-plant``  ``fmus.export.specfmu.build_plant_fmu(spec, path)`` (docs/spec.md)
+``parcosim workspace``  ``scenarios.studies.workspace.plot_workspace(preset_or_spec, out_dir)`` (docs/workspace.md)
 =====================  ==============================================
 
 Errors end the command with exit status 2 and one readable line on stderr, nothing else
@@ -191,7 +191,7 @@ def _check_command(argv: list, parser) -> None:
 
 def _check_scene(name: str) -> None:
     """Refuse an unknown scene naming the closest one."""
-    from scenarios.scenes import scene_names
+    from scenarios.scenes.catalogue import scene_names
 
     names = scene_names()
     if name not in names:
@@ -211,13 +211,13 @@ def _output(args) -> tuple:
         from fmus.native.build import DEFAULT_NATIVE_OUT
         value = DEFAULT_NATIVE_OUT
     elif args.command == "build" and value is None:
-        from fmus.build import DEFAULT_OUT
+        from fmus.export.build import DEFAULT_OUT
         value = DEFAULT_OUT
     return (Path(value), is_file) if value is not None else (None, False)
 
 
 def _modes() -> tuple:
-    from fmus.master import MODES
+    from fmus.cosim.master import MODES
 
     return MODES
 
@@ -294,45 +294,45 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
 def _command(args) -> int:
     try:
         if args.command == "demo":
-            from scenarios.plant_demo import run
+            from scenarios.examples.plant_demo import run
             run(args.out, args.preset)
         elif args.command == "list":
-            from scenarios.scenes import get_scene, scene_names
+            from scenarios.scenes.catalogue import get_scene, scene_names
             width = max(len(name) for name in scene_names())
             for name in scene_names():
                 print(f"{name:{width}s} {get_scene(name).description}")
         elif args.command == "run":
             return _run(args)
         elif args.command == "report":
-            from scenarios.report import write_report
+            from scenarios.batch.report import write_report
             print(write_report(args.out, args.mode, progress=progress_bar("report"), scheduler=args.scheduler,
                                workers=args.workers))
         elif args.command == "sweep":
             return _sweep(args)
         elif args.command == "export-ssp":
             if args.per_component:
-                from scenarios.per_component import export_per_component
+                from scenarios.packaging.per_component import export_per_component
                 print(export_per_component(_scene(args), args.path, args.fmu_dir, args.substeps,
                                            args.internal_observer))
             else:
                 if args.substeps is not None or args.internal_observer:
                     raise ValueError("--substeps and --internal-observer go with --per-component")
-                from scenarios.package import export_package
+                from scenarios.packaging.chain import export_package
                 print(export_package(_scene(args), args.path, args.fmu_dir))
         elif args.command == "export-fmu":
             if args.native:
                 from fmus.native.loopbuild import export_native_fmu
                 print(export_native_fmu(_scene(args).system, args.path))
             else:
-                from fmus.export import export_fmu
+                from fmus.systemfmu.export import export_fmu
                 print(export_fmu(_scene(args).system, args.path))
         elif args.command == "trade":
             return _trade(args)
         elif args.command == "build-plant":
-            from fmus.specfmu import build_plant_fmu
+            from fmus.export.specfmu import build_plant_fmu
             print(build_plant_fmu(args.spec, args.path))
         elif args.command == "workspace":
-            from scenarios.workspace import plot_workspace
+            from scenarios.studies.workspace import plot_workspace
             circles = [tuple(float(v) for v in c.split(",")) for c in args.circle]
             if any(len(c) != 3 for c in circles):
                 raise ValueError(f"--circle {args.circle}: write CX,CY,R in metres")
@@ -342,7 +342,7 @@ def _command(args) -> int:
             for path in build_native_all(args.out or DEFAULT_NATIVE_OUT):
                 print(path)
         elif args.command == "build":
-            from fmus.build import DEFAULT_OUT, build_all
+            from fmus.export.build import DEFAULT_OUT, build_all
             for path in build_all(args.out or DEFAULT_OUT):
                 print(path)
     except (ValueError, OSError, RuntimeError, zipfile.BadZipFile) as exc:
@@ -362,7 +362,8 @@ def progress_bar(label: str):
 
 def _scene(args):
     """The scene ``args.scene``, with its drives inside the plant if ``--drives-in-plant N``."""
-    from scenarios.scenes import drives_in_plant, get_scene, with_fmu_files
+    from scenarios.scenes.catalogue import get_scene
+    from scenarios.scenes.transforms import drives_in_plant, with_fmu_files
 
     scene = get_scene(args.scene)
     if args.drives_in_plant is not None:
@@ -403,7 +404,7 @@ def _run_folder(args) -> str:
 
 
 def _run(args) -> int:
-    from scenarios.run import run_scene
+    from scenarios.run.runner import run_scene
 
     scene = _scene(args)
     if args.native:
@@ -430,7 +431,7 @@ def _run(args) -> int:
     compiled = f", compiled in {m['compile_s']:.2f} s" if "compile_s" in m else ""
     speed = f"{m['wall_s']:.2f} s wall ({m['realtime_factor']:.1f}x real time{compiled}) -> {out}"
     if "peak_pitch_deg" in m:     # a wheeled pendulum's scene: its own metrics
-        from scenarios.pendulum import pendulum_line
+        from scenarios.scenes.pendulum import pendulum_line
 
         print(f"{scene.name} [{m['mode']}]: {pendulum_line(m)}, {speed}")
         return 0
@@ -447,7 +448,7 @@ def _sweep_folder(args) -> str:
 
 
 def _sweep(args) -> int:
-    from scenarios.sweep import run_sweep
+    from scenarios.batch.sweep import run_sweep
 
     out = args.out or _sweep_folder(args)
     sweep = run_sweep(args.scene, args.samples, args.uncertainty, seed=args.seed, distribution=args.distribution,
@@ -466,11 +467,11 @@ def _sweep(args) -> int:
 
 
 def _trade(args) -> int:
-    from scenarios.pendulum import PENDULUM_SCENES
-    from scenarios.trade import run_trade
+    from scenarios.scenes.pendulum import PENDULUM_SCENES
+    from scenarios.studies.trade import run_trade
 
-    if args.scene in PENDULUM_SCENES:   # the pendulum's own study (scenarios/pendulum_trade.py)
-        from scenarios.pendulum_trade import run_pendulum_trade
+    if args.scene in PENDULUM_SCENES:   # the pendulum's own study (scenarios/studies/pendulum_trade.py)
+        from scenarios.studies.pendulum_trade import run_pendulum_trade
 
         report = run_pendulum_trade(args.scene, quick=args.quick, out_dir=args.out,
                                     progress=lambda line: print(line, file=sys.stderr, flush=True))

@@ -1,7 +1,7 @@
 """Bring a model of the plant back in line with what was measured of the real one.
 
 A controller that predicts the plant one sample ahead with a model of it (the sampled
-chain of an exported package, :mod:`fmus.embedded`) runs that model beside the real
+chain of an exported package, :mod:`fmus.systemfmu.cores`) runs that model beside the real
 plant; each sample it compares the model's outputs with the measured ones and, where
 they disagree, moves the model's state to the nearest state the measurement allows:
 

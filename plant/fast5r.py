@@ -60,7 +60,7 @@ S_OFFSET1, S_OFFSET2, SETTINGS_SIZE = SETTINGS["offset"].start, SETTINGS["offset
 OK, NONFINITE_INPUT, NONFINITE_STATE, DIVERGED, SINGULAR = 0, 1, 2, 3, 4
 #: The plant's state entries before the currents (q and dq, 7.12).
 PLANT_STATES = STATE["current"].start
-#: Entries of x after the inputs: the FiveBarPlant outputs (fmus.parts.PLANT_OUTPUTS order).
+#: Entries of x after the inputs: the FiveBarPlant outputs (fmus.slave.declarations.PLANT_OUTPUTS order).
 PLANT_OUTPUT_COUNT = 11
 #: The most motors a step takes (one per actuated joint).
 MAX_MOTORS = 2
@@ -188,7 +188,7 @@ class FastKernel:
     The buffers (parameters, settings, report, scratch, refusal) belong to this object and
     their addresses are computed once, inside the bound calls.  A deep copy (an FMU snapshot)
     is this object: it holds configuration and scratch only, no run state, so an FMU state
-    writes its class, not its buffers (``FMU_STATE_OPAQUE``, :func:`fmus.fmustate.opaque_tag`):
+    writes its class, not its buffers (``FMU_STATE_OPAQUE``, :func:`fmus.slave.state.opaque_tag`):
     a refused state cannot have written into them.
     """
 

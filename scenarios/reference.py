@@ -19,8 +19,8 @@ else:
   the drive's ``tau`` output is :meth:`motor.Drive.torque` of the state at the interval's end;
 * the **discrete part** — trajectory, derivator, position controller, observers — are the
   scene's own components, the master's in-process instances, initialised and stepped by the
-  master's own loop (:class:`fmus.stepper.Stepper`, the Gauss-Seidel order of
-  :func:`fmus.master.stepping_order`) with the same inputs as in the co-simulation;
+  master's own loop (:class:`fmus.cosim.stepper.Stepper`, the Gauss-Seidel order of
+  :func:`fmus.cosim.master.stepping_order`) with the same inputs as in the co-simulation;
 * each drive samples its voltage with its own :meth:`motor.Drive.sample_voltage` at t_k, at
   the drive's place in that order — the co-simulation drive's current controller, PWM
   quantisation, current noise and offset — held over [t_k, t_k+1] (zero-order hold); the
@@ -62,7 +62,7 @@ same in all four):
     speed); a LuGre drive's own mean torque (``torque_output="mean"``).  It measures what a drive output "torque averaged over the step" would
     buy the co-simulation.
 
-Scenes: any :class:`fmus.system.System` with one ``FiveBarPlant``, up to two
+Scenes: any :class:`fmus.cosim.system.System` with one ``FiveBarPlant``, up to two
 ``DCMotorDrive`` (each connected ``drive.tau -> plant.tau<j>`` and reading
 ``plant.dq<j>`` as ``omega``, L > 0, sample time T equal to the communication step),
 and discrete components; e.g. every ``bench_*`` scene and ``thesis_sim_circle`` (ideal
@@ -78,11 +78,11 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from fmus.instances import CoSimulationError, InProcessInstance
-from fmus.master import RecordedRun, stepping_order
-from fmus.parts import publish_plant
-from fmus.stepper import Stepper
-from fmus.system import System
+from fmus.cosim.backends import CoSimulationError, InProcessInstance
+from fmus.cosim.master import RecordedRun, stepping_order
+from fmus.slave.declarations import publish_plant
+from fmus.cosim.stepper import Stepper
+from fmus.cosim.system import System
 from motor import shaft_torque
 from plant import fivebar
 from plant.actuated import ActuatedPlant
@@ -100,7 +100,7 @@ class ReferenceError(RuntimeError):
 
 @dataclass
 class ReferenceResult(RecordedRun):
-    """A reference run on the communication grid, laid out as :class:`fmus.master.Result`.
+    """A reference run on the communication grid, laid out as :class:`fmus.cosim.master.Result`.
 
     ``signals`` has every output of every component ("instance.variable"); row 0 is the
     state after initialisation, row k the state after the k-th sample interval (a
@@ -131,7 +131,7 @@ def _real_outputs(instance) -> list:
 
 
 class _Replaced:
-    """An instance of the master's loop (:class:`fmus.stepper.Stepper`) whose ``do_step`` the
+    """An instance of the master's loop (:class:`fmus.cosim.stepper.Stepper`) whose ``do_step`` the
     reference replaces; everything else (variables, inputs, outputs, initialisation) is the
     in-process instance's."""
 
@@ -293,7 +293,8 @@ def _mean_torque(drive_slave, i_start, v, omega, h):
 # --- the run ------------------------------------------------------------------------------
 
 def _system_of(scene_or_name, stop_time, system_changes):
-    from .scenes import Scene, get_scene
+    from scenarios.scenes.catalogue import get_scene
+    from scenarios.scenes.scene import Scene
 
     scene = get_scene(scene_or_name) if isinstance(scene_or_name, str) else scene_or_name
     system = scene.system if isinstance(scene, Scene) else scene
@@ -311,7 +312,7 @@ def _the_plant(system) -> str:
     if len(plants) != 1:
         actuated = [c.name for c in system.components if c.model == "ActuatedFiveBarPlant"]
         hint = (f" ({', '.join(actuated)} is an ActuatedFiveBarPlant: its truth is the reference of the scene "
-                "before scenarios.scenes.drives_in_plant)") if actuated else ""
+                "before scenarios.scenes.transforms.drives_in_plant)") if actuated else ""
         raise ReferenceError(f"the reference needs exactly one FiveBarPlant, found {len(plants)}{hint}")
     return plants[0]
 
@@ -330,8 +331,8 @@ def _instances(system) -> dict:
 
 
 def _driving(system, plant_name) -> dict:
-    """Drive instance -> the plant joint it drives (:func:`scenarios.scenes.drive_joints`)."""
-    from .scenes import drive_joints
+    """Drive instance -> the plant joint it drives (:func:`scenarios.scenes.transforms.drive_joints`)."""
+    from scenarios.scenes.transforms import drive_joints
 
     try:
         return drive_joints(system, plant_name)
@@ -358,10 +359,10 @@ def _links(system, instances, order, plant_name, coupling) -> dict:
 def reference_run(scene_or_name, rtol: float = RTOL, atol: float = ATOL, stop_time: float | None = None,
                   method: str = METHOD, coupling: str = "monolithic", system_changes=None,
                   progress=None) -> ReferenceResult:
-    """Run the reference of a scene (a name, a :class:`scenarios.scenes.Scene` or a System).
+    """Run the reference of a scene (a name, a :class:`scenarios.scenes.scene.Scene` or a System).
 
     The components are the master's in-process instances, initialised and stepped by the
-    master's own loop (:class:`fmus.stepper.Stepper`, Gauss-Seidel order); only the plant's
+    master's own loop (:class:`fmus.cosim.stepper.Stepper`, Gauss-Seidel order); only the plant's
     step (the continuous block) and, coupled monolithically, the drives' (their voltage
     sample) are the reference's.
 
@@ -384,7 +385,7 @@ def reference_run(scene_or_name, rtol: float = RTOL, atol: float = ATOL, stop_ti
     ReferenceResult
         Keeps the rows so far and sets ``error`` when a component refused a step.
     """
-    from .scenes import Scene
+    from scenarios.scenes.scene import Scene
 
     if coupling not in COUPLINGS:
         raise ValueError(f"coupling = {coupling!r}; valid: {', '.join(COUPLINGS)}")
@@ -505,7 +506,7 @@ def with_parameters(system: System, instance: str, component_substeps: int | Non
 # --- measurements (docs/reference.md) -----------------------------------------------------
 
 def _windows(stop: float, scene) -> list:
-    from .scenes import Scene
+    from scenarios.scenes.scene import Scene
 
     edges = [0.0, min(0.1, stop)]
     if isinstance(scene, Scene) and scene.reference_end < stop:
@@ -519,9 +520,9 @@ def main(argv=None) -> int:
     the reference, the master's deviation from it, and where it comes from."""
     import argparse
 
-    from fmus.master import simulate
+    from fmus.cosim.master import simulate
 
-    from .scenes import get_scene
+    from scenarios.scenes.catalogue import get_scene
 
     parser = argparse.ArgumentParser(prog="python -m scenarios.reference", description=main.__doc__)
     parser.add_argument("scene", nargs="?", default="bench_circle_TCMDx")

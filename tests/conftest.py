@@ -11,7 +11,7 @@ import pytest
 @pytest.fixture(scope="session")
 def built_fmus(tmp_path_factory):
     """Model name -> path of every FMU ``parcosim build`` makes, built into a temporary directory."""
-    from fmus.build import build_all
+    from fmus.export.build import build_all
 
     out = tmp_path_factory.mktemp("fmus")
     return {path.stem: path for path in build_all(out)}
@@ -36,7 +36,7 @@ def native_fmus(tmp_path_factory):
 @pytest.fixture(scope="session")
 def twin_fmus(tmp_path_factory):
     """Model name -> path of the pythonfmu FMU of every model that has a native FMU."""
-    from fmus.build import build_fmu
+    from fmus.export.build import build_fmu
     from fmus.native.models import NATIVE
 
     out = tmp_path_factory.mktemp("twins")

@@ -7,12 +7,13 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from fmus.master import simulate
+from fmus.cosim.master import simulate
 from motor import Drive, friction, get_motor_preset, shaft_torque
 from plant import IntegratorSettings, PlantError, PlantSimulator, fast5r, fivebar, get_preset
 from plant.actuated import ActuatedPlant
 from scenarios.reference import deviation, reference_run
-from scenarios.scenes import drives_in_plant, get_scene
+from scenarios.scenes.catalogue import get_scene
+from scenarios.scenes.transforms import drives_in_plant
 
 START = (-0.002, 0.108)      # the bench circle's start
 
@@ -165,7 +166,7 @@ def test_the_reference_of_an_in_plant_scene_points_to_its_original():
     from scenarios.reference import ReferenceError
 
     with pytest.raises(ReferenceError, match="plant is an ActuatedFiveBarPlant: its truth is the reference of the "
-                                             "scene before scenarios.scenes.drives_in_plant"):
+                                             "scene before scenarios.scenes.transforms.drives_in_plant"):
         reference_run(drives_in_plant(_short(get_scene("bench_circle_TCMDx"), 0.01)))
 
 
@@ -220,7 +221,7 @@ def test_every_integration_path_agrees(settings):
 
 def test_a_miswired_drive_is_refused_by_name():
     """The drive's omega read from the other joint: drives_in_plant and the reference refuse it alike."""
-    from fmus.system import Connection
+    from fmus.cosim.system import Connection
     from scenarios.reference import ReferenceError
 
     scene = _short(get_scene("bench_circle_TCMDx"), 0.01)
@@ -274,10 +275,10 @@ def test_a_bad_input_changes_nothing():
     a.step((1.0, -1.0), (0.2, -0.2), (0.0, 0.0), 1e-3)            # and it steps on
 
 
-# --- idle steps: the plant as a model inside a control chain (fmus.embedded.ChainCore) --------
+# --- idle steps: the plant as a model inside a control chain (fmus.systemfmu.cores.ChainCore) --------
 
 def _actuated_slave(mode, **parameters):
-    from fmus.instances import InProcessInstance
+    from fmus.cosim.backends import InProcessInstance
 
     instance = InProcessInstance("ActuatedFiveBarPlant", "plant")
     instance.initialize({"preset": "bench", "x0": START[0], "y0": START[1], "mode": mode, "substeps": 32,
@@ -331,7 +332,7 @@ def test_idle_steps_hold_zero_volts_as_the_real_plant_commanded_zero():
 
 
 def test_a_correction_redoes_the_bristles_from_the_snapshot():
-    """A model of the plant corrected to a measurement (fmus.embedded.ChainCore) redoes its
+    """A model of the plant corrected to a measurement (fmus.systemfmu.cores.ChainCore) redoes its
     last step from the snapshot taken before it: the drives' deflections too."""
     from plant.correction import corrected_state
 
@@ -361,7 +362,7 @@ def test_a_correction_redoes_the_bristles_from_the_snapshot():
 ], ids=["mu_s2", "mu1", "current_noise2", "friction1"])
 def test_a_bad_drive_parameter_is_refused_by_its_fmu_name(parameters, name, value, words):
     """The drives' refusals name the FMU's variables (suffix j), as fields and in the message."""
-    from fmus.parts import build_drive
+    from fmus.slave.declarations import build_drive
     from motor._checks import BadValue
 
     slave = _actuated_slave("current", **parameters)
@@ -379,11 +380,11 @@ def test_a_bad_drive_parameter_is_refused_by_its_fmu_name(parameters, name, valu
     ({"mu_s1": -3.0}, "mu_s1", -3.0, "parameter mu_s1 = -3.0 is negative (use -1 for the preset's value)"),
 ], ids=["J_design2", "kt1", "omega_eps2", "mu_s1"])
 def test_a_bad_motor_override_is_refused_by_its_fmu_name(parameters, name, value, words):
-    """A motor parameter the slave overrides (fmus.refusals.with_overrides) is refused by its FMU
+    """A motor parameter the slave overrides (fmus.slave.refusals.with_overrides) is refused by its FMU
     variable, suffix j included, and its value, as fields and in the message: J_design2 is
     MotorParams' J_rotor, kt1 and omega_eps2 its kt and omega_eps; mu_s1 is refused before
     MotorParams sees it."""
-    from fmus.parts import build_drive
+    from fmus.slave.declarations import build_drive
     from motor._checks import BadValue
 
     slave = _actuated_slave("current", **parameters)

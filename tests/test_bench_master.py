@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 from benchmarks import passthrough
-from fmus.build import SLAVES
-from fmus.master import simulate
-from fmus.system import split_signal
-from scenarios.scenes import get_scene
+from fmus.export.build import SLAVES
+from fmus.cosim.master import simulate
+from fmus.cosim.system import split_signal
+from scenarios.scenes.catalogue import get_scene
 
 SCENE = "bench_circle_TCMDx"
 STEPS = 5

@@ -1,4 +1,4 @@
-"""Every FMI call is bounded (issue #30, item 2): the work limit of fmus/budget.py and the start
+"""Every FMI call is bounded (issue #30, item 2): the work limit of fmus/slave/budget.py and the start
 times fmi2SetupExperiment refuses.
 
 Counts, never timings: the general algorithm's right-hand sides are counted by wrapping its
@@ -20,12 +20,12 @@ import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 
-from fmus import budget
-from fmus.embedded import SYSTEM_FILE, system_to_dict
-from fmus.guarded import FmiError, check_experiment_times
+from fmus.slave import budget
+from fmus.systemfmu.cores import SYSTEM_FILE, system_to_dict
+from fmus.slave.base import FmiError, check_experiment_times
 from plant import IntegratorSettings, PlantSimulator, get_preset
 from plant.wheeled import MAX_SUBSTEPS as WHEELED_MAX_SUBSTEPS
-from scenarios.scenes import get_scene
+from scenarios.scenes.catalogue import get_scene
 from tests.fmi_support import FmuInstance
 from tests.test_extremes import make_slave, set_variables
 
@@ -238,7 +238,7 @@ def test_closed_loop_with_dopri5_stops_mid_step_and_restores(monkeypatch, tmp_pa
 
 def test_control_chain_counts_the_model_of_the_plant_and_its_correction(rhs_calls, monkeypatch, tmp_path):
     """One step of the chain steps its model of the plant twice at most (the correction redoes it)."""
-    from scenarios.package import package_scene
+    from scenarios.packaging.chain import package_scene
 
     monkeypatch.setattr(budget, "CALL_CPU_SECONDS", 0.05)
     chain = package_scene(get_scene("bench_circle_TCMDx")).chain

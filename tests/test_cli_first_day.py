@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-import scenarios.run as run_module
+import scenarios.run.runner as run_module
 from parcosim.cli import _parser, main
 
 SCENE = "bench_circle_TCMDx"
@@ -41,12 +41,12 @@ def no_work(monkeypatch):
     def never(*args, **kwargs):
         raise AssertionError("work started before the arguments were checked")
 
-    import fmus.export
-    import scenarios.trade
+    import fmus.systemfmu.export
+    import scenarios.studies.trade
 
     monkeypatch.setattr(run_module, "simulate", never)
-    monkeypatch.setattr(scenarios.trade, "run_trade", never)
-    monkeypatch.setattr(fmus.export, "export_fmu", never)
+    monkeypatch.setattr(scenarios.studies.trade, "run_trade", never)
+    monkeypatch.setattr(fmus.systemfmu.export, "export_fmu", never)
 
 
 REFUSED = {
@@ -145,7 +145,7 @@ def test_written_files_follow_the_umask(mask, tmp_path, short_runs, capsys):
         source = tmp_path / "a.zip"
         with zipfile.ZipFile(source, "w") as z:
             z.writestr("x", "1")
-        from fmus.archive import rewrite
+        from fmus.export.archive import rewrite
 
         copy = rewrite(source, tmp_path / "b.zip", {"y": "2"})
     finally:
@@ -170,9 +170,9 @@ def _fake_engine(failing: set):
 @pytest.mark.parametrize("failing, status", [(set(), 0), ({1, 3}, 0), ({0, 1, 2, 3}, 1)])
 def test_a_sweep_exits_1_only_when_every_sample_failed_and_writes_rows_by_sample(
         failing, status, tmp_path, monkeypatch, capsys):
-    import scenarios.sweep
+    import scenarios.batch.sweep
 
-    monkeypatch.setattr(scenarios.sweep, "run_tasks", _fake_engine(failing))
+    monkeypatch.setattr(scenarios.batch.sweep, "run_tasks", _fake_engine(failing))
     assert main(["sweep", SCENE, "--samples", "4", "--uncertainty", "0.1", "--out", str(tmp_path)]) == status
     captured = capsys.readouterr()
     assert f"{4 - len(failing)} completed, {len(failing)} failed" in captured.out
@@ -186,7 +186,7 @@ def test_the_workspace_figure_holds_the_whole_workspace(tmp_path):
     bases (the figure was cropped at y = -0.1 m, leaving out a quarter of the bench's workspace
     and a branch of det J_X = 0)."""
     from plant import fivebar, get_preset
-    from scenarios.workspace import plot_workspace
+    from scenarios.studies.workspace import plot_workspace
 
     plot_workspace("bench", tmp_path, step=0.005)
     x0, x1, y0, y1 = json.loads((tmp_path / "workspace.json").read_text())["map_extent"]

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import scenarios.run as run_module
+import scenarios.run.runner as run_module
 from parcosim.cli import EXIT_INTERRUPTED, main
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -82,9 +82,9 @@ def test_a_failed_metrics_write_names_metrics_json(tmp_path, short_runs, monkeyp
 
 
 def test_the_master_returns_the_rows_so_far_on_keyboard_interrupt(monkeypatch):
-    from fmus import stepper as stepper_module
-    from fmus.master import simulate
-    from scenarios.scenes import get_scene
+    from fmus.cosim import stepper as stepper_module
+    from fmus.cosim.master import simulate
+    from scenarios.scenes.catalogue import get_scene
 
     calls = {"n": 0}
     step = stepper_module.Stepper.step

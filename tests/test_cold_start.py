@@ -1,5 +1,5 @@
 """Cold start (issue 27, item 5): an FMU started with its parameters as built imports what its
-model needs and builds nothing; its designs travel in its resources (fmus/designs.py).
+model needs and builds nothing; its designs travel in its resources (fmus/slave/designs.py).
 
 Not timed (benchmarks/cold_start.py measures the seconds): these check which packages a
 fresh process has loaded after ``fmpy.simulate_fmu`` of our FMUs, and that the designs an FMU
@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fmus import designs
+from fmus.slave import designs
 
 pytestmark = [pytest.mark.slow, pytest.mark.fmu]
 
@@ -61,8 +61,8 @@ def _run_fresh(specs, tmp_path) -> list:
 
 @pytest.fixture(scope="module")
 def closed_loop(tmp_path_factory):
-    from fmus.export import export_fmu
-    from scenarios.scenes import get_scene
+    from fmus.systemfmu.export import export_fmu
+    from scenarios.scenes.catalogue import get_scene
 
     return export_fmu(get_scene("bench_circle_TCMDx").system, tmp_path_factory.mktemp("loop") / "ClosedLoop.fmu")
 
@@ -72,7 +72,7 @@ def fresh_runs(built_fmus, closed_loop, tmp_path_factory):
     """One fresh process that runs, in turn, the FMUs whose initialisation computes designs
     (and the plant), a copy of the drive with motor 2 baked in (as an SSP package's), then the
     drive with another resistance and the controller with another grid: {spec: line}."""
-    from fmus.export import with_start_values
+    from fmus.systemfmu.export import with_start_values
 
     baked = with_start_values(built_fmus["DCMotorDrive"], {"preset": "motor2"},
                               tmp_path_factory.mktemp("baked") / "BakedDrive.fmu")
@@ -103,7 +103,7 @@ def test_other_parameters_compute_their_designs(fresh_runs):
 
 
 def test_designs_travel_bit_for_bit(tmp_path):
-    """What :func:`fmus.designs.load` puts back is what was computed: the current controller's
+    """What :func:`fmus.slave.designs.load` puts back is what was computed: the current controller's
     coefficients and poles, the filters, the table (catches a field mixed up or rounded in
     the file)."""
     from controller import derivators, model

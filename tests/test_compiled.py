@@ -1,4 +1,4 @@
-"""The compiled mode (fmus.compiled): the same rows as in process, refusals, fall-backs.
+"""The compiled mode (fmus.cosim.compiled): the same rows as in process, refusals, fall-backs.
 
 The loop is C (kernels/src/loop.c) over a plan of data: nothing is compiled per wiring.
 """
@@ -8,11 +8,12 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from fmus import compiled
-from fmus.master import simulate
-from fmus.system import Component, System
-from scenarios.run import run_scene
-from scenarios.scenes import drives_in_plant, get_scene
+from fmus.cosim import compiled
+from fmus.cosim.master import simulate
+from fmus.cosim.system import Component, System
+from scenarios.run.runner import run_scene
+from scenarios.scenes.catalogue import get_scene
+from scenarios.scenes.transforms import drives_in_plant
 
 
 def _short(scene, stop_time):
@@ -47,10 +48,10 @@ def test_compiled_rows_are_the_in_process_rows(name, drives_inside):
 
 
 def test_every_parameter_a_sweep_perturbs_reaches_the_compiled_loop():
-    """A sweep's robot (scenarios.perturb: chain geometry and inertia, encoder zero errors,
+    """A sweep's robot (scenarios.scenes.perturb: chain geometry and inertia, encoder zero errors,
     motor constants with the nominal current-controller design) runs the same rows compiled
     as in process: an adapter that left a parameter to the Python path would differ here."""
-    from scenarios.perturb import draw, perturbable, perturbed, uncertainties
+    from scenarios.scenes.perturb import draw, perturbable, perturbed, uncertainties
 
     base = _short(get_scene("bench_circle_TCMDq"), 1.0)
     parameters = perturbable(base)
@@ -116,7 +117,7 @@ def test_generated_source_follows_the_stepping_order():
 
 
 def test_python_finishes_a_declined_step_from_the_declining_member_and_sub_step():
-    from fmus.stepper import Stepper, _exchanges_of
+    from fmus.cosim.stepper import Stepper, _exchanges_of
 
     calls = []
 

@@ -1,14 +1,14 @@
-"""Where a polygon's error lies (scenarios.metrics.side_contour_errors): synthetic paths with a
+"""Where a polygon's error lies (scenarios.run.metrics.side_contour_errors): synthetic paths with a
 known distance from each side, a pure lag along the path, samples outside the sides' times,
-and the scenes' own polygon (scenarios.metrics.scene_polygon)."""
+and the scenes' own polygon (scenarios.run.metrics.scene_polygon)."""
 import math
 
 import numpy as np
 import pytest
 
 from controller.trajectories import PolygonTrajectory, triangle
-from scenarios.metrics import scene_polygon, side_contour_errors
-from scenarios.scenes import get_scene
+from scenarios.run.metrics import scene_polygon, side_contour_errors
+from scenarios.scenes.catalogue import get_scene
 
 H = 1e-3
 
@@ -79,7 +79,7 @@ def test_the_scene_polygon_is_its_trajectory_component_s():
 def test_the_named_sides_must_each_exceed_every_other_side():
     """sides_hold: a claim holds when each named side's error is above every other side's;
     a tie, a named side below another, or a missing value do not hold."""
-    from scenarios.report import sides_hold
+    from scenarios.batch.report import sides_hold
 
     assert sides_hold([0.3, 0.1, 0.2], (1,)) and sides_hold([0.3, 0.1, 0.2], (1, 3))
     assert not sides_hold([0.2, 0.3, 0.1], (1,)) and not sides_hold([0.3, 0.25, 0.2], (1, 3))
@@ -89,7 +89,7 @@ def test_the_named_sides_must_each_exceed_every_other_side():
 def test_the_side_table_reports_the_larger_side_and_the_count():
     """side_section: one row per strategy with the larger side here and the bench's, and the
     count of strategies whose bench sides hold."""
-    from scenarios.report import THESIS_TRIANGLE_SIDES, side_section
+    from scenarios.batch.report import THESIS_TRIANGLE_SIDES, side_section
 
     contour = {s: [1.0, 2.0, 3.0] for s in THESIS_TRIANGLE_SIDES}        # side III larger everywhere
     text = "\n".join(side_section(contour))

@@ -7,9 +7,9 @@ import pytest
 
 from controller.position import PositionController as InProcess
 from controller.strategies import get_strategy
-from fmus.master import simulate
+from fmus.cosim.master import simulate
 from plant import get_preset
-from scenarios.scenes import Fidelity, bench
+from scenarios.scenes.thesis import Fidelity, bench
 from tests.fmi_support import FmuInstance
 from tests.test_fmu_controller import SMALL_GRID, controller_inputs
 

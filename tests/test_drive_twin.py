@@ -189,8 +189,8 @@ def _short(scene, stop=0.6):
 
 
 def test_fidelity_twin_runs_compiled_as_in_process_and_numbers_do_not_change_the_loop():
-    from fmus.master import simulate
-    from scenarios.scenes import Fidelity, bench
+    from fmus.cosim.master import simulate
+    from scenarios.scenes.thesis import Fidelity, bench
 
     twin = Fidelity(friction="lugre", pwm_counts=500, current_offset=0.01, current_noise=0.03, noise_seed=4)
     scene = _short(bench("TCMDq", "circle", fidelity=twin))
@@ -208,7 +208,7 @@ def test_fidelity_twin_runs_compiled_as_in_process_and_numbers_do_not_change_the
 
 
 def test_fidelity_refuses_what_it_cannot_model():
-    from scenarios.scenes import Fidelity
+    from scenarios.scenes.thesis import Fidelity
 
     with pytest.raises(ValueError, match="friction = 'lugre' models the dry friction that coulomb = False"):
         Fidelity(friction="lugre", coulomb=False)
@@ -225,9 +225,10 @@ def test_fidelity_refuses_what_it_cannot_model():
 def test_lugre_inside_the_actuated_plant_runs_compiled_as_in_process_and_near_the_separate_drives():
     """drives_in_plant: the bristles advance per step with the speed held inside the plant, as
     in the separate drive; the rest (currents, mechanism, sigma2 = b) is integrated together."""
-    from fmus.master import simulate
-    from scenarios.metrics import rms_norm
-    from scenarios.scenes import Fidelity, bench, drives_in_plant
+    from fmus.cosim.master import simulate
+    from scenarios.run.metrics import rms_norm
+    from scenarios.scenes.thesis import Fidelity, bench
+    from scenarios.scenes.transforms import drives_in_plant
 
     twin = Fidelity(friction="lugre", pwm_counts=1000, current_noise=0.02, noise_seed=3)
     separate = _short(bench("PDq", "circle", fidelity=twin), 1.0)

@@ -1,4 +1,4 @@
-"""``parcosim export-fmu``: a scene's whole closed loop as one FMU (fmus.export.export_fmu).
+"""``parcosim export-fmu``: a scene's whole closed loop as one FMU (fmus.systemfmu.export.export_fmu).
 
 Its run in an importer is the master's run: fmpy.simulate_fmu as a user calls it, Ecos and
 libcosim (the FMU alone in an SSP package) give ``parcosim run``'s path to the last bit;
@@ -13,12 +13,12 @@ import pytest
 from fmpy import simulate_fmu
 from fmpy.validation import validate_fmu
 
-from fmus.export import export_fmu
-from fmus.master import simulate
-from fmus.ssp import export_ssp
-from fmus.ssp_run import ecos_available
-from fmus.system import Component, System
-from scenarios.scenes import get_scene
+from fmus.systemfmu.export import export_fmu
+from fmus.cosim.master import simulate
+from fmus.ssp.export import export_ssp
+from fmus.ssp.run import ecos_available
+from fmus.cosim.system import Component, System
+from scenarios.scenes.catalogue import get_scene
 
 pytestmark = [pytest.mark.fmu]
 
@@ -80,7 +80,7 @@ def test_an_inner_parameter_changes_the_path_as_in_the_scene(exported):
 def _unavailable(tool):
     if tool == "ecos":
         return ecos_available()
-    from fmus.libcosim_runner import libcosim_available
+    from fmus.ssp.libcosim import libcosim_available
 
     return libcosim_available()
 
@@ -91,7 +91,7 @@ def test_the_tools_run_the_fmu_as_parcosim_run(exported, tmp_path, tool):
     reason = _unavailable(tool)
     if reason:
         pytest.skip(f"{tool} cannot be loaded: {reason}")
-    from scenarios.tools import run_tool
+    from scenarios.studies.tools import run_tool
 
     _, system, path = exported
     alone = System((Component("loop", "ClosedLoop"),), (), ("loop.x", "loop.y"), system.stop_time, system.step)
@@ -124,25 +124,26 @@ def test_a_step_that_is_not_a_whole_number_of_its_steps_is_refused(exported):
 
 
 def _imports_of(source: str) -> set:
-    """The ``fmus`` modules a bundled module imports (``from .x``, ``from <bundle>.fmus.x``,
-    ``from <bundle>.fmus import x``)."""
+    """The ``fmus`` modules a bundled module imports, dotted below ``fmus`` (``from <bundle>.fmus.cosim.master
+    import x`` -> ``cosim.master``; ``from <bundle>.fmus.slave import budget`` -> ``slave``, ``slave.budget``)."""
     import ast
 
-    from fmus.bundle import bundle_name
+    from fmus.export.bundle import ROOT, bundle_name
 
     found = set()
     for node in ast.walk(ast.parse(source)):
         if isinstance(node, ast.ImportFrom):
+            assert not node.level, "bundled code imports absolutely (the bundle rewrites absolute imports)"
             module = (node.module or "").removeprefix(f"{bundle_name()}.")
-            if node.level == 1:
-                found.add(module.split(".")[0] if module else "")
-                if not module:
-                    found.update(alias.name for alias in node.names)
-            elif module.startswith("fmus."):
-                found.add(module.split(".")[1])
-            elif module == "fmus":
-                found.update(alias.name for alias in node.names)
-    return found - {""}
+            if module != "fmus" and not module.startswith("fmus."):
+                continue
+            below = module.removeprefix("fmus").removeprefix(".")
+            found.add(below)
+            for alias in node.names:     # a submodule imported by name
+                name = f"{below}.{alias.name}".lstrip(".")
+                if (ROOT / "fmus" / f"{name.replace('.', '/')}.py").exists() or (ROOT / "fmus" / name.replace(".", "/")).is_dir():
+                    found.add(name)
+    return found
 
 
 def test_the_fmu_bundles_every_fmus_module_it_imports(exported):
@@ -150,14 +151,16 @@ def test_the_fmu_bundles_every_fmus_module_it_imports(exported):
     must travel in the FMU (in this process the repository's would hide a missing one)."""
     import zipfile
 
-    from fmus.bundle import bundle_name
+    from fmus.export.bundle import bundle_name
 
     _, _, path = exported
     base = f"resources/{bundle_name()}/fmus/"
     with zipfile.ZipFile(path) as z:
         sources = {name[len(base):]: z.read(name).decode() for name in z.namelist()
                    if name.startswith(base) and name.endswith(".py")}
-    bundled = {name[:-3] for name in sources if "/" not in name} | {"slaves"}
-    # fmus.build: only the master's "fmu" mode imports it; a system FMU runs in process.
-    needed = set().union(*(_imports_of(text) for text in sources.values())) - {"build"}
+    bundled = {name[:-3].removesuffix("__init__").rstrip("/").replace("/", ".") for name in sources}
+    # fmus.export.build: only the master's "fmu" mode imports it (a system FMU runs in process);
+    # fmus.moved: only where the package is called "fmus", never inside a bundle.
+    needed = set().union(*(_imports_of(text) for text in sources.values())) - {"export.build", "moved"}
+    assert {"slave.base", "cosim.master", "systemfmu.cores", "slave.budget"} <= needed   # the reader reads
     assert needed <= bundled, f"imported but not in the FMU: {sorted(needed - bundled)}"

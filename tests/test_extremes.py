@@ -20,11 +20,11 @@ from pythonfmu import Integer, Real, String
 
 from controller.strategies import STRATEGY_NAMES, get_strategy
 from controller.trajectories import get_trajectory
-from fmus.build import SLAVES
-from fmus.master import simulate
+from fmus.export.build import SLAVES
+from fmus.cosim.master import simulate
 from plant import ACCURATE, IntegratorSettings, PlantError, PlantSimulator, fivebar, get_preset
 from plant.simulator import BAUMGARTE_RK4_LIMIT, RESIDUAL_STOP
-from scenarios.scenes import Fidelity, bench, thesis_sim_circle
+from scenarios.scenes.thesis import Fidelity, bench, thesis_sim_circle
 from tests.fmi_support import FmuInstance
 
 H = 1e-3

@@ -1,5 +1,5 @@
 """The per-step kernels (kernels/src/drive.c and observer.c, controller.fastderivator, controller.fasttrajectory):
-a refused step changes nothing, so the Python path can take it again (fmus.compiled)."""
+a refused step changes nothing, so the Python path can take it again (fmus.cosim.compiled)."""
 import math
 
 import numpy as np

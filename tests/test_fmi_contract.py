@@ -17,8 +17,8 @@ import pytest
 from pythonfmu import Boolean, Integer, Real, String
 from pythonfmu.enums import Fmi2Status
 
-from fmus.build import SLAVES
-from fmus.guarded import MIN_STEP, FmiError
+from fmus.export.build import SLAVES
+from fmus.slave.base import MIN_STEP, FmiError
 from tests.test_extremes import GOOD, H, make_slave, real_outputs, set_variables, slave_class
 
 MODELS = list(SLAVES)
@@ -260,7 +260,7 @@ def test_derivator_refuses_dbl_max_naming_the_input(value):
 
 
 def test_a_plant_step_that_would_take_over_the_limit_is_refused_at_initialisation():
-    """Counted, not timed (fmus/budget.py; tests/test_call_limits.py covers every plant)."""
+    """Counted, not timed (fmus/slave/budget.py; tests/test_call_limits.py covers every plant)."""
     slave = make_slave("FiveBarPlant", {"kernel": "general", "substeps": 10000})
     assert "kernel = 'general', substeps = 10000" in slave.error and "use substeps <=" in slave.error
     assert "needs 40000 right-hand-side evaluations" in slave.error
@@ -335,7 +335,7 @@ def test_a_controller_with_an_unwritable_cache_initialises(tmp_path, monkeypatch
 def test_a_tunable_parameter_may_be_set_after_initialisation():
     from pythonfmu import Fmi2Variability
 
-    from fmus.guarded import GuardedSlave
+    from fmus.slave.base import GuardedSlave
 
     class Tunable(GuardedSlave):
         def __init__(self, **kwargs):

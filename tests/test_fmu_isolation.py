@@ -1,6 +1,6 @@
 """An FMU's Python code is its own and stays out of the importer's way (issue 30, items 3-4).
 
-The bundled model code runs under a private package ``parcosim_<hash>`` (fmus/bundle.py),
+The bundled model code runs under a private package ``parcosim_<hash>`` (fmus/export/bundle.py),
 loaded by parcosim's wrapper without ``sys.path``; the wrapper checks the GUID and the binary
 against the identity in the resources, and the slaves refuse FMI calls out of order.  Cases
 that depend on what a process has imported run in fresh processes (a case that crashes the
@@ -19,8 +19,8 @@ from pathlib import Path
 
 import pytest
 
-from fmus.bundle import PACKAGES, REWRITTEN, bundle_name, rewrite_imports
-from fmus.wrapper import compiled_wrapper
+from fmus.export.bundle import PACKAGES, REWRITTEN, bundle_name, rewrite_imports
+from fmus.export.wrapper import compiled_wrapper
 from tests.test_wrapper import run_case, unzip
 
 pytestmark = [pytest.mark.fmu]
@@ -51,19 +51,19 @@ def test_every_import_form_is_rewritten_and_binds_what_it_bound(tmp_path):
     source = textwrap.dedent("""\
         import os, plant.fast5r
         import motor as m, controller
-        from fmus.guarded import (MIN_STEP,
-                                  FmiError)  # a comment stays
+        from fmus.slave.base import (MIN_STEP,
+                                     FmiError)  # a comment stays
         from . import sibling
         def lazy():
             from plant.spec import load; return load
-        if True: import fmus.parts as parts
+        if True: import fmus.slave.declarations as parts
         """).encode()
     out = rewrite_imports(source, "P").decode()
     assert out.splitlines()[0] == "import os, P.plant.fast5r, P.plant as plant"
     assert "import P.motor as m, P.controller as controller" in out
-    assert "from P.fmus.guarded import (MIN_STEP,\n                          FmiError)  # a comment stays" in out
+    assert "from P.fmus.slave.base import (MIN_STEP,\n                             FmiError)  # a comment stays" in out
     assert "from . import sibling" in out and "from P.plant.spec import load; return load" in out
-    assert "if True: import P.fmus.parts as parts" in out
+    assert "if True: import P.fmus.slave.declarations as parts" in out
     assert out.count("\n") == source.decode().count("\n")        # line numbers kept
     # Executed against a package P holding a plant.fast5r, the names bind to P's modules.
     package = tmp_path / "P" / "plant"
@@ -83,7 +83,7 @@ def test_every_import_form_is_rewritten_and_binds_what_it_bound(tmp_path):
 
 
 def test_no_bundled_source_keeps_an_import_of_a_plain_name(tmp_path):
-    from fmus.bundle import write_bundle
+    from fmus.export.bundle import write_bundle
 
     package = write_bundle(tmp_path)
     assert package.name == bundle_name() and package.name.startswith("parcosim_")
@@ -98,7 +98,7 @@ def test_no_bundled_source_keeps_an_import_of_a_plain_name(tmp_path):
 
 def test_the_name_follows_the_sources(tmp_path, monkeypatch):
     """Any source change gives another package name; the same sources the same one."""
-    import fmus.bundle as bundle
+    import fmus.export.bundle as bundle
 
     for name in (*PACKAGES, "fmus"):
         shutil.copytree(ROOT / name, tmp_path / name, ignore=shutil.ignore_patterns("__pycache__", "build"))
@@ -167,12 +167,12 @@ def test_with_parcosim_imported_the_fmu_runs_its_own_bundle(built_fmus, tmp_path
     result = run_python(f"""
         import json, sys
         import fmpy
-        import controller.trajectories, fmus.guarded
-        mine = (controller.trajectories.__file__, fmus.guarded.__file__)
+        import controller.trajectories, fmus.slave.base
+        mine = (controller.trajectories.__file__, fmus.slave.base.__file__)
         fmpy.simulate_fmu({str(where)!r}, stop_time=0.002, step_size=1e-3)
         theirs = sys.modules["{package}.controller.trajectories"]
-        print(json.dumps([theirs.__file__, sys.modules["{package}.fmus.guarded"].__file__,
-                          (controller.trajectories.__file__, fmus.guarded.__file__) == mine,
+        print(json.dumps([theirs.__file__, sys.modules["{package}.fmus.slave.base"].__file__,
+                          (controller.trajectories.__file__, fmus.slave.base.__file__) == mine,
                           sys.modules["controller.trajectories"] is controller.trajectories]))
     """, cwd=ROOT)
     resources = str(where / "resources" / package)
@@ -189,7 +189,7 @@ def _build_from_copy(tmp_path, edit) -> Path:
     out = tmp_path / "out"
     run_python(f"""
         import json
-        from fmus.build import build_fmu
+        from fmus.export.build import build_fmu
         print(json.dumps(str(build_fmu("Trajectory", {str(out)!r}))))
     """, cwd=copy)
     return out / "Trajectory.fmu"
@@ -271,7 +271,7 @@ def test_pythonfmus_binary_still_runs_the_bundle(built_fmus, tmp_path):
     """Without a C compiler an FMU keeps pythonfmu's binary: it finds the dotted slave module."""
     import pythonfmu
 
-    from fmus.archive import rewrite
+    from fmus.export.archive import rewrite
 
     fmu = rewrite(built_fmus["Trajectory"], tmp_path / "Trajectory.fmu", {
         "binaries/linux64/Trajectory.so": (Path(pythonfmu.__file__).parent / "resources" / "binaries" / "linux64"
@@ -399,7 +399,7 @@ def test_calls_out_of_order_are_refused_and_change_nothing(built_fmus, tmp_path)
 
 
 def test_in_process_the_slave_refuses_the_same_calls():
-    from fmus.guarded import FmiError
+    from fmus.slave.base import FmiError
     from tests.test_extremes import make_slave
 
     slave = make_slave("Derivator")

@@ -240,8 +240,8 @@ def test_bad_observer_parameters_are_refused_with_their_name(observer_fmu, param
 
 
 def test_drive_fmu_runs_in_a_process_without_parcosim(drive_fmu, tmp_path):
-    """The FMU carries its own model code (motor/, fmus/guarded.py), under its bundle's name."""
-    from fmus.bundle import bundle_name
+    """The FMU carries its own model code (motor/, fmus/slave/base.py), under its bundle's name."""
+    from fmus.export.bundle import bundle_name
 
     script = (
         "import fmpy, sys\n"

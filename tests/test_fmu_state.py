@@ -11,11 +11,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fmus.instances import InProcessInstance, _FmuInstance
-from fmus.master import simulate, stepping_order
-from fmus.stepper import Stepper
-from fmus.system import Component, System
-from scenarios.scenes import drives_in_plant, get_scene
+from fmus.cosim.backends import InProcessInstance, _FmuInstance
+from fmus.cosim.master import simulate, stepping_order
+from fmus.cosim.stepper import Stepper
+from fmus.cosim.system import Component, System
+from scenarios.scenes.catalogue import get_scene
+from scenarios.scenes.transforms import drives_in_plant
 
 BEFORE, AFTER = 150, 60
 
@@ -89,8 +90,8 @@ def test_fmu_state_continues_bit_for_bit(scene, built_fmus):
 @pytest.fixture(scope="module")
 def system_fmus(tmp_path_factory):
     """The ClosedLoop of the bench scene and the ControlChain of its package."""
-    from fmus.export import build_system_fmu, export_fmu
-    from scenarios.package import PLANT, package_scene
+    from fmus.systemfmu.export import build_system_fmu, export_fmu
+    from scenarios.packaging.chain import PLANT, package_scene
 
     out = tmp_path_factory.mktemp("system_fmus")
     package = package_scene(get_scene("bench_circle_TCMDx"))
@@ -151,7 +152,7 @@ def test_system_fmu_state_is_the_whole_inner_system(model, system_fmus):
 
 
 def test_after_set_state_the_system_fmu_time_is_the_states(system_fmus):
-    from fmus.master import CoSimulationError
+    from fmus.cosim.master import CoSimulationError
 
     inst = _FmuInstance(system_fmus["ClosedLoop"], "loop")
     _bind_all(inst)
@@ -172,7 +173,7 @@ def test_after_set_state_the_system_fmu_time_is_the_states(system_fmus):
 def test_restoring_a_state_taken_before_a_refused_step_clears_the_refusal(backend, built_fmus):
     """The plant refuses a NaN torque and every step after; set back to the state before,
     it steps again exactly as from that state."""
-    from fmus.master import CoSimulationError
+    from fmus.cosim.master import CoSimulationError
 
     make = {"inprocess": lambda: InProcessInstance("FiveBarPlant", "plant"),
             "fmu": lambda: _FmuInstance(built_fmus["FiveBarPlant"], "plant")}[backend]

@@ -19,10 +19,11 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from fmus import fmustate, stateformat
-from fmus.guarded import FmiError
-from fmus.instances import CoSimulationError, InProcessInstance, _FmuInstance
-from fmus.registry import SLAVES
+from fmus.slave import state as fmustate
+from fmus.slave import state_format as stateformat
+from fmus.slave.base import FmiError
+from fmus.cosim.backends import CoSimulationError, InProcessInstance, _FmuInstance
+from fmus.slave.registry import SLAVES
 
 MODELS = tuple(SLAVES)
 STEPS = 20
@@ -321,15 +322,15 @@ def _inner_snapshots(node):
 
 
 def test_reading_any_state_imports_and_runs_nothing(tmp_path):
-    """The issue's exploit: pickle bytes naming ``fmus.guarded`` + ``os.system``.  In a fresh
+    """The issue's exploit: pickle bytes naming ``fmus.slave.base`` + ``os.system``.  In a fresh
     process the crafted bytes, and a well-formed state naming subprocess.Popen and ctypes,
     are refused, run nothing and leave sys.modules as it was: the reader never imports."""
     marker = tmp_path / "ran"
     script = f"""
 import pickle, sys, pickletools
-from fmus.stateformat import Header, ObjectRecord, Opaque, encode
+from fmus.slave.state_format import Header, ObjectRecord, Opaque, encode
 from fmus.slaves.parcosim_trajectory import Trajectory
-from fmus.guarded import FmiError
+from fmus.slave.base import FmiError
 
 class Evil:
     def __reduce__(self):

@@ -19,10 +19,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fmus.master import AlgebraicLoopError, simulate
-from fmus.system import Component, Connection, System
+from fmus.cosim.master import AlgebraicLoopError, simulate
+from fmus.cosim.system import Component, Connection, System
 from parcosim.cli import main
-from scenarios.scenes import get_scene, with_fmu_files
+from scenarios.scenes.catalogue import get_scene
+from scenarios.scenes.transforms import with_fmu_files
 
 sys.path.insert(0, str(Path(__file__).parent / "support" / "cfmu"))
 from build import build_c_fmu, compiler  # noqa: E402
@@ -106,8 +107,8 @@ def test_exports_carry_the_foreign_fmu_or_say_why_not(c_fmus, tmp_path, capsys, 
         assert b'modelName="DCDrive"' in drive.read("modelDescription.xml")
     # fmpy's SSP runner runs the package as our Jacobi master runs the scene at the
     # package's base step with its sample phases.
-    from fmus.ssp import read_ssp_experiment, read_ssp_parameters
-    from fmus.ssp_run import simulate_ssp_fmpy
+    from fmus.ssp.export import read_ssp_experiment, read_ssp_parameters
+    from fmus.ssp.run import simulate_ssp_fmpy
 
     run = simulate_ssp_fmpy(path, stop_time=0.3)
     bound = read_ssp_parameters(path)
@@ -137,8 +138,8 @@ def test_the_exports_with_c_drives_track_in_the_tools(c_fmus, tmp_path):
     master's run with the C drives bit for bit."""
     from fmpy import simulate_fmu
 
-    from fmus.export import export_fmu
-    from scenarios.tools import compare, short
+    from fmus.systemfmu.export import export_fmu
+    from scenarios.studies.tools import compare, short
 
     scene = dataclasses.replace(short(_c_drives(c_fmus), 2.0), window=(1.0, 2.0))
     with pytest.warns(UserWarning, match="method"):     # our drive's parameter the C drive lacks
@@ -212,7 +213,7 @@ def test_a_connection_joins_one_type(c_fmus):
 # --- the build and foreign files -------------------------------------------------------------
 
 def test_build_leaves_a_foreign_fmu_alone_and_fmu_mode_refuses_it(c_fmus, tmp_path, capsys):
-    from fmus.build import ForeignFmuError, build_fmu, ensure_built
+    from fmus.export.build import ForeignFmuError, build_fmu, ensure_built
 
     foreign = tmp_path / "DCMotorDrive.fmu"
     foreign.write_bytes(c_fmus["DCDrive"].read_bytes())

@@ -4,7 +4,7 @@ Canudas de Wit, Olsson, Åström, Lischinsky (IEEE TAC 1995), with the paper's e
 mass, σ0 = 1e5 N/m, σ1 = √1e5 N s/m, σ2 = 0.4 N s/m, Fc = 1 N, Fs = 1.5 N, vs = 0.001 m/s.
 The oracle is the paper's ODE (1)-(4) written here again with numpy and integrated by scipy's
 LSODA at rtol 1e-8: it shares no code with motor/friction.py.  Our model is stepped the way the
-drive steps it (:func:`scenarios.friction_demo.push`): the speed held over a step h, the bristle
+drive steps it (:func:`scenarios.examples.friction_demo.push`): the speed held over a step h, the bristle
 state solved exactly (:func:`motor.friction.advance`), the mass integrated with the step's mean
 friction.
 """
@@ -17,7 +17,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from motor import friction as fr
-from scenarios.friction_demo import PAPER, RAMP, SINE, SPRING, push
+from scenarios.examples.friction_demo import PAPER, RAMP, SINE, SPRING, push
 
 MASS = 1.0
 H = 1e-5          # the stepped model's step: c = h σ1 / m = 3e-3, far inside the coupling's band

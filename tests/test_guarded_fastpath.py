@@ -1,4 +1,4 @@
-"""The short cuts of :class:`fmus.guarded.GuardedSlave`'s step path keep its refusals (issue 16).
+"""The short cuts of :class:`fmus.slave.base.GuardedSlave`'s step path keep its refusals (issue 16).
 
 ``do_step`` checks a step size once and skips the check while the same h comes again;
 ``get_real``/``set_real`` resolve a list of value references once and cache it after
@@ -9,7 +9,7 @@ from __future__ import annotations
 import pytest
 from pythonfmu import Real
 
-from fmus.guarded import MAX_TIME, FmiError
+from fmus.slave.base import MAX_TIME, FmiError
 from tests.test_extremes import make_slave, slave_class
 
 
@@ -78,7 +78,7 @@ def test_the_shared_accessors_convert_each_variable_and_respect_setters():
     """attribute_reader/attribute_writer, the one implementation of GuardedSlave.get_real/set_real
     and InProcessInstance.bind: each value converted by its own type, a system FMU's flat
     "ctrl.lam" read as one attribute (not attrgetter's path), a property set through its setter."""
-    from fmus.guarded import attribute_reader, attribute_writer
+    from fmus.slave.base import attribute_reader, attribute_writer
 
     class Model:
         clamped = property(lambda self: self._clamped, lambda self, value: setattr(self, "_clamped", min(value, 1.0)))
@@ -99,7 +99,7 @@ def test_the_shared_accessors_convert_each_variable_and_respect_setters():
 
 
 def test_an_in_process_instance_reads_outputs_of_every_type():
-    from fmus.instances import InProcessInstance
+    from fmus.cosim.backends import InProcessInstance
 
     instance = InProcessInstance("DCMotorDrive", "drive")
     instance.initialize({"T": -1e-3}, 0.0)                  # refused: the String output says why

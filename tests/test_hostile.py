@@ -1,7 +1,7 @@
 """Property-based: every FMU through fmpy under random, hostile and careless use (issue 13).
 
-Cases come from :func:`scenarios.hostile.make_case` (random parameters, inputs, step sizes,
-call orders and strings) and run in worker subprocesses (:func:`scenarios.hostile.run_cases`),
+Cases come from :func:`fmus.hostile.cases.make_case` (random parameters, inputs, step sizes,
+call orders and strings) and run in worker subprocesses (:func:`fmus.hostile.cases.run_cases`),
 30 a worker, so that a crash of the importing process fails a test instead of ending the
 session.  Hypothesis draws the cases' seeds,
 derandomised: CI runs the same 30 cases per FMU every time (about a minute in all).
@@ -23,9 +23,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from fmus.build import SLAVES
-from fmus.guarded import WRAPPER_SYMBOL
-from scenarios import hostile
+from fmus.export.build import SLAVES
+from fmus.slave.base import WRAPPER_SYMBOL
+from fmus.hostile import cases as hostile
 
 pytestmark = [pytest.mark.slow, pytest.mark.fmu]
 

@@ -10,7 +10,7 @@ import math
 
 import pytest
 
-from fmus.instances import CoSimulationError, InProcessInstance
+from fmus.cosim.backends import CoSimulationError, InProcessInstance
 
 H_SUBSTEPS = 4
 STEPS = 60

@@ -185,7 +185,7 @@ def test_the_simulator_refuses_with_one_record_and_its_message():
 
 
 def test_the_terms_function_is_the_inverse_terms():
-    """pc_fivebar_terms_of (the position law's terms function, fmus/adapters.py) reads its model
+    """pc_fivebar_terms_of (the position law's terms function, fmus/cosim/compiled_adapters.py) reads its model
     as the parameter buffer and fills the inverse terms (held to the general algorithm in
     tests/test_controller_fast.py): argument order and layout."""
     sim, kernel = _plant()

@@ -8,7 +8,7 @@ import ctypes
 
 import numpy as np
 
-from fmus.compiled import LoopPlan, Member
+from fmus.cosim.compiled import LoopPlan, Member
 from kernels import Refusal
 
 IO = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double, ctypes.c_double,

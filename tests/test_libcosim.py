@@ -1,5 +1,5 @@
 """OSP libcosim (PyPI libcosimpy) runs an exported SSP package like the Jacobi master and
-Ecos (fmus.libcosim_runner).
+Ecos (fmus.ssp.libcosim).
 
 libcosim can end the process (a segmentation fault for a package without a step size,
 ``abort`` for an FMU error while initialising on a worker thread), so every libcosim run
@@ -17,13 +17,13 @@ import zipfile
 import numpy as np
 import pytest
 
-from fmus.libcosim_runner import (libcosim_available,
+from fmus.ssp.libcosim import (libcosim_available,
                                   read_libcosim_step, simulate_ssp_libcosim, with_libcosim_annotation)
-from fmus.master import simulate
-from fmus.ssp import NS, OSP_ANNOTATION, OSP_NS, export_ssp, libcosim_annotation_xml
-from fmus.ssp_run import ecos_available, simulate_ssp_ecos
-from fmus.system import Component, System
-from scenarios.scenes import get_scene
+from fmus.cosim.master import simulate
+from fmus.ssp.export import NS, OSP_ANNOTATION, OSP_NS, export_ssp, libcosim_annotation_xml
+from fmus.ssp.run import ecos_available, simulate_ssp_ecos
+from fmus.cosim.system import Component, System
+from scenarios.scenes.catalogue import get_scene
 
 pytestmark = [pytest.mark.slow, pytest.mark.fmu, pytest.mark.tools]
 

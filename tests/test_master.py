@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 
 from controller.derivators import DEFAULT_FC_ACC, DEFAULT_FC_VEL, SAMPLE_TIME, Derivator
-from fmus.master import AlgebraicLoopError, simulate
-from fmus.system import Component, Connection, System
+from fmus.cosim.master import AlgebraicLoopError, simulate
+from fmus.cosim.system import Component, Connection, System
 from plant import PlantSimulator, get_preset
-from scenarios.scenes import get_scene
+from scenarios.scenes.catalogue import get_scene
 
 
 def _short(scene_name, stop_time):

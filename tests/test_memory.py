@@ -9,7 +9,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 
 from memory_loop import loop  # noqa: E402
 
-from scenarios.scenes import get_scene  # noqa: E402
+from scenarios.scenes.catalogue import get_scene  # noqa: E402
 
 pytestmark = [pytest.mark.slow]
 

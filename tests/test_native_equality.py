@@ -245,7 +245,7 @@ def test_native_fmu_equals_its_pythonfmu_twin(model, native_fmus, twin_fmus):
         compare(twin_fmus[model], native_fmus[model], scenario, parameters)
 
 
-#: The sampled models (fmus/sampling.py; the drive in current mode), run again with steps h = T / 4.
+#: The sampled models (fmus/slave/sampling.py; the drive in current mode), run again with steps h = T / 4.
 SAMPLED = ("ActuatedFiveBarPlant", "BalanceController", "CurrentObserver", "DCMotorDrive", "Derivator",
            "PositionController")
 

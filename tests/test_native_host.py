@@ -204,11 +204,11 @@ def test_the_native_bench_loop_in_the_c_host_tracks_as_a_jacobi_master(host, nat
     with ``coupling="jacobi"`` (Python objects, no FMU): e_ef and tau_ef within 5 %.  (The
     Gauss-Seidel run, ``parcosim run``, tracks to 0.447 mm; a Jacobi tool adds a step of delay
     per connection: 40.0 mm.)"""
-    from fmus.master import simulate
-    from fmus.ssp import export_ssp
-    from scenarios.metrics import scene_metrics
-    from scenarios.run import result_columns
-    from scenarios.scenes import get_scene
+    from fmus.cosim.master import simulate
+    from fmus.ssp.export import export_ssp
+    from scenarios.run.metrics import scene_metrics
+    from scenarios.run.runner import result_columns
+    from scenarios.scenes.catalogue import get_scene
 
     scene = get_scene(SCENE)
     models = sorted({c.model for c in scene.system.components})

@@ -1,8 +1,8 @@
 """The hostile-use campaign against FMUs built with AddressSanitizer and
 UndefinedBehaviorSanitizer (issue 28, item 5).
 
-Cases come from :func:`scenarios.hostile.make_case` and run in worker subprocesses with the
-ASan runtime preloaded (:func:`scenarios.hostile.sanitizer_env`): an out-of-bounds access,
+Cases come from :func:`fmus.hostile.cases.make_case` and run in worker subprocesses with the
+ASan runtime preloaded (:func:`fmus.hostile.cases.sanitizer_env`): an out-of-bounds access,
 a use after free or undefined behaviour in an FMU ends its worker, and the case is a crash.
 First the harness itself: the C low-pass of benchmarks/baseline_fmu with its instance
 allocated 8 bytes short is a crash in every case, and is clean when allocated right.
@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from scenarios import hostile
+from fmus.hostile import cases as hostile
 
 #: Links into the low-pass a calloc that returns 8 bytes whatever is asked: its instance
 #: is written past its end in fmi2Instantiate.
@@ -104,7 +104,7 @@ def failures(results) -> list:
 
 
 def state_cases(model: str, unzipped: dict) -> list:
-    """One "state" case per variant of :data:`scenarios.hostile.STATE_VARIANTS`, forged twice
+    """One "state" case per variant of :data:`fmus.hostile.cases.STATE_VARIANTS`, forged twice
     more; "foreign" bytes are another native model's when there is one."""
     others = [m for m in unzipped if m != model] or [model]
     base = hostile.cases_for(model, unzipped[model], range(SEED, SEED + 3), wrapper=True, kinds=["state"])
@@ -174,7 +174,7 @@ def test_the_forger_writes_the_checksum_a_native_state_carries(model, native_san
 
     from fmpy import read_model_description
 
-    from scenarios.hostile_worker import NATIVE_CHECKSUM_BYTES, NATIVE_STATE_MAGIC, fnv1a
+    from fmus.hostile.worker import NATIVE_CHECKSUM_BYTES, NATIVE_STATE_MAGIC, fnv1a
 
     unzip_dir = str(native_sanitized[model])
     md = read_model_description(unzip_dir)

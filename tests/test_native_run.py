@@ -10,10 +10,11 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from fmus.master import simulate
+from fmus.cosim.master import simulate
 from fmus.native.models import NATIVE
 from fmus.native.run import native_system
-from scenarios.scenes import drives_in_plant, get_scene
+from scenarios.scenes.catalogue import get_scene
+from scenarios.scenes.transforms import drives_in_plant
 
 
 #: Per scene, the components that run native (the others: pythonfmu FMUs).

@@ -14,9 +14,10 @@ import zipfile
 import numpy as np
 import pytest
 
-from fmus.ssp import export_ssp, read_ssp_experiment, read_ssp_parameters
-from fmus.system import Component, Connection, System
-from scenarios import run as scenario_run, sweep
+from fmus.ssp.export import export_ssp, read_ssp_experiment, read_ssp_parameters
+from fmus.cosim.system import Component, Connection, System
+from scenarios.run import runner as scenario_run
+from scenarios.batch import sweep
 
 #: Values no short format keeps: 17 significant digits, a subnormal, the int32 ends.
 AWKWARD = {"gain": 0.1 + 0.2, "tiny": 5e-324, "big": -1.7976931348623157e308, "third": 1.0 / 3.0,

@@ -1,4 +1,4 @@
-"""The package for Jacobi masters (scenarios.package, fmus.embedded.ChainCore): a control
+"""The package for Jacobi masters (scenarios.packaging.chain, fmus.systemfmu.cores.ChainCore): a control
 chain FMU one sample ahead and the plant FMU.
 
 What a user sees is checked in the tools themselves (test_tools.py); here, in process:
@@ -13,11 +13,13 @@ import dataclasses
 import numpy as np
 import pytest
 
-from fmus.embedded import chain_interface
-from fmus.master import simulate
-from scenarios.metrics import rms_norm
-from scenarios.package import CONTROL, PLANT, package_scene, run_jacobi
-from scenarios.scenes import Fidelity, bench, drives_in_plant, get_scene
+from fmus.systemfmu.cores import chain_interface
+from fmus.cosim.master import simulate
+from scenarios.run.metrics import rms_norm
+from scenarios.packaging.chain import CONTROL, PLANT, package_scene, run_jacobi
+from scenarios.scenes.catalogue import get_scene
+from scenarios.scenes.thesis import Fidelity, bench
+from scenarios.scenes.transforms import drives_in_plant
 
 pytestmark = [pytest.mark.slow, pytest.mark.fmu]
 
@@ -27,7 +29,7 @@ def _short(scene, stop):
 
 
 def jacobi_package_run(package, plant_parameters=None, zero_first_inputs=False, zero_start=True):
-    """:func:`scenarios.package.run_jacobi` as ((x, y, x_d, y_d), chain)."""
+    """:func:`scenarios.packaging.chain.run_jacobi` as ((x, y, x_d, y_d), chain)."""
     run = run_jacobi(package, plant_parameters, zero_first_inputs, zero_start)
     return (run.x, run.y, run.x_d, run.y_d), run.chain
 

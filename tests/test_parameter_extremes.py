@@ -12,7 +12,7 @@ clauses taken out, the value as set, spelled as Python's ``repr`` spells it (``5
 parameter's FMU name (``lam``; ``ctrl.lam`` in a system FMU) where it names a value:
 ``lam = ...``, ``lam: ...``, ``(lam) = ...``, ``lam must ...``, ``|lam|``, ``parameter lam``
 (not ``preset`` in "unknown preset 'x'").  A system FMU writes its components' parameters
-so (:func:`fmus.embedded.qualified`): each atomic refusal is checked in that form too.
+so (:func:`fmus.systemfmu.cores.qualified`): each atomic refusal is checked in that form too.
 
 In process: every parameter of every atomic FMU at every value of its type, in several
 configurations (so that a parameter only one branch of a model uses is exercised); the system
@@ -34,8 +34,8 @@ import pytest
 from fmpy.fmi1 import FMICallException
 from pythonfmu import Boolean, Integer, Real, String
 
-from fmus.embedded import SYSTEM_FILE, qualified, system_to_dict
-from fmus.registry import SLAVES
+from fmus.systemfmu.cores import SYSTEM_FILE, qualified, system_to_dict
+from fmus.slave.registry import SLAVES
 from tests.fmi_support import FmuInstance
 from tests.test_extremes import GOOD, slave_class
 
@@ -259,12 +259,12 @@ REFUSED = {Real: math.nan, Integer: -2 ** 31, String: "no_such_name"}
 @lru_cache(maxsize=None)
 def _system(model: str):
     """(slave class, resources folder, measured inputs) of the system FMU ``model`` of
-    :data:`SCENE`, its ``system.json`` as :func:`fmus.export.build_system_fmu` writes it."""
-    from fmus.instances import InProcessInstance
+    :data:`SCENE`, its ``system.json`` as :func:`fmus.systemfmu.export.build_system_fmu` writes it."""
+    from fmus.cosim.backends import InProcessInstance
     from fmus.slaves.parcosim_closedloop import ClosedLoop
     from fmus.slaves.parcosim_controlchain import ControlChain
-    from scenarios.package import PLANT, package_scene
-    from scenarios.scenes import get_scene
+    from scenarios.packaging.chain import PLANT, package_scene
+    from scenarios.scenes.catalogue import get_scene
 
     scene = get_scene(SCENE)
     if model == "ClosedLoop":
@@ -362,9 +362,9 @@ def _fmpy_cases():
 @pytest.fixture(scope="module")
 def chain_fmu(tmp_path_factory):
     """The ControlChain FMU of :data:`SCENE`'s package."""
-    from fmus.export import build_system_fmu
-    from scenarios.package import PLANT, package_scene
-    from scenarios.scenes import get_scene
+    from fmus.systemfmu.export import build_system_fmu
+    from scenarios.packaging.chain import PLANT, package_scene
+    from scenarios.scenes.catalogue import get_scene
 
     return build_system_fmu("chain", package_scene(get_scene(SCENE)).chain,
                             tmp_path_factory.mktemp("chain") / "chain.fmu", PLANT)

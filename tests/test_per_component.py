@@ -1,9 +1,9 @@
-"""The per-component package for Jacobi masters (scenarios.per_component, issue 26):
+"""The per-component package for Jacobi masters (scenarios.packaging.per_component, issue 26):
 its timing from the loop's order, what it states for the tools, and that it tracks.
 
 Tracking is checked as a user sees it: e_ef of the package's run against ``parcosim run``
 of the scene (our Gauss-Seidel master), over a short window of a short copy; the tools
-(fmpy, Ecos, libcosim) are Jacobi masters, which ``fmus.master.simulate(...,
+(fmpy, Ecos, libcosim) are Jacobi masters, which ``fmus.cosim.master.simulate(...,
 coupling="jacobi")`` is bit for bit (docs/ssp.md), so the in-process Jacobi run stands for
 them here and tests/test_swap_drive.py runs the tools themselves.
 """
@@ -15,13 +15,13 @@ import zipfile
 
 import pytest
 
-from fmus.master import simulate
-from fmus.ssp import read_ssp_experiment, read_ssp_parameters
-from fmus.system import Component, Connection, System
-from scenarios.metrics import scene_metrics
-from scenarios.per_component import (PHASE, choose_substeps, component_timing, export_per_component,
+from fmus.cosim.master import simulate
+from fmus.ssp.export import read_ssp_experiment, read_ssp_parameters
+from fmus.cosim.system import Component, Connection, System
+from scenarios.run.metrics import scene_metrics
+from scenarios.packaging.per_component import (PHASE, choose_substeps, component_timing, export_per_component,
                                      per_component_system, stages, with_internal_observers)
-from scenarios.scenes import get_scene
+from scenarios.scenes.catalogue import get_scene
 
 STOP = 0.5
 WINDOW = (0.1, STOP)
@@ -99,7 +99,7 @@ def test_substeps_hold_the_stages_and_are_whole_nanoseconds():
 
 @pytest.fixture(scope="module")
 def bench_variables(built_fmus):
-    from fmus.ssp import _read_variables
+    from fmus.ssp.export import _read_variables
 
     system = get_scene("bench_circle_TCMDx").system
     return {c.name: _read_variables(c.model, built_fmus[c.model]) for c in system.components}
@@ -123,7 +123,7 @@ def bench_package(tmp_path_factory, built_fmus):
 
 
 def test_the_package_states_its_base_step_where_the_tools_read_it(bench_package):
-    from fmus.libcosim_runner import read_libcosim_step
+    from fmus.ssp.libcosim import read_libcosim_step
 
     step = read_ssp_experiment(bench_package)[2]
     assert step < 1e-3 and (1e-3 / step) == pytest.approx(round(1e-3 / step), abs=1e-9)

@@ -12,13 +12,13 @@ import numpy as np
 import pytest
 from scipy.integrate import quad, solve_ivp
 
-from fmus.master import simulate
-from fmus.system import Component, System
+from fmus.cosim.master import simulate
+from fmus.cosim.system import Component, System
 from motor import (CurrentController, advance_current, armature_current_rate, electrical_step_coefficients,
                    get_motor_preset, shaft_torque)
 from scenarios.reference import (ReferenceError, _mean_torque, deviation, reference_run,
                                  with_parameters)
-from scenarios.scenes import get_scene
+from scenarios.scenes.catalogue import get_scene
 
 pytestmark = [pytest.mark.slow]
 

@@ -1,13 +1,13 @@
 """The refusal record (kernels.Refused): a kernel's code and offending quantity become one
 record with the variable, value, unit, time and instance as fields, the slave's message and
-the master's error (fmus.instances.CoSimulationError.refusal) carry it."""
+the master's error (fmus.cosim.backends.CoSimulationError.refusal) carry it."""
 from __future__ import annotations
 
 import math
 
 import pytest
 
-from fmus.guarded import _refusal_record
+from fmus.slave.base import _refusal_record
 from kernels import Reason, Refusal, Refused, refused
 
 REASONS = {3: Reason("BAD_INPUT", ("q1", "q2"), "rad", "input {variable} = {value!r} {unit} at t = {time} s is absurd")}

@@ -1,15 +1,15 @@
 """Full-length runs of the bench scenes (the thesis' 16 and seed 001's SMC) and thesis_sim_circle: stored metrics and the thesis' claims.
 
-The stored metrics (tests/data/scene_metrics.json, written by ``python -m scenarios.regression
+The stored metrics (tests/data/scene_metrics.json, written by ``python -m scenarios.batch.regression
 --write``) catch any change of a closed loop's result; the tolerance is argued in
-:mod:`scenarios.regression` and docs/testing.md.  The claims are the thesis' own (7.2.11,
+:mod:`scenarios.batch.regression` and docs/testing.md.  The claims are the thesis' own (7.2.11,
 Tables 9-12), asserted on the live runs, not on the stored file.  21 runs, ~1 min.
 """
 import functools
 
 import pytest
 
-from scenarios import regression
+from scenarios.batch import regression
 
 STORED = regression.load()["scenes"]
 
@@ -21,8 +21,8 @@ def _metrics(name):
 
 def test_the_stored_scenes_are_the_bench_scenes_without_the_twin():
     """The twin's scenes (recalibrated when refitted) are left out by the twin's own list."""
-    from scenarios.scenes import scene_names
-    from scenarios.twin import twin_scene_names
+    from scenarios.scenes.catalogue import scene_names
+    from scenarios.scenes.twin import twin_scene_names
 
     bench = {n for n in scene_names() if n.startswith("bench_")} - set(twin_scene_names())
     assert set(regression.regression_scenes()) == set(STORED) == bench | {"thesis_sim_circle"}

@@ -1,7 +1,7 @@
 """The reproduction report: its numbers come from the runs' metrics, and it says what differs."""
 import math
 
-from scenarios.report import THESIS_BENCH, bench_scene_names, render
+from scenarios.batch.report import THESIS_BENCH, bench_scene_names, render
 
 
 def _metrics(e_ef, stopped=()):

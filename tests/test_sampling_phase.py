@@ -1,5 +1,5 @@
 """Sampled components stepped at h = T / n sample once per period, on sub-step ``sample_phase``
-(issue 26, item 1; :mod:`fmus.sampling`, the drive's counter in kernels/src/drive.c).
+(issue 26, item 1; :mod:`fmus.slave.sampling`, the drive's counter in kernels/src/drive.c).
 
 The reference of each check is the component itself at h = T (the behaviour the default keeps)
 or, for the drive's electrics, the exact solution of 4.162 written here.  Inputs are functions
@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from fmus.instances import InProcessInstance
+from fmus.cosim.backends import InProcessInstance
 from motor import get_motor_preset
 from tests.test_extremes import GOOD, set_variables, slave_class
 
@@ -352,8 +352,8 @@ def test_libcosim_and_ecos_step_a_sub_stepped_derivator(sampled_fmus):
     and in Ecos: the estimate changes on sub-step 2 of every period, no refusal."""
     from fmpy import read_model_description
 
-    from fmus.libcosim_runner import libcosim_available
-    from fmus.ssp_run import ecos_available
+    from fmus.ssp.libcosim import libcosim_available
+    from fmus.ssp.run import ecos_available
 
     refs = {m: {v.name: v.valueReference for v in read_model_description(str(sampled_fmus[m])).modelVariables}
             for m in ("Derivator", "Trajectory")}

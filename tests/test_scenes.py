@@ -5,13 +5,14 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from fmus.system import Component, System
+from fmus.cosim.system import Component, System
 from parcosim.cli import main
-from scenarios import scenes
-from scenarios.metrics import rms_norm
-from scenarios.run import run_scene
-from scenarios.scenes import Scene, get_scene, scene_names
-from scenarios.regression import STORED as STORED_METRICS
+from scenarios.scenes import catalogue as scenes
+from scenarios.run.metrics import rms_norm
+from scenarios.run.runner import run_scene
+from scenarios.scenes.catalogue import get_scene, scene_names
+from scenarios.scenes.scene import Scene
+from scenarios.batch.regression import STORED as STORED_METRICS
 
 
 def _shortened(name, stop_time):
@@ -29,7 +30,7 @@ def test_scene_names_cover_the_contract():
 
 
 def test_every_twin_scene_name_resolves_to_that_twin_scene():
-    from scenarios.twin import twin_scene_names
+    from scenarios.scenes.twin import twin_scene_names
 
     names = twin_scene_names()
     assert len(set(names)) == 16 and set(names) <= set(scene_names())
@@ -129,7 +130,7 @@ def test_stopped_run_keeps_what_was_recorded(tmp_path):
 
 
 def test_fidelity_switches_remove_what_they_switch_off():
-    from scenarios.scenes import Fidelity, bench
+    from scenarios.scenes.thesis import Fidelity, bench
 
     def models(**switches):
         return sorted(c.model for c in bench("TCx", fidelity=Fidelity(**switches)).system.components)
@@ -151,7 +152,7 @@ def test_fidelity_switches_remove_what_they_switch_off():
                                       dict(derivator=False, encoder=False), dict(link_inertias=False, m0=0.05),
                                       dict(viscous=False, coulomb=False)])
 def test_reduced_fidelity_scenes_track(switches):
-    from scenarios.scenes import Fidelity, bench
+    from scenarios.scenes.thesis import Fidelity, bench
 
     scene = bench("PDx", fidelity=Fidelity(**switches))
     scene = replace(scene, system=replace(scene.system, stop_time=1.5), window=(1.0, 1.5))
@@ -184,9 +185,9 @@ def test_export_ssp_command(tmp_path, built_fmus, capsys):
 def test_with_sample_time_sets_every_sample_time():
     import importlib
 
-    from fmus.build import SLAVES
-    from fmus.master import simulate
-    from scenarios.scenes import SAMPLE_TIME_MODELS, with_sample_time
+    from fmus.export.build import SLAVES
+    from fmus.cosim.master import simulate
+    from scenarios.scenes.transforms import SAMPLE_TIME_MODELS, with_sample_time
 
     declaring_T = set()
     for model, module in SLAVES.items():

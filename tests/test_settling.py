@@ -1,11 +1,11 @@
-"""The settled steady-state error (scenarios.metrics.settling): synthetic errors with a known
+"""The settled steady-state error (scenarios.run.metrics.settling): synthetic errors with a known
 settling time, errors that never settle, and a bench scene that settles late."""
 import math
 
 import numpy as np
 import pytest
 
-from scenarios.metrics import SETTLE_BAND, SETTLE_HOLD, settling
+from scenarios.run.metrics import SETTLE_BAND, SETTLE_HOLD, settling
 
 STOP, AFTER, H = 4.5, 3.0, 1e-3
 
@@ -86,7 +86,7 @@ def test_settling_too_close_to_the_end_of_the_run_does_not_count():
 def test_bench_triangle_PDMDq_settles_late():
     """The late settler of the 16 bench scenes: 0.47 mm 1 s after the stop (the earlier e_ss),
     settled (within one count) about 1.9 s after it at a few µm."""
-    from scenarios.run import run_scene
+    from scenarios.run.runner import run_scene
 
     m = run_scene("bench_triangle_PDMDq", mode="compiled", plots=False).metrics
     assert m["settled"] and 1.5 < m["t_settle_s"] < 2.5

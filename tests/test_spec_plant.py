@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from fmpy.validation import validate_fmu
 
-from fmus.specfmu import build_plant_fmu
+from fmus.export.specfmu import build_plant_fmu
 from plant import IntegratorSettings, PlantSimulator, get_preset
 from plant import spec as plant_spec
 from plant.parallel import inverse_dynamics_terms

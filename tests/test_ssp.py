@@ -1,4 +1,4 @@
-"""SSP 1.0 export (fmus.ssp): the package is well-formed and runs in fmpy's SSP runner and in
+"""SSP 1.0 export (fmus.ssp.export): the package is well-formed and runs in fmpy's SSP runner and in
 Ecos with the same end-effector trajectory as the Jacobi master, point for point."""
 from __future__ import annotations
 
@@ -9,11 +9,12 @@ import zipfile
 import numpy as np
 import pytest
 
-from fmus.master import simulate
-from fmus.ssp import NS, PARAMETER_SET, export_ssp, read_ssp_experiment, read_ssp_parameters
-from fmus.ssp_run import ecos_available, simulate_ssp_ecos, simulate_ssp_fmpy
-from fmus.system import Component, Connection, System
-from scenarios.scenes import drives_in_plant, get_scene
+from fmus.cosim.master import simulate
+from fmus.ssp.export import NS, PARAMETER_SET, export_ssp, read_ssp_experiment, read_ssp_parameters
+from fmus.ssp.run import ecos_available, simulate_ssp_ecos, simulate_ssp_fmpy
+from fmus.cosim.system import Component, Connection, System
+from scenarios.scenes.catalogue import get_scene
+from scenarios.scenes.transforms import drives_in_plant
 
 pytestmark = [pytest.mark.slow, pytest.mark.fmu, pytest.mark.tools]
 

@@ -3,10 +3,10 @@ in more sub-steps: the same values as a system built with that many sub-steps.""
 import numpy as np
 import pytest
 
-from fmus.master import _close, _instantiate, stepping_order
-from fmus.stepper import Stepper
+from fmus.cosim.master import _close, _instantiate, stepping_order
+from fmus.cosim.stepper import Stepper
 from scenarios.reference import with_parameters
-from scenarios.scenes import get_scene
+from scenarios.scenes.catalogue import get_scene
 
 
 def _stepped(system, split=None):

@@ -15,11 +15,11 @@ from pathlib import Path
 
 import pytest
 
-from fmus.ssp_run import ecos_available
-from scenarios.per_component import export_per_component
-from scenarios.run import run_scene
-from scenarios.scenes import get_scene
-from scenarios.tools import run_tool, tool_metrics
+from fmus.ssp.run import ecos_available
+from scenarios.packaging.per_component import export_per_component
+from scenarios.run.runner import run_scene
+from scenarios.scenes.catalogue import get_scene
+from scenarios.studies.tools import run_tool, tool_metrics
 
 sys.path.insert(0, str(Path(__file__).parent / "support" / "cfmu"))
 from build import build_c_fmu, compiler  # noqa: E402
@@ -30,7 +30,7 @@ BOUND = 0.05
 
 
 def _libcosim_reason():
-    from fmus.libcosim_runner import libcosim_available
+    from fmus.ssp.libcosim import libcosim_available
 
     return libcosim_available()
 
@@ -71,7 +71,7 @@ def ours(scene):
 
 
 def _tracking_ratios(scene, path, tool, bindings=False):
-    from fmus.ssp import read_ssp_experiment
+    from fmus.ssp.export import read_ssp_experiment
 
     step = read_ssp_experiment(path)[2]
     columns = {signal: name for name, signal in scene.columns.items()}
@@ -105,7 +105,7 @@ def test_a_supplier_drive_swapped_into_the_package_tracks_in_the_tool(scene, swa
 def test_the_swapped_package_keeps_the_bindings_a_drive_needs(swapped):
     """The SSD is untouched: each drive slot still binds its preset (Ecos and libcosim give
     it to the C drive), and no phase (the drives sample at the period's start)."""
-    from fmus.ssp import read_ssp_parameters
+    from fmus.ssp.export import read_ssp_parameters
 
     params = read_ssp_parameters(swapped)
     assert params["drive1.preset"] == "motor1" and params["drive2.preset"] == "motor2"

@@ -1,4 +1,4 @@
-"""Monte Carlo sweeps (scenarios.sweep, perturb, engine): U = 0 is the nominal run bit for
+"""Monte Carlo sweeps (scenarios.batch.sweep, perturb, engine): U = 0 is the nominal run bit for
 bit, draws depend only on (seed, sample, parameter), failures are rows, an interrupted sweep
 continues where it stopped, a killed worker loses no sample, the report's engine changes no
 result.  One cluster of threads per module (LocalCluster start-up costs seconds); real
@@ -10,12 +10,12 @@ import signal
 import numpy as np
 import pytest
 
-from scenarios.engine import open_client
-from scenarios.perturb import (ENCODER_OFFSET_SCALE, TRUNCATE_SIGMA, draw, load_perturb_file, perturbable,
+from scenarios.batch.engine import open_client
+from scenarios.scenes.perturb import (ENCODER_OFFSET_SCALE, TRUNCATE_SIGMA, draw, load_perturb_file, perturbable,
                                perturbed, uncertainties)
-from scenarios.run import run_scene
-from scenarios.scenes import get_scene
-from scenarios.sweep import METRICS, read_rows, run_sweep, with_stop_time
+from scenarios.run.runner import run_scene
+from scenarios.scenes.catalogue import get_scene
+from scenarios.batch.sweep import METRICS, read_rows, run_sweep, with_stop_time
 
 pytestmark = [pytest.mark.slow]
 
@@ -128,7 +128,7 @@ def test_controller_side_keeps_the_nominal_model():
 
 
 def _drive(**parameters):
-    from fmus.instances import InProcessInstance
+    from fmus.cosim.backends import InProcessInstance
 
     instance = InProcessInstance("DCMotorDrive", "drive")
     instance.enter_initialization({"preset": "motor1", **parameters}, 0.0)
@@ -147,7 +147,7 @@ def test_design_parameters_keep_the_current_controller():
                   b_design=motor1.b)
     assert coefficients(kept.controller.design) == nominal
     assert kept.params.R == off["R"]                                        # the physics is the changed motor
-    from fmus.instances import InProcessInstance
+    from fmus.cosim.backends import InProcessInstance
 
     bad = InProcessInstance("DCMotorDrive", "drive")
     bad.enter_initialization({"L_design": -2.0}, 0.0)
@@ -170,7 +170,7 @@ def test_encoder_offset_shifts_the_reading_by_whole_counts():
 
 
 def test_chain_parameters_reach_the_plant():
-    from fmus.instances import InProcessInstance
+    from fmus.cosim.backends import InProcessInstance
 
     plant = InProcessInstance("FiveBarPlant", "plant")
     plant.enter_initialization({"preset": "bench", "x0": -0.002, "y0": 0.108, "chain2_m2": 0.2,
@@ -247,7 +247,7 @@ def test_a_killed_worker_loses_no_sample(process_client, client):
 
 
 def test_report_engine_gives_the_serial_results(client, tmp_path):
-    from scenarios.report import run_bench
+    from scenarios.batch.report import run_bench
 
     names = ["bench_circle_TCMDx", "bench_triangle_PDMDq"]
     engine = run_bench(tmp_path, scenes=names, client=client)
@@ -260,7 +260,7 @@ def test_report_engine_gives_the_serial_results(client, tmp_path):
 
 
 def _lugre_scene():
-    from scenarios.scenes import Fidelity, bench
+    from scenarios.scenes.thesis import Fidelity, bench
 
     return with_stop_time(bench("TCx", "triangle", fidelity=Fidelity(friction="lugre")), SHORT)
 

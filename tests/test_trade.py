@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-from scenarios.trade import COLUMNS, Trade, pareto, run_trade
+from scenarios.studies.trade import COLUMNS, Trade, pareto, run_trade
 
 
 @pytest.fixture(scope="module")

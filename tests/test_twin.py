@@ -1,4 +1,4 @@
-"""The bench twin (scenarios.twin, scenarios.twin_fit): its one parameter file, its scenes'
+"""The bench twin (scenarios.scenes.twin, scenarios.studies.twin_fit): its one parameter file, its scenes'
 effects, the same rows in every mode, stateless noise, and a fit that reads only the circle."""
 import math
 from dataclasses import replace
@@ -6,13 +6,13 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from fmus.master import simulate
+from fmus.cosim.master import simulate
 from motor import get_motor_preset
 from plant import ENCODER_COUNTS, get_preset
-from scenarios import twin_fit
-from scenarios.report import THESIS_BENCH, THESIS_MD_CHANGE
-from scenarios.scenes import get_scene, scene_names
-from scenarios.twin import (PARAMETERS, PWM_COUNTS, Twin, bench_real, encoder_phase, load_twin,
+from scenarios.studies import twin_fit
+from scenarios.batch.report import THESIS_BENCH, THESIS_MD_CHANGE
+from scenarios.scenes.catalogue import get_scene, scene_names
+from scenarios.scenes.twin import (PARAMETERS, PWM_COUNTS, Twin, bench_real, encoder_phase, load_twin,
                             read_fit, write_twin)
 
 
@@ -163,7 +163,7 @@ def test_the_fit_reads_only_the_circle_and_finds_the_global_minimum(monkeypatch,
 
 
 def test_the_shipped_calibration_gives_the_reported_circle():
-    """docs/twin_runs.json (written by the report) is what scenarios/bench_twin.toml gives: the
+    """docs/twin_runs.json (written by the report) is what scenarios/scenes/bench_twin.toml gives: the
     circle's e_ef and tau_ef of every strategy, seed 101.  Tolerance 1e-3 relative: moving
     friction_scale by 1e-3 moves e_ef by at most 0.5 % (docs/twin.md "Sensitivity"), so a
     changed drive, delay or law shows, and last-bit differences between machines, which
@@ -180,7 +180,7 @@ def test_the_shipped_calibration_gives_the_reported_circle():
 
 
 def test_the_report_links_the_method_and_holds_no_copy_of_it():
-    """docs/twin.md is what ``python -m scenarios.twin_fit report`` writes: the generated tables,
+    """docs/twin.md is what ``python -m scenarios.studies.twin_fit report`` writes: the generated tables,
     then the link to the hand-written docs/twin_method.md; no section of the method is copied in
     (two copies drift apart), and the report edited by hand below its tables fails."""
     docs = twin_fit.ROOT / "docs"
@@ -193,10 +193,10 @@ def test_the_report_links_the_method_and_holds_no_copy_of_it():
 
 
 def test_margin_runs_raise_lambda_and_apply_the_delay():
-    """scenarios.twin_margin: the controller gets λ + 5 and the chosen delay.  At λ = 60 a 14 ms
+    """scenarios.studies.twin_margin: the controller gets λ + 5 and the chosen delay.  At λ = 60 a 14 ms
     delay costs ω τ ≈ 120 rad/s × 0.014 s ≈ 1.7 rad of phase at the loop's crossover (kv = 2λ),
     more than its margin: the torque grows several-fold, which a delay not applied would not do."""
-    from scenarios.twin_margin import margin, with_controller
+    from scenarios.studies.twin_margin import margin, with_controller
 
     scene = with_controller(bench_real("TCq", "circle", Twin()), lam=65.0, delay_steps=3)
     ctrl = scene.system.component("ctrl").parameters

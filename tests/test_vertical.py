@@ -8,10 +8,10 @@ import dataclasses
 import numpy as np
 import pytest
 
-from scenarios.run import run_scene
-from scenarios.scenes import (VERTICAL_COUNTER_MASSES, VERTICAL_GRAVITY, Fidelity, get_scene, scene_names,
-                              vertical_circle)
-from scenarios.tools import compare, short
+from scenarios.run.runner import run_scene
+from scenarios.scenes.catalogue import get_scene, scene_names
+from scenarios.scenes.thesis import VERTICAL_COUNTER_MASSES, VERTICAL_GRAVITY, Fidelity, vertical_circle
+from scenarios.studies.tools import compare, short
 
 
 def test_names_and_what_reaches_plant_and_controller():

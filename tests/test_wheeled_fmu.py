@@ -12,8 +12,8 @@ from fmpy.validation import validate_fmu
 from controller.balance import BalanceSettings, design_balance
 from fmus.slaves.parcosim_wheeledpendulum import OUTPUTS
 from plant.wheeled import SEED, WheeledPendulum, upright_linearisation
-from scenarios.pendulum import BALANCED_DEG, PendulumFidelity, pendulum_scene
-from scenarios.run import run_scene
+from scenarios.scenes.pendulum import BALANCED_DEG, PendulumFidelity, pendulum_scene
+from scenarios.run.runner import run_scene
 from tests.fmi_support import FmuInstance
 
 NAMES = [name for name, _ in OUTPUTS]
@@ -76,7 +76,7 @@ def test_linearisation_matches_finite_differences_of_the_fmu_step():
     of the analytic linearisation (to the finite difference's own error)."""
     import control
 
-    from fmus.instances import InProcessInstance
+    from fmus.cosim.backends import InProcessInstance
 
     A, B = upright_linearisation()
     sys_d = control.c2d(control.ss(A, B, np.eye(6), np.zeros((6, 2))), 1e-3)
@@ -157,7 +157,7 @@ def test_fidelity_switches_still_balance(fidelity):
 
 def test_sample_time_quick_checks():
     """The sweep's ends (docs/pendulum.md): balanced at 2 ms, fallen at 10 ms."""
-    from scenarios.pendulum_trade import sample_time_rows
+    from scenarios.studies.pendulum_trade import sample_time_rows
 
     slow, fast = sample_time_rows((10e-3, 2e-3))
     assert not slow["completed"] and "fell over" in slow["error"]

@@ -1,4 +1,4 @@
-"""The workspace figure (scenarios/workspace.py): loci, refusals, the CLI."""
+"""The workspace figure (scenarios/studies/workspace/): loci, refusals, the CLI."""
 import json
 import subprocess
 import sys
@@ -9,8 +9,8 @@ import pytest
 from plant import fivebar, get_preset
 from plant import spec as plant_spec
 from plant.specsim import assemble
-from scenarios import workspace
-from scenarios.workspace_spec import measures
+from scenarios.studies import workspace
+from scenarios.studies.workspace.spec import measures
 
 
 def parallel_singular_point(params, x=0.0, lo=0.03, hi=0.1):

@@ -1,4 +1,4 @@
-"""parcosim's FMI 2.0 wrapper (fmus/wrapper/parcosim_fmi2.c) under hostile and careless use.
+"""parcosim's FMI 2.0 wrapper (fmus/export/wrapper/parcosim_fmi2.c) under hostile and careless use.
 
 Every case runs in its own Python process (tests/support/fmi2raw.py drives the FMU's
 binary through ctypes), so that a crash of the importing process is a failed test, not
@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from fmus.wrapper import compiled_wrapper, has_wrapper, install_wrapper
+from fmus.export.wrapper import compiled_wrapper, has_wrapper, install_wrapper
 
 ROOT = Path(__file__).resolve().parent.parent
 pytestmark = [pytest.mark.fmu, pytest.mark.skipif(compiled_wrapper(quiet=True) is None,
@@ -34,7 +34,7 @@ def report(**values):
 PROBER = '''
 import os, signal, time
 from pythonfmu import Fmi2Slave, Fmi2Causality, Fmi2Variability, Boolean, Integer, Real, String
-from fmus.guarded import FmiError
+from fmus.slave.base import FmiError
 
 
 class Prober(Fmi2Slave):
@@ -356,7 +356,7 @@ def test_without_a_compiler_fmus_keep_pythonfmus_binary_with_one_warning(built_f
     import shutil
     import warnings
 
-    import fmus.wrapper as wrapper
+    import fmus.export.wrapper as wrapper
 
     fmu = tmp_path / "Trajectory.fmu"
     shutil.copy2(built_fmus["Trajectory"], fmu)
@@ -385,7 +385,7 @@ def test_the_wrapper_compiles_without_a_warning(tmp_path):
     signed/unsigned comparison or a missing prototype introduced in the C fails here."""
     import sysconfig
 
-    from fmus.wrapper import CFLAGS, SOURCE, compiler
+    from fmus.export.wrapper import CFLAGS, SOURCE, compiler
 
     cc = compiler()
     if cc is None:

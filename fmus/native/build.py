@@ -22,11 +22,11 @@ from xml.etree import ElementTree as ET
 
 import numpy as np
 
-from ..foreign import built_by_parcosim
-from ..guarded import START_VALUES_FILE
-from ..identity import IDENTITY_FILE
-from ..modeldescription import model_structure
-from ..registry import SLAVES
+from fmus.export.mark import built_by_parcosim
+from fmus.slave.base import START_VALUES_FILE
+from fmus.slave.identity import IDENTITY_FILE
+from fmus.export.modeldescription import model_structure
+from fmus.slave.registry import SLAVES
 from .models import NATIVE
 
 HERE = Path(__file__).resolve().parent
@@ -35,7 +35,7 @@ KERNELS = HERE.parent.parent / "kernels" / "src"
 GENERIC = ("fmi2_native.c", "pcn_values.c", "pcn_state.c", "pcn_text.c", "pcn_text.h", "pcn_model.h", "pcn_native.h")
 #: As the kernels' library (kernels/build.py): no FMA contraction, so results match it bit for bit.
 CFLAGS = ("-std=c11", "-O2", "-fPIC", "-fvisibility=hidden", "-ffp-contract=off", "-fno-fast-math")
-#: What a sampled model adds (fmus/sampling.py's sub-stepping): its generic part and the kernels' counting rule.
+#: What a sampled model adds (fmus/slave/sampling.py's sub-stepping): its generic part and the kernels' counting rule.
 SAMPLED = ("pcn_sampling.c", "pcn_sampling.h")
 SAMPLED_KERNELS = ("pc_sampling.c",)
 DEFAULT_NATIVE_OUT = HERE.parent / "build" / "native"
@@ -184,7 +184,7 @@ def compile_command(sources_dir: Path, output: Path, compiler: str = "cc") -> li
 def model_description(slave, model: str, guid: str, sources: list[str], feedthrough: dict) -> bytes:
     """The native FMU's modelDescription.xml: the slave's (pythonfmu's writer), with its own
     GUID, no execution tool, the ModelStructure and the source files."""
-    variable = "false" if getattr(type(slave), "has_sample_period", False) else "true"   # as fmus/build.py
+    variable = "false" if getattr(type(slave), "has_sample_period", False) else "true"   # as fmus/export/build.py
     root = slave.to_xml({"canHandleVariableCommunicationStepSize": variable, "canGetAndSetFMUstate": "true",
                          "canSerializeFMUstate": "true", "needsExecutionTool": "false"})
     root.set("guid", guid)

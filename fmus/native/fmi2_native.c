@@ -1,7 +1,7 @@
 /* The native FMUs' one FMI 2.0 co-simulation implementation (docs/native.md).
  *
- * It behaves as the pythonfmu FMUs under parcosim's wrapper (fmus/guarded.py,
- * fmus/wrapper/parcosim_fmi2.c): the same call-order rules, refusals (fmi2Discard for a
+ * It behaves as the pythonfmu FMUs under parcosim's wrapper (fmus/slave/base.py,
+ * fmus/export/wrapper/parcosim_fmi2.c): the same call-order rules, refusals (fmi2Discard for a
  * refused step, fmi2Error for a refused call, never fmi2Fatal) and messages; the model's own
  * part is its adapter (pcn_model.h).  The FMU state is data with a checked header: a state of
  * another model or GUID, of other parameters, with configuration words changed or damaged, is

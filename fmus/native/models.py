@@ -19,7 +19,7 @@ class NativeModel:
     """A native FMU's C parts: ``adapter`` (in fmus/native/adapters, named pcn_<model>.c:
     sources/ is flat), ``kernels`` (C files of kernels/src; their headers follow) and
     ``data`` (slave -> (scalars, arrays), module docstring); ``sampled``: sub-stepped at a
-    sample time T (fmus/sampling.py), with ``pcn_sampling.c`` and the kernels' counting rule;
+    sample time T (fmus/slave/sampling.py), with ``pcn_sampling.c`` and the kernels' counting rule;
     ``parts``: more files of fmus/native/adapters it compiles (``pcn_drive_setup.c|h``)."""
 
     adapter: str
@@ -94,9 +94,9 @@ def _plant(slave):
 
 def drive_presets() -> dict:
     """Every motor preset by name (``preset_names``) and its fields in
-    :data:`fmus.parts.MOTOR_PARAMETERS`' order, a row each (``preset_motor``): pcn_drive_setup.h's
+    :data:`fmus.slave.declarations.MOTOR_PARAMETERS`' order, a row each (``preset_motor``): pcn_drive_setup.h's
     pcn_motor_presets."""
-    from fmus.parts import MOTOR_PARAMETERS
+    from fmus.slave.declarations import MOTOR_PARAMETERS
     from motor.presets import MOTOR_PRESETS
 
     names = sorted(MOTOR_PRESETS)
@@ -111,7 +111,7 @@ def drive_design(slave, suffix: str = "") -> dict:
     their own).  ``design<suffix>_keys``: a row of R, L, kt, ke, b, J_rotor of the design's
     motor and T each; ``design<suffix>_coefficients``: alpha, beta, gamma, delta each (0 if
     the first failed); ``design<suffix>_error``: the first's failure message, or ""."""
-    from fmus.parts import drive_params
+    from fmus.slave.declarations import drive_params
     from motor.current_controller import THESIS_POLES
     from motor.drive import _design
     from motor.presets import MOTOR_PRESETS
@@ -157,7 +157,7 @@ def _position(slave):
     from controller.model import TabulatedModel, perturbed_params
     from controller.position import default_kt
     from controller.strategies import ALL_STRATEGY_NAMES, get_strategy
-    from fmus.parts import with_counter_masses
+    from fmus.slave.declarations import with_counter_masses
     from fmus.slaves.parcosim_positioncontroller import MAX_DELAY_STEPS, MAX_TABLE_POINTS
     from plant import fivebar
     from plant.fast5r import pack_params

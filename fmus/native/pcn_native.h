@@ -5,7 +5,7 @@
 #include "fmi2Functions.h"
 #include "pcn_model.h"
 
-/* fmus/guarded.py: MIN_STEP, MAX_TIME, TIME_RESOLUTION. */
+/* fmus/slave/base.py: MIN_STEP, MAX_TIME, TIME_RESOLUTION. */
 #define MIN_STEP 1e-9
 #define MAX_TIME 1e9
 #define TIME_RESOLUTION 1e-6

@@ -1,4 +1,4 @@
-/* Sub-stepping of the native sampled FMUs (pcn_sampling.h), worded as fmus/sampling.py. */
+/* Sub-stepping of the native sampled FMUs (pcn_sampling.h), worded as fmus/slave/sampling.py. */
 #include "pcn_sampling.h"
 
 #include <math.h>

@@ -1,4 +1,4 @@
-/* Sub-stepping of the native sampled FMUs (fmus/sampling.py's SampledSteps): the counter in
+/* Sub-stepping of the native sampled FMUs (fmus/slave/sampling.py's SampledSteps): the counter in
  * the model data, the step-size rule with the twin's messages, the restored counter's check.
  * The counting rule itself is the kernels' (pc_sampling.h). */
 #ifndef PCN_SAMPLING_H

@@ -1,5 +1,5 @@
 /* The native FMUs' variable access: fmi2Get/Set of every type by value reference, with the
- * checks and messages of parcosim's wrapper and GuardedSlave (fmus/guarded.py), and the
+ * checks and messages of parcosim's wrapper and GuardedSlave (fmus/slave/base.py), and the
  * co-simulation functions this FMU does not provide (docs/native.md). */
 #include <string.h>
 

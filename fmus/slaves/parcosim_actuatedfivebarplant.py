@@ -20,12 +20,12 @@ process share one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
-from fmus import budget
-from fmus import designs
-from fmus.guarded import MIN_STEP, GuardedSlave
-from fmus.sampling import declare_sample_phase
-from fmus.refusals import PRESET_VALUE, TINY, refuse_absurd
-from fmus.parts import (PLANT_OUTPUTS, CurrentLoopSteps, build_drive, build_plant, correct_plant, declare_drive_options,
+from fmus.slave import budget
+from fmus.slave import designs
+from fmus.slave.base import MIN_STEP, GuardedSlave
+from fmus.slave.sampling import declare_sample_phase
+from fmus.slave.refusals import PRESET_VALUE, TINY, refuse_absurd
+from fmus.slave.declarations import (PLANT_OUTPUTS, CurrentLoopSteps, build_drive, build_plant, correct_plant, declare_drive_options,
                         declare_motor, declare_plant, publish_plant)
 from plant.actuated import ActuatedPlant
 
@@ -42,7 +42,7 @@ class ActuatedFiveBarPlant(CurrentLoopSteps, GuardedSlave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        designs.load(self.resources)   # what its build computed ahead (fmus/designs.py)
+        designs.load(self.resources)   # what its build computed ahead (fmus/slave/designs.py)
         d = self.declare
         for j in JOINTS:
             d(f"i_ref{j}", "input", 0.0, f"Drive {j}: current reference, sampled at the step start (current mode) [A]")
@@ -96,11 +96,11 @@ class ActuatedFiveBarPlant(CurrentLoopSteps, GuardedSlave):
         self._publish()
 
     def _advance(self, run, current_time, step_size):
-        """``run(max_evaluations)``, a step of the whole state, within the call's work limit (:mod:`fmus.budget`)."""
+        """``run(max_evaluations)``, a step of the whole state, within the call's work limit (:mod:`fmus.slave.budget`)."""
         budget.step_plant(self.actuated.plant, run, current_time, step_size)
 
     def known_step_work(self) -> float:
-        """The least CPU [s] a step is charged (:func:`fmus.budget.known_step_work`)."""
+        """The least CPU [s] a step is charged (:func:`fmus.slave.budget.known_step_work`)."""
         return budget.known_step_work(self.actuated.plant)
 
     def _publish(self):
@@ -111,7 +111,7 @@ class ActuatedFiveBarPlant(CurrentLoopSteps, GuardedSlave):
             setattr(self, f"v{j}", drive.v)
             setattr(self, f"i{j}", drive.i)
 
-    # --- a model of the plant inside a controller (fmus.embedded.ChainCore) -------------
+    # --- a model of the plant inside a controller (fmus.systemfmu.cores.ChainCore) -------------
     def snapshot(self):
         """The state before the next step (mechanism, currents, LuGre bristles), for :meth:`correct`."""
         a = self.actuated

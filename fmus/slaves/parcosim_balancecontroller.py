@@ -4,7 +4,7 @@ A thin adapter over :class:`controller.balance.BalanceController` (observer + LQ
 with python-control at initialisation).  The sample's ``doStep(t, h)`` reads the encoders
 and the gyro at t and outputs the motor voltages held over [t, t + T], saturated at
 ``v_battery``; steps h = T / n sample once per period, on sub-step ``sample_phase``, and
-hold in between (:mod:`fmus.sampling`); outputs change only in ``doStep``: no direct feedthrough.
+hold in between (:mod:`fmus.slave.sampling`); outputs change only in ``doStep``: no direct feedthrough.
 
 The module name is unique among parcosim slaves: all FMUs loaded in one
 process share one Python interpreter and its module cache.
@@ -14,9 +14,9 @@ from __future__ import annotations
 from controller.balance import ROUTES, BalanceController as _Controller
 from controller.balance import BalanceSettings, design_balance, get_route
 from controller.fastbalance import INPUTS, OUTPUTS
-from fmus.guarded import MIN_STEP, GuardedSlave
-from fmus.sampling import SampledSteps, declare_sample_phase
-from fmus.refusals import refuse_absurd, refuse_absurd_inputs, require_finite
+from fmus.slave.base import MIN_STEP, GuardedSlave
+from fmus.slave.sampling import SampledSteps, declare_sample_phase
+from fmus.slave.refusals import refuse_absurd, refuse_absurd_inputs, require_finite
 
 ESTIMATES = OUTPUTS[6:]
 

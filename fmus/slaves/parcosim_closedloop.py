@@ -1,21 +1,21 @@
 """FMI slave ``ClosedLoop``: a whole parcosim scene, its loop stepped inside the FMU.
 
 ``doStep(t, h)`` takes one communication step of the scene's system exactly as
-``fmus.master.simulate`` does (in process, Gauss-Seidel, the master's order), so the FMU's
+``fmus.cosim.master.simulate`` does (in process, Gauss-Seidel, the master's order), so the FMU's
 outputs are the rows of ``parcosim run SCENE``: ``x``, ``y`` (the end effector) and every
 recorded signal under its name (``traj.x_d``, ``ctrl.tau1`` ...).  Every parameter of every
 inner component is a parameter ``<instance>.<name>`` (``ctrl.lam``, ``plant.x0``).  The
 step size must be the scene's communication step (1 ms).  No inputs.
 
-Made per scene by ``parcosim export-fmu SCENE OUT.fmu`` (:func:`fmus.export.export_fmu`).
+Made per scene by ``parcosim export-fmu SCENE OUT.fmu`` (:func:`fmus.systemfmu.export.export_fmu`).
 The module name is unique among parcosim slaves: all FMUs loaded in one process share
 one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
-from fmus import designs
-from fmus.embedded import LoopCore
-from fmus.systemslave import SystemSlave
+from fmus.slave import designs
+from fmus.systemfmu.cores import LoopCore
+from fmus.systemfmu.slave_base import SystemSlave
 
 
 class ClosedLoop(SystemSlave):
@@ -25,7 +25,7 @@ class ClosedLoop(SystemSlave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        designs.load(self.resources)   # what its build computed ahead (fmus/designs.py)
+        designs.load(self.resources)   # what its build computed ahead (fmus/slave/designs.py)
         self.declare("x", "output", 0.0, f"End effector x ({self.plant}.x) [m]")
         self.declare("y", "output", 0.0, f"End effector y ({self.plant}.y) [m]")
         for signal in self.system.record:

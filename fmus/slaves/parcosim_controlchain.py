@@ -1,10 +1,10 @@
 """FMI slave ``ControlChain``: a scene's components but its plant, one sample ahead.
 
-For a package run by a Jacobi master (:mod:`scenarios.package`): inputs are the plant's
+For a package run by a Jacobi master (:mod:`scenarios.packaging.chain`): inputs are the plant's
 measured outputs at the step's start (``q1_enc``, ``q2_enc`` on the bench); after
 ``doStep(t, h)`` the command outputs (``v_ref1``, ``v_ref2`` or ``tau1``, ``tau2``) are what
 the plant is to apply over its next step [t + h, t + 2h], the sample of t + h computed
-with the plant predicted by the chain's model of it (:class:`fmus.embedded.ChainCore`);
+with the plant predicted by the chain's model of it (:class:`fmus.systemfmu.cores.ChainCore`);
 after initialisation, what it applies over [0, h].  The recorded signals of the scene's
 other components are outputs named by the signal (``traj.x_d``, ``ctrl.tau1``), at t + h
 as the master records them.  The model of the plant is the system's component ``plant``,
@@ -17,9 +17,9 @@ one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
-from fmus import designs
-from fmus.embedded import ChainCore, chain_interface
-from fmus.systemslave import SystemSlave
+from fmus.slave import designs
+from fmus.systemfmu.cores import ChainCore, chain_interface
+from fmus.systemfmu.slave_base import SystemSlave
 
 
 class ControlChain(SystemSlave):
@@ -31,7 +31,7 @@ class ControlChain(SystemSlave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        designs.load(self.resources)   # what its build computed ahead (fmus/designs.py)
+        designs.load(self.resources)   # what its build computed ahead (fmus/slave/designs.py)
         self.measured, commanded = chain_interface(self.system, self.plant)
         self.commanded = tuple(commanded)
         for name in self.measured:

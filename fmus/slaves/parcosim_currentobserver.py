@@ -11,16 +11,16 @@ Outputs change only in ``doStep``: no direct feedthrough.
 
 Sub-steps h = T / n: the estimate advances on every step (the dynamic kind integrates
 over each, as the drive's electrics do) and the output ``i_hat`` is published once per
-period, at the end of sub-step ``sample_phase``, held in between (:mod:`fmus.sampling`).
+period, at the end of sub-step ``sample_phase``, held in between (:mod:`fmus.slave.sampling`).
 
 The module name is unique among parcosim slaves: all FMUs loaded in one
 process share one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
-from fmus.guarded import MIN_STEP, GuardedSlave
-from fmus.sampling import SampledSteps, declare_sample_phase
-from fmus.refusals import PRESET_VALUE, motor_preset, refuse_absurd, require_finite, with_overrides
+from fmus.slave.base import MIN_STEP, GuardedSlave
+from fmus.slave.sampling import SampledSteps, declare_sample_phase
+from fmus.slave.refusals import PRESET_VALUE, motor_preset, refuse_absurd, require_finite, with_overrides
 from motor import CurrentObserver as _Observer
 
 #: Start value of the numeric motor parameters meaning "the preset's value".

@@ -20,11 +20,11 @@ process share one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
-from fmus import designs
-from fmus.guarded import MIN_STEP, GuardedSlave
-from fmus.refusals import refuse_absurd
-from fmus.parts import CurrentLoopSteps, build_drive, declare_drive_options, declare_motor
-from fmus.sampling import declare_sample_phase
+from fmus.slave import designs
+from fmus.slave.base import MIN_STEP, GuardedSlave
+from fmus.slave.refusals import refuse_absurd
+from fmus.slave.declarations import CurrentLoopSteps, build_drive, declare_drive_options, declare_motor
+from fmus.slave.sampling import declare_sample_phase
 
 OUTPUTS = ("tau", "v", "i")
 
@@ -38,7 +38,7 @@ class DCMotorDrive(CurrentLoopSteps, GuardedSlave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        designs.load(self.resources)   # what its build computed ahead (fmus/designs.py)
+        designs.load(self.resources)   # what its build computed ahead (fmus/slave/designs.py)
         d = self.declare
         d("i_ref", "input", 0.0, "Current reference, sampled at the step start (current mode) [A]")
         d("v_ref", "input", 0.0, "Commanded voltage, applied over the step, saturated at +-v_max (voltage mode) [V]")

@@ -4,7 +4,7 @@ Each ``doStep(t, h)`` takes the inputs ``q1``, ``q2`` as the newest sample and o
 estimates at that sample (:class:`controller.derivators.Derivator`: backward difference,
 2nd-order Bessel low-pass for velocity, 8th-order for acceleration, discretised at
 ``T``).  Steps h = T / n sample once per period, on sub-step ``sample_phase``, and hold the
-estimates in between (:mod:`fmus.sampling`).  Wiring: feed the plant's (encoder) angles at t and
+estimates in between (:mod:`fmus.slave.sampling`).  Wiring: feed the plant's (encoder) angles at t and
 read the estimates for t after this step, before the controller's step at t.  Outputs
 change only in ``doStep``: no direct feedthrough.
 
@@ -23,10 +23,10 @@ import numpy as np
 
 from controller.derivators import DEFAULT_FC_ACC, DEFAULT_FC_VEL, SAMPLE_TIME
 from controller.derivators import Derivator as _Derivator
-from fmus import designs
-from fmus.guarded import MIN_STEP, GuardedSlave
-from fmus.sampling import SampledSteps, declare_sample_phase
-from fmus.refusals import ABSURD, refuse_absurd, require_finite
+from fmus.slave import designs
+from fmus.slave.base import MIN_STEP, GuardedSlave
+from fmus.slave.sampling import SampledSteps, declare_sample_phase
+from fmus.slave.refusals import ABSURD, refuse_absurd, require_finite
 
 OUTPUTS = ("dq1", "dq2", "ddq1", "ddq2")
 #: Lowest fc T of a filter: below (fc T ~ 1e-9) the discretised Bessel filters are singular.
@@ -41,7 +41,7 @@ class Derivator(SampledSteps, GuardedSlave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        designs.load(self.resources)   # what its build computed ahead (fmus/designs.py)
+        designs.load(self.resources)   # what its build computed ahead (fmus/slave/designs.py)
         d = self.declare
         d("q1", "input", 0.0, "Chain 1 actuated angle sample [rad]")
         d("q2", "input", 0.0, "Chain 2 actuated angle sample [rad]")

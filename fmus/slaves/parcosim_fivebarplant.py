@@ -5,9 +5,9 @@ process share one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
-from fmus import budget
-from fmus.guarded import GuardedSlave
-from fmus.parts import PLANT_OUTPUTS, build_plant, correct_plant, declare_plant, publish_plant
+from fmus.slave import budget
+from fmus.slave.base import GuardedSlave
+from fmus.slave.declarations import PLANT_OUTPUTS, build_plant, correct_plant, declare_plant, publish_plant
 
 OUTPUTS = tuple(name for name, _ in PLANT_OUTPUTS)
 
@@ -27,7 +27,7 @@ class FiveBarPlant(GuardedSlave):
         self.idle_steps = 0    # a model in a controller: steps with zero torques (ChainCore)
 
     def known_step_work(self) -> float:
-        """The least CPU [s] a step is charged (:func:`fmus.budget.known_step_work`)."""
+        """The least CPU [s] a step is charged (:func:`fmus.slave.budget.known_step_work`)."""
         return budget.known_step_work(self.sim)
 
     def setup(self):
@@ -47,11 +47,11 @@ class FiveBarPlant(GuardedSlave):
         publish_plant(self, sim)
 
     def _advance(self, tau1, tau2, current_time, step_size):
-        """The plant's step with the torques held, within the call's work limit (:mod:`fmus.budget`)."""
+        """The plant's step with the torques held, within the call's work limit (:mod:`fmus.slave.budget`)."""
         sim = self.sim
         budget.step_plant(sim, lambda limit: sim.step(tau1, tau2, step_size, limit), current_time, step_size)
 
-    # --- a model of the plant inside a controller (fmus.embedded.ChainCore) -------------
+    # --- a model of the plant inside a controller (fmus.systemfmu.cores.ChainCore) -------------
     def snapshot(self):
         """The state before the next step, for :meth:`correct`."""
         return self.sim.y, self.sim.time

@@ -6,7 +6,7 @@ Timing: ``doStep(t, h)`` reads the measurements and references set before it (th
 at t), computes the torques and current references and holds them as outputs; the master
 applies them to the drives/plant over [t, t + h].  Outputs change only in ``doStep``: no
 direct feedthrough.  Steps h = T / n sample once per period, on sub-step ``sample_phase``,
-and hold in between (:mod:`fmus.sampling`); T is the integration step of the sliding term.  ``delay_steps`` = n > 0
+and hold in between (:mod:`fmus.slave.sampling`); T is the integration step of the sliding term.  ``delay_steps`` = n > 0
 models a computation delay (docs/twin.md: on the bench of 7.2.1 a Raspberry Pi 2 reads the
 encoders at a sample and computes the law; the thesis does not say when the commands reach
 the driver, the twin assumes at the next sample): the outputs ``tau1``,
@@ -17,7 +17,7 @@ Numeric parameters ``lam``, ``m_star``, ``phi``, ``k1``, ``k2``, ``kt1``, ``kt2`
 meaning "the strategy preset's value" (Tables 6-8; ``trajectory`` picks Table 6 or 7 for
 joint-space strategies) or the motor presets' kt.  ``gamma1``, ``gamma2`` > 0 turn on the
 adaptive gain (6.66).  The tabulated model's table travels in the FMU's resources, built with
-the FMU for its parameters then (:mod:`fmus.designs`); other parameters (the grid ``grid_step``,
+the FMU for its parameters then (:mod:`fmus.slave.designs`); other parameters (the grid ``grid_step``,
 ``x_min`` ... ``y_max``, the plant's, ``model_error``) give another table, loaded from the user's
 cache (``controller.model.cache_dir``) or built at initialisation, which the log says.
 
@@ -35,11 +35,11 @@ from controller.law import delay
 from controller.model import DEFAULT_EXTENT, DEFAULT_GRID_STEP
 from controller.position import PositionController as _Controller
 from controller.strategies import get_strategy
-from fmus import designs
-from fmus.guarded import MIN_STEP, GuardedSlave
-from fmus.sampling import SampledSteps, declare_sample_phase
-from fmus.refusals import PRESET_VALUE, refuse_absurd, refuse_tiny, require_finite
-from fmus.parts import declare_counter_masses, with_counter_masses
+from fmus.slave import designs
+from fmus.slave.base import MIN_STEP, GuardedSlave
+from fmus.slave.sampling import SampledSteps, declare_sample_phase
+from fmus.slave.refusals import PRESET_VALUE, refuse_absurd, refuse_tiny, require_finite
+from fmus.slave.declarations import declare_counter_masses, with_counter_masses
 from plant import get_preset
 
 #: Start value meaning "the preset's value".
@@ -63,7 +63,7 @@ class PositionController(SampledSteps, GuardedSlave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        designs.load(self.resources)   # what its build computed ahead (fmus/designs.py)
+        designs.load(self.resources)   # what its build computed ahead (fmus/slave/designs.py)
         d = self.declare
         for name, text in (("q1", "Measured q1 [rad]"), ("q2", "Measured q2 [rad]"),
                            ("dq1", "Measured dq1 [rad/s]"), ("dq2", "Measured dq2 [rad/s]"),

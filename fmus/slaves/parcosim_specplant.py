@@ -12,12 +12,10 @@ from __future__ import annotations
 
 import os
 
-from fmus import budget
-from fmus.guarded import GuardedSlave
-from fmus.refusals import refuse_absurd, require_finite
-
-#: The spec inside the FMU's resources.
-SPEC_RESOURCE = "plant_spec.toml"
+from fmus.slave import budget
+from fmus.slave.base import GuardedSlave
+from fmus.slave.designs import SPEC_RESOURCE
+from fmus.slave.refusals import refuse_absurd, require_finite
 
 
 class SpecPlant(GuardedSlave):
@@ -75,7 +73,7 @@ class SpecPlant(GuardedSlave):
         self._publish()
 
     def known_step_work(self) -> float:
-        """The least CPU [s] a step is charged (:func:`fmus.budget.known_step_work`)."""
+        """The least CPU [s] a step is charged (:func:`fmus.slave.budget.known_step_work`)."""
         return budget.known_step_work(self.sim)
 
     def step(self, current_time, step_size):

@@ -12,8 +12,8 @@ process share one Python interpreter and its module cache.
 from __future__ import annotations
 
 from controller.trajectories import BENCH_START, PRESET_CYCLES, from_parameters, sample_buffers, sample_values
-from fmus.guarded import GuardedSlave
-from fmus.refusals import refuse_absurd, refuse_tiny, require_finite
+from fmus.slave.base import GuardedSlave
+from fmus.slave.refusals import refuse_absurd, refuse_tiny, require_finite
 
 OUTPUTS = ("x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
 

@@ -11,9 +11,9 @@ from __future__ import annotations
 
 from dataclasses import fields
 
-from fmus import budget
-from fmus.guarded import GuardedSlave
-from fmus.refusals import refuse_absurd, refuse_absurd_inputs, refuse_tiny, require_finite
+from fmus.slave import budget
+from fmus.slave.base import GuardedSlave
+from fmus.slave.refusals import refuse_absurd, refuse_absurd_inputs, refuse_tiny, require_finite
 
 #: (output, description) of the pendulum (docs/contract.md).
 OUTPUTS = (
@@ -96,7 +96,7 @@ class WheeledPendulum(GuardedSlave):
         self.publish()
 
     def known_step_work(self) -> float:
-        """The CPU [s] a step is charged: 4 evaluations a substep (:mod:`fmus.budget`)."""
+        """The CPU [s] a step is charged: 4 evaluations a substep (:mod:`fmus.slave.budget`)."""
         return 4 * self.sim.substeps * budget.WHEELED_RK4_EVALUATION
 
     def publish(self):

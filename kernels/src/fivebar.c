@@ -384,7 +384,7 @@ void pc_fivebar_terms_of(const void *model, const double *q, const double *dq, d
     pc_fivebar_inverse_terms(model, q, dq, (pc_fivebar_inverse *)terms);
 }
 
-/* The plant's outputs (fmus.parts.PLANT_OUTPUTS order) from a report into x[first ..]. */
+/* The plant's outputs (fmus.slave.declarations.PLANT_OUTPUTS order) from a report into x[first ..]. */
 static void publish(const pc_fivebar_report *rep, double *x, int first)
 {
     const double o[11] = {rep->q1, rep->q2, rep->dq1, rep->dq2, rep->x, rep->y, rep->dx, rep->dy, rep->q1_enc,

@@ -75,7 +75,7 @@ typedef struct {
     double finite;        /* 1 if every state entry is finite, else 0 */
     double residual;      /* norm of the position residual (5.18) [m] */
     double measures[3];   /* sin theta12, sin theta22, sin(phi12 - phi22) */
-    /* the FiveBarPlant outputs, world convention (fmus.parts.PLANT_OUTPUTS order) */
+    /* the FiveBarPlant outputs, world convention (fmus.slave.declarations.PLANT_OUTPUTS order) */
     double q1, q2, dq1, dq2, x, y, dx, dy, q1_enc, q2_enc;
 } pc_fivebar_report;
 

@@ -1,4 +1,4 @@
-/* The compiled mode's step loop (fmus/compiled.py): a system's components stepped in their
+/* The compiled mode's step loop (fmus/cosim/compiled.py): a system's components stepped in their
  * Gauss-Seidel order, each through its model's I/O function (pc_io_fn), the connections
  * copies between fixed slots of one value array.  The plan is data built once per run; no
  * code is generated. */

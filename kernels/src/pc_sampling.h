@@ -1,6 +1,6 @@
 /* The sub-step counting rule of a sampled component (docs/master.md "Sub-stepping sampled
  * components"), once for every user: the drive's current controller (drive.c), the native
- * FMUs' adapters and, through the kernels' library, fmus/sampling.py.
+ * FMUs' adapters and, through the kernels' library, fmus/slave/sampling.py.
  *
  * A component sampled at T accepts steps h = T / n (n a whole number, 1e-9 relative).  It
  * counts its steps in the period with a whole-number counter (never fmod of the time, which

@@ -16,7 +16,7 @@
 #include "pcn_model.h"
 #include "pcn_sampling.h"
 
-#define ABSURD 1e6   /* fmus/refusals.py */
+#define ABSURD 1e6   /* fmus/slave/refusals.py */
 #define MIN_STEP 1e-9
 #define WORDS ((long)(sizeof(pc_balance) / sizeof(double)))
 #define CONFIGURATION ((long)(sizeof(pc_balance_params) / sizeof(double)))

@@ -129,7 +129,7 @@ static int check_step(pcn_instance *in, double t, double h, pcn_text *why)
     return 0;
 }
 
-/* fmus/embedded.py's _steps_in, then the loop's steps. */
+/* fmus/systemfmu/cores.py's _steps_in, then the loop's steps. */
 static int step(pcn_instance *in, double t, double h, pcn_text *why)
 {
     const double H = pcn_loop.step;

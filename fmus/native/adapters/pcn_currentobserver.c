@@ -17,7 +17,7 @@
 #include "pcn_model.h"
 #include "pcn_sampling.h"
 
-#define ABSURD 1e6   /* fmus/refusals.py */
+#define ABSURD 1e6   /* fmus/slave/refusals.py */
 #define TINY 1e-12
 #define PRESET_VALUE (-1.0)
 #define MIN_STEP 1e-9

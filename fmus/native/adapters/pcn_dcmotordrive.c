@@ -20,7 +20,7 @@
 #include "pcn_model.h"
 #include "pcn_sampling.h"
 
-#define ABSURD 1e6   /* fmus/refusals.py */
+#define ABSURD 1e6   /* fmus/slave/refusals.py */
 #define MIN_STEP 1e-9
 #define OBSERVER_WORDS ((long)(sizeof(pc_observer) / sizeof(double)))
 

@@ -16,7 +16,7 @@
 #include "pcn_model.h"
 #include "pcn_sampling.h"
 
-#define ABSURD 1e6      /* fmus/refusals.py */
+#define ABSURD 1e6      /* fmus/slave/refusals.py */
 #define MIN_FC_T 1e-6   /* the slave's lowest fc T */
 #define CHANNELS 2
 

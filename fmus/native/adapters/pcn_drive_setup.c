@@ -8,7 +8,7 @@
 #include "electrics.h"
 #include "pc_sampling.h"
 
-#define ABSURD 1e6          /* fmus/refusals.py */
+#define ABSURD 1e6          /* fmus/slave/refusals.py */
 #define TINY 1e-12
 #define PRESET_VALUE (-1.0)
 #define MAX_COUNT 2147483648.0        /* motor._checks.count's default limit, 2^31 */

@@ -1,4 +1,4 @@
-/* One DC motor drive in a native FMU (docs/native.md): its set-up as fmus.parts.build_drive,
+/* One DC motor drive in a native FMU (docs/native.md): its set-up as fmus.slave.declarations.build_drive,
  * motor.Drive and Drive.start make it, with their checks in their order and their messages;
  * its step (drive.c) with the step coefficients of a new step length (electrics.c) and the
  * kernel's refusals in motor.kernel.DRIVE_REASONS' words; the check of restored model data.
@@ -19,14 +19,14 @@
 #include "drive.h"
 #include "pcn_text.h"
 
-/* The motor's fields in fmus.parts.MOTOR_PARAMETERS' order (their FMU variables R ... sigma1,
+/* The motor's fields in fmus.slave.declarations.MOTOR_PARAMETERS' order (their FMU variables R ... sigma1,
  * J_design: J_design sets MotorParams' J_rotor). */
 enum {
     PCN_MOTOR_R, PCN_MOTOR_L, PCN_MOTOR_KT, PCN_MOTOR_KE, PCN_MOTOR_B, PCN_MOTOR_MU, PCN_MOTOR_V_MAX,
     PCN_MOTOR_OMEGA_EPS, PCN_MOTOR_MU_S, PCN_MOTOR_OMEGA_S, PCN_MOTOR_SIGMA0, PCN_MOTOR_SIGMA1, PCN_MOTOR_J_ROTOR,
     PCN_MOTOR_FIELDS
 };
-/* fmus.parts.DESIGN_PARAMETERS: R_design, L_design, kt_design, ke_design, b_design. */
+/* fmus.slave.declarations.DESIGN_PARAMETERS: R_design, L_design, kt_design, ke_design, b_design. */
 #define PCN_DESIGN_FIELDS 5
 /* What a design depends on (motor.current_controller.design_key, the poles fixed):
  * R, L, kt, ke, b, J_rotor of the design's motor, then T. */

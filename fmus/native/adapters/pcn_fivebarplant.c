@@ -1,6 +1,6 @@
 /* Native FiveBarPlant (fmus/slaves/parcosim_fivebarplant.py) over pc_fivebar_step.
  *
- * The set-up is fmus.parts.build_plant's (pcn_plant_setup.c): the presets travel as build
+ * The set-up is fmus.slave.declarations.build_plant's (pcn_plant_setup.c): the presets travel as build
  * data, every parameter works as in the pythonfmu FMU except the settings that have no C
  * (method 'dopri5', kernel 'general'), refused by name at initialisation.  A step is
  * PlantSimulator.step's with RK4 and the C kernel: without projection one pc_fivebar_step (the

@@ -8,7 +8,7 @@
 #include "kinematics5r.h"
 #include "model_config.h"
 
-#define ABSURD 1e6             /* fmus/refusals.py */
+#define ABSURD 1e6             /* fmus/slave/refusals.py */
 #define TINY 1e-12
 #define PRESET_VALUE (-1.0)
 #define PI 3.14159265358979323846   /* math.pi */
@@ -54,7 +54,7 @@ static const double *preset(const pcn_instance *in, pcn_text *why)
     return NULL;
 }
 
-/* fmus.parts._chain_overrides: chain k's (1, 2) fields with chain<k>_<field> unless -1. */
+/* fmus.slave.declarations._chain_overrides: chain k's (1, 2) fields with chain<k>_<field> unless -1. */
 static int chain_overrides(const pcn_instance *in, int k, double chain[CHAIN_FIELDS], pcn_text *why)
 {
     static const char *const fields[8] = {"l1", "l2", "lg1", "lg2", "m1", "m2", "Jz1", "Jz2"};
@@ -86,7 +86,7 @@ static void counter_offsets(const double c[CHAIN_FIELDS], double M1, double M2, 
     L[0] = M1 > 0.0 ? -(m1 * lg1 + (M2 + m2) * l1) / M1 : 0.0;
 }
 
-/* fmus.parts.with_counter_masses: checked, named as the FMU's variables. */
+/* fmus.slave.declarations.with_counter_masses: checked, named as the FMU's variables. */
 static int counter_masses(const pcn_instance *in, double chains[2][CHAIN_FIELDS], double M[2], pcn_text *why)
 {
     static const char *const names[2] = {"counter_mass1", "counter_mass2"};

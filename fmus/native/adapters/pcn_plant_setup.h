@@ -1,12 +1,12 @@
 /* The 5R plant's set-up and refusals for the native FiveBarPlant and ActuatedFiveBarPlant
- * (docs/native.md): fmus.parts.build_plant's checks in their order with their messages, the
+ * (docs/native.md): fmus.slave.declarations.build_plant's checks in their order with their messages, the
  * presets (build data: pcn_plant_preset_*), the chain overrides, the counter-masses absorbed
  * into the links (plant.fast5r.composite_link), the link inertias, the integrator settings
  * (RK4 with kernel 'fast' only: dopri5 and the general kernel have no C and are refused by
  * name), the encoders and the start at rest from the inverse kinematics
  * (plant.fivebar.thesis_coordinates); then PlantSimulator's step-size rule and the texts of
  * its refused steps.  Both models declare the plant's variables under the same names
- * (fmus.parts.declare_plant), so this file compiles against either model's model_config.h.
+ * (fmus.slave.declarations.declare_plant), so this file compiles against either model's model_config.h.
  */
 #ifndef PCN_PLANT_SETUP_H
 #define PCN_PLANT_SETUP_H
@@ -29,7 +29,7 @@ typedef struct {
  * (why written, as the twin's ValueError) when refused. */
 int pcn_plant_setup(const pcn_instance *in, pcn_plant_config *c, double y[PCN_PLANT_STATES], pcn_text *why);
 
-/* The plant's outputs (fmus.parts.PLANT_OUTPUTS) of a state's report into the output slots. */
+/* The plant's outputs (fmus.slave.declarations.PLANT_OUTPUTS) of a state's report into the output slots. */
 void pcn_plant_publish(pcn_instance *in, const pc_fivebar_report *report);
 
 /* PlantSimulator.check_step beyond h > 0: Baumgarte's lambda against RK4's stability. */

@@ -26,10 +26,10 @@
 #include "pcn_model.h"
 #include "pcn_sampling.h"
 
-#define ABSURD 1e6          /* fmus/refusals.py */
+#define ABSURD 1e6          /* fmus/slave/refusals.py */
 #define TINY 1e-12
 #define PRESET_VALUE (-1.0)
-#define MIN_STEP 1e-9       /* fmus/guarded.py */
+#define MIN_STEP 1e-9       /* fmus/slave/base.py */
 #define N_NUMERIC 18
 #define N_INPUTS 12
 
@@ -135,7 +135,7 @@ static int check_numbers(const pcn_instance *in, const double *v, double kt[2], 
     return 0;
 }
 
-/* fmus.parts.with_counter_masses on preset p: finite, absurd, >= 0, heavy enough to balance. */
+/* fmus.slave.declarations.with_counter_masses on preset p: finite, absurd, >= 0, heavy enough to balance. */
 static int check_counter_masses(const pcn_instance *in, int p, pcn_text *why)
 {
     static const char *const names[2] = {"counter_mass1", "counter_mass2"};

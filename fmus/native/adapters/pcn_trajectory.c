@@ -12,7 +12,7 @@
 #include "pcn_model.h"
 #include "trajectory.h"
 
-#define ABSURD 1e6   /* fmus/refusals.py */
+#define ABSURD 1e6   /* fmus/slave/refusals.py */
 #define TINY 1e-12
 #define PRESET_CYCLES (-1)
 

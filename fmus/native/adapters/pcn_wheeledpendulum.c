@@ -13,7 +13,7 @@
 #include "pcn_model.h"
 #include "wheeled.h"
 
-#define ABSURD 1e6   /* fmus/refusals.py */
+#define ABSURD 1e6   /* fmus/slave/refusals.py */
 #define TINY 1e-12
 #define N_PARAMS 11
 #define N_INITIAL 8

@@ -1,0 +1,260 @@
+"""The compiled mode: a system's whole step loop run in C.
+
+``simulate(system, mode="compiled")`` (``parcosim run SCENE --mode compiled``) builds the
+in-process slaves and initialises them exactly as ``mode="inprocess"`` does (same
+:class:`fmus.cosim.stepper.Stepper`, same stepping order, same t = 0 row).  Then each component's
+**compiled adapter** (:data:`ADAPTERS`, one per model, in :mod:`fmus.cosim.compiled_adapters`) hands over
+its model's C I/O step (``pc_<model>_io`` in kernels/src/) and a context pointing at the
+buffers its model already steps with; :class:`Plan` lays the stepping order, the slots and
+those pointers out as one ``pc_loop_plan``, and ``pc_loop_run`` (kernels/src/loop.c) steps
+them with the connections as copies between fixed slots.  Same kernels, same buffers, same
+order: the rows are bit-identical to the in-process run.  Nothing is generated or compiled
+at run time: ``compile_s`` is building the plan.
+
+Refusals: a kernel that cannot do exactly what the Python model would (a refused input,
+a diverged step, a controller sample off its table) returns a non-zero status without
+changing anything; the loop stops there, and the rest of that step runs in Python through
+the same slave objects (:meth:`fmus.cosim.adapter.Adapter.to_python` first), which raise the refusal's
+message or take the sample (e.g. the exact model where the table has a hole); then the
+compiled loop goes on from the next step.
+
+A model without an adapter, a component given as an FMU file, Jacobi coupling, retried
+steps or an adapter that declines its settings (:class:`fmus.cosim.adapter.NotCompilable`) make the run fall
+back to ``mode="inprocess"`` with a warning saying why (``Result.extra["fallback"]``).
+"""
+from __future__ import annotations
+
+import ctypes
+import time as _time
+from pathlib import Path
+
+import numpy as np
+
+import kernels
+from kernels import Refusal
+
+from fmus.slave.base import MAX_TIME
+from fmus.cosim.backends import CoSimulationError
+from fmus.cosim.adapter import ADAPTERS, NotCompilable
+from fmus.cosim.system import split_signal
+
+
+class _LoopPlan(ctypes.Structure):
+    """``pc_loop_plan`` (kernels/src/loop.h)."""
+
+    _int_p = ctypes.POINTER(ctypes.c_int)
+    _fields_ = [("n_groups", ctypes.c_int), ("group_substeps", _int_p), ("group_end", _int_p),
+                ("io", ctypes.POINTER(ctypes.c_void_p)), ("context", ctypes.POINTER(ctypes.c_void_p)),
+                ("x", ctypes.POINTER(ctypes.c_void_p)),
+                ("in_end", _int_p), ("in_x", _int_p), ("in_slot", _int_p),
+                ("out_end", _int_p), ("out_x", _int_p), ("out_slot", _int_p),
+                ("n_record", ctypes.c_int), ("record_slot", _int_p)]
+
+
+class _LoopStop(ctypes.Structure):
+    """``pc_loop_stop`` (kernels/src/loop.h)."""
+
+    _fields_ = [("step", ctypes.c_int), ("member", ctypes.c_int), ("substep", ctypes.c_int),
+                ("time", ctypes.c_double), ("refusal", Refusal)]
+
+
+def _ints(values) -> np.ndarray:
+    return np.ascontiguousarray(values, dtype=np.intc)
+
+
+class Member:
+    """One member of a :class:`LoopPlan`: its I/O step and context (addresses), its ``x``
+    array, and its connections as (index in x, slot) pairs."""
+
+    def __init__(self, io: int, context: int, x: np.ndarray, inputs=(), outputs=()):
+        self.io, self.context, self.x = io, context, x
+        self.inputs, self.outputs = list(inputs), list(outputs)
+
+
+class LoopPlan:
+    """A ``pc_loop_plan`` (kernels/src/loop.h) and the arrays it points into.
+
+    Parameters
+    ----------
+    groups : list of (int, list of Member)
+        The stepping order: groups of members stepped ``substeps`` times per step.
+    record_slots : sequence of int
+        The slots recorded after every step.
+    """
+
+    def __init__(self, groups, record_slots):
+        group_substeps, group_end, members = [], [], []
+        for substeps, group in groups:
+            members += group
+            group_substeps.append(substeps)
+            group_end.append(len(members))
+        self.members = members
+        pairs = {"in": [m.inputs for m in members], "out": [m.outputs for m in members]}
+        arrays = {"group_substeps": group_substeps, "group_end": group_end, "record_slot": list(record_slots)}
+        for kind, lists in pairs.items():
+            arrays[f"{kind}_end"] = np.cumsum([len(p) for p in lists]).tolist()
+            arrays[f"{kind}_x"] = [x for p in lists for x, _ in p]
+            arrays[f"{kind}_slot"] = [s for p in lists for _, s in p]
+        self._arrays = {name: _ints(values) for name, values in arrays.items()}
+        self._pointers = {"io": np.array([m.io for m in members], dtype=np.uintp),
+                          "context": np.array([m.context for m in members], dtype=np.uintp),
+                          "x": np.array([kernels.address(m.x) for m in members], dtype=np.uintp)}
+        fields = {name: a.ctypes.data_as(ctypes.POINTER(ctypes.c_int)) for name, a in self._arrays.items()}
+        fields.update({name: a.ctypes.data_as(ctypes.POINTER(ctypes.c_void_p)) for name, a in self._pointers.items()})
+        self.struct = _LoopPlan(n_groups=len(group_substeps), n_record=len(arrays["record_slot"]), **fields)
+
+    def run(self, values: np.ndarray, record: np.ndarray, k0: int, k1: int, t: float, h: float) -> _LoopStop:
+        """Steps k0 .. k1-1 in C (``values`` and the C-contiguous ``record`` are written in
+        place); the stop says where and why it ended."""
+        stop = _LoopStop()
+        _loop_run()(ctypes.byref(self.struct), kernels.address(values), kernels.address(record), k0, k1, t, h,
+                    ctypes.byref(stop))
+        return stop
+
+
+class Plan:
+    """The compiled loop of one system: its adapters in stepping order and their
+    :class:`LoopPlan`."""
+
+    def __init__(self, system, stepper, instances):
+        self.system, self.stepper = system, stepper
+        entries = {id(inst): name for name, inst in instances.items()}
+        self.adapters, self.positions = [], []   # positions: (group, member) of each adapter
+        self._contexts = []
+        h = system.step
+        groups = []
+        for g, (substeps, members) in enumerate(stepper.groups):
+            group = []
+            for m, (inst, in_slots, out_slots) in enumerate(members):
+                name = entries[id(inst)]
+                adapter = self._adapter(name, system.component(name).model, inst.slave, h / substeps)
+                in_names, out_names = stepper.io_names[name]
+                layout = adapter.inputs + adapter.outputs
+                context = adapter.context()
+                self._contexts.append(context)
+                group.append(Member(adapter.io_address(), ctypes.addressof(context), adapter.x,
+                                    [(layout.index(n), s) for n, s in zip(in_names, in_slots)],
+                                    [(layout.index(n), s) for n, s in zip(out_names, out_slots)]))
+                self.adapters.append(adapter)
+                self.positions.append((g, m))
+            groups.append((substeps, group))
+        self.loop = LoopPlan(groups, stepper.record_slots)
+        self.description = self._describe()
+
+    def _adapter(self, name, model, slave, h):
+        cls = ADAPTERS.get(model)
+        if cls is None:
+            raise NotCompilable(f"component {name}: model {model!r} has no compiled adapter")
+        try:
+            slave.check_step_size(0.0, h)
+        except ValueError as exc:
+            raise NotCompilable(f"component {name}: {exc}") from None
+        adapter = cls(name, slave, h)
+        in_names, out_names = self.stepper.io_names[name]
+        for kind, names, known in (("input", in_names, cls.inputs), ("output", out_names, cls.outputs)):
+            unknown = [n for n in names if n not in known]
+            if unknown:
+                raise NotCompilable(f"component {name}: {kind}s {', '.join(unknown)} of {model} are not "
+                                    "in its compiled adapter")
+        adapter.x = np.array([float(getattr(slave, n)) for n in cls.inputs + cls.outputs])
+        return adapter
+
+    def _describe(self) -> str:
+        """The stepping order as text: one line per member (``# name (model): kernel``)."""
+        lines = []
+        for (g, _), a in zip(self.positions, self.adapters):
+            substeps = self.stepper.groups[g][0]
+            lines.append(f"# {a.name} ({a.model}): {a.kernel}" + (f", {substeps} sub-steps" if substeps > 1 else ""))
+        return "\n".join(lines)
+
+    def run(self, values, record, k0, k1, t, h) -> _LoopStop:
+        """:meth:`LoopPlan.run` of the system's plan."""
+        return self.loop.run(values, record, k0, k1, t, h)
+
+
+def _loop_run():
+    return kernels.function("pc_loop_run", None, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int,
+                            ctypes.c_int, ctypes.c_double, ctypes.c_double, ctypes.c_void_p)
+
+
+def check_compilable(system, coupling: str, retry_substeps) -> None:
+    """Raise :class:`NotCompilable` for what the compiled loop does not cover, before anything is built."""
+    from fmus.cosim.foreign import is_fmu_file
+
+    if coupling != "gauss-seidel":
+        raise NotCompilable(f"coupling {coupling!r}: the compiled loop is Gauss-Seidel only")
+    if retry_substeps is not None:
+        raise NotCompilable("retry_substeps: retried steps need FMU states, which the compiled loop does not take")
+    for c in system.components:
+        if is_fmu_file(c.model):
+            raise NotCompilable(f"component {c.name} is an FMU file ({Path(c.model).name}), which has no compiled "
+                                "adapter")
+        if c.model not in _adapters():
+            raise NotCompilable(f"component {c.name}: model {c.model!r} has no compiled adapter")
+    if not system.stop_time + system.step <= MAX_TIME:
+        raise NotCompilable(f"stop time {system.stop_time!r} s is beyond {MAX_TIME:g} s")
+
+
+def _adapters() -> dict:
+    from fmus.cosim import compiled_adapters  # noqa: F401 - registers the adapters of parcosim's models
+
+    return ADAPTERS
+
+
+def run_compiled(system, instances, order, progress, interrupt, result_of):
+    """Initialise, compile and step; ``result_of(data, rows, error, interrupted, wall, init)``
+    makes the :class:`fmus.cosim.master.Result`.  Raises :class:`NotCompilable` before the first
+    step when a component's settings have no compiled loop."""
+    from fmus.cosim.stepper import Stepper
+
+    _adapters()
+    stepper = Stepper(system, instances, order)
+    h, steps = system.step, system.steps
+    data = np.full((steps + 1, len(system.record)), np.nan)
+    init_start = _time.perf_counter()
+    try:
+        stepper.initialize(0.0)
+    except CoSimulationError as exc:
+        return result_of(data[:0], exc, False, 0.0, _time.perf_counter() - init_start, {})
+    data[0] = stepper.row()
+    compile_start = _time.perf_counter()
+    plan = Plan(system, stepper, instances)
+    values = np.array(stepper.values, dtype=float)
+    compile_s = _time.perf_counter() - compile_start
+    init_s = compile_start - init_start
+    start, cpu_start = _time.perf_counter(), _time.thread_time()
+    error, interrupted, done, t = None, False, 0, 0.0
+    chunk = max(1, steps // 100)
+    python_steps = 0
+    try:
+        while done < steps:
+            if interrupt.requested:
+                raise KeyboardInterrupt
+            end = min(steps, done + chunk)
+            stop = plan.run(values, data, done, end, t, h)
+            done, t = stop.step, stop.time
+            if stop.member >= 0:     # a kernel declined step k: the Python path takes the rest of it
+                for a in plan.adapters:
+                    a.to_python()
+                    a.slave._next_time = None   # the slaves did not see the compiled steps
+                stepper.values[:] = values.tolist()
+                g, m = plan.positions[stop.member]
+                stepper.time = t
+                stepper.step(start=(g, m, stop.substep))
+                for a in plan.adapters:
+                    a.from_python()
+                values[:] = stepper.values
+                t = stepper.time
+                done += 1
+                data[done] = stepper.row()
+                python_steps += 1
+            if progress is not None:
+                progress(done / steps)
+    except CoSimulationError as exc:
+        error = exc
+    except KeyboardInterrupt:
+        interrupted = True
+    wall = _time.perf_counter() - start
+    extra = {"compile_s": compile_s, "python_steps": python_steps, "plan": plan.description,
+             "cpu_s": _time.thread_time() - cpu_start}
+    return result_of(data[:done + 1], error, interrupted, wall, init_s, extra)

@@ -1,0 +1,449 @@
+"""The co-simulation master: a :class:`fmus.cosim.system.System` stepped at a fixed communication step.
+
+Two back ends run the same system and give identical results:
+
+* ``"fmu"``: the built FMUs through fmpy.  Each FMU file is extracted and its model
+  description read once per process; each instance gets its value references and a
+  preallocated ctypes buffer once, and every step makes one ``fmi2SetReal``, one
+  ``fmi2DoStep`` and one ``fmi2GetReal`` call (fmpy's list-based convenience calls cost
+  about a third of a step).
+* ``"inprocess"``: the same slave classes (``fmus/slaves``) stepped directly, no FMI.
+
+Couplings (``coupling``):
+
+* ``"gauss-seidel"`` (default): components are stepped one after the other and each reads
+  the outputs its sources hold at that moment.  The order (:func:`stepping_order`) comes
+  from the connections and what the FMUs declare: an output of ``variability="discrete"``
+  is a sample taken at the step's start and held over the step (derivator, observer,
+  controller), so its readers step after it, in the same step; any other output is a
+  value at the end of the producer's step, so a reader stepped before the producer reads
+  it at the step's start, which is what a sampled component wants.  Among the orders
+  that keep every sample in its step, the master picks one where the fewest connections
+  read a continuous output already advanced to t + h (ties: the system's listing order).
+  A loop of samples or of direct-feedthrough outputs has no such order: it is reported
+  as an algebraic loop naming its connections.
+* ``"jacobi"``: every component reads the outputs all components held at the step's
+  start, then all step (what fmpy's SSP runner and Ecos do).
+
+Multi-rate: a component with ``substeps = n`` is stepped n times per communication step,
+each ``h / n``; consecutive components (in the stepping order) with the same n step
+together and exchange their values at every sub-step (e.g. the drives and the plant at
+0.25 ms while the sampled components stay at 1 ms); what they read from the others is held.
+
+Recorded signals: row 0 holds the outputs after initialisation (t = 0), row k those after
+the k-th step (t = k h): for a continuous output the value at t, for a sampled output the
+sample held over [t - h, t].
+
+A refused step (fmi2Discard/Error/Fatal, or an exception in process) stops the run;
+:class:`Result` keeps the rows recorded so far and ``error`` says which instance refused,
+at what time, with its own message.  A KeyboardInterrupt (SIGINT) stops it the same way:
+the rows recorded so far, ``error`` "interrupted at t = ...", ``interrupted`` true (an FMU
+interrupted inside a call refuses it with a message naming the KeyboardInterrupt, which
+counts as the interruption).
+"""
+from __future__ import annotations
+
+import contextlib
+import signal as _signal
+import threading
+import time as _time
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from fmus.slave.base import INTERRUPTED_MARK
+from fmus.cosim.backends import CoSimulationError, InProcessInstance, _FmuInstance
+from fmus.cosim.stepper import Stepper
+from fmus.cosim.system import System, split_signal
+
+MODES = ("fmu", "inprocess", "compiled")
+COUPLINGS = ("gauss-seidel", "jacobi")
+#: Up to this many components in one feedback loop the order is optimal (exhaustive);
+#: larger loops keep the system's listing order where the samples allow.
+EXHAUSTIVE_LIMIT = 16
+
+
+class AlgebraicLoopError(ValueError):
+    """Connections that need each other's value in the same step."""
+
+
+class RecordedRun:
+    """Signals by name (``run["plant.x"]``) and whether the run reached its end; a base of
+    run results that have ``signals`` and ``error``."""
+
+    def __getitem__(self, signal: str) -> np.ndarray:
+        return self.signals[signal]
+
+    @property
+    def completed(self) -> bool:
+        """True when the run reached its stop time."""
+        return self.error is None
+
+
+@dataclass
+class Result(RecordedRun):
+    """What a run produced: the recorded signals, and why it stopped early if it did."""
+
+    time: np.ndarray
+    signals: dict
+    order: tuple
+    mode: str
+    coupling: str
+    wall_s: float   # stepping, from the first communication point to the last
+    error: str | None = None
+    stop_time: float = 0.0
+    init_s: float = 0.0   # loading, instantiating, initialising (tables, designs)
+    #: ``cpu_s``: CPU time of this thread in the stepping (steadier than wall_s on a shared
+    #: machine); ``retried``; compiled mode: ``compile_s``, ``python_steps``, ``source``,
+    #: or ``fallback``.
+    extra: dict = field(default_factory=dict)
+    interrupted: bool = False   # stopped by KeyboardInterrupt (SIGINT); ``error`` says when
+
+
+# --- the stepping order -------------------------------------------------------------------
+
+def stepping_order(system: System, variables: dict) -> tuple:
+    """The Gauss-Seidel order of ``system``'s components (see the module docstring).
+
+    ``variables`` maps each instance name to its :class:`Variable` dict.  Raises
+    :class:`AlgebraicLoopError` when sampled or feedthrough outputs form a loop.
+    """
+    names = [c.name for c in system.components]
+    index = {n: i for i, n in enumerate(names)}
+    hard = {n: set() for n in names}      # hard[b] = components that must step before b
+    soft = {}                              # (reader, source) -> connections preferring reader first
+    hard_edges = {}
+    for conn in system.connections:
+        src, out = split_signal(conn.source)
+        dst, _ = split_signal(conn.target)
+        if src == dst:
+            continue
+        variable = variables[src][out]
+        if variable.variability == "discrete" or variable.depends_on:
+            hard[dst].add(src)
+            hard_edges.setdefault((src, dst), []).append(conn)
+        else:
+            soft[(dst, src)] = soft.get((dst, src), 0) + 1
+    _check_hard_loops(names, hard, hard_edges)
+    if len(names) > EXHAUSTIVE_LIMIT:
+        return _listing_order(names, hard)
+
+    # best[mask] = (violated soft connections, order as listing indices) over placed sets
+    best = {0: (0, ())}
+    for mask in range(1 << len(names)):
+        if mask not in best:
+            continue
+        cost, order = best[mask]
+        for i, n in enumerate(names):
+            if mask & (1 << i) or any(not mask & (1 << index[p]) for p in hard[n]):
+                continue
+            # A reader placed after its continuous source reads t + h: count those.
+            added = sum(count for (reader, source), count in soft.items()
+                        if reader == n and mask & (1 << index[source]))
+            candidate = (cost + added, order + (i,))
+            new = mask | (1 << i)
+            if new not in best or candidate < best[new]:
+                best[new] = candidate
+    return tuple(names[i] for i in best[(1 << len(names)) - 1][1])
+
+
+def _listing_order(names, hard):
+    placed, order = set(), []
+    while len(order) < len(names):
+        n = next(n for n in names if n not in placed and hard[n] <= placed)
+        placed.add(n)
+        order.append(n)
+    return tuple(order)
+
+
+def _check_hard_loops(names, hard, hard_edges):
+    state = {}
+
+    def visit(n, path):
+        state[n] = 1
+        for p in sorted(hard[n]):
+            if state.get(p) == 1:
+                cycle = path[path.index(p):] + [p] if p in path else [p, n]
+                links = []
+                for a, b in zip(cycle, cycle[1:]):
+                    for conn in hard_edges.get((b, a), ()):
+                        links.append(f"{conn.source} -> {conn.target}")
+                raise AlgebraicLoopError(
+                    "algebraic loop: these connections need each other's value within one step "
+                    "(sampled or direct-feedthrough outputs): " + "; ".join(links))
+            if state.get(p) is None:
+                visit(p, path + [p])
+        state[n] = 2
+
+    for n in names:
+        if n not in state:
+            visit(n, [n])
+
+
+# --- running -----------------------------------------------------------------------------
+
+def _instantiate(system: System, mode: str, fmu_dir):
+    """Instance name -> back-end instance: our components in process or as our built FMUs
+    (by ``mode``), components given as an FMU file through fmpy in either mode."""
+    from fmus.cosim.foreign import is_fmu_file
+
+    if mode not in MODES:
+        raise ValueError(f"mode = {mode!r}; valid: {', '.join(MODES)}")
+    ours = [c for c in system.components if not is_fmu_file(c.model)]
+    for c in system.components:
+        if is_fmu_file(c.model) and not Path(c.model).is_file():
+            raise ValueError(f"component {c.name}: no FMU file {c.model}")
+    paths = {}
+    if mode == "fmu":
+        from fmus.export.build import ensure_built
+
+        paths = ensure_built(sorted({c.model for c in ours}), fmu_dir)
+    instances = {}
+    try:
+        for c in system.components:
+            if is_fmu_file(c.model):
+                instances[c.name] = _FmuInstance(Path(c.model), c.name)
+            elif mode == "fmu":
+                instances[c.name] = _FmuInstance(paths[c.model], c.name)
+            else:
+                instances[c.name] = InProcessInstance(c.model, c.name)
+    except BaseException:
+        _close(instances)
+        raise
+    return instances
+
+
+def _close(instances: dict) -> None:
+    for inst in instances.values():
+        try:
+            inst.close()
+        except Exception:  # noqa: BLE001 - closing must not hide the run's outcome
+            pass
+
+
+#: Types a connection can carry (and a recorded signal can have).
+CONNECTABLE = ("Real", "Integer", "Boolean")
+
+
+def _check_signals(system: System, instances: dict) -> None:
+    def variable(signal, causalities):
+        instance, name = split_signal(signal)
+        variables = instances[instance].variables
+        if name not in variables:
+            model = system.component(instance).model
+            kinds = {}
+            for v in variables.values():
+                kinds.setdefault(v.causality, []).append(v.name)
+            listing = "; ".join(f"{kind} {', '.join(names)}" for kind, names in kinds.items())
+            raise ValueError(f"{signal}: {model} has no variable {name!r}; its variables: {listing}")
+        v = variables[name]
+        if v.causality not in causalities:
+            raise ValueError(f"{signal} is a {v.causality}, expected {' or '.join(causalities)}")
+        if v.type not in CONNECTABLE:
+            raise ValueError(f"{signal} is {v.type}; only {', '.join(CONNECTABLE)} signals can be connected "
+                             "or recorded")
+        return v
+
+    for conn in system.connections:
+        source, target = variable(conn.source, ("output",)), variable(conn.target, ("input",))
+        if source.type != target.type:
+            raise ValueError(f"{conn.source} ({source.type}) -> {conn.target} ({target.type}): a connection "
+                             "joins variables of one type")
+    for signal in system.record:
+        variable(signal, ("output", "input", "local"))
+    for c in system.components:
+        for name in c.parameters:
+            v = instances[c.name].variables.get(name)
+            if v is None or v.causality not in ("parameter", "input"):
+                raise ValueError(f"component {c.name}: {c.model} has no parameter {name!r}")
+
+
+def simulate(system: System, mode: str = "inprocess", coupling: str = "gauss-seidel",
+             fmu_dir=None, progress=None, retry_substeps: int | None = None) -> Result:
+    """Run ``system`` from 0 to its stop time.
+
+    Parameters
+    ----------
+    system : System
+    mode : {"inprocess", "fmu", "compiled"}
+        Slave objects called directly, the built FMUs through fmpy (built into
+        ``fmu_dir``, default ``fmus/build``, when missing or older than the sources), or the
+        slave objects' compiled kernels in one generated, compiled loop (:mod:`fmus.cosim.compiled`:
+        the same rows as in process; ``Result.extra["compile_s"]``; systems it does not
+        cover fall back to in process with a warning, ``Result.extra["fallback"]``).
+    coupling : {"gauss-seidel", "jacobi"}
+    progress : callable, optional
+        Called as ``progress(fraction)`` about a hundred times during the run.
+    retry_substeps : int, optional
+        On a refused step, set every instance back to the step's start (FMU state, taken
+        before every step) and take the step again with the refusing instance in this many
+        sub-steps, inputs held; the step is refused only if that refuses too.  Retried
+        steps are listed in ``Result.extra["retried"]`` as (time, instance).  None
+        (default): a refused step stops the run, and no state is taken.
+
+    Returns
+    -------
+    Result
+        Never raises for a refused step: ``Result.error`` says what happened and the
+        rows recorded so far are kept.  Bad systems (unknown variables, algebraic loops)
+        raise ValueError before anything runs.
+    """
+    if coupling not in COUPLINGS:
+        raise ValueError(f"coupling = {coupling!r}; valid: {', '.join(COUPLINGS)}")
+    if retry_substeps is not None and not (isinstance(retry_substeps, int) and retry_substeps >= 2):
+        raise ValueError(f"retry_substeps = {retry_substeps!r} must be an integer >= 2 (or None: no retry)")
+    with deferred_sigint() as interrupt:
+        return _simulate(system, mode, coupling, fmu_dir, progress, retry_substeps, interrupt)
+
+
+class _Interrupt:
+    """Whether a SIGINT arrived (:func:`deferred_sigint`)."""
+
+    requested = False
+
+
+@contextlib.contextmanager
+def deferred_sigint():
+    """While inside, the first SIGINT only sets ``requested`` on the object yielded (the
+    master stops between steps, never inside an FMU's call, where a KeyboardInterrupt
+    would reach the FMU's own Python); a second one raises KeyboardInterrupt at once.
+    Outside the main thread, or under a handler other than Python's default, nothing changes."""
+    interrupt = _Interrupt()
+    if threading.current_thread() is not threading.main_thread() or \
+            _signal.getsignal(_signal.SIGINT) is not _signal.default_int_handler:
+        yield interrupt
+        return
+
+    def handler(signum, frame):
+        if interrupt.requested:
+            raise KeyboardInterrupt
+        interrupt.requested = True
+
+    _signal.signal(_signal.SIGINT, handler)
+    try:
+        yield interrupt
+    finally:
+        _signal.signal(_signal.SIGINT, _signal.default_int_handler)
+
+
+def _simulate(system, mode, coupling, fmu_dir, progress, retry_substeps, interrupt) -> Result:
+    fallback = None
+    if mode == "compiled":
+        from fmus.cosim.compiled import NotCompilable, check_compilable
+
+        try:
+            check_compilable(system, coupling, retry_substeps)
+        except NotCompilable as exc:
+            fallback = str(exc)
+    if fallback is None and mode == "compiled":
+        try:
+            return _simulate_with(system, mode, coupling, fmu_dir, progress, retry_substeps, interrupt)
+        except NotCompilable as exc:
+            fallback = str(exc)
+    if fallback is not None:
+        warnings.warn(f"compiled mode: {fallback}; running in process instead", stacklevel=3)
+        result = _simulate_with(system, "inprocess", coupling, fmu_dir, progress, retry_substeps, interrupt)
+        result.extra["fallback"] = fallback
+        return result
+    return _simulate_with(system, mode, coupling, fmu_dir, progress, retry_substeps, interrupt)
+
+
+def _simulate_with(system, mode, coupling, fmu_dir, progress, retry_substeps, interrupt) -> Result:
+    loading = _time.perf_counter()
+    instances = _instantiate(system, "inprocess" if mode == "compiled" else mode, fmu_dir)
+    loading_s = _time.perf_counter() - loading
+    try:
+        from fmus.cosim.foreign import without_missing_parameters
+
+        system, skipped = without_missing_parameters(system, {n: set(i.variables) for n, i in instances.items()})
+        _check_signals(system, instances)
+        if skipped:
+            warnings.warn(skipped, stacklevel=2)
+        variables = {n: inst.variables for n, inst in instances.items()}
+        order = (stepping_order(system, variables) if coupling == "gauss-seidel"
+                 else tuple(c.name for c in system.components))
+        if mode == "compiled":
+            from fmus.cosim.compiled import run_compiled
+
+            def result_of(data, error, interrupted, wall, init_s, extra):
+                return _result(system, data, order, mode, coupling, error, interrupted, wall,
+                               loading_s + init_s, extra)
+
+            return run_compiled(system, instances, order, progress, interrupt, result_of)
+        return _run(system, instances, order, mode, coupling, progress, loading_s, retry_substeps, interrupt)
+    finally:
+        _close(instances)
+
+
+def _result(system, data, order, mode, coupling, error, interrupted, wall, init_s, extra) -> Result:
+    """The :class:`Result` of rows ``data``, stopped by ``error`` (a CoSimulationError) or not."""
+    h, rows = system.step, len(data)
+    last = max(rows - 1, 0) * h     # the last row's time: where the run stopped
+    message = None
+    if error is not None:
+        message = (str(error) if error.time == error.time
+                   else f"{error.instance}: {error.message} at t = {last:.6g} s")
+        if INTERRUPTED_MARK in error.message:
+            interrupted = True
+            message = f"interrupted at t = {last:.6g} s ({error.instance}: {error.message})"
+    elif interrupted:
+        message = f"interrupted at t = {last:.6g} s"
+    return Result(time=np.arange(rows) * h, signals={s: data[:, j] for j, s in enumerate(system.record)},
+                  order=tuple(order), mode=mode, coupling=coupling, wall_s=wall, error=message,
+                  stop_time=system.stop_time, init_s=init_s, extra=extra, interrupted=interrupted)
+
+
+def _retrying_step(stepper: Stepper, substeps: int, retried: list) -> None:
+    """One step; if an instance refuses it, the step again from its start with that
+    instance in ``substeps`` sub-steps (the second refusal is the step's)."""
+    state = stepper.state()
+    try:
+        try:
+            stepper.step()
+        except CoSimulationError as exc:
+            stepper.restore(state)
+            retried.append((stepper.time, exc.instance))
+            try:
+                stepper.step(split={exc.instance: substeps})
+            except CoSimulationError as again:
+                raise CoSimulationError(again.instance, again.time, f"{again.message} (also refused in {substeps} "
+                                        f"sub-steps after {exc.instance} refused the full step)") from None
+    finally:
+        stepper.free_state(state)
+
+
+def _run(system, instances, order, mode, coupling, progress, loading_s=0.0, retry_substeps=None,
+         interrupt=_Interrupt) -> Result:
+    stepper = Stepper(system, instances, order, jacobi=coupling == "jacobi")
+    retried = []
+    advance = stepper.step if retry_substeps is None else lambda: _retrying_step(stepper, retry_substeps, retried)
+    h, steps = system.step, system.steps
+    data = np.full((steps + 1, len(system.record)), np.nan)
+    error, rows, interrupted = None, 0, False
+    init_start = start = _time.perf_counter()
+    cpu_start = _time.thread_time()
+    try:
+        stepper.initialize(0.0)
+        start = _time.perf_counter()
+        cpu_start = _time.thread_time()
+        data[0] = stepper.row()
+        rows = 1
+        report_every = max(1, steps // 100)
+        for k in range(steps):
+            if interrupt.requested:
+                raise KeyboardInterrupt
+            advance()
+            data[k + 1] = stepper.row()
+            rows = k + 2
+            if progress is not None and (k + 1) % report_every == 0:
+                progress((k + 1) / steps)
+    except CoSimulationError as exc:
+        error = exc
+    except KeyboardInterrupt:
+        interrupted = True
+    wall, cpu = _time.perf_counter() - start, _time.thread_time() - cpu_start
+    extra = {"cpu_s": cpu, **({"retried": retried} if retry_substeps is not None else {})}
+    return _result(system, data[:rows], order, mode, coupling, error, interrupted, wall,
+                   loading_s + (start - init_start), extra)

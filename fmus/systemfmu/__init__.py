@@ -1,0 +1,1 @@
+"""A system inside one FMU: the cores that step it, the slave base, ``parcosim export-fmu``."""

@@ -1,0 +1,1 @@
+"""Many runs on dask.distributed: the engine, sweeps, the reproduction report, the regression."""

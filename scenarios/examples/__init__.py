@@ -1,0 +1,1 @@
+"""Examples a user copies and changes."""

@@ -1,0 +1,1 @@
+"""A scene as an SSP package for other tools (two instances, or one per component)."""

@@ -1,0 +1,1 @@
+"""Studies: each writes under out/; docs change only through an explicit --docs."""
