@@ -218,7 +218,7 @@ def run_c_host(program: Path, package: Path, stop: float, work: Path, preload: s
 
 def export_loops(work: Path, scene: str) -> dict:
     """The scene's ClosedLoop FMUs: kind ("ClosedLoop native", "ClosedLoop pythonfmu") -> .fmu."""
-    from fmus.export import export_fmu
+    from fmus.systemfmu.export import export_fmu
     from fmus.native.loopbuild import export_native_fmu
     from scenarios.scenes import get_scene
 

@@ -60,7 +60,7 @@ def native_loop_fmu(tmp_path_factory):
 @pytest.fixture(scope="session")
 def twin_loop_fmu(tmp_path_factory):
     """The pythonfmu ClosedLoop of :data:`LOOP_SCENE` (``parcosim export-fmu``)."""
-    from fmus.export import export_fmu
+    from fmus.systemfmu.export import export_fmu
     from scenarios.scenes import get_scene
 
     return export_fmu(get_scene(LOOP_SCENE).system, tmp_path_factory.mktemp("twin_loop") / "ClosedLoop.fmu")

@@ -232,7 +232,7 @@ def test_other_loops_equal_their_pythonfmu_closed_loops(scene, drives_in_plant, 
     """Other kernels, other contexts: the wheeled pendulum and its balance controller (the
     push at 1 s included), and the bench with its drives inside the plant (the actuated
     plant's context points to the plant's own: a context relocated into the scratch arena)."""
-    from fmus.export import export_fmu
+    from fmus.systemfmu.export import export_fmu
     from fmus.native.loopbuild import export_native_fmu
     from scenarios.scenes import drives_in_plant as inside
 

@@ -20,13 +20,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import budget
-from ..compiled import NotCompilable, check_compilable
-from ..embedded import SYSTEM_FILE, system_to_dict
-from ..export import closed_loop_system
-from ..slaves.parcosim_closedloop import ClosedLoop
-from .build import GENERIC, HERE, KERNELS, NativeBuildError, _c_string, kernel_files, package, variables
-from .loopimage import LoopImage, loop_image
+from fmus.slave import budget
+from fmus.cosim.compiled import NotCompilable, check_compilable
+from fmus.systemfmu.cores import SYSTEM_FILE, system_to_dict
+from fmus.systemfmu.export import closed_loop_system
+from fmus.slaves.parcosim_closedloop import ClosedLoop
+from fmus.native.build import GENERIC, HERE, KERNELS, NativeBuildError, _c_string, kernel_files, package, variables
+from fmus.native.loopimage import LoopImage, loop_image
 
 MODEL = "ClosedLoop"
 #: Every kernel (the library's build stamp aside): the members' I/O steps and what they call.

@@ -26,9 +26,9 @@ import numpy as np
 
 import kernels
 
-from ..compiled import NotCompilable, Plan, _adapters
-from ..stepper import Stepper
-from .build import KERNELS
+from fmus.cosim.compiled import NotCompilable, Plan, _adapters
+from fmus.cosim.stepper import Stepper
+from fmus.native.build import KERNELS
 
 WORD = 8
 #: Relocation kinds (fmus/native/pcn_loop.h): into the data arena, the scratch arena, a function.
