@@ -1,0 +1,153 @@
+"""Which tests execute which product line: the map that makes a mutant cheap (issue 31).
+
+The whole suite runs once per state of the product and the tests, under coverage with
+pytest-cov's per-test contexts (``--cov-context=test``) and :mod:`benchmarks.mutation_timing`
+(what each test costs), in a copy of the committed tree.  Files are measured wherever they
+run from under the temporary directory (the copy, and the FMUs' bundles unzipped by an
+importer: a bundled ``.../plant/drive.py`` counts as ``plant/drive.py``); a test's
+subprocesses are measured too (``coverage.process_startup``), without a test's name.  The
+map is a gzipped JSON file named by a key of the trees of the product and the tests
+(:func:`key`), so a commit that changes neither keeps it.
+
+A mutant then runs only the tests that execute a line it changes (:func:`select`); a line
+executed only outside any test (at import, during collection, in a subprocess) falls back
+to the tests that import the module; a line nothing executes is reported as such (the
+mutant survives without a run).
+"""
+from __future__ import annotations
+
+import gzip
+import hashlib
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+MAPS = ROOT / "benchmarks" / "results"
+#: What the key covers: every tree whose change may change which test runs which line.
+KEYED = ("plant", "motor", "controller", "fmus", "scenarios", "parcosim", "kernels", "tests", "pyproject.toml")
+#: Not a test: coverage's context of lines run outside one (import, collection, subprocess).
+OUTSIDE = ""
+
+
+def key(root: Path = ROOT) -> str:
+    """A hash of the committed trees of :data:`KEYED` at HEAD (12 hex digits)."""
+    ids = subprocess.run(["git", "rev-parse", *(f"HEAD:{name}" for name in KEYED)], cwd=root, check=True,
+                         capture_output=True, text=True).stdout
+    return hashlib.sha1(ids.encode()).hexdigest()[:12]
+
+
+def map_path(root: Path = ROOT) -> Path:
+    return MAPS / f"linemap_{key(root)}.json.gz"
+
+
+def _product_file(measured: str, products: set) -> str | None:
+    """The product file (relative to the root) that a measured path is a copy of."""
+    parts = Path(measured).parts
+    for k in range(len(parts) - 1):
+        candidate = "/".join(parts[k:])
+        if candidate in products:
+            return candidate
+    return None
+
+
+def build(copy: Path, products: list, tests: list, out: Path, log=sys.stdout) -> dict:
+    """Run ``tests`` (files, relative to ``copy``) in ``copy`` under coverage; write the map to
+    ``out`` and return it."""
+    import coverage
+
+    work = Path(tempfile.mkdtemp(prefix="parcosim_linemap_"))
+    rc = work / "coveragerc"
+    data = work / ".coverage"
+    rc.write_text(f"[run]\nparallel = True\nsource = {tempfile.gettempdir()}\ndata_file = {data}\n")
+    (work / "sitecustomize.py").write_text("import coverage\ncoverage.process_startup()\n")
+    times = work / "times.json"
+    env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1", COVERAGE_PROCESS_START=str(rc), COVERAGE_FILE=str(data),
+               PARCOSIM_MUTATION_TIMES=str(times),
+               PARCOSIM_CACHE=tempfile.mkdtemp(prefix="parcosim_mapcache_"),
+               PYTHONPATH=os.pathsep.join([str(copy), str(work), *_other_paths()]))
+    command = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "benchmarks.mutation_timing",
+               "--cov", f"--cov-config={rc}", "--cov-context=test", "--cov-report=", *tests]
+    done = subprocess.run(command, cwd=copy, env=env, stdout=log, stderr=subprocess.STDOUT)
+    covered = coverage.CoverageData(basename=str(data))
+    covered.read()
+    products_set = set(products)
+    names, index = [], {}
+    lines, outside = {}, {}
+    for measured in covered.measured_files():
+        product = _product_file(measured, products_set)
+        if product is None:
+            continue
+        for line, contexts in covered.contexts_by_lineno(measured).items():
+            for context in contexts:
+                test = context.split("|")[0]
+                if test == OUTSIDE:
+                    outside.setdefault(product, set()).add(line)
+                    continue
+                if test not in index:
+                    index[test] = len(names)
+                    names.append(test)
+                lines.setdefault(product, {}).setdefault(str(line), set()).add(index[test])
+    timing = json.loads(times.read_text()) if times.exists() else {"tests": {}, "shared": {}}
+    record = {"key": out.name.split("_")[1].split(".")[0],
+              "commit": subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True,
+                                       text=True).stdout.strip(),
+              "returncode": done.returncode, "tests": names,
+              "cost": [timing["tests"].get(name, {}).get("seconds", 0.0) for name in names],
+              "shared_of": [timing["tests"].get(name, {}).get("shared", []) for name in names],
+              "shared": timing["shared"], "all_tests": timing["tests"],
+              "lines": {f: {line: sorted(ids) for line, ids in by.items()} for f, by in lines.items()},
+              "outside": {f: sorted(ls) for f, ls in outside.items()}}
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with gzip.open(out, "wt") as stream:
+        json.dump(record, stream)
+    return record
+
+
+def _other_paths() -> list:
+    """``$PYTHONPATH`` less the worktree (a copy's run must import the copy's modules, and so
+    must its subprocesses)."""
+    return [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep)
+            if p and Path(p).resolve() != ROOT]
+
+
+def load(path: Path) -> dict:
+    with gzip.open(path, "rt") as stream:
+        return json.load(stream)
+
+
+def cost(record: dict, tests: list) -> float:
+    """Seconds ``tests`` (node ids) took in the map's run: their own and their shared fixtures'."""
+    own = record["all_tests"]
+    shared = {s for t in tests for s in own.get(t, {}).get("shared", [])}
+    return sum(own.get(t, {}).get("seconds", 0.0) for t in tests) + sum(record["shared"].get(s, 0.0) for s in shared)
+
+
+def select(record: dict, file: str, first: int, last: int, near_files: list, budget: float) -> dict:
+    """The tests to run for a change of ``file``'s lines ``first``..``last``.
+
+    ``{"tests": node ids, or None when only import-time or subprocess runs execute the lines,
+    "covering": how many tests execute them, "cost": the selection's measured seconds}``;
+    the tests of ``near_files`` (the module's importers) first, then the cheaper; no more than
+    ``budget`` seconds of them (the first always).  ``tests == []``: nothing executes them.
+    """
+    by_line = record["lines"].get(file, {})
+    ids = sorted({i for line in range(first, last + 1) for i in by_line.get(str(line), ())})
+    if not ids:
+        outside = set(record["outside"].get(file, ()))
+        run_outside = any(line in outside for line in range(first, last + 1))
+        return {"tests": None if run_outside else [], "covering": 0, "cost": 0.0}
+    near = set(near_files)
+    ids.sort(key=lambda i: (record["tests"][i].split("::")[0] not in near, record["cost"][i]))
+    chosen, total = [], 0.0
+    for i in ids:
+        name = record["tests"][i]
+        extra = cost(record, chosen + [name]) - total
+        if chosen and total + extra > budget:
+            continue
+        chosen.append(name)
+        total += extra
+    return {"tests": chosen, "covering": len(ids), "cost": round(total, 2)}
