@@ -29,15 +29,20 @@ ROOT = Path(__file__).resolve().parent.parent
 MAPS = ROOT / "benchmarks" / "results"
 #: What the key covers: every tree whose change may change which test runs which line.
 KEYED = ("plant", "motor", "controller", "fmus", "scenarios", "parcosim", "kernels", "tests", "pyproject.toml")
+#: Test files no mutant runs (the mutation tools' own, the sanitizer build of pristine C): not
+#: in the map, and not in its key.
+NOT_RUN = ("tests/test_mutation", "tests/test_sanitizers.py")
 #: Not a test: coverage's context of lines run outside one (import, collection, subprocess).
 OUTSIDE = ""
 
 
-def key(root: Path = ROOT) -> str:
-    """A hash of the committed trees of :data:`KEYED` at HEAD (12 hex digits)."""
-    ids = subprocess.run(["git", "rev-parse", *(f"HEAD:{name}" for name in KEYED)], cwd=root, check=True,
-                         capture_output=True, text=True).stdout
-    return hashlib.sha1(ids.encode()).hexdigest()[:12]
+def key(root: Path = ROOT, commit: str = "HEAD") -> str:
+    """A hash of the committed files of :data:`KEYED` at ``commit`` but :data:`NOT_RUN`'s (12
+    hex digits)."""
+    listing = subprocess.run(["git", "ls-tree", "-r", commit, "--", *KEYED], cwd=root, check=True,
+                             capture_output=True, text=True).stdout.splitlines()
+    kept = [line for line in listing if not line.split("\t", 1)[1].startswith(NOT_RUN)]
+    return hashlib.sha1("\n".join(kept).encode()).hexdigest()[:12]
 
 
 def map_path(root: Path = ROOT) -> Path:
@@ -105,6 +110,30 @@ def build(copy: Path, products: list, tests: list, out: Path, log=sys.stdout) ->
     with gzip.open(out, "wt") as stream:
         json.dump(record, stream)
     return record
+
+
+def merge(records: list, out: Path) -> dict:
+    """One map of the maps of disjoint sets of test files (built side by side); a shared
+    fixture costs the most any of them measured."""
+    merged = {"key": records[0]["key"], "commit": records[0]["commit"],
+              "returncode": max(r["returncode"] for r in records), "tests": [], "cost": [], "shared_of": [],
+              "shared": {}, "all_tests": {}, "lines": {}, "outside": {}}
+    for r in records:
+        offset = len(merged["tests"])
+        for name in ("tests", "cost", "shared_of"):
+            merged[name] += r[name]
+        merged["all_tests"].update(r["all_tests"])
+        for fixture, seconds in r["shared"].items():
+            merged["shared"][fixture] = max(seconds, merged["shared"].get(fixture, 0.0))
+        for f, by in r["lines"].items():
+            into = merged["lines"].setdefault(f, {})
+            for line, ids in by.items():
+                into[line] = into.get(line, []) + [i + offset for i in ids]
+        for f, lines in r["outside"].items():
+            merged["outside"][f] = sorted(set(merged["outside"].get(f, [])) | set(lines))
+    with gzip.open(out, "wt") as stream:
+        json.dump(merged, stream)
+    return merged
 
 
 def _other_paths() -> list:
