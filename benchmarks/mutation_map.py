@@ -1,13 +1,14 @@
 """Which tests execute which product line: the map that makes a mutant cheap (issue 31).
 
-The whole suite runs once per state of the product and the tests, under coverage with
-pytest-cov's per-test contexts (``--cov-context=test``) and :mod:`benchmarks.mutation_timing`
-(what each test costs), in a copy of the committed tree.  Files are measured wherever they
+Each test file runs once per state of the product and the tests, the first time a mutant
+asks for it, under coverage with pytest-cov's per-test contexts (``--cov-context=test``) and
+:mod:`benchmarks.mutation_timing` (what each test costs, which fail anyway), in a copy of the
+committed tree.  Files are measured wherever they
 run from under the temporary directory (the copy, and the FMUs' bundles unzipped by an
 importer: a bundled ``.../plant/drive.py`` counts as ``plant/drive.py``); a test's
 subprocesses are measured too (``coverage.process_startup``), without a test's name.  The
-map is a gzipped JSON file named by a key of the trees of the product and the tests
-(:func:`key`), so a commit that changes neither keeps it.
+map of a test file is a gzipped JSON file under a folder named by a key of the product's
+and the tests' files (:func:`key`), so a commit that changes neither keeps it.
 
 A mutant then runs only the tests that execute a line it changes (:func:`select`); a line
 executed only outside any test (at import, during collection, in a subprocess) falls back
@@ -20,13 +21,13 @@ import gzip
 import hashlib
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-MAPS = ROOT / "benchmarks" / "results"
 #: What the key covers: every tree whose change may change which test runs which line.
 KEYED = ("plant", "motor", "controller", "fmus", "scenarios", "parcosim", "kernels", "tests", "pyproject.toml")
 #: Test files no mutant runs (the mutation tools' own, the sanitizer build of pristine C): not
@@ -43,10 +44,6 @@ def key(root: Path = ROOT, commit: str = "HEAD") -> str:
                              capture_output=True, text=True).stdout.splitlines()
     kept = [line for line in listing if not line.split("\t", 1)[1].startswith(NOT_RUN)]
     return hashlib.sha1("\n".join(kept).encode()).hexdigest()[:12]
-
-
-def map_path(root: Path = ROOT) -> Path:
-    return MAPS / f"linemap_{key(root)}.json.gz"
 
 
 def _product_file(measured: str, products: set) -> str | None:
@@ -96,29 +93,29 @@ def build(copy: Path, products: list, tests: list, out: Path, log=sys.stdout) ->
                     index[test] = len(names)
                     names.append(test)
                 lines.setdefault(product, {}).setdefault(str(line), set()).add(index[test])
-    timing = json.loads(times.read_text()) if times.exists() else {"tests": {}, "shared": {}}
-    record = {"key": out.name.split("_")[1].split(".")[0],
-              "commit": subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True,
+    timing = json.loads(times.read_text()) if times.exists() else {"tests": {}, "shared": {}, "failed": []}
+    record = {"commit": subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True,
                                        text=True).stdout.strip(),
               "returncode": done.returncode, "tests": names,
               "cost": [timing["tests"].get(name, {}).get("seconds", 0.0) for name in names],
               "shared_of": [timing["tests"].get(name, {}).get("shared", []) for name in names],
-              "shared": timing["shared"], "all_tests": timing["tests"],
+              "shared": timing["shared"], "all_tests": timing["tests"], "failed": timing["failed"],
               "lines": {f: {line: sorted(ids) for line, ids in by.items()} for f, by in lines.items()},
               "outside": {f: sorted(ls) for f, ls in outside.items()}}
     out.parent.mkdir(parents=True, exist_ok=True)
     with gzip.open(out, "wt") as stream:
         json.dump(record, stream)
+    shutil.rmtree(work, ignore_errors=True)
     return record
 
 
-def merge(records: list, out: Path) -> dict:
-    """One map of the maps of disjoint sets of test files (built side by side); a shared
-    fixture costs the most any of them measured."""
-    merged = {"key": records[0]["key"], "commit": records[0]["commit"],
-              "returncode": max(r["returncode"] for r in records), "tests": [], "cost": [], "shared_of": [],
-              "shared": {}, "all_tests": {}, "lines": {}, "outside": {}}
+def merge(records: list) -> dict:
+    """One map of the maps of disjoint sets of test files; a shared fixture costs the most any
+    of them measured."""
+    merged = {"returncode": max([r["returncode"] for r in records], default=0), "tests": [], "cost": [],
+              "shared_of": [], "shared": {}, "all_tests": {}, "lines": {}, "outside": {}, "failed": []}
     for r in records:
+        merged["failed"] += r.get("failed", [])
         offset = len(merged["tests"])
         for name in ("tests", "cost", "shared_of"):
             merged[name] += r[name]
@@ -131,9 +128,22 @@ def merge(records: list, out: Path) -> dict:
                 into[line] = into.get(line, []) + [i + offset for i in ids]
         for f, lines in r["outside"].items():
             merged["outside"][f] = sorted(set(merged["outside"].get(f, [])) | set(lines))
-    with gzip.open(out, "wt") as stream:
-        json.dump(merged, stream)
     return merged
+
+
+def shard_path(test_file: str, root: Path = ROOT) -> Path:
+    """Where the map of one test file is kept: ``out/linemap_<key>/`` (:func:`key`)."""
+    return root / "out" / f"linemap_{key(root)}" / (test_file.replace("/", "__") + ".json.gz")
+
+
+def for_files(copy: Path, products: list, test_files: list, log=subprocess.DEVNULL) -> dict:
+    """The map of ``test_files``, each built (in ``copy``, unmutated) the first time it is asked
+    for and kept (:func:`shard_path`)."""
+    records = []
+    for test_file in test_files:
+        path = shard_path(test_file)
+        records.append(load(path) if path.exists() else build(copy, products, [test_file], path, log))
+    return merge(records)
 
 
 def _other_paths() -> list:
@@ -164,7 +174,9 @@ def select(record: dict, file: str, first: int, last: int, near_files: list, bud
     ``budget`` seconds of them (the first always).  ``tests == []``: nothing executes them.
     """
     by_line = record["lines"].get(file, {})
-    ids = sorted({i for line in range(first, last + 1) for i in by_line.get(str(line), ())})
+    failing = set(record.get("failed", ()))
+    ids = sorted({i for line in range(first, last + 1) for i in by_line.get(str(line), ())
+                  if record["tests"][i] not in failing})
     if not ids:
         outside = set(record["outside"].get(file, ()))
         run_outside = any(line in outside for line in range(first, last + 1))

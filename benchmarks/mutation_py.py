@@ -511,25 +511,29 @@ def run_c(copy: Path, mutant, chosen: dict, base: float, factor: float) -> dict:
         shutil.rmtree(work, ignore_errors=True)
 
 
-def select(linemap: dict, name: str, mutant, near: list, budget: float) -> dict:
-    """The tests a mutant runs: for Python, those that execute a line it changes
-    (:func:`benchmarks.mutation_map.select`; the importers of the module when only import-time
-    or subprocess runs execute it); for C (coverage does not see C lines), every test of the
-    kernels' and the oracles' files (and mutation_c's extra ones), the cheaper first."""
+def select(copy: Path, name: str, mutant, near: list, budget: float) -> dict:
+    """The tests a mutant runs.  Python: among the test files of ``near`` (the nearest
+    importers of its module, :func:`test_map`), those tests that execute a line it changes
+    (:mod:`benchmarks.mutation_map`, each file's map built in ``copy`` the first time); all of
+    ``near`` when only import-time or subprocess runs execute the lines; none when nothing
+    does.  C (coverage does not see C lines): every test of the kernels' and the oracles'
+    files (and mutation_c's extra ones), the cheaper first."""
     if name.endswith(".c"):
         files = sorted({str(p.relative_to(ROOT)) for pattern in C_TESTS for p in ROOT.glob(pattern)})
         files += mutation_c.EXTRA_TESTS.get(mutant.file, [])
-        tests = sorted((t for t in linemap["all_tests"] if t.split("::")[0] in files),
+        linemap = mutation_map.for_files(copy, python_files(), files)
+        failing = set(linemap["failed"])
+        tests = sorted((t for t in linemap["all_tests"] if t not in failing),
                        key=lambda t: linemap["all_tests"][t]["seconds"])
         return {"tests": tests, "covering": len(tests), "cost": round(mutation_map.cost(linemap, tests), 2),
                 "selection": "C tests"}
+    linemap = mutation_map.for_files(copy, python_files(), near)
     chosen = mutation_map.select(linemap, name, mutant.line, mutant.end_line, near, budget)
     if chosen["tests"] is None:
-        return {"tests": near, "covering": 0, "cost": round(sum(
-            mutation_map.cost(linemap, [t for t in linemap["all_tests"] if t.split("::")[0] == f]) for f in near), 2),
-            "selection": "importers (lines run only at import or in a subprocess)"}
+        return {"tests": near, "covering": 0, "cost": round(mutation_map.cost(linemap, list(linemap["all_tests"])), 2),
+                "selection": "importers (lines run only at import or in a subprocess)"}
     if not chosen["tests"]:
-        return dict(chosen, selection="none", note="no test executes the line")
+        return dict(chosen, selection="none", note=f"none of the {len(near)} nearest test files executes the line")
     return dict(chosen, selection="coverage")
 
 
@@ -551,22 +555,6 @@ def read_results(results: Path) -> tuple:
     return header, done
 
 
-def linemap_for(build_if_missing: bool = True) -> dict:
-    """The line -> tests map of the committed tree (built, at length, if there is none)."""
-    path = mutation_map.map_path()
-    if not path.exists():
-        if not build_if_missing:
-            raise FileNotFoundError(f"no line -> tests map {path}: run --build-map")
-        copy = make_copy(Path(tempfile.gettempdir()) / f"parcosim_mutpy_map_{os.getpid()}")
-        try:
-            tests = [str(p.relative_to(ROOT)) for p in sorted((ROOT / "tests").glob("test_*.py"))
-                     if not str(p.relative_to(ROOT)).startswith(NOT_RUN)]
-            mutation_map.build(copy, python_files(), tests, path)
-        finally:
-            shutil.rmtree(copy, ignore_errors=True)
-    return mutation_map.load(path)
-
-
 def campaign(seed: int, sample: int, workers: int, results: Path | None = None, retry_timeouts: bool = False,
              base: float = 30.0, factor: float = 3.0, budget: float = 300.0) -> Path:
     """Draw ``sample`` mutants with ``seed`` and run them, each against the tests that execute
@@ -586,22 +574,23 @@ def campaign(seed: int, sample: int, workers: int, results: Path | None = None, 
     else:
         results.parent.mkdir(parents=True, exist_ok=True)
         header = {"seed": seed, "sample": len(chosen), "commit": commit, "map": mutation_map.key(),
+                  "near_files": MOST_TESTS,
                   "base_seconds": base, "factor": factor, "budget_seconds": budget,
                   "pool": {name: len(ms) for name, ms in pool.items()},
                   "lines": {name: line_count(name) for name in pool}, "drawn": [name for name, _ in chosen]}
         results.write_text(json.dumps({"header": header}) + "\n")
-    linemap = linemap_for()
     near_of = test_map()
-    lock = threading.Lock()
+    lock, shards = threading.Lock(), threading.Lock()      # shards: one map built at a time
     copies = [make_copy(Path(tempfile.gettempdir()) / f"parcosim_mutpy_{os.getpid()}_{w}") for w in range(workers)]
     free = list(copies)
 
     def one(k):
         name, mutant = chosen[k]
-        tests = select(linemap, name, mutant, near_of.get(module_name(name), []), budget)
         with lock:
             copy = free.pop()
         try:
+            with shards:
+                tests = select(copy, name, mutant, near_of.get(module_name(name), []), budget)
             run = run_c if name.endswith(".c") else run_python
             result = run(copy, mutant, tests, base, factor)
         finally:
@@ -668,7 +657,6 @@ def main(argv=None) -> int:
     parser.add_argument("--retry-timeouts", action="store_true", help="run the timed-out mutants again, last")
     parser.add_argument("--workers", type=int, default=1, help="mutants run at once (one tree copy each)")
     parser.add_argument("--results", type=Path, help="the JSON-lines file (default: benchmarks/results/mutation_<seed>.jsonl)")
-    parser.add_argument("--build-map", action="store_true", help="build the line -> tests map of HEAD and stop")
     parser.add_argument("--report", action="store_true", help="reprint the table from --results")
     parser.add_argument("--confirm", action="store_true", help="re-run the killing tests on the unmutated tree")
     parser.add_argument("--pool", action="store_true", help="list every mutant of the pool")
@@ -678,10 +666,6 @@ def main(argv=None) -> int:
         for name, mutants in pool_by_file().items():
             for m in mutants:
                 print(f"{name}:{m.line}:{m.column} {m.operator} {m.before[:60]!r} -> {m.after[:60]!r}")
-        return 0
-    if args.build_map:
-        linemap_for()
-        print(mutation_map.map_path())
         return 0
     if args.confirm:
         print(confirm(results, 90.0))

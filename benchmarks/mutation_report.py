@@ -37,7 +37,7 @@ def table(header: dict, done: dict) -> str:
         every = a == "**total**"
         mine = [m for m in ran if every or area(m["file"]) == a]
         lines = sum(v for n, v in header["lines"].items() if every or area(n) == a)
-        drawn = sum(every or area(n) == a for n in header["drawn"])
+        drawn = sum(every or area(n) == a for n in header["drawn"]) if header["drawn"] else "-"
         counts = [sum(m["outcome"] == o for m in mine) for o in ("killed", "survived", "not viable", "timeout")]
         k, s = counts[0], counts[1]
         score = f"{100 * k / (k + s):.1f} %" if k + s else "-"

@@ -8,6 +8,9 @@ the JSON file named by ``$PARCOSIM_MUTATION_TIMES`` at the session's end:
 ``shared``    key of a fixture of wider scope than a function (``scope:argname``, with the
               module for a module-scoped one) -> the seconds its setup took
 
+``failed``    node ids of the tests that failed or errored (the map's run is on the unmutated
+              tree: a mutant does not run them)
+
 A subset of the tests then costs the sum of its tests' own seconds and of the shared fixtures
 they use (each once), whatever test of the subset sets a shared fixture up first.
 """
@@ -21,6 +24,7 @@ import pytest
 
 _TESTS: dict = {}
 _SHARED: dict = {}
+_FAILED: set = set()
 _DURING: list = []       # the shared fixtures' seconds spent inside the current test's phases
 
 
@@ -60,8 +64,13 @@ def pytest_runtest_protocol(item, nextitem):
     _TESTS[item.nodeid] = {"seconds": round(max(own, 0.0), 3), "shared": _shared_of(item)}
 
 
+def pytest_runtest_logreport(report):
+    if report.failed:
+        _FAILED.add(report.nodeid)
+
+
 def pytest_sessionfinish(session):
     path = os.environ.get("PARCOSIM_MUTATION_TIMES")
     if path:
         with open(path, "w") as out:
-            json.dump({"tests": _TESTS, "shared": _SHARED}, out)
+            json.dump({"tests": _TESTS, "shared": _SHARED, "failed": sorted(_FAILED)}, out)
