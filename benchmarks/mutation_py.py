@@ -69,6 +69,9 @@ C_TESTS = ("tests/test_kernels_*.py", "tests/test_oracles_*.py")
 #: How many imports away a test may reach a module and still run for its mutants, and how
 #: many test files (the nearest, then the smallest) a mutant runs at most.
 NEAR, MOST_TESTS = 2, 6
+#: A file of long runs (``pytest -m slow``: sanitizer builds, hostile campaigns, dask sweeps,
+#: other tools): a Python mutant does not run it (one such file takes minutes to tens of them).
+SLOW = re.compile(r"^pytestmark = .*pytest\.mark\.slow", re.M)
 #: A test run's wall-clock limit, in multiples of its CPU-time limit (``--timeout``).
 WALL_FACTOR = 8
 #: Words of a test file that builds FMUs or starts processes: it runs after the others of its
@@ -398,13 +401,14 @@ def test_map() -> dict:
     """Product module -> the test files that import it, or import a module that imports it
     (:data:`NEAR` imports away at most: a package's ``__init__`` names all its modules, so the
     full closure is nearly every test), the nearer first, then those that build no FMU and
-    start no process, then the smaller, at most :data:`MOST_TESTS` of them."""
+    start no process, then the smaller, at most :data:`MOST_TESTS` of them; never a
+    :data:`SLOW` file."""
     graph = {}
     for path in [ROOT / f for f in python_files()] + sorted((ROOT / "tests").rglob("*.py")):
         own = module_name(str(path.relative_to(ROOT)))
         graph[own] = _imports(path, own)
     tests = [p for p in sorted((ROOT / "tests").glob("test_*.py"))
-             if not str(p.relative_to(ROOT)).startswith(NOT_RUN)]
+             if not str(p.relative_to(ROOT)).startswith(NOT_RUN) and not SLOW.search(p.read_text())]
     mapping = {}
     for test in tests:
         own = module_name(str(test.relative_to(ROOT)))
