@@ -17,6 +17,7 @@ mutant survives without a run).
 """
 from __future__ import annotations
 
+import contextlib
 import gzip
 import hashlib
 import json
@@ -136,13 +137,15 @@ def shard_path(test_file: str, root: Path = ROOT) -> Path:
     return root / "out" / f"linemap_{key(root)}" / (test_file.replace("/", "__") + ".json.gz")
 
 
-def for_files(copy: Path, products: list, test_files: list, log=subprocess.DEVNULL) -> dict:
+def for_files(copy: Path, products: list, test_files: list, lock_of=None, log=subprocess.DEVNULL) -> dict:
     """The map of ``test_files``, each built (in ``copy``, unmutated) the first time it is asked
-    for and kept (:func:`shard_path`)."""
+    for and kept (:func:`shard_path`); ``lock_of(test_file)``: a lock held while that file's
+    map is looked for and built (workers side by side build different files)."""
     records = []
     for test_file in test_files:
         path = shard_path(test_file)
-        records.append(load(path) if path.exists() else build(copy, products, [test_file], path, log))
+        with lock_of(test_file) if lock_of else contextlib.nullcontext():
+            records.append(load(path) if path.exists() else build(copy, products, [test_file], path, log))
     return merge(records)
 
 

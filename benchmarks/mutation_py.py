@@ -515,7 +515,7 @@ def run_c(copy: Path, mutant, chosen: dict, base: float, factor: float) -> dict:
         shutil.rmtree(work, ignore_errors=True)
 
 
-def select(copy: Path, name: str, mutant, near: list, budget: float) -> dict:
+def select(copy: Path, name: str, mutant, near: list, budget: float, lock_of=None) -> dict:
     """The tests a mutant runs.  Python: among the test files of ``near`` (the nearest
     importers of its module, :func:`test_map`), those tests that execute a line it changes
     (:mod:`benchmarks.mutation_map`, each file's map built in ``copy`` the first time); all of
@@ -525,13 +525,13 @@ def select(copy: Path, name: str, mutant, near: list, budget: float) -> dict:
     if name.endswith(".c"):
         files = sorted({str(p.relative_to(ROOT)) for pattern in C_TESTS for p in ROOT.glob(pattern)})
         files += mutation_c.EXTRA_TESTS.get(mutant.file, [])
-        linemap = mutation_map.for_files(copy, python_files(), files)
+        linemap = mutation_map.for_files(copy, python_files(), files, lock_of)
         failing = set(linemap["failed"])
         tests = sorted((t for t in linemap["all_tests"] if t not in failing),
                        key=lambda t: linemap["all_tests"][t]["seconds"])
         return {"tests": tests, "covering": len(tests), "cost": round(mutation_map.cost(linemap, tests), 2),
                 "selection": "C tests"}
-    linemap = mutation_map.for_files(copy, python_files(), near)
+    linemap = mutation_map.for_files(copy, python_files(), near, lock_of)
     chosen = mutation_map.select(linemap, name, mutant.line, mutant.end_line, near, budget)
     if chosen["tests"] is None:
         return {"tests": near, "covering": 0, "cost": round(mutation_map.cost(linemap, list(linemap["all_tests"])), 2),
@@ -584,7 +584,12 @@ def campaign(seed: int, sample: int, workers: int, results: Path | None = None, 
                   "lines": {name: line_count(name) for name in pool}, "drawn": [name for name, _ in chosen]}
         results.write_text(json.dumps({"header": header}) + "\n")
     near_of = test_map()
-    lock, shards = threading.Lock(), threading.Lock()      # shards: one map built at a time
+    lock, shards = threading.Lock(), {}
+
+    def lock_of(test_file):            # one worker builds a test file's map, the other waits for it
+        with lock:
+            return shards.setdefault(test_file, threading.Lock())
+
     copies = [make_copy(Path(tempfile.gettempdir()) / f"parcosim_mutpy_{os.getpid()}_{w}") for w in range(workers)]
     free = list(copies)
 
@@ -593,8 +598,7 @@ def campaign(seed: int, sample: int, workers: int, results: Path | None = None, 
         with lock:
             copy = free.pop()
         try:
-            with shards:
-                tests = select(copy, name, mutant, near_of.get(module_name(name), []), budget)
+            tests = select(copy, name, mutant, near_of.get(module_name(name), []), budget, lock_of)
             run = run_c if name.endswith(".c") else run_python
             result = run(copy, mutant, tests, base, factor)
         finally:
