@@ -137,16 +137,49 @@ def shard_path(test_file: str, root: Path = ROOT) -> Path:
     return root / "out" / f"linemap_{key(root)}" / (test_file.replace("/", "__") + ".json.gz")
 
 
+def split(record: dict, test_file: str) -> dict:
+    """The part of a map (of several test files' run) that is ``test_file``'s: its tests, the
+    lines they execute; lines run outside any test and the shared fixtures' costs go with
+    every part."""
+    keep = [i for i, name in enumerate(record["tests"]) if name.split("::")[0] == test_file]
+    new_index = {old: new for new, old in enumerate(keep)}
+    lines = {}
+    for f, by in record["lines"].items():
+        for line, ids in by.items():
+            mine = [new_index[i] for i in ids if i in new_index]
+            if mine:
+                lines.setdefault(f, {})[line] = mine
+    own = {name: t for name, t in record["all_tests"].items() if name.split("::")[0] == test_file}
+    return {"commit": record["commit"], "returncode": record["returncode"],
+            "tests": [record["tests"][i] for i in keep], "cost": [record["cost"][i] for i in keep],
+            "shared_of": [record["shared_of"][i] for i in keep], "shared": record["shared"], "all_tests": own,
+            "failed": [t for t in record["failed"] if t.split("::")[0] == test_file], "lines": lines,
+            "outside": record["outside"]}
+
+
 def for_files(copy: Path, products: list, test_files: list, lock_of=None, log=subprocess.DEVNULL) -> dict:
-    """The map of ``test_files``, each built (in ``copy``, unmutated) the first time it is asked
-    for and kept (:func:`shard_path`); ``lock_of(test_file)``: a lock held while that file's
+    """The map of ``test_files``; those not yet mapped are mapped in one run (in ``copy``,
+    unmutated: a session's fixtures, such as the built FMUs, are made once) and each file's
+    part is kept (:func:`shard_path`).  ``lock_of(test_file)``: a lock held while that file's
     map is looked for and built (workers side by side build different files)."""
-    records = []
-    for test_file in test_files:
-        path = shard_path(test_file)
-        with lock_of(test_file) if lock_of else contextlib.nullcontext():
-            records.append(load(path) if path.exists() else build(copy, products, [test_file], path, log))
-    return merge(records)
+    locks = [lock_of(f) for f in sorted(set(test_files))] if lock_of else []
+    for held in locks:
+        held.acquire()
+    try:
+        missing = [f for f in test_files if not shard_path(f).exists()]
+        if missing:
+            work = Path(tempfile.mkdtemp(prefix="parcosim_linemaps_"))
+            record = build(copy, products, missing, work / "all.json.gz", log)
+            for test_file in missing:
+                path = shard_path(test_file)
+                path.parent.mkdir(parents=True, exist_ok=True)
+                with gzip.open(path, "wt") as stream:
+                    json.dump(split(record, test_file), stream)
+            shutil.rmtree(work, ignore_errors=True)
+        return merge([load(shard_path(f)) for f in test_files])
+    finally:
+        for held in locks:
+            held.release()
 
 
 def _other_paths() -> list:

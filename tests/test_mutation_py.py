@@ -143,3 +143,15 @@ def test_the_report_counts_per_area_and_lists_survivors():
     assert "| law | 5 | 1 | 1 | 1 | 0 | 0 | 0 | 100.0 % |" in text
     assert "| **total** | 15 | 3 | 3 | 2 | 1 | 0 | 0 | 66.7 % |" in text
     assert "- [1] plant/a.py:2:0 (arith) 'a' -> 'b' [no test executes the line]" in text
+
+
+def test_a_run_of_several_test_files_splits_into_each_files_map_and_merges_back():
+    mm, record = _linemap()
+    record.update(commit="c", returncode=0, shared_of=[[], [], ["session::built_fmus"]],
+                  failed=["tests/test_b.py::test_dear"])
+    a, b = mm.split(record, "tests/test_a.py"), mm.split(record, "tests/test_b.py")
+    assert a["tests"] == ["tests/test_a.py::test_cheap"] and a["lines"] == {"plant/x.py": {"10": [0]}}
+    assert b["lines"] == {"plant/x.py": {"10": [0, 1], "11": [0], "30": [1]}} and a["failed"] == []
+    merged = mm.merge([a, b])
+    assert merged["tests"] == record["tests"] and merged["lines"] == record["lines"]
+    assert mm.select(merged, "plant/x.py", 11, 11, [], 1000.0)["tests"] == []    # fails unmutated: left out
