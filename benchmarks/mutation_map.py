@@ -7,8 +7,8 @@ committed tree.  Files are measured wherever they
 run from under the temporary directory (the copy, and the FMUs' bundles unzipped by an
 importer: a bundled ``.../plant/drive.py`` counts as ``plant/drive.py``); a test's
 subprocesses are measured too (``coverage.process_startup``), without a test's name.  The
-map of a test file is a gzipped JSON file under a folder named by a key of the product's
-and the tests' files (:func:`key`), so a commit that changes neither keeps it.
+map of a test file is a gzipped JSON file named by a key of the product's files, that test
+file's and the tests' helpers (:func:`key`), so a commit that changes none of them keeps it.
 
 A mutant then runs only the tests that execute a line it changes (:func:`select`); a line
 executed only outside any test (at import, during collection, in a subprocess) falls back
@@ -38,13 +38,22 @@ NOT_RUN = ("tests/test_mutation", "tests/test_sanitizers.py")
 OUTSIDE = ""
 
 
-def key(root: Path = ROOT, commit: str = "HEAD") -> str:
-    """A hash of the committed files of :data:`KEYED` at ``commit`` but :data:`NOT_RUN`'s (12
-    hex digits)."""
+def key(root: Path = ROOT, commit: str = "HEAD", test_file: str | None = None) -> str:
+    """A hash of the committed files of :data:`KEYED` at ``commit`` (12 hex digits), of the
+    tests' only ``test_file`` and the helpers (``tests/`` files not named ``test_*``): what a
+    test file's map depends on."""
     listing = subprocess.run(["git", "ls-tree", "-r", commit, "--", *KEYED], cwd=root, check=True,
                              capture_output=True, text=True).stdout.splitlines()
-    kept = [line for line in listing if not line.split("\t", 1)[1].startswith(NOT_RUN)]
+    kept = [line for line in listing if _keyed(line.split("\t", 1)[1], test_file)]
     return hashlib.sha1("\n".join(kept).encode()).hexdigest()[:12]
+
+
+def _keyed(path: str, test_file: str | None) -> bool:
+    if path.startswith(NOT_RUN):
+        return False
+    if path.startswith("tests/") and Path(path).name.startswith("test_"):
+        return test_file is None or path == test_file
+    return True
 
 
 def _product_file(measured: str, products: set) -> str | None:
@@ -132,9 +141,10 @@ def merge(records: list) -> dict:
     return merged
 
 
-def shard_path(test_file: str, root: Path = ROOT) -> Path:
-    """Where the map of one test file is kept: ``out/linemap_<key>/`` (:func:`key`)."""
-    return root / "out" / f"linemap_{key(root)}" / (test_file.replace("/", "__") + ".json.gz")
+def shard_path(test_file: str, root: Path = ROOT, commit: str = "HEAD") -> Path:
+    """Where the map of one test file is kept: ``out/linemaps/<file>_<key>.json.gz``
+    (:func:`key` of that file)."""
+    return root / "out" / "linemaps" / f"{test_file.replace('/', '__')}_{key(root, commit, test_file)}.json.gz"
 
 
 def split(record: dict, test_file: str) -> dict:
@@ -157,26 +167,27 @@ def split(record: dict, test_file: str) -> dict:
             "outside": record["outside"]}
 
 
-def for_files(copy: Path, products: list, test_files: list, lock_of=None, log=subprocess.DEVNULL) -> dict:
+def for_files(copy: Path, products: list, test_files: list, lock_of=None, commit: str = "HEAD",
+              log=subprocess.DEVNULL) -> dict:
     """The map of ``test_files``; those not yet mapped are mapped in one run (in ``copy``,
     unmutated: a session's fixtures, such as the built FMUs, are made once) and each file's
-    part is kept (:func:`shard_path`).  ``lock_of(test_file)``: a lock held while that file's
+    part is kept (:func:`shard_path` at ``commit``, the copy's).  ``lock_of(test_file)``: a lock held while that file's
     map is looked for and built (workers side by side build different files)."""
     locks = [lock_of(f) for f in sorted(set(test_files))] if lock_of else []
     for held in locks:
         held.acquire()
     try:
-        missing = [f for f in test_files if not shard_path(f).exists()]
+        missing = [f for f in test_files if not shard_path(f, commit=commit).exists()]
         if missing:
             work = Path(tempfile.mkdtemp(prefix="parcosim_linemaps_"))
             record = build(copy, products, missing, work / "all.json.gz", log)
             for test_file in missing:
-                path = shard_path(test_file)
+                path = shard_path(test_file, commit=commit)
                 path.parent.mkdir(parents=True, exist_ok=True)
                 with gzip.open(path, "wt") as stream:
                     json.dump(split(record, test_file), stream)
             shutil.rmtree(work, ignore_errors=True)
-        return merge([load(shard_path(f)) for f in test_files])
+        return merge([load(shard_path(f, commit=commit)) for f in test_files])
     finally:
         for held in locks:
             held.release()

@@ -397,21 +397,22 @@ def _named_in_strings(tree, package: str) -> set:
     return found
 
 
-def test_map() -> dict:
+def test_map(root: Path = ROOT) -> dict:
     """Product module -> the test files that import it, or import a module that imports it
     (:data:`NEAR` imports away at most: a package's ``__init__`` names all its modules, so the
     full closure is nearly every test), the nearer first, then those that build no FMU and
     start no process, then the smaller, at most :data:`MOST_TESTS` of them; never a
-    :data:`SLOW` file."""
+    :data:`SLOW` file.  ``root``: the tree whose tests are read (a campaign's copy of its
+    commit)."""
     graph = {}
-    for path in [ROOT / f for f in python_files()] + sorted((ROOT / "tests").rglob("*.py")):
-        own = module_name(str(path.relative_to(ROOT)))
+    for path in [root / f for f in python_files()] + sorted((root / "tests").rglob("*.py")):
+        own = module_name(str(path.relative_to(root)))
         graph[own] = _imports(path, own)
-    tests = [p for p in sorted((ROOT / "tests").glob("test_*.py"))
-             if not str(p.relative_to(ROOT)).startswith(NOT_RUN) and not SLOW.search(p.read_text())]
+    tests = [p for p in sorted((root / "tests").glob("test_*.py"))
+             if not str(p.relative_to(root)).startswith(NOT_RUN) and not SLOW.search(p.read_text())]
     mapping = {}
     for test in tests:
-        own = module_name(str(test.relative_to(ROOT)))
+        own = module_name(str(test.relative_to(root)))
         distance, frontier = {}, set(graph[own])
         for step in range(1, NEAR + 1):
             frontier = {m for m in frontier if m not in distance}
@@ -420,7 +421,7 @@ def test_map() -> dict:
         text = test.read_text()
         heavy = any(word in text for word in HEAVY)
         for m, d in distance.items():
-            mapping.setdefault(m, []).append((d, heavy, test.stat().st_size, str(test.relative_to(ROOT))))
+            mapping.setdefault(m, []).append((d, heavy, test.stat().st_size, str(test.relative_to(root))))
     return {m: [entry[-1] for entry in sorted(entries)][:MOST_TESTS] for m, entries in mapping.items()}
 
 
@@ -431,11 +432,11 @@ def results_path(seed: int) -> Path:
     return ROOT / "benchmarks" / "results" / f"mutation_{seed}.jsonl"
 
 
-def make_copy(where: Path) -> Path:
-    """The committed tree (``git archive HEAD``) at ``where``, with the built kernels library."""
+def make_copy(where: Path, commit: str = "HEAD") -> Path:
+    """The committed tree (``git archive <commit>``) at ``where``, with the built kernels library."""
     shutil.rmtree(where, ignore_errors=True)
     where.mkdir(parents=True)
-    archive = subprocess.run(["git", "archive", "HEAD"], cwd=ROOT, check=True, capture_output=True).stdout
+    archive = subprocess.run(["git", "archive", commit], cwd=ROOT, check=True, capture_output=True).stdout
     subprocess.run(["tar", "-x", "-C", str(where)], input=archive, check=True)
     shutil.copy2(mutation_c.kbuild.build(), where / "kernels" / mutation_c.kbuild.LIBRARY.name)
     return where
@@ -515,7 +516,7 @@ def run_c(copy: Path, mutant, chosen: dict, base: float, factor: float) -> dict:
         shutil.rmtree(work, ignore_errors=True)
 
 
-def select(copy: Path, name: str, mutant, near: list, budget: float, lock_of=None) -> dict:
+def select(copy: Path, name: str, mutant, near: list, budget: float, lock_of=None, commit: str = "HEAD") -> dict:
     """The tests a mutant runs.  Python: among the test files of ``near`` (the nearest
     importers of its module, :func:`test_map`), those tests that execute a line it changes
     (:mod:`benchmarks.mutation_map`, each file's map built in ``copy`` the first time); all of
@@ -523,15 +524,15 @@ def select(copy: Path, name: str, mutant, near: list, budget: float, lock_of=Non
     does.  C (coverage does not see C lines): every test of the kernels' and the oracles'
     files (and mutation_c's extra ones), the cheaper first."""
     if name.endswith(".c"):
-        files = sorted({str(p.relative_to(ROOT)) for pattern in C_TESTS for p in ROOT.glob(pattern)})
+        files = sorted({str(p.relative_to(copy)) for pattern in C_TESTS for p in copy.glob(pattern)})
         files += mutation_c.EXTRA_TESTS.get(mutant.file, [])
-        linemap = mutation_map.for_files(copy, python_files(), files, lock_of)
+        linemap = mutation_map.for_files(copy, python_files(), files, lock_of, commit)
         failing = set(linemap["failed"])
         tests = sorted((t for t in linemap["all_tests"] if t not in failing),
                        key=lambda t: linemap["all_tests"][t]["seconds"])
         return {"tests": tests, "covering": len(tests), "cost": round(mutation_map.cost(linemap, tests), 2),
                 "selection": "C tests"}
-    linemap = mutation_map.for_files(copy, python_files(), near, lock_of)
+    linemap = mutation_map.for_files(copy, python_files(), near, lock_of, commit)
     chosen = mutation_map.select(linemap, name, mutant.line, mutant.end_line, near, budget)
     if chosen["tests"] is None:
         return {"tests": near, "covering": 0, "cost": round(mutation_map.cost(linemap, list(linemap["all_tests"])), 2),
@@ -583,14 +584,15 @@ def campaign(seed: int, sample: int, workers: int, results: Path | None = None, 
                   "pool": {name: len(ms) for name, ms in pool.items()},
                   "lines": {name: line_count(name) for name in pool}, "drawn": [name for name, _ in chosen]}
         results.write_text(json.dumps({"header": header}) + "\n")
-    near_of = test_map()
+    copies = [make_copy(Path(tempfile.gettempdir()) / f"parcosim_mutpy_{os.getpid()}_{w}", header["commit"])
+              for w in range(workers)]
+    near_of = test_map(copies[0])     # the tests of the draw's commit: tests written since are not run
     lock, shards = threading.Lock(), {}
 
     def lock_of(test_file):            # one worker builds a test file's map, the other waits for it
         with lock:
             return shards.setdefault(test_file, threading.Lock())
 
-    copies = [make_copy(Path(tempfile.gettempdir()) / f"parcosim_mutpy_{os.getpid()}_{w}") for w in range(workers)]
     free = list(copies)
 
     def one(k):
@@ -598,7 +600,8 @@ def campaign(seed: int, sample: int, workers: int, results: Path | None = None, 
         with lock:
             copy = free.pop()
         try:
-            tests = select(copy, name, mutant, near_of.get(module_name(name), []), budget, lock_of)
+            tests = select(copy, name, mutant, near_of.get(module_name(name), []), budget, lock_of,
+                           header["commit"])
             run = run_c if name.endswith(".c") else run_python
             result = run(copy, mutant, tests, base, factor)
         finally:
