@@ -215,7 +215,8 @@ def cost(record: dict, tests: list) -> float:
 def select(record: dict, file: str, first: int, last: int, near_files: list, budget: float) -> dict:
     """The tests to run for a change of ``file``'s lines ``first``..``last``.
 
-    ``{"tests": node ids, or None when only import-time or subprocess runs execute the lines,
+    ``{"tests": node ids, or None when import-time or subprocess runs execute the lines (a
+    module-level line, run once at import, is seen by every test after it),
     "covering": how many tests execute them, "cost": the selection's measured seconds}``;
     the tests of ``near_files`` (the module's importers) first, then the cheaper; no more than
     ``budget`` seconds of them (the first always).  ``tests == []``: nothing executes them.
@@ -224,10 +225,11 @@ def select(record: dict, file: str, first: int, last: int, near_files: list, bud
     failing = set(record.get("failed", ()))
     ids = sorted({i for line in range(first, last + 1) for i in by_line.get(str(line), ())
                   if record["tests"][i] not in failing})
+    outside = set(record["outside"].get(file, ()))
+    if any(line in outside for line in range(first, last + 1)):
+        return {"tests": None, "covering": len(ids), "cost": 0.0}      # run at import: every test may see it
     if not ids:
-        outside = set(record["outside"].get(file, ()))
-        run_outside = any(line in outside for line in range(first, last + 1))
-        return {"tests": None if run_outside else [], "covering": 0, "cost": 0.0}
+        return {"tests": [], "covering": 0, "cost": 0.0}
     near = set(near_files)
     ids.sort(key=lambda i: (record["tests"][i].split("::")[0] not in near, record["cost"][i]))
     chosen, total = [], 0.0

@@ -536,7 +536,7 @@ def select(copy: Path, name: str, mutant, near: list, budget: float, lock_of=Non
     chosen = mutation_map.select(linemap, name, mutant.line, mutant.end_line, near, budget)
     if chosen["tests"] is None:
         return {"tests": near, "covering": 0, "cost": round(mutation_map.cost(linemap, list(linemap["all_tests"])), 2),
-                "selection": "importers (lines run only at import or in a subprocess)"}
+                "selection": "near files whole (a line run at import or in a subprocess)"}
     if not chosen["tests"]:
         return dict(chosen, selection="none", note=f"none of the {len(near)} nearest test files executes the line")
     return dict(chosen, selection="coverage")

@@ -116,6 +116,7 @@ def test_a_mutant_runs_the_tests_that_execute_its_lines_nearest_and_cheapest_fir
     assert mm.select(record, "plant/x.py", 11, 11, [], budget=0.0)["tests"] == ["tests/test_b.py::test_dear"]
     assert mm.select(record, "plant/x.py", 29, 31, [], 60.0)["tests"] == ["tests/test_b.py::test_fmu"]  # a span
     assert mm.select(record, "plant/x.py", 20, 20, [], 60.0)["tests"] is None     # run at import only
+    assert mm.select(record, "plant/x.py", 1, 10, [], 60.0)["tests"] is None      # at import and in tests
     assert mm.select(record, "plant/x.py", 40, 40, [], 60.0)["tests"] == []       # run by nothing
     assert mm.select(record, "plant/y.py", 1, 1, [], 60.0)["tests"] == []
 
