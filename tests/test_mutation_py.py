@@ -92,3 +92,67 @@ def test_the_map_finds_direct_importers_and_modules_named_in_strings():
     assert mapping["fmus.slaves.parcosim_derivator"]          # loaded by importlib from a "fmus.slaves." name
     assert all(not t.startswith(mp.NOT_RUN) for tests in mapping.values() for t in tests)
     assert all(len(tests) <= mp.MOST_TESTS for tests in mapping.values())
+
+
+def _linemap():
+    from benchmarks import mutation_map as mm
+    tests = ["tests/test_a.py::test_cheap", "tests/test_b.py::test_dear", "tests/test_b.py::test_fmu"]
+    return mm, {"tests": tests, "cost": [1.0, 50.0, 2.0], "shared": {"session::built_fmus": 100.0},
+                "all_tests": {tests[0]: {"seconds": 1.0, "shared": []}, tests[1]: {"seconds": 50.0, "shared": []},
+                              tests[2]: {"seconds": 2.0, "shared": ["session::built_fmus"]}},
+                "lines": {"plant/x.py": {"10": [0, 1, 2], "11": [1], "30": [2]}},
+                "outside": {"plant/x.py": [1, 2, 20]}}
+
+
+def test_a_mutant_runs_the_tests_that_execute_its_lines_nearest_and_cheapest_first_within_the_budget():
+    mm, record = _linemap()
+    assert mm.cost(record, record["tests"][2:]) == 102.0                  # a shared fixture once, with its test
+    assert mm.cost(record, record["tests"]) == 153.0
+    chosen = mm.select(record, "plant/x.py", 10, 10, ["tests/test_b.py"], budget=1000.0)
+    assert chosen["tests"] == ["tests/test_b.py::test_fmu", "tests/test_b.py::test_dear", "tests/test_a.py::test_cheap"]
+    assert chosen["covering"] == 3 and chosen["cost"] == 153.0
+    cut = mm.select(record, "plant/x.py", 10, 10, [], budget=60.0)        # the fixture's 100 s do not fit
+    assert cut["tests"] == ["tests/test_a.py::test_cheap", "tests/test_b.py::test_dear"] and cut["cost"] == 51.0
+    assert mm.select(record, "plant/x.py", 11, 11, [], budget=0.0)["tests"] == ["tests/test_b.py::test_dear"]
+    assert mm.select(record, "plant/x.py", 29, 31, [], 60.0)["tests"] == ["tests/test_b.py::test_fmu"]  # a span
+    assert mm.select(record, "plant/x.py", 20, 20, [], 60.0)["tests"] is None     # run at import only
+    assert mm.select(record, "plant/x.py", 1, 10, [], 60.0)["tests"] is None      # at import and in tests
+    assert mm.select(record, "plant/x.py", 40, 40, [], 60.0)["tests"] == []       # run by nothing
+    assert mm.select(record, "plant/y.py", 1, 1, [], 60.0)["tests"] == []
+
+
+def test_a_bundled_copy_counts_as_its_product_file():
+    from benchmarks import mutation_map as mm
+    products = {"plant/drive.py", "fmus/slaves/parcosim_plant.py"}
+    assert mm._product_file("/tmp/fmpy_x/resources/parcosim_b1/plant/drive.py", products) == "plant/drive.py"
+    assert mm._product_file("/tmp/copy/fmus/slaves/parcosim_plant.py", products) == "fmus/slaves/parcosim_plant.py"
+    assert mm._product_file("/tmp/copy/tests/test_drive.py", products) is None
+
+
+def test_the_report_counts_per_area_and_lists_survivors():
+    from benchmarks.mutation_report import area, table
+    assert area("kernels/src/drive.c") == "kernels C" and area("controller/law.py") == "law"
+    assert area("fmus/ssp.py") == "fmus export/SSP/state/refusals" and area("fmus/slaves/parcosim_derivator.py") == "fmus other"
+    header = {"seed": 1, "commit": "abc", "sample": 3, "lines": {"plant/a.py": 10, "controller/law.py": 5},
+              "drawn": ["plant/a.py", "plant/a.py", "controller/law.py"]}
+    base = {"column": 0, "before": "a", "after": "b", "operator": "arith", "seconds": 1.0}
+    done = {0: dict(base, index=0, file="plant/a.py", line=1, outcome="killed"),
+            1: dict(base, index=1, file="plant/a.py", line=2, outcome="survived", note="no test executes the line"),
+            2: dict(base, index=2, file="controller/law.py", line=3, outcome="killed")}
+    text = table(header, done)
+    assert "| plant | 10 | 2 | 2 | 1 | 1 | 0 | 0 | 50.0 % |" in text
+    assert "| law | 5 | 1 | 1 | 1 | 0 | 0 | 0 | 100.0 % |" in text
+    assert "| **total** | 15 | 3 | 3 | 2 | 1 | 0 | 0 | 66.7 % |" in text
+    assert "- [1] plant/a.py:2:0 (arith) 'a' -> 'b' [no test executes the line]" in text
+
+
+def test_a_run_of_several_test_files_splits_into_each_files_map_and_merges_back():
+    mm, record = _linemap()
+    record.update(commit="c", returncode=0, shared_of=[[], [], ["session::built_fmus"]],
+                  failed=["tests/test_b.py::test_dear"])
+    a, b = mm.split(record, "tests/test_a.py"), mm.split(record, "tests/test_b.py")
+    assert a["tests"] == ["tests/test_a.py::test_cheap"] and a["lines"] == {"plant/x.py": {"10": [0]}}
+    assert b["lines"] == {"plant/x.py": {"10": [0, 1], "11": [0], "30": [1]}} and a["failed"] == []
+    merged = mm.merge([a, b])
+    assert merged["tests"] == record["tests"] and merged["lines"] == record["lines"]
+    assert mm.select(merged, "plant/x.py", 11, 11, [], 1000.0)["tests"] == []    # fails unmutated: left out

@@ -44,3 +44,20 @@ def test_sliding_mode_term_lowers_the_tracking_error(kind, base, md):
     """Tables 9-12: adding the sliding-mode term lowers e_ef in all 8 pairs on the bench.
     Smallest gain here: PDx -> PDMDx on the triangle, 0.650 -> 0.573 mm (12 %); asserted: 5 %."""
     assert _metrics(f"bench_{kind}_{md}")["e_ef_mm"] < 0.95 * _metrics(f"bench_{kind}_{base}")["e_ef_mm"]
+
+
+def test_compare_names_each_metric_off_by_more_than_the_tolerance_and_no_other(monkeypatch):
+    """``compare`` (the ``--check`` of the stored metrics) on made-up values: a change within
+    the relative tolerance passes, one beyond it, a sign, and a metric that appears or
+    disappears (None) are named with both values."""
+    rel = regression.RELATIVE_TOLERANCE
+    stored = {"e_ef_mm": 1.0, "tau_ef_Nm": 2.0, "e_ss_mm": None, "e_ss_1s_mm": 3.0, "t_settle_s": None, "e_max_mm": 5.0}
+    now = {"e_ef_mm": 1.0 + 0.5 * rel, "tau_ef_Nm": 2.0 * (1 + 2 * rel), "e_ss_mm": 0.1, "e_ss_1s_mm": None,
+           "t_settle_s": None, "e_max_mm": -5.0}
+    monkeypatch.setattr(regression, "load", lambda: {"scenes": {"scene_a": stored}})
+    monkeypatch.setattr(regression, "regression_scenes", lambda: ["scene_a"])
+    monkeypatch.setattr(regression, "measure", lambda name: dict(now))
+    assert set(now) == set(regression.METRICS)
+    assert regression.compare() == [f"scene_a tau_ef_Nm: {now['tau_ef_Nm']!r}, stored 2.0",
+                                    "scene_a e_ss_mm: 0.1, stored None", "scene_a e_ss_1s_mm: None, stored 3.0",
+                                    "scene_a e_max_mm: -5.0, stored 5.0"]

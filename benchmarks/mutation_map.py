@@ -1,0 +1,243 @@
+"""Which tests execute which product line: the map that makes a mutant cheap (issue 31).
+
+Each test file runs once per state of the product and the tests, the first time a mutant
+asks for it, under coverage with pytest-cov's per-test contexts (``--cov-context=test``) and
+:mod:`benchmarks.mutation_timing` (what each test costs, which fail anyway), in a copy of the
+committed tree.  Files are measured wherever they
+run from under the temporary directory (the copy, and the FMUs' bundles unzipped by an
+importer: a bundled ``.../plant/drive.py`` counts as ``plant/drive.py``); a test's
+subprocesses are measured too (``coverage.process_startup``), without a test's name.  The
+map of a test file is a gzipped JSON file named by a key of the product's files, that test
+file's and the tests' helpers (:func:`key`), so a commit that changes none of them keeps it.
+
+A mutant then runs only the tests that execute a line it changes (:func:`select`); a line
+executed only outside any test (at import, during collection, in a subprocess) falls back
+to the tests that import the module; a line nothing executes is reported as such (the
+mutant survives without a run).
+"""
+from __future__ import annotations
+
+import contextlib
+import gzip
+import hashlib
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+#: What the key covers: every tree whose change may change which test runs which line.
+KEYED = ("plant", "motor", "controller", "fmus", "scenarios", "parcosim", "kernels", "tests", "pyproject.toml")
+#: Test files no mutant runs (the mutation tools' own, the sanitizer build of pristine C): not
+#: in the map, and not in its key.
+NOT_RUN = ("tests/test_mutation", "tests/test_sanitizers.py")
+#: Not a test: coverage's context of lines run outside one (import, collection, subprocess).
+OUTSIDE = ""
+
+
+def key(root: Path = ROOT, commit: str = "HEAD", test_file: str | None = None) -> str:
+    """A hash of the committed files of :data:`KEYED` at ``commit`` (12 hex digits), of the
+    tests' only ``test_file`` and the helpers (``tests/`` files not named ``test_*``): what a
+    test file's map depends on."""
+    listing = subprocess.run(["git", "ls-tree", "-r", commit, "--", *KEYED], cwd=root, check=True,
+                             capture_output=True, text=True).stdout.splitlines()
+    kept = [line for line in listing if _keyed(line.split("\t", 1)[1], test_file)]
+    return hashlib.sha1("\n".join(kept).encode()).hexdigest()[:12]
+
+
+def _keyed(path: str, test_file: str | None) -> bool:
+    if path.startswith(NOT_RUN):
+        return False
+    if path.startswith("tests/") and Path(path).name.startswith("test_"):
+        return test_file is None or path == test_file
+    return True
+
+
+def _product_file(measured: str, products: set) -> str | None:
+    """The product file (relative to the root) that a measured path is a copy of."""
+    parts = Path(measured).parts
+    for k in range(len(parts) - 1):
+        candidate = "/".join(parts[k:])
+        if candidate in products:
+            return candidate
+    return None
+
+
+def build(copy: Path, products: list, tests: list, out: Path, log=sys.stdout) -> dict:
+    """Run ``tests`` (files, relative to ``copy``) in ``copy`` under coverage; write the map to
+    ``out`` and return it."""
+    import coverage
+
+    work = Path(tempfile.mkdtemp(prefix="parcosim_linemap_"))
+    rc = work / "coveragerc"
+    data = work / ".coverage"
+    rc.write_text(f"[run]\nparallel = True\nsource = {tempfile.gettempdir()}\ndata_file = {data}\n")
+    (work / "sitecustomize.py").write_text("import coverage\ncoverage.process_startup()\n")
+    times = work / "times.json"
+    env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1", COVERAGE_PROCESS_START=str(rc), COVERAGE_FILE=str(data),
+               PARCOSIM_MUTATION_TIMES=str(times),
+               PARCOSIM_CACHE=tempfile.mkdtemp(prefix="parcosim_mapcache_"),
+               PYTHONPATH=os.pathsep.join([str(copy), str(work), *_other_paths()]))
+    command = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "benchmarks.mutation_timing",
+               "--cov", f"--cov-config={rc}", "--cov-context=test", "--cov-report=", *tests]
+    done = subprocess.run(command, cwd=copy, env=env, stdout=log, stderr=subprocess.STDOUT)
+    covered = coverage.CoverageData(basename=str(data))
+    covered.read()
+    products_set = set(products)
+    names, index = [], {}
+    lines, outside = {}, {}
+    for measured in covered.measured_files():
+        product = _product_file(measured, products_set)
+        if product is None:
+            continue
+        for line, contexts in covered.contexts_by_lineno(measured).items():
+            for context in contexts:
+                test = context.split("|")[0]
+                if test == OUTSIDE:
+                    outside.setdefault(product, set()).add(line)
+                    continue
+                if test not in index:
+                    index[test] = len(names)
+                    names.append(test)
+                lines.setdefault(product, {}).setdefault(str(line), set()).add(index[test])
+    timing = json.loads(times.read_text()) if times.exists() else {"tests": {}, "shared": {}, "failed": []}
+    record = {"commit": subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True,
+                                       text=True).stdout.strip(),
+              "returncode": done.returncode, "tests": names,
+              "cost": [timing["tests"].get(name, {}).get("seconds", 0.0) for name in names],
+              "shared_of": [timing["tests"].get(name, {}).get("shared", []) for name in names],
+              "shared": timing["shared"], "all_tests": timing["tests"], "failed": timing["failed"],
+              "lines": {f: {line: sorted(ids) for line, ids in by.items()} for f, by in lines.items()},
+              "outside": {f: sorted(ls) for f, ls in outside.items()}}
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with gzip.open(out, "wt") as stream:
+        json.dump(record, stream)
+    shutil.rmtree(work, ignore_errors=True)
+    return record
+
+
+def merge(records: list) -> dict:
+    """One map of the maps of disjoint sets of test files; a shared fixture costs the most any
+    of them measured."""
+    merged = {"returncode": max([r["returncode"] for r in records], default=0), "tests": [], "cost": [],
+              "shared_of": [], "shared": {}, "all_tests": {}, "lines": {}, "outside": {}, "failed": []}
+    for r in records:
+        merged["failed"] += r.get("failed", [])
+        offset = len(merged["tests"])
+        for name in ("tests", "cost", "shared_of"):
+            merged[name] += r[name]
+        merged["all_tests"].update(r["all_tests"])
+        for fixture, seconds in r["shared"].items():
+            merged["shared"][fixture] = max(seconds, merged["shared"].get(fixture, 0.0))
+        for f, by in r["lines"].items():
+            into = merged["lines"].setdefault(f, {})
+            for line, ids in by.items():
+                into[line] = into.get(line, []) + [i + offset for i in ids]
+        for f, lines in r["outside"].items():
+            merged["outside"][f] = sorted(set(merged["outside"].get(f, [])) | set(lines))
+    return merged
+
+
+def shard_path(test_file: str, root: Path = ROOT, commit: str = "HEAD") -> Path:
+    """Where the map of one test file is kept: ``out/linemaps/<file>_<key>.json.gz``
+    (:func:`key` of that file)."""
+    return root / "out" / "linemaps" / f"{test_file.replace('/', '__')}_{key(root, commit, test_file)}.json.gz"
+
+
+def split(record: dict, test_file: str) -> dict:
+    """The part of a map (of several test files' run) that is ``test_file``'s: its tests, the
+    lines they execute; lines run outside any test and the shared fixtures' costs go with
+    every part."""
+    keep = [i for i, name in enumerate(record["tests"]) if name.split("::")[0] == test_file]
+    new_index = {old: new for new, old in enumerate(keep)}
+    lines = {}
+    for f, by in record["lines"].items():
+        for line, ids in by.items():
+            mine = [new_index[i] for i in ids if i in new_index]
+            if mine:
+                lines.setdefault(f, {})[line] = mine
+    own = {name: t for name, t in record["all_tests"].items() if name.split("::")[0] == test_file}
+    return {"commit": record["commit"], "returncode": record["returncode"],
+            "tests": [record["tests"][i] for i in keep], "cost": [record["cost"][i] for i in keep],
+            "shared_of": [record["shared_of"][i] for i in keep], "shared": record["shared"], "all_tests": own,
+            "failed": [t for t in record["failed"] if t.split("::")[0] == test_file], "lines": lines,
+            "outside": record["outside"]}
+
+
+def for_files(copy: Path, products: list, test_files: list, lock_of=None, commit: str = "HEAD",
+              log=subprocess.DEVNULL) -> dict:
+    """The map of ``test_files``; those not yet mapped are mapped in one run (in ``copy``,
+    unmutated: a session's fixtures, such as the built FMUs, are made once) and each file's
+    part is kept (:func:`shard_path` at ``commit``, the copy's).  ``lock_of(test_file)``: a lock held while that file's
+    map is looked for and built (workers side by side build different files)."""
+    locks = [lock_of(f) for f in sorted(set(test_files))] if lock_of else []
+    for held in locks:
+        held.acquire()
+    try:
+        missing = [f for f in test_files if not shard_path(f, commit=commit).exists()]
+        if missing:
+            work = Path(tempfile.mkdtemp(prefix="parcosim_linemaps_"))
+            record = build(copy, products, missing, work / "all.json.gz", log)
+            for test_file in missing:
+                path = shard_path(test_file, commit=commit)
+                path.parent.mkdir(parents=True, exist_ok=True)
+                with gzip.open(path, "wt") as stream:
+                    json.dump(split(record, test_file), stream)
+            shutil.rmtree(work, ignore_errors=True)
+        return merge([load(shard_path(f, commit=commit)) for f in test_files])
+    finally:
+        for held in locks:
+            held.release()
+
+
+def _other_paths() -> list:
+    """``$PYTHONPATH`` less the worktree (a copy's run must import the copy's modules, and so
+    must its subprocesses)."""
+    return [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep)
+            if p and Path(p).resolve() != ROOT]
+
+
+def load(path: Path) -> dict:
+    with gzip.open(path, "rt") as stream:
+        return json.load(stream)
+
+
+def cost(record: dict, tests: list) -> float:
+    """Seconds ``tests`` (node ids) took in the map's run: their own and their shared fixtures'."""
+    own = record["all_tests"]
+    shared = {s for t in tests for s in own.get(t, {}).get("shared", [])}
+    return sum(own.get(t, {}).get("seconds", 0.0) for t in tests) + sum(record["shared"].get(s, 0.0) for s in shared)
+
+
+def select(record: dict, file: str, first: int, last: int, near_files: list, budget: float) -> dict:
+    """The tests to run for a change of ``file``'s lines ``first``..``last``.
+
+    ``{"tests": node ids, or None when import-time or subprocess runs execute the lines (a
+    module-level line, run once at import, is seen by every test after it),
+    "covering": how many tests execute them, "cost": the selection's measured seconds}``;
+    the tests of ``near_files`` (the module's importers) first, then the cheaper; no more than
+    ``budget`` seconds of them (the first always).  ``tests == []``: nothing executes them.
+    """
+    by_line = record["lines"].get(file, {})
+    failing = set(record.get("failed", ()))
+    ids = sorted({i for line in range(first, last + 1) for i in by_line.get(str(line), ())
+                  if record["tests"][i] not in failing})
+    outside = set(record["outside"].get(file, ()))
+    if any(line in outside for line in range(first, last + 1)):
+        return {"tests": None, "covering": len(ids), "cost": 0.0}      # run at import: every test may see it
+    if not ids:
+        return {"tests": [], "covering": 0, "cost": 0.0}
+    near = set(near_files)
+    ids.sort(key=lambda i: (record["tests"][i].split("::")[0] not in near, record["cost"][i]))
+    chosen, total = [], 0.0
+    for i in ids:
+        name = record["tests"][i]
+        extra = cost(record, chosen + [name]) - total
+        if chosen and total + extra > budget:
+            continue
+        chosen.append(name)
+        total += extra
+    return {"tests": chosen, "covering": len(ids), "cost": round(total, 2)}
