@@ -51,6 +51,25 @@ def test_the_thesis_trajectories_are_accepted_and_bad_circles_refused_with_their
     assert through.summary()["first_refusal_s"] is not None
 
 
+def test_first_refusal_time_is_the_sample_index_times_the_sample_time():
+    """The same circle through the near-singular band, sampled at 1 ms and at 2 ms: the first
+    refused sample is at the same time (within one sample) and its index times the sample time
+    (wrong code it catches: an index read as milliseconds whatever the sample time)."""
+    params = get_preset("bench")
+    x, y = parallel_singular_point(params)
+    circle = workspace.user_circle(x, y + 0.05, 0.05)
+
+    def ref(t):   # started half a turn later: it enters the band near t = 0.39 s, not at once
+        return circle(t + 0.5)
+
+    fine = workspace.check_trajectory(params, "low", ref, 1.0)
+    coarse = workspace.check_trajectory(params, "low", ref, 1.0, sample_time=2e-3)
+    first = min(int(i[0]) for i in coarse.refused.values() if len(i))
+    assert coarse.summary()["first_refusal_s"] == pytest.approx(first * 2e-3)
+    assert abs(coarse.summary()["first_refusal_s"] - fine.summary()["first_refusal_s"]) <= 2e-3
+    assert 0.3 < fine.summary()["first_refusal_s"] < 0.5
+
+
 def test_spec_measures_vanish_on_the_parallel_locus():
     spec = plant_spec.load("bench_5r")
     x, y = parallel_singular_point(get_preset("bench"))

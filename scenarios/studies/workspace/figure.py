@@ -19,19 +19,21 @@ OUTSIDE, BAND, TABLE = "outside the workspace", "in the near-singular band", "ou
 
 @dataclass
 class TrajectoryCheck:
-    """One trajectory sampled at 1 ms: its path, and the samples the controller refuses."""
+    """One trajectory sampled every ``sample_time`` s: its path, and the samples the controller
+    refuses."""
 
     name: str
     x: np.ndarray
     y: np.ndarray
     refused: dict = field(default_factory=dict)   # reason -> indices
     min_margin: float = math.inf
+    sample_time: float = 1e-3
 
     def summary(self) -> dict:
         first = min((int(i[0]) for i in self.refused.values() if len(i)), default=None)
         return {"name": self.name, "min_margin": self.min_margin,
                 "refused_samples": {r: int(len(i)) for r, i in self.refused.items() if len(i)},
-                "first_refusal_s": None if first is None else first * 1e-3}
+                "first_refusal_s": None if first is None else first * self.sample_time}
 
 
 @dataclass
@@ -68,12 +70,13 @@ def user_circle(cx: float, cy: float, radius: float, period: float = 1.0):
 
 
 def check_trajectory(params, name, reference, duration, band=fivebar.NEAR_SINGULAR_MARGIN,
-                     extent=DEFAULT_EXTENT) -> TrajectoryCheck:
-    """Sample ``reference`` (t -> object with x, y, or a pair) every 1 ms over ``duration`` and
-    find the samples the controller refuses (controller.position: workspace, band, table)."""
-    ts = np.arange(int(round(duration / 1e-3)) + 1) * 1e-3
+                     extent=DEFAULT_EXTENT, sample_time=1e-3) -> TrajectoryCheck:
+    """Sample ``reference`` (t -> object with x, y, or a pair) every ``sample_time`` s (the
+    controller's T, 1 ms) over ``duration`` and find the samples the controller refuses
+    (controller.position: workspace, band, table)."""
+    ts = np.arange(int(round(duration / sample_time)) + 1) * sample_time
     pts = np.array([tuple(reference(t))[:2] for t in ts])
-    check = TrajectoryCheck(name, pts[:, 0], pts[:, 1])
+    check = TrajectoryCheck(name, pts[:, 0], pts[:, 1], sample_time=sample_time)
     reasons = {OUTSIDE: [], BAND: [], TABLE: []}
     for i, (x, y) in enumerate(pts):
         try:
