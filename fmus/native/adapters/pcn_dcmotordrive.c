@@ -103,8 +103,7 @@ static int setup(pcn_instance *in, pcn_text *why)
 
 static const char *accepted_steps(const pcn_instance *in)
 {
-    if (current_mode(in)) return "in current mode " PCN_SAMPLING_ACCEPTS;
-    return "any step size h with 1e-09 s <= h and t + h <= 1e+09 s (voltage mode)";
+    return pcn_drive_accepted_steps(current_mode(in));
 }
 
 /* CurrentLoopSteps.check_step_size: in current mode h divides T, with the drive's counter. */

@@ -7,6 +7,7 @@
 
 #include "electrics.h"
 #include "pc_sampling.h"
+#include "pcn_sampling.h"
 
 #define ABSURD 1e6          /* fmus/slave/refusals.py */
 #define TINY 1e-12
@@ -339,4 +340,10 @@ int pcn_drive_check_data(const pcn_drive_data *built, const pcn_drive_data *data
     if (!whole(k->phase, k->substeps))
         return pcn_addf(why, "the drive's sub-step %r is not a whole number in [0, %r)", k->phase, k->substeps), 1;
     return 0;
+}
+
+const char *pcn_drive_accepted_steps(int current_mode)
+{
+    if (current_mode) return "in current mode " PCN_SAMPLING_ACCEPTS;
+    return "any step size h with 1e-09 s <= h and t + h <= 1e+09 s (voltage mode)";
 }

@@ -93,6 +93,9 @@ double pcn_drive_torque(const pcn_drive_data *d, double omega);
  * ActuatedFiveBarPlant prepares its drives before pc_actuated_step). */
 void pcn_drive_prepare(pcn_drive_data *d, double h);
 
+/* The steps a drive accepts, in CurrentLoopSteps' words: sampled in current mode, any h in voltage mode. */
+const char *pcn_drive_accepted_steps(int current_mode);
+
 /* Drive.step: one step with the inputs held; out = {tau, v, i}.  Refused: DRIVE_REASONS'
  * message (with euler's divergence explained) in `why`, nonzero, nothing changed. */
 int pcn_drive_step(pcn_drive_data *d, double i_ref, double v_ref, double omega, double i_hat, double h,
