@@ -304,3 +304,21 @@ def test_a_lugre_sample_with_mu_past_the_preset_s_break_away_runs(client):
     row = run_sweep(scene, 1, 0.0, seed=seed, perturb=held, client=client).rows[0]
     assert not row["completed"] and row["drive1.mu_s"] == motor1.mu_s
     assert "break-away torque Fs (mu_s)" in row["error"] and "Coulomb torque Fc (mu)" in row["error"], row["error"]
+
+
+def test_worker_processes_import_the_installed_code_not_an_fmus_copy_on_the_parents_path(tmp_path, monkeypatch):
+    """A parent that ran a pythonfmu FMU in process has the FMU's resources folder on its path,
+    with a partial copy of ``fmus``; each worker process drops it before anything of ours is
+    imported (scenarios/batch/worker_path.py).  Wrong code it catches: a preload given by module
+    name, whose import of the ``scenarios`` package imports ``fmus`` from that copy first (the
+    sweeps' workers then failed with "No module named 'fmus.slave.identity'")."""
+    import fmus
+
+    fmu = tmp_path / "extracted"
+    (fmu / "resources" / "fmus").mkdir(parents=True)
+    (fmu / "resources" / "fmus" / "__init__.py").write_text("raise ImportError('the FMU copy of fmus was imported')\n")
+    (fmu / "modelDescription.xml").write_text("<fmiModelDescription/>\n")
+    monkeypatch.syspath_prepend(str(fmu / "resources"))
+    with open_client(workers=1, processes=True) as c:
+        found = c.run(lambda: __import__("fmus").__file__)
+    assert list(found.values()) == [fmus.__file__]

@@ -25,6 +25,7 @@ import contextlib
 import os
 from dataclasses import dataclass
 
+from scenarios.batch import worker_path
 from scenarios.scenes.scene import Scene
 
 #: Metrics of a task that did not produce any (NaN where a number belongs).
@@ -91,7 +92,10 @@ def open_client(scheduler: str | None = None, workers: int | None = None, proces
     n = default_workers() if workers is None else workers
     if not (isinstance(n, int) and n >= 1):
         raise ValueError(f"workers = {workers!r} must be an integer >= 1")
-    preload = ["scenarios.batch.worker_path"] if processes else []   # a clean sys.path in each worker process
+    # A clean sys.path in each worker process: the preload is given by file, because importing
+    # it by name would import the scenarios package (and fmus, through its aliases of moved
+    # modules) from the path it is there to clean.
+    preload = [worker_path.__file__] if processes else []
     with LocalCluster(n_workers=n, threads_per_worker=1, processes=processes, dashboard_address=":0",
                       silence_logs=40, preload=preload) as cluster, Client(cluster) as client:
         yield client

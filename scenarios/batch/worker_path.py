@@ -5,7 +5,8 @@ A worker process is spawned with its parent's ``sys.path``.  A parent that has r
 pythonfmu FMU in process (``mode="fmu"``, fmpy) has that FMU's ``resources`` folder on its
 path, with a copy of ``fmus``, ``plant``, ``motor`` and ``controller`` that may be older than
 the installed ones; a worker importing those would run another code.  This module imports
-nothing of parcosim, so it runs before any of it is imported.
+nothing of parcosim, so it runs before any of it is imported; the engine gives it to dask by
+file (importing it by name would import the ``scenarios`` package first).
 """
 from __future__ import annotations
 
