@@ -21,6 +21,7 @@ the electrical model, used by the drive and by the dynamic current observer.
 """
 
 import ctypes
+import functools
 
 import kernels
 from motor import _checks, kernel
@@ -68,21 +69,16 @@ def electrical_step_coefficients(R, L, h, method="exact"):
     if method == "euler" and L == 0.0:
         raise ValueError(f"method 'euler' needs L > 0, got L = {L!r}; use 'quasi_static'")
     ag = (ctypes.c_double * 2)()
-    _step_coefficients()(R, L, h, ELECTRICAL_METHODS.index(method), ag)   # kernels/src/electrics.c
+    _coefficients_kernel("pc_electrical_step_coefficients")(R, L, h, ELECTRICAL_METHODS.index(method), ag)   # kernels/src/electrics.c
     return ag[0], ag[1]
 
 
-def _step_coefficients():
-    """The kernel ``pc_electrical_step_coefficients`` (bound once)."""
-    global _STEP_COEFFICIENTS
-    if _STEP_COEFFICIENTS is None:
-        _STEP_COEFFICIENTS = kernels.function("pc_electrical_step_coefficients", ctypes.c_int, ctypes.c_double,
-                                              ctypes.c_double, ctypes.c_double, ctypes.c_int,
-                                              ctypes.POINTER(ctypes.c_double))
-    return _STEP_COEFFICIENTS
-
-
-_STEP_COEFFICIENTS = None
+@functools.cache
+def _coefficients_kernel(name: str):
+    """A kernel of electrics.c with the coefficients' signature ``(R, L, h, method, out[2])``,
+    bound once: ``pc_electrical_step_coefficients`` or ``pc_mean_current_coefficients``."""
+    return kernels.function(name, ctypes.c_int, ctypes.c_double, ctypes.c_double, ctypes.c_double, ctypes.c_int,
+                            ctypes.POINTER(ctypes.c_double))
 
 
 def mean_current_coefficients(R, L, h, method="exact"):
@@ -98,21 +94,10 @@ def mean_current_coefficients(R, L, h, method="exact"):
     """
     electrical_step_coefficients(R, L, h, method)   # its checks and messages
     w = (ctypes.c_double * 2)()
-    _mean_coefficients()(R, L, h, ELECTRICAL_METHODS.index(method), w)   # kernels/src/electrics.c
+    _coefficients_kernel("pc_mean_current_coefficients")(R, L, h, ELECTRICAL_METHODS.index(method), w)   # kernels/src/electrics.c
     return w[0], w[1]
 
 
-def _mean_coefficients():
-    """The kernel ``pc_mean_current_coefficients`` (bound once)."""
-    global _MEAN_COEFFICIENTS
-    if _MEAN_COEFFICIENTS is None:
-        _MEAN_COEFFICIENTS = kernels.function("pc_mean_current_coefficients", ctypes.c_int, ctypes.c_double,
-                                              ctypes.c_double, ctypes.c_double, ctypes.c_int,
-                                              ctypes.POINTER(ctypes.c_double))
-    return _MEAN_COEFFICIENTS
-
-
-_MEAN_COEFFICIENTS = None
 
 
 def advance_current(i, v, omega, ke, coefficients):
