@@ -12,6 +12,8 @@ import dataclasses
 import warnings
 import zipfile
 
+import numpy as np
+
 import pytest
 
 from scenarios.packaging.per_component import TrackingWarning, check_tracking, export_per_component, _variables, \
@@ -58,3 +60,34 @@ def test_the_check_measures_the_oscillation_it_names(fmu_dir):
     e_4, tau_4 = check_tracking(scene, system, variables, 4)
     assert tau_1ms > 2.0
     assert abs(e_4 - 1.0) < 0.05 and abs(tau_4 - 1.0) < 0.05
+
+
+@pytest.mark.parametrize("model", ["Derivator", "PositionController", "BalanceController", "CurrentObserver"])
+@pytest.mark.parametrize("n", [1, 4])
+def test_hold_first_step_keeps_a_zero_fed_first_step_out_of_the_model(model, n):
+    """fmpy's runner feeds 0.0 to every input on its first step, Ecos and libcosim the outputs
+    after initialisation: with ``hold_first_step`` both give the same outputs on every step,
+    the start values over the first; without it they differ (the property is not vacuous)."""
+    from tests.test_sampling_phase import SAMPLED, input_value, new_slave
+
+    _, inputs, outputs = SAMPLED[model]
+
+    def outputs_of(hold, zero_first):
+        slave = new_slave(model, {"hold_first_step": hold})
+        start = [getattr(slave, name) for name in outputs]
+        h, rows = 1e-3 / n, []
+        for k in range(6 * n):
+            m, j = divmod(k, n)
+            for index, (name, (base, amplitude)) in enumerate(inputs.items()):
+                setattr(slave, name, 0.0 if zero_first and k == 0 else input_value(base, amplitude, m, j, index))
+            assert slave.do_step(k * h, h), slave.error
+            rows.append([getattr(slave, name) for name in outputs])
+        return start, np.array(rows)
+
+    start, fed_zeros = outputs_of(True, True)
+    _, fed_outputs = outputs_of(True, False)
+    np.testing.assert_array_equal(fed_zeros, fed_outputs)
+    np.testing.assert_array_equal(fed_zeros[0], start)
+    assert np.ptp(fed_zeros, axis=0).max() > 0.0                   # it samples after the first step
+    if n == 1:
+        assert not np.array_equal(outputs_of(False, True)[1], outputs_of(False, False)[1])

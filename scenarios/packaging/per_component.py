@@ -55,6 +55,8 @@ from scenarios.scenes.scene import Scene
 
 #: The Integer parameter of our sampled FMUs: the sub-step of each period they sample on.
 PHASE = "sample_phase"
+#: The Boolean parameter of our sampled FMUs: the run's first step does not sample.
+HOLD_FIRST = "hold_first_step"
 #: Sub-steps per period the export chooses from: T / n a whole number of nanoseconds for
 #: T = 1 ms (libcosim's time unit), smallest first.
 SUBSTEP_CHOICES = (1, 2, 4, 5, 8, 10, 20, 25, 40, 50, 100, 125, 200, 250, 500, 1000)
@@ -336,12 +338,22 @@ def with_internal_observers(system: System) -> System:
 def per_component_system(system: System, variables: dict, substeps: int | None = None) -> tuple:
     """(``system`` stepped at its package's base step with each sampled component's
     :data:`PHASE`, its :class:`Timing`).  A phase of 0 (the default) is not set, so a
-    replacement FMU without the parameter takes the same bindings."""
+    replacement FMU without the parameter takes the same bindings.  An instance that samples
+    on the run's first step (phase 0: every one at n = 1) and has :data:`HOLD_FIRST` gets it
+    true: fmpy's runner feeds 0.0 to every input on that step, which the sample would take as
+    the plant's angles and the reference (module docstring)."""
     if any(c.substeps != 1 for c in system.components):
         raise ValueError("multi-rate components (substeps > 1) cannot be exported per component")
     timing = component_timing(system, variables, substeps)
-    components = tuple(dataclasses.replace(c, parameters={**c.parameters, PHASE: timing.phases[c.name]})
-                       if timing.phases.get(c.name) else c for c in system.components)
+
+    def timed(c):
+        if c.name not in timing.phases:
+            return c
+        phase = timing.phases[c.name]
+        extra = {PHASE: phase} if phase else ({HOLD_FIRST: True} if HOLD_FIRST in variables[c.name] else {})
+        return dataclasses.replace(c, parameters={**c.parameters, **extra}) if extra else c
+
+    components = tuple(timed(c) for c in system.components)
     return dataclasses.replace(system, components=components, step=timing.base_step), timing
 
 
