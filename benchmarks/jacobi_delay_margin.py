@@ -1,6 +1,6 @@
 """Why a per-component package stepped at the 1 ms period oscillates under the task-space PD laws.
 
-    python benchmarks/jacobi_delay_margin.py [--delays 0,0 2,3 2,2 1,1] [--points 24]
+    python benchmarks/jacobi_delay_margin.py [--delays 0,0 2,3 2,2 1,1] [--points 24] [--predict]
 
 A Jacobi master (Ecos, libcosim, fmpy's ``simulate_ssp``) steps every instance from the
 values all held at the step's start, so each connection costs a step.  At h = T = 1 ms the
@@ -12,7 +12,9 @@ linearised about rest along the circle and the triangle (``benchmarks/twin_linea
 plant with the bench's own link inertias and rotors, the derivator's velocity chain, the law
 τ = G (λ² e + 2λ ė)), with those delays on the two feedbacks: the smallest λ whose closed
 loop has a pole on or outside the unit circle along the path, beside the strategies' λ.
-The drives' current loops, friction, quantisation and the sliding-mode terms are left out.
+``--predict``: the controller extrapolates the angle it has over the position delay with the
+velocity estimate it has (y + a T v), the usual compensation of a known delay.  The drives'
+current loops, friction, quantisation and the sliding-mode terms are left out.
 Figures: docs/ssp.md ("A drive that closes its own current loop").
 """
 from __future__ import annotations
@@ -25,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from twin_linear_margin import loop_at, plant, rotor_inertias, velocity_chain  # noqa: E402
+from twin_linear_margin import T, loop_at, plant, rotor_inertias, velocity_chain  # noqa: E402
 
 from controller.strategies import get_strategy  # noqa: E402
 from controller.trajectories import get_trajectory  # noqa: E402
@@ -35,10 +37,12 @@ from plant import get_preset  # noqa: E402
 DELAYS = ((0, 0), (2, 3), (2, 2), (1, 1))
 
 
-def closed_loop(Ad, Bd, Cm, G, lam, derivator, position_delay: int, velocity_delay: int) -> np.ndarray:
+def closed_loop(Ad, Bd, Cm, G, lam, derivator, position_delay: int, velocity_delay: int,
+                predict: bool = False) -> np.ndarray:
     """The closed loop's state matrix on [plant, derivator, the last ``position_delay``
     angle samples, the last ``velocity_delay`` velocity estimates]: u_k = -G (λ² y_k-a +
-    2λ v_k-b) held over [t_k, t_k+1], y = Cm x, v the derivator's estimate of y."""
+    2λ v_k-b) held over [t_k, t_k+1], y = Cm x, v the derivator's estimate of y; with
+    ``predict`` y_k-a + a T v_k-b in place of y_k-a."""
     va, vb, vc, vd = (np.kron(np.eye(2), m) for m in derivator)
     n, nv, a, b = Ad.shape[0], va.shape[0], position_delay, velocity_delay
     size = n + nv + 2 * a + 2 * b
@@ -51,7 +55,8 @@ def closed_loop(Ad, Bd, Cm, G, lam, derivator, position_delay: int, velocity_del
     v_now[:, :n], v_now[:, n:n + nv] = vd @ Cm, vc
     y_used = y_now if a == 0 else np.eye(size)[iy + 2 * (a - 1):iy + 2 * a]
     v_used = v_now if b == 0 else np.eye(size)[iv + 2 * (b - 1):iv + 2 * b]
-    M[:n] += Bd @ (-G @ (lam ** 2 * y_used + 2 * lam * v_used))
+    horizon = a * T if predict else 0.0
+    M[:n] += Bd @ (-G @ (lam ** 2 * (y_used + horizon * v_used) + 2 * lam * v_used))
     for start, depth, now in ((iy, a, y_now), (iv, b, v_now)):
         if depth:
             M[start:start + 2] = now
@@ -60,15 +65,15 @@ def closed_loop(Ad, Bd, Cm, G, lam, derivator, position_delay: int, velocity_del
     return M
 
 
-def limit(system, G, derivator, delays, lams=np.arange(1.0, 300.0, 1.0)) -> float:
+def limit(system, G, derivator, delays, predict=False, lams=np.arange(1.0, 300.0, 1.0)) -> float:
     """The smallest λ of ``lams`` with a closed-loop pole on or outside the unit circle."""
     for lam in lams:
-        if max(abs(np.linalg.eigvals(closed_loop(*system, G, lam, derivator, *delays)))) >= 1.0:
+        if max(abs(np.linalg.eigvals(closed_loop(*system, G, lam, derivator, *delays, predict)))) >= 1.0:
             return float(lam)
     return math.inf
 
 
-def path_limits(kind: str, delays, points: int = 24) -> dict:
+def path_limits(kind: str, delays, points: int = 24, predict: bool = False) -> dict:
     """{family: smallest λ limit over ``points`` points of trajectory ``kind``} with ``delays``."""
     params = get_preset("bench")
     links, Jr, derivator = params.with_rotors(0.0, 0.0), rotor_inertias(params), velocity_chain()
@@ -78,7 +83,7 @@ def path_limits(kind: str, delays, points: int = 24) -> dict:
         Ml, families = loop_at(params, links, trajectory(t).x, trajectory(t).y)
         system = plant(Ml, Jr)
         for name, (G, _lam) in families.items():
-            best[name] = min(best.get(name, math.inf), limit(system, G, derivator, delays))
+            best[name] = min(best.get(name, math.inf), limit(system, G, derivator, delays, predict))
     return best
 
 
@@ -87,6 +92,7 @@ def main(argv=None) -> int:
     parser.add_argument("--delays", nargs="+", default=[f"{a},{b}" for a, b in DELAYS],
                         help="position,velocity delays in periods (0,0: our master; 2,3: the 1 ms package)")
     parser.add_argument("--points", type=int, default=24)
+    parser.add_argument("--predict", action="store_true", help="the controller extrapolates the angle over its delay")
     args = parser.parse_args(argv)
     lams = {"PDq": {k: get_strategy("PDq", k).lam for k in ("circle", "triangle")},
             "TCq/TCx": {k: get_strategy("TCx").lam for k in ("circle", "triangle")},
@@ -96,7 +102,7 @@ def main(argv=None) -> int:
     for kind in ("circle", "triangle"):
         for text in args.delays:
             delays = tuple(int(v) for v in text.split(","))
-            found = path_limits(kind, delays, args.points)
+            found = path_limits(kind, delays, args.points, args.predict)
             cells = [f"{found[f]:.0f} ({lams[f][kind]:.0f})" for f in lams]
             print(f"| {kind} | {delays[0]}, {delays[1]} | " + " | ".join(cells) + " |")
     return 0
