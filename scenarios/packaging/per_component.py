@@ -18,7 +18,8 @@ Integer parameter ``sample_phase``, docs/contract.md):
   drives 0); each connection then delivers its sample exactly when the next stage takes
   its own.  So no stage that reads the plant samples on the run's first step, where fmpy
   feeds 0.0 to every input; a one-stage chain (thesis_sim's controller) therefore samples
-  on sub-step 1;
+  on sub-step 1; at n = 1 every phase is 0 and those instances get ``hold_first_step``
+  (their first sample on the second step, as in every tool);
 * n: the Jacobi master adds one sub-step per stage and one into the plant to our
   master's loop, (last + 1) h, and the tracking error grows with that delay (measured:
   thesis_sim_circle e_ef x(1 + 2.03/n), the bench x1.005 at n = 4).  Exporting a scene,
@@ -41,7 +42,11 @@ ignores bindings) and binds them in the SSD (libcosim, Ecos' ``init(t, "paramete
 ``internal_observer``: the drives estimate their current themselves (``DCMotorDrive``'s
 ``internal_observer``, the observer of 7.20 inside the drive FMU, as a real drive closes
 its current loop): the observers ``obs1``/``obs2`` and their connections go, which takes
-the one connection inside the 1 ms current loop out of the Jacobi master.
+the one connection inside the 1 ms current loop out of the Jacobi master.  At n = 1 the
+chain still costs 2 periods on the position and 3 on the velocity feedback, at the stability
+limit of the task-space PD laws (``benchmarks/jacobi_delay_margin.py``): a ``substeps``
+given for a scene is therefore checked by a run (:func:`check_tracking`, a
+:class:`TrackingWarning` by name outside :data:`TRACKING_BOUND`).
 """
 from __future__ import annotations
 
