@@ -41,6 +41,31 @@ def test_a_plain_period_package_of_a_task_space_pd_scene_is_named_at_export(fmu_
     assert len([w for w in caught if issubclass(w.category, TrackingWarning)]) == 1
 
 
+def test_the_plain_period_package_with_the_observers_outside_is_named_too(fmu_dir, tmp_path):
+    """Without internal observers the 1 ms package has a connection inside the current loop
+    (the issue's 40 mm): the same check names it."""
+    scene = _short("bench_circle_TCMDx")
+    with pytest.warns(TrackingWarning, match=r"bench_circle_TCMDx \(strategy TCMDx\)"):
+        export_per_component(scene, tmp_path / "tcmdx.ssp", fmu_dir, substeps=1)
+
+
+def test_plain_fmpy_runs_the_1ms_package_as_the_scene(fmu_dir, tmp_path):
+    """fmpy's ``simulate_ssp`` feeds 0.0 to every input on its first step: the 1 ms package's
+    derivator and controller hold that step (``hold_first_step``), so a triangle, whose
+    metric window starts at 0, keeps the scene's torque (it was x55 before)."""
+    from scenarios.run.runner import run_scene
+    from scenarios.studies.tools import run_tool, tool_metrics
+
+    scene = dataclasses.replace(_short("bench_triangle_PDq"), window=(0.0, STOP))
+    path = export_per_component(scene, tmp_path / "pdq.ssp", fmu_dir, substeps=1, internal_observer=True)
+    columns = {signal: name for name, signal in scene.columns.items() if name in ("x", "y", "x_d", "y_d", "tau1", "tau2")}
+    m = tool_metrics(scene, run_tool("fmpy", path, list(columns), STOP, 1e-3), columns)
+    ours = run_scene(scene, mode="inprocess").metrics
+    assert m["completed"]
+    assert abs(m["tau_ef_Nm"] / ours["tau_ef_Nm"] - 1.0) < 0.05
+    assert abs(m["e_ef_mm"] / ours["e_ef_mm"] - 1.0) < 0.05
+
+
 @pytest.mark.parametrize("name, substeps", [("bench_circle_PDx", 4), ("bench_circle_TCMDx", 1)])
 def test_packages_that_track_export_without_a_warning(fmu_dir, tmp_path, name, substeps):
     scene = _short(name)
