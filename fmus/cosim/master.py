@@ -435,45 +435,32 @@ def _retrying_step(stepper: Stepper, substeps: int, retried: list) -> None:
         stepper.free_state(state)
 
 
-#: Steps between two looks at the SIGINT flag (and at most between two progress calls).
-CHUNK = 64
-
-
 def _step_in_python(run: RunContext, stepper: Stepper) -> Outcome:
-    """Step the initialised ``stepper`` to the stop time (or to a refusal or a SIGINT), each
-    step :meth:`Stepper.step` and its row kept; rows go into the array a chunk at a time."""
-    system, progress = run.system, run.progress
+    """Step the initialised ``stepper`` to the stop time (or to a refusal or a SIGINT): each
+    step one :meth:`Stepper.step` and its row."""
+    system, progress, interrupt = run.system, run.progress, run.interrupt
     retried = []
     advance = stepper.step if run.retry_substeps is None else \
         functools.partial(_retrying_step, stepper, run.retry_substeps, retried)
     steps = system.steps
     data = np.full((steps + 1, len(system.record)), np.nan)
     data[0] = stepper.row()
-    pending = []
-    record, keep = stepper.row, pending.append
-    done, error, interrupted = 0, None, False
+    record, done, error, interrupted = stepper.row, 0, None, False
     report_every = max(1, steps // 100)
     start, cpu_start = _time.perf_counter(), _time.thread_time()
     try:
-        while done < steps:
-            if run.interrupt.requested:
+        for k in range(1, steps + 1):
+            if interrupt.requested:
                 raise KeyboardInterrupt
-            end = min(steps, done + CHUNK, (done // report_every + 1) * report_every)
-            for _ in range(done, end):
-                advance()
-                keep(record())
-            data[done + 1:end + 1] = pending
-            pending.clear()
-            done = end
-            if progress is not None and done % report_every == 0:
-                progress(done / steps)
+            advance()
+            data[k] = record()
+            done = k
+            if progress is not None and k % report_every == 0:
+                progress(k / steps)
     except CoSimulationError as exc:
         error = exc
     except KeyboardInterrupt:
         interrupted = True
-    if pending:      # the rows of the chunk a refusal or a SIGINT cut
-        data[done + 1:done + 1 + len(pending)] = pending
-        done += len(pending)
     wall, cpu = _time.perf_counter() - start, _time.thread_time() - cpu_start
     extra = {"cpu_s": cpu, **({"retried": retried} if run.retry_substeps is not None else {})}
     return Outcome(data[:done + 1], error, interrupted, wall, extra=extra)

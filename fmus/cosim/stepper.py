@@ -22,7 +22,7 @@ The structure, built once:
   sub-steps (a retried step, a program of its own) and the rest of a step from a given call
   (the compiled mode) are the same loop.  Jacobi coupling is the same program reading from
   snapshots (the values at the step's start, and a multi-rate group's values at each of its
-  sub-steps' start) that the calls' ``before`` hooks take.
+  sub-steps' start) that the pull of a sub-step's first call takes.
 """
 from __future__ import annotations
 
@@ -64,13 +64,12 @@ class Call(NamedTuple):
     """One instance's step within a communication step, as :meth:`Stepper.step` runs it
     (a named tuple: unpacked in one go on the step's path).
 
-    ``before()`` (or None) takes Jacobi's snapshot first; ``pull(reads)`` (``pull`` None: no
-    inputs) sets the inputs from the list ``reads`` (the values, or a snapshot);
+    ``pull(reads)`` (None: no inputs) sets the inputs from the list ``reads`` (the values, or a
+    Jacobi snapshot, which the pull of a sub-step's first call takes first);
     ``step(t + offset, dt)`` steps (False: refused, ``instance.step_refused(t)`` says why);
     ``values[out] = read(source)`` stores the outputs (``out`` a slice, or an index for one
     output read as a value)."""
 
-    before: Callable | None
     pull: Callable | None
     reads: list
     step: Callable
@@ -211,13 +210,12 @@ class Stepper:
             produced = slice(min(own), max(own) + 1) if jacobi and n > 1 and own else None
             for j in range(n):
                 for m, entry in enumerate(group.entries):
-                    before = None
-                    if jacobi and m == 0:
-                        before = _snapshot(values, held, reads if n > 1 else None, produced,
-                                           first_of_step=g == 0 and j == 0, first_of_group=j == 0)
                     pull, step, read, source, out, inst = self._member_calls(entry)
+                    if jacobi and m == 0:
+                        pull = _snapshot(values, held, reads if n > 1 else None, produced, pull,
+                                         first_of_step=g == 0 and j == 0, first_of_group=j == 0)
                     index[(g, m, j)] = len(calls)
-                    calls.append(Call(before, pull, reads, step, j * dt, dt, read, source, out, inst))
+                    calls.append(Call(pull, reads, step, j * dt, dt, read, source, out, inst))
         return _Program(tuple(calls), index)
 
     def initialize(self, start_time: float = 0.0) -> None:
@@ -312,32 +310,31 @@ class Stepper:
         if start is not None:
             calls = calls[self._program.index[start]:]
         h, t, values = self.system.step, self.time, self.values
-        now = t
         try:
-            for before, pull, reads, step, offset, dt, read, source, out, inst in calls:
-                if before is not None:
-                    before()
+            for pull, reads, step, offset, dt, read, source, out, inst in calls:
                 if pull is not None:
                     pull(reads)
-                now = t + offset
-                if step(now, dt) is False:
-                    raise inst.step_refused(now)
+                if step(t + offset, dt) is False:
+                    raise inst.step_refused(t + offset)
                 values[out] = read(source)
         except CoSimulationError:
             raise
         except Exception as exc:  # noqa: BLE001 - as the instance's do_step reports it
-            raise CoSimulationError(inst.name, now, str(exc)) from None
+            raise CoSimulationError(inst.name, t + offset, str(exc)) from None
         # The communication point advances by adding h, as fmpy's and Ecos' masters do:
         # an exported system then runs there on the very same time points.
         self.time = t + h
 
 
-def _snapshot(values, held, group_reads, produced, first_of_step, first_of_group):
-    """Jacobi's ``before`` hook of a group's first call in a sub-step: the values at the
-    step's start into ``held`` (first group), and for a multi-rate group its reads
-    (``group_reads``): ``held`` at its first sub-step, then with its own outputs (the slice
-    ``produced``, or None) as they are now."""
-    def snapshot():
+def _snapshot(values, held, group_reads, produced, pull, first_of_step, first_of_group):
+    """The pull of Jacobi's first call in a group's sub-step: first the values at the step's
+    start into ``held`` (first group), and for a multi-rate group its reads (``group_reads``):
+    ``held`` at its first sub-step, then with its own outputs (the slice ``produced``, or None)
+    as they are now; then the member's own ``pull`` (or None)."""
+    if not first_of_step and group_reads is None:
+        return pull
+
+    def snapshot_and_pull(reads):
         if first_of_step:
             held[:] = values
         if group_reads is not None:
@@ -345,4 +342,6 @@ def _snapshot(values, held, group_reads, produced, first_of_step, first_of_group
                 group_reads[:] = held
             elif produced is not None:
                 group_reads[produced] = values[produced]
-    return snapshot if first_of_step or group_reads is not None else None
+        if pull is not None:
+            pull(reads)
+    return snapshot_and_pull
