@@ -34,6 +34,27 @@ Recorded signals: row 0 holds the outputs after initialisation (t = 0), row k th
 the k-th step (t = k h): for a continuous output the value at t, for a sampled output the
 sample held over [t - h, t].
 
+The clock: the stepper steps from t_0 = 0 and adds h after each step (t_{k+1} = t_k + h in
+double, in Python and in the C loop alike: :class:`fmus.cosim.stepper.Stepper`, kernels/src/loop.c);
+the rows are labelled k h.  Stepping at t_k = k h instead (libcosim's and fmpy 0.3's clock) was
+measured to move the bench circle's e_ef by 5.9e-9 relative and bench_circle_PDx's e_ss by
+3.2e-6 (beyond the regression's 1.5e-6): a change of results, left to a decision of its own
+(docs/master.md, "The clock").
+
+How a run is laid out (one record each, no argument lists handed down): :func:`simulate` checks
+its arguments and makes a :class:`fmus.cosim.context.RunContext`; ``_simulate`` decides what the
+compiled loop cannot cover from the system alone (:func:`fmus.cosim.compiled.check_compilable`)
+before anything is loaded, loads the instances once, checks the signals, orders and wires them
+(:class:`fmus.cosim.stepper.Stepper`, whose plan is one :class:`fmus.cosim.stepper.Entry` per
+instance) and initialises them once; then either the compiled loop steps them
+(:class:`fmus.cosim.compiled.Plan`; a component whose settings it declines sends the run on in
+Python from the same initialised instances) or ``_step_in_python`` does, one
+:meth:`Stepper.step <fmus.cosim.stepper.Stepper.step>` and one row per step.  Either hands back an
+:class:`fmus.cosim.context.Outcome` that ``_result`` turns into the :class:`Result`.  The
+Gauss-Seidel loop itself exists once in Python (``Stepper.step``: the usual step, a retried
+step's split one, the rest of a step a compiled kernel declined, Jacobi) and once in C
+(kernels/src/loop.c).
+
 A refused step (fmi2Discard/Error/Fatal, or an exception in process) stops the run;
 :class:`Result` keeps the rows recorded so far and ``error`` says which instance refused,
 at what time, with its own message.  A KeyboardInterrupt (SIGINT) stops it the same way:
