@@ -40,7 +40,6 @@ from fmus.slave.base import MAX_TIME
 from fmus.cosim.backends import CoSimulationError
 from fmus.cosim.adapter import ADAPTERS, NotCompilable
 from fmus.cosim.context import Outcome
-from fmus.cosim.system import split_signal
 
 
 class _LoopPlan(ctypes.Structure):

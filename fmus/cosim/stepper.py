@@ -183,11 +183,6 @@ class Stepper:
         self._program = self._program_of(self.groups)
         self.time = 0.0
 
-    @property
-    def io_names(self) -> dict:
-        """Instance name -> (its connected inputs, the outputs it produces), as bound."""
-        return {e.name: (e.inputs, e.outputs) for e in self.plan}
-
     def _slot(self, signal):
         return self.slots.setdefault(signal, len(self.slots))
 
