@@ -273,3 +273,19 @@ def test_fmi3_fmu_survives_careless_calls_and_forged_states_under_asan(native_fm
                          capture_output=True, text=True, errors="backslashreplace", timeout=300)
     assert run.returncode == 0 and "survived" in run.stdout, run.stderr[-3000:]
     assert "3 of 3 instantiations refused" in run.stdout, run.stdout
+
+
+@pytest.mark.slow
+def test_fmi3_closed_loop_equals_the_fmi2_one(native_loop_fmu, tmp_path):
+    """`export-fmu SCENE OUT.fmu --native --fmi-version 3`: the whole loop under FMI 3.0, every
+    output of fmpy's run equal to the FMI 2.0 native ClosedLoop's, bit for bit."""
+    from conftest import LOOP_SCENE
+
+    path = tmp_path / "ClosedLoop.fmu"
+    assert main(["export-fmu", LOOP_SCENE, str(path), "--native", "--fmi-version", "3"]) == 0
+    assert validate_fmu(str(path)) == [] and read_model_description(str(path)).fmiVersion == "3.0"
+    runs = [simulate_fmu(str(p), stop_time=0.5, output_interval=1e-3, fmi_type="CoSimulation")
+            for p in (native_loop_fmu, path)]
+    assert runs[0].dtype.names == runs[1].dtype.names and len(runs[0]) == 501
+    for name in runs[0].dtype.names:
+        assert list(runs[0][name]) == list(runs[1][name]), name

@@ -37,7 +37,7 @@ KERNELS = HERE.parent.parent / "kernels" / "src"
 #: The generic part every native FMU compiles (of no FMI version; :data:`LAYER` adds its FMI functions).
 GENERIC = ("pcn_core.c", "pcn_values.c", "pcn_state.c", "pcn_text.c", "pcn_text.h", "pcn_model.h", "pcn_native.h")
 #: The FMI layer of each FMI version (``--fmi-version``).
-LAYER = {2: "fmi2_native.c", 3: "fmi3_native.c"}
+LAYER = {2: ("fmi2_native.c",), 3: ("fmi3_native.c", "fmi3_refused.c")}
 #: As the kernels' library (kernels/build.py): no FMA contraction, so results match it bit for bit.
 CFLAGS = ("-std=c11", "-O2", "-fPIC", "-fvisibility=hidden", "-ffp-contract=off", "-fno-fast-math")
 #: What a sampled model adds (fmus/slave/sampling.py's sub-stepping): its generic part and the kernels' counting rule.
@@ -251,7 +251,7 @@ def package(model: str, slave, rows: list, scalars: dict, arrays: dict, files: l
     ``sources/``, its binary compiled from them, the modelDescription.xml of ``slave`` (the
     pythonfmu slave, its declarations)."""
     _check_version(fmi_version)
-    files = [*files, HERE / LAYER[fmi_version]]
+    files = [*files, *(HERE / name for name in LAYER[fmi_version])]
     if len({f.name for f in files} | set(generated)) != len(files) + len(generated):   # sources/ is flat
         raise NativeBuildError(f"{model}: two source files share a name: {sorted(f.name for f in files)}")
     digest = hashlib.sha256(repr((model, rows, scalars, {k: np.asarray(v).tobytes() for k, v in arrays.items()},
