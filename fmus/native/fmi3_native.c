@@ -58,7 +58,8 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
         pcn_addf(&why, "instantiation token %s is not this FMU's: %s has %s",
                  instantiationToken ? instantiationToken : "(NULL)", pcn_this_model.identifier, pcn_guid);
     else if (eventModeUsed)
-        pcn_addf(&why, "eventModeUsed refused: %s has no Event Mode (hasEventMode=\"false\")", pcn_this_model.identifier);
+        pcn_addf(&why, "eventModeUsed refused: %s has no Event Mode (hasEventMode=\"false\")",
+                 pcn_this_model.identifier);
     else if (nRequiredIntermediateVariables > 0)
         pcn_addf(&why, "%d required intermediate variables refused: %s provides no intermediate update",
                  (int)nRequiredIntermediateVariables, pcn_this_model.identifier);
@@ -208,8 +209,9 @@ fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
 {
     for (size_t k = 0; instance && vr && k < nvr; ++k)
         if (vr[k] == PCN_TIME_VR)
-            return (fmi3Status)pcn_call_error(instance, "fmi3SetFloat64", "value reference " PCN_STR(PCN_TIME_VR)
-                                              " ('time') is the independent variable: it is never set; nothing was set");
+            return (fmi3Status)pcn_call_error(instance, "fmi3SetFloat64",
+                                              "value reference " PCN_STR(PCN_TIME_VR) " ('time') is the independent "
+                                              "variable: it is never set; nothing was set");
     return set(instance, "fmi3SetFloat64", vr, nvr, values, nValues, PCN_REAL);
 }
 fmi3Status fmi3SetInt32(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const fmi3Int32 values[],
@@ -229,7 +231,8 @@ fmi3Status fmi3GetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], 
                           size_t nValues)
 {
     int *ints = calloc(nvr ? nvr : 1, sizeof *ints);
-    if (ints == NULL) return instance ? (fmi3Status)pcn_call_error(instance, "fmi3GetBoolean", "out of memory") : fmi3Error;
+    if (ints == NULL)
+        return instance ? (fmi3Status)pcn_call_error(instance, "fmi3GetBoolean", "out of memory") : fmi3Error;
     fmi3Status status = get(instance, "fmi3GetBoolean", vr, nvr, values ? (void *)ints : NULL, nValues, PCN_BOOLEAN);
     for (size_t k = 0; status == fmi3OK && k < nvr; ++k) values[k] = ints[k] != 0;
     free(ints);
@@ -239,7 +242,8 @@ fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], 
                           const fmi3Boolean values[], size_t nValues)
 {
     int *ints = calloc(nvr ? nvr : 1, sizeof *ints);
-    if (ints == NULL) return instance ? (fmi3Status)pcn_call_error(instance, "fmi3SetBoolean", "out of memory") : fmi3Error;
+    if (ints == NULL)
+        return instance ? (fmi3Status)pcn_call_error(instance, "fmi3SetBoolean", "out of memory") : fmi3Error;
     const unsigned char *bytes = (const unsigned char *)values;
     for (size_t k = 0; bytes && k < nvr; ++k) ints[k] = bytes[k] != 0;
     fmi3Status status = set(instance, "fmi3SetBoolean", vr, nvr, values ? (const void *)ints : NULL, nValues,

@@ -5,8 +5,9 @@ DefaultExperiment, the log categories and the ModelStructure's dependencies exis
 FMI 2.0 description the pythonfmu slave declares (:func:`fmus.native.build.model_description`);
 this module writes them in FMI 3.0's words: ``instantiationToken`` for ``guid``, one element
 per variable named by its type (Real -> ``Float64``, Integer -> ``Int32``), a String's start
-as a ``<Start value=...>`` child, the independent variable ``time`` FMI 3.0 requires, ``Output`` and ``InitialUnknown`` by value reference, and a
-co-simulation interface without Event Mode, early return or intermediate update.
+as a ``<Start value=...>`` child, the independent variable ``time`` FMI 3.0 requires,
+``Output`` and ``InitialUnknown`` by value reference, and a co-simulation interface without
+Event Mode, early return or intermediate update.
 """
 from __future__ import annotations
 

@@ -359,14 +359,16 @@ pcn_status pcn_serialize(native *in, const char *fn, void *state, unsigned char 
 {
     const pcn_state *s = own_state(in, fn, state);
     if (s == NULL) return PCN_ERROR;
-    if (bytes == NULL || size < s->size) return pcn_call_error(in, fn, "the byte array is NULL or shorter than the state");
+    if (bytes == NULL || size < s->size)
+        return pcn_call_error(in, fn, "the byte array is NULL or shorter than the state");
     memcpy(bytes, s->bytes, s->size);
     return PCN_OK;
 }
 
 pcn_status pcn_deserialize(native *in, const char *fn, const unsigned char bytes[], size_t size, void **state)
 {
-    if (state == NULL || (bytes == NULL && size > 0)) return pcn_call_error(in, fn, "the bytes or the state pointer is NULL");
+    if (state == NULL || (bytes == NULL && size > 0))
+        return pcn_call_error(in, fn, "the bytes or the state pointer is NULL");
     /* Checked against this instance by restoring it into a scratch copy of the bytes' claims:
      * a state is kept only if it would be accepted by the layer's SetFMUState now. */
     pcn_state *s = malloc(sizeof *s + size);

@@ -134,7 +134,8 @@ pcn_status pcn_set(native *in, const char *fn, const unsigned vr[], size_t nvr, 
             if (((const char *const *)values)[k] == NULL) {
                 pcn_text why;
                 pcn_clear(&why);
-                pcn_addf(&why, "%s (value reference %u): NULL refused; nothing was set", pcn_variable_of(vr[k])->name, vr[k]);
+                pcn_addf(&why, "%s (value reference %u): NULL refused; nothing was set", pcn_variable_of(vr[k])->name,
+                         vr[k]);
                 return pcn_call_error(in, fn, why.text);
             }
     int parameter = 0;

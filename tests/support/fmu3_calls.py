@@ -16,7 +16,8 @@ from fmpy.fmi3 import FMU3Slave
 
 from support.fmu_calls import Step
 
-#: FMI 2.0's functions and type names as FMI 3.0 names them (fmi2SetupExperiment's part is fmi3EnterInitializationMode's).
+#: FMI 2.0's functions as FMI 3.0 names them (fmi2SetupExperiment's part is fmi3EnterInitializationMode's);
+#: the others are fmi2X -> fmi3X.
 NAMES = {"fmi2Instantiate": "fmi3InstantiateCoSimulation", "fmi2SetupExperiment": "fmi3EnterInitializationMode",
          "fmi2SetFMUstate": "fmi3SetFMUState", "fmi2GetFMUstate": "fmi3GetFMUState",
          "fmi2FreeFMUstate": "fmi3FreeFMUState", "fmi2SerializedFMUstateSize": "fmi3SerializedFMUStateSize",
