@@ -156,3 +156,29 @@ def test_native_without_per_component_is_refused(tmp_path, capsys):
     assert main(["export-ssp", "bench_circle_TCMDx", str(tmp_path / "p.ssp"), "--native"]) == 2
     assert "--native go with --per-component" in capsys.readouterr().err
     assert not (tmp_path / "p.ssp").exists()
+
+
+def test_in_a_c_host_with_no_python_the_native_package_runs_as_the_pythonfmu_one_in_libcosim(scene, packages,
+                                                                                           tmp_path):
+    """libcosim's C library in a C program (tests/native_host): libpython never mapped, every
+    signal as the pythonfmu package's in libcosimpy (within 1e-12 of its peak)."""
+    from tests.native_host.host import HostUnavailable, build_host, config_text, run_host
+
+    if UNAVAILABLE["libcosim"] is not None:
+        pytest.skip(f"libcosim cannot be loaded here: {UNAVAILABLE['libcosim']}")
+    try:
+        host = build_host(tmp_path)
+    except HostUnavailable as exc:
+        pytest.skip(str(exc))
+    python, native = packages
+    signals = [signal for signal in scene.columns.values()]
+    run = run_host(host, tmp_path / "run", config_text(STOP, outputs=signals, ssp=native, every=1))
+    assert run.report["libpython_mapped"] == "0" and run.report["python_symbol"] == "0", run.report
+    expected, _ = _run(scene, python, "libcosim")
+    time = np.asarray(run.columns["time"], dtype=float)
+    k = np.minimum(np.searchsorted(time, expected.time - 1e-9), len(time) - 1)
+    same = np.abs(time[k] - expected.time) <= 1e-9      # the C host writes no row for t = 0
+    assert same.sum() >= len(expected.time) - 1 and time[-1] == pytest.approx(STOP)
+    for s in signals:
+        got, want = np.asarray(run.columns[s], dtype=float)[k[same]], np.asarray(expected[s], dtype=float)[same]
+        assert np.all(np.abs(got - want) <= 1e-12 * max(np.max(np.abs(want)), 1e-300)), s

@@ -87,8 +87,8 @@ def main(argv=None) -> int:
     if args.native:
         binaries = "native FMUs" + (", rebuilt with -fsanitize=address,undefined" if env else "")
     text = (f"{len(results)} cases, {wall:.0f} s wall ({binaries}); "
-            f"`python -m fmus.hostile.campaign{' --native' if args.native else ''} --cases {args.cases} "
-            f"--seed {args.seed}`\n\n"
+            f"`python -m fmus.hostile.campaign{' --native' if args.native else ''}"
+            f"{f' --loop {args.loop}' if args.loop else ''} --cases {args.cases} --seed {args.seed}`\n\n"
             + hostile.markdown_summary(results) + "\n")
     (out / "summary.md").write_text(text, encoding="utf-8")
     print(text)
