@@ -27,6 +27,7 @@ from fmpy.fmi2 import FMU2Slave
 from fmus.native.state_bytes import MAGIC as NATIVE_STATE_MAGIC
 from fmus.native.state_bytes import fnv1a
 from fmus.hostile.cases import CALL_LIMIT
+from fmus.status import FmiStatus, Outcome, RunError, step_failed
 
 #: Bytes of the checksum that ends a serialised parcosim state (docs/state.md).
 CHECKSUM_BYTES = 32
@@ -43,8 +44,10 @@ class _Exploit:
     def __reduce__(self):
         return os.system, (self.command,)
 
-FATAL = 4
-NAMES = {0: "OK", 1: "Warning", 2: "Discard", 3: "Error", 4: "Fatal", 5: "Pending"}
+FATAL = FmiStatus.FATAL
+NAMES = {s.value: "OK" if s is FmiStatus.OK else s.name.capitalize() for s in FmiStatus}
+#: What a refused call may return (anything else but fmi2Fatal is a problem).
+_ANSWERS = (FmiStatus.OK, FmiStatus.WARNING, FmiStatus.DISCARD, FmiStatus.ERROR)
 
 
 class Fatal(Exception):
@@ -79,11 +82,11 @@ class Runner:
         if seconds > CALL_LIMIT:
             self.problems.append(f"{label} took {seconds:.1f} s (limit {CALL_LIMIT:g} s)")
         self.statuses.append([label, NAMES.get(status, str(status))])
-        if status not in (0, 1, 2, 3):
+        if status not in _ANSWERS:
             if status == FATAL:
                 raise Fatal(label)
             self.problems.append(f"{label} returned status {status}")
-        if status in (2, 3):
+        if step_failed(status):
             self.refused = True
             self.check_message(label)
         return status, result
@@ -103,6 +106,24 @@ class Runner:
         names = [name for name in self.vars if name in message]
         if not message.strip() or not (names or " = " in message or "t = " in message):
             self.problems.append(f"the refused {label} left error = {message!r}, naming nothing")
+        self.check_record(label, message)
+
+    def check_record(self, label: str, message: str) -> None:
+        """A refused step leaves its record in ``refusal`` (fmus.status.RunError): the instance's
+        name, a kind of refusal and the message of ``error``."""
+        if "refusal" not in self.vars:
+            return
+        text = self.fmu.getString([self.vars["refusal"].valueReference])[0]
+        if not text:        # a native FMU (fmus/native) holds no record: its message is all it gives
+            return
+        try:
+            record = RunError.from_json(text.decode("utf-8", "replace") if isinstance(text, bytes) else str(text))
+        except (ValueError, TypeError) as exc:
+            self.problems.append(f"the refused {label} left refusal = {text!r}, no record: {exc}")
+            return
+        if record is None or record.message != message or not record.instance or \
+                record.kind not in (Outcome.REFUSED, Outcome.INITIALISATION):
+            self.problems.append(f"the refused {label} left refusal = {text!r}, not the record of error = {message!r}")
 
     def set(self, name: str, value) -> None:
         v = self.vars[name]

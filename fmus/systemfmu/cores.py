@@ -33,6 +33,7 @@ from fmus.cosim.backends import _CONVERT, CoSimulationError, InProcessInstance
 from fmus.cosim.master import stepping_order
 from fmus.cosim.stepper import Stepper
 from fmus.cosim.system import Component, Connection, System, split_signal
+from fmus.status import RunError
 
 SYSTEM_FILE = "system.json"
 
@@ -125,10 +126,6 @@ class InitialisationRefused(CoSimulationError):
         return f"{self.instance}: {self.message}"
 
 
-#: How :mod:`fmus.slave.base` words a refused initialisation: the reason, then the start time.
-_INITIALISATION_REFUSAL = re.compile(r"initialisation refused: (?P<reason>.*) \(t = [^()]* s\)", re.S)
-
-
 def qualified(message: str, instance: str, parameters) -> str:
     """``message`` of the component ``instance`` with its ``parameters`` written
     ``<instance>.<parameter>`` where it names a value by them: ``lam = ...``, ``lam: ...``,
@@ -161,18 +158,19 @@ class SystemStepper(Stepper):
     def initialize(self, start_time: float = 0.0) -> None:
         super().initialize(start_time)
         for name, inst in self.instances.items():
-            error = getattr(getattr(inst, "slave", None), "error", "")     # an in-process slave's refusal
-            if error:
-                refusal = _INITIALISATION_REFUSAL.fullmatch(error)
-                reason = refusal["reason"] if refusal else error
-                raise InitialisationRefused(name, start_time, qualified(reason, name, self.parameters[name]))
+            slave = getattr(inst, "slave", None)        # an in-process slave's refusal, in its own words
+            if slave is not None and slave.error:
+                reason = slave.refused_because or slave.error
+                raise InitialisationRefused(name, start_time, qualified(reason, name, self.parameters[name]),
+                                            RunError.from_json(slave.refusal))
 
     def step(self, split: dict | None = None) -> None:
         try:
             super().step(split)
         except CoSimulationError as exc:
             raise CoSimulationError(exc.instance, exc.time,
-                                    qualified(exc.message, exc.instance, self.parameters[exc.instance])) from None
+                                    qualified(exc.message, exc.instance, self.parameters[exc.instance]),
+                                    exc.run_error) from None
 
 
 def _steps_in(time: float, current_time: float, step_size: float, h: float, multiples: bool) -> int:
