@@ -26,6 +26,9 @@ class CoSimulationError(Exception):
     record (``run_error``, :class:`fmus.status.RunError`: its kind, and for a model's refusal the
     variable, value, unit and code)."""
 
+    #: Its message names the time (``kernels.timed``): a system FMU reporting it adds none.
+    names_time = True
+
     def __init__(self, instance: str, time: float, message: str, run_error: RunError | None = None):
         super().__init__(f"{instance} refused the step from t = {time:.6g} s: {message}")
         self.instance, self.time, self.message, self.run_error = instance, time, message, run_error

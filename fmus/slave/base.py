@@ -56,6 +56,7 @@ from fmus.slave.identity import read_identity
 from fmus.slave.refusals import FmiError
 from fmus.slave.state_calls import SlaveState
 from fmus.status import Outcome, refusal_of
+from kernels import timed
 
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, Real, String, Boolean
 from pythonfmu.enums import Fmi2Initial, Fmi2Status
@@ -215,7 +216,7 @@ class GuardedSlave(SlaveState, Fmi2Slave):
             why = f"ends after t = {MAX_TIME:g} s"
         else:
             return
-        raise ValueError(self.step_size_message(current_time, h, why))
+        raise timed(ValueError(self.step_size_message(current_time, h, why)))
 
     def step_size_message(self, current_time: float, step_size: float, why: str) -> str:
         """'step size h = ... s at t = ... s <why>; <Model> accepts <accepted_steps()>'."""
@@ -481,7 +482,7 @@ class GuardedSlave(SlaveState, Fmi2Slave):
             except KeyboardInterrupt as exc:
                 self.refused_because = INTERRUPTED_MARK
                 self._refuse(f"step {INTERRUPTED_MARK} at t = {current_time!r} s", current_time,
-                             cause=(exc, Outcome.INTERRUPTED, current_time))
+                             cause=(timed(exc), Outcome.INTERRUPTED, current_time))
                 self._ready, self._step_refused = False, True
                 return False
             except Exception as exc:  # noqa: BLE001
@@ -495,7 +496,8 @@ class GuardedSlave(SlaveState, Fmi2Slave):
             return False
         if not self._initialised:
             self._refuse(f"doStep from t = {current_time!r} s before initialisation "
-                         "(fmi2ExitInitializationMode) refused", repeat=True, cause=(None, Outcome.REFUSED, current_time))
+                         "(fmi2ExitInitializationMode) refused", repeat=True,
+                         cause=(None, Outcome.REFUSED, current_time))
             return False
         if self._step_refused:
             self._refuse(f"an earlier step was refused ({self.error}); restore an FMU state taken before it "
@@ -517,16 +519,18 @@ class GuardedSlave(SlaveState, Fmi2Slave):
         if self._last_step:
             tolerance = min(tolerance, 0.5 * self._last_step)
         if not abs(current_time - expected) <= tolerance:
-            raise ValueError(f"communication point t = {current_time!r} s does not follow the last one: "
-                             f"the next doStep must start at t = {expected!r} s (the last step's end, or the "
-                             "time of the state set by fmi2SetFMUstate)")
+            raise timed(ValueError(f"communication point t = {current_time!r} s does not follow the last one: "
+                                   f"the next doStep must start at t = {expected!r} s (the last step's end, or the "
+                                   "time of the state set by fmi2SetFMUstate)"))
 
     def _refuse(self, message: str, time: float | None = None, repeat: bool = False,
                 keep_error: bool = False, cause: tuple | None = None) -> None:
-        """Log ``message`` (with the step's ``time`` unless it names it) as the instance's refusal;
-        unless ``keep_error``, it becomes ``error`` and ``cause`` (exception or None, its
-        :class:`Outcome`, the time) the record in ``refusal``."""
-        text = message if (time is None or repeat or " t = " in message) else f"{message} (step from t = {time:.6g} s)"
+        """Log ``message`` as the instance's refusal, with the step's ``time`` unless ``cause``'s
+        exception names it (``names_time``: :func:`kernels.timed`); unless ``keep_error``, it
+        becomes ``error`` and ``cause`` (exception or None, its :class:`Outcome`, the time) the
+        record in ``refusal``."""
+        names_time = cause is not None and getattr(cause[0], "names_time", False)
+        text = message if (time is None or repeat or names_time) else f"{message} (step from t = {time:.6g} s)"
         if repeat and time is not None:
             text = f"{message}; step from t = {time:.6g} s refused"
         if not keep_error:

@@ -34,6 +34,7 @@ from fmus.cosim.master import stepping_order
 from fmus.cosim.stepper import Stepper
 from fmus.cosim.system import Component, Connection, System, split_signal
 from fmus.status import RunError
+from kernels import timed
 
 SYSTEM_FILE = "system.json"
 
@@ -180,11 +181,11 @@ def _steps_in(time: float, current_time: float, step_size: float, h: float, mult
     n = round(step_size / h) if math.isfinite(step_size) and step_size > 0.0 else 0
     if n < 1 or (n > 1 and not multiples) or not math.isclose(step_size, n * h, rel_tol=1e-9, abs_tol=0.0):
         allowed = f"a whole multiple of h = {h!r} s" if multiples else f"h = {h!r} s"
-        raise ValueError(f"step size {step_size!r} s at t = {current_time:.6g} s: this FMU steps its "
-                         f"system at its communication step; the step size must be {allowed}")
+        raise timed(ValueError(f"step size {step_size!r} s at t = {current_time:.6g} s: this FMU steps its "
+                               f"system at its communication step; the step size must be {allowed}"))
     if not math.isclose(current_time, time, rel_tol=0.0, abs_tol=1e-6 * h):
-        raise ValueError(f"communication point t = {current_time!r} s does not follow the last one "
-                         f"({time!r} s)")
+        raise timed(ValueError(f"communication point t = {current_time!r} s does not follow the last one "
+                               f"({time!r} s)"))
     return n
 
 
@@ -315,7 +316,7 @@ class ChainCore:
         _steps_in(self._time, current_time, step_size, h, multiples=False)
         for name, value in measured.items():
             if not math.isfinite(value):
-                raise ValueError(f"input {name} = {value!r} at t = {current_time:.6g} s is not finite")
+                raise timed(ValueError(f"input {name} = {value!r} at t = {current_time:.6g} s is not finite"))
         if current_time > 0.5 * h:
             try:
                 corrected = self.model.slave.correct(self._snapshot, measured, h)
