@@ -120,12 +120,14 @@ class RunError:
 
 def refusal_of(exc: BaseException, kind: Outcome, message: str, instance: str, time: float) -> RunError:
     """The :class:`RunError` of a slave's refusal: ``exc``'s record when it is a model's
-    (:class:`kernels.Refused`, or anything with a ``run_error``), its ``instance`` and ``time``
-    filled in when unknown; the bare outcome otherwise.  ``message`` is the slave's message."""
+    (:class:`kernels.Refused`) or an inner component's (``exc.run_error``, in a system FMU:
+    its instance becomes ``<instance>.<inner>``, an interruption stays one), its ``instance``
+    and ``time`` filled in when unknown; the bare outcome otherwise.  ``message`` is the slave's message."""
     inner = getattr(exc, "run_error", None)
     if isinstance(inner, RunError):
-        return replace(inner, kind=kind, message=message, instance=inner.instance or instance,
-                         time=time if inner.time is None else inner.time)
+        return replace(inner, kind=inner.kind if inner.kind is Outcome.INTERRUPTED else kind, message=message,
+                       instance=f"{instance}.{inner.instance}" if inner.instance else instance,
+                       time=time if inner.time is None else inner.time)
     record = exc.record() if callable(getattr(exc, "record", None)) else {}
     return RunError.from_record({**record, "kind": kind, "message": message,
                                  "instance": record.get("instance") or instance,

@@ -141,6 +141,39 @@ def test_a_refused_fmu_step_returns_the_tables_fmi_status(built_fmus):
     assert run_error.message == error and "tau1" in error
 
 
+def _closed_loop(tmp_path, system: System):
+    """The ClosedLoop slave (a system FMU's, in process) of ``system``."""
+    from fmus.slaves.parcosim_closedloop import ClosedLoop
+    from fmus.systemfmu.cores import SYSTEM_FILE, system_to_dict
+
+    (tmp_path / SYSTEM_FILE).write_text(json.dumps({"role": "loop", "plant": "plant",
+                                                    "system": system_to_dict(system)}))
+    return ClosedLoop(instance_name="loop", resources=str(tmp_path))
+
+
+@pytest.mark.parametrize("plant, kind", [({}, Outcome.REFUSED), ({"x0": 5.0}, Outcome.INITIALISATION)],
+                         ids=["refused step", "refused initialisation"])
+def test_a_system_fmu_passes_its_components_record_on(tmp_path, plant, kind):
+    """A ClosedLoop's refusal is its plant's record (kind, quantity), named ``loop.plant``;
+    its initialisation refusal is found by the record's kind and said in the plant's own words
+    (the system FMU once cut them out of the plant's message with a regular expression)."""
+    loop = _closed_loop(tmp_path, _open_loop(**plant).system)
+    loop.setup_experiment(0.0)
+    loop.enter_initialization_mode()
+    loop.exit_initialization_mode()
+    t, h = 0.0, 1e-3
+    while loop.do_step(t, h):
+        t += h
+        assert t < 1.0, "the open loop should have been refused"
+    error = RunError.from_json(loop.refusal)
+    assert (error.kind, error.instance, error.message) == (kind, "loop.plant", loop.error)
+    if kind is Outcome.REFUSED:
+        assert error.reason == "singular" and t - h <= error.time <= t + h and error.variable in loop.error
+    else:
+        assert loop.error.startswith("initialisation refused: plant: ") and loop.error.count("initialisation") == 1
+        assert loop.refused_because.startswith("plant: ") and "x0" in loop.refused_because
+
+
 #: Product packages (the tests, benchmarks and docs are not product).
 PRODUCT = ("fmus", "scenarios", "parcosim", "plant", "motor", "controller", "kernels")
 #: Names that hold a message of ours: branching on their text is reading a message.

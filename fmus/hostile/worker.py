@@ -26,7 +26,7 @@ from fmpy.fmi2 import FMU2Slave
 
 from fmus.native.state_bytes import MAGIC as NATIVE_STATE_MAGIC
 from fmus.native.state_bytes import fnv1a
-from fmus.hostile.cases import CALL_LIMIT
+from fmus.hostile.cases import CALL_LIMIT, EXIT_AFTER_FATAL
 from fmus.status import FmiStatus, Outcome, RunError, step_failed
 
 #: Bytes of the checksum that ends a serialised parcosim state (docs/state.md).
@@ -332,7 +332,7 @@ def main() -> int:
                               "seconds": time.perf_counter() - start}) + "\n")
         out.flush()
         if outcome == "fatal":
-            return 3
+            return EXIT_AFTER_FATAL
     return 0
 
 
