@@ -109,6 +109,13 @@ def test_a_refused_initialisation_is_the_kind_initialisation(mode, built_fmus):
     assert "initialisation refused: " in str(result.error) and "x0" in str(result.error)
 
 
+def test_every_outcome_has_one_fmi_status_and_one_exit_status():
+    """A new outcome without its row would be a KeyError where the CLI or an FMU reports it."""
+    assert set(FMI_STATUS) == set(EXIT_STATUS) == set(Outcome)
+    assert EXIT_STATUS[Outcome.COMPLETED] == 0 and FMI_STATUS[Outcome.COMPLETED] is FmiStatus.OK
+    assert all(EXIT_STATUS[o] != 0 and FMI_STATUS[o] > FmiStatus.WARNING for o in Outcome if o is not Outcome.COMPLETED)
+
+
 def test_a_refused_fmu_step_returns_the_tables_fmi_status(built_fmus):
     """Through fmpy, the plant FMU's refused doStep is the status FMI_STATUS gives a refusal, and
     its String output ``refusal`` the record of its ``error``."""

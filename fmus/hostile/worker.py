@@ -114,8 +114,6 @@ class Runner:
         if "refusal" not in self.vars:
             return
         text = self.fmu.getString([self.vars["refusal"].valueReference])[0]
-        if not text:        # a native FMU (fmus/native) holds no record: its message is all it gives
-            return
         try:
             record = RunError.from_json(text.decode("utf-8", "replace") if isinstance(text, bytes) else str(text))
         except (ValueError, TypeError) as exc:
