@@ -8,7 +8,7 @@ the message in ``error`` and the FMI log); the master's back ends read that outp
 process and through an FMU alike, and :class:`fmus.cosim.master.Result` carries it as
 ``error``; ``metrics.json`` writes its fields, a sweep's rows its columns, the CLI its
 message.  Nothing on the way reads a message to learn what happened (docs/contract.md,
-"Outcomes and errors").
+"Outcomes and errors as data").
 """
 from __future__ import annotations
 

@@ -37,7 +37,7 @@ stops early writes what it recorded, prints the component's message and exits 1;
 sweep whose every sample failed (one with some failures exits 0 and says how many).  SIGINT
 (Ctrl-C) during ``parcosim run`` writes the whole rows recorded so far and metrics with
 ``"completed": false``, prints one line and exits 130.  The exit status of each outcome is
-one table, :data:`fmus.status.EXIT_STATUS` (docs/contract.md, "Outcomes and errors").
+one table, :data:`fmus.status.EXIT_STATUS` (docs/contract.md, "Outcomes and errors as data").
 """
 from __future__ import annotations
 

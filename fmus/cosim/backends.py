@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from fmus.cosim.slots import gatherer, span
-from fmus.status import RunError, step_failed
+from fmus.status import FmiStatus, RunError
 
 
 class CoSimulationError(Exception):
@@ -82,6 +82,8 @@ class _Batch:
 
 
 _double, _TRUE = ctypes.c_double, ctypes.c_int(1)
+#: A status above it refuses the call (:func:`fmus.status.step_failed`), as a plain int for the step's path.
+_WARNING = int(FmiStatus.WARNING)
 
 
 def _step_calls(dll):
@@ -184,7 +186,7 @@ class _FmuInstance:
                 array[:] = values
             else:
                 array[:] = [convert(values[k]) for k in positions]
-            if step_failed(setter(self._component, vrs, n, array)):
+            if setter(self._component, vrs, n, array) > _WARNING:
                 raise CoSimulationError(self.name, float("nan"), self._last_message() or "setting inputs failed")
 
     def get_outputs(self) -> list:
@@ -201,7 +203,7 @@ class _FmuInstance:
         return values
 
     def do_step(self, t: float, h: float) -> None:
-        if step_failed(self._do_step(self._component, _double(t), _double(h), _TRUE)):
+        if self._do_step(self._component, _double(t), _double(h), _TRUE) > _WARNING:
             raise CoSimulationError(self.name, t, self._string_output("error") or self._last_message()
                                     or "fmi2DoStep refused", self._refusal())
 
