@@ -93,8 +93,9 @@ class RunError:
         the strings ``"inf"``, ``"-inf"``, ``"nan"``, which JSON has no numbers for)."""
         out = asdict(self)
         out["kind"] = self.kind.value
-        if isinstance(self.value, float) and not math.isfinite(self.value):
-            out["value"] = repr(self.value)
+        if self.value is not None:
+            value = float(self.value)        # a numpy scalar too
+            out["value"] = value if math.isfinite(value) else repr(value)
         return out
 
     def to_json(self) -> str:

@@ -55,7 +55,7 @@ import sys
 from fmus.slave.identity import read_identity
 from fmus.slave.refusals import FmiError
 from fmus.slave.state_calls import SlaveState
-from fmus.status import Outcome, refusal_of
+from fmus.status import Outcome, RunError, refusal_of
 from kernels import timed
 
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, Real, String, Boolean
@@ -536,7 +536,10 @@ class GuardedSlave(SlaveState, Fmi2Slave):
         if not keep_error:
             self.error = message if repeat else text
             exc, kind, when = cause
-            self.refusal = refusal_of(exc, kind, self.error, self.instance_name, when).to_json()
+            try:
+                self.refusal = refusal_of(exc, kind, self.error, self.instance_name, when).to_json()
+            except Exception:  # noqa: BLE001 - a record that does not fit JSON: the bare refusal, never an escape
+                self.refusal = RunError(kind, self.error, self.instance_name, when).to_json()
         line = f"{self.instance_name}: {text}"
         self.log(line if self._wrapper_is_ours() else line.replace("%", "%%"), Fmi2Status.error,
                  category="logStatusError")
