@@ -89,13 +89,15 @@ class RunError:
         return self.message
 
     def record(self) -> dict:
-        """The fields as a dict of JSON types (``kind`` its word; a non-finite ``value`` as
-        the strings ``"inf"``, ``"-inf"``, ``"nan"``, which JSON has no numbers for)."""
+        """The fields as a dict of JSON types (``kind`` its word; a non-finite ``value`` or
+        ``time``, a diverged model's or a hostile importer's, as the strings ``"inf"``, ``"-inf"``,
+        ``"nan"``, which JSON has no numbers for)."""
         out = asdict(self)
         out["kind"] = self.kind.value
-        if self.value is not None:
-            value = float(self.value)        # a numpy scalar too
-            out["value"] = value if math.isfinite(value) else repr(value)
+        for name in _NUMBERS:
+            if out[name] is not None:
+                number = float(out[name])        # a numpy scalar too
+                out[name] = number if math.isfinite(number) else repr(number)
         return out
 
     def to_json(self) -> str:
@@ -109,14 +111,19 @@ class RunError:
         known = {f.name for f in fields(cls)}
         values = {k: v for k, v in record.items() if k in known}
         values["kind"] = Outcome(values.get("kind", Outcome.REFUSED))
-        if isinstance(values.get("value"), str):
-            values["value"] = float(values["value"])
+        for name in _NUMBERS:
+            if isinstance(values.get(name), str):
+                values[name] = float(values[name])
         return cls(**{"message": "", **values})
 
     @classmethod
     def from_json(cls, text: str) -> RunError | None:
         """The error of :meth:`to_json`'s text; None for "" (no refusal)."""
         return cls.from_record(json.loads(text)) if text else None
+
+
+#: The record's float fields (non-finite ones are written as strings).
+_NUMBERS = ("time", "value")
 
 
 def refusal_of(exc: BaseException, kind: Outcome, message: str, instance: str, time: float) -> RunError:

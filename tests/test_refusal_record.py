@@ -37,8 +37,8 @@ def test_the_record_survives_its_json_with_non_finite_values():
     for value in (math.inf, -math.inf, 2e7):
         error = RunError(Outcome.REFUSED, "m", "plant", 0.25, "q2", value, "rad", 3, "BAD_INPUT")
         assert RunError.from_json(error.to_json()) == error
-    nan = RunError.from_json(RunError(Outcome.REFUSED, "m", value=math.nan).to_json())
-    assert math.isnan(nan.value)
+    nan = RunError.from_json(RunError(Outcome.REFUSED, "m", time=math.nan, value=math.nan).to_json())
+    assert math.isnan(nan.value) and math.isnan(nan.time)     # a hostile importer's doStep(nan, h)
     assert RunError.from_json("") is None
 
 

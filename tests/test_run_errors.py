@@ -109,6 +109,21 @@ def test_a_refused_initialisation_is_the_kind_initialisation(mode, built_fmus):
     assert "initialisation refused: " in str(result.error) and "x0" in str(result.error)
 
 
+def test_a_hostile_communication_point_is_a_record_too():
+    """doStep(nan, h): the record's time is NaN, which strict JSON refuses; the slave must still
+    answer with its record (the hostile-use campaign found it escaping as an exception)."""
+    from fmus.slaves.parcosim_fivebarplant import FiveBarPlant
+
+    slave = FiveBarPlant(instance_name="")
+    slave.setup_experiment(0.0)
+    slave.enter_initialization_mode()
+    slave.exit_initialization_mode()
+    assert slave.do_step(0.0, 1e-3) and slave.refusal == ""
+    assert slave.do_step(math.nan, 1e-3) is False
+    error = RunError.from_json(slave.refusal)
+    assert (error.kind, error.instance, error.message) == (Outcome.REFUSED, "", slave.error) and math.isnan(error.time)
+
+
 def test_every_outcome_has_one_fmi_status_and_one_exit_status():
     """A new outcome without its row would be a KeyError where the CLI or an FMU reports it."""
     assert set(FMI_STATUS) == set(EXIT_STATUS) == set(Outcome)

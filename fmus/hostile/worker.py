@@ -119,7 +119,7 @@ class Runner:
         except (ValueError, TypeError) as exc:
             self.problems.append(f"the refused {label} left refusal = {text!r}, no record: {exc}")
             return
-        if record is None or record.message != message or not record.instance or \
+        if record is None or record.message != message or record.instance != self.case["instance_name"] or \
                 record.kind not in (Outcome.REFUSED, Outcome.INITIALISATION):
             self.problems.append(f"the refused {label} left refusal = {text!r}, not the record of error = {message!r}")
 

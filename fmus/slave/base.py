@@ -539,7 +539,7 @@ class GuardedSlave(SlaveState, Fmi2Slave):
             try:
                 self.refusal = refusal_of(exc, kind, self.error, self.instance_name, when).to_json()
             except Exception:  # noqa: BLE001 - a record that does not fit JSON: the bare refusal, never an escape
-                self.refusal = RunError(kind, self.error, self.instance_name, when).to_json()
+                self.refusal = RunError(kind, self.error, self.instance_name).to_json()
         line = f"{self.instance_name}: {text}"
         self.log(line if self._wrapper_is_ours() else line.replace("%", "%%"), Fmi2Status.error,
                  category="logStatusError")
