@@ -1,4 +1,4 @@
-"""How a run, a step or a sample ended: one vocabulary (:class:`Outcome`), one record of why
+"""How a run, a step or a sample ended: one vocabulary (:class:`RunStatus`), one record of why
 (:class:`RunError`), and one table each to the FMI statuses and to ``parcosim``'s exit statuses.
 
 A refusal is data from the model to the user: a kernel's code becomes
@@ -18,7 +18,7 @@ import math
 from dataclasses import asdict, dataclass, fields, replace
 
 
-class Outcome(str, enum.Enum):
+class RunStatus(str, enum.Enum):
     """How a run (a step, a sample) ended.  The value is the word written in files."""
 
     #: The run reached its stop time.
@@ -53,14 +53,14 @@ class FmiStatus(enum.IntEnum):
 #: which abort on any error there still get the reason (docs/extremes.md); a call refused as
 #: such (:class:`fmus.slave.refusals.FmiError`: a set of an output, calls out of order) is
 #: fmi2Error.
-FMI_STATUS = {Outcome.COMPLETED: FmiStatus.OK, Outcome.REFUSED: FmiStatus.DISCARD,
-              Outcome.INITIALISATION: FmiStatus.DISCARD, Outcome.INTERRUPTED: FmiStatus.DISCARD,
-              Outcome.FAILED: FmiStatus.ERROR, Outcome.INVALID: FmiStatus.ERROR}
+FMI_STATUS = {RunStatus.COMPLETED: FmiStatus.OK, RunStatus.REFUSED: FmiStatus.DISCARD,
+              RunStatus.INITIALISATION: FmiStatus.DISCARD, RunStatus.INTERRUPTED: FmiStatus.DISCARD,
+              RunStatus.FAILED: FmiStatus.ERROR, RunStatus.INVALID: FmiStatus.ERROR}
 
 #: ``parcosim``'s exit status for each outcome (128 + SIGINT for an interruption, as shells
 #: report it; 2 for a command refused before any work, as argparse does).
-EXIT_STATUS = {Outcome.COMPLETED: 0, Outcome.REFUSED: 1, Outcome.INITIALISATION: 1, Outcome.FAILED: 1,
-               Outcome.INTERRUPTED: 130, Outcome.INVALID: 2}
+EXIT_STATUS = {RunStatus.COMPLETED: 0, RunStatus.REFUSED: 1, RunStatus.INITIALISATION: 1, RunStatus.FAILED: 1,
+               RunStatus.INTERRUPTED: 130, RunStatus.INVALID: 2}
 
 
 def step_failed(status: int) -> bool:
@@ -70,12 +70,12 @@ def step_failed(status: int) -> bool:
 
 @dataclass(frozen=True)
 class RunError:
-    """Why a run (a step, a sample) stopped: the :class:`Outcome` (``kind``), the message a user
+    """Why a run (a step, a sample) stopped: the :class:`RunStatus` (``kind``), the message a user
     reads (``str()``), and, as fields, who refused (``instance``), when (``time`` [s]) and, for
     a model's refusal (:class:`kernels.Refused`), the quantity: ``variable``, ``value``,
     ``unit``, the model's ``code`` and its name ``reason``.  A field nobody knows is None."""
 
-    kind: Outcome
+    kind: RunStatus
     message: str
     instance: str | None = None
     time: float | None = None
@@ -110,7 +110,7 @@ class RunError:
         ignored, missing ones are None."""
         known = {f.name for f in fields(cls)}
         values = {k: v for k, v in record.items() if k in known}
-        values["kind"] = Outcome(values.get("kind", Outcome.REFUSED))
+        values["kind"] = RunStatus(values.get("kind", RunStatus.REFUSED))
         for name in _NUMBERS:
             if isinstance(values.get(name), str):
                 values[name] = float(values[name])
@@ -126,14 +126,14 @@ class RunError:
 _NUMBERS = ("time", "value")
 
 
-def refusal_of(exc: BaseException, kind: Outcome, message: str, instance: str, time: float) -> RunError:
+def refusal_of(exc: BaseException, kind: RunStatus, message: str, instance: str, time: float) -> RunError:
     """The :class:`RunError` of a slave's refusal: ``exc``'s record when it is a model's
     (:class:`kernels.Refused`) or an inner component's (``exc.run_error``, in a system FMU:
     its instance becomes ``<instance>.<inner>``, an interruption stays one), its ``instance``
     and ``time`` filled in when unknown; the bare outcome otherwise.  ``message`` is the slave's message."""
     inner = getattr(exc, "run_error", None)
     if isinstance(inner, RunError):
-        return replace(inner, kind=inner.kind if inner.kind is Outcome.INTERRUPTED else kind, message=message,
+        return replace(inner, kind=inner.kind if inner.kind is RunStatus.INTERRUPTED else kind, message=message,
                        instance=f"{instance}.{inner.instance}" if inner.instance else instance,
                        time=time if inner.time is None else inner.time)
     record = exc.record() if callable(getattr(exc, "record", None)) else {}

@@ -50,16 +50,16 @@ import warnings
 import zipfile
 from pathlib import Path
 
-from fmus.status import EXIT_STATUS, Outcome
+from fmus.status import EXIT_STATUS, RunStatus
 
 from .checks import (CommandError, Parser, at_least, check_output, first_missing, non_negative, remove_if_empty,
                      suggestion)
 
 
 #: Exit status after SIGINT (128 + 2, as shells report it).
-EXIT_INTERRUPTED = EXIT_STATUS[Outcome.INTERRUPTED]
+EXIT_INTERRUPTED = EXIT_STATUS[RunStatus.INTERRUPTED]
 #: Exit status of a refused command (bad arguments, an output that cannot be written).
-EXIT_REFUSED = EXIT_STATUS[Outcome.INVALID]
+EXIT_REFUSED = EXIT_STATUS[RunStatus.INVALID]
 #: The default job: bare ``parcosim`` is ``parcosim run DEFAULT_SCENE``.
 DEFAULT_SCENE = "bench_circle_TCMDx"
 
@@ -422,7 +422,7 @@ def _run(args) -> int:
                         fmu_dir=args.fmu_dir, progress=bar, retry_substeps=args.retry_substeps)
     m, error = outcome.metrics, outcome.result.error
     if error is not None:
-        so_far = (f"; recorded so far ({len(outcome.result.time)} rows): {out}" if error.kind is Outcome.INTERRUPTED
+        so_far = (f"; recorded so far ({len(outcome.result.time)} rows): {out}" if error.kind is RunStatus.INTERRUPTED
                   else f" (recorded so far: {out})")
         print(f"parcosim: {error}{so_far}", file=sys.stderr)
         return EXIT_STATUS[error.kind]
@@ -463,7 +463,7 @@ def _sweep(args) -> int:
     if not s["completed"]:
         first = next(r["error"] for r in sweep.rows if not r["completed"])
         print(f"parcosim: every sample failed; the first: {first}", file=sys.stderr)
-        return EXIT_STATUS[Outcome.FAILED]
+        return EXIT_STATUS[RunStatus.FAILED]
     return 0
 
 

@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 
 import scenarios.run.runner as run_module
-from fmus.status import Outcome, RunError
+from fmus.status import RunStatus, RunError
 from parcosim.cli import _parser, main
 from scenarios.batch.sweep import read_rows
 
@@ -163,10 +163,10 @@ def _fake_engine(failing: set):
         for task in reversed(tasks):
             i = int(task.key.removeprefix("sample"))
             ok = i not in failing
-            error = None if ok else RunError(Outcome.REFUSED, f"refused {i}", "plant", 0.5 + i, "q1", 2.0, "rad", 3,
+            error = None if ok else RunError(RunStatus.REFUSED, f"refused {i}", "plant", 0.5 + i, "q1", 2.0, "rad", 3,
                                              "BAD_INPUT")
             on_result(task, {"e_ef_mm": 1.0 + i, "tau_ef_Nm": 0.1, "e_ss_mm": 0.01, "e_ss_1s_mm": 0.01,
-                             "t_settle_s": 0.5, "completed": ok, "outcome": (error.kind if error else Outcome.COMPLETED).value,
+                             "t_settle_s": 0.5, "completed": ok, "outcome": (error.kind if error else RunStatus.COMPLETED).value,
                              "error": error and error.record(), "wall_s": 0.1})
         return {}
     return run_tasks

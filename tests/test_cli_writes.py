@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import scenarios.run.runner as run_module
-from fmus.status import Outcome
+from fmus.status import RunStatus
 from parcosim.cli import EXIT_INTERRUPTED, main
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -99,8 +99,8 @@ def test_the_master_returns_the_rows_so_far_on_keyboard_interrupt(monkeypatch):
     monkeypatch.setattr(stepper_module.Stepper, "step", interrupted)
     result = simulate(replace(get_scene(SCENE).system, stop_time=0.1))
     assert result.interrupted and not result.completed
-    assert str(result.error) == "interrupted at t = 0.019 s" and result.error.kind is Outcome.INTERRUPTED
-    assert result.outcome is Outcome.INTERRUPTED and result.error.time == pytest.approx(0.019, abs=1e-12)
+    assert str(result.error) == "interrupted at t = 0.019 s" and result.error.kind is RunStatus.INTERRUPTED
+    assert result.status is RunStatus.INTERRUPTED and result.error.time == pytest.approx(0.019, abs=1e-12)
     assert len(result.time) == 20 and np.isfinite(result["plant.x"]).all()
 
 

@@ -17,7 +17,7 @@ from fmus.systemfmu.export import export_fmu
 from fmus.cosim.master import simulate
 from fmus.ssp.export import export_ssp
 from fmus.ssp.run import ecos_available
-from fmus.status import Outcome, RunError
+from fmus.status import RunStatus, RunError
 from fmus.cosim.system import Component, System
 from scenarios.scenes.catalogue import get_scene
 
@@ -121,7 +121,7 @@ def test_a_step_that_is_not_a_whole_number_of_its_steps_is_refused(exported):
     message, record = (fmu.getString([variables[name].valueReference])[0].decode() for name in ("error", "refusal"))
     assert "step size 0.0005 s" in message and "whole multiple of h = 0.001 s" in message
     record = RunError.from_json(record)      # the system FMU's own refusal, as a record
-    assert (record.kind, record.instance, record.time, record.message) == (Outcome.REFUSED, "loop", 2 * system.step,
+    assert (record.kind, record.instance, record.time, record.message) == (RunStatus.REFUSED, "loop", 2 * system.step,
                                                                           message)
     fmu.terminate()
     fmu.freeInstance()

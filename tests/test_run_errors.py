@@ -17,7 +17,7 @@ import pytest
 
 from fmus.cosim.master import simulate
 from fmus.cosim.system import Component, System
-from fmus.status import EXIT_STATUS, FMI_STATUS, FmiStatus, Outcome, RunError
+from fmus.status import EXIT_STATUS, FMI_STATUS, FmiStatus, RunStatus, RunError
 from scenarios.run.runner import run_scene
 from scenarios.scenes.scene import Scene
 
@@ -41,7 +41,7 @@ def _open_loop(stop_time: float = 2.0, **plant) -> Scene:
 
 @pytest.fixture(scope="module")
 def refused_runs(tmp_path_factory, built_fmus):
-    """mode -> (Outcome of run_scene, the metrics.json it wrote) of the open loop."""
+    """mode -> (RunStatus of run_scene, the metrics.json it wrote) of the open loop."""
     fmu_dir = next(iter(built_fmus.values())).parent
     runs = {}
     for mode in ("inprocess", "fmu", "compiled"):
@@ -54,7 +54,7 @@ def refused_runs(tmp_path_factory, built_fmus):
 def test_a_refused_plant_step_is_one_record_in_every_mode(refused_runs):
     outcome, metrics = refused_runs["inprocess"]
     error = outcome.result.error
-    assert isinstance(error, RunError) and error.kind is Outcome.REFUSED and outcome.result.outcome is Outcome.REFUSED
+    assert isinstance(error, RunError) and error.kind is RunStatus.REFUSED and outcome.result.status is RunStatus.REFUSED
     assert (error.instance, error.reason) == ("plant", "singular") and error.variable and error.code
     assert math.isfinite(error.value) and abs(error.value) < 1e-2       # the singularity measure, near 0
     # the refused step is the one after the last row: its time lies within a step of it
@@ -75,7 +75,7 @@ def test_the_cli_line_is_the_records_message_and_its_exit_status_the_tables(monk
     status = cli.main(["run", "bench_circle_TCMDx", "--out", str(tmp_path)])
     metrics = json.loads((tmp_path / "metrics.json").read_text())
     lines = capsys.readouterr().err.strip().splitlines()
-    assert status == EXIT_STATUS[Outcome.REFUSED] == 1
+    assert status == EXIT_STATUS[RunStatus.REFUSED] == 1
     # (the in-process slave also says its refusal on stderr, "[parcosim] plant: ...", as an FMU does)
     assert lines[-1].startswith(f"parcosim: {metrics['error']['message']} (recorded so far: {tmp_path})")
 
@@ -94,8 +94,8 @@ def test_an_interruption_inside_a_component_is_the_kind_interrupted(monkeypatch)
 
     monkeypatch.setattr(FiveBarPlant, "step", interrupted)
     result = simulate(_open_loop(stop_time=0.05).system)
-    assert result.interrupted and result.outcome is Outcome.INTERRUPTED and not result.completed
-    assert (result.error.kind, result.error.instance, result.error.time) == (Outcome.INTERRUPTED, "plant",
+    assert result.interrupted and result.status is RunStatus.INTERRUPTED and not result.completed
+    assert (result.error.kind, result.error.instance, result.error.time) == (RunStatus.INTERRUPTED, "plant",
                                                                              pytest.approx(0.01))
     assert str(result.error).startswith("interrupted at t = 0.01 s (plant: ")
 
@@ -104,7 +104,7 @@ def test_an_interruption_inside_a_component_is_the_kind_interrupted(monkeypatch)
 def test_a_refused_initialisation_is_the_kind_initialisation(mode, built_fmus):
     result = simulate(_open_loop(stop_time=0.01, x0=5.0).system, mode=mode,
                       fmu_dir=next(iter(built_fmus.values())).parent)
-    assert result.outcome is Outcome.INITIALISATION and len(result.time) == 1
+    assert result.status is RunStatus.INITIALISATION and len(result.time) == 1
     assert (result.error.instance, result.error.time) == ("plant", 0.0)
     assert "initialisation refused: " in str(result.error) and "x0" in str(result.error)
 
@@ -121,14 +121,14 @@ def test_a_hostile_communication_point_is_a_record_too():
     assert slave.do_step(0.0, 1e-3) and slave.refusal == ""
     assert slave.do_step(math.nan, 1e-3) is False
     error = RunError.from_json(slave.refusal)
-    assert (error.kind, error.instance, error.message) == (Outcome.REFUSED, "", slave.error) and math.isnan(error.time)
+    assert (error.kind, error.instance, error.message) == (RunStatus.REFUSED, "", slave.error) and math.isnan(error.time)
 
 
 def test_every_outcome_has_one_fmi_status_and_one_exit_status():
     """A new outcome without its row would be a KeyError where the CLI or an FMU reports it."""
-    assert set(FMI_STATUS) == set(EXIT_STATUS) == set(Outcome)
-    assert EXIT_STATUS[Outcome.COMPLETED] == 0 and FMI_STATUS[Outcome.COMPLETED] is FmiStatus.OK
-    assert all(EXIT_STATUS[o] != 0 and FMI_STATUS[o] > FmiStatus.WARNING for o in Outcome if o is not Outcome.COMPLETED)
+    assert set(FMI_STATUS) == set(EXIT_STATUS) == set(RunStatus)
+    assert EXIT_STATUS[RunStatus.COMPLETED] == 0 and FMI_STATUS[RunStatus.COMPLETED] is FmiStatus.OK
+    assert all(EXIT_STATUS[o] != 0 and FMI_STATUS[o] > FmiStatus.WARNING for o in RunStatus if o is not RunStatus.COMPLETED)
 
 
 def test_a_refused_fmu_step_returns_the_tables_fmi_status(built_fmus):
@@ -152,14 +152,14 @@ def test_a_refused_fmu_step_returns_the_tables_fmi_status(built_fmus):
         fmu.setReal([refs["tau1"]], [math.inf])
         with pytest.raises(FMICallException) as refused:
             fmu.doStep(0.0, 1e-3)
-        assert refused.value.status == FMI_STATUS[Outcome.REFUSED] == FmiStatus.DISCARD
+        assert refused.value.status == FMI_STATUS[RunStatus.REFUSED] == FmiStatus.DISCARD
         error, record = (fmu.getString([refs[name]])[0].decode() for name in ("error", "refusal"))
     finally:
         fmu.terminate()
         fmu.freeInstance()
     run_error = RunError.from_json(record)
     assert (run_error.kind, run_error.instance, run_error.variable, run_error.value, run_error.time) == \
-        (Outcome.REFUSED, "p", "tau1", math.inf, 0.0)
+        (RunStatus.REFUSED, "p", "tau1", math.inf, 0.0)
     assert run_error.message == error and "tau1" in error
 
 
@@ -173,7 +173,7 @@ def _closed_loop(tmp_path, system: System):
     return ClosedLoop(instance_name="loop", resources=str(tmp_path))
 
 
-@pytest.mark.parametrize("plant, kind", [({}, Outcome.REFUSED), ({"x0": 5.0}, Outcome.INITIALISATION)],
+@pytest.mark.parametrize("plant, kind", [({}, RunStatus.REFUSED), ({"x0": 5.0}, RunStatus.INITIALISATION)],
                          ids=["refused step", "refused initialisation"])
 def test_a_system_fmu_passes_its_components_record_on(tmp_path, plant, kind):
     """A ClosedLoop's refusal is its plant's record (kind, quantity), named ``loop.plant``;
@@ -189,7 +189,7 @@ def test_a_system_fmu_passes_its_components_record_on(tmp_path, plant, kind):
         assert t < 1.0, "the open loop should have been refused"
     error = RunError.from_json(loop.refusal)
     assert (error.kind, error.instance, error.message) == (kind, "loop.plant", loop.error)
-    if kind is Outcome.REFUSED:
+    if kind is RunStatus.REFUSED:
         assert error.reason == "singular" and t - h <= error.time <= t + h and error.variable in loop.error
     else:
         assert loop.error.startswith("initialisation refused: plant: ") and loop.error.count("initialisation") == 1

@@ -27,7 +27,7 @@ from fmpy.fmi2 import FMU2Slave
 from fmus.native.state_bytes import MAGIC as NATIVE_STATE_MAGIC
 from fmus.native.state_bytes import fnv1a
 from fmus.hostile.cases import CALL_LIMIT, EXIT_AFTER_FATAL
-from fmus.status import FmiStatus, Outcome, RunError, step_failed
+from fmus.status import FmiStatus, RunStatus, RunError, step_failed
 
 #: Bytes of the checksum that ends a serialised parcosim state (docs/state.md).
 CHECKSUM_BYTES = 32
@@ -120,7 +120,7 @@ class Runner:
             self.problems.append(f"the refused {label} left refusal = {text!r}, no record: {exc}")
             return
         if record is None or record.message != message or record.instance != self.case["instance_name"] or \
-                record.kind not in (Outcome.REFUSED, Outcome.INITIALISATION):
+                record.kind not in (RunStatus.REFUSED, RunStatus.INITIALISATION):
             self.problems.append(f"the refused {label} left refusal = {text!r}, not the record of error = {message!r}")
 
     def set(self, name: str, value) -> None:

@@ -55,7 +55,7 @@ import sys
 from fmus.slave.identity import read_identity
 from fmus.slave.refusals import FmiError
 from fmus.slave.state_calls import SlaveState
-from fmus.status import Outcome, RunError, refusal_of
+from fmus.status import RunStatus, RunError, refusal_of
 from kernels import timed
 
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, Real, String, Boolean
@@ -455,12 +455,12 @@ class GuardedSlave(SlaveState, Fmi2Slave):
             self._ready = self._step_refused = False
             self.refused_because = INTERRUPTED_MARK
             self._refuse(f"initialisation refused: {INTERRUPTED_MARK} (t = {self._start_time:.6g} s)",
-                         cause=(exc, Outcome.INTERRUPTED, self._start_time))
+                         cause=(exc, RunStatus.INTERRUPTED, self._start_time))
         except Exception as exc:  # noqa: BLE001 - nothing may escape to pythonfmu
             self._ready = self._step_refused = False
             self.refused_because = str(exc)
             self._refuse(f"initialisation refused: {exc} (t = {self._start_time:.6g} s)",
-                         cause=(exc, Outcome.INITIALISATION, self._start_time))
+                         cause=(exc, RunStatus.INITIALISATION, self._start_time))
 
     def terminate(self):
         self._terminated = True
@@ -482,22 +482,22 @@ class GuardedSlave(SlaveState, Fmi2Slave):
             except KeyboardInterrupt as exc:
                 self.refused_because = INTERRUPTED_MARK
                 self._refuse(f"step {INTERRUPTED_MARK} at t = {current_time!r} s", current_time,
-                             cause=(timed(exc), Outcome.INTERRUPTED, current_time))
+                             cause=(timed(exc), RunStatus.INTERRUPTED, current_time))
                 self._ready, self._step_refused = False, True
                 return False
             except Exception as exc:  # noqa: BLE001
                 self.refused_because = str(exc)
-                self._refuse(str(exc), current_time, cause=(exc, Outcome.REFUSED, current_time))
+                self._refuse(str(exc), current_time, cause=(exc, RunStatus.REFUSED, current_time))
                 self._ready, self._step_refused = False, True
                 return False
         if self._terminated:
             self._refuse(f"doStep from t = {current_time!r} s after fmi2Terminate refused", repeat=True,
-                         cause=(None, Outcome.REFUSED, current_time))
+                         cause=(None, RunStatus.REFUSED, current_time))
             return False
         if not self._initialised:
             self._refuse(f"doStep from t = {current_time!r} s before initialisation "
                          "(fmi2ExitInitializationMode) refused", repeat=True,
-                         cause=(None, Outcome.REFUSED, current_time))
+                         cause=(None, RunStatus.REFUSED, current_time))
             return False
         if self._step_refused:
             self._refuse(f"an earlier step was refused ({self.error}); restore an FMU state taken before it "
@@ -506,7 +506,7 @@ class GuardedSlave(SlaveState, Fmi2Slave):
             self._refuse(self.error, current_time, repeat=True, keep_error=True)
         else:
             self._refuse("initialisation refused", current_time, repeat=True,
-                         cause=(None, Outcome.INITIALISATION, current_time))
+                         cause=(None, RunStatus.INITIALISATION, current_time))
         return False
 
     def _check_communication_point(self, current_time: float) -> None:
@@ -527,7 +527,7 @@ class GuardedSlave(SlaveState, Fmi2Slave):
                 keep_error: bool = False, cause: tuple | None = None) -> None:
         """Log ``message`` as the instance's refusal, with the step's ``time`` unless ``cause``'s
         exception names it (``names_time``: :func:`kernels.timed`); unless ``keep_error``, it
-        becomes ``error`` and ``cause`` (exception or None, its :class:`Outcome`, the time) the
+        becomes ``error`` and ``cause`` (exception or None, its :class:`RunStatus`, the time) the
         record in ``refusal``."""
         names_time = cause is not None and getattr(cause[0], "names_time", False)
         text = message if (time is None or repeat or names_time) else f"{message} (step from t = {time:.6g} s)"

@@ -25,7 +25,7 @@ import contextlib
 import os
 from dataclasses import dataclass
 
-from fmus.status import Outcome, RunError
+from fmus.status import RunStatus, RunError
 from scenarios.batch import worker_path
 from scenarios.scenes.scene import Scene
 
@@ -74,7 +74,7 @@ def run_task(task: Task) -> dict:
 
 def _failed(exc: Exception) -> dict:
     """The metrics' ``outcome`` and ``error`` of a task that could not run (or whose worker died)."""
-    error = RunError(Outcome.FAILED, f"{type(exc).__name__}: {exc}")
+    error = RunError(RunStatus.FAILED, f"{type(exc).__name__}: {exc}")
     return {"outcome": error.kind.value, "error": error.record()}
 
 

@@ -17,7 +17,7 @@ Files in DIR:
 * ``sweep.csv``: one row per sample, in sample order: ``sample``, one column per
   perturbed parameter (its value), ``e_ef_mm``, ``tau_ef_Nm``, ``e_ss_mm`` (once settled),
   ``e_ss_1s_mm``, ``t_settle_s`` (:mod:`scenarios.run.metrics`), ``completed``, ``outcome``
-  (:class:`fmus.status.Outcome`), the fields of the error's record (:class:`fmus.status.RunError`)
+  (:class:`fmus.status.RunStatus`), the fields of the error's record (:class:`fmus.status.RunError`)
   ``error_instance``, ``error_time``, ``error_variable``, ``error_value``, ``error_unit``,
   ``error_code``, ``error_reason`` (empty when the sample completed or the field is unknown),
   ``error`` (its message), ``wall_s``.

@@ -8,7 +8,7 @@
 
 A run that a component stops early, or that a KeyboardInterrupt (SIGINT) stops, still writes
 the rows it recorded and metrics with ``"completed": false``, ``"outcome"`` its
-:class:`fmus.status.Outcome` and under ``"error"`` the record of why
+:class:`fmus.status.RunStatus` and under ``"error"`` the record of why
 (:meth:`fmus.status.RunError.record`: kind, message, instance, time, variable, value, unit,
 code, reason; ``"interrupted": true`` for SIGINT).  Every file is written atomically (a temporary file in
 the same directory, then ``os.replace``): a reader never sees half a file, and a failed
@@ -209,7 +209,7 @@ def run_scene(scene, mode: str = "inprocess", out_dir=None, coupling: str = "gau
         metrics["python_steps"] = result.extra["python_steps"]
     if "fallback" in result.extra:
         metrics["fallback"] = result.extra["fallback"]
-    metrics["outcome"] = result.outcome.value
+    metrics["outcome"] = result.status.value
     if result.error is not None:
         metrics["error"] = result.error.record()
     if result.interrupted:
