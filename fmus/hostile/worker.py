@@ -27,7 +27,7 @@ from fmpy.fmi2 import FMU2Slave
 from fmus.native.state_bytes import MAGIC as NATIVE_STATE_MAGIC
 from fmus.native.state_bytes import fnv1a
 from fmus.hostile.cases import CALL_LIMIT, EXIT_AFTER_FATAL
-from fmus.status import FmiStatus, RunStatus, RunError, step_failed
+from fmus.status import FMI_STATUS, FmiStatus, RunError, RunStatus, step_failed
 
 #: Bytes of the checksum that ends a serialised parcosim state (docs/state.md).
 CHECKSUM_BYTES = 32
@@ -88,10 +88,10 @@ class Runner:
             self.problems.append(f"{label} returned status {status}")
         if step_failed(status):
             self.refused = True
-            self.check_message(label)
+            self.check_message(label, status)
         return status, result
 
-    def check_message(self, label: str) -> None:
+    def check_message(self, label: str, status: int) -> None:
         """A refusal must leave a message in ``error`` naming something."""
         if "error" not in self.vars:
             return
@@ -106,11 +106,12 @@ class Runner:
         names = [name for name in self.vars if name in message]
         if not message.strip() or not (names or " = " in message or "t = " in message):
             self.problems.append(f"the refused {label} left error = {message!r}, naming nothing")
-        self.check_record(label, message)
+        self.check_record(label, message, status)
 
-    def check_record(self, label: str, message: str) -> None:
+    def check_record(self, label: str, message: str, status: int) -> None:
         """A refused step leaves its record in ``refusal`` (fmus.status.RunError): the instance's
-        name, a kind of refusal and the message of ``error``."""
+        name, a kind of refusal and the message of ``error``; a refused doStep returns the status
+        of that kind (fmus.status.FMI_STATUS)."""
         if "refusal" not in self.vars:
             return
         text = self.fmu.getString([self.vars["refusal"].valueReference])[0]
@@ -122,6 +123,9 @@ class Runner:
         if record is None or record.message != message or record.instance != self.case["instance_name"] or \
                 record.kind not in (RunStatus.REFUSED, RunStatus.INITIALISATION):
             self.problems.append(f"the refused {label} left refusal = {text!r}, not the record of error = {message!r}")
+        elif label.startswith("doStep") and status != FMI_STATUS[record.kind]:
+            self.problems.append(f"the refused {label} returned {NAMES.get(status)}, not the "
+                                 f"{NAMES[FMI_STATUS[record.kind]]} of a {record.kind.value} refusal")
 
     def set(self, name: str, value) -> None:
         v = self.vars[name]
