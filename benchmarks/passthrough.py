@@ -59,12 +59,12 @@ def _real_class(model: str):
 
 
 def variable_specs(model: str) -> list[dict]:
-    """The variables of the real slave of ``model`` (without the base's ``error``), in order."""
+    """The variables of the real slave of ``model`` (without the base's ``error`` and ``refusal``), in order."""
     cls = _real_class(model)
     slave = cls(instance_name="spec")
     specs = []
     for v in slave.vars.values():
-        if v.name == "error":
+        if v.name in ("error", "refusal"):
             continue
         specs.append({"name": v.name, "kind": type(v).__name__,
                       "causality": v.causality.name if v.causality is not None else None,

@@ -17,6 +17,7 @@ import ctypes
 import functools
 import operator
 import os
+import string
 import weakref
 from pathlib import Path
 
@@ -273,23 +274,26 @@ class Reason:
     (``variables``), their unit, and the message template (``str.format`` fields
     ``variable``, ``value``, ``unit``, ``time`` and any given to :func:`refused`)."""
 
-    __slots__ = ("name", "variables", "unit", "text")
+    __slots__ = ("name", "variables", "unit", "text", "fields")
 
     def __init__(self, name: str, variables: tuple, unit: str, text: str):
         self.name, self.variables, self.unit, self.text = name, tuple(variables), unit, text
+        #: The template's field names (``time`` among them: its message names the time).
+        self.fields = frozenset(f for _, f, _, _ in string.Formatter().parse(text) if f)
 
 
 class Refused(ValueError):
     """A kernel's refusal as one record: ``instance`` (None until the FMI layer names it),
     ``time`` (s, or None outside a run), ``variable``, ``value``, ``unit``, ``code`` and
     ``reason`` (the model's code name), and the message (``str(exc)``), which names the
-    variable, its value, its unit and the time."""
+    variable, its value, its unit and, when ``names_time`` (:func:`timed`), the time."""
 
     def __init__(self, message: str, *, code: int, reason: str, variable: str, value: float, unit: str,
-                 time: float | None = None, instance: str | None = None):
+                 time: float | None = None, instance: str | None = None, names_time: bool = False):
         super().__init__(message)
         self.message, self.code, self.reason = message, code, reason
         self.variable, self.value, self.unit, self.time, self.instance = variable, value, unit, time, instance
+        self.names_time = names_time
 
     def record(self) -> dict:
         """The record's fields as a dict (for logs, results and tests)."""
@@ -303,5 +307,16 @@ def refused(reasons: dict, refusal: Refusal, time: float | None = None, **fields
     reason = reasons[refusal.code]
     variable = reason.variables[refusal.index] if reason.variables else ""
     message = reason.text.format(variable=variable, value=refusal.value, unit=reason.unit, time=time, **fields)
+    names_time = time is not None and "time" in reason.fields
     return Refused(message, code=refusal.code, reason=reason.name, variable=variable, value=refusal.value,
-                   unit=reason.unit, time=time, **{k: v for k, v in fields.items() if k == "instance"})
+                   unit=reason.unit, time=time, names_time=names_time,
+                   **{k: v for k, v in fields.items() if k == "instance"})
+
+
+def timed(exc: BaseException) -> BaseException:
+    """``exc``, marked as naming in its message the time of the step it refuses
+    (``names_time``): the FMU slave that reports it adds no time of its own
+    (:meth:`fmus.slave.base.GuardedSlave.do_step`).  A mark, so that nobody reads the message to
+    find out."""
+    exc.names_time = True
+    return exc

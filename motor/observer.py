@@ -118,7 +118,9 @@ class CurrentObserver:
         if code == kernel.OK:
             return calls.x[3]
         at = "" if time is None else f" at t = {time:.6g} s"
-        raise kernels.refused(kernel.OBSERVER_REASONS, calls.refusal, time, at=at, v=v, omega=omega)
+        refused = kernels.refused(kernel.OBSERVER_REASONS, calls.refusal, time, at=at, v=v, omega=omega)
+        names_time = at and "at" in kernel.OBSERVER_REASONS[calls.refusal.code].fields
+        raise kernels.timed(refused) if names_time else refused
 
 
 _O = kernel.indices(kernel.OBSERVER)

@@ -15,14 +15,19 @@ from pathlib import Path
 
 
 class CommandError(ValueError):
-    """A command refused before it did anything: printed as one line, exit status 2."""
+    """A command refused before it did anything: printed as one line, exit status 2, after
+    ``head`` (the command that refused it, as argparse names it; default ``parcosim: error``)."""
+
+    def __init__(self, message: str, head: str = "parcosim: error"):
+        super().__init__(message)
+        self.head = head
 
 
 class Parser(argparse.ArgumentParser):
     """argparse's parser whose refusal is one line (no usage block): :class:`CommandError`."""
 
     def error(self, message):
-        raise CommandError(f"{self.prog}: {message} (`{self.prog} --help` lists the options)")
+        raise CommandError(f"{message} (`{self.prog} --help` lists the options)", head=self.prog)
 
 
 def at_least(least: int, name: str):

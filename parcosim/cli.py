@@ -36,7 +36,8 @@ arguments (a misspelled command or scene gets a suggestion), an output that cann
 stops early writes what it recorded, prints the component's message and exits 1; so does a
 sweep whose every sample failed (one with some failures exits 0 and says how many).  SIGINT
 (Ctrl-C) during ``parcosim run`` writes the whole rows recorded so far and metrics with
-``"completed": false``, prints one line and exits 130.
+``"completed": false``, prints one line and exits 130.  The exit status of each outcome is
+one table, :data:`fmus.status.EXIT_STATUS` (docs/contract.md, "Outcomes and errors as data").
 """
 from __future__ import annotations
 
@@ -49,14 +50,16 @@ import warnings
 import zipfile
 from pathlib import Path
 
+from fmus.status import EXIT_STATUS, RunStatus
+
 from .checks import (CommandError, Parser, at_least, check_output, first_missing, non_negative, remove_if_empty,
                      suggestion)
 
 
 #: Exit status after SIGINT (128 + 2, as shells report it).
-EXIT_INTERRUPTED = 130
+EXIT_INTERRUPTED = EXIT_STATUS[RunStatus.INTERRUPTED]
 #: Exit status of a refused command (bad arguments, an output that cannot be written).
-EXIT_REFUSED = 2
+EXIT_REFUSED = EXIT_STATUS[RunStatus.INVALID]
 #: The default job: bare ``parcosim`` is ``parcosim run DEFAULT_SCENE``.
 DEFAULT_SCENE = "bench_circle_TCMDx"
 
@@ -196,8 +199,8 @@ def _check_command(argv: list, parser) -> None:
     """Refuse a misspelled command, with the closest one, before argparse's 'invalid choice'."""
     commands = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)][0].choices
     if argv and not argv[0].startswith("-") and argv[0] not in commands:
-        raise CommandError(f"parcosim: unknown command {argv[0]!r}{suggestion(argv[0], commands)} "
-                           f"(`parcosim --help` lists them)")
+        raise CommandError(f"unknown command {argv[0]!r}{suggestion(argv[0], commands)} "
+                           f"(`parcosim --help` lists them)", head="parcosim")
 
 
 def _check_scene(name: str) -> None:
@@ -295,7 +298,7 @@ def _refuse(exc: Exception) -> int:
     """Print ``exc`` as the one line of a refused command; its exit status."""
     text = " ".join(str(exc).split())
     clear = "\r\033[K" if sys.stderr.isatty() else ""      # over a progress line, if one is shown
-    print(clear + (text if text.startswith("parcosim") else f"parcosim: error: {text}"), file=sys.stderr)
+    print(f"{clear}{getattr(exc, 'head', 'parcosim: error')}: {text}", file=sys.stderr)
     return EXIT_REFUSED
 
 
@@ -430,14 +433,12 @@ def _run(args) -> int:
         print(f"{scene.name}: loading and initialising ({args.mode})...", end="", file=sys.stderr, flush=True)
     outcome = run_scene(scene, mode=args.mode, out_dir=out, coupling=args.coupling,
                         fmu_dir=args.fmu_dir, progress=bar, retry_substeps=args.retry_substeps)
-    m = outcome.metrics
-    if outcome.result.interrupted:
-        print(f"parcosim: {outcome.result.error}; recorded so far ({len(outcome.result.time)} rows): {out}",
-              file=sys.stderr)
-        return EXIT_INTERRUPTED
-    if outcome.result.error:
-        print(f"parcosim: {outcome.result.error} (recorded so far: {out})", file=sys.stderr)
-        return 1
+    m, error = outcome.metrics, outcome.result.error
+    if error is not None:
+        so_far = (f"; recorded so far ({len(outcome.result.time)} rows): {out}" if error.kind is RunStatus.INTERRUPTED
+                  else f" (recorded so far: {out})")
+        print(f"parcosim: {error}{so_far}", file=sys.stderr)
+        return EXIT_STATUS[error.kind]
     if args.retry_substeps is not None and not m["retried_steps"]:
         print("parcosim: note: no step was refused, so --retry-substeps retried nothing; it only slowed the run "
               "(every state saved at every step): leave it out unless a step is refused", file=sys.stderr)
@@ -475,7 +476,7 @@ def _sweep(args) -> int:
     if not s["completed"]:
         first = next(r["error"] for r in sweep.rows if not r["completed"])
         print(f"parcosim: every sample failed; the first: {first}", file=sys.stderr)
-        return 1
+        return EXIT_STATUS[RunStatus.FAILED]
     return 0
 
 

@@ -286,7 +286,8 @@ class PlantSimulator:
         except WorkLimitError:
             raise
         except (IntegrationError, np.linalg.LinAlgError) as exc:
-            raise PlantError(f"integration failed in the step from t = {self.time:.6g} s ({held()}): {exc}") from None
+            raise kernels.timed(PlantError(f"integration failed in the step from t = {self.time:.6g} s ({held()}): "
+                                           f"{exc}")) from None
 
     def _fast_step(self, z, u1, u2, dt, held, motors, voltages):
         """The C kernel's RK4 step from z: (the trial state, a new array; the verdict)."""
@@ -303,15 +304,15 @@ class PlantSimulator:
         """Refuse (:class:`PlantError`) a step length that is not finite and > 0, or a Baumgarte
         lambda above :data:`BAUMGARTE_RK4_LIMIT` / h for the RK4 step h."""
         if not (math.isfinite(dt) and dt > 0.0):
-            raise PlantError(f"step size {dt!r} at t = {self.time:.6g} s must be > 0")
+            raise kernels.timed(PlantError(f"step size {dt!r} at t = {self.time:.6g} s must be > 0"))
         s = self.settings
         if s.method == "rk4" and s.baumgarte * dt / s.substeps > BAUMGARTE_RK4_LIMIT:
             h = dt / s.substeps
-            raise PlantError(
+            raise kernels.timed(PlantError(
                 f"baumgarte = {s.baumgarte!r} /s with RK4 steps of {h:.6g} s (step from t = {self.time:.6g} s): "
                 f"baumgarte * h = {s.baumgarte * h:.4g} > {BAUMGARTE_RK4_LIMIT:g}, RK4 no longer damps the "
                 f"loop-closure residual (unstable beyond {RK4_REAL_STABILITY:.4g}); use baumgarte <= "
-                f"{BAUMGARTE_RK4_LIMIT / h:.4g} /s (the thesis advises <= 1/h), more substeps or dopri5")
+                f"{BAUMGARTE_RK4_LIMIT / h:.4g} /s (the thesis advises <= 1/h), more substeps or dopri5"))
 
     def accept(self, y, dt: float, held, verdict=None) -> None:
         """Make ``y``, the state integrated over dt from the present one, the new state.
@@ -369,7 +370,7 @@ class PlantSimulator:
     def _record(message, status, variable, value, time) -> PlantRefused:
         reason, unit = REFUSALS[status]
         return PlantRefused(message, code=status, reason=reason, variable=variable, value=float(value), unit=unit,
-                            time=time)
+                            time=time, names_time=True)       # every message of _record names t
 
     def project(self, y, iterations: int = 3):
         """Newton projection on q̄(q) = 0 and dq = C dq#, keeping q# fixed."""

@@ -200,6 +200,10 @@ def loads(text: str, source: str = "<string>") -> PlantSpec:
 
 
 def _syntax_line(exc) -> int | None:
+    """The line of a TOML syntax error: ``exc.lineno`` (Python 3.14's tomllib), else read from
+    tomllib's message, the only place Python 3.11-3.13 give it (a third party's text, not ours)."""
+    if getattr(exc, "lineno", None) is not None:
+        return exc.lineno
     m = re.search(r"line (\d+)", str(exc))
     return int(m.group(1)) if m else None
 

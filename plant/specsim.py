@@ -17,6 +17,8 @@ import math
 
 import numpy as np
 
+from kernels import timed
+
 from .integrators import IntegrationError, WorkLimitError, dopri5, rk4
 from .parallel import forward_dynamics, left_inverse_solve, mechanism_state
 from .serial import chain_dynamics, chain_kinematics
@@ -130,13 +132,13 @@ class SpecSimulator:
         ``max_evaluations``, None: unbounded)."""
         torques = np.asarray(torques, dtype=float)
         if torques.shape != (len(self.spec.inputs),):
-            raise PlantError(f"{torques.size} torques given for the {len(self.spec.inputs)} inputs "
-                             f"{', '.join(self.spec.inputs)} at t = {self.time:.6g} s")
+            raise timed(PlantError(f"{torques.size} torques given for the {len(self.spec.inputs)} inputs "
+                                   f"{', '.join(self.spec.inputs)} at t = {self.time:.6g} s"))
         for name, value in zip(self.spec.inputs, torques.tolist()):
             if not math.isfinite(value):
-                raise PlantError(f"input {name} = {value!r} at t = {self.time:.6g} s is not finite")
+                raise timed(PlantError(f"input {name} = {value!r} at t = {self.time:.6g} s is not finite"))
         if not (math.isfinite(dt) and dt > 0.0):
-            raise PlantError(f"step size {dt!r} at t = {self.time:.6g} s must be > 0")
+            raise timed(PlantError(f"step size {dt!r} at t = {self.time:.6g} s must be > 0"))
         s = self.settings
         if s.method == "rk4" and s.baumgarte * dt / s.substeps > BAUMGARTE_RK4_LIMIT:
             raise PlantError(f"baumgarte = {s.baumgarte!r} /s with RK4 steps of {dt / s.substeps:.6g} s: "
@@ -152,14 +154,15 @@ class SpecSimulator:
         except WorkLimitError:
             raise
         except (IntegrationError, np.linalg.LinAlgError) as exc:
-            raise PlantError(f"integration failed in the step from t = {self.time:.6g} s ({held}): {exc}") from None
+            raise timed(PlantError(f"integration failed in the step from t = {self.time:.6g} s ({held}): "
+                                   f"{exc}")) from None
         if not np.all(np.isfinite(y)):
-            raise PlantError(f"state became non-finite in the step from t = {self.time:.6g} s ({held})")
+            raise timed(PlantError(f"state became non-finite in the step from t = {self.time:.6g} s ({held})"))
         residual = self._residual_of(y)
         if not residual <= RESIDUAL_STOP:
-            raise PlantError(f"integration diverged in the step from t = {self.time:.6g} s ({held}): loop-closure "
-                             f"residual {residual:.3g} m > {RESIDUAL_STOP:g} m (a singular pose or too fast a "
-                             "motion for the step: use substeps or dopri5)")
+            raise timed(PlantError(f"integration diverged in the step from t = {self.time:.6g} s ({held}): "
+                                   f"loop-closure residual {residual:.3g} m > {RESIDUAL_STOP:g} m (a singular pose or too fast a "
+                                   "motion for the step: use substeps or dopri5)"))
         self.y = y
         self.time += dt
         return evaluations

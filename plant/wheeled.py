@@ -122,7 +122,7 @@ class FallenError(kernels.Refused, RuntimeError):
     def __init__(self, refused: kernels.Refused, psi: float):
         record = refused.record()
         message = record.pop("message")
-        super().__init__(message, **record)
+        super().__init__(message, **record, names_time=refused.names_time)
         self.psi = psi
 
 

@@ -560,7 +560,7 @@ def main(argv=None) -> int:
             line(f"reference at rtol, atol / {factor}", run(rtol=args.rtol / factor, atol=args.atol / factor), ref)
     master = simulate(system)
     print(f"master (in-process, defaults): {master.wall_s:.1f} s wall"
-          f"{'' if master.completed else ', STOPPED: ' + master.error}", flush=True)
+          f"{'' if master.completed else ', STOPPED: ' + str(master.error)}", flush=True)
     line("master - reference", master, ref)
     if not args.variants:
         return 0

@@ -36,7 +36,7 @@ def test_passthrough_slave_has_the_real_variables_and_copies(model, classes):
     slave.exit_initialization_mode()
     fake = [{"name": v.name, "causality": v.causality.name if v.causality else None,
              "variability": v.variability.name if v.variability else None, "kind": type(v).__name__}
-            for v in slave.vars.values() if v.name != "error"]
+            for v in slave.vars.values() if v.name not in ("error", "refusal")]
     assert fake == [{k: s[k] for k in ("name", "causality", "variability", "kind")} for s in real]
 
     rng = random.Random(model)

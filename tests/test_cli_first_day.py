@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import stat
 import zipfile
@@ -15,7 +16,9 @@ from pathlib import Path
 import pytest
 
 import scenarios.run.runner as run_module
+from fmus.status import RunStatus, RunError
 from parcosim.cli import _parser, main
+from scenarios.batch.sweep import read_rows
 
 SCENE = "bench_circle_TCMDx"
 
@@ -160,9 +163,11 @@ def _fake_engine(failing: set):
         for task in reversed(tasks):
             i = int(task.key.removeprefix("sample"))
             ok = i not in failing
+            error = None if ok else RunError(RunStatus.REFUSED, f"refused {i}", "plant", 0.5 + i, "q1", 2.0, "rad", 3,
+                                             "BAD_INPUT")
             on_result(task, {"e_ef_mm": 1.0 + i, "tau_ef_Nm": 0.1, "e_ss_mm": 0.01, "e_ss_1s_mm": 0.01,
-                             "t_settle_s": 0.5, "completed": ok, "error": "" if ok else f"refused {i}",
-                             "wall_s": 0.1})
+                             "t_settle_s": 0.5, "completed": ok, "outcome": (error.kind if error else RunStatus.COMPLETED).value,
+                             "error": error and error.record(), "wall_s": 0.1})
         return {}
     return run_tasks
 
@@ -179,6 +184,14 @@ def test_a_sweep_exits_1_only_when_every_sample_failed_and_writes_rows_by_sample
     assert ("every sample failed; the first: refused" in captured.err) == (status == 1)
     lines = (tmp_path / "sweep.csv").read_text().splitlines()
     assert [int(line.split(",")[0]) for line in lines[1:]] == [0, 1, 2, 3]
+    rows = read_rows(tmp_path / "sweep.csv", lines[0].split(","))
+    for row in rows:       # the error's record as columns, read back with their types
+        bad = row["sample"] in failing
+        assert row["outcome"] == ("refused" if bad else "completed") and row["error"] == (f"refused {row['sample']}"
+                                                                                          if bad else "")
+        assert (row["error_instance"], row["error_variable"], row["error_unit"], row["error_code"]) == \
+            (("plant", "q1", "rad", 3) if bad else ("", "", "", None))
+        assert row["error_time"] == 0.5 + row["sample"] if bad else math.isnan(row["error_time"])
 
 
 def test_the_workspace_figure_holds_the_whole_workspace(tmp_path):

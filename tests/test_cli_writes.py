@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 import scenarios.run.runner as run_module
+from fmus.status import RunStatus
 from parcosim.cli import EXIT_INTERRUPTED, main
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -98,7 +99,8 @@ def test_the_master_returns_the_rows_so_far_on_keyboard_interrupt(monkeypatch):
     monkeypatch.setattr(stepper_module.Stepper, "step", interrupted)
     result = simulate(replace(get_scene(SCENE).system, stop_time=0.1))
     assert result.interrupted and not result.completed
-    assert result.error == "interrupted at t = 0.019 s"
+    assert str(result.error) == "interrupted at t = 0.019 s" and result.error.kind is RunStatus.INTERRUPTED
+    assert result.status is RunStatus.INTERRUPTED and result.error.time == pytest.approx(0.019, abs=1e-12)
     assert len(result.time) == 20 and np.isfinite(result["plant.x"]).all()
 
 
@@ -144,7 +146,8 @@ def test_sigint_during_a_run_writes_what_was_recorded_and_exits_130(mode, tmp_pa
     assert np.isfinite(data).all()
     metrics = json.loads((out / "metrics.json").read_text())
     assert metrics["completed"] is False and metrics["interrupted"] is True
-    assert metrics["error"].startswith("interrupted at t = ")
+    assert metrics["outcome"] == "interrupted" and metrics["error"]["kind"] == "interrupted"
+    assert metrics["error"]["message"].startswith("interrupted at t = ") and metrics["error"]["message"] in lines[0]
 
 
 #: ``parcosim run`` that prints "instantiating" and waits 1 s before the master loads the FMUs.

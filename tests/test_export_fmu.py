@@ -17,6 +17,7 @@ from fmus.systemfmu.export import export_fmu
 from fmus.cosim.master import simulate
 from fmus.ssp.export import export_ssp
 from fmus.ssp.run import ecos_available
+from fmus.status import RunStatus, RunError
 from fmus.cosim.system import Component, System
 from scenarios.scenes.catalogue import get_scene
 
@@ -116,9 +117,12 @@ def test_a_step_that_is_not_a_whole_number_of_its_steps_is_refused(exported):
     fmu.doStep(0.0, 2 * system.step)
     with pytest.raises(Exception, match="2"):          # fmi2Discard
         fmu.doStep(2 * system.step, 0.5 * system.step)
-    error = {v.name: v for v in md.modelVariables}["error"]
-    message = fmu.getString([error.valueReference])[0].decode()
+    variables = {v.name: v for v in md.modelVariables}
+    message, record = (fmu.getString([variables[name].valueReference])[0].decode() for name in ("error", "refusal"))
     assert "step size 0.0005 s" in message and "whole multiple of h = 0.001 s" in message
+    record = RunError.from_json(record)      # the system FMU's own refusal, as a record
+    assert (record.kind, record.instance, record.time, record.message) == (RunStatus.REFUSED, "loop", 2 * system.step,
+                                                                          message)
     fmu.terminate()
     fmu.freeInstance()
 

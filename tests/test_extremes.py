@@ -19,6 +19,7 @@ from fmpy.fmi1 import FMICallException
 from pythonfmu import Integer, Real, String
 
 from controller.strategies import STRATEGY_NAMES, get_strategy
+from fmus.status import RunStatus
 from controller.trajectories import get_trajectory
 from fmus.export.build import SLAVES
 from fmus.cosim.master import simulate
@@ -71,9 +72,11 @@ def refused(result, instance, *fragments):
     """The run stopped with ``instance``'s refusal, its message holding every fragment."""
     assert_clean(result)
     assert result.error is not None, "the run should have been refused"
-    assert result.error.startswith(f"{instance} refused the step from t = "), result.error
+    assert result.error.instance == instance and result.error.kind in (RunStatus.REFUSED, RunStatus.INITIALISATION)
+    message = str(result.error)
+    assert message.startswith(f"{instance} refused the step from t = "), message
     for fragment in fragments:
-        assert fragment in result.error, (fragment, result.error)
+        assert fragment in message, (fragment, message)
     return result
 
 

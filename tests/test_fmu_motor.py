@@ -41,7 +41,7 @@ def test_fmpy_validate_finds_no_problem(built_fmus, model):
 ])
 def test_variables_structure_and_sentinel_defaults(built_fmus, model, outputs, sentinels):
     md = read_model_description(str(built_fmus[model]))
-    assert {o.variable.name for o in md.outputs} == outputs | {"error"}
+    assert {o.variable.name for o in md.outputs} == outputs | {"error", "refusal"}
     assert all(o.dependencies == [] for o in md.outputs)       # outputs change only in doStep
     variables = {v.name: v for v in md.modelVariables}
     for name in sentinels:

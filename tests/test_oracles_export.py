@@ -119,10 +119,13 @@ def test_sweep_rows_read_back_exactly(tmp_path):
     header = sweep.columns(["plant.m0", "ctrl.lam"])
     rows = [{"sample": 3, "plant.m0": 0.1 + 0.2, "ctrl.lam": 70.00000000000001, "e_ef_mm": 1.0 / 3.0,
              "tau_ef_Nm": -2.5e-310, "e_ss_mm": math.inf, "e_ss_1s_mm": 0.0, "t_settle_s": 1e300,
-             "completed": True, "error": "", "wall_s": 12.345678901234567},
+             "completed": True, "outcome": "completed", "error_instance": "", "error_time": -0.0,
+             "error_variable": "", "error_value": -0.0, "error_unit": "", "error_code": None, "error_reason": "",
+             "error": "", "wall_s": 12.345678901234567},
             {"sample": 4, "plant.m0": 1.5, "ctrl.lam": 2.0, "e_ef_mm": math.nan, "tau_ef_Nm": 1.0, "e_ss_mm": 2.0,
-             "e_ss_1s_mm": 3.0, "t_settle_s": 4.0, "completed": False, "error": 'x = "1",\n2',
-             "wall_s": 0.5}]
+             "e_ss_1s_mm": 3.0, "t_settle_s": 4.0, "completed": False, "outcome": "refused",
+             "error_instance": "plant", "error_time": 0.1 + 0.2, "error_variable": "chain 1, elbow", "error_value": -math.inf,
+             "error_unit": "N m", "error_code": 7, "error_reason": "singular", "error": 'x = "1",\n2', "wall_s": 0.5}]
     path = tmp_path / "sweep.csv"
     appender = sweep._Appender(path, header)
     for row in rows:
@@ -134,3 +137,4 @@ def test_sweep_rows_read_back_exactly(tmp_path):
     rows[1]["error"] = 'x = "1", 2'
     assert back == rows
     assert [type(v) for v in back[0].values()] == [type(v) for v in rows[0].values()]
+    assert [type(v) for v in back[1].values()] == [type(v) for v in rows[1].values()]

@@ -122,11 +122,11 @@ def test_stopped_run_keeps_what_was_recorded(tmp_path):
     columns = dict(zip(("x", "y", "x_d", "y_d", "tau1", "tau2"), record))
     scene = Scene("open_loop", "open loop into a singularity", system, columns, (0.0, 2.0), 2.0, "none")
     outcome = run_scene(scene, out_dir=tmp_path)
-    assert outcome.result.error and "plant" in outcome.result.error
+    assert outcome.result.error.instance == "plant" and "plant" in str(outcome.result.error)
     rows = (tmp_path / "result.csv").read_text().splitlines()
     assert 10 < len(rows) - 1 == len(outcome.result.time) < 2001
     metrics = json.loads((tmp_path / "metrics.json").read_text())
-    assert metrics["completed"] is False and metrics["e_ef_mm"] is None and "plant" in metrics["error"]
+    assert metrics["completed"] is False and metrics["e_ef_mm"] is None and metrics["error"]["instance"] == "plant"
 
 
 def test_fidelity_switches_remove_what_they_switch_off():

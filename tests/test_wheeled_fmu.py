@@ -140,7 +140,11 @@ def test_push_and_drive_scenes():
 def test_falling_run_reports_completed_false():
     outcome = run_scene(pendulum_scene("pendulum_balance", v_battery=0.3))
     assert outcome.metrics["completed"] is False
-    assert "fell over" in outcome.metrics["error"] and "psi = " in outcome.metrics["error"]
+    error = outcome.metrics["error"]
+    assert "fell over" in error["message"] and "psi = " in error["message"]
+    # the fall as data: the plant's kernel refused with the pitch as the variable
+    assert (error["kind"], error["instance"], error["variable"], error["unit"]) == ("refused", "plant", "psi", "rad")
+    assert abs(error["value"]) >= math.pi / 2 and outcome.metrics["outcome"] == "refused"
 
 
 @pytest.mark.parametrize("fidelity", [PendulumFidelity(yaw=False), PendulumFidelity(electrics="ideal"),

@@ -17,16 +17,21 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from fmus.cosim.slots import attribute_pull, gathering_pull, span
+from fmus.status import FmiStatus, RunError
 
 
 class CoSimulationError(Exception):
     """A component refused a call; carries the instance, the time and its message, and, when
-    the refusal came from a kernel's code, its record (``refusal``: :meth:`kernels.Refused.record`,
-    the variable, value, unit and code as fields)."""
+    the component said why as a record (a parcosim slave's String output ``refusal``), that
+    record (``run_error``, :class:`fmus.status.RunError`: its kind, and for a model's refusal the
+    variable, value, unit and code)."""
 
-    def __init__(self, instance: str, time: float, message: str, refusal: dict | None = None):
+    #: Its message names the time (``kernels.timed``): a system FMU reporting it adds none.
+    names_time = True
+
+    def __init__(self, instance: str, time: float, message: str, run_error: RunError | None = None):
         super().__init__(f"{instance} refused the step from t = {time:.6g} s: {message}")
-        self.instance, self.time, self.message, self.refusal = instance, time, message, refusal
+        self.instance, self.time, self.message, self.run_error = instance, time, message, run_error
 
 
 @dataclass(frozen=True)
@@ -77,6 +82,8 @@ class _Batch:
 
 
 _double, _TRUE = ctypes.c_double, ctypes.c_int(1)
+#: A status above it refuses the call (:func:`fmus.status.step_failed`), as a plain int for the step's path.
+_WARNING = int(FmiStatus.WARNING)
 
 
 def _step_calls(dll):
@@ -179,7 +186,7 @@ class _FmuInstance:
                 array[:] = values
             else:
                 array[:] = [convert(values[k]) for k in positions]
-            if setter(self._component, vrs, n, array) > 1:
+            if setter(self._component, vrs, n, array) > _WARNING:
                 raise CoSimulationError(self.name, float("nan"), self._last_message() or "setting inputs failed")
 
     def get_outputs(self) -> list:
@@ -196,12 +203,14 @@ class _FmuInstance:
         return values
 
     def do_step(self, t: float, h: float) -> None:
-        if self._do_step(self._component, _double(t), _double(h), _TRUE) > 1:
-            raise CoSimulationError(self.name, t, self._error_output() or self._last_message() or "fmi2DoStep refused")
+        if self._do_step(self._component, _double(t), _double(h), _TRUE) > _WARNING:
+            raise CoSimulationError(self.name, t, self._string_output("error") or self._last_message()
+                                    or "fmi2DoStep refused", self._refusal())
 
-    def _error_output(self) -> str:
-        """The String output ``error`` of a parcosim FMU: the same text as in process."""
-        variable = self.variables.get("error")
+    def _string_output(self, name: str) -> str:
+        """The String output ``name`` of a parcosim FMU (``error``, ``refusal``: the same as in
+        process); "" when the FMU has none."""
+        variable = self.variables.get(name)
         if variable is None or variable.type != "String" or variable.causality != "output":
             return ""
         try:
@@ -210,10 +219,14 @@ class _FmuInstance:
             return ""
         return value.decode(errors="replace") if isinstance(value, bytes) else str(value or "")
 
+    def _refusal(self) -> RunError | None:
+        """The record of the FMU's refusal (its String output ``refusal``), or None."""
+        return RunError.from_json(self._string_output("refusal"))
+
     def _last_message(self) -> str:
-        # parcosim slaves log "<instance>: <message>"; the error names the instance already.
-        message = self.messages[-1] if self.messages else ""
-        return message[len(self.name) + 2:] if message.startswith(f"{self.name}: ") else message
+        """The FMU's last log message (a foreign FMU's refusal, or a call refused by parcosim's
+        wrapper, which logs the message alone)."""
+        return self.messages[-1] if self.messages else ""
 
     def get_state(self):
         """The FMU's ``fmi2GetFMUstate`` (free it with :meth:`free_state`)."""
@@ -315,9 +328,10 @@ class InProcessInstance:
         return pull, slave.do_step, operator.call, self.get_outputs, span(out_slots), self
 
     def step_refused(self, t: float) -> CoSimulationError:
-        """The error of a ``do_step`` the slave refused (returned False) at ``t``."""
+        """The error of a ``do_step`` the slave refused (returned False) at ``t``, with the
+        slave's record (its output ``refusal``)."""
         return CoSimulationError(self.name, t, getattr(self.slave, "error", "") or "do_step refused",
-                                 getattr(self.slave, "refusal", None))
+                                 RunError.from_json(getattr(self.slave, "refusal", "")))
 
     def set_inputs(self, values: list) -> None:
         """Set the bound inputs to ``values``."""

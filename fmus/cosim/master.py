@@ -56,11 +56,12 @@ step's split one, the rest of a step a compiled kernel declined, Jacobi) and onc
 (kernels/src/loop.c).
 
 A refused step (fmi2Discard/Error/Fatal, or an exception in process) stops the run;
-:class:`Result` keeps the rows recorded so far and ``error`` says which instance refused,
-at what time, with its own message.  A KeyboardInterrupt (SIGINT) stops it the same way:
-the rows recorded so far, ``error`` "interrupted at t = ...", ``interrupted`` true (an FMU
-interrupted inside a call refuses it with a message naming the KeyboardInterrupt, which
-counts as the interruption).
+:class:`Result` keeps the rows recorded so far and ``error`` (:class:`fmus.status.RunError`)
+says which instance refused, at what time, with its own message (``str(error)``) and, from
+the component's record, its kind and the refused quantity.  A KeyboardInterrupt (SIGINT)
+stops it the same way: the rows recorded so far, ``error`` of kind ``interrupted``,
+"interrupted at t = ...", ``interrupted`` true (an FMU interrupted inside a call refuses it
+with a record of kind ``interrupted``, which counts as the interruption).
 """
 from __future__ import annotations
 
@@ -75,11 +76,11 @@ from pathlib import Path
 
 import numpy as np
 
-from fmus.slave.base import INTERRUPTED_MARK
 from fmus.cosim.backends import CoSimulationError, InProcessInstance, _FmuInstance
 from fmus.cosim.context import Outcome, RunContext
 from fmus.cosim.stepper import Stepper
 from fmus.cosim.system import System, split_signal
+from fmus.status import RunError, RunStatus
 
 MODES = ("fmu", "inprocess", "compiled")
 COUPLINGS = ("gauss-seidel", "jacobi")
@@ -115,7 +116,7 @@ class Result(RecordedRun):
     mode: str
     coupling: str
     wall_s: float   # stepping, from the first communication point to the last
-    error: str | None = None
+    error: RunError | None = None   # why the run stopped early (str(): the message)
     stop_time: float = 0.0
     init_s: float = 0.0   # loading, instantiating, initialising (tables, designs)
     #: ``cpu_s``: CPU time of this thread in the stepping (steadier than wall_s on a shared
@@ -123,6 +124,11 @@ class Result(RecordedRun):
     #: or ``fallback``.
     extra: dict = field(default_factory=dict)
     interrupted: bool = False   # stopped by KeyboardInterrupt (SIGINT); ``error`` says when
+
+    @property
+    def status(self) -> RunStatus:
+        """How the run ended: :attr:`RunStatus.COMPLETED`, or ``error``'s kind."""
+        return RunStatus.COMPLETED if self.error is None else self.error.kind
 
 
 # --- the stepping order -------------------------------------------------------------------
@@ -418,23 +424,29 @@ def _compiled(run: RunContext, stepper: Stepper) -> tuple:
 
 def _result(run: RunContext, order, outcome: Outcome, loading_s: float) -> Result:
     """The :class:`Result` of ``outcome``, stopped by its error (a CoSimulationError) or not."""
-    system, error, interrupted = run.system, outcome.error, outcome.interrupted
-    h, rows = system.step, len(outcome.rows)
-    last = max(rows - 1, 0) * h     # the last row's time: where the run stopped
-    message = None
-    if error is not None:
-        message = (str(error) if error.time == error.time
-                   else f"{error.instance}: {error.message} at t = {last:.6g} s")
-        if INTERRUPTED_MARK in error.message:
-            interrupted = True
-            message = f"interrupted at t = {last:.6g} s ({error.instance}: {error.message})"
-    elif interrupted:
-        message = f"interrupted at t = {last:.6g} s"
-    data = outcome.rows
+    system, data = run.system, outcome.rows
+    h, rows = system.step, len(data)
+    run_error = run_error_of(outcome.error, outcome.interrupted, max(rows - 1, 0) * h)
     return Result(time=np.arange(rows) * h, signals={s: data[:, j] for j, s in enumerate(system.record)},
-                  order=tuple(order), mode=run.mode, coupling=run.coupling, wall_s=outcome.wall_s, error=message,
+                  order=tuple(order), mode=run.mode, coupling=run.coupling, wall_s=outcome.wall_s, error=run_error,
                   stop_time=system.stop_time, init_s=loading_s + outcome.init_s, extra=outcome.extra,
-                  interrupted=interrupted)
+                  interrupted=run_error is not None and run_error.kind is RunStatus.INTERRUPTED)
+
+
+def run_error_of(error: CoSimulationError | None, interrupted: bool, last: float) -> RunError | None:
+    """The :class:`RunError` of a run stopped by ``error`` (the component's record, or a bare
+    refusal when it gave none) or by SIGINT (``interrupted``) with its last row at ``last`` [s];
+    None when it was not stopped."""
+    if error is None:
+        return RunError(RunStatus.INTERRUPTED, f"interrupted at t = {last:.6g} s", time=last) if interrupted else None
+    known = error.time == error.time      # NaN: a call with no time of its own (setting inputs)
+    record = error.run_error or RunError(RunStatus.REFUSED, error.message)
+    if record.kind is RunStatus.INTERRUPTED:
+        message = f"interrupted at t = {last:.6g} s ({error.instance}: {error.message})"
+    else:
+        message = str(error) if known else f"{error.instance}: {error.message} at t = {last:.6g} s"
+    time = record.time if record.time is not None else (error.time if known else last)
+    return replace(record, message=message, instance=record.instance or error.instance, time=time)
 
 
 def _retrying_step(stepper: Stepper, substeps: int, retried: list) -> None:
@@ -451,7 +463,8 @@ def _retrying_step(stepper: Stepper, substeps: int, retried: list) -> None:
                 stepper.step(split={exc.instance: substeps})
             except CoSimulationError as again:
                 raise CoSimulationError(again.instance, again.time, f"{again.message} (also refused in {substeps} "
-                                        f"sub-steps after {exc.instance} refused the full step)") from None
+                                        f"sub-steps after {exc.instance} refused the full step)",
+                                        again.run_error) from None
     finally:
         stepper.free_state(state)
 

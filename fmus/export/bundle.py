@@ -27,7 +27,7 @@ ROOT = Path(__file__).resolve().parents[2]
 PACKAGES = ("kernels", "plant", "motor", "controller")
 #: The ``fmus`` modules bundled: the slave base, and the in-process master a system FMU
 #: (``ClosedLoop``, ``ControlChain``) steps its components with; plus ``fmus/slaves``.
-FMUS_MODULES = ("__init__.py",
+FMUS_MODULES = ("__init__.py", "status.py",
                 "slave/__init__.py", "slave/base.py", "slave/state_calls.py", "slave/state.py", "slave/state_format.py",
                 "slave/budget.py", "slave/declarations.py", "slave/refusals.py", "slave/identity.py",
                 "slave/designs.py", "slave/registry.py", "slave/sampling.py",

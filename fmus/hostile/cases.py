@@ -47,6 +47,9 @@ KINDS = ("parameters", "inputs", "steps", "order", "strings", "sets", "state", "
 WRAPPER_KINDS = ("sets", "state", "start", "lifecycle")
 #: Outcomes, in the order of the summary table.
 OUTCOMES = ("ok", "refused", "fatal", "violation", "crash", "hang")
+#: The worker's exit status after a case whose call returned fmi2Fatal (its instance may not be
+#: called again): the case is ``fatal``, not a ``crash``.
+EXIT_AFTER_FATAL = 3
 
 DBL_MAX = sys.float_info.max
 HOSTILE_REALS = (0.0, -0.0, 1.0, -1.0, 1e-300, -1e-300, 5e-324, -5e-324, 1e300, -1e300, DBL_MAX, -DBL_MAX,
@@ -259,7 +262,7 @@ def _run_worker(cases: list, unzipped: dict, case_timeout: float, extra_env: dic
             chunk = os.read(read_fd, 1 << 16)
             if not chunk:      # the worker ended before the case's result
                 code = process.wait()
-                outcome = "crash" if code != 3 else "fatal"
+                outcome = "crash" if code != EXIT_AFTER_FATAL else "fatal"
                 results.append(CaseResult(cases[len(results)], outcome, problems=[
                     f"worker exit status {code}" + (f" (signal {-code})" if code < 0 else "")],
                     seconds=time.monotonic() - started))

@@ -26,7 +26,8 @@ from fmpy.fmi2 import FMU2Slave
 
 from fmus.native.state_bytes import MAGIC as NATIVE_STATE_MAGIC
 from fmus.native.state_bytes import fnv1a
-from fmus.hostile.cases import CALL_LIMIT
+from fmus.hostile.cases import CALL_LIMIT, EXIT_AFTER_FATAL
+from fmus.status import FMI_STATUS, FmiStatus, RunError, RunStatus, step_failed
 
 #: Bytes of the checksum that ends a serialised parcosim state (docs/state.md).
 CHECKSUM_BYTES = 32
@@ -43,8 +44,10 @@ class _Exploit:
     def __reduce__(self):
         return os.system, (self.command,)
 
-FATAL = 4
-NAMES = {0: "OK", 1: "Warning", 2: "Discard", 3: "Error", 4: "Fatal", 5: "Pending"}
+FATAL = FmiStatus.FATAL
+NAMES = {s.value: "OK" if s is FmiStatus.OK else s.name.capitalize() for s in FmiStatus}
+#: What a refused call may return (anything else but fmi2Fatal is a problem).
+_ANSWERS = (FmiStatus.OK, FmiStatus.WARNING, FmiStatus.DISCARD, FmiStatus.ERROR)
 
 
 class Fatal(Exception):
@@ -79,16 +82,16 @@ class Runner:
         if seconds > CALL_LIMIT:
             self.problems.append(f"{label} took {seconds:.1f} s (limit {CALL_LIMIT:g} s)")
         self.statuses.append([label, NAMES.get(status, str(status))])
-        if status not in (0, 1, 2, 3):
+        if status not in _ANSWERS:
             if status == FATAL:
                 raise Fatal(label)
             self.problems.append(f"{label} returned status {status}")
-        if status in (2, 3):
+        if step_failed(status):
             self.refused = True
-            self.check_message(label)
+            self.check_message(label, status)
         return status, result
 
-    def check_message(self, label: str) -> None:
+    def check_message(self, label: str, status: int) -> None:
         """A refusal must leave a message in ``error`` naming something."""
         if "error" not in self.vars:
             return
@@ -103,6 +106,26 @@ class Runner:
         names = [name for name in self.vars if name in message]
         if not message.strip() or not (names or " = " in message or "t = " in message):
             self.problems.append(f"the refused {label} left error = {message!r}, naming nothing")
+        self.check_record(label, message, status)
+
+    def check_record(self, label: str, message: str, status: int) -> None:
+        """A refused step leaves its record in ``refusal`` (fmus.status.RunError): the instance's
+        name, a kind of refusal and the message of ``error``; a refused doStep returns the status
+        of that kind (fmus.status.FMI_STATUS)."""
+        if "refusal" not in self.vars:
+            return
+        text = self.fmu.getString([self.vars["refusal"].valueReference])[0]
+        try:
+            record = RunError.from_json(text.decode("utf-8", "replace") if isinstance(text, bytes) else str(text))
+        except (ValueError, TypeError) as exc:
+            self.problems.append(f"the refused {label} left refusal = {text!r}, no record: {exc}")
+            return
+        if record is None or record.message != message or record.instance != self.case["instance_name"] or \
+                record.kind not in (RunStatus.REFUSED, RunStatus.INITIALISATION):
+            self.problems.append(f"the refused {label} left refusal = {text!r}, not the record of error = {message!r}")
+        elif label.startswith("doStep") and status != FMI_STATUS[record.kind]:
+            self.problems.append(f"the refused {label} returned {NAMES.get(status)}, not the "
+                                 f"{NAMES[FMI_STATUS[record.kind]]} of a {record.kind.value} refusal")
 
     def set(self, name: str, value) -> None:
         v = self.vars[name]
@@ -311,7 +334,7 @@ def main() -> int:
                               "seconds": time.perf_counter() - start}) + "\n")
         out.flush()
         if outcome == "fatal":
-            return 3
+            return EXIT_AFTER_FATAL
     return 0
 
 

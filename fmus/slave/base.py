@@ -14,7 +14,9 @@ return.  So:
   keeps the outputs of the last good step and returns False (fmi2Discard);
 * log messages reach the importer only if it turned logging on, so the same
   message also goes to stderr (where a failed write is ignored) and to the String
-  output ``error``;
+  output ``error``; the String output ``refusal`` holds the refusal as a record
+  (:meth:`fmus.status.RunError.to_json`: kind, instance, time, and for a model's refusal the
+  variable, value, unit, code and reason), which the master reads instead of the message;
 * :class:`FmiError` raised in a callback refuses that call with ``fmi2Error`` under
   parcosim's FMI wrapper (:mod:`fmus.export.wrapper`).
 
@@ -51,9 +53,10 @@ import os
 import sys
 
 from fmus.slave.identity import read_identity
-from kernels import Refused
 from fmus.slave.refusals import FmiError
 from fmus.slave.state_calls import SlaveState
+from fmus.status import RunStatus, RunError, refusal_of
+from kernels import timed
 
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, Real, String, Boolean
 from pythonfmu.enums import Fmi2Initial, Fmi2Status
@@ -97,8 +100,6 @@ class GuardedSlave(SlaveState, Fmi2Slave):
 
     #: Outputs are samples at the step's start, held over the step (see above).
     sampled = False
-    #: The record of the last step a kernel refused (:meth:`kernels.Refused.record`), or None.
-    refusal = None
     #: The step size the last :meth:`check_step_size` accepted (derived, not FMU state: its
     #: mangled name keeps it out of :func:`fmus.slave.state.model_state`).
     __accepted_step = None
@@ -112,6 +113,11 @@ class GuardedSlave(SlaveState, Fmi2Slave):
         self.register_variable(String("error", causality=Fmi2Causality.output,
                                       variability=Fmi2Variability.discrete,
                                       description="Why the last step was refused ('' when all is well)"))
+        self.refusal = ""            # the present refusal's RunError as JSON (the output ``refusal``)
+        #: The present refusal in its own words: the exception's message, without the time and
+        #: the framing of ``error`` ("initialisation refused: ..."); "" when all is well.
+        self.refused_because = ""
+        self._step_refused = False   # a step was refused (not the initialisation): later steps say so
         self._ready = False          # initialised well, no step refused since
         self._initialising = False   # in Initialization Mode (fmi2EnterInitializationMode was called)
         self._initialised = False    # fmi2ExitInitializationMode was called
@@ -157,9 +163,16 @@ class GuardedSlave(SlaveState, Fmi2Slave):
         def __init__(self, *args, **kw):
             declare_variables(self, *args, **kw)
             if type(self) is cls:   # the most derived class: every variable is declared
+                self._declare_refusal()
                 self._apply_start_values()
 
         cls.__init__ = __init__
+
+    def _declare_refusal(self) -> None:
+        """Register the String output ``refusal`` last (the other value references stay as they were)."""
+        self.register_variable(String("refusal", causality=Fmi2Causality.output, variability=Fmi2Variability.discrete,
+                                      description="The last refusal as a JSON record: kind, instance, time, variable, "
+                                                  "value, unit, code, reason, message ('' when all is well)"))
 
     def _apply_start_values(self) -> None:
         """Give the variables the start values of ``resources/start_values.json``, if the FMU
@@ -203,7 +216,7 @@ class GuardedSlave(SlaveState, Fmi2Slave):
             why = f"ends after t = {MAX_TIME:g} s"
         else:
             return
-        raise ValueError(self.step_size_message(current_time, h, why))
+        raise timed(ValueError(self.step_size_message(current_time, h, why)))
 
     def step_size_message(self, current_time: float, step_size: float, why: str) -> str:
         """'step size h = ... s at t = ... s <why>; <Model> accepts <accepted_steps()>'."""
@@ -329,7 +342,7 @@ class GuardedSlave(SlaveState, Fmi2Slave):
             self._initial_outputs = False
 
     def _calculated_names(self) -> frozenset:
-        return self._memo("calculated", lambda: self._names_of(Fmi2Causality.output) - {"error"})
+        return self._memo("calculated", lambda: self._names_of(Fmi2Causality.output) - {"error", "refusal"})
 
     def _names_of(self, causality) -> frozenset:
         return self._memo(("causality", causality), lambda: frozenset(
@@ -436,13 +449,18 @@ class GuardedSlave(SlaveState, Fmi2Slave):
             if not self._built_for_exit:   # a read in Initialization Mode ran it, nothing set since
                 self.setup()
             self._ready = True
-            self.error = ""
-        except KeyboardInterrupt:
-            self._ready = False
-            self._refuse(f"initialisation refused: {INTERRUPTED_MARK} (t = {self._start_time:.6g} s)")
+            self.error = self.refusal = self.refused_because = ""
+            self._step_refused = False
+        except KeyboardInterrupt as exc:
+            self._ready = self._step_refused = False
+            self.refused_because = INTERRUPTED_MARK
+            self._refuse(f"initialisation refused: {INTERRUPTED_MARK} (t = {self._start_time:.6g} s)",
+                         cause=(exc, RunStatus.INTERRUPTED, self._start_time))
         except Exception as exc:  # noqa: BLE001 - nothing may escape to pythonfmu
-            self._ready = False
-            self._refuse(f"initialisation refused: {exc} (t = {self._start_time:.6g} s)")
+            self._ready = self._step_refused = False
+            self.refused_because = str(exc)
+            self._refuse(f"initialisation refused: {exc} (t = {self._start_time:.6g} s)",
+                         cause=(exc, RunStatus.INITIALISATION, self._start_time))
 
     def terminate(self):
         self._terminated = True
@@ -461,28 +479,34 @@ class GuardedSlave(SlaveState, Fmi2Slave):
                 self.step(current_time, step_size)
                 self._next_time, self._last_step = end, step_size
                 return True
-            except KeyboardInterrupt:
-                self._refuse(f"step {INTERRUPTED_MARK} at t = {current_time!r} s", current_time)
-                self._ready = False
+            except KeyboardInterrupt as exc:
+                self.refused_because = INTERRUPTED_MARK
+                self._refuse(f"step {INTERRUPTED_MARK} at t = {current_time!r} s", current_time,
+                             cause=(timed(exc), RunStatus.INTERRUPTED, current_time))
+                self._ready, self._step_refused = False, True
                 return False
             except Exception as exc:  # noqa: BLE001
-                self.refusal = _refusal_record(exc, self.instance_name, current_time)
-                self._refuse(str(exc), current_time)
-                self._ready = False
+                self.refused_because = str(exc)
+                self._refuse(str(exc), current_time, cause=(exc, RunStatus.REFUSED, current_time))
+                self._ready, self._step_refused = False, True
                 return False
         if self._terminated:
-            self._refuse(f"doStep from t = {current_time!r} s after fmi2Terminate refused", repeat=True)
+            self._refuse(f"doStep from t = {current_time!r} s after fmi2Terminate refused", repeat=True,
+                         cause=(None, RunStatus.REFUSED, current_time))
             return False
         if not self._initialised:
             self._refuse(f"doStep from t = {current_time!r} s before initialisation "
-                         "(fmi2ExitInitializationMode) refused", repeat=True)
+                         "(fmi2ExitInitializationMode) refused", repeat=True,
+                         cause=(None, RunStatus.REFUSED, current_time))
             return False
-        if not self._ready:
-            if self._initialised and self.error and not self.error.startswith("initialisation refused"):
-                self._refuse(f"an earlier step was refused ({self.error}); restore an FMU state taken before it "
-                             "(fmi2SetFMUstate) to go on", current_time, repeat=True, keep_error=True)
-            else:
-                self._refuse(self.error or "initialisation refused", current_time, repeat=True)
+        if self._step_refused:
+            self._refuse(f"an earlier step was refused ({self.error}); restore an FMU state taken before it "
+                         "(fmi2SetFMUstate) to go on", current_time, repeat=True, keep_error=True)
+        elif self.error:          # the initialisation's refusal, said again (its record kept)
+            self._refuse(self.error, current_time, repeat=True, keep_error=True)
+        else:
+            self._refuse("initialisation refused", current_time, repeat=True,
+                         cause=(None, RunStatus.INITIALISATION, current_time))
         return False
 
     def _check_communication_point(self, current_time: float) -> None:
@@ -495,17 +519,27 @@ class GuardedSlave(SlaveState, Fmi2Slave):
         if self._last_step:
             tolerance = min(tolerance, 0.5 * self._last_step)
         if not abs(current_time - expected) <= tolerance:
-            raise ValueError(f"communication point t = {current_time!r} s does not follow the last one: "
-                             f"the next doStep must start at t = {expected!r} s (the last step's end, or the "
-                             "time of the state set by fmi2SetFMUstate)")
+            raise timed(ValueError(f"communication point t = {current_time!r} s does not follow the last one: "
+                                   f"the next doStep must start at t = {expected!r} s (the last step's end, or the "
+                                   "time of the state set by fmi2SetFMUstate)"))
 
     def _refuse(self, message: str, time: float | None = None, repeat: bool = False,
-                keep_error: bool = False) -> None:
-        text = message if (time is None or repeat or " t = " in message) else f"{message} (step from t = {time:.6g} s)"
+                keep_error: bool = False, cause: tuple | None = None) -> None:
+        """Log ``message`` as the instance's refusal, with the step's ``time`` unless ``cause``'s
+        exception names it (``names_time``: :func:`kernels.timed`); unless ``keep_error``, it
+        becomes ``error`` and ``cause`` (exception or None, its :class:`RunStatus`, the time) the
+        record in ``refusal``."""
+        names_time = cause is not None and getattr(cause[0], "names_time", False)
+        text = message if (time is None or repeat or names_time) else f"{message} (step from t = {time:.6g} s)"
         if repeat and time is not None:
             text = f"{message}; step from t = {time:.6g} s refused"
         if not keep_error:
             self.error = message if repeat else text
+            exc, kind, when = cause
+            try:
+                self.refusal = refusal_of(exc, kind, self.error, self.instance_name, when).to_json()
+            except Exception:  # noqa: BLE001 - a record that does not fit JSON: the bare refusal, never an escape
+                self.refusal = RunError(kind, self.error, self.instance_name).to_json()
         line = f"{self.instance_name}: {text}"
         self.log(line if self._wrapper_is_ours() else line.replace("%", "%%"), Fmi2Status.error,
                  category="logStatusError")
@@ -523,18 +557,6 @@ class GuardedSlave(SlaveState, Fmi2Slave):
         except AttributeError:
             self.__wrapper_is_ours = wrapper_symbol_present(getattr(self, "resources", None), type(self).__name__)
             return self.__wrapper_is_ours
-
-
-def _refusal_record(exc: Exception, instance: str, time: float) -> dict | None:
-    """The record of a kernel's refusal (:class:`kernels.Refused`) with its instance and time
-    filled in; None for any other exception."""
-    if not isinstance(exc, Refused):
-        return None
-    if exc.instance is None:
-        exc.instance = instance
-    if exc.time is None:
-        exc.time = time
-    return exc.record()
 
 
 #: A start time t0 is refused where t0 + TIME_RESOLUTION == t0: time could not advance there.

@@ -25,6 +25,8 @@ import math
 import threading
 from contextlib import contextmanager
 
+from kernels import timed
+
 #: CPU one FMI call may take [s] (counted, not timed).
 CALL_CPU_SECONDS = 1.0
 
@@ -99,8 +101,8 @@ class CallBudget:
         fit: '<cause> needs <count> <what> (~<unit> each), more than <limit>; <advice>'."""
         if count * unit <= self.left:
             return
-        raise CallLimitError(f"{cause} needs {count:.6g} {what} (~{short(unit)} each), more than "
-                             f"{self.limit_text(unit)}" + (f"; {advice}" if advice else ""))
+        raise timed(CallLimitError(f"{cause} needs {count:.6g} {what} (~{short(unit)} each), more than "
+                                   f"{self.limit_text(unit)}" + (f"; {advice}" if advice else "")))
 
     def spend(self, seconds: float) -> None:
         self.left -= seconds
@@ -158,10 +160,10 @@ def bounded_integration(run, unit: float, known: int | None, what: str, current_
             try:
                 evaluations = run(budget.count_left(unit))
             except WorkLimitError as exc:
-                raise CallLimitError(
+                raise timed(CallLimitError(
                     f"{cause} needs more {what} (~{short(unit)} each) than {budget.limit_text(unit)}: dopri5 "
                     f"stopped after {exc.evaluations}, {exc.reached:.3g} s into the step; nothing changed"
-                    + (f"; {advice}" if advice else "")) from None
+                    + (f"; {advice}" if advice else ""))) from None
         budget.spend(evaluations * unit)
         return evaluations
 

@@ -8,6 +8,9 @@ from __future__ import annotations
 
 import math
 
+from kernels import timed
+
+
 class FmiError(Exception):
     """Refuse the current FMI call with ``fmi2Error``.
 
@@ -109,7 +112,8 @@ def refuse_absurd_inputs(time: float, **inputs) -> None:
     the time (the wheeled pendulum's torques and sensors: none comes near it)."""
     for name, value in inputs.items():
         if abs(value) > ABSURD:
-            raise ValueError(f"input {name} = {value!r} at t = {time:.6g} s is absurd: |{name}| must be <= {ABSURD:g}")
+            raise timed(ValueError(f"input {name} = {value!r} at t = {time:.6g} s is absurd: "
+                                   f"|{name}| must be <= {ABSURD:g}"))
 
 
 def refuse_tiny(**values) -> None:

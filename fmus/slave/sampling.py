@@ -36,6 +36,7 @@ from pythonfmu import DefaultExperiment
 
 import kernels
 from fmus.slave.base import GuardedSlave
+from kernels import timed
 
 _d = ctypes.c_double
 _SUBSTEPS = kernels.function("pc_sampling_substeps", _d, _d, _d)
@@ -68,8 +69,8 @@ def checked_substeps(slave, current_time: float, step_size: float) -> int:
     ValueError naming h, T and t (and the phase) otherwise."""
     n = substeps_of(slave.T, step_size)
     if n is None:
-        raise ValueError(slave.step_size_message(current_time, step_size,
-                                                 f"does not divide the sample time T = {slave.T!r} s"))
+        raise timed(ValueError(slave.step_size_message(current_time, step_size,
+                                                       f"does not divide the sample time T = {slave.T!r} s")))
     check_phase(slave, current_time, step_size, n)
     return n
 
@@ -78,17 +79,18 @@ def check_phase(slave, current_time: float, step_size: float, n: int) -> None:
     """Raise ValueError unless ``slave.sample_phase`` is a whole number in [0, n)."""
     phase = getattr(slave, PHASE_PARAMETER)
     if not (isinstance(phase, int) and 0 <= phase < n):
-        raise ValueError(f"parameter {PHASE_PARAMETER} = {phase!r} must be a whole number in [0, T / h) = [0, {n}) "
-                         f"for the step size h = {step_size!r} s at t = {current_time!r} s (T = {slave.T!r} s)")
+        raise timed(ValueError(f"parameter {PHASE_PARAMETER} = {phase!r} must be a whole number in "
+                               f"[0, T / h) = [0, {n}) "
+                               f"for the step size h = {step_size!r} s at t = {current_time!r} s (T = {slave.T!r} s)"))
 
 
 def check_period_change(slave, current_time: float, step_size: float, n: int, counted: int, substep: int) -> None:
     """Raise ValueError if T / h changes (``counted`` -> ``n``) within a period (``substep`` > 0)."""
     if _CHANGES_PERIOD(substep, counted, n):
-        raise ValueError(f"step size h = {step_size!r} s at t = {current_time!r} s changes the step within a "
-                         f"sample period (T = {slave.T!r} s, sub-step {substep} of {counted}, steps of "
-                         f"{slave.T / counted!r} s): {type(slave).__name__} accepts a new step size only at a "
-                         "period's start")
+        raise timed(ValueError(f"step size h = {step_size!r} s at t = {current_time!r} s changes the step within a "
+                               f"sample period (T = {slave.T!r} s, sub-step {substep} of {counted}, steps of "
+                               f"{slave.T / counted!r} s): {type(slave).__name__} accepts a new step size only at a "
+                               "period's start"))
 
 
 def model_description_with_period(slave, to_xml, model_options):

@@ -27,6 +27,7 @@ from fmus.slave import designs
 from fmus.slave.base import MIN_STEP, GuardedSlave
 from fmus.slave.sampling import SampledSteps, declare_sample_phase
 from fmus.slave.refusals import ABSURD, refuse_absurd, require_finite
+from kernels import timed
 
 OUTPUTS = ("dq1", "dq2", "ddq1", "ddq2")
 #: Lowest fc T of a filter: below (fc T ~ 1e-9) the discretised Bessel filters are singular.
@@ -93,8 +94,8 @@ class Derivator(SampledSteps, GuardedSlave):
         # One check of the sum in the usual case: a NaN or an infinity makes it not finite (so do
         # finite values whose sum overflows: they are checked one by one then).
         if not math.isfinite(dq1 + dq2 + ddq1 + ddq2) and not all(map(math.isfinite, estimates)):
-            raise ValueError(f"the estimates (dq1, dq2, ddq1, ddq2) = {tuple(estimates)!r} at t = "
-                             f"{current_time:.6g} s are not finite (inputs q1 = {self.q1!r}, q2 = {self.q2!r} rad)")
+            raise timed(ValueError(f"the estimates (dq1, dq2, ddq1, ddq2) = {tuple(estimates)!r} at t = "
+                                   f"{current_time:.6g} s are not finite (inputs q1 = {self.q1!r}, q2 = {self.q2!r} rad)"))
         self.dq1, self.dq2, self.ddq1, self.ddq2 = dq1, dq2, ddq1, ddq2
 
     def _refuse_inputs(self, current_time):
@@ -102,7 +103,7 @@ class Derivator(SampledSteps, GuardedSlave):
         for name in ("q1", "q2"):
             value = getattr(self, name)
             if not math.isfinite(value):
-                raise ValueError(f"input {name} = {value!r} at t = {current_time:.6g} s is not finite")
+                raise timed(ValueError(f"input {name} = {value!r} at t = {current_time:.6g} s is not finite"))
             if abs(value) > ABSURD:
-                raise ValueError(f"input {name} = {value!r} rad at t = {current_time:.6g} s is absurd: "
-                                 f"|{name}| must be <= {ABSURD:g} rad")
+                raise timed(ValueError(f"input {name} = {value!r} rad at t = {current_time:.6g} s is absurd: "
+                                       f"|{name}| must be <= {ABSURD:g} rad"))

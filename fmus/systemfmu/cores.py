@@ -33,6 +33,8 @@ from fmus.cosim.backends import _CONVERT, CoSimulationError, InProcessInstance
 from fmus.cosim.master import stepping_order
 from fmus.cosim.stepper import Stepper
 from fmus.cosim.system import Component, Connection, System, split_signal
+from fmus.status import RunError
+from kernels import timed
 
 SYSTEM_FILE = "system.json"
 
@@ -125,10 +127,6 @@ class InitialisationRefused(CoSimulationError):
         return f"{self.instance}: {self.message}"
 
 
-#: How :mod:`fmus.slave.base` words a refused initialisation: the reason, then the start time.
-_INITIALISATION_REFUSAL = re.compile(r"initialisation refused: (?P<reason>.*) \(t = [^()]* s\)", re.S)
-
-
 def qualified(message: str, instance: str, parameters) -> str:
     """``message`` of the component ``instance`` with its ``parameters`` written
     ``<instance>.<parameter>`` where it names a value by them: ``lam = ...``, ``lam: ...``,
@@ -161,18 +159,19 @@ class SystemStepper(Stepper):
     def initialize(self, start_time: float = 0.0) -> None:
         super().initialize(start_time)
         for name, inst in self.instances.items():
-            error = getattr(getattr(inst, "slave", None), "error", "")     # an in-process slave's refusal
-            if error:
-                refusal = _INITIALISATION_REFUSAL.fullmatch(error)
-                reason = refusal["reason"] if refusal else error
-                raise InitialisationRefused(name, start_time, qualified(reason, name, self.parameters[name]))
+            slave = getattr(inst, "slave", None)        # an in-process slave's refusal, in its own words
+            if slave is not None and slave.error:
+                reason = slave.refused_because or slave.error
+                raise InitialisationRefused(name, start_time, qualified(reason, name, self.parameters[name]),
+                                            RunError.from_json(slave.refusal))
 
     def step(self, split: dict | None = None) -> None:
         try:
             super().step(split)
         except CoSimulationError as exc:
             raise CoSimulationError(exc.instance, exc.time,
-                                    qualified(exc.message, exc.instance, self.parameters[exc.instance])) from None
+                                    qualified(exc.message, exc.instance, self.parameters[exc.instance]),
+                                    exc.run_error) from None
 
 
 def _steps_in(time: float, current_time: float, step_size: float, h: float, multiples: bool) -> int:
@@ -182,11 +181,11 @@ def _steps_in(time: float, current_time: float, step_size: float, h: float, mult
     n = round(step_size / h) if math.isfinite(step_size) and step_size > 0.0 else 0
     if n < 1 or (n > 1 and not multiples) or not math.isclose(step_size, n * h, rel_tol=1e-9, abs_tol=0.0):
         allowed = f"a whole multiple of h = {h!r} s" if multiples else f"h = {h!r} s"
-        raise ValueError(f"step size {step_size!r} s at t = {current_time:.6g} s: this FMU steps its "
-                         f"system at its communication step; the step size must be {allowed}")
+        raise timed(ValueError(f"step size {step_size!r} s at t = {current_time:.6g} s: this FMU steps its "
+                               f"system at its communication step; the step size must be {allowed}"))
     if not math.isclose(current_time, time, rel_tol=0.0, abs_tol=1e-6 * h):
-        raise ValueError(f"communication point t = {current_time!r} s does not follow the last one "
-                         f"({time!r} s)")
+        raise timed(ValueError(f"communication point t = {current_time!r} s does not follow the last one "
+                               f"({time!r} s)"))
     return n
 
 
@@ -317,7 +316,7 @@ class ChainCore:
         _steps_in(self._time, current_time, step_size, h, multiples=False)
         for name, value in measured.items():
             if not math.isfinite(value):
-                raise ValueError(f"input {name} = {value!r} at t = {current_time:.6g} s is not finite")
+                raise timed(ValueError(f"input {name} = {value!r} at t = {current_time:.6g} s is not finite"))
         if current_time > 0.5 * h:
             try:
                 corrected = self.model.slave.correct(self._snapshot, measured, h)

@@ -8,7 +8,7 @@ single-threaded worker process per core by default (a run holds the GIL; threads
 run in parallel).
 
 Nothing is lost: a run that fails is a result carrying its error (``completed`` false,
-``error`` the message); a worker process that dies mid-run has its tasks rerun on another
+``error`` the record of why, :class:`fmus.status.RunError`, of kind ``failed`` when the run could not start); a worker process that dies mid-run has its tasks rerun on another
 worker by the scheduler (up to ``distributed.scheduler.allowed-failures`` times, then the
 task's result is the KilledWorker error).
 
@@ -25,6 +25,7 @@ import contextlib
 import os
 from dataclasses import dataclass
 
+from fmus.status import RunStatus, RunError
 from scenarios.batch import worker_path
 from scenarios.scenes.scene import Scene
 
@@ -60,15 +61,21 @@ class Task:
 
 def run_task(task: Task) -> dict:
     """Run ``task`` (on a worker): its metrics (:func:`scenarios.run.metrics.scene_metrics`), or,
-    when the run could not even start, ``completed`` false and ``error`` the message.  Never
+    when the run could not even start, ``completed`` false and ``error`` its record (kind ``failed``).  Never
     raises for a run that fails: the failure is the result."""
     from scenarios.run.runner import run_scene
 
     try:
         outcome = run_scene(task.scene, mode=task.mode, out_dir=task.out_dir, plots=task.plots)
     except Exception as exc:  # noqa: BLE001 - a run that cannot start is a result with its error
-        return {**_NO_METRICS, "scene": task.scene.name, "error": f"{type(exc).__name__}: {exc}"}
+        return {**_NO_METRICS, "scene": task.scene.name, **_failed(exc)}
     return outcome.metrics
+
+
+def _failed(exc: Exception) -> dict:
+    """The metrics' ``outcome`` and ``error`` of a task that could not run (or whose worker died)."""
+    error = RunError(RunStatus.FAILED, f"{type(exc).__name__}: {exc}")
+    return {"outcome": error.kind.value, "error": error.record()}
 
 
 def default_workers() -> int:
@@ -144,7 +151,7 @@ def run_tasks(tasks, client=None, scheduler=None, workers=None, on_result=None, 
             try:
                 metrics = future.result()
             except Exception as exc:  # noqa: BLE001 - e.g. KilledWorker: the task's row carries it
-                metrics = {**_NO_METRICS, "scene": task.scene.name, "error": f"{type(exc).__name__}: {exc}"}
+                metrics = {**_NO_METRICS, "scene": task.scene.name, **_failed(exc)}
             results[task.key] = metrics
             if on_result is not None:
                 on_result(task, metrics)

@@ -15,7 +15,7 @@ from pathlib import Path
 
 from controller.strategies import STRATEGY_NAMES
 
-from scenarios.run.runner import _json_safe
+from scenarios.run.runner import _json_safe, error_message
 from scenarios.scenes.catalogue import get_scene
 
 #: Thesis Tables 9-10 and 13-14 (bench): strategy -> (e_ef mm, tau_ef N m, e_ss_x, e_ss_y, e_ss mm).
@@ -101,7 +101,7 @@ def render(metrics: dict, mode: str) -> str:
              "and the trajectory, with the parameters of Tables 4-8, 16 and 18.", ""]
     failed = [n for n, m in metrics.items() if not m["completed"]]
     if failed:
-        lines += ["**Runs stopped early:** " + "; ".join(f"{n}: {metrics[n].get('error')}" for n in failed), ""]
+        lines += ["**Runs stopped early:** " + "; ".join(f"{n}: {error_message(metrics[n])}" for n in failed), ""]
     number = {"circle": (9, 11, 13), "triangle": (10, 12, 14)}
     for kind in KINDS:
         t_ef, t_md, t_ss = number[kind]

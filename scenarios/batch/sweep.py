@@ -16,7 +16,11 @@ Files in DIR:
 
 * ``sweep.csv``: one row per sample, in sample order: ``sample``, one column per
   perturbed parameter (its value), ``e_ef_mm``, ``tau_ef_Nm``, ``e_ss_mm`` (once settled),
-  ``e_ss_1s_mm``, ``t_settle_s`` (:mod:`scenarios.run.metrics`), ``completed``, ``error``, ``wall_s``.
+  ``e_ss_1s_mm``, ``t_settle_s`` (:mod:`scenarios.run.metrics`), ``completed``, ``outcome``
+  (:class:`fmus.status.RunStatus`), the fields of the error's record (:class:`fmus.status.RunError`)
+  ``error_instance``, ``error_time``, ``error_variable``, ``error_value``, ``error_unit``,
+  ``error_code``, ``error_reason`` (empty when the sample completed or the field is unknown),
+  ``error`` (its message), ``wall_s``.
   While the sweep runs, each row is appended and flushed to disk as its run finishes, in one
   write: a sweep killed at any point leaves every finished row whole (a torn last line, if
   any, is dropped when the sweep starts again); when it ends, the file is rewritten
@@ -28,7 +32,7 @@ Files in DIR:
   ``sweep.png``: their violin and box plots.
 
 A run that fails (a component refuses a step, a worker dies more often than the scheduler
-retries) is a row with ``completed`` false and its ``error``; it is not run again.
+retries) is a row with ``completed`` false, its ``outcome`` and its error's fields; it is not run again.
 """
 from __future__ import annotations
 
@@ -51,7 +55,12 @@ from scenarios.scenes.scene import Scene
 #: The metrics of a sweep row, then the bookkeeping columns.
 #: e_ss_mm: once settled; t_settle_s NaN (empty in the summary's n) when a run did not settle.
 METRICS = ("e_ef_mm", "tau_ef_Nm", "e_ss_mm", "e_ss_1s_mm", "t_settle_s")
-TAIL = ("completed", "error", "wall_s")
+#: The fields of the error's record (:meth:`fmus.status.RunError.record`) a row has as columns
+#: ``error_<field>``; the message is the column ``error``.
+ERROR_FIELDS = ("instance", "time", "variable", "value", "unit", "code", "reason")
+TAIL = ("completed", "outcome", *(f"error_{f}" for f in ERROR_FIELDS), "error", "wall_s")
+#: Columns read back as text; ``error_code`` as an integer; the others as floats.
+_TEXT = frozenset(("outcome", "error_instance", "error_variable", "error_unit", "error_reason", "error"))
 #: Settings that must match to continue a sweep in the same directory.
 _SETTINGS = ("scene", "uncertainty", "seed", "distribution", "perturb", "mode", "stop_time", "parameters")
 
@@ -67,7 +76,8 @@ class Sweep:
         The perturbed parameters (the csv's parameter columns), ``<instance>.<parameter>``.
     rows : list of dict
         One per sample 0..N-1, by sample: ``sample``, the parameter values, the metrics,
-        ``completed`` (bool), ``error`` (str, "" when none), ``wall_s``.
+        ``completed`` (bool), ``outcome`` (str), the error's fields ``error_<field>`` (None, NaN or
+        "" when unknown), ``error`` (its message, "" when none), ``wall_s``.
     summary : dict
         Metric -> statistics over the completed samples (:func:`summarize`).
     computed : list of int
@@ -106,11 +116,28 @@ def columns(parameters: list) -> list:
 
 
 def _cell(value) -> str:
+    if value is None:
+        return ""
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, float):
         return repr(value)
     return " ".join(str(value).split())      # one line per row, always
+
+
+def error_columns(metrics: dict) -> dict:
+    """A run's ``outcome`` and its error's record (``metrics["error"]``) as a row's columns."""
+    error = metrics.get("error") or {}
+    columns = {"outcome": metrics.get("outcome", "")}
+    for name in ERROR_FIELDS:
+        value = error.get(name)
+        if name in ("time", "value"):
+            value = math.nan if value is None else float(value)
+        elif name != "code":
+            value = "" if value is None else value
+        columns[f"error_{name}"] = value
+    columns["error"] = error.get("message", "")
+    return columns
 
 
 def _line(header: list, row: dict) -> str:
@@ -126,8 +153,12 @@ def _parse(row: dict) -> dict:
             out[key] = int(text)
         elif key == "completed":
             out[key] = text == "true"
-        elif key == "error":
+        elif key in _TEXT:
             out[key] = text
+        elif key == "error_code":
+            out[key] = int(text) if text else None
+        elif key in ("error_time", "error_value") and not text:
+            out[key] = math.nan
         else:
             out[key] = float(text)
     return out
@@ -303,8 +334,7 @@ def run_sweep(scene, samples: int, uncertainty: float, seed: int = 0, distributi
     def record(task, metrics):
         i = sample_of[task.key]
         row = {"sample": i, **values[i], **{m: float(metrics[m]) for m in METRICS},
-               "completed": bool(metrics["completed"]), "error": metrics.get("error", "") or "",
-               "wall_s": float(metrics["wall_s"])}
+               "completed": bool(metrics["completed"]), **error_columns(metrics), "wall_s": float(metrics["wall_s"])}
         done[i] = row
         if appender is not None:
             appender.append(row)

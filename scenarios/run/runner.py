@@ -7,8 +7,10 @@
     print(outcome.metrics["e_ef_mm"])
 
 A run that a component stops early, or that a KeyboardInterrupt (SIGINT) stops, still writes
-the rows it recorded and metrics with ``"completed": false`` and the message under ``"error"``
-(``"interrupted": true`` for SIGINT).  Every file is written atomically (a temporary file in
+the rows it recorded and metrics with ``"completed": false``, ``"outcome"`` its
+:class:`fmus.status.RunStatus` and under ``"error"`` the record of why
+(:meth:`fmus.status.RunError.record`: kind, message, instance, time, variable, value, unit,
+code, reason; ``"interrupted": true`` for SIGINT).  Every file is written atomically (a temporary file in
 the same directory, then ``os.replace``): a reader never sees half a file, and a failed
 write (a full disk) leaves the previous file, if any, and raises :class:`WriteError` naming
 the file.
@@ -207,8 +209,9 @@ def run_scene(scene, mode: str = "inprocess", out_dir=None, coupling: str = "gau
         metrics["python_steps"] = result.extra["python_steps"]
     if "fallback" in result.extra:
         metrics["fallback"] = result.extra["fallback"]
-    if result.error:
-        metrics["error"] = result.error
+    metrics["outcome"] = result.status.value
+    if result.error is not None:
+        metrics["error"] = result.error.record()
     if result.interrupted:
         metrics["interrupted"] = True
     if retry_substeps is not None:
@@ -222,3 +225,9 @@ def run_scene(scene, mode: str = "inprocess", out_dir=None, coupling: str = "gau
         if plots and len(columns["t"]) > 1 and not result.interrupted:
             files.extend(plot_run(scene, columns, out))
     return Outcome(scene, result, columns, metrics, files)
+
+
+def error_message(metrics: dict) -> str:
+    """The message of the ``error`` record in a run's ``metrics`` (:func:`run_scene`,
+    :func:`scenarios.batch.engine.run_task`); "" when the run completed."""
+    return (metrics.get("error") or {}).get("message", "")

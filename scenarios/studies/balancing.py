@@ -57,7 +57,7 @@ def measure(strategy: str, frequency: float, balanced: bool):
         "v_peak_V": float(np.max(volts)),
         "saturated_pct": float(100.0 * np.mean(volts >= v_max * (1 - 1e-9))),
         "i_peak_run_A": float(max(np.max(np.abs(c["i1"])), np.max(np.abs(c["i2"])))),
-        "error": outcome.result.error or "",
+        "error": str(outcome.result.error or ""),
     }
     return row, c
 

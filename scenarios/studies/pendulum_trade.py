@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from scenarios.scenes.pendulum import BALANCED_DEG, PendulumFidelity, pendulum_scene
-from scenarios.run.runner import atomic_write, run_scene
+from scenarios.run.runner import atomic_write, error_message, run_scene
 
 SAMPLE_TIMES = (1e-3, 2e-3, 4e-3, 5e-3, 6e-3, 6.5e-3, 7e-3, 7.5e-3, 8e-3, 10e-3, 15e-3, 20e-3)
 BATTERY_VOLTAGES = (8.0, 4.0, 2.0, 1.6, 1.5, 1.45, 1.4, 1.35, 1.3, 1.2, 1.0, 0.6)
@@ -87,7 +87,7 @@ def sample_time_rows(times=SAMPLE_TIMES) -> list:
         m = run_scene(scene).metrics
         rows.append({"T_ms": 1e3 * T, "balanced": balanced(m), "completed": m["completed"],
                      "peak_pitch_deg": m["peak_pitch_deg"], "last_second_pitch_deg": m["last_second_pitch_deg"],
-                     "error": m.get("error", "")})
+                     "error": error_message(m)})
     return rows
 
 
@@ -99,7 +99,7 @@ def battery_rows(voltages=BATTERY_VOLTAGES) -> list:
         m = outcome.metrics
         rows.append({"v_battery": v, "balanced": balanced(m), "completed": m["completed"],
                      "peak_pitch_deg": m["peak_pitch_deg"], "last_second_pitch_deg": m["last_second_pitch_deg"],
-                     "peak_voltage": float(np.max(np.abs(outcome.columns["v_l"]))), "error": m.get("error", "")})
+                     "peak_voltage": float(np.max(np.abs(outcome.columns["v_l"]))), "error": error_message(m)})
     return rows
 
 

@@ -182,7 +182,7 @@ def _sweep(base: Scene, chosen: list, reference, rounds: int, say) -> tuple[list
             columns.update({name: result[sig] for name, sig in scene.columns.items()})
             row["e_ef_mm"] = scene_metrics(scene, columns, row["wall_s"], result.completed)["e_ef_mm"]
             if result.error:
-                row["error"] = result.error
+                row["error"] = str(result.error)
         rows.append(row)
     return rows, skipped
 
