@@ -91,8 +91,8 @@ def struct_types() -> dict:
     of the kernels' headers (kernels/src/*.h; no nested braces)."""
     found = {}
     for header in sorted(KERNELS.glob("*.h")):
-        text = re.sub(r"//[^\n]*", "", re.sub(r"/\*.*?\*/", "", header.read_text(), flags=re.S))
-        for body, name in re.findall(r"typedef\s+struct\s*\w*\s*\{([^{}]*)\}\s*(\w+)\s*;", text):
+        source = re.sub(r"//[^\n]*", "", re.sub(r"/\*.*?\*/", "", header.read_text(), flags=re.S))
+        for body, name in re.findall(r"typedef\s+struct\s*\w*\s*\{([^{}]*)\}\s*(\w+)\s*;", source):
             names = []
             for decl in filter(None, (d.strip() for d in body.split(";"))):
                 pointer = re.search(r"\(\s*\*\s*(?:const\s+)?(\w+)\s*\)", decl)   # a function pointer
