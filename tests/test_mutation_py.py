@@ -133,6 +133,9 @@ def test_the_report_counts_per_area_and_lists_survivors():
     from benchmarks.mutation_report import area, table
     assert area("kernels/src/drive.c") == "kernels C" and area("controller/law.py") == "law"
     assert area("fmus/ssp.py") == "fmus export/SSP/state/refusals" and area("fmus/slaves/parcosim_derivator.py") == "fmus other"
+    # the same modules after the layout of issue 29 (a fresh draw of today's tree)
+    assert area("fmus/ssp/export.py") == area("fmus/slave/state_format.py") == "fmus export/SSP/state/refusals"
+    assert area("fmus/slave/sampling.py") == area("fmus/cosim/stepper.py") == "fmus other"
     header = {"seed": 1, "commit": "abc", "sample": 3, "lines": {"plant/a.py": 10, "controller/law.py": 5},
               "drawn": ["plant/a.py", "plant/a.py", "controller/law.py"]}
     base = {"column": 0, "before": "a", "after": "b", "operator": "arith", "seconds": 1.0}
