@@ -1,0 +1,143 @@
+"""The sampled slaves at a sample time of 2 ms, stepped at h = 1 ms and sampling on sub-step 1
+(``sample_phase`` non-zero), against the product's model objects built at T = 2 ms and
+stepped once per period here (issue 31, patterns 1 and 2).  The model objects themselves are
+held against independent computations at 2 ms in test_oracles_designs.py; these tests catch
+a slave that builds or steps its model with the default 1 ms (its ``T`` dropped, a step size
+given where the period is meant, ``T`` and ``h`` swapped), or samples on the wrong sub-step.
+Each test also checks that the 1 ms model gives other outputs, so it can tell the two apart."""
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from controller.balance import BalanceController, BalanceSettings, design_balance, get_route
+from controller.derivators import Derivator
+from controller.fastbalance import INPUTS as BALANCE_INPUTS, OUTPUTS as BALANCE_OUTPUTS
+from controller.position import PositionController, default_kt
+from controller.strategies import get_strategy
+from fmus.cosim.backends import InProcessInstance
+from fmus.slave.refusals import ABSURD
+from plant import fivebar, get_preset
+
+T, N, PHASE, PERIODS = 2e-3, 2, 1, 40
+H = T / N
+
+
+def _stepped(model, parameters, inputs, outputs):
+    """Outputs after each sub-step of the slave; ``inputs(k)`` -> {name: value} of sub-step k.
+    Returns (rows, the sampled sub-steps' inputs)."""
+    instance = InProcessInstance(model, model.lower())
+    instance.initialize({"T": T, "sample_phase": PHASE, **parameters}, 0.0)
+    slave, rows, sampled = instance.slave, [], []
+    for k in range(PERIODS * N):
+        values = inputs(k)
+        for name, value in values.items():
+            setattr(slave, name, value)
+        instance.do_step(k * H, H)
+        rows.append([getattr(slave, name) for name in outputs])
+        if k % N == PHASE:
+            sampled.append((k * H, values))
+    return np.array(rows), sampled
+
+
+def _held(reference_rows, start):
+    """The slave's expected rows: ``start`` until the first sample (sub-step PHASE), then each
+    period's sample held over the next N sub-steps."""
+    rows = [start] * PHASE
+    for row in reference_rows:
+        rows += [row] * N
+    return np.array(rows[:PERIODS * N])
+
+
+def _angles(k):
+    return {"q1": 0.4 + 0.02 * math.sin(0.05 * k) + 1e-4 * (k % N), "q2": 2.1 - 0.03 * math.cos(0.04 * k)}
+
+
+def test_the_derivator_slave_filters_with_its_T_and_samples_on_its_phase():
+    """Bessel filters at fc 60 Hz (velocity) and 25 Hz (acceleration) discretised at 2 ms."""
+    outputs = ("dq1", "dq2", "ddq1", "ddq2")
+    rows, sampled = _stepped("Derivator", {"fc_vel": 60.0, "fc_acc": 25.0}, _angles, outputs)
+
+    def reference(period):
+        d = Derivator(60.0, 25.0, period)
+        d.start_at_first_sample(2)
+        return [list(d.step_values((v["q1"], v["q2"]), ABSURD)) for _, v in sampled]
+
+    expected = reference(T)
+    np.testing.assert_array_equal(rows, _held(expected, [0.0] * 4))
+    assert np.max(np.abs(np.array(expected)[:, 0])) > 0.1
+    assert not np.allclose(reference(1e-3), expected, rtol=1e-3, atol=0.0)
+
+
+def test_the_position_controller_slave_runs_its_law_with_its_T():
+    """PDMDq with adaptive gains (gamma 4 and 3) and phi = 1, the exact model: the sliding
+    integral (6.65) and the adaptive gain (6.66) advance by T a sample."""
+    outputs = ("tau1", "tau2", "i_ref1", "i_ref2", "e1", "e2")
+    x1, y1 = -0.002, 0.108
+
+    def inputs(k):
+        return {**_angles(k), "dq1": 0.1 * math.cos(0.05 * k), "dq2": -0.2, "ddq1": 0.0, "ddq2": 0.3,
+                "x_d": x1 + 1e-3 * math.sin(0.03 * k), "y_d": y1, "dx_d": 0.01, "dy_d": 0.0,
+                "ddx_d": 0.0, "ddy_d": 0.0}
+
+    # the slave's angles: near the hold point x1 (7.28), world angles
+    q1, _, q2, _ = fivebar.inverse_kinematics(get_preset("bench"), x1, y1)
+
+    def near(k):
+        values = inputs(k)
+        values["q1"], values["q2"] = q1 + 1e-3 * math.sin(0.07 * k), q2 - 1e-3 * math.cos(0.05 * k)
+        return values
+
+    gains = {"k1": 50.0, "k2": 40.0, "gamma1": 4.0, "gamma2": 3.0, "phi": 1.0}
+    rows, sampled = _stepped("PositionController", {"strategy": "PDMDq", "model": "exact", **gains}, near, outputs)
+
+    def reference(period):
+        strategy = get_strategy("PDMDq", "circle").with_(k=(50.0, 40.0), gamma=(4.0, 3.0), phi=1.0)
+        c = PositionController(get_preset("bench"), strategy, model="exact", kt=default_kt(), T=period)
+        names = ("q1", "q2", "dq1", "dq2", "ddq1", "ddq2", "x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
+        return [list(c.step_with_errors(t, *(v[n] for n in names))) for t, v in sampled]
+
+    expected = reference(T)
+    np.testing.assert_array_equal(rows, _held(expected, [0.0] * 6))
+    assert not np.allclose(reference(1e-3)[5:], expected[5:], rtol=1e-6, atol=0.0)
+
+
+def test_the_balance_controller_slave_is_designed_and_samples_at_its_T():
+    """The LQR and the observer designed for 2 ms (seed 000's model, python-control's c2d)."""
+    outputs = ("v_l", "v_r", "tau_l", "tau_r")
+
+    def inputs(k):
+        return {"enc_l": 0.01 + 0.002 * math.sin(0.1 * k), "enc_r": 0.02 - 0.001 * k / PERIODS,
+                "gyro": 0.1 * math.cos(0.07 * k)}
+
+    rows, sampled = _stepped("BalanceController", {}, inputs, outputs)
+
+    def reference(period):
+        c = BalanceController(design_balance(replace(BalanceSettings(), T=period)), get_route("hold"))
+        out = []
+        for t, v in sampled:
+            c.sample(t, v["enc_l"], v["enc_r"], v["gyro"])
+            named = dict(zip(BALANCE_OUTPUTS, c.io[len(BALANCE_INPUTS):].tolist()))
+            out.append([named[n] for n in outputs])
+        return out
+
+    expected = reference(T)
+    np.testing.assert_array_equal(rows, _held(expected, [0.0] * 4))
+    assert np.max(np.abs(np.array(expected))) > 0.01
+    assert not np.allclose(reference(1e-3), expected, rtol=1e-6, atol=0.0)
+
+
+@pytest.mark.parametrize("model", ["Derivator", "PositionController", "BalanceController", "CurrentObserver"])
+def test_a_step_of_T_itself_at_2ms_samples_every_step(model):
+    """h = T = 2 ms is accepted and ``sample_phase`` 1 is refused for it (n = 1), naming the
+    phase and [0, 1).  Catches the phase's bound taken from the default T."""
+    instance = InProcessInstance(model, "m")
+    parameters = {"T": T, "sample_phase": 1}
+    if model == "PositionController":
+        parameters["model"] = "exact"
+    instance.initialize(parameters, 0.0)
+    assert instance.slave.do_step(0.0, T) is False
+    assert "parameter sample_phase = 1 must be a whole number in [0, T / h) = [0, 1)" in instance.slave.error
