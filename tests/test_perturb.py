@@ -88,9 +88,13 @@ def test_weights_give_each_kind_its_uncertainty_and_the_last_matching_pattern_wi
     the wrong kind, the order of the patterns reversed, a follower given U."""
     params = perturbable(_scene(drive1={"friction": "lugre"}))
     spread = uncertainties(params, 0.3)
-    assert spread["plant.chain2_l1"] == 0.3 * LENGTH_WEIGHT and spread["plant.l0"] == 0.3 * LENGTH_WEIGHT
+    # the docstring's figures: U = 0.4 gives +-0.4 % on a length, +-4 mrad on an encoder's zero
+    assert LENGTH_WEIGHT == 0.01 and ENCODER_OFFSET_SCALE == 0.01
+    assert spread["plant.chain2_l1"] == 0.3 * 0.01 and spread["plant.l0"] == 0.3 * 0.01
     assert spread["plant.chain2_lg1"] == 0.3 and spread["drive2.ke"] == 0.3 and spread["drive1.b"] == 0.3
-    assert spread["plant.encoder_offset2"] == 0.3 * ENCODER_OFFSET_SCALE
+    assert spread["plant.encoder_offset2"] == 0.3 * 0.01
+    zero = uncertainties(params, 0.0)                  # U = 0: the nominal run, accepted
+    assert all(u == 0.0 for name, u in zero.items() if name != "drive1.mu_s")
     assert spread["drive1.mu_s"] is None
     spread = uncertainties(params, 0.3, {"drive*.R": 0.1, "drive2.*": 0.05, "drive1.mu_s": 0.2})
     assert spread["drive1.R"] == 0.1 and spread["drive2.R"] == 0.05 and spread["drive2.kt"] == 0.05

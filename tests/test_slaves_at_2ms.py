@@ -141,3 +141,39 @@ def test_a_step_of_T_itself_at_2ms_samples_every_step(model):
     instance.initialize(parameters, 0.0)
     assert instance.slave.do_step(0.0, T) is False
     assert "parameter sample_phase = 1 must be a whole number in [0, T / h) = [0, 1)" in instance.slave.error
+
+
+def test_the_drive_slave_controls_its_current_at_its_T_with_its_offset():
+    """DCMotorDrive at T = 2 ms, h = 0.5 ms, sampling on sub-step 1, with a current-sensor
+    offset of 0.03 A (0 by default) and the mean torque: each sub-step's (tau, v, i) is the
+    motor.Drive's built with the same T, phase and offset.  Catches the slave's T, phase,
+    offset or torque output not passed to its drive."""
+    from motor import Drive, get_motor_preset
+
+    n, phase = 4, 1
+    h = T / n
+    options = {"T": T, "sample_phase": phase, "current_offset": 0.03, "torque_output": "mean"}
+    instance = InProcessInstance("DCMotorDrive", "drive")
+    instance.initialize({"preset": "motor1", **options}, 0.0)
+    slave = instance.slave
+
+    def reference(**changes):
+        drive = Drive(get_motor_preset("motor1"), mode="current", method="exact", **{**options, **changes})
+        drive.start(0.0, 0.0)
+        return drive
+
+    drive, other = reference(), reference(T=1e-3, sample_phase=0)
+    rows, expected, at_1ms = [], [], []
+    for k in range(60):
+        i_ref, omega, i_hat = 1.0 + 0.5 * math.sin(0.2 * k), 3.0 * math.cos(0.05 * k), 0.8 + 0.1 * (k % 3)
+        slave.i_ref, slave.omega, slave.i_hat = i_ref, omega, i_hat
+        instance.do_step(k * h, h)
+        rows.append((slave.tau, slave.v, slave.i))
+        expected.append(drive.step(i_ref, 0.0, omega, i_hat, h))
+        at_1ms.append(other.step(i_ref, 0.0, omega, i_hat, h))
+    np.testing.assert_array_equal(rows, expected)
+    volts = np.array(expected)[:, 1]
+    for m in range(14):                          # held from sub-step 1 of each period to sub-step 0 of the next
+        start = m * n + phase
+        assert np.all(volts[start:start + n] == volts[start]) and volts[start] != volts[start - 1], m
+    assert not np.allclose(at_1ms, expected, rtol=1e-6, atol=0.0)
