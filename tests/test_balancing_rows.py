@@ -66,7 +66,8 @@ def test_break_even_is_where_the_straight_lines_between_the_points_cross():
     rows += [{"strategy": "TCx", "frequency_Hz": f, "balanced": True, "tau_ef_Nm": -5.0} for f in plain]
     g0, g1 = heavy[1.0] - plain[1.0], heavy[1.5] - plain[1.5]
     assert balancing.break_even(rows, "PDx") == pytest.approx(1.0 + 0.5 * g0 / (g0 - g1), rel=1e-12)
-    rising = [dict(r, tau_ef_Nm=r["tau_ef_Nm"] + (1.0 if r["balanced"] else 0.0)) for r in rows if r["strategy"] == "PDx"]
+    rising = [dict(r, tau_ef_Nm=r["tau_ef_Nm"] + (1.0 if r["balanced"] else 0.0))
+              for r in rows if r["strategy"] == "PDx"]
     assert balancing.break_even(rising, "PDx") is None
 
 
