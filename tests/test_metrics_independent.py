@@ -31,8 +31,8 @@ def _columns(end=11.0):
     after the stop at 8 s that decays into a final offset, and torques of unequal size."""
     k = np.arange(int(round(end / H)) + 1)
     # a master's times are k H within rounding (sums t + h, whole nanoseconds): here 0.3 ps late
-    # on every 8th sample (the window's end at 8 s among them), early on the others (its start)
-    t = k * H + np.where(k % 8 == 0, 3e-13, -3e-13)
+    # at 8, 9, 10 and 11 s (the ends of the windows), 0.3 ps early on every other sample (their starts)
+    t = k * H + np.where((k % 500 == 0) & (k >= 4000), 3e-13, -3e-13)
     after = np.clip(t - 8.0, 0.0, None)
     ex = 3e-4 + 2e-4 * np.sin(5.0 * t) * (t < 8.0) + 8e-4 * np.exp(-after / 0.15) * (t >= 8.0)
     ey = -1e-4 + 1e-4 * np.cos(3.0 * t) * (t < 8.0) - 5e-4 * np.exp(-after / 0.3) * (t >= 8.0)
@@ -54,7 +54,7 @@ def test_every_metric_is_its_definition_over_its_samples():
     c = _columns()
     m = scene_metrics(_scene(), c, wall_s=2.5, completed=True, init_s=0.25)
     t = c["t"].tolist()
-    assert t[4000] > 8.0 and t[500] < 1.0                  # the window's end and start samples, off by 0.3 ps
+    assert t[4000] > 8.0 and t[500] < 1.0 and t[4500] > 9.0 and t[4400] < 8.8     # the windows' ends, 0.3 ps off
     ex = [a - b for a, b in zip(c["x_d"], c["x"])]
     ey = [a - b for a, b in zip(c["y_d"], c["y"])]
     window = range(500, 4001)                              # [1, 8] s by sample index: k H

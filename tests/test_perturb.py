@@ -173,6 +173,18 @@ def test_the_perturbed_scene_sets_the_values_and_keeps_the_drives_designs_nomina
                      **{p.variable: values[p.name] for p in params if p.instance == "plant"}}
 
 
+def test_a_plant_without_a_preset_is_the_thesis_sim_preset():
+    """Catches the FiveBarPlant's default preset (``thesis_sim``, as the FMU declares) lost."""
+    scene = get_scene("bench_circle_TCMDx")
+    components = tuple(replace(c, parameters={k: v for k, v in c.parameters.items() if k != "preset"})
+                       if c.name == "plant" else c for c in scene.system.components)
+    params = {p.name: p.nominal for p in perturbable(replace(scene, system=replace(scene.system,
+                                                                                  components=components)))}
+    thesis = get_preset("thesis_sim")
+    assert params["plant.l0"] == thesis.l0 and params["plant.chain2_m1"] == thesis.chain2.m1
+    assert thesis.chain2.m1 != get_preset("bench").chain2.m1
+
+
 def test_a_perturb_file_is_read_and_each_bad_entry_refused_naming_file_and_key(tmp_path):
     """Catches the checks of the file (unknown key, negative or non-numeric value, a
     distribution not known) dropped or loosened; ints are read as floats."""
@@ -186,7 +198,8 @@ def test_a_perturb_file_is_read_and_each_bad_entry_refused_naming_file_and_key(t
                           ('[uncertainty]\n"a" = -0.5\n', r"uncertainty 'a' = -0.5 must be"),
                           ('[uncertainty]\n"a" = nan\n', r"uncertainty 'a' = nan must be"),
                           ('distribution = "cauchy"\n', r"distribution = 'cauchy'; valid: uniform, normal"),
-                          ('uncertainty = 3\n', r"'uncertainty' must be a table")):
+                          ('uncertainty = 3\n', r"'uncertainty' must be a table"),
+                          ('[uncertainty\n', r"Expected '\]'")):
         f.write_text(text)
         with pytest.raises(ValueError, match=rf"--perturb {f}: " + message):
             load_perturb_file(f)
