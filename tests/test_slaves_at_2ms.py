@@ -177,3 +177,49 @@ def test_the_drive_slave_controls_its_current_at_its_T_with_its_offset():
         start = m * n + phase
         assert np.all(volts[start:start + n] == volts[start]) and volts[start] != volts[start - 1], m
     assert not np.allclose(at_1ms, expected, rtol=1e-6, atol=0.0)
+
+
+def test_the_actuated_plant_slave_gives_each_joint_its_own_drive_at_its_T():
+    """ActuatedFiveBarPlant at T = 2 ms, h = 1 ms, sampling on sub-step 1, with unlike drives
+    (motor2's preset and R2 = 1.3 ohm on joint 2, current offsets of +0.03 and -0.02 A, 0 by
+    default) and an encoder zero error on joint 1: each step's outputs are plant.actuated's
+    ActuatedPlant built here from the same simulator and motor.Drive objects.  Catches a
+    joint's drive built with the other joint's suffix, the T or phase not passed to them."""
+    from motor import Drive, get_motor_preset
+    from plant import PlantSimulator
+    from plant.actuated import ActuatedPlant
+
+    count = 2.0 * math.pi / 20000
+    parameters = {"preset": "bench", "x0": -0.002, "y0": 0.108, "preset1": "motor1", "preset2": "motor2",
+                  "R2": 1.3, "current_offset1": 0.03, "current_offset2": -0.02, "encoder_offset1": 2.37 * count}
+    instance = InProcessInstance("ActuatedFiveBarPlant", "plant")
+    instance.initialize({"T": T, "sample_phase": PHASE, **parameters}, 0.0)
+    slave = instance.slave
+
+    def reference(period, phase=PHASE):
+        sim = PlantSimulator(get_preset("bench"), x0=-0.002, y0=0.108, encoder_offsets=(2.37 * count, 0.0))
+        motor2 = replace(get_motor_preset("motor2"), R=1.3)
+        drives = [(1, Drive(get_motor_preset("motor1"), T=period, sample_phase=phase, current_offset=0.03,
+                            design_params=get_motor_preset("motor1"))),
+                  (2, Drive(motor2, T=period, sample_phase=phase, current_offset=-0.02, design_params=motor2))]
+        for _, drive in drives:
+            drive.start(0.0, 0.0)
+        return ActuatedPlant(sim, drives)
+
+    plant, other = reference(T), reference(1e-3, phase=0)
+    names = ("x", "y", "q1_enc", "q2_enc", "i1", "i2", "v1", "v2", "tau1", "tau2")
+    got, expected, at_1ms = [], [], []
+    for k in range(40):
+        i_ref = (1.0 + 0.5 * math.sin(0.2 * k), -0.8 + 0.3 * math.cos(0.1 * k))
+        i_hat = (0.9, -0.7 + 0.01 * k)
+        slave.i_ref1, slave.i_ref2 = i_ref
+        slave.i_hat1, slave.i_hat2 = i_hat
+        instance.do_step(k * H, H)
+        got.append([getattr(slave, n) for n in names])
+        for p, rows in ((plant, expected), (other, at_1ms)):
+            p.step(i_ref, i_hat, (0.0, 0.0), H)
+            o = p.plant.outputs()
+            rows.append([o["x"], o["y"], o["q1_enc"], o["q2_enc"], *p.currents,
+                         *(d.v for _, d in p.drives), *p.shaft_torques()])
+    np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-15)
+    assert not np.allclose(at_1ms, expected, rtol=1e-6, atol=0.0)
