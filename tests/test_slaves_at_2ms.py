@@ -223,3 +223,30 @@ def test_the_actuated_plant_slave_gives_each_joint_its_own_drive_at_its_T():
                          *(d.v for _, d in p.drives), *p.shaft_torques()])
     np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-15)
     assert not np.allclose(at_1ms, expected, rtol=1e-6, atol=0.0)
+
+
+def test_the_dynamic_observer_slave_starts_at_its_i0_and_omega0_and_publishes_on_its_phase():
+    """CurrentObserver, kind dynamic, motor2 with ke = 0.06 (its own), i0 = 0.4 A and omega0 =
+    3 rad/s (0 by default), T = 2 ms, h = 1 ms, phase 1: the estimate advances every sub-step
+    (motor.CurrentObserver from the same start), is published on sub-step 1 of each period and
+    held in between; before the first sample the output is i0.  Catches i0 or omega0 not
+    reaching the observer, a parameter override lost, the publication on another sub-step."""
+    from motor import CurrentObserver, get_motor_preset
+
+    instance = InProcessInstance("CurrentObserver", "obs")
+    instance.initialize({"preset": "motor2", "ke": 0.06, "kind": "dynamic", "i0": 0.4, "omega0": 3.0, "T": T,
+                         "sample_phase": PHASE}, 0.0)
+    slave = instance.slave
+    observer = CurrentObserver(replace(get_motor_preset("motor2"), ke=0.06), "dynamic")
+    observer.reset(0.4, 3.0)
+    assert slave.i_hat == 0.4
+    published = 0.4
+    for k in range(30):
+        v, omega = 2.0 * math.sin(0.3 * k), 3.0 + 0.1 * k
+        slave.v, slave.omega = v, omega
+        instance.do_step(k * H, H)
+        estimate = observer.estimate(v, omega, H, k * H)
+        if k % N == PHASE:
+            published = estimate
+        assert slave.i_hat == published, k
+    assert published != 0.4
