@@ -242,7 +242,7 @@ def test_the_dynamic_observer_slave_starts_at_its_i0_and_omega0_and_publishes_on
     assert slave.i_hat == 0.4
     published = 0.4
     for k in range(30):
-        v, omega = 2.0 * math.sin(0.3 * k), 3.0 + 0.1 * k
+        v, omega = 2.0 * math.sin(0.3 * k), 3.5 + 0.1 * k      # not omega0 at the first step
         slave.v, slave.omega = v, omega
         instance.do_step(k * H, H)
         estimate = observer.estimate(v, omega, H, k * H)
