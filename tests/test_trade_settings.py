@@ -45,6 +45,8 @@ def test_the_names_are_unique_and_the_quick_sweep_is_part_of_the_full_one():
     ("torque end", {"drive1": ({"torque_output": "end"}, 1), "drive2": ({"torque_output": "end"}, 1)}),
     ("table 2.5 mm", {"ctrl": ({"grid_step": 0.0025}, 1)}),
     ("viscous b=1e-7", {"drive1": ({"b": 1e-7}, 1), "drive2": ({"b": 1e-7}, 1)}),
+    ("no viscous friction", {"drive1": ({"b": 0.0, "b_design": 0.0001226}, 1),      # the controller keeps
+                             "drive2": ({"b": 0.0, "b_design": 0.0002039}, 1)}),    # the motors' b (Table 16, 18)
 ])
 def test_a_setting_changes_what_it_says_and_nothing_else(name, expected):
     """Catches a setting applied to the wrong component, its sub-steps given to the others,

@@ -194,8 +194,8 @@ def settings(quick: bool = False) -> list:
         Setting("quasi-static electrics", "fidelity", "electrics='quasi_static': L neglected in the drive",
                 _fidelity(electrics="quasi_static")),
         Setting("no Coulomb friction", "fidelity", "coulomb=False (mu = 0)", _fidelity(coulomb=False)),
-        Setting("no viscous friction", "fidelity", "viscous=False (b = 0; also re-designs the current controller "
-                "for b = 0)", _fidelity(viscous=False)),
+        Setting("no viscous friction", "fidelity", "viscous=False (b = 0; the current controller stays "
+                "designed for the motor's b)", _fidelity(viscous=False)),
         Setting("viscous b=1e-7", "fidelity", "b = 1e-7 N m s/rad in the drives: the friction nearly gone, the "
                 "current controller designed for it", _drive_setting(b=1e-7)),
         Setting("exact angles", "fidelity", "encoder=False: derivator and controller read the exact angles",
