@@ -7,7 +7,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import pytest
 
 from scenarios.batch import sweep
 from scenarios.scenes import get_scene
