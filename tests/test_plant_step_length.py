@@ -47,3 +47,18 @@ def test_the_wheeled_pendulum_at_2ms_is_two_1ms_steps_with_the_disturbance():
     assert long.time == pytest.approx(0.05, abs=1e-15)
     assert np.max(np.abs(long.y - short.y)) < 1e-12
     assert np.max(np.abs(long.y - still.y)) > 1e-5                 # the disturbance acts
+
+
+@pytest.mark.parametrize("dt", [-1e-3, 0.0, math.inf, math.nan])
+def test_a_step_that_is_not_finite_and_positive_is_refused_naming_it_and_nothing_moves(dt):
+    """Seed 3501's survivor [45] (plant/simulator.py:305, ``isfinite(dt) and dt > 0`` -> ``or``):
+    a negative or infinite step is refused by the simulator's own check, with its message,
+    before the kernel sees it, and the state and time stay."""
+    from plant.simulator import PlantError
+
+    sim = PlantSimulator(get_preset("bench"), x0=-0.002, y0=0.108)
+    sim.step(0.01, 0.0, 2e-3)
+    y, t = sim.y.copy(), sim.time
+    with pytest.raises(PlantError, match=rf"^step size {dt!r} at t = 0.002 s must be > 0$"):
+        sim.step(0.01, 0.0, dt)
+    assert np.array_equal(sim.y, y) and sim.time == t
