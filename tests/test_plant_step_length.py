@@ -51,7 +51,7 @@ def test_the_wheeled_pendulum_at_2ms_is_two_1ms_steps_with_the_disturbance():
 
 @pytest.mark.parametrize("dt", [-1e-3, 0.0, math.inf, math.nan])
 def test_a_step_that_is_not_finite_and_positive_is_refused_naming_it_and_nothing_moves(dt):
-    """Seed 3501's survivor [45] (plant/simulator.py:305, ``isfinite(dt) and dt > 0`` -> ``or``):
+    """Seed 3501's survivor [44] (plant/simulator.py:305, ``isfinite(dt) and dt > 0`` -> ``or``):
     a negative or infinite step is refused by the simulator's own check, with its message,
     before the kernel sees it, and the state and time stay."""
     from plant.simulator import PlantError

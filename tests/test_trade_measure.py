@@ -1,5 +1,5 @@
 """scenarios/studies/trade/measure.py's error columns on runs made up here (seed 3501's survivor
-[46], scenarios/trade.py:370 then: the energy error's reference replaced by the run's own
+[45], scenarios/trade.py:370 then: the energy error's reference replaced by the run's own
 energy survived): a run at 2 ms against a reference at 1 ms, its energy error, current error
 and deviation against the numbers computed here."""
 from __future__ import annotations
