@@ -38,3 +38,16 @@ def test_a_connected_input_given_a_value_stays_an_input_connector_and_keeps_its_
     assert connectors[("first", "u")] == "parameter" and connectors[("first", "gain")] == "parameter"
     assert connectors[("first", "y")] == "output" and connectors[("second", "y")] == "output"
     assert read_ssp_parameters(path) == {"first.u": 0.25, "first.gain": 1.5, "second.u": -2.0}
+
+
+def test_an_integer_parameter_outside_32_bits_is_refused_naming_it(tmp_path):
+    """Seed 3501's survivor [51] (fmus/ssp.py:64, the upper bound 2**31 - 1 -> 2**31 passed):
+    the int32 ends are bound exactly (test_oracles_export.py), one past either end is refused."""
+    import pytest
+
+    fmus = {model: fake_fmu(tmp_path / f"{model}.fmu", model) for model in ("Alpha", "Beta")}
+    for value in (2 ** 31, -2 ** 31 - 1):
+        system = System((Component("first", "Alpha", {"count": value}), Component("second", "Beta")),
+                        (Connection("first.y", "second.u"),), ("second.y",), stop_time=0.5, step=2e-3)
+        with pytest.raises(ValueError, match=rf"parameter first.count = {value} does not fit a 32-bit FMI Integer"):
+            export_ssp(system, tmp_path / "sys.ssp", fmus=fmus)
