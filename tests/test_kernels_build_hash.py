@@ -38,3 +38,17 @@ def test_the_compiler_is_cc_from_the_environment_else_one_on_the_path(monkeypatc
     monkeypatch.setenv("CC", "no-such-compiler-here")
     with pytest.raises(build.NoCompiler, match=r"set CC, or install gcc: 'apt-get install gcc libc6-dev'"):
         build.compiler()
+
+
+def test_the_command_line_builds_the_plain_library_where_asked(tmp_path, capsys):
+    """``python -m kernels.build --out DIR`` (seed 3501's survivor [71]: its ``build(out,
+    sanitize)`` with the arguments swapped passed, no test ran the command): the library in DIR,
+    its path printed, carrying the plain build's hash."""
+    import ctypes
+
+    assert build.main(["--out", str(tmp_path)]) == 0
+    library = tmp_path / build.LIBRARY.name
+    assert capsys.readouterr().out.strip() == str(library)
+    loaded = ctypes.CDLL(str(library))
+    loaded.pc_sources_hash.restype = ctypes.c_char_p
+    assert loaded.pc_sources_hash().decode() == build.sources_hash()
