@@ -576,6 +576,11 @@ def campaign(seed: int, sample: int, workers: int, results: Path | None = None, 
         if header["seed"] != seed or header["sample"] != len(chosen):
             raise ValueError(f"{results} holds seed {header['seed']}, sample {header['sample']}, "
                              f"not seed {seed}, sample {len(chosen)}")
+        if header.get("drawn") and header["drawn"] != [name for name, _ in chosen]:
+            raise ValueError(f"{results} was drawn from the product files of commit {header['commit'][:10]}; "
+                             f"this tree's draw differs (a file moved or changed since): resume from a checkout "
+                             f"of that commit (git worktree add --detach DIR {header['commit'][:10]}) with this "
+                             f"tool's benchmarks/mutation_*.py copied into it")
     else:
         results.parent.mkdir(parents=True, exist_ok=True)
         header = {"seed": seed, "sample": len(chosen), "commit": commit, "map": mutation_map.key(),

@@ -6,6 +6,12 @@ from __future__ import annotations
 #: fmus/ modules of the FMI layer's export, SSP, state and refusal code (issue 31 item 2).
 FMI_EXPORT = ("archive", "build", "bundle", "designs", "export", "fmustate", "foreign", "guarded", "identity",
               "modeldescription", "refusals", "slavestate", "ssp", "ssp_run", "stateformat")
+#: The same modules since the layout of issue 29 (fmus/__init__.py's MOVED), by path.
+FMI_EXPORT_FILES = ("fmus/export/archive.py", "fmus/export/build.py", "fmus/export/bundle.py",
+                    "fmus/slave/designs.py", "fmus/systemfmu/export.py", "fmus/slave/state.py",
+                    "fmus/cosim/foreign.py", "fmus/slave/base.py", "fmus/slave/identity.py",
+                    "fmus/export/modeldescription.py", "fmus/slave/refusals.py", "fmus/slave/state_calls.py",
+                    "fmus/ssp/__init__.py", "fmus/ssp/export.py", "fmus/ssp/run.py", "fmus/slave/state_format.py")
 #: controller/ modules of the control law and its gains.
 LAW = ("law", "position", "strategies")
 AREAS = ("kernels C", "law", "controller", "plant", "motor", "fmus export/SSP/state/refusals", "fmus other",
@@ -21,7 +27,8 @@ def area(name: str) -> str:
     if top == "controller":
         return "law" if stem in LAW else "controller"
     if top == "fmus":
-        return "fmus export/SSP/state/refusals" if "/" not in rest and stem in FMI_EXPORT else "fmus other"
+        exported = name in FMI_EXPORT_FILES or "/" not in rest and stem in FMI_EXPORT
+        return "fmus export/SSP/state/refusals" if exported else "fmus other"
     if top in ("kernels", "parcosim"):
         return "kernels, parcosim (Python)"
     return top

@@ -133,6 +133,9 @@ def test_the_report_counts_per_area_and_lists_survivors():
     from benchmarks.mutation_report import area, table
     assert area("kernels/src/drive.c") == "kernels C" and area("controller/law.py") == "law"
     assert area("fmus/ssp.py") == "fmus export/SSP/state/refusals" and area("fmus/slaves/parcosim_derivator.py") == "fmus other"
+    # the same modules after the layout of issue 29 (a fresh draw of today's tree)
+    assert area("fmus/ssp/export.py") == area("fmus/slave/state_format.py") == "fmus export/SSP/state/refusals"
+    assert area("fmus/slave/sampling.py") == area("fmus/cosim/stepper.py") == "fmus other"
     header = {"seed": 1, "commit": "abc", "sample": 3, "lines": {"plant/a.py": 10, "controller/law.py": 5},
               "drawn": ["plant/a.py", "plant/a.py", "controller/law.py"]}
     base = {"column": 0, "before": "a", "after": "b", "operator": "arith", "seconds": 1.0}
@@ -156,3 +159,22 @@ def test_a_run_of_several_test_files_splits_into_each_files_map_and_merges_back(
     merged = mm.merge([a, b])
     assert merged["tests"] == record["tests"] and merged["lines"] == record["lines"]
     assert mm.select(merged, "plant/x.py", 11, 11, [], 1000.0)["tests"] == []    # fails unmutated: left out
+
+
+def test_a_resume_from_a_tree_whose_draw_differs_is_refused(monkeypatch, tmp_path):
+    """Catches a resume that reads the pool from a tree where files moved since the draw (the
+    check of ``header["drawn"]`` dropped): it would run other mutants under the old indices."""
+    import json
+    monkeypatch.setattr(mp, "line_count", lambda name: 100)
+    pool = {"a.py": mp.mutants_of_python("a.py", SNIPPET), "b.py": mp.mutants_of_python("b.py", SNIPPET)}
+    monkeypatch.setattr(mp, "pool_by_file", lambda: pool)
+    drawn = [name for name, _ in mp.draw(pool, 7, 5)]
+    results = tmp_path / "m.jsonl"
+    moved = ["c.py" if name == "a.py" else name for name in drawn]
+    results.write_text(json.dumps({"header": {"seed": 7, "sample": 5, "commit": "0" * 40, "drawn": moved}}) + "\n")
+    try:
+        mp.campaign(7, 5, 1, results)
+    except ValueError as refused:
+        assert "drawn from the product files of commit 0000000000" in str(refused)
+    else:
+        raise AssertionError("a draw that differs from the recorded one was resumed")

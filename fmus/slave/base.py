@@ -156,6 +156,16 @@ class GuardedSlave(SlaveState, Fmi2Slave):
             kwargs["setter"] = lambda value: setattr(self, name, value)
         self.register_variable(kind(name, **kwargs))
 
+    def to_xml(self, model_options=None):
+        """pythonfmu's modelDescription with each Real start value written to the last bit:
+        pythonfmu writes 16 significant digits, which give back about three doubles in four
+        (WheeledPendulum's J_psi = 0.0010367999999999998 read back as 0.0010368)."""
+        root = super().to_xml(model_options or {})
+        for variable, element in zip(self.vars.values(), root.find("ModelVariables")):
+            if isinstance(variable, Real) and isinstance(variable.start, float):
+                element.find("Real").set("start", repr(variable.start))
+        return root
+
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
         declare_variables = cls.__init__

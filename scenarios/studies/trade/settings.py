@@ -48,13 +48,14 @@ def _plant(scene: Scene) -> str | None:
     return plants[0] if len(plants) == 1 else None
 
 
-def _change(scene: Scene, names, substeps: int | None = None, **parameters) -> Scene:
-    """``scene`` with the components ``names`` given ``parameters`` (and ``Component.substeps``)."""
+def _change(scene: Scene, names, component_substeps: int | None = None, **parameters) -> Scene:
+    """``scene`` with the components ``names`` given ``parameters`` (a plant's ``substeps``: its
+    RK4 steps) and the master's ``Component.substeps`` (``component_substeps``)."""
     components = []
     for c in scene.system.components:
         if c.name in names:
             c = replace(c, parameters={**c.parameters, **parameters},
-                        substeps=c.substeps if substeps is None else substeps)
+                        substeps=c.substeps if component_substeps is None else component_substeps)
         components.append(c)
     return replace(scene, system=replace(scene.system, components=tuple(components)))
 
@@ -69,7 +70,7 @@ def _plant_setting(**parameters):
 def _plant_multirate(n: int):
     def build(scene):
         plant = _plant(scene)
-        return None if plant is None else _change(scene, [plant], substeps=n)
+        return None if plant is None else _change(scene, [plant], component_substeps=n)
     return build
 
 
@@ -86,8 +87,8 @@ def _group(n: int, **drive_parameters):
         drives, plant = _drives(scene), _plant(scene)
         if not drives or plant is None:
             return None
-        scene = _change(scene, drives, substeps=n, **drive_parameters)
-        return _change(scene, [plant], substeps=n)
+        scene = _change(scene, drives, component_substeps=n, **drive_parameters)
+        return _change(scene, [plant], component_substeps=n)
     return build
 
 
@@ -193,8 +194,8 @@ def settings(quick: bool = False) -> list:
         Setting("quasi-static electrics", "fidelity", "electrics='quasi_static': L neglected in the drive",
                 _fidelity(electrics="quasi_static")),
         Setting("no Coulomb friction", "fidelity", "coulomb=False (mu = 0)", _fidelity(coulomb=False)),
-        Setting("no viscous friction", "fidelity", "viscous=False (b = 0; also re-designs the current controller "
-                "for b = 0)", _fidelity(viscous=False)),
+        Setting("no viscous friction", "fidelity", "viscous=False (b = 0; the current controller stays "
+                "designed for the motor's b)", _fidelity(viscous=False)),
         Setting("viscous b=1e-7", "fidelity", "b = 1e-7 N m s/rad in the drives: the friction nearly gone, the "
                 "current controller designed for it", _drive_setting(b=1e-7)),
         Setting("exact angles", "fidelity", "encoder=False: derivator and controller read the exact angles",

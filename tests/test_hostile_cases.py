@@ -1,0 +1,113 @@
+"""fmus/hostile/cases.py without running a case (the campaign's own tests are of the slow kind):
+the variable table read from a slave's model description, the cases a seed makes (what each
+kind makes hostile and what it leaves sane), and the summary's counts (issue 31: the FMI layer's
+weakest area, every value compared with what the docstrings say)."""
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from collections import Counter
+
+import pytest
+from fmpy import read_model_description
+
+from fmus.cosim.backends import InProcessInstance
+from fmus.hostile.cases import (HOSTILE_REALS, KINDS, OUTCOMES, START_TIMES, STATE_VARIANTS, STEP_SIZES,
+                                WRAPPER_KINDS, CaseResult, make_case, markdown_summary, summary, variable_table)
+
+MODEL = "DCMotorDrive"
+
+
+@pytest.fixture(scope="module")
+def table(tmp_path_factory):
+    slave = InProcessInstance(MODEL, "d").slave
+    path = tmp_path_factory.mktemp("md") / "modelDescription.xml"
+    path.write_bytes(ET.tostring(slave.to_xml(), encoding="UTF-8", xml_declaration=True))
+    return slave, variable_table(read_model_description(str(path)))
+
+
+def test_the_variable_table_is_each_variables_name_type_causality_variability_and_start(table):
+    """Catches a start parsed as another type (a Boolean "false" read as True, an Integer as a
+    float), the causality and variability swapped, a variable left out."""
+    slave, rows = table
+    assert len(rows) == len(slave.vars)
+    kinds = {"Real": float, "Integer": int, "Boolean": bool, "String": str}
+    for (name, type_, causality, variability, start), variable in zip(rows, slave.vars.values()):
+        assert name == variable.name and causality == variable.causality.name
+        assert variability == (variable.variability.name if variable.variability else "continuous")
+        if start is not None:
+            assert type(start) is kinds[type_] and start == getattr(slave, name), name
+    by_name = {row[0]: row for row in rows}
+    assert by_name["internal_observer"][1:] == ("Boolean", "parameter", "fixed", False)
+    assert by_name["T"][1:] == ("Real", "parameter", "fixed", 1e-3)
+    assert by_name["sample_phase"][1:] == ("Integer", "parameter", "fixed", 0)
+    assert by_name["i_ref"][2] == "input" and by_name["tau"][2] == "output"
+
+
+def test_a_seed_makes_the_same_case_and_draws_no_wrapper_kind_unless_asked(table):
+    _, rows = table
+    assert make_case(MODEL, rows, 17) == make_case(MODEL, rows, 17)
+    plain = Counter(make_case(MODEL, rows, seed)["kind"] for seed in range(300))
+    assert set(plain) == set(KINDS) - set(WRAPPER_KINDS)
+    wrapped = Counter(make_case(MODEL, rows, seed, wrapper=True)["kind"] for seed in range(300))
+    assert set(wrapped) == set(KINDS)
+    assert make_case("Derivator", rows, 17) != make_case(MODEL, rows, 17)     # the model is in the seed
+
+
+def test_each_kind_makes_hostile_what_it_is_about_and_keeps_the_rest_sane(table):
+    """Catches a kind that sets parameters it should not, step sizes off the list or hostile
+    where sane, a state case without its bytes or with the model's own state as foreign,
+    start times off the list, the ``error`` output written."""
+    _, rows = table
+    parameters = {row[0] for row in rows if row[2] == "parameter"}
+    for seed in range(120):
+        case = make_case(MODEL, rows, seed, kind=KINDS[seed % len(KINDS)], wrapper=True,
+                         models=("DCMotorDrive", "Derivator"))
+        kind, ops = case["kind"], case["ops"]
+        assert not any(op[0] == "set" and op[1] == "error" for op in ops)
+        if kind not in ("parameters", "strings"):
+            assert case["parameters"] == []
+        else:
+            assert {name for name, _ in case["parameters"]} <= parameters
+        if kind == "parameters":
+            assert 1 <= len(case["parameters"]) <= 3
+        steps = [op for op in ops if op[0] == "step"]
+        assert 1 <= len(steps) <= 6
+        if kind == "steps":
+            assert all(op[2] in STEP_SIZES or math.isnan(op[2]) for op in steps)
+        else:
+            assert all(op[2] == 1e-3 for op in steps)
+        if kind != "order":
+            assert all(op[1] is None for op in steps) and ops[0][0] != "step_before_init"
+        states = [op for op in ops if op[0] == "state_bytes"]
+        assert len(states) == (kind == "state")
+        if states:
+            assert states[0][1] in STATE_VARIANTS and states[0][3] == "Derivator" and 0 <= states[0][2] < 2 ** 31
+        assert case["start_time"] in START_TIMES or math.isnan(case["start_time"])
+        if kind != "start":
+            assert case["start_time"] == 0.0
+        if kind != "lifecycle":
+            assert case["guid"] == "own"
+        if kind == "inputs":
+            values = [op[2] for op in ops if op[0] == "set"]
+            assert values and all(isinstance(v, float) for v in values)
+        if kind not in ("inputs", "sets"):
+            for op in ops:
+                if op[0] == "set":
+                    assert op[2] not in HOSTILE_REALS[6:] and math.isfinite(op[2]), op
+
+
+def test_the_summary_counts_each_outcome_per_fmu_and_kind_and_in_all():
+    cases = [({"model": "A", "kind": "steps"}, "ok"), ({"model": "A", "kind": "steps"}, "refused"),
+             ({"model": "A", "kind": "state"}, "refused"), ({"model": "B", "kind": "steps"}, "crash")]
+    results = [CaseResult(case, outcome) for case, outcome in cases]
+    table = summary(results)
+    zero = dict.fromkeys(OUTCOMES, 0)
+    assert table == {("A", "steps"): {**zero, "ok": 1, "refused": 1}, ("A", "all"): {**zero, "ok": 1, "refused": 2},
+                     ("A", "state"): {**zero, "refused": 1}, ("B", "steps"): {**zero, "crash": 1},
+                     ("B", "all"): {**zero, "crash": 1}}
+    lines = markdown_summary(results).splitlines()
+    assert lines[0] == "| FMU | kind | cases | ok | refused | fatal | violation | crash | hang |"
+    assert lines[2:] == ["| A | **all** | 3 | 1 | 2 | 0 | 0 | 0 | 0 |", "| A | state | 1 | 0 | 1 | 0 | 0 | 0 | 0 |",
+                         "| A | steps | 2 | 1 | 1 | 0 | 0 | 0 | 0 |", "| B | **all** | 1 | 0 | 0 | 0 | 0 | 1 | 0 |",
+                         "| B | steps | 1 | 0 | 0 | 0 | 0 | 1 | 0 |"]

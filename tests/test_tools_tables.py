@@ -1,0 +1,89 @@
+"""scenarios/studies/tools.py's numbers without running a tool (its own tests are of the slow
+kind): a tool's run at 0.5 ms read at the scene's 2 ms communication points, the metrics of
+those rows against scene_metrics of the same rows taken by index, and the comparison tables'
+ratios and CPU figures against the numbers computed here (issue 31: a second sample time,
+values compared with an independent computation)."""
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from fmus.ssp.run import SspRun
+from scenarios.run.metrics import scene_metrics
+from scenarios.scenes import get_scene
+from scenarios.studies import tools
+
+H = 2e-3
+
+
+def _scene():
+    scene = get_scene("bench_circle_TCMDx")
+    return replace(scene, system=replace(scene.system, step=H, stop_time=0.2), window=(0.05, 0.15))
+
+
+def _run(error=None, end=0.2):
+    """A tool's run at 0.5 ms, its times summed as t + h (off k h by ulps); package signals."""
+    n = int(round(end / 5e-4)) + 1
+    t = np.cumsum(np.full(n, 5e-4)) - 5e-4
+    signals = {"plant.x": 0.01 * np.sin(7 * t), "plant.y": 0.1 + 0.002 * t, "traj.x_d": 0.01 * np.sin(7 * t + 0.01),
+               "traj.y_d": np.full(n, 0.1), "ctrl.tau1": 0.02 * np.cos(t), "ctrl.tau2": -0.01 + t,
+               "plant.q1": t}
+    return SspRun(t, signals, "fmpy", wall_s=0.8, error=error, extra={"cpu_s": 0.5})
+
+
+COLUMNS = {"plant.x": "x", "plant.y": "y", "traj.x_d": "x_d", "traj.y_d": "y_d", "ctrl.tau1": "tau1",
+           "ctrl.tau2": "tau2", "plant.q1": "q1"}
+
+
+def test_a_tools_finer_rows_are_read_at_the_scenes_2ms_points():
+    """Every 4th row of the 0.5 ms run (101 of 401): its metrics are scene_metrics of those rows.
+    Catches the rows read at the tool's own step, at 1 ms (the default), or by exact equality
+    of the summed times (none would match), a column not among the metric's kept."""
+    scene, run = _scene(), _run()
+    got = tools.tool_metrics(scene, run, COLUMNS)
+    rows = np.arange(0, 401, 4)
+    data = {"t": run.time[rows], **{name: run[signal][rows] for signal, name in COLUMNS.items() if name != "q1"}}
+    expected = scene_metrics(scene, data, 0.8, True)
+    assert got["completed"] is True and got["simulated_s"] == pytest.approx(0.2, abs=1e-12)
+    for key in ("e_ef_mm", "tau_ef_Nm", "e_max_mm", "realtime_factor"):
+        assert got[key] == pytest.approx(expected[key], rel=1e-12), key
+    assert got["e_ef_mm"] > 0.0
+
+
+def test_a_run_that_stopped_early_or_failed_is_not_completed():
+    scene = _scene()
+    assert tools.tool_metrics(scene, _run(end=0.1), COLUMNS)["completed"] is False
+    assert tools.tool_metrics(scene, _run(error="fmi2Error"), COLUMNS)["completed"] is False
+
+
+def _results():
+    ours = {"e_ef_mm": 0.5, "tau_ef_Nm": 0.02}
+    fmpy = {"e_ef_mm": 0.55, "tau_ef_Nm": 0.021, "completed": True, "cpu_s": 0.3, "simulated_s": 0.2, "step": H}
+    ecos = {"e_ef_mm": 0.45, "tau_ef_Nm": 0.019, "completed": True, "cpu_s": 0.6, "simulated_s": 0.2, "step": 1e-3}
+    return {("default", "bench_circle_TCMDx"): [("fmpy", fmpy, ours, None), ("ecos", ecos, ours, None),
+                                                ("libcosim", None, ours, "RuntimeError: no")]}
+
+
+def test_the_comparison_table_gives_each_tools_ratios_step_and_cpu():
+    """e_ef 0.55 against ours 0.5: 1.1000; CPU 0.3 s over 200 simulated ms: 1500 µs a ms.
+    Catches a ratio inverted, the CPU per ms off by 1000, a failed tool's row lost."""
+    lines = tools.table(_results()).splitlines()
+    assert lines[2] == "| default | bench_circle_TCMDx | fmpy | 2 | 0.55 (0.5) | 1.1000 | 1.0500 | yes | 1500 |"
+    assert lines[3] == "| default | bench_circle_TCMDx | ecos | 1 | 0.45 (0.5) | 0.9000 | 0.9500 | yes | 3000 |"
+    assert lines[4] == "| default | bench_circle_TCMDx | libcosim | – | – (0.5) | – | – | no: RuntimeError: no | – |"
+
+
+def test_the_summary_gives_each_tools_ranges_over_the_scenes():
+    results = _results()
+    results[("default", "bench_triangle_TCMDx")] = [
+        ("fmpy", {"e_ef_mm": 0.8, "tau_ef_Nm": 0.03, "completed": True, "cpu_s": 0.5, "simulated_s": 0.2,
+                  "step": H}, {"e_ef_mm": 1.0, "tau_ef_Nm": 0.03}, None)]
+    lines = tools.summary(results).splitlines()
+    fmpy = next(line for line in lines if line.startswith("| default | fmpy |"))
+    assert fmpy == "| default | fmpy | 0.8000-1.1000 | 1.0000-1.0500 | 2/2 | 2 | 0.2 | 1500-2500 (2000) |"
+    libcosim = next(line for line in lines if line.startswith("| default | libcosim |"))
+    assert libcosim == "| default | libcosim | – | – | 0/1 | – | – | – |"
+    assert math.isnan(tools._ratio(1.0, 0.0)) and math.isnan(tools._ratio(None, 1.0))

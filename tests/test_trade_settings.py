@@ -1,0 +1,81 @@
+"""scenarios/studies/trade/settings.py: each setting of the trade study applied to a bench scene
+changes what its text says and nothing else; the sample-time settings at 2 and 4 ms; settings
+that do not apply give None (issue 31: sample times other than 1 ms, switches off their
+defaults; the scenes compared as data, nothing runs)."""
+from __future__ import annotations
+
+import pytest
+
+from scenarios.scenes import get_scene
+from scenarios.scenes.transforms import SAMPLE_TIME_MODELS
+from scenarios.studies.trade.settings import SAMPLE_TIMES, settings
+
+SCENE = get_scene("bench_circle_TCMDx")
+BY_NAME = {s.name: s for s in settings()}
+
+
+def _differences(before, after):
+    """{component: (parameters changed or added, substeps if changed)} between two scenes."""
+    old = {c.name: c for c in before.system.components}
+    found = {}
+    for c in after.system.components:
+        o = old.get(c.name)
+        if o is None or o.model != c.model:
+            found[c.name] = "new"
+            continue
+        changed = {k: v for k, v in c.parameters.items() if o.parameters.get(k, object()) != v}
+        if changed or c.substeps != o.substeps:
+            found[c.name] = (changed, c.substeps)
+    return found
+
+
+def test_the_names_are_unique_and_the_quick_sweep_is_part_of_the_full_one():
+    names = [s.name for s in settings()]
+    assert len(names) == len(set(names)) and names[0] == "defaults"
+    assert {s.name for s in settings(quick=True)} <= set(names)
+    assert {s.kind for s in settings()} == {"accuracy", "fidelity"}
+
+
+@pytest.mark.parametrize("name, expected", [
+    ("plant rk4 substeps=4", {"plant": ({"substeps": 4}, 1)}),
+    ("plant dopri5 rtol=1e-10", {"plant": ({"method": "dopri5", "rtol": 1e-10, "atol": 1e-13}, 1)}),
+    ("plant multirate 4", {"plant": ({}, 4)}),
+    ("drive euler", {"drive1": ({"method": "euler"}, 1), "drive2": ({"method": "euler"}, 1)}),
+    ("group 8", {"drive1": ({}, 8), "drive2": ({}, 8), "plant": ({}, 8)}),
+    ("torque end", {"drive1": ({"torque_output": "end"}, 1), "drive2": ({"torque_output": "end"}, 1)}),
+    ("table 2.5 mm", {"ctrl": ({"grid_step": 0.0025}, 1)}),
+    ("viscous b=1e-7", {"drive1": ({"b": 1e-7}, 1), "drive2": ({"b": 1e-7}, 1)}),
+    ("no viscous friction", {"drive1": ({"b": 0.0, "b_design": 0.0001226}, 1),      # the controller keeps
+                             "drive2": ({"b": 0.0, "b_design": 0.0002039}, 1)}),    # the motors' b (Table 16, 18)
+])
+def test_a_setting_changes_what_it_says_and_nothing_else(name, expected):
+    """Catches a setting applied to the wrong component, its sub-steps given to the others,
+    or a parameter of another setting."""
+    built = BY_NAME[name].build(SCENE)
+    assert _differences(SCENE, built) == expected
+    assert built.system.step == SCENE.system.step and built.system.connections == SCENE.system.connections
+
+
+@pytest.mark.parametrize("T", SAMPLE_TIMES)
+def test_the_sample_time_settings_step_and_sample_everything_at_T(T):
+    """Both sample times (2 and 4 ms) and the ideal-sensors variant: the master's step and every
+    designed component's T; the variant has no drives or derivator and the same T."""
+    assert T in (2e-3, 4e-3)
+    built = BY_NAME[f"sample {1e3 * T:g} ms"].build(SCENE)
+    assert built.system.step == T and built.system.stop_time == SCENE.system.stop_time
+    designed = [c for c in built.system.components if c.model in SAMPLE_TIME_MODELS]
+    assert len(designed) == 6 and all(c.parameters["T"] == T for c in designed)
+    ideal = BY_NAME[f"ideal + exact sensors, sample {1e3 * T:g} ms"].build(SCENE)
+    assert ideal.system.step == T
+    models = [c.model for c in ideal.system.components]
+    assert "DCMotorDrive" not in models and "Derivator" not in models
+    assert all(c.parameters["T"] == T for c in ideal.system.components if c.model in SAMPLE_TIME_MODELS)
+
+
+def test_settings_that_do_not_apply_give_none():
+    """The thesis' simulation scene has no drives and is no bench scene."""
+    thesis = get_scene("thesis_sim_circle")
+    for name in ("drive euler", "group 4", "drives in plant, substeps=8", "no observer", "torque end"):
+        assert BY_NAME[name].build(thesis) is None, name
+    assert BY_NAME["plant rk4 substeps=4"].build(thesis) is not None
+    assert BY_NAME["jacobi"].coupling == "jacobi" and BY_NAME["fmu"].mode == "fmu"
