@@ -24,8 +24,9 @@ def test_a_task_that_cannot_start_is_a_result_with_its_error_and_no_numbers(tmp_
     blocked.write_text("")
     result = run_task(Task("k", _short(), out_dir=str(blocked / "run")))
     assert result["scene"] == "bench_circle_TCMDx" and result["completed"] is False and result["settled"] is False
-    assert result["error"].startswith("WriteError: ")
-    assert f"output directory {blocked / 'run'} is not writable" in result["error"]
+    assert result["outcome"] == "failed" and result["error"]["kind"] == "failed"
+    assert result["error"]["message"].startswith("WriteError: ")
+    assert f"output directory {blocked / 'run'} is not writable" in result["error"]["message"]
     for key in ("e_ef_mm", "tau_ef_Nm", "e_ss_mm", "e_ss_1s_mm", "t_settle_s", "wall_s"):
         assert math.isnan(result[key]), key
 

@@ -16,10 +16,25 @@ HEADER = sweep.columns(["drive1.R", "plant.l0"])
 
 
 def _row(sample, value, completed=True, error=""):
+    """A row; a failed one carries a refusal record's fields (a completed one has none: NaN,
+    None or "")."""
+    record = {"outcome": "refused", "error_instance": "plant", "error_time": 0.25 + value,
+              "error_variable": "q1", "error_value": -1.5e300, "error_unit": "rad", "error_code": 3,
+              "error_reason": "absurd"} if error else {
+              "outcome": "completed", "error_instance": "", "error_time": math.nan, "error_variable": "",
+              "error_value": math.nan, "error_unit": "", "error_code": None, "error_reason": ""}
     return {"sample": sample, "drive1.R": 1.1 + value, "plant.l0": 0.05 - value / 1e3, "e_ef_mm": 0.5 + value,
             "tau_ef_Nm": 0.02 * (1 + value), "e_ss_mm": math.nan if sample == 2 else 0.1 * value,
-            "e_ss_1s_mm": 0.3, "t_settle_s": 1.0 + value, "completed": completed, "error": error,
+            "e_ss_1s_mm": 0.3, "t_settle_s": 1.0 + value, "completed": completed, **record, "error": error,
             "wall_s": 3.0 + sample}
+
+
+def _same(a, b) -> bool:
+    """Rows equal value for value, NaN equal to NaN (a completed row's error time and value)."""
+    return len(a) == len(b) and all(
+        x.keys() == y.keys() and all(x[k] == y[k] or (isinstance(x[k], float) and math.isnan(x[k])
+                                                     and isinstance(y[k], float) and math.isnan(y[k])) for k in x)
+        for x, y in zip(a, b))
 
 
 def _write(path, rows):
@@ -31,7 +46,8 @@ def _write(path, rows):
 
 def test_the_header_is_sample_parameters_metrics_then_the_tail():
     assert HEADER == ["sample", "drive1.R", "plant.l0", "e_ef_mm", "tau_ef_Nm", "e_ss_mm", "e_ss_1s_mm",
-                      "t_settle_s", "completed", "error", "wall_s"]
+                      "t_settle_s", "completed", "outcome", "error_instance", "error_time", "error_variable",
+                      "error_value", "error_unit", "error_code", "error_reason", "error", "wall_s"]
 
 
 def test_a_torn_last_row_is_left_out_and_cut_off_only_when_repairing(tmp_path):
@@ -43,13 +59,14 @@ def test_a_torn_last_row_is_left_out_and_cut_off_only_when_repairing(tmp_path):
     _write(path, rows)
     whole = path.read_bytes()
     path.write_bytes(whole + b"2,1.5,0.0")
-    assert sweep.read_rows(path, HEADER) == rows
+    assert _same(sweep.read_rows(path, HEADER), rows)
     assert path.read_bytes() == whole + b"2,1.5,0.0"
-    assert sweep.read_rows(path, HEADER, repair=True) == rows
+    assert _same(sweep.read_rows(path, HEADER, repair=True), rows)
     assert path.read_bytes() == whole
     _write(path, [_row(3, 0.5, completed=False, error="refused")])
     back = sweep.read_rows(path, HEADER)
-    assert back[:2] == rows and back[2]["sample"] == 3 and back[2]["error"] == "refused"
+    assert _same(back[:2], rows) and back[2]["sample"] == 3 and back[2]["error"] == "refused"
+    assert _same(back[2:], [_row(3, 0.5, completed=False, error="refused")])
     assert back[2]["completed"] is False and back[2]["wall_s"] == 6.0
 
 
