@@ -11,8 +11,8 @@ This module packs :class:`~plant.presets.FiveBarParams` into the C struct ``pc_f
 (counter-masses, seed 001 (55)-(64), absorbed into each chain's links by
 :func:`composite_link`), reads every buffer offset from the library (:func:`kernels.layout`),
 and offers :class:`FastKernel`, the simulator's binding with its buffers' addresses computed
-once.  ``tests/test_plant_dynamics.py`` holds the kernel against the general algorithm
-(:mod:`plant.serial`, :mod:`plant.parallel`), ``tests/test_kernels_fivebar.py`` checks energy,
+once.  ``tests/plant/test_plant_dynamics.py`` holds the kernel against the general algorithm
+(:mod:`plant.serial`, :mod:`plant.parallel`), ``tests/kernels/test_kernels_fivebar.py`` checks energy,
 refusals and layouts.
 """
 from __future__ import annotations

@@ -1,11 +1,12 @@
 """Many runs in one process do not grow its memory (benchmarks/memory_loop.py runs 1000)."""
 import sys
 from dataclasses import replace
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+from tests.support.paths import ROOT
+
+sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from memory_loop import loop  # noqa: E402
 

@@ -5,17 +5,12 @@ trajectories only to the accuracy MuJoCo's soft ``connect`` closure allows
 (measured 3e-8 m to 3e-7 m over 0.4 s with RK4 at 1 ms; asserted at 1e-6 m).
 """
 
-import sys
-from pathlib import Path
-
 import mujoco  # in the test extra: a missing MuJoCo is a failure, not a skip
 import numpy as np
 import pytest
 
-# Repository root on the path so that `tests.support` and `benchmarks` import under any pytest invocation.
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from benchmarks import mujoco_5r  # noqa: E402
-from tests.support import lagrange5r as ref  # noqa: E402
+from benchmarks import mujoco_5r
+from tests.support import lagrange5r as ref
 
 pytestmark = [pytest.mark.tools]
 

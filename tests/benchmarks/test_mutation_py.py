@@ -88,7 +88,7 @@ def test_the_draw_is_seeded_and_distinct(monkeypatch):
 
 def test_the_map_finds_direct_importers_and_modules_named_in_strings():
     mapping = mp.test_map()
-    assert mapping["fmus.ssp.export"][:2] and "tests/test_oracles_export.py" in mapping["fmus.ssp.export"]
+    assert mapping["fmus.ssp.export"][:2] and "tests/fmus/export/test_oracles_export.py" in mapping["fmus.ssp.export"]
     assert mapping["fmus.slaves.parcosim_derivator"]          # loaded by importlib from a "fmus.slaves." name
     assert all(not t.startswith(mp.NOT_RUN) for tests in mapping.values() for t in tests)
     assert all(len(tests) <= mp.MOST_TESTS for tests in mapping.values())

@@ -18,8 +18,8 @@ import pytest
 
 import scenarios.run.runner as run_module
 from parcosim.cli import EXIT_INTERRUPTED, main
+from tests.support.paths import ROOT
 
-ROOT = Path(__file__).resolve().parents[1]
 SCENE = "bench_circle_TCMDx"
 
 

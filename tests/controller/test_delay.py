@@ -10,8 +10,8 @@ from controller.strategies import get_strategy
 from fmus.cosim.master import simulate
 from plant import get_preset
 from scenarios.scenes.thesis import Fidelity, bench
-from tests.fmi_support import FmuInstance
-from tests.test_fmu_controller import SMALL_GRID, controller_inputs
+from tests.support.fmi_support import FmuInstance
+from tests.fmus.slaves.test_fmu_controller import SMALL_GRID, controller_inputs
 
 pytestmark = [pytest.mark.slow]
 

@@ -62,11 +62,11 @@ def test_trajectory_refuses_negative_time_and_is_continuous_at_its_end(trajector
 
 @pytest.mark.parametrize("yaw", [True, False])
 def test_balance_kernel_is_the_observer_and_lqr_written_with_numpy(yaw):
-    # The BalanceController object against the numpy oracle (tests/test_kernels_wheeled.py),
+    # The BalanceController object against the numpy oracle (tests/kernels/test_kernels_wheeled.py),
     # on the real design.
     from controller import fastbalance
     from controller.balance import BalanceController, BalanceSettings, design_balance, get_route
-    from tests.test_kernels_wheeled import numpy_balance
+    from tests.kernels.test_kernels_wheeled import numpy_balance
 
     design = design_balance(BalanceSettings(yaw=yaw, v_battery=2.0))
     controller = BalanceController(design, get_route("forward_turn"))

@@ -1,6 +1,6 @@
 """The 5R's C kernel (kernels/src/fivebar.c) against oracles: energy conservation, the loop
 closure, refusals that change nothing, and the C structs' layout as Python packs them.
-(tests/test_plant_dynamics.py holds it against the general algorithm, state by state.)"""
+(tests/plant/test_plant_dynamics.py holds it against the general algorithm, state by state.)"""
 from __future__ import annotations
 
 import ctypes
@@ -187,7 +187,7 @@ def test_the_simulator_refuses_with_one_record_and_its_message():
 def test_the_terms_function_is_the_inverse_terms():
     """pc_fivebar_terms_of (the position law's terms function, fmus/cosim/compiled_adapters.py) reads its model
     as the parameter buffer and fills the inverse terms (held to the general algorithm in
-    tests/test_controller_fast.py): argument order and layout."""
+    tests/controller/test_controller_fast.py): argument order and layout."""
     sim, kernel = _plant()
     q, dq = sim.y[:7].copy(), sim.y[7:].copy() + 0.3
     expected, got = np.empty(fast5r.INVERSE_SIZE), np.full(fast5r.INVERSE_SIZE, np.nan)

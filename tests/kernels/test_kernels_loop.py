@@ -1,7 +1,7 @@
 """The compiled mode's C loop (kernels/src/loop.c) on members whose I/O steps are ctypes
 callbacks: stepping order, sub-steps and their start times, the slot copies, the recorded
 rows, and where a declining member stops it.  Runs under the sanitizers too
-(tests/test_sanitizers.py), which checks the loop's indexing of the plan's arrays."""
+(tests/kernels/test_sanitizers.py), which checks the loop's indexing of the plan's arrays."""
 from __future__ import annotations
 
 import ctypes

@@ -10,7 +10,6 @@ import ctypes
 import math
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,8 +18,8 @@ import kernels
 from controller import law
 from motor import CurrentObserver, kernel as motor_kernel, motor1
 from plant import IntegratorSettings, PlantSimulator, fast5r, get_preset
+from tests.support.paths import ROOT
 
-ROOT = Path(__file__).resolve().parent.parent
 DT = 1e-3
 #: Two unlike motors (joint, R, L, kt, ke, b, mu, omega_eps): every column differs.
 MOTORS = np.array([[0.0, 1.1, 6.7e-4, 0.056, 0.051, 1.2e-4, 0.04, 0.5],
@@ -80,14 +79,14 @@ def test_the_io_step_writes_each_motors_torque_and_nothing_past_them():
 def test_the_io_step_reads_no_motor_row_past_the_last_under_the_sanitizer(tmp_path):
     """The step above with the motor rows in a buffer of their own (malloc'd, ASan's
     redzone right behind): the sanitizer build aborts on a read past it."""
-    sanitizers = pytest.importorskip("tests.test_sanitizers")
+    sanitizers = pytest.importorskip("tests.kernels.test_sanitizers")
     if sanitizers.ASAN is None:
         pytest.skip("the C compiler has no AddressSanitizer runtime")
     from kernels import build
 
     library = build.build(tmp_path / "libparcosim_kernels.so", sanitize=True)
     script = ("import ctypes, numpy as np, kernels; from plant import fast5r; "
-              "from tests.test_oracles_kernels import _moving_state, MOTORS, VOLTAGES; "
+              "from tests.kernels.test_oracles_kernels import _moving_state, MOTORS, VOLTAGES; "
               "kernel, z = _moving_state(); motors = np.array(MOTORS); "
               "ctx = kernel.context(z, motors, VOLTAGES.copy(), first=2); x = np.zeros(2 + 11 + 2); "
               "r = kernels.Refusal(); "

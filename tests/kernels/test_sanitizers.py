@@ -1,7 +1,7 @@
 """The C kernels under AddressSanitizer and UndefinedBehaviorSanitizer.
 
 The kernels' library is built again with ``-fsanitize=address,undefined`` (kernels/build.py
-``--sanitize``), and the kernels' own tests (``tests/test_kernels_*.py``, the compiled loop's
+``--sanitize``), and the kernels' own tests (``tests/kernels/test_kernels_*.py``, the compiled loop's
 included) run in a subprocess that loads that build
 (``$PARCOSIM_KERNELS_LIB``) with the ASan runtime preloaded: an out-of-bounds access, a use
 after free or undefined behaviour (signed overflow, a misaligned load, a bad shift) in any
@@ -20,8 +20,8 @@ from pathlib import Path
 import pytest
 
 from kernels import build
+from tests.support.paths import ROOT
 
-ROOT = Path(__file__).resolve().parent.parent
 
 
 def _runtime(name: str) -> str | None:

@@ -2,7 +2,6 @@
 
 import json
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,8 +10,9 @@ from motor import (DATASHEET_KT_OVER_KE, THESIS_SETTLING_TIMES, current_transfer
                    inertia_from_pole, motor1, motor2, normal_equations_electrical,
                    normal_equations_friction, read_motor_csv)
 from motor.cli import identify_main
+from tests.support.paths import ROOT
 
-DATA = Path(__file__).resolve().parents[1] / "motor" / "data"
+DATA = ROOT / "motor" / "data"
 
 
 def thesis_data(name):

@@ -14,7 +14,7 @@ from plant import ACCURATE, IntegratorSettings, PlantSimulator, get_preset
 from plant import fivebar
 from plant.serial import chain_dynamics
 from tests.support import lagrange5r as ref
-from tests.test_plant_dynamics import reference_params
+from tests.plant.test_plant_dynamics import reference_params
 
 pytestmark = [pytest.mark.slow]
 
@@ -147,7 +147,7 @@ def test_zero_counter_masses_leave_the_fast_kernel_bit_identical():
 def test_fmus_take_the_counter_masses(built_fmus):
     """FiveBarPlant and ActuatedFiveBarPlant with counter_mass1/2 under gravity: the same
     plant as in-process (bit for bit), at rest without torque; m0 with them is refused."""
-    from tests.fmi_support import FmuInstance
+    from tests.support.fmi_support import FmuInstance
 
     parameters = {"preset": "bench", "x0": 0.03, "y0": 0.16, "gravity_x": GRAVITY[0], "gravity_y": GRAVITY[1],
                   "gravity_z": GRAVITY[2], "counter_mass1": COUNTER[0], "counter_mass2": COUNTER[1]}

@@ -6,17 +6,12 @@ energy and work balances, the world-frame conventions of the brief ../shared/spe
 tolerance-refinement study of its integrator.
 """
 
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 import sympy as sp
 from sympy.physics import mechanics as me
 
-# Repository root on the path so that `tests.support` imports under any pytest invocation.
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from tests.support import lagrange5r as ref  # noqa: E402
+from tests.support import lagrange5r as ref
 
 
 def _bench_with_tip_mass_and_gravity():

@@ -1,14 +1,11 @@
 """The spatial Delta-like spec (plant/specs/delta3.toml) against MuJoCo: a model generated
 from the same spec (benchmarks/mujoco_spec.py), Newton-Euler dynamics with the loop
 closures as equality constraints, shares no formulation with plant/."""
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 mujoco = pytest.importorskip("mujoco")
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from benchmarks import mujoco_spec  # noqa: E402
 from plant import spec as plant_spec  # noqa: E402
 from plant.parallel import mechanism_state  # noqa: E402

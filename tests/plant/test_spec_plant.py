@@ -11,7 +11,7 @@ from plant import IntegratorSettings, PlantSimulator, get_preset
 from plant import spec as plant_spec
 from plant.parallel import inverse_dynamics_terms
 from plant.specsim import AssemblyError, SpecSimulator, assemble
-from tests.fmi_support import FmuInstance
+from tests.support.fmi_support import FmuInstance
 
 pytestmark = [pytest.mark.slow]
 

@@ -11,14 +11,13 @@ import argparse
 import importlib.util
 import itertools
 import re
-from pathlib import Path
 
 import pytest
 
 from motor.cli import _parser as motor_parser
 from parcosim.cli import _parser
+from tests.support.paths import ROOT
 
-ROOT = Path(__file__).resolve().parents[1]
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 #: Paths that name what a command writes or what an FMU holds, not files of the repository.
 OUTPUT_PREFIXES = ("out/", "fmus/build", "resources/", "binaries/", "documentation/", "sources/")

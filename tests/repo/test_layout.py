@@ -16,11 +16,10 @@ import ast
 import importlib.util
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
+from tests.support.paths import ROOT
 
-ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("kernels", "motor", "plant", "controller", "fmus", "scenarios", "parcosim")
 
 #: Bottom first: a module may import from its own layer (if that closes no cycle) and below.
@@ -101,7 +100,7 @@ def group_of(module: str) -> str:
     """The longest prefix of :data:`LAYERS` that ``module`` is in."""
     matches = [g for g in LAYER if module == g or module.startswith(g + ".")]
     if not matches:
-        raise KeyError(f"{module} ({MODULES[module].relative_to(ROOT)}) is in no layer of tests/test_layout.py")
+        raise KeyError(f"{module} ({MODULES[module].relative_to(ROOT)}) is in no layer of tests/repo/test_layout.py")
     return max(matches, key=len)
 
 

@@ -14,7 +14,6 @@ import dataclasses
 import sys
 import warnings
 import zipfile
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -24,8 +23,9 @@ from fmus.cosim.system import Component, Connection, System
 from parcosim.cli import main
 from scenarios.scenes.catalogue import get_scene
 from scenarios.scenes.transforms import with_fmu_files
+from tests.support.paths import TESTS
 
-sys.path.insert(0, str(Path(__file__).parent / "support" / "cfmu"))
+sys.path.insert(0, str(TESTS / "support" / "cfmu"))
 from build import build_c_fmu, compiler  # noqa: E402
 
 pytestmark = [pytest.mark.slow, pytest.mark.fmu]

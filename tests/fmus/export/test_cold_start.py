@@ -20,7 +20,6 @@ from fmus.slave import designs
 
 pytestmark = [pytest.mark.slow, pytest.mark.fmu]
 
-ROOT = Path(__file__).resolve().parent.parent
 #: Packages an FMU started with its parameters as built must not import (they are for
 #: designs computed ahead, plots and the JIT that the C kernels replace).
 HEAVY = ("control", "scipy.signal", "matplotlib", "numba")

@@ -21,11 +21,11 @@ import pytest
 
 from fmus.export.bundle import PACKAGES, REWRITTEN, bundle_name, rewrite_imports
 from fmus.export.wrapper import compiled_wrapper
-from tests.test_wrapper import run_case, unzip
+from tests.fmus.export.test_wrapper import run_case, unzip
+from tests.support.paths import ROOT
 
 pytestmark = [pytest.mark.fmu]
 
-ROOT = Path(__file__).resolve().parent.parent
 #: The names the bundle must never add to an importer's sys.modules.
 PLAIN = ("plant", "motor", "controller", "fmus", "scenarios", "parcosim")
 needs_wrapper = pytest.mark.skipif(compiled_wrapper(quiet=True) is None,
@@ -212,7 +212,7 @@ def test_two_fmus_built_from_different_versions_coexist_in_one_process(built_fmu
     result = run_python(f"""
         import json, sys
         sys.path.insert(0, {str(ROOT / 'tests')!r})
-        from fmi_support import FmuInstance
+        from tests.support.fmi_support import FmuInstance
         a = FmuInstance({str(built_fmus['Trajectory'])!r}, {{"kind": "hold"}}, "a")
         b = FmuInstance({str(other_version)!r}, {{"kind": "hold"}}, "b")
         for _ in range(3):
@@ -400,7 +400,7 @@ def test_calls_out_of_order_are_refused_and_change_nothing(built_fmus, tmp_path)
 
 def test_in_process_the_slave_refuses_the_same_calls():
     from fmus.slave.base import FmiError
-    from tests.test_extremes import make_slave
+    from tests.fmus.slave.test_extremes import make_slave
 
     slave = make_slave("Derivator")
     with pytest.raises(FmiError, match="fmi2ExitInitializationMode refused in Step Mode"):

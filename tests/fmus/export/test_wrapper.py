@@ -18,8 +18,8 @@ from pathlib import Path
 import pytest
 
 from fmus.export.wrapper import compiled_wrapper, has_wrapper, install_wrapper
+from tests.support.paths import ROOT
 
-ROOT = Path(__file__).resolve().parent.parent
 pytestmark = [pytest.mark.fmu, pytest.mark.skipif(compiled_wrapper(quiet=True) is None,
                                                    reason="no C compiler: the FMUs keep pythonfmu's wrapper")]
 

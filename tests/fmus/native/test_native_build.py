@@ -15,7 +15,7 @@ from fmpy.validation import validate_fmu
 
 from fmus.native.build import compile_command, platform_folder
 from fmus.native.models import NATIVE
-from support.fmu_calls import Driver
+from tests.support.fmu_calls import Driver
 
 MODELS = sorted(NATIVE)
 #: With the native ClosedLoop of a scene (``export-fmu --native``, the fixture ``native_loop_fmu``).

@@ -17,7 +17,7 @@ from typing import Callable
 import pytest
 
 from controller.balance import BalanceSettings
-from support.fmu_calls import Driver
+from tests.support.fmu_calls import Driver
 
 BALANCE_T = BalanceSettings().T
 #: The bench twin's drive options (scenarios/twin.py): LuGre friction with stiction, PWM, current noise and offset.

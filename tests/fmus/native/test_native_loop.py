@@ -14,12 +14,12 @@ import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
 
-from conftest import LOOP_SCENE
+from tests.conftest import LOOP_SCENE
 from fmus.native import state_bytes
 from scenarios.metrics import scene_metrics
 from scenarios.run import run_scene
 from scenarios.scenes import get_scene
-from support.fmu_calls import Driver
+from tests.support.fmu_calls import Driver
 
 H = 1e-3
 

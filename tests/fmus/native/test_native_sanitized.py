@@ -11,13 +11,13 @@ import json
 import subprocess
 import sys
 import zipfile
-from pathlib import Path
 
 import pytest
 
 from fmus.native.build import compile_command, platform_folder
 from fmus.native.models import NATIVE
-from test_sanitizers import ASAN, _sanitized_env
+from tests.kernels.test_sanitizers import ASAN, _sanitized_env
+from tests.support.paths import ROOT, TESTS
 
 SANITIZE = ("-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer", "-g")
 pytestmark = pytest.mark.skipif(ASAN is None, reason="the C compiler has no AddressSanitizer runtime")
@@ -33,12 +33,12 @@ def test_native_fmu_survives_careless_calls_and_forged_states_under_asan(model, 
     binary = folder / "binaries" / platform_folder() / f"{model}.so"
     command = compile_command(folder / "sources", binary)
     subprocess.run([command[0], *SANITIZE, *command[1:]], check=True, capture_output=True)
-    worker = Path(__file__).parent / "support" / "native_fuzz.py"
+    worker = TESTS / "support" / "native_fuzz.py"
     env = _sanitized_env(binary)
-    env["PYTHONPATH"] = str(Path(__file__).resolve().parent.parent)
+    env["PYTHONPATH"] = str(ROOT)
     rows = []
     if model == "PositionController":   # steps the law runs: on the table, then off it (the exact fallback)
-        from test_native_equality import _controller_inputs
+        from tests.fmus.native.test_native_equality import _controller_inputs
 
         inputs = _controller_inputs()
         rows = [tmp_path / "inputs.json"]

@@ -14,7 +14,6 @@ import math
 import re
 import shutil
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -26,10 +25,11 @@ from fmus.slave.base import FmiError, check_experiment_times
 from plant import IntegratorSettings, PlantSimulator, get_preset
 from plant.wheeled import MAX_SUBSTEPS as WHEELED_MAX_SUBSTEPS
 from scenarios.scenes.catalogue import get_scene
-from tests.fmi_support import FmuInstance
-from tests.test_extremes import make_slave, set_variables
+from tests.support.fmi_support import FmuInstance
+from tests.fmus.slave.test_extremes import make_slave, set_variables
+from tests.support.paths import ROOT
 
-SPECS = Path(__file__).resolve().parent.parent / "plant" / "specs"
+SPECS = ROOT / "plant" / "specs"
 GRAVITY = {"gravity_y": -9.81}
 #: The general kernel's plants: (model, parameters) with the spec's name for SpecPlant.
 GENERAL = [("FiveBarPlant", {"kernel": "general", **GRAVITY}),

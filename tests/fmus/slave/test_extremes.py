@@ -25,7 +25,7 @@ from fmus.cosim.master import simulate
 from plant import ACCURATE, IntegratorSettings, PlantError, PlantSimulator, fivebar, get_preset
 from plant.simulator import BAUMGARTE_RK4_LIMIT, RESIDUAL_STOP
 from scenarios.scenes.thesis import Fidelity, bench, thesis_sim_circle
-from tests.fmi_support import FmuInstance
+from tests.support.fmi_support import FmuInstance
 
 H = 1e-3
 X1 = get_trajectory("triangle").start_point           # (-0.002, 0.108): the bench start (7.28)

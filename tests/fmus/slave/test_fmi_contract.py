@@ -2,7 +2,7 @@
 
 Each test checks one row of the table "The FMI calls under hostile use" in
 docs/extremes.md, on the slaves called as pythonfmu calls them (in process; the same calls
-through fmpy are in tests/test_hostile.py).
+through fmpy are in tests/fmus/hostile/test_hostile.py).
 """
 from __future__ import annotations
 
@@ -11,7 +11,6 @@ import subprocess
 import sys
 import textwrap
 import warnings
-from pathlib import Path
 
 import pytest
 from pythonfmu import Boolean, Integer, Real, String
@@ -19,10 +18,10 @@ from pythonfmu.enums import Fmi2Status
 
 from fmus.export.build import SLAVES
 from fmus.slave.base import MIN_STEP, FmiError
-from tests.test_extremes import GOOD, H, make_slave, real_outputs, set_variables, slave_class
+from tests.fmus.slave.test_extremes import GOOD, H, make_slave, real_outputs, set_variables, slave_class
+from tests.support.paths import ROOT
 
 MODELS = list(SLAVES)
-ROOT = Path(__file__).resolve().parents[1]
 
 
 def variables(slave, causality, kind=None):
@@ -260,7 +259,7 @@ def test_derivator_refuses_dbl_max_naming_the_input(value):
 
 
 def test_a_plant_step_that_would_take_over_the_limit_is_refused_at_initialisation():
-    """Counted, not timed (fmus/slave/budget.py; tests/test_call_limits.py covers every plant)."""
+    """Counted, not timed (fmus/slave/budget.py; tests/fmus/slave/test_call_limits.py covers every plant)."""
     slave = make_slave("FiveBarPlant", {"kernel": "general", "substeps": 10000})
     assert "kernel = 'general', substeps = 10000" in slave.error and "use substeps <=" in slave.error
     assert "needs 40000 right-hand-side evaluations" in slave.error
@@ -282,7 +281,7 @@ def test_two_controllers_initialised_from_two_threads_both_work(tmp_path):
     """In a fresh interpreter, where the law is not compiled yet."""
     code = textwrap.dedent("""
         import threading
-        from tests.test_extremes import make_slave
+        from tests.fmus.slave.test_extremes import make_slave
         slaves = [None, None]
         def init(k):
             slaves[k] = make_slave("PositionController")

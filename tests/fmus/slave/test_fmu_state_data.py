@@ -471,7 +471,7 @@ def test_a_state_whose_arrays_name_another_dtype_is_refused_and_changes_nothing(
 
 # --- through the FMI wrapper ---------------------------------------------------------------
 
-from test_fmu_state import system_fmus  # noqa: E402,F401 - the ClosedLoop and ControlChain FMUs (a fixture)
+from tests.fmus.slave.test_fmu_state import system_fmus  # noqa: E402,F401 - the ClosedLoop and ControlChain FMUs (a fixture)
 
 
 @pytest.mark.parametrize("model", ["ClosedLoop", "ControlChain"])

@@ -10,7 +10,7 @@ import pytest
 from pythonfmu import Real
 
 from fmus.slave.base import MAX_TIME, FmiError
-from tests.test_extremes import make_slave, slave_class
+from tests.fmus.slave.test_extremes import make_slave, slave_class
 
 
 def _vr(slave, name):

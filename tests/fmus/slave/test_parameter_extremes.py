@@ -36,8 +36,8 @@ from pythonfmu import Boolean, Integer, Real, String
 
 from fmus.systemfmu.cores import SYSTEM_FILE, qualified, system_to_dict
 from fmus.slave.registry import SLAVES
-from tests.fmi_support import FmuInstance
-from tests.test_extremes import GOOD, slave_class
+from tests.support.fmi_support import FmuInstance
+from tests.fmus.slave.test_extremes import GOOD, slave_class
 
 H = 1e-3
 #: Start time: where importers start, and where the models evaluate their first sample (a
@@ -246,7 +246,7 @@ def test_every_refusal_of_an_extreme_parameter_names_it_the_value_and_the_time(m
 
 # --- the system FMUs: every inner parameter is a parameter <instance>.<name> -----------------
 
-#: The scene inside the system FMUs (tests/test_fmu_state.py's ``system_fmus``).
+#: The scene inside the system FMUs (tests/fmus/slave/test_fmu_state.py's ``system_fmus``).
 SCENE = "bench_circle_TCMDx"
 #: The values the plant's parameters of the ControlChain are tried at (issue 30: "ControlChain
 #: with a bad plant parameter"); each case initialises a whole scene (about 0.1 s).

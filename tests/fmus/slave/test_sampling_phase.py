@@ -15,7 +15,7 @@ import pytest
 
 from fmus.cosim.backends import InProcessInstance
 from motor import get_motor_preset
-from tests.test_extremes import GOOD, set_variables, slave_class
+from tests.fmus.slave.test_extremes import GOOD, set_variables, slave_class
 
 T = 1e-3
 
@@ -298,7 +298,7 @@ def test_the_fmus_declare_their_period_and_fmpy_steps_by_it(model, sampled_fmus)
 def test_the_derivator_fmu_in_fmpy_samples_on_its_phase(sampled_fmus):
     """Through fmpy, h = T / 4, phase 1, inputs delayed one step: the h = T run (in process)
     repeated four times, one step later."""
-    from tests.fmi_support import FmuInstance
+    from tests.support.fmi_support import FmuInstance
 
     n, p, periods = 4, 1, 6
     _, inputs, outputs = SAMPLED["Derivator"]
@@ -319,7 +319,7 @@ def test_the_derivator_fmu_in_fmpy_samples_on_its_phase(sampled_fmus):
 
 def test_the_drive_fmu_state_taken_mid_period_continues_exactly(sampled_fmus):
     """fmi2GetFMUstate one sub-step into a period (fmpy), then the same steps twice."""
-    from tests.fmi_support import FmuInstance
+    from tests.support.fmi_support import FmuInstance
 
     fmu = FmuInstance(sampled_fmus["DCMotorDrive"], {"sample_phase": 2})
     h = T / 4

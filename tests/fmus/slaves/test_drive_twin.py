@@ -1,7 +1,7 @@
 """The drive's bench-twin options: LuGre friction, PWM resolution, current-loop offset and noise.
 
 In the Python drive, the DCMotorDrive FMU, the compiled loop and the scenes' Fidelity; the
-LuGre model itself is tested against the paper in tests/test_friction.py.
+LuGre model itself is tested against the paper in tests/motor/test_friction.py.
 """
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ import controller.fasttrajectory  # noqa: F401
 import plant.fast5r  # noqa: F401
 from motor import Drive, friction as fr, kernel, motor1
 from motor.drive import gaussian
-from tests.fmi_support import FmuInstance
+from tests.support.fmi_support import FmuInstance
 
 H = 1e-3
 

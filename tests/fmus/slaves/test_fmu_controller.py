@@ -9,7 +9,7 @@ from fmpy.validation import validate_fmu
 from controller.position import PositionController as InProcess
 from controller.strategies import get_strategy
 from plant import fivebar, get_preset
-from tests.fmi_support import FmuInstance
+from tests.support.fmi_support import FmuInstance
 
 NAMES = ("Trajectory", "Derivator", "PositionController")
 SMALL_GRID = {"grid_step": 0.01, "x_min": -0.02, "x_max": 0.04, "y_min": 0.12, "y_max": 0.18, "cache": False}

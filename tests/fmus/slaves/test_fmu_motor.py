@@ -4,7 +4,6 @@ clean refusals of bad input."""
 import math
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,8 +13,9 @@ from fmpy.validation import validate_fmu
 
 from fmus.slaves.parcosim_dcmotordrive import OUTPUTS as DRIVE_OUTPUTS
 from motor import CurrentObserver, Drive, get_motor_preset, motor1
-from tests.fmi_support import FmuInstance
+from tests.support.fmi_support import FmuInstance
 from tests.support.motor_loops import current_step
+from tests.support.paths import ROOT
 
 T = 1e-3
 
@@ -257,5 +257,5 @@ def test_drive_fmu_runs_in_a_process_without_parcosim(drive_fmu, tmp_path):
     assert done.returncode == 0, done.stderr[-2000:]
     module_file, i_end = done.stdout.split()[-2:]
     assert f"/resources/{bundle_name()}/motor/" in module_file
-    assert not module_file.startswith(str(Path(__file__).parent.parent))
+    assert not module_file.startswith(str(ROOT))
     assert float(i_end) == pytest.approx(6.0 / 0.829, rel=1e-9)

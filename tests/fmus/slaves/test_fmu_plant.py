@@ -11,7 +11,7 @@ from fmpy.validation import validate_fmu
 
 from fmus.slaves.parcosim_fivebarplant import OUTPUTS
 from plant import IntegratorSettings, PlantSimulator, get_preset
-from tests.fmi_support import FmuInstance
+from tests.support.fmi_support import FmuInstance
 
 
 def torques(t):

@@ -14,7 +14,7 @@ from fmus.slaves.parcosim_wheeledpendulum import OUTPUTS
 from plant.wheeled import SEED, WheeledPendulum, upright_linearisation
 from scenarios.scenes.pendulum import BALANCED_DEG, PendulumFidelity, pendulum_scene
 from scenarios.run.runner import run_scene
-from tests.fmi_support import FmuInstance
+from tests.support.fmi_support import FmuInstance
 
 NAMES = [name for name, _ in OUTPUTS]
 

@@ -5,7 +5,7 @@ Tracking is checked as a user sees it: e_ef of the package's run against ``parco
 of the scene (our Gauss-Seidel master), over a short window of a short copy; the tools
 (fmpy, Ecos, libcosim) are Jacobi masters, which ``fmus.cosim.master.simulate(...,
 coupling="jacobi")`` is bit for bit (docs/ssp.md), so the in-process Jacobi run stands for
-them here and tests/test_swap_drive.py runs the tools themselves.
+them here and tests/scenarios/packaging/test_swap_drive.py runs the tools themselves.
 """
 from __future__ import annotations
 

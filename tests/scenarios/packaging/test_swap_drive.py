@@ -11,7 +11,6 @@ from __future__ import annotations
 import dataclasses
 import sys
 import zipfile
-from pathlib import Path
 
 import pytest
 
@@ -20,8 +19,9 @@ from scenarios.packaging.per_component import export_per_component
 from scenarios.run.runner import run_scene
 from scenarios.scenes.catalogue import get_scene
 from scenarios.studies.tools import run_tool, tool_metrics
+from tests.support.paths import TESTS
 
-sys.path.insert(0, str(Path(__file__).parent / "support" / "cfmu"))
+sys.path.insert(0, str(TESTS / "support" / "cfmu"))
 from build import build_c_fmu, compiler  # noqa: E402
 
 STOP, WINDOW = 0.5, (0.1, 0.5)

@@ -221,7 +221,7 @@ def test_run_command_with_the_drives_in_the_plant(tmp_path, capsys):
 
 def test_run_retry_substeps_option(tmp_path, capsys):
     """``parcosim run --retry-substeps N`` passes N to the master: a completed run lists no
-    retried step; N < 2 is one line and exit 2 (the retry itself: tests/test_fmu_state.py)."""
+    retried step; N < 2 is one line and exit 2 (the retry itself: tests/fmus/slave/test_fmu_state.py)."""
     import json
 
     out = tmp_path / "retry"

@@ -6,7 +6,7 @@ The package (scenarios.packaging.chain) models one thing differently from our ma
 integrated in the plant instead of separate (docs/actuated.md: 6.5e-6 m RMS apart over the
 bench circle); the ratio is then 1 within 0.2 % on these scenes (docs/ssp.md).  The
 bound asserted, 5 %, is the issue's goal.  The per-component package in the tools:
-tests/test_swap_drive.py.
+tests/scenarios/packaging/test_swap_drive.py.
 """
 from __future__ import annotations
 

@@ -14,6 +14,7 @@ from scenarios.batch.report import THESIS_BENCH, THESIS_MD_CHANGE
 from scenarios.scenes.catalogue import get_scene, scene_names
 from scenarios.scenes.twin import (PARAMETERS, PWM_COUNTS, Twin, bench_real, encoder_phase, load_twin,
                             read_fit, write_twin)
+from tests.support.paths import ROOT
 
 
 def test_the_twin_file_round_trips_and_refuses_bad_values(tmp_path):
@@ -172,7 +173,7 @@ def test_the_shipped_calibration_gives_the_reported_circle():
     import json
     from pathlib import Path
 
-    stored = json.loads((Path(__file__).resolve().parent.parent / "docs" / "twin_runs.json").read_text())["circle"]
+    stored = json.loads((ROOT / "docs" / "twin_runs.json").read_text())["circle"]
     runs = twin_fit.run_twin(load_twin(), "circle", seeds=(101,))
     for s, by_seed in runs.items():
         for key in ("e_ef_mm", "tau_ef_Nm"):
