@@ -9,6 +9,7 @@ import pytest
 pytest.importorskip("cosmic_ray")
 
 from benchmarks import mutation  # noqa: E402
+from tests import layout_rules  # noqa: E402
 
 pytestmark = [pytest.mark.tools]
 
@@ -93,7 +94,7 @@ def test_every_target_names_an_existing_test():
         assert (root / source).is_file(), source
         for target in targets:
             module, _, test = target.partition("::")
-            path = root / "tests" / f"{module}.py"
+            path = root / layout_rules.path_of(module)
             assert path.is_file(), (source, target)
             if test:
                 names = {n.name for n in ast.walk(ast.parse(path.read_text())) if isinstance(n, ast.FunctionDef)}
