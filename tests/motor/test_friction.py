@@ -157,6 +157,7 @@ def test_static_map_is_the_stribeck_curve():
     ("sigma2", math.nan, "sigma2 (b) = nan must be a finite number"),
 ])
 def test_bad_parameters_are_named(field, value, words):
+    """Catches a LuGre parameter check that is missing or whose message does not name the field and its value."""
     with pytest.raises(ValueError, match=words.replace("(", r"\(").replace(")", r"\)")):
         fr.LuGre(**{**PAPER, field: value})
 

@@ -135,6 +135,7 @@ def test_anti_windup_leaves_saturation_at_once():
 
 
 def test_substeps_hold_controller_voltage_over_period():
+    """Catches a controller that recomputes its voltage at every sub-step instead of once per period T."""
     drive = Drive(motor1)
     v = [drive.step(1.0, 0.0, 0.0, drive.i, T / 4)[1] for _ in range(8)]
     assert v[0] == v[1] == v[2] == v[3] != v[4] == v[7]
@@ -143,6 +144,7 @@ def test_substeps_hold_controller_voltage_over_period():
 
 
 def test_design_params_keep_the_controller_of_the_real_motor():
+    """Catches a drive that designs its current controller from the simulated motor instead of design_params."""
     from motor import get_motor_preset
 
     real = get_motor_preset("motor1")

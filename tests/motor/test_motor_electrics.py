@@ -59,6 +59,7 @@ def test_explicit_euler_unstable_when_step_exceeds_two_time_constants():
 
 
 def test_quasi_static_is_steady_state_current():
+    """Catches a quasi-static current other than (v - ke omega) / R, or a wrong L = 0 limit of the exact step."""
     i = run_voltage(motor2, [5.0, -3.0], method="quasi_static", omega=20.0)
     np.testing.assert_allclose(i, (np.array([5.0, -3.0]) - motor2.ke * 20.0) / motor2.R, rtol=1e-15)
     assert electrical_step_coefficients(1.0, 0.0, H, "exact") == (0.0, 1.0)  # L = 0 limit
@@ -78,6 +79,7 @@ def test_free_running_motor_settles_at_analytic_speed(params):
 
 
 def test_coulomb_friction_regularisation():
+    """Catches a wrong sign, scale or tanh width of the regularised Coulomb friction, or a non-zero value at rest."""
     assert coulomb_friction(0.0, 0.05, 0.5) == 0.0
     assert coulomb_friction(-2.0, 0.05, 0.5) == pytest.approx(-0.05, rel=1e-3)
     assert coulomb_friction(0.1, 0.05, 0.5) == pytest.approx(0.05 * math.tanh(0.2))
@@ -95,6 +97,7 @@ def test_default_friction_width_keeps_explicit_coupling_monotone():
 
 @pytest.mark.parametrize("name", ["i_ref", "v_ref", "omega", "i_hat", "h"])
 def test_nan_input_named(name):
+    """Catches a drive step that accepts NaN in an input or names the wrong input in its refusal."""
     args = {"i_ref": 0.0, "v_ref": 0.0, "omega": 0.0, "i_hat": 0.0, "h": H}
     args[name] = math.nan
     with pytest.raises(ValueError, match=rf"^{name} must be a finite number, got nan"):
@@ -102,6 +105,7 @@ def test_nan_input_named(name):
 
 
 def test_bad_mode_method_and_step():
+    """Catches a drive that accepts an unknown mode or method, a negative step, a step not dividing T, or L = 0."""
     with pytest.raises(ValueError, match=r"mode must be one of 'current', 'voltage'; got 'torque'"):
         Drive(motor1, mode="torque")
     with pytest.raises(ValueError, match="method must be one of"):
@@ -117,6 +121,7 @@ def test_bad_mode_method_and_step():
 
 
 def test_mean_current_coefficients_are_the_step_average():
+    """Catches mean-current weights that are not the integral average over the step (exact, Euler, quasi-static)."""
     import math
 
     from scipy.integrate import quad

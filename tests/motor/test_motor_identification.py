@@ -21,6 +21,7 @@ def thesis_data(name):
 
 @pytest.mark.parametrize("name, n", [("motor1", 9), ("motor2", 8)])
 def test_identification_is_the_exact_least_squares_fit(name, n):
+    """Catches an identification that is not the least-squares fit of appendix D (or reads rpm for rad/s)."""
     u, i, omega = thesis_data(name)
     assert len(u) == n and omega.min() > 10 and omega.max() < 170   # rad/s, not rpm
     r = identify(u, i, omega)
@@ -72,6 +73,7 @@ def test_comparison_with_tables_16_and_18():
 
 
 def test_recovers_known_parameters_from_noisy_synthetic_data():
+    """Catches an identification that misses known R, ke, kt, mu, b, J exactly, or is not robust to small noise."""
     true = motor2.with_(R=0.95, ke=0.048, kt=0.048 * DATASHEET_KT_OVER_KE, mu=0.03, b=3e-4, J_rotor=2.5e-4)
     rng = np.random.default_rng(7)
     omega = np.linspace(10.0, 200.0, 60)
@@ -99,11 +101,13 @@ def test_recovers_known_parameters_from_noisy_synthetic_data():
     (dict(u=[1, 2], i=[1, 1.1], omega=[1, 2], settling_time=0), "settling_time must be > 0, got 0"),
 ])
 def test_bad_identification_input(kwargs, message):
+    """Catches identification input checks that are missing or whose message does not say what is wrong."""
     with pytest.raises(ValueError, match=message):
         identify(**kwargs)
 
 
 def test_csv_any_column_order_and_errors(tmp_path):
+    """Catches a CSV reader that depends on column order, or misses a missing column or a bad number's line."""
     good = tmp_path / "m.csv"
     good.write_text("omega,note,u,i\n10,a,1.0,0.5\n20,b,2.0,0.6\n")
     u, i, omega = read_motor_csv(good)
@@ -117,6 +121,7 @@ def test_csv_any_column_order_and_errors(tmp_path):
 
 
 def test_cli_prints_json(capsys):
+    """Catches an identify-motor command whose JSON differs from identify() on the same data."""
     assert identify_main(["--data", str(DATA / "motor2.csv"), "--settling-time", "0.198"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out == identify(*thesis_data("motor2"), settling_time=0.198)
@@ -125,6 +130,7 @@ def test_cli_prints_json(capsys):
 @pytest.mark.parametrize("argv", [["--data", "does-not-exist.csv"], ["--data", "{bad}"],
                                   [], ["--data", "{data}", "--kt-over-ke", "abc"]])
 def test_cli_errors_one_line_exit_2(argv, capsys, tmp_path):
+    """Catches an identify-motor error that is a traceback, more than one line, or an exit code other than 2."""
     bad = tmp_path / "bad.csv"
     bad.write_text("voltage,current\n1,2\n")
     argv = [a.format(bad=bad, data=DATA / "motor1.csv") for a in argv]

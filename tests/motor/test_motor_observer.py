@@ -11,6 +11,7 @@ T = 1e-3
 
 
 def test_static_observer_is_7_20():
+    """Catches a static observer that is not (7.20) or that keeps memory between calls."""
     obs = CurrentObserver(motor1)
     assert obs.estimate(6.0, 40.0, T) == pytest.approx((6.0 - motor1.ke * 40.0) / motor1.R, rel=1e-15)
     assert obs.estimate(6.0, 40.0, T) == obs.estimate(6.0, 40.0, 5 * T)  # memoryless
@@ -41,6 +42,7 @@ def test_static_observer_lags_true_current_by_electrical_transient():
 
 @pytest.mark.parametrize("name", ["v", "omega", "h"])
 def test_bad_observer_input_named(name):
+    """Catches an observer that accepts NaN or an unknown kind, or names the wrong input in its refusal."""
     args = {"v": 1.0, "omega": 0.0, "h": T}
     args[name] = math.nan
     with pytest.raises(ValueError, match=rf"^{name} must be a finite number, got nan"):

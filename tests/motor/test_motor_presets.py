@@ -8,6 +8,7 @@ from motor import MOTOR_PRESETS, MotorParams, get_motor_preset, motor1, motor2
 
 
 def test_presets_match_system_md():
+    """Catches a motor preset whose value differs from Tables 16 and 18 (SYSTEM.md), or a copy instead of the preset."""
     assert (motor1.R, motor1.L, motor1.b, motor1.kt, motor1.mu, motor1.ke, motor1.J_rotor) == \
         (1.101, 0.667e-3, 1.226e-4, 5.598e-2, 4.357e-2, 5.138e-2, 1.469e-4)
     assert (motor2.R, motor2.L, motor2.b, motor2.kt, motor2.mu, motor2.ke, motor2.J_rotor) == \
@@ -17,6 +18,7 @@ def test_presets_match_system_md():
 
 
 def test_unknown_preset_lists_valid_ones():
+    """Catches an unknown preset refused without listing the valid names, or a preset added or lost."""
     with pytest.raises(ValueError, match=r"'motor3'.*motor1, motor2, seed000"):
         get_motor_preset("motor3")
     assert sorted(MOTOR_PRESETS) == ["motor1", "motor2", "seed000"]
@@ -35,11 +37,13 @@ def test_seed000_preset_is_the_seed_motor():
     ("omega_eps", 0.0),
 ])
 def test_non_physical_parameter_named(name, value):
+    """Catches a motor parameter check that is missing or whose message does not name the field and its value."""
     with pytest.raises(ValueError, match=rf"^{name} must .*{value!r}"):
         motor1.with_(**{name: value})
 
 
 def test_with_replaces_and_rejects_unknown_names():
+    """Catches with_() changing other fields, accepting a misspelled name, or skipping the physical checks."""
     m = motor1.with_(L=0.0, mu=0.0)
     assert (m.L, m.mu, m.R) == (0.0, 0.0, motor1.R)
     with pytest.raises(ValueError, match="unknown motor parameter.*'Rx'"):
