@@ -50,6 +50,7 @@ def test_c_derivative_equals_the_general_algorithm_with_the_motor_equations():
 
 
 def test_without_drives_it_is_the_plant():
+    """Catches an actuated plant that changes the plant's derivative when it holds no drives."""
     a = _actuated()
     bare = ActuatedPlant(a.plant, [])
     z = a.plant.y.copy()
@@ -106,6 +107,7 @@ def test_rk4_steps_beyond_the_electrical_pole_are_refused_by_name():
 
 
 def test_quasi_static_drive_refused():
+    """Catches an actuated plant accepting a drive with L = 0 (no armature current state)."""
     sim = PlantSimulator(get_preset("bench"), *START)
     drive = Drive(get_motor_preset("motor2").with_(L=0.0), mode="voltage")
     with pytest.raises(ValueError, match="drive on joint 2: L = 0.0 H has no armature current"):
@@ -119,6 +121,7 @@ def _short(scene, stop):
 
 
 def test_drives_in_plant_rewires_the_bench():
+    """Catches drives_in_plant dropping or miswiring a connection, a parameter or a column."""
     scene = drives_in_plant(get_scene("bench_circle_TCMDx"), substeps=4)
     models = {c.name: c.model for c in scene.system.components}
     assert "drive1" not in models and models["plant"] == "ActuatedFiveBarPlant"
@@ -132,6 +135,7 @@ def test_drives_in_plant_rewires_the_bench():
 
 
 def test_drives_in_plant_needs_drives():
+    """Catches drives_in_plant silently returning a scene that has no drive."""
     with pytest.raises(ValueError, match="no DCMotorDrive to move into the plant"):
         drives_in_plant(get_scene("thesis_sim_circle"))
 
@@ -153,6 +157,7 @@ def test_converges_to_the_monolithic_reference():
 
 
 def test_fmu_and_inprocess_identical(built_fmus):
+    """Catches an ActuatedFiveBarPlant FMU whose rows differ from the in-process run by a bit."""
     fmu_dir = next(iter(built_fmus.values())).parent
     system = drives_in_plant(_short(get_scene("bench_triangle_TCMDx"), 0.1), substeps=2).system
     a = simulate(system, mode="inprocess")

@@ -22,6 +22,7 @@ def moving():
 
 
 def test_consistent_state_closes_the_loop_at_the_given_angles_and_speeds(moving):
+    """Catches a corrected state off the given angles or speeds, or with its loop open."""
     o = moving.outputs()
     z = consistent_state(moving, [o["q1"] + 0.01, o["q2"] - 0.02], [0.3, -0.4])
     assert fivebar.world_angles(z[:7]) == pytest.approx((o["q1"] + 0.01, o["q2"] - 0.02), abs=1e-14)
@@ -33,6 +34,7 @@ def test_consistent_state_closes_the_loop_at_the_given_angles_and_speeds(moving)
 
 
 def test_agreeing_measurements_change_nothing(moving):
+    """Catches a correction that moves the model when the measurements already agree with it."""
     o = moving.outputs()
     assert corrected_state(moving, {k: o[k] for k in ("q1_enc", "q2_enc")}, H) is None
     assert corrected_state(moving, {k: o[k] for k in ("q1", "q2", "dq1", "dq2")}, H) is None
@@ -54,6 +56,7 @@ def test_a_reading_one_count_off_moves_the_angle_just_inside_its_cell(moving, of
 
 
 def test_exact_measurements_are_taken_as_they_are(moving):
+    """Catches a correction that rounds or filters an exact (not encoder) measurement."""
     o = moving.outputs()
     z = corrected_state(moving, {"q1": o["q1"] + 1e-4, "q2": o["q2"], "dq1": 0.5, "dq2": o["dq2"]}, H)
     assert fivebar.world_angles(z[:7]) == pytest.approx((o["q1"] + 1e-4, o["q2"]), abs=1e-14)
@@ -61,6 +64,7 @@ def test_exact_measurements_are_taken_as_they_are(moving):
 
 
 def test_unmeasurable_outputs_are_refused(moving):
+    """Catches a correction that silently ignores an output it cannot correct the model with."""
     with pytest.raises(ValueError, match="cannot correct the plant model with \\['x'\\]"):
         corrected_state(moving, {"x": 0.0}, H)
 

@@ -40,6 +40,7 @@ def test_contract_angles():
 
 @pytest.mark.parametrize("preset", PRESETS)
 def test_ik_fk_round_trip(preset):
+    """Catches inverse and direct kinematics that disagree, or an inverse that puts a distal link off the tip."""
     p = get_preset(preset)
     for x, y in workspace_points(p):
         q = inverse_kinematics(p, x, y)
@@ -52,6 +53,7 @@ def test_ik_fk_round_trip(preset):
 
 @pytest.mark.parametrize("preset", PRESETS)
 def test_thesis_coordinates_close_the_loop(preset):
+    """Catches thesis coordinates (7.12) of a pose that leave the loop-closure residual open."""
     p = get_preset(preset)
     mech = build_mechanism(p)
     for x, y in workspace_points(p, 10):
@@ -61,6 +63,7 @@ def test_thesis_coordinates_close_the_loop(preset):
 
 @pytest.mark.parametrize("preset", PRESETS)
 def test_jacobians_match_finite_differences(preset):
+    """Catches a wrong sign, index or term in J_X, J_Theta or the joint rates (central differences of the IK)."""
     p = get_preset(preset)
     eps = 1e-7
     for x, y in workspace_points(p, 10):
@@ -77,6 +80,7 @@ def test_jacobians_match_finite_differences(preset):
 
 
 def test_singularity_measures_vanish_at_singular_poses():
+    """Catches serial or parallel singularity measures that do not vanish at a stretched chain or flat links."""
     p = get_preset("thesis_sim")
     # Chain 1 stretched: the tip at distance l1 + l2 from its base.
     reach = (p.chain1.l1 + p.chain1.l2) * (1 - 1e-10)
@@ -91,6 +95,7 @@ def test_singularity_measures_vanish_at_singular_poses():
 
 
 def test_workspace_map_has_a_near_singular_band():
+    """Catches a workspace map whose status disagrees with its margin or misses a region (inside, near, outside)."""
     p = get_preset("thesis_sim")
     ws = workspace_map(p, step=0.01)
     counts = np.bincount(ws.status.ravel(), minlength=3)
@@ -100,6 +105,7 @@ def test_workspace_map_has_a_near_singular_band():
 
 
 def test_unreachable_point_is_named():
+    """Catches an inverse kinematics that returns NaN or a wrong pose for an unreachable point instead of naming it."""
     with pytest.raises(KinematicsError, match=r"x=0\.5.*outside the workspace"):
         inverse_kinematics(get_preset("bench"), 0.5, 0.1)
 

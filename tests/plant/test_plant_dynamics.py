@@ -111,6 +111,7 @@ def test_inverse_dynamics_inverts_forward_dynamics(preset):
 
 
 def test_kinetic_energy_is_conserved_without_torque():
+    """Catches a plant that gains or loses kinetic energy without torque or gravity."""
     params = get_preset("bench")
     sim = PlantSimulator(params, 0.0, 0.16, ACCURATE, dx0=0.3, dy0=-0.2)
     e0 = sim.kinetic_energy()
@@ -186,6 +187,7 @@ def test_default_and_accurate_settings_against_the_reference(preset, x0, y0):
 
 
 def test_bad_input_is_refused_with_name_value_and_time():
+    """Catches a plant step that accepts NaN or inf, or changes its state on a refused step."""
     sim = PlantSimulator(get_preset("thesis_sim"), 0.07, 0.17)
     sim.step(0.0, 0.0, 1e-3)
     state = sim.y.copy()
@@ -206,6 +208,7 @@ def test_bad_input_is_refused_with_name_value_and_time():
 
 
 def test_running_into_a_singularity_stops_with_time_and_place():
+    """Catches a plant that integrates through a singular pose, or stops without time and place."""
     sim = PlantSimulator(get_preset("thesis_sim"), 0.07, 0.17)
     with pytest.raises(PlantError, match=r"singular pose reached at t = .* at x = .* y = "):
         for _ in range(5000):

@@ -31,6 +31,7 @@ def _total_energy(params, q, dq):
 @pytest.mark.parametrize("x, y, q1_deg, q2_deg, tolerance_deg",
                          [(0.0, 0.17, 49.6, 130.4, 0.05), (0.07, 0.17, 24.36, 99.97, 0.005)])
 def test_world_frame_working_mode(x, y, q1_deg, q2_deg, tolerance_deg):
+    """Catches a reference in another frame or working mode than SYSTEM.md section 2 (elbows outward)."""
     params = ref.params_thesis_sim()
     phi = ref.ik(params, x, y)
     assert np.degrees(phi[0]) == pytest.approx(q1_deg, abs=tolerance_deg)
@@ -105,6 +106,7 @@ def _symbolic_model():
 
 
 def test_sympy_mechanics_cross_check():
+    """Catches a wrong mass matrix, forcing or constraint Jacobian of the reference (sympy.physics.mechanics)."""
     params = _bench_with_tip_mass_and_gravity()
     mass_fn, forcing_fn, jacobian_fn, rhs_fn = _symbolic_model()
     chain_values = [[c["l1"], c["l2"], c["lg1"], c["lg2"], c["m1"], c["m2"], c["Jz1"], c["Jz2"],
@@ -145,6 +147,7 @@ def test_sympy_mechanics_cross_check():
 
 
 def test_accelerations_keep_tips_together():
+    """Catches reference accelerations that violate the loop closure at acceleration or velocity level."""
     params = _bench_with_tip_mass_and_gravity()
     phi, dphi = ref.full_state(params, ref.ik(params, -0.04, 0.15)[::2], (2.0, 1.5))
     ddphi = ref.accelerations(params, phi, dphi, (0.2, -0.1))
@@ -157,6 +160,7 @@ def test_accelerations_keep_tips_together():
 @pytest.mark.parametrize("gravity, dq0", [((0.0, 0.0, 0.0), (0.3, -0.3)),
                                           ((0.5, 0.5, -9.81), (0.3, -0.3))])
 def test_energy_conserved_without_torque(gravity, dq0):
+    """Catches a reference that gains or loses energy without torque (any gravity)."""
     params = ref.params_bench()
     params["m0"] = 0.05
     params["g"] = gravity
@@ -171,6 +175,7 @@ def test_energy_conserved_without_torque(gravity, dq0):
 
 
 def test_work_of_constant_torques_equals_energy_gain():
+    """Catches a reference whose energy gain is not the work of the torques (a wrong sign or scale)."""
     params = ref.params_bench()
     tau = (0.03, -0.02)
     phi = ref.ik(params, 0.0, 0.17)
@@ -182,6 +187,7 @@ def test_work_of_constant_torques_equals_energy_gain():
 
 
 def test_tolerance_refinement_reaches_1e_11_m():
+    """Catches a reference integrator whose default tolerance is coarser than 1e-11 m."""
     params = ref.params_bench()
 
     def torques(t):
@@ -196,6 +202,7 @@ def test_tolerance_refinement_reaches_1e_11_m():
 
 
 def test_parallel_singularity_is_reported():
+    """Catches a reference that returns rates at a parallel singularity instead of refusing."""
     params = ref.params_thesis_sim()
     phi = ref.ik(params, 0.0, 0.17)
     with pytest.raises(ValueError, match="singularity"):

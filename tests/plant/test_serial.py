@@ -37,6 +37,7 @@ def _com_positions(q):
 
 @pytest.mark.parametrize("q, dq", STATES)
 def test_jacobians_match_finite_differences(q, dq):
+    """Catches a wrong column, sign or frame in the linear and angular Jacobians of the serial chain."""
     kin = chain_kinematics(CHAIN, q, dq)
     for j in range(4):
         step = np.zeros(4)
@@ -86,6 +87,7 @@ def _kinetic_energy_from_motion(q, dq):
 
 @pytest.mark.parametrize("q, dq", STATES)
 def test_mass_matrix_gives_the_kinetic_energy(q, dq):
+    """Catches a mass matrix that is not symmetric positive definite or not the chain's kinetic energy."""
     M = chain_dynamics(CHAIN, q, dq, np.zeros(3)).M
     np.testing.assert_allclose(M, M.T, atol=1e-14)
     assert np.all(np.linalg.eigvalsh(M) > 0)
@@ -108,6 +110,7 @@ def test_velocity_terms_are_the_christoffel_terms_of_M(q, dq):
 
 @pytest.mark.parametrize("q, dq", STATES)
 def test_gravity_terms_are_the_gradient_of_the_potential(q, dq):
+    """Catches gravity terms with a wrong sign, mass or COM (the potential's gradient, any gravity)."""
     gravity = np.array([0.3, -9.81, 1.2])
     masses = np.array([link.mass for link in CHAIN.links])
 
@@ -119,6 +122,7 @@ def test_gravity_terms_are_the_gradient_of_the_potential(q, dq):
 
 
 def test_bad_joint_kind_is_refused():
+    """Catches a DH joint that accepts a kind other than 'R' or 'P'."""
     with pytest.raises(ValueError, match="'R' or 'P'"):
         DHJoint("X", a=0.1, alpha=0.0)
 

@@ -143,11 +143,13 @@ def test_a_bad_value_is_named_with_its_line_key_and_value(old, new, line, key, v
 
 
 def test_a_syntax_error_keeps_the_line():
+    """Catches a spec loader that loses the TOML syntax error's line."""
     with pytest.raises(plant_spec.SpecError, match=r"t.toml, line 10: TOML syntax"):
         plant_spec.loads(GOOD.replace("a = 0.1\nmass = 0.1", "a = 0.1 0.2\nmass = 0.1"), source="t.toml")
 
 
 def test_a_parallel_spec_needs_as_many_actuators_as_dof():
+    """Catches a parallel spec accepted with more platform freedoms than actuators."""
     text = plant_spec.load("thesis_sim_5r").text.replace('independent = ["x", "y"]', 'independent = ["x", "y", "z"]')
     with pytest.raises(plant_spec.SpecError, match=r"line 13: platform.independent = \['x', 'y', 'z'\]: 3 degrees "
                                                    r"of freedom but 2 actuated"):
@@ -155,6 +157,7 @@ def test_a_parallel_spec_needs_as_many_actuators_as_dof():
 
 
 def test_every_shipped_spec_loads():
+    """Catches a shipped spec that no longer loads, or is loaded under another name."""
     names = plant_spec.shipped_specs()
     assert {"thesis_sim_5r", "bench_5r", "rr", "rr_counter_masses", "rr_balanced", "balanced_5r", "delta3"} <= set(names)
     for name in names:
@@ -162,6 +165,7 @@ def test_every_shipped_spec_loads():
 
 
 def test_build_plant_cli_names_the_bad_line(tmp_path):
+    """Catches build-plant writing an FMU from a bad or serial spec, or erring without the line."""
     import subprocess
     import sys
     bad = tmp_path / "bad.toml"
@@ -188,6 +192,7 @@ def test_gravity_and_chain_names_default_as_the_format_says():
 
 
 def test_repeated_independent_axes_are_refused_naming_the_entry():
+    """Catches a spec accepted with the same platform axis twice."""
     text = (plant_spec.SPEC_DIR / "bench_5r.toml").read_text()
     assert 'independent = ["x", "y"]' in text
     with pytest.raises(ValueError, match=r"platform\.independent.*distinct"):

@@ -40,6 +40,7 @@ def bench_fmu(tmp_path_factory):
 
 
 def test_spec_fmu_equals_five_bar_plant_over_one_second(bench_fmu):
+    """Catches a SpecPlant FMU that drifts from the FiveBarPlant over one second."""
     assert validate_fmu(str(bench_fmu)) == []
     fmu = FmuInstance(bench_fmu, {"x0": START[0], "y0": START[1]})
     n = 1000
@@ -57,6 +58,7 @@ def test_spec_fmu_equals_five_bar_plant_over_one_second(bench_fmu):
 
 
 def test_thesis_sim_spec_equals_five_bar_plant_in_process():
+    """Catches a spec-built 5R that differs from the general algorithm or the fast kernel."""
     sim = SpecSimulator(plant_spec.load("thesis_sim_5r"), (*START, 0.0))
     n = 300
     ref = reference_paths("thesis_sim", n)
@@ -68,6 +70,7 @@ def test_thesis_sim_spec_equals_five_bar_plant_in_process():
 
 
 def test_spec_fmu_refuses_bad_input_without_crashing(bench_fmu):
+    """Catches a SpecPlant FMU that accepts NaN or moves its outputs on a refused step."""
     fmu = FmuInstance(bench_fmu, {"x0": START[0], "y0": START[1]})
     fmu.step(1e-3, tau1=0.01, tau2=0.0)
     x = fmu.get("x")
@@ -81,6 +84,7 @@ def test_spec_fmu_refuses_bad_input_without_crashing(bench_fmu):
 
 
 def test_balanced_5r_has_no_gravity_load_and_stays_at_rest():
+    """Catches balancing counter-masses placed wrong: gravity would load the joints."""
     spec = plant_spec.load("balanced_5r")
     rng = np.random.default_rng(4)
     for _ in range(10):
@@ -102,11 +106,13 @@ def test_balanced_5r_has_no_gravity_load_and_stays_at_rest():
 
 
 def test_assembly_out_of_reach_is_refused():
+    """Catches a spec simulator that starts from a pose whose loop cannot close."""
     with pytest.raises(AssemblyError, match="cannot close the loop"):
         SpecSimulator(plant_spec.load("thesis_sim_5r"), (0.0, 0.4, 0.0))
 
 
 def test_spec_fmu_state_restores_bit_for_bit(bench_fmu):
+    """Catches a SpecPlant FMU state that does not continue a run bit for bit."""
     fmu = FmuInstance(bench_fmu, {"x0": START[0], "y0": START[1]})
     for i in range(5):
         fmu.step(1e-3, tau1=0.02, tau2=-0.01)
@@ -129,6 +135,7 @@ def test_spec_fmu_state_restores_bit_for_bit(bench_fmu):
 
 
 def test_spec_fmu_refuses_substeps_it_cannot_take_in_time(bench_fmu):
+    """Catches a SpecPlant FMU that accepts more sub-steps than one call may do."""
     fmu = FmuInstance(bench_fmu, {"substeps": 10000})
     error = fmu.refused_step()
     assert "substeps = 10000" in error and "allowed per call" in error

@@ -62,6 +62,7 @@ def test_energy_balance_with_motor_torques():
 
 
 def test_linearisation_matches_finite_differences():
+    """Catches a wrong entry of the upright linearisation A, B (differences of the nonlinear model)."""
     A, B = upright_linearisation()
     sim = WheeledPendulum()
     order = [K.THETA, K.PSI, K.PHI, K.DTHETA, K.DPSI, K.DPHI]
@@ -108,6 +109,7 @@ def test_body_touching_the_floor_is_a_fall():
 
 
 def test_yaw_locked_keeps_heading():
+    """Catches a yaw-locked pendulum whose heading, yaw rate or lateral position moves."""
     sim = WheeledPendulum(yaw=False, initial=dict(psi=0.05))
     for _ in range(100):
         sim.step(0.01, -0.01, 1e-3)
@@ -119,12 +121,14 @@ def test_yaw_locked_keeps_heading():
     (lambda s: s.step(0.0, 0.0, -1.0), "step size -1.0 at t = 0 s"),
 ])
 def test_bad_input_named(call, text):
+    """Catches a pendulum step that accepts a non-finite input or names the wrong one."""
     sim = WheeledPendulum()
     with pytest.raises(ValueError, match=text.replace("(", r"\(")):
         call(sim)
 
 
 def test_bad_parameters_named():
+    """Catches a pendulum built with a negative mass, a pitch past 90 degrees or an unknown model."""
     with pytest.raises(ValueError, match="parameter M = -1"):
         WheeledPendulum(SEED.with_(M=-1.0))
     with pytest.raises(ValueError, match="initial state: pitch beyond 90"):
