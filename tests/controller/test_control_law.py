@@ -197,6 +197,7 @@ def test_step_with_errors_returns_both_errors_6_5(kernel):
 
 @pytest.mark.parametrize("T", [0.0, -1e-3, float("nan")])
 def test_sample_time_must_be_positive(T):
+    """Catches a controller built with T = 0, T < 0 or NaN (its derivatives would divide by it)."""
     with pytest.raises(ValueError, match=r"T = .* s must be > 0"):
         PositionController(BENCH, get_strategy("PDq"), T=T)
 

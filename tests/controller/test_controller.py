@@ -157,6 +157,7 @@ def test_sliding_term_integrates_k_sat_s_over_phi():
 
 
 def test_adaptive_gain_follows_6_66():
+    """Catches an adaptive gain k that does not follow (6.66): start value, sign product, growth rate."""
     meas, ref = sample_inputs()
     st = get_strategy("PDMDq").with_(gamma=(5.0, 5.0))
     ctrl = PositionController(BENCH, st)
@@ -171,6 +172,7 @@ def test_adaptive_gain_follows_6_66():
 
 
 def test_presets_follow_tables_6_to_8():
+    """Catches a strategy preset whose gain, lambda, phi or m* differs from Tables 6-8."""
     assert set(STRATEGY_NAMES) == {"PDq", "PDx", "TCq", "TCx", "PDMDq", "PDMDx", "TCMDq", "TCMDx"}
     assert get_strategy("PDq").lam == 35 and get_strategy("PDq", "triangle").lam == 25
     assert get_strategy("PDMDq", "triangle").phi == 90 and get_strategy("PDMDq").phi == 20
@@ -183,12 +185,14 @@ def test_presets_follow_tables_6_to_8():
 
 
 def test_unknown_strategy_is_refused():
+    """Catches get_strategy returning a default for an unknown name instead of refusing it."""
     with pytest.raises(ValueError, match="strategy = 'PID' is unknown"):
         get_strategy("PID")
 
 
 @pytest.mark.parametrize("index, name", [(0, "q1"), (3, "dq2"), (6, "x_d"), (11, "ddy_d")])
 def test_nan_input_is_refused_with_name_value_and_time(index, name):
+    """Catches a controller that accepts a NaN input or names the wrong input or time."""
     meas, ref = sample_inputs()
     values = list(meas + ref)
     values[index] = float("nan")
@@ -198,6 +202,7 @@ def test_nan_input_is_refused_with_name_value_and_time(index, name):
 
 
 def test_reference_outside_workspace_or_near_singular_is_refused():
+    """Catches a controller computing a torque for an unreachable or near-singular reference."""
     meas, _ = sample_inputs()
     ctrl = PositionController(BENCH, get_strategy("PDq"))
     with pytest.raises(ValueError, match=r"reference \(x_d, y_d\) = \(0.5, 0.1\) m at t = 1.5 s is outside"):

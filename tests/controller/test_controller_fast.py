@@ -41,6 +41,7 @@ def rel_err(a, b):
 # --- the compiled inverse dynamics -----------------------------------------------------------
 @pytest.mark.parametrize("preset", ["bench", "thesis_sim"])
 def test_fast_inverse_terms_equal_the_general_algorithm(preset):
+    """Catches a fast inverse-dynamics kernel term that differs from the general algorithm's."""
     params = loaded(preset)
     mech, p = fivebar.build_mechanism(params), fast5r.pack_params(params)
     rng = np.random.default_rng(7)
@@ -63,6 +64,7 @@ def test_fast_inverse_terms_equal_the_general_algorithm(preset):
 
 @pytest.mark.parametrize("preset", ["bench", "thesis_sim"])
 def test_exact_model_kernels_agree(preset):
+    """Catches an exact model whose fast (C) and general (Python) kernels give different terms."""
     params = loaded(preset)
     fast, general = ExactModel(params), ExactModel(params, kernel="general")
     rng = np.random.default_rng(3)
@@ -92,6 +94,7 @@ def moving_samples(rng, n, poses):
 
 @pytest.mark.parametrize("space", ["q", "x"])
 def test_exact_controller_kernels_agree(space):
+    """Catches TC and TCMD controllers whose compiled and general kernels give different torques."""
     rng = np.random.default_rng(11)
     poses = random_poses(BENCH, rng, 20, band=0.2)
     for name in (f"TC{space}", f"TCMD{space}"):
@@ -104,6 +107,7 @@ def test_exact_controller_kernels_agree(space):
 
 
 def test_refusals_name_the_variable_and_leave_the_state_alone(tmp_path, monkeypatch):
+    """Catches a compiled-law refusal that changes the state or names the wrong variable."""
     monkeypatch.setenv("PARCOSIM_CACHE", str(tmp_path))
     ctrl = PositionController(BENCH, get_strategy("TCMDx"), grid_step=0.01, extent=REGION, table_fallback=False)
     assert ctrl.compiled
@@ -139,11 +143,13 @@ def test_refusals_name_the_variable_and_leave_the_state_alone(tmp_path, monkeypa
 
 
 def test_unknown_kernel_is_refused():
+    """Catches a controller accepting an unknown kernel name instead of refusing it."""
     with pytest.raises(ValueError, match="kernel = 'c' is unknown"):
         PositionController(BENCH, get_strategy("PDx"), kernel="c")
 
 
 def test_step_with_errors_returns_the_errors():
+    """Catches step_with_errors returning other torques than step, or stale errors."""
     ctrl = PositionController(BENCH, get_strategy("PDq"))
     x, y = 0.01, 0.15
     ang = fivebar.inverse_kinematics(BENCH, x, y)
@@ -153,6 +159,7 @@ def test_step_with_errors_returns_the_errors():
 
 
 def test_table_fallback_uses_the_exact_model_off_the_table(tmp_path, monkeypatch):
+    """Catches a table fallback that refuses, or differs from the exact model, off the table."""
     monkeypatch.setenv("PARCOSIM_CACHE", str(tmp_path))
     strategy = get_strategy("TCx")
     tabulated = PositionController(BENCH, strategy, grid_step=0.01, extent=REGION)

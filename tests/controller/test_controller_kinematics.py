@@ -13,6 +13,7 @@ POINTS = [(0.0, 0.17), (0.07, 0.17), (-0.04, 0.12), (0.03, 0.25)]
 @pytest.mark.parametrize("preset", ["bench", "thesis_sim"])
 @pytest.mark.parametrize("x, y", POINTS)
 def test_kinematics_match_the_plant(preset, x, y):
+    """Catches controller kinematics (C) that differ from the plant's inverse, direct kinematics or margin."""
     params = get_preset(preset)
     kin, mech = Kinematics(params), fivebar.build_mechanism(params)
     ang = fivebar.inverse_kinematics(params, x, y)

@@ -14,6 +14,7 @@ REGION = (-0.02, 0.02, 0.14, 0.18)
 
 
 def test_table_reproduces_the_exact_model_at_grid_points():
+    """Catches a tabulated model that is off the exact model at its own grid points (an index swap)."""
     tab = TabulatedModel(BENCH, 0.01, REGION, cache=False)
     exact = ExactModel(BENCH)
     x, y = tab.xs[2], tab.ys[1]
@@ -33,6 +34,7 @@ def test_interpolation_error_falls_like_h_squared():
 
 
 def test_left_out_points_raise_a_clear_error(tmp_path, monkeypatch):
+    """Catches a table that interpolates across left-out or outside cells instead of refusing."""
     monkeypatch.setenv("PARCOSIM_CACHE", str(tmp_path))
     # A strip reaching the near-singular band near the x axis.
     tab = TabulatedModel(BENCH, 0.01, (-0.02, 0.02, 0.0, 0.06))
@@ -48,6 +50,7 @@ def test_left_out_points_raise_a_clear_error(tmp_path, monkeypatch):
 
 
 def test_model_error_scales_inertia_and_quadratic_terms():
+    """Catches a model error that does not scale all terms by (1 + e), or accepts e <= -1."""
     e = 0.2
     a = ExactModel(BENCH).terms(0.0, 0.17, 0.3, 0.1)
     b = ExactModel(perturbed_params(BENCH, e)).terms(0.0, 0.17, 0.3, 0.1)
@@ -58,6 +61,7 @@ def test_model_error_scales_inertia_and_quadratic_terms():
 
 @pytest.mark.parametrize("step", [0.0, -0.005, float("nan"), float("inf")])
 def test_grid_step_must_be_positive_and_finite(step):
+    """Catches a table built with a zero, negative, NaN or infinite grid step."""
     with pytest.raises(ValueError, match=r"grid step = .* m must be > 0"):
         TabulatedModel(BENCH, step, REGION, cache=False)
 
@@ -108,6 +112,7 @@ def test_near_singular_grid_points_are_left_out(tmp_path, monkeypatch):
 
 @pytest.mark.parametrize("dx, dy", [(1e-6, 0.0), (0.025, 0.0), (0.0, 1e-6), (0.0, 0.025)])
 def test_points_beyond_the_far_edges_are_outside(dx, dy, tmp_path, monkeypatch):
+    """Catches an off-by-one at the table's far edges: points just beyond them must be outside."""
     monkeypatch.setenv("PARCOSIM_CACHE", str(tmp_path))
     tab = TabulatedModel(BENCH, 0.01, REGION)
     x = (REGION[1] + dx) if dx else 0.0
@@ -117,6 +122,7 @@ def test_points_beyond_the_far_edges_are_outside(dx, dy, tmp_path, monkeypatch):
 
 
 def test_build_time_is_a_wall_time(tmp_path, monkeypatch):
+    """Catches a build time that is not measured, or not in seconds of wall time."""
     monkeypatch.setenv("PARCOSIM_CACHE", str(tmp_path))
     start = time.perf_counter()
     tab = TabulatedModel(BENCH, 0.01, REGION)

@@ -38,6 +38,7 @@ def test_controller_fmu_applies_the_law_delay_samples_late(built_fmus, delay):
 
 
 def test_controller_refuses_a_bad_delay(built_fmus):
+    """Catches a PositionController FMU accepting a negative delay_steps."""
     fmu = FmuInstance(built_fmus["PositionController"], {"strategy": "PDx", "delay_steps": -1})
     meas, ref = controller_inputs(0)
     assert "parameter delay_steps = -1 must be an integer in [0, 100]" in fmu.refused_step(
@@ -52,6 +53,7 @@ def _short(fidelity, stop=0.6):
 
 @pytest.mark.parametrize("delay", [1, 3])
 def test_delayed_bench_runs_the_same_rows_compiled_and_in_process(delay):
+    """Catches a delay that the compiled loop applies differently from in process, or not at all."""
     delayed = _short(Fidelity(delay_steps=delay))
     fast, slow = simulate(delayed, mode="compiled"), simulate(delayed, mode="inprocess")
     assert fast.mode == "compiled" and fast.extra["python_steps"] == 0
@@ -63,6 +65,7 @@ def test_delayed_bench_runs_the_same_rows_compiled_and_in_process(delay):
 
 
 def test_delayed_bench_runs_the_same_rows_as_fmus(tmp_path):
+    """Catches a delay that the FMU applies differently from the in-process controller."""
     delayed = _short(Fidelity(delay_steps=1), stop=0.2)
     fmu, slow = simulate(delayed, mode="fmu", fmu_dir=tmp_path), simulate(delayed, mode="inprocess")
     assert fmu.error is None

@@ -49,12 +49,14 @@ def test_designed_low_pass_is_the_prewarped_bilinear_bessel(order, fc):
 
 
 def test_cutoff_outside_nyquist_is_rejected():
+    """Catches a derivator designed with a cut-off above Nyquist instead of refusing it."""
     with pytest.raises(ValueError, match="cut-off"):
         Derivator(fc_vel=600.0)
 
 
 @pytest.mark.parametrize("fc_vel, fc_acc", CUTOFF_PAIRS)
 def test_sinusoid_response_matches_designed_filters(fc_vel, fc_acc):
+    """Catches a derivator whose gain or phase at any frequency differs from its designed filters."""
     derivator = Derivator(fc_vel, fc_acc, T)
     frequencies = np.array([1.0, 5.0, 11.0, 40.0, 100.0, 250.0])
     amplitudes = np.array([0.5, 2.0])
@@ -77,6 +79,7 @@ def test_sinusoid_response_matches_designed_filters(fc_vel, fc_acc):
 
 @pytest.mark.parametrize("fc_vel, fc_acc", CUTOFF_PAIRS)
 def test_ramp_velocity_exact_after_transient(fc_vel, fc_acc):
+    """Catches a derivator whose velocity of a ramp is not exact once settled (a wrong DC gain)."""
     t = np.arange(1000) * T
     slopes = np.array([2.7, -0.4])
     q = np.array([1.3, -2.2]) + t[:, None] * slopes
@@ -89,6 +92,7 @@ def test_ramp_velocity_exact_after_transient(fc_vel, fc_acc):
 
 @pytest.mark.parametrize("fc_vel, fc_acc", CUTOFF_PAIRS)
 def test_parabola_acceleration_exact_after_transient(fc_vel, fc_acc):
+    """Catches a derivator whose acceleration of a parabola is not exact once settled."""
     derivator = Derivator(fc_vel, fc_acc, T)
     t = np.arange(1000) * T
     initial_velocity, curvature = np.array([0.8, -1.5]), np.array([7.3, -12.0])
@@ -101,6 +105,7 @@ def test_parabola_acceleration_exact_after_transient(fc_vel, fc_acc):
 
 
 def test_cubic_acceleration_is_delayed_by_acceleration_delay():
+    """Catches a stated acceleration delay other than the filters' true one."""
     derivator = Derivator()
     t = np.arange(1000) * T
     jerk = np.array([11.0, -3.0])
@@ -110,6 +115,7 @@ def test_cubic_acceleration_is_delayed_by_acceleration_delay():
 
 
 def test_delays_are_the_dc_group_delays_of_the_chains():
+    """Catches velocity or acceleration delays that are not the chains' DC group delays."""
     derivator = Derivator()
     small = 0.01
     velocity, acceleration = derivator.frequency_response([small])
@@ -121,6 +127,7 @@ def test_delays_are_the_dc_group_delays_of_the_chains():
 
 
 def test_reset_starts_at_rest_without_transient():
+    """Catches a reset that does not start the filters at rest (a start-up transient)."""
     q0 = np.array([1.2, -2.5])
     velocity, acceleration = run(Derivator(), np.tile(q0, (300, 1)))
     assert np.max(np.abs(velocity)) < 1e-9
@@ -128,6 +135,7 @@ def test_reset_starts_at_rest_without_transient():
 
 
 def test_step_before_reset_is_an_error():
+    """Catches a derivator that steps from an uninitialised state instead of refusing."""
     with pytest.raises(RuntimeError, match="reset"):
         Derivator().step([0.0, 0.0])
 

@@ -85,6 +85,7 @@ def test_inside_its_layer_with_k_equal_lam_phi_it_is_computed_torque(space, kern
 
 
 def test_seed_law_needs_the_model():
+    """Catches seed 001's law accepted without the model, or an unknown law name accepted."""
     with pytest.raises(ValueError, match="seed 001's law needs the model"):
         get_strategy("SMCx").with_(model_based=False)
     with pytest.raises(ValueError, match="law = 'nope' is unknown"):

@@ -52,6 +52,7 @@ def central_difference(trajectory, t, fields):
     [("thesis_circle", thesis_circle_formula), ("circle", bench_circle_formula), ("triangle", triangle_formula)],
 )
 def test_positions_follow_thesis_formulas(kind, formula):
+    """Catches a trajectory position that differs from the thesis' formula at any time."""
     trajectory = get_trajectory(kind)
     for t in np.linspace(0.0, trajectory.duration, 4001)[:-1]:
         sample = trajectory(t)
@@ -60,6 +61,7 @@ def test_positions_follow_thesis_formulas(kind, formula):
 
 @pytest.mark.parametrize("kind", ["thesis_circle", "circle", "triangle"])
 def test_derivatives_match_central_differences(kind):
+    """Catches a trajectory velocity or acceleration that is not the derivative of its position."""
     trajectory = get_trajectory(kind)
     for t in times(trajectory.duration):
         sample = trajectory(t)
@@ -75,6 +77,7 @@ def jerk(trajectory, t):
 
 
 def test_triangle_vertices_have_zero_velocity_acceleration_and_jerk():
+    """Catches a triangle that does not stop with zero velocity, acceleration and jerk at a vertex."""
     trajectory = get_trajectory("triangle")
     peak_jerk = max(np.abs(jerk(trajectory, t)).max() for t in np.linspace(0.01, 0.74, 147))
     assert peak_jerk > 10.0
@@ -86,6 +89,7 @@ def test_triangle_vertices_have_zero_velocity_acceleration_and_jerk():
 
 
 def test_circle_stops_suddenly_and_continuously():
+    """Catches a circle whose position jumps at its end, or that keeps moving after it."""
     trajectory = get_trajectory("circle")
     assert trajectory.duration == 8.0
     just_before, at_stop, later = trajectory(8.0 - 1e-9), trajectory(8.0), trajectory(9.3)
@@ -96,6 +100,7 @@ def test_circle_stops_suddenly_and_continuously():
 
 
 def test_triangle_holds_first_vertex_after_two_cycles():
+    """Catches a triangle that does not hold its first vertex after its two cycles."""
     trajectory = get_trajectory("triangle")
     assert trajectory.duration == pytest.approx(4.5)
     assert trajectory(4.5) == trajectory(20.0) == ReferenceSample(*X1, 0.0, 0.0, 0.0, 0.0)
@@ -106,22 +111,26 @@ def test_triangle_holds_first_vertex_after_two_cycles():
     [("thesis_circle", (0.07, 0.17)), ("circle", X1), ("triangle", X1), ("hold", X1)],
 )
 def test_start_points_are_those_of_the_spec(kind, start):
+    """Catches a trajectory's start point other than the spec's."""
     assert get_trajectory(kind).start_point == pytest.approx(start, abs=1e-15)
 
 
 def test_reference_starts_at_the_start_point_where_the_thesis_says_so():
+    """Catches a reference whose sample at t = 0 is not the start point."""
     thesis = get_trajectory("thesis_circle")(0.0)
     assert (thesis.x, thesis.y) == pytest.approx((0.07, 0.17), abs=1e-15)
     assert get_trajectory("triangle")(0.0) == ReferenceSample(*X1, 0.0, 0.0, 0.0, 0.0)
 
 
 def test_hold_is_constant_at_rest():
+    """Catches a hold trajectory that moves or has a non-zero derivative."""
     trajectory = get_trajectory("hold", x=0.01, y=0.2)
     for t in (0.0, 1.0, 100.0):
         assert trajectory(t) == ReferenceSample(0.01, 0.2, 0.0, 0.0, 0.0, 0.0)
 
 
 def test_factory_passes_parameters_and_names_unknown_kinds():
+    """Catches a factory dropping parameters or refusing an unknown kind without listing the known."""
     assert get_trajectory("circle", cycles=3).duration == 3.0
     assert get_trajectory("triangle", side_time=0.5, cycles=1).duration == pytest.approx(1.5)
     with pytest.raises(ValueError, match="unknown trajectory kind 'square'") as error:
@@ -139,6 +148,7 @@ def test_smoothstep_is_the_polynomial_of_7_27_and_its_slope():
 
 
 def test_a_circle_turning_backwards_or_not_at_all_is_refused():
+    """Catches a circle built with a zero, negative or infinite frequency."""
     for frequency in (0.0, -1.0, math.inf):
         with pytest.raises(ValueError, match=f"frequency = {frequency!r} Hz must be > 0"):
             get_trajectory("circle", frequency=frequency)
@@ -171,6 +181,7 @@ def test_fmu_parameters_give_the_kinds_trajectory_and_name_a_bad_one():
 
 
 def test_trajectories_are_immutable_and_reject_negative_time():
+    """Catches a trajectory that can be changed after creation or sampled at negative time."""
     trajectory = get_trajectory("circle")
     with pytest.raises(dataclasses.FrozenInstanceError):
         trajectory.radius = 0.1
