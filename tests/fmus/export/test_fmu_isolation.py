@@ -211,8 +211,8 @@ def test_two_fmus_built_from_different_versions_coexist_in_one_process(built_fmu
     """Each runs its own code: the start point each holds by default is its own version's."""
     result = run_python(f"""
         import json, sys
-        sys.path.insert(0, {str(ROOT / 'tests')!r})
-        from tests.support.fmi_support import FmuInstance
+        sys.path.insert(0, {str(ROOT / 'tests' / 'support')!r})
+        from fmi_support import FmuInstance
         a = FmuInstance({str(built_fmus['Trajectory'])!r}, {{"kind": "hold"}}, "a")
         b = FmuInstance({str(other_version)!r}, {{"kind": "hold"}}, "b")
         for _ in range(3):
