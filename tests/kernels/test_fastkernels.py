@@ -16,6 +16,7 @@ def _twins(make):
 
 
 def test_a_refused_drive_step_changes_nothing():
+    """Catches a drive kernel that changes its state on a refused (NaN) step."""
     params = get_motor_preset("motor1")
     a, b = _twins(lambda: Drive(params, torque_output="mean", T=1e-3))
     inputs = [(0.3 * math.sin(k), 0.0, 2.0 * math.cos(k), 0.1 * k, 2.5e-4) for k in range(9)]
@@ -30,6 +31,7 @@ def test_a_refused_drive_step_changes_nothing():
 
 
 def test_a_refused_observer_step_changes_nothing():
+    """Catches an observer kernel that changes its state on a refused (NaN) step."""
     a, b = _twins(lambda: CurrentObserver(get_motor_preset("motor2"), "dynamic"))
     for k in range(4):
         assert a.estimate(3.0 * k, 0.5 * k, 1e-3) == b.estimate(3.0 * k, 0.5 * k, 1e-3)
@@ -40,6 +42,7 @@ def test_a_refused_observer_step_changes_nothing():
 
 
 def test_a_refused_derivator_sample_changes_nothing():
+    """Catches a derivator kernel that changes its filters on a refused (NaN) sample."""
     a, b = _twins(Derivator)
     a.reset([0.1, -0.2])
     b.reset([0.1, -0.2])
@@ -54,6 +57,7 @@ def test_a_refused_derivator_sample_changes_nothing():
 
 @pytest.mark.parametrize("trajectory", [circle(), triangle()], ids=["circle", "triangle"])
 def test_trajectory_refuses_negative_time_and_is_continuous_at_its_end(trajectory):
+    """Catches a trajectory kernel that accepts t < 0 or jumps at its end."""
     with pytest.raises(ValueError, match="trajectory time must be >= 0 s, got -0.001"):
         trajectory(-0.001)
     before, after = trajectory(trajectory.duration - 1e-9), trajectory(trajectory.duration)
@@ -64,6 +68,7 @@ def test_trajectory_refuses_negative_time_and_is_continuous_at_its_end(trajector
 def test_balance_kernel_is_the_observer_and_lqr_written_with_numpy(yaw):
     # The BalanceController object against the numpy oracle (tests/kernels/test_kernels_wheeled.py),
     # on the real design.
+    """Catches a balance kernel whose observer or LQR differs from the numpy oracle."""
     from controller import fastbalance
     from controller.balance import BalanceController, BalanceSettings, design_balance, get_route
     from tests.kernels.test_kernels_wheeled import numpy_balance

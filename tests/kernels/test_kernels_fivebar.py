@@ -71,6 +71,7 @@ def _plant(settings=IntegratorSettings()):
 
 
 def test_plant_io_steps_as_the_simulator_and_publishes_its_outputs():
+    """Catches a plant I/O step that differs from the simulator or publishes stale outputs."""
     sim, kernel = _plant()
     state = sim.y.copy()
     context = kernel.context(state)
@@ -88,6 +89,7 @@ def test_plant_io_steps_as_the_simulator_and_publishes_its_outputs():
 @pytest.mark.parametrize("index", [0, 1])
 @pytest.mark.parametrize("value", [math.nan, math.inf, -math.inf])
 def test_a_non_finite_input_is_refused_with_its_code_and_changes_nothing(index, value):
+    """Catches a plant kernel that steps on a non-finite torque or changes its state or scratch."""
     sim, kernel = _plant()
     state = sim.y.copy()
     context = kernel.context(state)
@@ -105,6 +107,7 @@ def test_a_non_finite_input_is_refused_with_its_code_and_changes_nothing(index, 
 
 
 def test_a_non_finite_voltage_or_state_is_refused_and_changes_nothing():
+    """Catches the actuated kernel stepping on a non-finite voltage or state."""
     sim, kernel = _plant()
     a_motors = np.array([[0, 1.0, 1e-3, 0.05, 0.05, 1e-5, 0.0, 0.1], [1, 1.0, 1e-3, 0.05, 0.05, 1e-5, 0.0, 0.1]])
     state = np.concatenate([sim.y, [0.1, -0.2]])

@@ -81,6 +81,7 @@ def test_kinematics_close_the_general_algorithms_chains():
 
 
 def test_kinematics_refuse_what_the_mechanism_cannot_take():
+    """Catches C kinematics returning NaN or a wrong pose where the chain cannot reach or assemble."""
     kin = Kinematics(BENCH)
     with pytest.raises(fivebar.KinematicsError, match=r"out of reach of a chain \(distance 0\.45 m\)"):
         kin.inverse(0.5, 0.0)                                   # 0.45 m from chain 1's base at (l0, 0)
@@ -134,6 +135,7 @@ def oracle_sample(st, model, reference, memory):
 @pytest.mark.parametrize("model", ["exact", "tabulated"])
 @pytest.mark.parametrize("name", ALL_STRATEGY_NAMES)
 def test_two_samples_follow_the_thesis_equations(name, model, tmp_path, monkeypatch):
+    """Catches a law kernel whose torques of two samples differ from (7.21)-(7.22) written in the test."""
     st = get_strategy(name)
     if not st.model_based and model == "tabulated":
         pytest.skip("PD strategies use no model")   # their "exact" case runs them

@@ -45,6 +45,7 @@ def _plan(calls, refuse_at=None):
 
 
 def test_members_step_in_order_with_their_sub_steps_and_the_rows_are_recorded():
+    """Catches a C loop that steps members out of order, with wrong sub-steps, or loses rows."""
     calls = []
     plan, acc = _plan(calls)
     values, record = np.zeros(2), np.full((5, 2), np.nan)
@@ -59,6 +60,7 @@ def test_members_step_in_order_with_their_sub_steps_and_the_rows_are_recorded():
 
 
 def test_a_declining_member_stops_the_loop_where_it_declined_with_its_refusal():
+    """Catches a C loop that goes on after a refusal or reports the wrong step or member."""
     calls = []
     plan, acc = _plan(calls, refuse_at=1.25)     # step 2 (t = 1), second sub-step
     values, record = np.zeros(2), np.full((5, 2), np.nan)

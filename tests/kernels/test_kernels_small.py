@@ -159,6 +159,7 @@ def test_a_damaged_derivator_buffer_is_a_refusal_record_naming_the_word(word, ch
 
 
 def test_a_small_scratch_is_refused():
+    """Catches a derivator kernel that writes past a scratch buffer too small for it."""
     buf = _started_buffer()
     scratch = np.zeros(3)
     out, refusal, q = np.zeros(4), kernels.Refusal(), np.zeros(2)
@@ -179,6 +180,7 @@ def test_a_non_finite_estimate_does_not_advance_the_state():
 
 
 def test_an_angle_beyond_the_limit_is_a_refusal_record_with_every_angle():
+    """Catches a derivator refusal that changes the buffer or names the wrong angle."""
     derivator = Derivator()
     derivator.reset([0.0, 0.0])
     saved = derivator.buf.copy()
@@ -228,6 +230,7 @@ def _sample(buf, t, words=None):
     ("T_CYCLES", math.nan), ("T_CYCLES", 1e300), ("T_SIDE_TIME", 0.0), ("T_SIDE_TIME", math.nan),
     ("T_KIND", 7.0)])
 def test_a_forged_polygon_is_refused_naming_its_word(word, value):
+    """Catches a trajectory kernel that trusts a forged buffer word (count, kind, times)."""
     buf = triangle().buf.copy()
     buf[getattr(fasttrajectory, word)] = value
     code, refusal, out = _sample(buf, 1.0)
@@ -241,6 +244,7 @@ triangle_ = triangle()
 
 @pytest.mark.parametrize("trajectory", [circle(), triangle_, hold()], ids=["circle", "triangle", "hold"])
 def test_a_short_trajectory_buffer_is_refused(trajectory):
+    """Catches a trajectory kernel that reads past the end of a short buffer."""
     buf = trajectory.buf
     assert _sample(buf, 0.5)[0] == 0
     code, refusal, _ = _sample(buf, 0.5, buf.size - 1)
@@ -252,6 +256,7 @@ def test_a_short_trajectory_buffer_is_refused(trajectory):
 
 @pytest.mark.parametrize("t", [-1e-9, math.nan, -math.inf])
 def test_a_time_before_zero_is_a_refusal_record(t):
+    """Catches a trajectory sampled at negative or NaN time, or refused with the wrong record."""
     with pytest.raises(kernels.Refused, match="trajectory time must be >= 0 s") as caught:
         circle()(t)
     record = caught.value.record()
@@ -260,6 +265,7 @@ def test_a_time_before_zero_is_a_refusal_record(t):
 
 
 def test_the_trajectory_io_function_gives_the_reference_at_the_steps_end():
+    """Catches a trajectory I/O function that gives the reference at the step's start."""
     trajectory = triangle()
     context = trajectories.kernel_context(trajectory)
     io = kernels.function("pc_trajectory_io", ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double,

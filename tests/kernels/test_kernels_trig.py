@@ -74,6 +74,7 @@ def angles(rng) -> np.ndarray:
 
 
 def test_within_one_ulp_of_libm_over_the_range(sincos):
+    """Catches an inline sin or cos more than 1 ulp from libm in the fast range."""
     x = angles(np.random.default_rng(27))
     s, c = sincos(x)
     libm_s = np.array([math.sin(v) for v in x])   # math.sin is the C library's
@@ -83,6 +84,7 @@ def test_within_one_ulp_of_libm_over_the_range(sincos):
 
 
 def test_within_one_and_a_half_ulp_of_the_true_values(sincos):
+    """Catches an inline sin or cos more than 1.5 ulp from the true value (mpmath)."""
     import mpmath
 
     rng = np.random.default_rng(2712)
@@ -98,6 +100,7 @@ def test_within_one_and_a_half_ulp_of_the_true_values(sincos):
 
 
 def test_exact_values_and_signs(sincos):
+    """Catches an inline sin or cos that loses -0.0, a subnormal or a tiny angle."""
     x = np.array([0.0, -0.0, 1e-300, -1e-300, 5e-324, 1e-9])
     s, c = sincos(x)
     assert s.tolist() == [0.0, -0.0, 1e-300, -1e-300, 5e-324, 1e-9]
@@ -106,6 +109,7 @@ def test_exact_values_and_signs(sincos):
 
 
 def test_outside_the_fast_range_it_is_libm(sincos):
+    """Catches an inline sin or cos that does not hand large or non-finite angles to libm."""
     x = np.array([1e3 + 1e-9, -1234.5, 1e5, -3e7, 1e300, math.inf, -math.inf, math.nan])
     s, c = sincos(x)
     for v, sv, cv in zip(x, s, c):

@@ -88,6 +88,7 @@ def test_a_fall_changes_nothing_and_names_the_substep():
 @pytest.mark.parametrize("index, value, code", [(0, math.nan, K.BAD_INPUT), (1, math.inf, K.BAD_INPUT),
                                                 (2, 2e6, K.INPUT_LIMIT)])
 def test_the_io_step_refuses_an_input_and_changes_nothing(index, value, code):
+    """Catches a pendulum I/O step that accepts a bad input or changes its state or outputs."""
     sim = WheeledPendulum(initial=dict(psi=0.05))
     settings = np.zeros(K.SETTINGS_SIZE)
     settings[K.S_SUBSTEPS], settings[K.S_COUNT], settings[K.S_LIMIT] = 2, 1e-3, 1e6
@@ -227,6 +228,7 @@ def test_the_balance_sample_refuses_a_size_or_index_outside_its_arrays(word, val
                                                        (0, math.inf, math.inf, fastbalance.BAD_INPUT),
                                                        (1, -2e6, 1e6, fastbalance.INPUT_LIMIT)])
 def test_the_balance_sample_refuses_an_input_and_changes_nothing(index, value, limit, code):
+    """Catches a balance sample that accepts a bad input or changes its buffer or outputs."""
     buf, x, refusal = _buffer(yaw=False), np.zeros(fastbalance.IO_SIZE), kernels.Refusal()
     x[index] = value
     before, x_before = buf.copy(), x.copy()

@@ -14,6 +14,7 @@ REASONS = {3: Reason("BAD_INPUT", ("q1", "q2"), "rad", "input {variable} = {valu
 
 
 def test_a_kernel_refusal_becomes_one_record_naming_the_quantity():
+    """Catches a refusal record with a wrong variable, unit, code or message."""
     exc = refused(REASONS, Refusal(code=3, index=1, value=2e7), time=0.25)
     assert str(exc) == "input q2 = 20000000.0 rad at t = 0.25 s is absurd"
     assert isinstance(exc, ValueError)
@@ -22,6 +23,7 @@ def test_a_kernel_refusal_becomes_one_record_naming_the_quantity():
 
 
 def test_the_slave_fills_in_the_instance_and_the_time_and_ignores_other_errors():
+    """Catches a slave record without instance or time, or one made of a plain error."""
     exc = Refused("x", code=1, reason="R", variable="v", value=math.inf, unit="V")
     record = _refusal_record(exc, "drive1", 1.5)
     assert (record["instance"], record["time"], record["value"]) == ("drive1", 1.5, math.inf)
@@ -29,5 +31,6 @@ def test_the_slave_fills_in_the_instance_and_the_time_and_ignores_other_errors()
 
 
 def test_an_unknown_code_is_not_turned_into_a_wrong_record():
+    """Catches an unknown kernel code turned into a record naming a wrong quantity."""
     with pytest.raises(KeyError):
         refused(REASONS, Refusal(code=4, index=0, value=1.0))

@@ -52,6 +52,7 @@ def _sanitized_env(library: Path) -> dict:
 
 def test_the_harness_catches_an_out_of_bounds_write(tmp_path):
     # Which wrong code would the harness miss if the runtime were not active? This one.
+    """Catches a sanitizer harness whose runtime is inactive (an out-of-bounds write would pass)."""
     source = tmp_path / "oob.c"
     source.write_text("void poke(double *a, int n) { a[n] = 1.0; }\n")
     library = tmp_path / "liboob.so"
@@ -63,6 +64,7 @@ def test_the_harness_catches_an_out_of_bounds_write(tmp_path):
 
 
 def test_the_kernels_tests_pass_under_asan_and_ubsan(tmp_path):
+    """Catches out-of-bounds accesses, leaks and undefined behaviour in the C kernels."""
     library = build.build(tmp_path / "libparcosim_kernels.so", sanitize=True)
     tests = sorted(str(p.relative_to(ROOT)) for p in (ROOT / "tests" / "kernels").glob("test_kernels_*.py"))
     assert len(tests) > 5, tests            # none would run the whole suite under the sanitizers

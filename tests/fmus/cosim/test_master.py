@@ -16,6 +16,7 @@ def _short(scene_name, stop_time):
 
 
 def test_bench_order_keeps_every_sample_in_its_step():
+    """Catches a stepping order in which a sampled output is read a step late or a continuous one a step early."""
     result = simulate(_short("bench_circle_TCMDx", 0.0))
     position = {name: i for i, name in enumerate(result.order)}
     # sampled outputs are read in the step that produced them ...
@@ -29,6 +30,7 @@ def test_bench_order_keeps_every_sample_in_its_step():
 
 
 def test_thesis_scene_order_controller_first():
+    """Catches a stepping order for the thesis scene other than controller, trajectory, plant."""
     assert simulate(_short("thesis_sim_circle", 0.0)).order == ("ctrl", "traj", "plant")
 
 
@@ -49,6 +51,7 @@ def _two_derivators(stop_time=0.05, extra=()):
 
 
 def test_gauss_seidel_passes_samples_within_the_step_jacobi_one_step_later():
+    """Catches couplings that swap Gauss-Seidel and Jacobi, or pass values one step off."""
     gs = simulate(_two_derivators(), coupling="gauss-seidel")
     jacobi = simulate(_two_derivators(), coupling="jacobi")
     # traj -> d1: both couplings read the trajectory's value at the step's start
@@ -62,6 +65,7 @@ def test_gauss_seidel_passes_samples_within_the_step_jacobi_one_step_later():
 
 
 def test_sampled_loop_is_reported_as_algebraic_loop():
+    """Catches a master that runs a loop of sampled feedthroughs instead of naming it."""
     system = _two_derivators()
     system = replace(system, connections=tuple(c for c in system.connections if c.source != "traj.y_d")
                      + (Connection("d2.dq2", "d1.q2"),))
@@ -71,6 +75,7 @@ def test_sampled_loop_is_reported_as_algebraic_loop():
 
 @pytest.mark.parametrize("coupling", ["gauss-seidel", "jacobi"])
 def test_fmu_and_inprocess_identical(coupling, built_fmus):
+    """Catches an FMU run whose rows differ from the in-process run by a bit, with either coupling."""
     system = _short("bench_triangle_PDMDq", 0.15)
     fmu_dir = next(iter(built_fmus.values())).parent
     a = simulate(system, mode="inprocess", coupling=coupling)
@@ -87,6 +92,7 @@ def _plant_only(torque, stop_time, substeps=1):
 
 
 def test_multirate_substeps_equal_the_plant_stepped_finer():
+    """Catches multi-rate sub-steps with a wrong time or step size (the plant stepped at h / 4 by hand)."""
     result = simulate(_plant_only(0.01, 0.05, substeps=4))
     sim = PlantSimulator(get_preset("bench"), -0.002, 0.108)
     x = [sim.outputs()["x"]]
@@ -101,6 +107,7 @@ def test_multirate_substeps_equal_the_plant_stepped_finer():
 @pytest.mark.parametrize("mode", ["inprocess", "fmu"])
 def test_refused_step_stops_the_run_and_keeps_the_record(mode, built_fmus):
     # 0.3 N m open loop throws the bench mechanism into a singular pose within the second.
+    """Catches a refused step that crashes the run, loses its rows or its message."""
     system = _plant_only(0.3, 2.0)
     result = simulate(system, mode=mode, fmu_dir=next(iter(built_fmus.values())).parent)
     assert result.error is not None and result.error.startswith("plant refused the step from t = ")
@@ -112,6 +119,7 @@ def test_refused_step_stops_the_run_and_keeps_the_record(mode, built_fmus):
 
 
 def test_bad_systems_are_refused_before_running():
+    """Catches a master that starts a system with an unknown variable, parameter or mode."""
     good = _plant_only(0.0, 0.01)
     with pytest.raises(ValueError, match="no variable 'z'"):
         simulate(replace(good, record=("plant.z",)))
@@ -139,6 +147,7 @@ def _drives_and_plant(substeps, stop_time=0.2):
 
 
 def test_group_substeps_converge_on_the_coupled_drive_plant_motion():
+    """Catches group sub-steps that do not converge at first order on the drive-plant motion."""
     runs = {n: simulate(_drives_and_plant(n)) for n in (1, 2, 4, 8)}
     for r in runs.values():
         assert r.error is None
@@ -150,6 +159,7 @@ def test_group_substeps_converge_on_the_coupled_drive_plant_motion():
 
 
 def test_mean_drive_torque_couples_the_plant_better_than_the_end_torque():
+    """Catches a mean drive torque that is not the step's mean (it would not beat the end torque)."""
     def torque_output(system, mode):
         return replace(system, components=tuple(
             replace(c, parameters={**c.parameters, "torque_output": mode}) if c.model == "DCMotorDrive" else c
