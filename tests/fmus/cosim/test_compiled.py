@@ -36,6 +36,7 @@ def _same_rows(a, b):
                                                  ("thesis_sim_circle_me20", False)],
                          ids=["bench", "drives_in_plant", "thesis_exact_model"])
 def test_compiled_rows_are_the_in_process_rows(name, drives_inside):
+    """Catches a compiled loop whose rows differ from the in-process run by a bit."""
     scene = _short(get_scene(name), 1.5)
     if drives_inside:
         scene = drives_in_plant(scene, substeps=2)
@@ -67,6 +68,7 @@ def test_every_parameter_a_sweep_perturbs_reaches_the_compiled_loop():
 def test_a_sample_off_the_table_is_taken_by_python_and_the_loop_goes_on():
     # The controller's table covers only x <= 0.02 m: on the rest of the circle the compiled
     # law declines and the Python controller evaluates the exact model there (table_fallback).
+    """Catches a compiled loop that stops or differs where the table declines a sample."""
     scene = _with(_short(get_scene("bench_circle_TCx"), 1.2), "ctrl", x_max=0.02)
     fast = simulate(scene.system, mode="compiled")
     slow = simulate(scene.system, mode="inprocess")
@@ -76,6 +78,7 @@ def test_a_sample_off_the_table_is_taken_by_python_and_the_loop_goes_on():
 
 
 def test_a_refusal_stops_at_the_same_step_with_the_same_message():
+    """Catches a compiled refusal at another step or with another message than in process."""
     scene = _with(_short(get_scene("bench_circle_TCx"), 1.2), "ctrl", x_max=0.02, table_fallback=False)
     fast = run_scene(scene, mode="compiled")
     slow = run_scene(scene, mode="inprocess")
@@ -87,6 +90,7 @@ def test_a_refusal_stops_at_the_same_step_with_the_same_message():
 
 
 def test_foreign_fmus_jacobi_and_retries_fall_back_with_a_reason():
+    """Catches compiled mode accepting a foreign FMU, Jacobi or retries, or falling back silently."""
     system = System((Component("drive1", "/tmp/supplier_drive.fmu"),), (), (), stop_time=0.01)
     with pytest.raises(compiled.NotCompilable, match=r"drive1 is an FMU file \(supplier_drive.fmu\)"):
         compiled.check_compilable(system, "gauss-seidel", None)
@@ -101,6 +105,7 @@ def test_foreign_fmus_jacobi_and_retries_fall_back_with_a_reason():
 
 
 def test_metrics_report_compile_time_and_peak_memory():
+    """Catches compiled-run metrics without compile time, memory or with Python steps."""
     outcome = run_scene(_short(get_scene("bench_circle_PDq"), 0.2), mode="compiled")
     m = outcome.metrics
     assert m["mode"] == "compiled" and m["compile_s"] > 0.0 and m["python_steps"] == 0
@@ -108,6 +113,7 @@ def test_metrics_report_compile_time_and_peak_memory():
 
 
 def test_generated_source_follows_the_stepping_order():
+    """Catches a compiled plan that steps members out of the master's order."""
     scene = _short(get_scene("bench_circle_PDq"), 0.01)
     result = simulate(scene.system, mode="compiled")
     source = result.extra["plan"]
@@ -117,6 +123,7 @@ def test_generated_source_follows_the_stepping_order():
 
 
 def test_python_finishes_a_declined_step_from_the_declining_member_and_sub_step():
+    """Catches Python redoing or skipping members when it finishes a declined step."""
     from fmus.cosim.stepper import Stepper, _exchanges_of
 
     calls = []
@@ -151,6 +158,7 @@ def test_python_finishes_a_declined_step_from_the_declining_member_and_sub_step(
 @pytest.mark.parametrize("name", ["pendulum_balance", "pendulum_push"])
 def test_the_pendulum_scenes_compiled_are_the_in_process_rows(name):
     # One compiled loop: both scenes share the wiring (the push is a plant parameter).
+    """Catches compiled pendulum scenes that differ from in process or fall back to Python."""
     scene = get_scene(name)
     fast = simulate(scene.system, mode="compiled")
     slow = simulate(scene.system, mode="inprocess")
@@ -161,6 +169,7 @@ def test_the_pendulum_scenes_compiled_are_the_in_process_rows(name):
 
 def test_a_pendulum_falling_in_the_compiled_loop_stops_with_the_in_process_message():
     # At 0.5 V the drives cannot catch the 5 degree release: the robot falls near t = 0.56 s.
+    """Catches a compiled fall at another step or with another message."""
     scene = _with(_with(get_scene("pendulum_balance"), "ctrl", v_battery=0.5), "drive_l", v_max=0.5)
     scene = _with(_short(scene, 1.0), "drive_r", v_max=0.5)
     fast = run_scene(scene, mode="compiled")

@@ -58,6 +58,7 @@ def _path_deviation(a, b):
 
 @pytest.mark.parametrize("mode", ["inprocess", "fmu"])
 def test_c_drive_replaces_both_bench_drives(mode, c_fmus, bench_inprocess, built_fmus):
+    """Catches a foreign C drive that is wired wrong or sent parameters it does not have."""
     fmu_dir = next(iter(built_fmus.values())).parent
     with pytest.warns(UserWarning, match=r"skipped: drive1 \(DCDrive.fmu\): method; drive2 \(DCDrive.fmu\): method"):
         result = simulate(_c_drives(c_fmus).system, mode=mode, fmu_dir=fmu_dir)
@@ -69,6 +70,7 @@ def test_c_drive_replaces_both_bench_drives(mode, c_fmus, bench_inprocess, built
 
 
 def test_parcosim_run_replace(c_fmus, tmp_path, capsys):
+    """Catches parcosim run --replace failing on a foreign drive or skipping parameters silently."""
     out = tmp_path / "run"
     assert main(["run", "bench_circle_TCMDx", "--replace", f"drive1={c_fmus['DCDrive']}",
                  "--replace", f"drive2={c_fmus['DCDrive']}", "--out", str(out)]) == 0
@@ -78,6 +80,7 @@ def test_parcosim_run_replace(c_fmus, tmp_path, capsys):
 
 
 def test_a_missing_variable_is_one_line_naming_it_and_the_fmus_variables(c_fmus, tmp_path, capsys):
+    """Catches a missing variable of a foreign FMU refused with a traceback or without its variables."""
     assert main(["run", "bench_circle_TCMDx", "--replace", f"drive1={c_fmus['Threshold']}",
                  "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err.strip()
@@ -93,11 +96,13 @@ def test_a_missing_variable_is_one_line_naming_it_and_the_fmus_variables(c_fmus,
     (["--replace", "drive1=/no/such.fmu"], "not an existing .fmu file"),
 ])
 def test_replace_mistakes_exit_2(argv, message, tmp_path, capsys):
+    """Catches a malformed --replace accepted or ending in a traceback instead of exit 2."""
     assert main(["run", "bench_circle_TCMDx", *argv, "--out", str(tmp_path)]) == 2
     assert message in capsys.readouterr().err
 
 
 def test_exports_carry_the_foreign_fmu_or_say_why_not(c_fmus, tmp_path, capsys, built_fmus):
+    """Catches an export that drops a foreign FMU or packs one it cannot run."""
     fmu_dir = str(next(iter(built_fmus.values())).parent)
     replace = ["--replace", f"drive1={c_fmus['DCDrive']}"]
     path = tmp_path / "drive.ssp"
@@ -171,6 +176,7 @@ def _threshold_system(c_fmus, x0, spread):
 
 @pytest.mark.parametrize("mode", ["inprocess", "fmu"])
 def test_integer_and_boolean_connections(mode, c_fmus, built_fmus):
+    """Catches Integer or Boolean connections passed as Real (or not at all) between FMUs."""
     trajectory = simulate(System((Component("traj", "Trajectory", {"kind": "circle"}),), (), ("traj.x_d",), 3.0))
     x_d = trajectory["traj.x_d"]
     x0, spread = x_d[0], np.ptp(x_d)
@@ -193,6 +199,7 @@ def test_integer_and_boolean_connections(mode, c_fmus, built_fmus):
 
 
 def test_outputs_without_dependencies_close_an_algebraic_loop(c_fmus):
+    """Catches outputs without declared dependencies taken as free of feedthrough."""
     path = str(c_fmus["Threshold"])
     system = System((Component("a", path, {}), Component("b", path, {})),
                     (Connection("a.above", "b.enable"), Connection("b.above", "a.enable")), ("a.count",), 0.01)
@@ -202,6 +209,7 @@ def test_outputs_without_dependencies_close_an_algebraic_loop(c_fmus):
 
 
 def test_a_connection_joins_one_type(c_fmus):
+    """Catches a connection between variables of two types accepted."""
     path = str(c_fmus["Threshold"])
     system = System((Component("a", path, {}), Component("b", path, {})),
                     (Connection("a.count", "b.u"),), ("b.y",), 0.01)
@@ -213,6 +221,7 @@ def test_a_connection_joins_one_type(c_fmus):
 # --- the build and foreign files -------------------------------------------------------------
 
 def test_build_leaves_a_foreign_fmu_alone_and_fmu_mode_refuses_it(c_fmus, tmp_path, capsys):
+    """Catches the build overwriting a foreign FMU, or FMU mode running it as ours."""
     from fmus.export.build import ForeignFmuError, build_fmu, ensure_built
 
     foreign = tmp_path / "DCMotorDrive.fmu"

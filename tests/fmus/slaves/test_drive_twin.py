@@ -50,6 +50,7 @@ def test_lugre_drive_is_kt_i_minus_the_pure_models_friction(torque_output):
 
 
 def test_refused_step_leaves_the_bristles():
+    """Catches a LuGre drive whose bristle state z changes on a refused step."""
     drive = Drive(motor1, friction="lugre")
     drive.step(0.3, 0.0, 0.5, 0.0, H)
     z = drive.z
@@ -79,6 +80,7 @@ def test_lugre_drive_holds_a_torque_below_break_away_and_slips_above():
 
 
 def test_pwm_applies_multiples_of_the_quantum_the_controller_keeps_its_own_output():
+    """Catches PWM that applies an unquantised voltage or feeds the quantised one back to the controller."""
     counts = 255
     q = motor1.v_max / counts
     pwm = Drive(motor1, pwm_counts=counts)
@@ -96,6 +98,7 @@ def test_pwm_applies_multiples_of_the_quantum_the_controller_keeps_its_own_outpu
 
 
 def test_noise_is_a_stateless_standard_normal():
+    """Catches current noise that is not N(0, 1), depends on call order, or correlates across streams."""
     g = np.array([gaussian(11, 1, k) for k in range(20000)])
     assert g[17] == gaussian(11, 1, 17)
     assert stats.kstest(g, "norm").pvalue > 1e-3
@@ -128,6 +131,7 @@ def test_offset_and_noise_enter_the_loops_sample():
     ({"friction": "lugre", "params": motor1.with_(mu=0.0)}, r"Fc \(mu\) = 0.0 must be > 0"),
 ])
 def test_bad_options_are_named(kwargs, words):
+    """Catches a drive accepting a bad twin option (friction, PWM, offset, noise) without naming it."""
     params = kwargs.pop("params", motor1)
     with pytest.raises(ValueError, match=words):
         Drive(params, **kwargs)
@@ -135,6 +139,7 @@ def test_bad_options_are_named(kwargs, words):
 
 @pytest.mark.parametrize("field, value", [("sigma0", -5.0), ("sigma1", -0.1), ("omega_s", 0.0), ("mu_s", -0.2)])
 def test_motor_params_refuse_bad_lugre_values(field, value):
+    """Catches motor parameters accepting a negative or zero LuGre coefficient."""
     with pytest.raises(ValueError, match=f"{field} must be"):
         motor1.with_(**{field: value})
 
@@ -146,6 +151,7 @@ TWIN = {"friction": "lugre", "pwm_counts": 1000, "current_offset": 0.02, "curren
 
 
 def test_fmu_matches_the_python_drive_and_restores_its_noise(built_fmus):
+    """Catches a twin drive FMU that differs from the Python drive or replays other noise after a state restore."""
     fmu = FmuInstance(built_fmus["DCMotorDrive"], {**TWIN, "sigma0": 80.0})
     drive = Drive(motor1.with_(sigma0=80.0), **TWIN)
     try:
@@ -175,6 +181,7 @@ def test_fmu_matches_the_python_drive_and_restores_its_noise(built_fmus):
     ("pwm_counts", -2, "pwm_counts must be a whole number"),
 ])
 def test_fmu_refuses_bad_values_naming_them(built_fmus, name, value, words):
+    """Catches a drive FMU accepting a bad twin parameter without naming it."""
     fmu = FmuInstance(built_fmus["DCMotorDrive"], {"friction": "lugre", name: value})
     try:
         assert words in fmu.refused_step(H)
@@ -189,6 +196,7 @@ def _short(scene, stop=0.6):
 
 
 def test_fidelity_twin_runs_compiled_as_in_process_and_numbers_do_not_change_the_loop():
+    """Catches twin options that the compiled loop applies differently from in process."""
     from fmus.cosim.master import simulate
     from scenarios.scenes.thesis import Fidelity, bench
 
@@ -208,6 +216,7 @@ def test_fidelity_twin_runs_compiled_as_in_process_and_numbers_do_not_change_the
 
 
 def test_fidelity_refuses_what_it_cannot_model():
+    """Catches a Fidelity combining LuGre without Coulomb, or twin effects on a scene without drives."""
     from scenarios.scenes.thesis import Fidelity
 
     with pytest.raises(ValueError, match="friction = 'lugre' models the dry friction that coulomb = False"):

@@ -17,6 +17,7 @@ SMALL_GRID = {"grid_step": 0.01, "x_min": -0.02, "x_max": 0.04, "y_min": 0.12, "
 
 @pytest.mark.parametrize("name", NAMES)
 def test_fmpy_validate_finds_no_problem(built_fmus, name):
+    """Catches a Trajectory, Derivator or PositionController FMU that fmpy's validation rejects."""
     assert validate_fmu(str(built_fmus[name])) == []
 
 
@@ -42,6 +43,7 @@ def thesis_reference(kind, t):
 
 @pytest.mark.parametrize("kind, steps", [("thesis_circle", 1200), ("circle", 300), ("triangle", 700)])
 def test_trajectory_fmu_matches_the_thesis_formulas(built_fmus, kind, steps):
+    """Catches a Trajectory FMU whose outputs differ from the thesis' formulas."""
     fmu = FmuInstance(built_fmus["Trajectory"], {"kind": kind})
     outputs = ("x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
     scale = (1, 1, 1, 1, 1e-2, 1e-2)   # 1e-9 m on positions, relative on the derivatives
@@ -77,6 +79,7 @@ def test_trajectory_fmu_outputs_are_calculated_in_initialization_mode(built_fmus
 
 
 def test_trajectory_fmu_refuses_unknown_kind(built_fmus):
+    """Catches a Trajectory FMU running a default for an unknown kind."""
     fmu = FmuInstance(built_fmus["Trajectory"], {"kind": "square"})
     assert "unknown trajectory kind 'square'" in fmu.refused_step(1e-3)
     fmu.close()
@@ -84,6 +87,7 @@ def test_trajectory_fmu_refuses_unknown_kind(built_fmus):
 
 @pytest.mark.parametrize("order", [1, 2])
 def test_derivator_fmu_is_exact_on_ramps_and_parabolas(built_fmus, order):
+    """Catches a Derivator FMU whose settled rates of ramps and parabolas are not exact."""
     fmu = FmuInstance(built_fmus["Derivator"], {"start_from_input": False, "q1_0": 0.3, "q2_0": -1.2})
     rate, acc = 0.7, -2.5
     for k in range(1500):
@@ -103,6 +107,7 @@ def test_derivator_fmu_is_exact_on_ramps_and_parabolas(built_fmus, order):
 
 
 def test_derivator_fmu_refuses_nan_and_wrong_step(built_fmus):
+    """Catches a Derivator FMU accepting NaN or a step other than its sample time."""
     fmu = FmuInstance(built_fmus["Derivator"])
     fmu.step(1e-3, q1=0.1, q2=0.2)
     assert abs(fmu.get("dq1")) < 1e-12    # starts at rest at the first input
@@ -123,6 +128,7 @@ def controller_inputs(k):
 
 @pytest.mark.parametrize("strategy, model", [("TCMDx", "tabulated"), ("TCMDq", "exact"), ("PDMDq", "tabulated")])
 def test_controller_fmu_equals_in_process(built_fmus, strategy, model):
+    """Catches a PositionController FMU whose torques differ from the in-process controller."""
     params = dict(SMALL_GRID, strategy=strategy, model=model)
     fmu = FmuInstance(built_fmus["PositionController"], params)
     ctrl = InProcess(get_preset("bench"), get_strategy(strategy), model=model, grid_step=0.01,
@@ -137,6 +143,7 @@ def test_controller_fmu_equals_in_process(built_fmus, strategy, model):
 
 
 def test_controller_fmu_refuses_bad_input(built_fmus):
+    """Catches a PositionController FMU accepting a NaN input or naming the wrong one."""
     meas, ref = controller_inputs(0)
     names = ("q1", "q2", "dq1", "dq2", "ddq1", "ddq2", "x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d")
     good = dict(zip(names, meas + ref))

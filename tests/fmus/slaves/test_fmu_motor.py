@@ -32,6 +32,7 @@ def observer_fmu(built_fmus):
 
 @pytest.mark.parametrize("model", ["DCMotorDrive", "CurrentObserver"])
 def test_fmpy_validate_finds_no_problem(built_fmus, model):
+    """Catches a DCMotorDrive or CurrentObserver FMU that fmpy's validation rejects."""
     assert validate_fmu(str(built_fmus[model])) == []
 
 
@@ -40,6 +41,7 @@ def test_fmpy_validate_finds_no_problem(built_fmus, model):
     ("CurrentObserver", {"i_hat"}, {"R", "ke", "L"}),
 ])
 def test_variables_structure_and_sentinel_defaults(built_fmus, model, outputs, sentinels):
+    """Catches a drive or observer FMU declaring feedthrough, missing an output, or losing a sentinel default."""
     md = read_model_description(str(built_fmus[model]))
     assert {o.variable.name for o in md.outputs} == outputs | {"error"}
     assert all(o.dependencies == [] for o in md.outputs)       # outputs change only in doStep
@@ -63,6 +65,7 @@ def analytic_locked_current(t, switch_times, voltages, R, L):
 
 @pytest.mark.parametrize("L_over_R_per_step", [None, 0.01])      # the preset's L, and L/R = h/100
 def test_voltage_mode_locked_rotor_equals_analytic_current(drive_fmu, L_over_R_per_step):
+    """Catches a voltage-mode drive whose locked-rotor current is not the RL circuit's (with saturation)."""
     R = motor1.R
     L = motor1.L if L_over_R_per_step is None else R * T * L_over_R_per_step
     params = {"mode": "voltage"} if L_over_R_per_step is None else {"mode": "voltage", "L": L}
@@ -102,6 +105,7 @@ def test_explicit_euler_blows_up_when_L_over_R_is_100x_shorter_than_the_step(dri
     ({"method": "euler", "omega0": -5.0}, T / 4),
 ])
 def test_current_mode_equals_in_process_drive_to_the_last_bit(drive_fmu, fmu_parameters, h):
+    """Catches a drive FMU that differs from the in-process drive by a bit for any parameter set."""
     p = dict(fmu_parameters)
     params = get_motor_preset(p.pop("preset", "motor1"))
     rename = {"J_design": "J_rotor"}
@@ -124,6 +128,7 @@ def test_current_mode_equals_in_process_drive_to_the_last_bit(drive_fmu, fmu_par
 
 @pytest.mark.parametrize("kind", ["static", "dynamic"])
 def test_observer_fmu_equals_in_process_observer(observer_fmu, kind):
+    """Catches an observer FMU that differs from the in-process observer or ignores its start values."""
     params = motor1.with_(R=1.3, ke=0.06, L=1e-3)
     obs = CurrentObserver(params, kind)
     obs.reset(0.25, 3.0)
@@ -171,6 +176,7 @@ def test_current_step_with_observer_fmu_settles(drive_fmu, observer_fmu, preset,
 
 @pytest.mark.parametrize("name", ["i_ref", "v_ref", "omega", "i_hat"])
 def test_nan_drive_input_is_refused_and_outputs_stay(drive_fmu, name):
+    """Catches a drive FMU accepting NaN or moving its outputs on a refused step."""
     fmu = FmuInstance(drive_fmu, {"omega0": 10.0})
     fmu.step(T, i_ref=0.5, omega=10.0)
     before = [fmu.get(n) for n in DRIVE_OUTPUTS]
@@ -183,6 +189,7 @@ def test_nan_drive_input_is_refused_and_outputs_stay(drive_fmu, name):
 
 @pytest.mark.parametrize("name", ["v", "omega"])
 def test_nan_observer_input_is_refused(observer_fmu, name):
+    """Catches an observer FMU accepting inf or moving i_hat on a refused step."""
     fmu = FmuInstance(observer_fmu)
     fmu.step(T, v=2.0, omega=1.0)
     before = fmu.get("i_hat")
@@ -205,6 +212,7 @@ def test_nan_observer_input_is_refused(observer_fmu, name):
     ({"omega0": float("nan")}, "omega0 must be a finite number, got nan"),
 ])
 def test_bad_drive_parameters_are_refused_with_their_name(drive_fmu, parameters, expected):
+    """Catches a drive FMU accepting a bad parameter, or refusing it without its name in the log."""
     fmu = FmuInstance(drive_fmu, parameters)
     message = fmu.refused_step(T, i_ref=1.0)
     assert expected in message
@@ -215,6 +223,7 @@ def test_bad_drive_parameters_are_refused_with_their_name(drive_fmu, parameters,
 
 
 def test_current_mode_step_must_divide_the_controller_period(drive_fmu):
+    """Catches a current-mode drive FMU accepting a step that does not divide T."""
     fmu = FmuInstance(drive_fmu)
     with pytest.raises(FMICallException) as info:
         fmu.fmu.doStep(currentCommunicationPoint=0.0, communicationStepSize=0.3e-3)
@@ -231,6 +240,7 @@ def test_current_mode_step_must_divide_the_controller_period(drive_fmu):
     ({"preset": "x"}, "unknown motor preset 'x'"),
 ])
 def test_bad_observer_parameters_are_refused_with_their_name(observer_fmu, parameters, expected):
+    """Catches an observer FMU accepting a bad parameter, or refusing it without its name."""
     fmu = FmuInstance(observer_fmu, parameters)
     message = fmu.refused_step(T, v=1.0)
     assert expected in message

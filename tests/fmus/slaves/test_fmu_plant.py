@@ -19,10 +19,12 @@ def torques(t):
 
 
 def test_fmpy_validate_finds_no_problem(built_fmus):
+    """Catches a FiveBarPlant FMU that fmpy's validation rejects."""
     assert validate_fmu(str(built_fmus["FiveBarPlant"])) == []
 
 
 def test_model_structure_declares_no_direct_feedthrough(built_fmus):
+    """Catches a FiveBarPlant FMU declaring feedthrough (masters would see an algebraic loop)."""
     from fmpy import read_model_description
     md = read_model_description(str(built_fmus["FiveBarPlant"]))
     names = {o.variable.name for o in md.outputs}
@@ -33,6 +35,7 @@ def test_model_structure_declares_no_direct_feedthrough(built_fmus):
 
 @pytest.mark.parametrize("preset, x0, y0", [("thesis_sim", 0.07, 0.17), ("bench", -0.002, 0.108)])
 def test_fmu_equals_the_in_process_model_to_the_last_bit(built_fmus, preset, x0, y0):
+    """Catches a FiveBarPlant FMU that differs from the in-process plant by a bit."""
     fmu = FmuInstance(built_fmus["FiveBarPlant"], {"preset": preset, "x0": x0, "y0": y0})
     sim = PlantSimulator(get_preset(preset), x0, y0)
     assert fmu.get("q1") == sim.outputs()["q1"]
@@ -47,6 +50,7 @@ def test_fmu_equals_the_in_process_model_to_the_last_bit(built_fmus, preset, x0,
 
 
 def test_integrator_parameters_reach_the_model(built_fmus):
+    """Catches FMU integrator parameters (method, tolerances, Baumgarte, kernel) not reaching the plant."""
     settings = {"method": "dopri5", "rtol": 1e-11, "atol": 1e-14, "baumgarte": 5.0, "kernel": "general"}
     fmu = FmuInstance(built_fmus["FiveBarPlant"], settings)
     sim = PlantSimulator(get_preset("thesis_sim"), 0.07, 0.17, IntegratorSettings(**settings))
@@ -58,6 +62,7 @@ def test_integrator_parameters_reach_the_model(built_fmus):
 
 
 def test_nan_torque_is_refused_and_outputs_stay_finite(built_fmus):
+    """Catches a plant FMU accepting NaN torque or moving its outputs on a refused step."""
     fmu = FmuInstance(built_fmus["FiveBarPlant"])
     fmu.step(1e-3, tau1=0.01, tau2=0.0)
     x_before = fmu.get("x")
@@ -77,6 +82,7 @@ def test_nan_torque_is_refused_and_outputs_stay_finite(built_fmus):
     ({"method": "euler"}, "unknown integrator 'euler'"),
 ])
 def test_bad_parameters_are_refused_with_their_name(built_fmus, parameters, expected):
+    """Catches a plant FMU accepting a bad parameter, or refusing it without its name."""
     fmu = FmuInstance(built_fmus["FiveBarPlant"], parameters)
     assert expected in fmu.refused_step(1e-3, tau1=0.0)
     assert any(expected in m for m in fmu.messages)
@@ -85,6 +91,7 @@ def test_bad_parameters_are_refused_with_their_name(built_fmus, parameters, expe
 
 
 def test_singularity_during_a_step_is_refused_with_time(built_fmus):
+    """Catches a plant FMU stepping through a singular pose or refusing without time."""
     fmu = FmuInstance(built_fmus["FiveBarPlant"])
     with pytest.raises(FMICallException):
         for _ in range(5000):
@@ -95,6 +102,7 @@ def test_singularity_during_a_step_is_refused_with_time(built_fmus):
 
 
 def test_two_fmus_in_one_process_do_not_interfere(built_fmus):
+    """Catches two plant FMU instances sharing state (a module global)."""
     a = FmuInstance(built_fmus["FiveBarPlant"], {"preset": "bench", "x0": -0.002, "y0": 0.108}, "a")
     b = FmuInstance(built_fmus["FiveBarPlant"], {"preset": "thesis_sim"}, "b")
     for _ in range(10):

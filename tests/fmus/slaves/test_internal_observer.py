@@ -34,6 +34,7 @@ def _omega(t):
 @pytest.mark.parametrize("substeps, phase", [(1, 0), (H_SUBSTEPS, 0), (H_SUBSTEPS, 2)])
 @pytest.mark.parametrize("preset", ["motor1", "motor2"])
 def test_the_internal_observer_is_the_two_instance_loop(preset, substeps, phase):
+    """Catches an internal observer that differs from the drive and observer FMUs wired together."""
     h = 1e-3 / substeps
     common = {"preset": preset, "mode": "current", "torque_output": "mean", "sample_phase": phase}
     inner = _instance("DCMotorDrive", "inner", ["i_ref", "omega"], ["tau", "v", "i"],
@@ -66,6 +67,7 @@ def test_the_internal_observer_is_the_two_instance_loop(preset, substeps, phase)
     ({"internal_observer": True, "observer_kind": "clairvoyant"}, "observer_kind"),
 ])
 def test_bad_internal_observer_settings_are_refused_by_name(parameters, names):
+    """Catches a drive accepting internal_observer with settings it cannot honour."""
     inst = _instance("DCMotorDrive", "d", ["i_ref", "omega"], ["tau"], {"preset": "motor1", **parameters})
     try:
         with pytest.raises(CoSimulationError, match=f"initialisation refused: .*{names}"):

@@ -21,10 +21,12 @@ NAMES = [name for name, _ in OUTPUTS]
 
 @pytest.mark.parametrize("model", ["WheeledPendulum", "BalanceController"])
 def test_fmpy_validate(built_fmus, model):
+    """Catches a WheeledPendulum or BalanceController FMU that fmpy's validation rejects."""
     assert validate_fmu(str(built_fmus[model])) == []
 
 
 def test_plant_fmu_equals_in_process_to_the_last_bit(built_fmus):
+    """Catches a WheeledPendulum FMU that differs from the in-process simulator by a bit."""
     start = {"psi0": 0.1, "dphi0": 1.0, "dtheta0": 2.0}
     fmu = FmuInstance(built_fmus["WheeledPendulum"], start)
     sim = WheeledPendulum(initial={"psi": 0.1, "dphi": 1.0, "dtheta": 2.0})
@@ -38,6 +40,7 @@ def test_plant_fmu_equals_in_process_to_the_last_bit(built_fmus):
 
 
 def test_fall_is_fmi2discard_naming_psi_and_time(built_fmus):
+    """Catches a fall reported as fmi2Error or fmi2Fatal, or without psi and time."""
     fmu = FmuInstance(built_fmus["WheeledPendulum"], {"psi0": 0.3})
     assert not fmu.get("fallen")
     with pytest.raises(FMICallException) as caught:
@@ -58,12 +61,14 @@ def test_fall_is_fmi2discard_naming_psi_and_time(built_fmus):
     ({"g": float("nan")}, "parameter g = nan"),
 ])
 def test_bad_plant_parameters_refused_by_name(built_fmus, parameters, expected):
+    """Catches a WheeledPendulum FMU accepting a bad parameter without naming it."""
     fmu = FmuInstance(built_fmus["WheeledPendulum"], parameters)
     assert expected in fmu.refused_step(1e-3)
     fmu.close()
 
 
 def test_nan_torque_refused_naming_variable_value_time(built_fmus):
+    """Catches a WheeledPendulum FMU accepting NaN torque or naming the wrong input."""
     fmu = FmuInstance(built_fmus["WheeledPendulum"])
     fmu.step(1e-3)
     message = fmu.refused_step(1e-3, tau_r=float("nan"))
@@ -100,6 +105,7 @@ def test_linearisation_matches_finite_differences_of_the_fmu_step():
 
 
 def test_design_closed_loop_and_observer_poles():
+    """Catches a balance design whose closed loop or observer is unstable or not the stated poles."""
     d = design_balance()
     poles = np.linalg.eigvals(d.Ad - d.Bd @ d.K)
     np.testing.assert_allclose(np.sort_complex(poles), np.sort_complex(d.closed_loop_poles), atol=1e-12)
@@ -112,6 +118,7 @@ def test_design_closed_loop_and_observer_poles():
 
 
 def test_balance_scene_recovers_from_5_degrees_and_fmus_equal_in_process(built_fmus):
+    """Catches a balance loop that does not recover from 5 degrees, or FMUs differing from in process."""
     scene = pendulum_scene("pendulum_balance")
     a = run_scene(scene)
     m = a.metrics
@@ -130,6 +137,7 @@ def test_balance_scene_recovers_from_5_degrees_and_fmus_equal_in_process(built_f
 
 
 def test_push_and_drive_scenes():
+    """Catches push or drive scenes that fall, drift more than 20 mm or miss the 90 degree turn."""
     push = run_scene("pendulum_push").metrics
     assert push["completed"] and 1.0 < push["peak_pitch_deg"] < 15.0 and push["last_second_pitch_deg"] < BALANCED_DEG
     drive = run_scene("pendulum_drive").metrics
@@ -138,6 +146,7 @@ def test_push_and_drive_scenes():
 
 
 def test_falling_run_reports_completed_false():
+    """Catches a falling run reported as completed, or without psi in its error."""
     outcome = run_scene(pendulum_scene("pendulum_balance", v_battery=0.3))
     assert outcome.metrics["completed"] is False
     assert "fell over" in outcome.metrics["error"] and "psi = " in outcome.metrics["error"]
@@ -146,6 +155,7 @@ def test_falling_run_reports_completed_false():
 @pytest.mark.parametrize("fidelity", [PendulumFidelity(yaw=False), PendulumFidelity(electrics="ideal"),
                                       PendulumFidelity(friction=False), PendulumFidelity(model="seed")])
 def test_fidelity_switches_still_balance(fidelity):
+    """Catches a pendulum fidelity switch (yaw, friction, model) that breaks balancing."""
     scene = pendulum_scene("pendulum_balance", fidelity)
     outcome = run_scene(scene)
     assert outcome.metrics["completed"] and outcome.metrics["last_second_pitch_deg"] <= BALANCED_DEG
@@ -165,6 +175,7 @@ def test_sample_time_quick_checks():
 
 
 def test_generic_commands_on_a_pendulum_scene(tmp_path, capsys):
+    """Catches a 5R-only command option accepted on a pendulum scene instead of refused in one line."""
     from parcosim.cli import main
 
     assert main(["export-ssp", "pendulum_balance", str(tmp_path / "p.ssp")]) == 2
