@@ -165,6 +165,7 @@ def test_every_strategy_starts_at_x1(kind, bound_mm):
     (1.0, (0.95, 1.0), (40.0, 50.0)),
 ])
 def test_voltage_saturation_bounds_the_torque_and_stays_stable(v_max, saturated, rms_mm):
+    """Catches a drive that exceeds v_max or a loop that goes unstable when the supply saturates."""
     system = with_parameters(short(bench("TCMDx"), 1.0), ("drive1", "drive2"), v_max=v_max)
     r = completed(simulate(replace(system, record=system.record + ("plant.dq1",))))
     v = np.abs(r["drive1.v"])
@@ -177,6 +178,7 @@ def test_voltage_saturation_bounds_the_torque_and_stays_stable(v_max, saturated,
 
 
 def test_absurd_voltage_command_is_clipped_at_the_supply():
+    """Catches a voltage command of 1e300 V passed on (inf torque) instead of clipped at the supply."""
     drive = make_slave("DCMotorDrive", {"mode": "voltage"})
     for k in range(3):
         drive.v_ref = 1e300 * (-1) ** k
@@ -200,6 +202,7 @@ def test_lambda_plus_5_and_20_stays_stable_in_our_bench(strategy):
 
 
 def test_lambda_far_beyond_the_preset_chatters_at_the_supply_but_stays_bounded():
+    """Catches a loop that diverges (not just chatters) when lambda is far beyond the preset."""
     r = completed(simulate(with_parameters(short(bench("TCMDx"), 1.0), ("ctrl",), lam=660.0)))
     assert rms_after(r, 0.5) < 0.25e-3 and tracking_error(r)[r.time >= 0.5].max() < 0.5e-3
     assert np.abs(r["drive1.v"]).max() == 24.0 and np.abs(r["ctrl.tau1"]).max() > 5.0
@@ -255,6 +258,7 @@ def _plant_run(method="rk4", baumgarte=10.0, substeps=1, steps=300):
     ("dopri5", 10000.0, 1, 1e-12, 1e-12),    # 10/h, adaptive: accurate, but stiff (~100x the cost)
 ])
 def test_baumgarte_from_0_to_10_over_h(method, baumgarte, substeps, deviation, residual):
+    """Catches Baumgarte stabilisation that drifts or destabilises the plant anywhere in 0-10/h."""
     reference, _ = _plant_run("accurate")
     xy, res = _plant_run(method, baumgarte, substeps)
     assert np.max(np.hypot(*(xy - reference).T)) < deviation
@@ -345,6 +349,7 @@ def _electrics(tau_e, electrics="full", observer_kind="static", stop_time=1.0):
 
 @pytest.mark.parametrize("tau_e", [6e-4, 1e-4, 1e-5, 1e-6])
 def test_exact_electrics_stay_stable_down_to_1_us(tau_e):
+    """Catches exact electrics that go unstable for electrical time constants down to 1 us."""
     r = completed(simulate(_electrics(tau_e)))
     assert 0.42e-3 < rms_after(r, 0.5) < 0.44e-3
 

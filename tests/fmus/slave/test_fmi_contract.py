@@ -174,6 +174,7 @@ def test_a_communication_point_that_does_not_follow_the_last_is_refused(model):
 
 
 def test_the_first_step_starts_at_the_start_time_and_points_may_round():
+    """Catches a first step off the start time accepted, or a master's rounded k h refused."""
     slave = make_slave("Trajectory")
     assert not slave.do_step(0.5, H)
     slave = make_slave("Trajectory")
@@ -270,6 +271,7 @@ def test_a_plant_step_that_would_take_over_the_limit_is_refused_at_initialisatio
 # --- resources -----------------------------------------------------------------------------------
 
 def test_instances_do_not_grow_sys_path():
+    """Catches a slave that appends to sys.path on every instantiation (pythonfmu's wrapper does)."""
     sys.path.append(sys.path[0])                           # what pythonfmu's wrapper does each time
     sys.path.append(sys.path[0])
     for _ in range(3):
@@ -332,6 +334,7 @@ def test_a_controller_with_an_unwritable_cache_initialises(tmp_path, monkeypatch
 
 
 def test_a_tunable_parameter_may_be_set_after_initialisation():
+    """Catches the after-initialisation guard refusing a parameter declared tunable."""
     from pythonfmu import Fmi2Variability
 
     from fmus.slave.base import GuardedSlave

@@ -202,6 +202,7 @@ def test_restoring_a_state_taken_before_a_refused_step_clears_the_refusal(backen
 @pytest.mark.parametrize("model", ["FiveBarPlant", "DCMotorDrive", "CurrentObserver", "Derivator",
                                    "PositionController", "Trajectory", "ActuatedFiveBarPlant"])
 def test_every_fmu_declares_state_capabilities(model, built_fmus):
+    """Catches an FMU that can get, set and serialise its state but does not declare it."""
     from fmpy import read_model_description
 
     cs = read_model_description(str(built_fmus[model])).coSimulation
@@ -233,10 +234,12 @@ def test_retry_in_sub_steps_completes_a_run_a_full_step_stops(mode, built_fmus):
 
 
 def test_without_retry_no_state_is_taken(monkeypatch):
+    """Catches a master that takes FMU states on every step when no retry is asked for."""
     monkeypatch.setattr(InProcessInstance, "get_state", lambda self: pytest.fail("state taken"))
     assert simulate(_spin_up(0.01)).completed
 
 
 def test_retry_substeps_must_split_the_step():
+    """Catches retry_substeps = 1 accepted (a retry that does not split the step)."""
     with pytest.raises(ValueError, match="retry_substeps = 1 must be an integer >= 2"):
         simulate(_spin_up(0.01), retry_substeps=1)

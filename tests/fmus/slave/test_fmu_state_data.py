@@ -366,6 +366,7 @@ print("new modules:", sorted(set(sys.modules) - modules))
 
 
 def test_ints_round_trip_over_the_whole_64_bit_range_and_beyond_it_are_refused_by_place():
+    """Catches a state format that truncates 64-bit ints or accepts larger ones silently."""
     header = stateformat.Header("M", "", bytes(32), 1)
     values = {"low": -2 ** 63, "high": 2 ** 63 - 1, "minus": -1000, "list": [-2 ** 62, 7]}
     assert stateformat.decode(stateformat.encode(header, values))[1] == values
@@ -399,6 +400,7 @@ def _refused_or_clean(model: str, data: bytes) -> None:
 @_PROPERTY
 @given(model=st.sampled_from(MODELS), data=st.binary(max_size=300))
 def test_random_bytes_are_refused(model, data):
+    """Catches a state parser that accepts, or crashes on, random bytes."""
     with pytest.raises(FmiError, match="fmi2DeSerializeFMUstate: "):
         _running(model, steps=0).deserialize_state(data)
 
@@ -415,6 +417,7 @@ def test_random_bodies_in_a_valid_frame_are_refused_by_the_reader(body):
 @_PROPERTY
 @given(model=st.sampled_from(MODELS), cut=st.floats(0.0, 1.0, exclude_max=True))
 def test_truncated_states_are_refused(model, cut):
+    """Catches a state parser that accepts, or crashes on, a truncated state."""
     data = _state_bytes(model)
     with pytest.raises(FmiError, match="truncated|not a serialised"):
         _running(model, steps=0).deserialize_state(data[:int(cut * len(data))])

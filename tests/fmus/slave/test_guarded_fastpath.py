@@ -62,6 +62,7 @@ def test_a_parameter_set_before_initialisation_is_refused_after_it_with_the_same
 
 
 def test_reads_of_many_lists_are_right_and_the_cache_stays_bounded():
+    """Catches a value-reference cache that returns another list's values or grows without bound."""
     slave = make_slave("FiveBarPlant")
     reals = [v for v in slave.vars.values() if isinstance(v, Real)]
     assert len(reals) > 40
@@ -99,6 +100,7 @@ def test_the_shared_accessors_convert_each_variable_and_respect_setters():
 
 
 def test_an_in_process_instance_reads_outputs_of_every_type():
+    """Catches an in-process instance that reads Integer, Boolean or String outputs as Real."""
     from fmus.cosim.backends import InProcessInstance
 
     instance = InProcessInstance("DCMotorDrive", "drive")

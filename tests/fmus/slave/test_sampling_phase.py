@@ -70,6 +70,7 @@ def run(model, n, periods, phase=0, delay=0, parameters=None):
 @pytest.mark.parametrize("model", SAMPLED)
 @pytest.mark.parametrize("n", [2, 4, 10])
 def test_sub_steps_sample_as_h_equal_T_at_the_period_start_and_hold(model, n):
+    """Catches a sampled component that samples at every sub-step instead of once per period."""
     periods = 12
     reference = run(model, 1, periods)
     sub = run(model, n, periods)
@@ -139,6 +140,7 @@ def test_a_phase_outside_the_period_is_refused_at_the_first_step(model, phase):
 
 @pytest.mark.parametrize("model", [*SAMPLED, "DCMotorDrive"])
 def test_the_step_changes_only_at_a_period_start(model):
+    """Catches a sampled component accepting a new step size in mid-period."""
     slave = new_drive() if model == "DCMotorDrive" else new_slave(model)
     t = 0.0
     for h in (T / 2, T / 2, T / 4):          # a period of T / 2, then T / 4 from its start
@@ -191,6 +193,7 @@ def drive_run(n, periods, phase=0, delay=0, omega_of=lambda m: 0.0):
 
 @pytest.mark.parametrize("n", [2, 4, 10])
 def test_the_drive_holds_its_voltage_and_its_electrics_advance_every_sub_step(n):
+    """Catches a drive that recomputes its voltage per sub-step or skips its electrics."""
     motor = get_motor_preset("motor1")
     periods = 10
     omega_of = lambda m: 5.0 + 3.0 * m               # noqa: E731 - the speed of period m
