@@ -37,6 +37,7 @@ def _model_and_data(params, **options):
 
 
 def test_mjcf_settings():
+    """Catches a MuJoCo model whose DOFs, step, integrator, contacts, gravity or armature differ from the bench."""
     params = ref.params_bench()
     model, _ = _model_and_data(params)
     assert (model.nq, model.nv, model.nu, model.neq) == (4, 4, 2, 1)
@@ -113,4 +114,5 @@ def test_trajectory_with_held_torques_matches_reference():
 
 
 def test_step_time_is_measured():
+    """Catches a MuJoCo step timer that returns zero, a negative or an absurd time."""
     assert 0.0 < mujoco_5r.mujoco_step_time_us(ref.params_bench(), n_steps=200) < 1e4

@@ -72,6 +72,7 @@ def test_replace_var_takes_a_local_of_the_same_kind_defined_before():
 
 
 def test_classic_operators():
+    """Catches a mutation operator (compare, boolean, arith) that does not make its classic change."""
     assert ("x < 0.0", "(x <= 0.0)") in _changes("compare")
     assert ("x < 0.0 and not rows", "(x < 0.0 or not rows)") in _changes("boolean")
     assert ("not rows", "(rows)") in _changes("boolean")

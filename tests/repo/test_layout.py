@@ -175,6 +175,7 @@ def test_no_import_cycle_between_folders():
 
 
 def test_imports_point_down():
+    """Catches a module importing from a layer above its own (docs/layout.md's table)."""
     upward = [f"{MODULES[m].relative_to(ROOT)}:{line}: {m} ({group_of(m)}) imports {t} ({group_of(t)})"
               for m, targets in GRAPH.items() for t, line in targets.items()
               if LAYER[group_of(t)] > LAYER[group_of(m)]]

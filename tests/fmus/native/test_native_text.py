@@ -60,6 +60,7 @@ def test_edges_and_every_power_of_two(formatter):
 
 
 def test_random_bit_patterns(formatter):
+    """Catches a C float formatter that differs from Python's repr on any of 50000 random doubles."""
     values = np.frombuffer(np.random.default_rng(28).bytes(8 * 50000), dtype=np.float64)
     check(formatter, [float(v) for v in values])
 
@@ -67,4 +68,5 @@ def test_random_bit_patterns(formatter):
 @settings(max_examples=300, deadline=None)
 @given(st.lists(st.floats(allow_nan=True, allow_infinity=True), min_size=1, max_size=50))
 def test_hypothesis_floats(formatter, values):
+    """Catches a C float formatter that differs from Python's repr on edge doubles (inf, nan, subnormal)."""
     check(formatter, values)

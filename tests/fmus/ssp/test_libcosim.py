@@ -105,6 +105,7 @@ def test_libcosim_matches_the_jacobi_master(thesis, libcosim_run):
 
 @needs_libcosim
 def test_libcosim_matches_ecos(thesis, libcosim_run):
+    """Catches an SSP package that libcosim and Ecos (both Jacobi) run differently."""
     reason = ecos_available()
     if reason is not None:
         pytest.skip(f"Ecos not available ({reason}): pip install ecospy and apt-get install libtbb12")

@@ -58,6 +58,7 @@ def _compare(run, reference, h):
 # --- the package -----------------------------------------------------------------------------
 
 def test_ssd_is_well_formed(exported):
+    """Catches an SSD with a wrong namespace, version, component order or connector declaration."""
     system, path, _ = exported
     with zipfile.ZipFile(path) as zf:
         names = set(zf.namelist())

@@ -50,6 +50,7 @@ def _deviation(time, x, y, reference, h):
 
 
 def test_the_fmu_validates(exported):
+    """Catches a system FMU that fmpy's validation rejects."""
     _, _, path = exported
     assert validate_fmu(str(path)) == []
 

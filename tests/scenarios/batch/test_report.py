@@ -18,6 +18,7 @@ def _metrics(e_ef, stopped=()):
 
 
 def test_report_numbers_come_from_the_metrics():
+    """Catches a report that prints stored or thesis numbers instead of the runs' metrics."""
     e_ef = {kind: {s: 2 * v[0] for s, v in table.items()} for kind, table in THESIS_BENCH.items()}
     text = render(_metrics(e_ef), "inprocess")
     assert "| PDq | 6.300 | 3.15 |" in text          # ours = twice the thesis here

@@ -96,6 +96,7 @@ def test_draws_follow_the_distribution(distribution):
 
 
 def test_weights_and_overrides(tmp_path):
+    """Catches uncertainty weights or per-parameter overrides that do not reach the spread."""
     params = perturbable(get_scene(SCENE))
     spread = uncertainties(params, 0.2)
     assert spread["plant.chain1_m2"] == 0.2 and spread["drive2.kt"] == 0.2
@@ -115,6 +116,7 @@ def test_weights_and_overrides(tmp_path):
 
 
 def test_controller_side_keeps_the_nominal_model():
+    """Catches a perturbation that leaks into the controller's model (it must stay nominal)."""
     scene = get_scene(SCENE)
     params = perturbable(scene)
     values = draw(params, uncertainties(params, 0.4), 0, 0)
@@ -137,6 +139,7 @@ def _drive(**parameters):
 
 
 def test_design_parameters_keep_the_current_controller():
+    """Catches a perturbed drive whose current controller is redesigned from the perturbed motor."""
     from motor import motor1
 
     coefficients = lambda d: (d.alpha, d.beta, d.gamma, d.delta)   # noqa: E731
@@ -170,6 +173,7 @@ def test_encoder_offset_shifts_the_reading_by_whole_counts():
 
 
 def test_chain_parameters_reach_the_plant():
+    """Catches perturbed chain parameters that do not reach the plant's model."""
     from fmus.cosim.backends import InProcessInstance
 
     plant = InProcessInstance("FiveBarPlant", "plant")

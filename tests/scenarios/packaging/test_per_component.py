@@ -48,10 +48,12 @@ def _chain_variables(sampled_c=True):
 
 
 def test_stages_count_the_sampled_connections_before_each_component():
+    """Catches stages that miscount the sampled connections upstream of a component."""
     assert stages(_chain_system(), {"a": {"y"}, "b": {"y"}}) == {"a": 0, "b": 1, "c": 2, "p": 0}
 
 
 def test_a_loop_of_samples_has_no_phases():
+    """Catches phases assigned to a loop of sampled connections instead of refusing it."""
     system = dataclasses.replace(_chain_system(), connections=(Connection("a.y", "b.u"), Connection("b.y", "a.u")))
     with pytest.raises(ValueError, match="loop"):
         stages(system, {"a": {"y"}, "b": {"y"}})
@@ -86,6 +88,7 @@ def test_a_foreign_reader_of_samples_counts_as_sampling_at_its_period_start():
 
 
 def test_substeps_hold_the_stages_and_are_whole_nanoseconds():
+    """Catches a sub-step count too small for the stages or not a whole number of ns."""
     assert choose_substeps(2) == 4 and choose_substeps(0) >= 1
     for last in range(6):
         n = choose_substeps(last)
@@ -106,6 +109,7 @@ def bench_variables(built_fmus):
 
 
 def test_bench_phases_follow_the_masters_order(bench_variables):
+    """Catches per-component phases that do not reproduce the master's stepping order."""
     system, timing = per_component_system(get_scene("bench_circle_TCMDx").system, bench_variables)
     n = timing.substeps
     assert system.step == pytest.approx(1e-3 / n, rel=1e-12)
@@ -131,6 +135,7 @@ def test_the_package_states_its_base_step_where_the_tools_read_it(bench_package)
 
 
 def test_bindings_and_baked_start_values_carry_the_phases_and_presets(bench_package):
+    """Catches a package whose bindings or baked start values lose a phase or preset."""
     from fmpy import read_model_description
 
     params = read_ssp_parameters(bench_package)

@@ -60,6 +60,7 @@ def test_current_rate_integrates_to_the_drives_exact_step(preset):
 
 @pytest.mark.parametrize("preset", ["motor1", "motor2"])
 def test_mean_torque_is_the_step_average(preset):
+    """Catches a reference's mean drive torque that is not the step average of the drive's torque."""
     class _Slave:  # what _mean_torque reads of a drive slave
         class drive:
             params = get_motor_preset(preset)
@@ -75,6 +76,7 @@ def test_mean_torque_is_the_step_average(preset):
 
 
 def test_refuses_what_it_cannot_integrate():
+    """Catches a reference run on a system without exactly one plant, or with another coupling."""
     system = System((Component("traj", "Trajectory", {}),), (), ("traj.x_d",), stop_time=0.01)
     with pytest.raises(ReferenceError, match="exactly one FiveBarPlant"):
         reference_run(system)
@@ -85,6 +87,7 @@ def test_refuses_what_it_cannot_integrate():
 # --- convergence ------------------------------------------------------------------------------
 
 def test_bench_reference_converges(bench_runs):
+    """Catches a bench reference that changes when its tolerances are tightened (not converged)."""
     ref = bench_runs["ref"]
     assert ref.completed, ref.error
     for key in ("ref/2", "ref/10"):
@@ -96,6 +99,7 @@ def test_bench_reference_converges(bench_runs):
 
 
 def test_thesis_reference_converges():
+    """Catches a thesis reference that changes when its tolerances are tightened (not converged)."""
     system = _system(THESIS, SHORT)
     ref = reference_run(system)
     for factor in (2, 10):

@@ -21,6 +21,7 @@ def _shortened(name, stop_time):
 
 
 def test_scene_names_cover_the_contract():
+    """Catches a contract scene (thesis_sim_circle, 16 bench scenes) missing from the catalogue."""
     names = scene_names()
     assert "thesis_sim_circle" in names
     for s in ("PDq", "PDx", "TCq", "TCx", "PDMDq", "PDMDx", "TCMDq", "TCMDx"):
@@ -54,12 +55,14 @@ def test_a_near_miss_twin_scene_name_is_refused_clearly(name):
 
 
 def test_ideal_actuator_scene_has_no_motors():
+    """Catches motors or observers left in the ideal-actuator thesis scene."""
     models = {c.model for c in get_scene("thesis_sim_circle").system.components}
     assert models == {"Trajectory", "PositionController", "FiveBarPlant"}
 
 
 @pytest.mark.parametrize("name", scene_names())
 def test_every_scene_starts_and_runs(name):
+    """Catches a catalogue scene that fails to start or gives non-finite positions."""
     outcome = run_scene(_shortened(name, 0.02))
     assert outcome.result.error is None
     assert np.all(np.isfinite(outcome.columns["x"]))
@@ -152,6 +155,7 @@ def test_fidelity_switches_remove_what_they_switch_off():
                                       dict(derivator=False, encoder=False), dict(link_inertias=False, m0=0.05),
                                       dict(viscous=False, coulomb=False)])
 def test_reduced_fidelity_scenes_track(switches):
+    """Catches a fidelity switch that breaks tracking of the bench circle."""
     from scenarios.scenes.thesis import Fidelity, bench
 
     scene = bench("PDx", fidelity=Fidelity(**switches))
@@ -164,6 +168,7 @@ def test_reduced_fidelity_scenes_track(switches):
 
 
 def test_export_ssp_command(tmp_path, built_fmus, capsys):
+    """Catches export-ssp writing a package without the scene's components or failing."""
     import zipfile
 
     fmu_dir = next(iter(built_fmus.values())).parent
@@ -183,6 +188,7 @@ def test_export_ssp_command(tmp_path, built_fmus, capsys):
 
 
 def test_with_sample_time_sets_every_sample_time():
+    """Catches with_sample_time missing a sampled component's T."""
     import importlib
 
     from fmus.export.build import SLAVES

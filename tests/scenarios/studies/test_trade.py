@@ -43,6 +43,7 @@ def test_every_run_completed_with_finite_positive_errors(quick):
 
 
 def test_defaults_are_the_scale(quick):
+    """Catches speed-up and gain not measured against the defaults' row."""
     trade, _ = quick
     base = trade.row("defaults")
     assert base["speedup"] == 1.0 and base["gain"] == 1.0
@@ -83,6 +84,7 @@ def _row(name, wall, err, kind="accuracy"):
 
 
 def test_pareto_front():
+    """Catches a Pareto front that keeps a dominated row, drops a front row, or takes a failed run."""
     rows = [_row("a", 1.0, 1e-5), _row("b", 2.0, 1e-6), _row("c", 2.5, 2e-6), _row("d", 0.5, 1e-3),
             _row("e", 0.1, 1e-9, kind="fidelity"), _row("f", 1.05, 9e-6), _row("g", 4.0, 1e-7)]
     rows.append({**_row("h", 0.01, 1e-12), "error": "plant refused the step"})

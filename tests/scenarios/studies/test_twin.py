@@ -31,12 +31,14 @@ def test_the_twin_file_round_trips_and_refuses_bad_values(tmp_path):
 
 
 def test_at_most_six_bounded_parameters():
+    """Catches a twin with more than six parameters or a shipped calibration outside its bounds."""
     assert len(PARAMETERS) <= 6
     assert all(b.low < b.high for b in PARAMETERS.values())
     load_twin()   # the shipped calibration is inside its bounds
 
 
 def test_twin_scene_has_the_bench_effects():
+    """Catches a twin scene missing a bench effect (friction, offset, noise, inertia)."""
     twin = Twin(friction_scale=2.0, stiction_ratio=1.5, stribeck_speed=0.2, current_offset=0.05, current_noise=0.03,
                 inertia_error=0.25)
     scene = bench_real("TCMDx", "triangle", twin, seed=7)
