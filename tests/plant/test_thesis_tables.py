@@ -92,6 +92,7 @@ def test_strategies_are_tables_6_to_8(table, trajectory):
 
 
 def test_the_eight_strategies_of_7_2():
+    """Catches a strategy added to or missing from Tables 6 and 8 (section 7.2's eight)."""
     assert sorted(STRATEGY_NAMES) == sorted([*TABLE_6, *TABLE_8])
 
 

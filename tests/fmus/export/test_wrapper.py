@@ -292,6 +292,7 @@ def test_an_exception_in_a_callback_is_fmi2error_and_the_instance_still_frees(pr
 
 
 def test_status_protocol_discard_state_reset_and_unsupported_calls(prober):
+    """Catches a wrapper that maps a discard, a state round trip, a reset or an unsupported call to the wrong status."""
     result = run_case(f"""
         from ctypes import byref, c_double, c_int
         fmu = RawFmu({str(prober)!r})

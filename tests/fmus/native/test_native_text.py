@@ -56,6 +56,7 @@ def check(formatter, values):
 
 
 def test_edges_and_every_power_of_two(formatter):
+    """Catches a C float formatter that differs from Python's repr at an edge value or a power of two."""
     check(formatter, EDGES + [2.0 ** k for k in range(-1074, 1024)] + [-(2.0 ** k) * 3 for k in range(-1000, 1000)])
 
 

@@ -15,6 +15,7 @@ from scenarios.studies.tools import compare, short
 
 
 def test_names_and_what_reaches_plant_and_controller():
+    """Catches a vertical scene whose gravity or counter-masses differ between plant and controller."""
     names = scene_names()
     for s in ("TCMDx", "PDq", "SMCx"):
         assert f"vertical_circle_{s}" in names and f"vertical_circle_balanced_{s}" in names
