@@ -76,6 +76,7 @@ def test_the_io_step_writes_each_motors_torque_and_nothing_past_them():
     assert state[14] != state[15]
 
 
+@pytest.mark.tools
 def test_the_io_step_reads_no_motor_row_past_the_last_under_the_sanitizer(tmp_path):
     """The step above with the motor rows in a buffer of their own (malloc'd, ASan's
     redzone right behind): the sanitizer build aborts on a read past it."""

@@ -17,6 +17,8 @@ from fmus.native.build import compile_command, platform_folder
 from fmus.native.models import NATIVE
 from tests.support.fmu_calls import Driver
 
+pytestmark = [pytest.mark.fmu]
+
 MODELS = sorted(NATIVE)
 #: With the native ClosedLoop of a scene (``export-fmu --native``, the fixture ``native_loop_fmu``).
 WITH_LOOP = MODELS + ["ClosedLoop"]

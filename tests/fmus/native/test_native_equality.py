@@ -19,6 +19,8 @@ import pytest
 from controller.balance import BalanceSettings
 from tests.support.fmu_calls import Driver
 
+pytestmark = [pytest.mark.fmu]
+
 BALANCE_T = BalanceSettings().T
 #: The bench twin's drive options (scenarios/twin.py): LuGre friction with stiction, PWM, current noise and offset.
 DRIVE_TWIN = {"friction": "lugre", "mu": 0.06, "mu_s": 0.08, "pwm_counts": 1000, "current_offset": 0.05,

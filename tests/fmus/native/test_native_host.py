@@ -20,6 +20,8 @@ import pytest
 from fmus.native.models import NATIVE
 from tests.native_host.host import HostUnavailable, build_host, config_text, run_host
 
+pytestmark = [pytest.mark.fmu]
+
 H = 1e-3            # s: the communication step
 TAU_A, TAU_B, U = 0.01, 0.02, 2.0
 

@@ -18,6 +18,8 @@ import pytest
 
 from fmus.hostile import cases as hostile
 
+pytestmark = [pytest.mark.fmu, pytest.mark.tools]
+
 #: Links into the low-pass a calloc that returns 8 bytes whatever is asked: its instance
 #: is written past its end in fmi2Instantiate.
 SHORT_CALLOC = """#include <stddef.h>

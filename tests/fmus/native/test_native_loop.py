@@ -21,6 +21,8 @@ from scenarios.run import run_scene
 from scenarios.scenes import get_scene
 from tests.support.fmu_calls import Driver
 
+pytestmark = [pytest.mark.fmu]
+
 H = 1e-3
 
 

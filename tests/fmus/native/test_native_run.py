@@ -16,6 +16,8 @@ from fmus.native.run import native_system
 from scenarios.scenes.catalogue import get_scene
 from scenarios.scenes.transforms import drives_in_plant
 
+pytestmark = [pytest.mark.fmu]
+
 
 #: Per scene, the components that run native (the others: pythonfmu FMUs).
 NATIVE_COMPONENTS = {"bench_circle_TCMDx": {"traj", "deriv", "ctrl", "obs1", "obs2", "drive1", "drive2", "plant"},

@@ -20,7 +20,8 @@ from tests.kernels.test_sanitizers import ASAN, _sanitized_env
 from tests.support.paths import ROOT, TESTS
 
 SANITIZE = ("-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer", "-g")
-pytestmark = pytest.mark.skipif(ASAN is None, reason="the C compiler has no AddressSanitizer runtime")
+pytestmark = [pytest.mark.slow, pytest.mark.fmu, pytest.mark.tools,
+              pytest.mark.skipif(ASAN is None, reason="the C compiler has no AddressSanitizer runtime")]
 
 
 @pytest.mark.parametrize("model", sorted(NATIVE) + ["ClosedLoop"])
