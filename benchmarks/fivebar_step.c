@@ -13,7 +13,7 @@
 int main(int argc, char **argv)
 {
     double p[sizeof(pc_fivebar_params) / sizeof(double)], s[sizeof(pc_fivebar_settings) / sizeof(double)];
-    double y0[14], y[14], scratch[PC_FIVEBAR_SCRATCH(14)], x[13];
+    double y0[14], y[14], scratch[PC_FIVEBAR_SCRATCH(14)] = {0}, x[13];
     FILE *f = argc == 3 || argc == 4 ? fopen(argv[1], "r") : NULL;
     if (!f) return 2;
     for (size_t i = 0; i < sizeof p / sizeof *p; ++i) if (fscanf(f, "%lf", &p[i]) != 1) return 2;

@@ -92,6 +92,12 @@ _inverse_terms = kernels.function("pc_fivebar_inverse_terms", None, _vp, _vp, _v
 plant_io_c = kernels.function("pc_fivebar_plant_io", _i, _vp, _vp, _d, _d, _vp)
 actuated_io_c = kernels.function("pc_fivebar_actuated_io", _i, _vp, _vp, _d, _d, _vp)
 CONTEXT_SIZE = kernels.function("pc_fivebar_context_size", _i)()
+#: Doubles of a step's scratch for up to :data:`MAX_MOTORS` motors, ``PC_FIVEBAR_SCRATCH`` of
+#: fivebar.h: the trial state, RK4's work (5 n) and the last report's trigonometry
+#: (``PC_FIVEBAR_TRIG_WORDS``), which must start zeroed.  Written out rather than asked of the
+#: library, so that this side also drives an older build (benchmarks/bench_compiled_libs.py);
+#: tests/kernels/test_kernels_fivebar.py holds it to ``pc_fivebar_scratch_words``.
+SCRATCH_WORDS = 6 * (PLANT_STATES + MAX_MOTORS) + 17
 #: The address of ``pc_fivebar_terms_of``: the inverse terms as the position law's terms function
 #: (``pc_law_terms_fn``; its model a ``pc_fivebar_params`` buffer, its terms :data:`INVERSE_SIZE` words).
 TERMS_OF = ctypes.cast(kernels.library().pc_fivebar_terms_of, _vp).value
@@ -198,7 +204,7 @@ class FastKernel:
         self.p = pack_params(params)
         self.s = settings if settings is not None else pack_settings(0.0, 1, 1.0, math.inf, 0.0)
         self.report = np.empty(REPORT_SIZE)
-        self.scratch = np.empty(6 * (PLANT_STATES + MAX_MOTORS))
+        self.scratch = np.zeros(SCRATCH_WORDS)
         self.z = np.empty(PLANT_STATES + MAX_MOTORS)     # the state a step starts from
         self.voltages = np.zeros(MAX_MOTORS)
         self.refusal = kernels.Refusal()
@@ -225,7 +231,7 @@ class FastKernel:
         """A ``pc_fivebar_context`` for the compiled loop over this kernel's parameters and
         settings, ``state`` (z), the motor rows, the ``voltages`` and ``held`` (u1, u2) buffers
         the caller fills, and a scratch of its own; the context keeps every buffer alive."""
-        scratch = np.empty(6 * (PLANT_STATES + MAX_MOTORS))
+        scratch = np.zeros(SCRATCH_WORDS)
         context = Context(_address(self.p), _address(self.s), _address(motors), _address(state),
                           _address(voltages) if voltages.size else None, None if held is None else _address(held),
                           _address(scratch), motors.shape[0], first)

@@ -16,7 +16,7 @@ import operator
 from dataclasses import dataclass
 from pathlib import Path
 
-from fmus.cosim.slots import gatherer, span
+from fmus.cosim.slots import attribute_pull, gathering_pull, span
 
 
 class CoSimulationError(Exception):
@@ -295,9 +295,9 @@ class InProcessInstance:
     def step_calls(self, in_slots, out_slots) -> tuple:
         """:func:`fmus.cosim.stepper.member_calls` of this instance: its plain Real attributes moved
         without a Python call of its own (the inputs converted to float, as :meth:`set_inputs`
-        does; the outputs read as the slave holds them, Reals), the slave's ``do_step`` called
-        directly.  Variables of another type, or attributes with a setter or a dotted name,
-        take :meth:`set_inputs` and :meth:`get_outputs`."""
+        does, in one dict update; the outputs read as the slave holds them, Reals), the slave's
+        ``do_step`` called directly.  Variables of another type, or attributes with a setter or
+        a dotted name, take :meth:`set_inputs` and :meth:`get_outputs`."""
         inputs, outputs = self._bound
         slave, cls = self.slave, type(self.slave)
 
@@ -307,18 +307,8 @@ class InProcessInstance:
 
         pull = None
         if in_slots:
-            if plain(inputs):
-                # one store a value: about half the cost of zip/map/update's iterators
-                attributes, pairs = vars(slave), tuple(zip((v.name for v in inputs), in_slots))
-
-                def pull(values):
-                    for name, slot in pairs:
-                        attributes[name] = float(values[slot])
-            else:
-                set_inputs, gather = self.set_inputs, gatherer(in_slots)
-
-                def pull(values):
-                    set_inputs(gather(values))
+            pull = (attribute_pull(vars(slave), [v.name for v in inputs], in_slots) if plain(inputs)
+                    else gathering_pull(self.set_inputs, in_slots))
         if outputs and plain(outputs):
             out = out_slots[0] if len(out_slots) == 1 else span(out_slots)
             return pull, slave.do_step, operator.attrgetter(*(v.name for v in outputs)), slave, out, self

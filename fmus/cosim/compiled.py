@@ -19,8 +19,11 @@ message or take the sample (e.g. the exact model where the table has a hole); th
 compiled loop goes on from the next step.
 
 A model without an adapter, a component given as an FMU file, Jacobi coupling, retried
-steps or an adapter that declines its settings (:class:`fmus.cosim.adapter.NotCompilable`) make the run fall
-back to ``mode="inprocess"`` with a warning saying why (``Result.extra["fallback"]``).
+steps or a stop time past the slaves' last time (:func:`check_compilable`) make the run fall back
+to ``mode="inprocess"`` with a warning saying why (``Result.extra["fallback"]``), decided before
+anything is loaded.  An adapter that declines its component's settings (:class:`fmus.cosim.adapter.NotCompilable`
+from :class:`Plan`; they are known once the slave is set up) makes the same fallback from the
+instances already initialised: nothing is loaded or initialised twice.
 """
 from __future__ import annotations
 
@@ -36,7 +39,7 @@ from kernels import Refusal
 from fmus.slave.base import MAX_TIME
 from fmus.cosim.backends import CoSimulationError
 from fmus.cosim.adapter import ADAPTERS, NotCompilable
-from fmus.cosim.system import split_signal
+from fmus.cosim.context import Outcome
 
 
 class _LoopPlan(ctypes.Structure):
@@ -116,32 +119,32 @@ class Plan:
     """The compiled loop of one system: its adapters in stepping order and their
     :class:`LoopPlan`."""
 
-    def __init__(self, system, stepper, instances):
+    def __init__(self, system, stepper):
+        _adapters()
         self.system, self.stepper = system, stepper
-        entries = {id(inst): name for name, inst in instances.items()}
         self.adapters, self.positions = [], []   # positions: (group, member) of each adapter
         self._contexts = []
         h = system.step
         groups = []
-        for g, (substeps, members) in enumerate(stepper.groups):
-            group = []
-            for m, (inst, in_slots, out_slots) in enumerate(members):
-                name = entries[id(inst)]
-                adapter = self._adapter(name, system.component(name).model, inst.slave, h / substeps)
-                in_names, out_names = stepper.io_names[name]
+        for g, group in enumerate(stepper.groups):
+            members = []
+            for m, entry in enumerate(group.entries):
+                adapter = self._adapter(entry, system.component(entry.name).model, h / group.substeps)
                 layout = adapter.inputs + adapter.outputs
                 context = adapter.context()
                 self._contexts.append(context)
-                group.append(Member(adapter.io_address(), ctypes.addressof(context), adapter.x,
-                                    [(layout.index(n), s) for n, s in zip(in_names, in_slots)],
-                                    [(layout.index(n), s) for n, s in zip(out_names, out_slots)]))
+                members.append(Member(adapter.io_address(), ctypes.addressof(context), adapter.x,
+                                      [(layout.index(n), s) for n, s in zip(entry.inputs, entry.in_slots)],
+                                      [(layout.index(n), s) for n, s in zip(entry.outputs, entry.out_slots)]))
                 self.adapters.append(adapter)
                 self.positions.append((g, m))
-            groups.append((substeps, group))
+            groups.append((group.substeps, members))
         self.loop = LoopPlan(groups, stepper.record_slots)
         self.description = self._describe()
 
-    def _adapter(self, name, model, slave, h):
+    @staticmethod
+    def _adapter(entry, model, h):
+        name, slave = entry.name, entry.instance.slave
         cls = ADAPTERS.get(model)
         if cls is None:
             raise NotCompilable(f"component {name}: model {model!r} has no compiled adapter")
@@ -150,8 +153,7 @@ class Plan:
         except ValueError as exc:
             raise NotCompilable(f"component {name}: {exc}") from None
         adapter = cls(name, slave, h)
-        in_names, out_names = self.stepper.io_names[name]
-        for kind, names, known in (("input", in_names, cls.inputs), ("output", out_names, cls.outputs)):
+        for kind, names, known in (("input", entry.inputs, cls.inputs), ("output", entry.outputs, cls.outputs)):
             unknown = [n for n in names if n not in known]
             if unknown:
                 raise NotCompilable(f"component {name}: {kind}s {', '.join(unknown)} of {model} are not "
@@ -163,7 +165,7 @@ class Plan:
         """The stepping order as text: one line per member (``# name (model): kernel``)."""
         lines = []
         for (g, _), a in zip(self.positions, self.adapters):
-            substeps = self.stepper.groups[g][0]
+            substeps = self.stepper.groups[g].substeps
             lines.append(f"# {a.name} ({a.model}): {a.kernel}" + (f", {substeps} sub-steps" if substeps > 1 else ""))
         return "\n".join(lines)
 
@@ -201,34 +203,22 @@ def _adapters() -> dict:
     return ADAPTERS
 
 
-def run_compiled(system, instances, order, progress, interrupt, result_of):
-    """Initialise, compile and step; ``result_of(data, rows, error, interrupted, wall, init)``
-    makes the :class:`fmus.cosim.master.Result`.  Raises :class:`NotCompilable` before the first
-    step when a component's settings have no compiled loop."""
-    from fmus.cosim.stepper import Stepper
-
-    _adapters()
-    stepper = Stepper(system, instances, order)
+def run_compiled(run, stepper, plan: Plan) -> Outcome:
+    """Step ``run.system`` (a :class:`fmus.cosim.context.RunContext`) from its initialised
+    ``stepper`` in the compiled loop ``plan``; the rest of a step a kernel declines runs in
+    Python (:meth:`fmus.cosim.stepper.Stepper.step` from that member on)."""
+    system = run.system
     h, steps = system.step, system.steps
     data = np.full((steps + 1, len(system.record)), np.nan)
-    init_start = _time.perf_counter()
-    try:
-        stepper.initialize(0.0)
-    except CoSimulationError as exc:
-        return result_of(data[:0], exc, False, 0.0, _time.perf_counter() - init_start, {})
     data[0] = stepper.row()
-    compile_start = _time.perf_counter()
-    plan = Plan(system, stepper, instances)
     values = np.array(stepper.values, dtype=float)
-    compile_s = _time.perf_counter() - compile_start
-    init_s = compile_start - init_start
     start, cpu_start = _time.perf_counter(), _time.thread_time()
     error, interrupted, done, t = None, False, 0, 0.0
     chunk = max(1, steps // 100)
     python_steps = 0
     try:
         while done < steps:
-            if interrupt.requested:
+            if run.interrupt.requested:
                 raise KeyboardInterrupt
             end = min(steps, done + chunk)
             stop = plan.run(values, data, done, end, t, h)
@@ -248,13 +238,12 @@ def run_compiled(system, instances, order, progress, interrupt, result_of):
                 done += 1
                 data[done] = stepper.row()
                 python_steps += 1
-            if progress is not None:
-                progress(done / steps)
+            if run.progress is not None:
+                run.progress(done / steps)
     except CoSimulationError as exc:
         error = exc
     except KeyboardInterrupt:
         interrupted = True
     wall = _time.perf_counter() - start
-    extra = {"compile_s": compile_s, "python_steps": python_steps, "plan": plan.description,
-             "cpu_s": _time.thread_time() - cpu_start}
-    return result_of(data[:done + 1], error, interrupted, wall, init_s, extra)
+    extra = {"python_steps": python_steps, "plan": plan.description, "cpu_s": _time.thread_time() - cpu_start}
+    return Outcome(data[:done + 1], error, interrupted, wall, extra=extra)

@@ -20,19 +20,22 @@ from plant.fast5r import TERMS_OF
 from fmus.cosim.adapter import Adapter, NotCompilable, register
 from fmus.slave.refusals import ABSURD
 from fmus.slave.declarations import PLANT_OUTPUTS
-from fmus.slave.sampling import PHASE_PARAMETER, substeps_of
+from fmus.slave.sampling import HOLD_FIRST_PARAMETER, PHASE_PARAMETER, substeps_of
 
 _PLANT_OUTPUTS = tuple(name for name, _ in PLANT_OUTPUTS)
 
 
 def _samples_every_step(name, slave, h) -> None:
     """Raise NotCompilable unless the sampled ``slave`` samples on every step (h = T,
-    ``sample_phase`` 0): its kernel has no sub-step counter (:mod:`fmus.slave.sampling`), the
+    ``sample_phase`` 0, ``hold_first_step`` false): its kernel has no sub-step counter (:mod:`fmus.slave.sampling`), the
     Python path counts, holds, or refuses by name."""
     phase = getattr(slave, PHASE_PARAMETER)
     if substeps_of(slave.T, h) != 1 or phase != 0:
         raise NotCompilable(f"component {name}: steps h = {h!r} s with T = {slave.T!r} s, {PHASE_PARAMETER} = "
                             f"{phase!r}: the compiled kernel samples on every step (h = T, {PHASE_PARAMETER} 0 only)")
+    if getattr(slave, HOLD_FIRST_PARAMETER, False):
+        raise NotCompilable(f"component {name}: {HOLD_FIRST_PARAMETER} = True: the compiled kernel samples on the "
+                            "first step too")
 
 
 @register

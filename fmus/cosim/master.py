@@ -34,6 +34,27 @@ Recorded signals: row 0 holds the outputs after initialisation (t = 0), row k th
 the k-th step (t = k h): for a continuous output the value at t, for a sampled output the
 sample held over [t - h, t].
 
+The clock: the stepper steps from t_0 = 0 and adds h after each step (t_{k+1} = t_k + h in
+double, in Python and in the C loop alike: :class:`fmus.cosim.stepper.Stepper`, kernels/src/loop.c);
+the rows are labelled k h.  Stepping at t_k = k h instead (libcosim's and fmpy 0.3's clock) was
+measured to move the bench circle's e_ef by 5.9e-9 relative and bench_circle_PDx's e_ss by
+3.2e-6 (beyond the regression's 1.5e-6): a change of results, left to a decision of its own
+(docs/master.md, "The clock").
+
+How a run is laid out (one record each, no argument lists handed down): :func:`simulate` checks
+its arguments and makes a :class:`fmus.cosim.context.RunContext`; ``_simulate`` decides what the
+compiled loop cannot cover from the system alone (:func:`fmus.cosim.compiled.check_compilable`)
+before anything is loaded, loads the instances once, checks the signals, orders and wires them
+(:class:`fmus.cosim.stepper.Stepper`, whose plan is one :class:`fmus.cosim.stepper.Entry` per
+instance) and initialises them once; then either the compiled loop steps them
+(:class:`fmus.cosim.compiled.Plan`; a component whose settings it declines sends the run on in
+Python from the same initialised instances) or ``_step_in_python`` does, one
+:meth:`Stepper.step <fmus.cosim.stepper.Stepper.step>` and one row per step.  Either hands back an
+:class:`fmus.cosim.context.Outcome` that ``_result`` turns into the :class:`Result`.  The
+Gauss-Seidel loop itself exists once in Python (``Stepper.step``: the usual step, a retried
+step's split one, the rest of a step a compiled kernel declined, Jacobi) and once in C
+(kernels/src/loop.c).
+
 A refused step (fmi2Discard/Error/Fatal, or an exception in process) stops the run;
 :class:`Result` keeps the rows recorded so far and ``error`` says which instance refused,
 at what time, with its own message.  A KeyboardInterrupt (SIGINT) stops it the same way:
@@ -44,17 +65,19 @@ counts as the interruption).
 from __future__ import annotations
 
 import contextlib
+import functools
 import signal as _signal
 import threading
 import time as _time
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
 from fmus.slave.base import INTERRUPTED_MARK
 from fmus.cosim.backends import CoSimulationError, InProcessInstance, _FmuInstance
+from fmus.cosim.context import Outcome, RunContext
 from fmus.cosim.stepper import Stepper
 from fmus.cosim.system import System, split_signal
 
@@ -294,8 +317,10 @@ def simulate(system: System, mode: str = "inprocess", coupling: str = "gauss-sei
         raise ValueError(f"coupling = {coupling!r}; valid: {', '.join(COUPLINGS)}")
     if retry_substeps is not None and not (isinstance(retry_substeps, int) and retry_substeps >= 2):
         raise ValueError(f"retry_substeps = {retry_substeps!r} must be an integer >= 2 (or None: no retry)")
+    if mode not in MODES:
+        raise ValueError(f"mode = {mode!r}; valid: {', '.join(MODES)}")
     with deferred_sigint() as interrupt:
-        return _simulate(system, mode, coupling, fmu_dir, progress, retry_substeps, interrupt)
+        return _simulate(RunContext(system, mode, coupling, fmu_dir, progress, retry_substeps, interrupt))
 
 
 class _Interrupt:
@@ -328,58 +353,73 @@ def deferred_sigint():
         _signal.signal(_signal.SIGINT, _signal.default_int_handler)
 
 
-def _simulate(system, mode, coupling, fmu_dir, progress, retry_substeps, interrupt) -> Result:
+def _simulate(run: RunContext) -> Result:
+    """Load, check, initialise and step ``run``'s system; close the instances."""
     fallback = None
-    if mode == "compiled":
+    if run.mode == "compiled":     # what the compiled loop does not cover, known before anything is loaded
         from fmus.cosim.compiled import NotCompilable, check_compilable
 
         try:
-            check_compilable(system, coupling, retry_substeps)
+            check_compilable(run.system, run.coupling, run.retry_substeps)
         except NotCompilable as exc:
             fallback = str(exc)
-    if fallback is None and mode == "compiled":
-        try:
-            return _simulate_with(system, mode, coupling, fmu_dir, progress, retry_substeps, interrupt)
-        except NotCompilable as exc:
-            fallback = str(exc)
-    if fallback is not None:
-        warnings.warn(f"compiled mode: {fallback}; running in process instead", stacklevel=3)
-        result = _simulate_with(system, "inprocess", coupling, fmu_dir, progress, retry_substeps, interrupt)
-        result.extra["fallback"] = fallback
-        return result
-    return _simulate_with(system, mode, coupling, fmu_dir, progress, retry_substeps, interrupt)
-
-
-def _simulate_with(system, mode, coupling, fmu_dir, progress, retry_substeps, interrupt) -> Result:
     loading = _time.perf_counter()
-    instances = _instantiate(system, "inprocess" if mode == "compiled" else mode, fmu_dir)
+    instances = _instantiate(run.system, "fmu" if run.mode == "fmu" else "inprocess", run.fmu_dir)
     loading_s = _time.perf_counter() - loading
     try:
         from fmus.cosim.foreign import without_missing_parameters
 
-        system, skipped = without_missing_parameters(system, {n: set(i.variables) for n, i in instances.items()})
+        system, skipped = without_missing_parameters(run.system, {n: set(i.variables) for n, i in instances.items()})
         _check_signals(system, instances)
         if skipped:
-            warnings.warn(skipped, stacklevel=2)
-        variables = {n: inst.variables for n, inst in instances.items()}
-        order = (stepping_order(system, variables) if coupling == "gauss-seidel"
-                 else tuple(c.name for c in system.components))
-        if mode == "compiled":
-            from fmus.cosim.compiled import run_compiled
-
-            def result_of(data, error, interrupted, wall, init_s, extra):
-                return _result(system, data, order, mode, coupling, error, interrupted, wall,
-                               loading_s + init_s, extra)
-
-            return run_compiled(system, instances, order, progress, interrupt, result_of)
-        return _run(system, instances, order, mode, coupling, progress, loading_s, retry_substeps, interrupt)
+            warnings.warn(skipped, stacklevel=3)
+        run = replace(run, system=system)
+        order = (stepping_order(system, {n: inst.variables for n, inst in instances.items()})
+                 if run.coupling == "gauss-seidel" else tuple(c.name for c in system.components))
+        stepper = Stepper(system, instances, order, jacobi=run.coupling == "jacobi")
+        init_start = _time.perf_counter()
+        try:
+            stepper.initialize(0.0)
+        except CoSimulationError as exc:
+            outcome = Outcome(np.empty((0, len(system.record))), exc, init_s=_time.perf_counter() - init_start)
+            return _result(run, order, outcome, loading_s)
+        init_s = _time.perf_counter() - init_start
+        if run.mode == "compiled" and fallback is None:
+            outcome, fallback = _compiled(run, stepper)
+        if run.mode != "compiled" or fallback is not None:
+            outcome = _step_in_python(run, stepper)
+        outcome.init_s = init_s
+        if fallback is not None:
+            # The settings an adapter declines are known only once the slaves are set up: the run
+            # goes on in process from the same initialised instances (nothing loaded twice).
+            warnings.warn(f"compiled mode: {fallback}; running in process instead", stacklevel=3)
+            outcome.extra["fallback"] = fallback
+            run = replace(run, mode="inprocess")
+        return _result(run, order, outcome, loading_s)
     finally:
         _close(instances)
 
 
-def _result(system, data, order, mode, coupling, error, interrupted, wall, init_s, extra) -> Result:
-    """The :class:`Result` of rows ``data``, stopped by ``error`` (a CoSimulationError) or not."""
-    h, rows = system.step, len(data)
+def _compiled(run: RunContext, stepper: Stepper) -> tuple:
+    """(the :class:`Outcome` of the compiled loop, None), or (None, why not) when a component's
+    settings have no compiled loop."""
+    from fmus.cosim.compiled import NotCompilable, Plan, run_compiled
+
+    compile_start = _time.perf_counter()
+    try:
+        plan = Plan(run.system, stepper)
+    except NotCompilable as exc:
+        return None, str(exc)
+    compile_s = _time.perf_counter() - compile_start
+    outcome = run_compiled(run, stepper, plan)
+    outcome.extra = {"compile_s": compile_s, **outcome.extra}
+    return outcome, None
+
+
+def _result(run: RunContext, order, outcome: Outcome, loading_s: float) -> Result:
+    """The :class:`Result` of ``outcome``, stopped by its error (a CoSimulationError) or not."""
+    system, error, interrupted = run.system, outcome.error, outcome.interrupted
+    h, rows = system.step, len(outcome.rows)
     last = max(rows - 1, 0) * h     # the last row's time: where the run stopped
     message = None
     if error is not None:
@@ -390,9 +430,11 @@ def _result(system, data, order, mode, coupling, error, interrupted, wall, init_
             message = f"interrupted at t = {last:.6g} s ({error.instance}: {error.message})"
     elif interrupted:
         message = f"interrupted at t = {last:.6g} s"
+    data = outcome.rows
     return Result(time=np.arange(rows) * h, signals={s: data[:, j] for j, s in enumerate(system.record)},
-                  order=tuple(order), mode=mode, coupling=coupling, wall_s=wall, error=message,
-                  stop_time=system.stop_time, init_s=init_s, extra=extra, interrupted=interrupted)
+                  order=tuple(order), mode=run.mode, coupling=run.coupling, wall_s=outcome.wall_s, error=message,
+                  stop_time=system.stop_time, init_s=loading_s + outcome.init_s, extra=outcome.extra,
+                  interrupted=interrupted)
 
 
 def _retrying_step(stepper: Stepper, substeps: int, retried: list) -> None:
@@ -414,36 +456,32 @@ def _retrying_step(stepper: Stepper, substeps: int, retried: list) -> None:
         stepper.free_state(state)
 
 
-def _run(system, instances, order, mode, coupling, progress, loading_s=0.0, retry_substeps=None,
-         interrupt=_Interrupt) -> Result:
-    stepper = Stepper(system, instances, order, jacobi=coupling == "jacobi")
+def _step_in_python(run: RunContext, stepper: Stepper) -> Outcome:
+    """Step the initialised ``stepper`` to the stop time (or to a refusal or a SIGINT): each
+    step one :meth:`Stepper.step` and its row."""
+    system, progress, interrupt = run.system, run.progress, run.interrupt
     retried = []
-    advance = stepper.step if retry_substeps is None else lambda: _retrying_step(stepper, retry_substeps, retried)
-    h, steps = system.step, system.steps
+    advance = stepper.step if run.retry_substeps is None else \
+        functools.partial(_retrying_step, stepper, run.retry_substeps, retried)
+    steps = system.steps
     data = np.full((steps + 1, len(system.record)), np.nan)
-    error, rows, interrupted = None, 0, False
-    init_start = start = _time.perf_counter()
-    cpu_start = _time.thread_time()
+    data[0] = stepper.row()
+    record, done, error, interrupted = stepper.row, 0, None, False
+    report_every = max(1, steps // 100)
+    start, cpu_start = _time.perf_counter(), _time.thread_time()
     try:
-        stepper.initialize(0.0)
-        start = _time.perf_counter()
-        cpu_start = _time.thread_time()
-        data[0] = stepper.row()
-        rows = 1
-        report_every = max(1, steps // 100)
-        for k in range(steps):
+        for k in range(1, steps + 1):
             if interrupt.requested:
                 raise KeyboardInterrupt
             advance()
-            data[k + 1] = stepper.row()
-            rows = k + 2
-            if progress is not None and (k + 1) % report_every == 0:
-                progress((k + 1) / steps)
+            data[k] = record()
+            done = k
+            if progress is not None and k % report_every == 0:
+                progress(k / steps)
     except CoSimulationError as exc:
         error = exc
     except KeyboardInterrupt:
         interrupted = True
     wall, cpu = _time.perf_counter() - start, _time.thread_time() - cpu_start
-    extra = {"cpu_s": cpu, **({"retried": retried} if retry_substeps is not None else {})}
-    return _result(system, data[:rows], order, mode, coupling, error, interrupted, wall,
-                   loading_s + (start - init_start), extra)
+    extra = {"cpu_s": cpu, **({"retried": retried} if run.retry_substeps is not None else {})}
+    return Outcome(data[:done + 1], error, interrupted, wall, extra=extra)

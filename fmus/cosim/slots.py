@@ -1,8 +1,10 @@
-"""Values moved between an instance and the master's slot array: the few fast getters both the
-stepper (:mod:`fmus.cosim.stepper`) and the in-process back end (:mod:`fmus.cosim.backends`) use."""
+"""Values moved between an instance and the master's slot array: the few fast getters and
+setters both the stepper (:mod:`fmus.cosim.stepper`) and the in-process back end
+(:mod:`fmus.cosim.backends`) use."""
 from __future__ import annotations
 
 import operator
+from typing import Callable
 
 
 def gatherer(slots):
@@ -20,3 +22,32 @@ def span(slots) -> slice:
     if list(slots) != list(range(first, first + len(slots))):
         raise AssertionError(f"output slots {slots} are not consecutive")
     return slice(first, first + len(slots))
+
+
+def attribute_pull(attributes: dict, names: list, slots) -> Callable:
+    """``pull(values)``: ``attributes[name] = float(values[slot])`` for each input, written out
+    for one and two inputs (the most common: a store each, no loop), a loop for more (cheaper
+    than one dict update of zip and map objects; measured)."""
+    pairs = tuple(zip(names, slots))
+    if len(pairs) == 1:
+        (name, slot), = pairs
+
+        def pull(values):
+            attributes[name] = float(values[slot])
+    elif len(pairs) == 2:
+        (name0, slot0), (name1, slot1) = pairs
+
+        def pull(values):
+            attributes[name0] = float(values[slot0])
+            attributes[name1] = float(values[slot1])
+    else:
+        def pull(values):
+            for name, slot in pairs:
+                attributes[name] = float(values[slot])
+    return pull
+
+
+def gathering_pull(set_inputs: Callable, slots) -> Callable:
+    """``pull(values)``: ``set_inputs`` of the values of ``slots``."""
+    gather = gatherer(slots)
+    return lambda values: set_inputs(gather(values))

@@ -1,61 +1,127 @@
-"""A system's instances stepped one communication step at a time.
+"""A system's instances stepped one communication step at a time: the one Gauss-Seidel loop.
 
 :class:`Stepper` is the loop of :func:`fmus.cosim.master.simulate`, cut at the step: built
 from the instances and their stepping order, it initialises them, then each
 :meth:`Stepper.step` advances every instance by one communication step and updates
 the values of the signals that are read or recorded.  The master runs a whole system
 with it; an FMU that contains a system (:mod:`fmus.systemfmu.cores`) steps it in its
-``doStep``.  The semantics (coupling, multi-rate groups, rows) are the master's: see
+``doStep``; the compiled mode (:mod:`fmus.cosim.compiled`) hands it the rest of a step a
+kernel declined; the monolithic reference (:mod:`scenarios.reference`) steps its discrete
+part with it.  The semantics (coupling, multi-rate groups, rows) are the master's: see
 :mod:`fmus.cosim.master`.
+
+The structure, built once:
+
+* :attr:`Stepper.plan`: one :class:`Entry` per instance in stepping order (its inputs and
+  outputs by name and slot, its sub-steps); :attr:`Stepper.groups`: consecutive entries of
+  one sub-step count > 1 form a :class:`Group` (:func:`rate_groups`);
+* the step's **program**: the groups unrolled into one flat sequence of :class:`Call`
+  (one per instance and sub-step, with its time offset and step length, what it reads, how
+  it sets its inputs, steps and stores its outputs).  :meth:`Stepper.step` runs that
+  sequence and nothing else: the usual step, a step with some instances split into more
+  sub-steps (a retried step, a program of its own) and the rest of a step from a given call
+  (the compiled mode) are the same loop.  Jacobi coupling is the same program reading from
+  snapshots (the values at the step's start, and a multi-rate group's values at each of its
+  sub-steps' start) that the pull of a sub-step's first call takes.
 """
 from __future__ import annotations
 
 import operator
+from dataclasses import dataclass
+from typing import Callable, NamedTuple
 
 from fmus.cosim.backends import CoSimulationError
 from fmus.cosim.slots import gatherer as _gatherer
+from fmus.cosim.slots import gathering_pull
 from fmus.cosim.slots import span as _span
 from fmus.cosim.system import System, split_signal
 
 
-def member_calls(inst, in_slots, out_slots) -> tuple:
-    """What one communication step of ``inst`` takes from the stepper's values:
-    (pull(values) or None, step(t, h), read, source, out, inst).  ``pull`` sets the inputs
-    from the slots ``in_slots``; ``step`` steps (False: refused, ``inst.step_refused(t)`` says
-    why); ``values[out] = read(source)`` stores the outputs (``out`` a slice, or an index for
-    one output read as a value).  An instance offers its own (``inst.step_calls``: the
-    in-process slaves' attributes moved without a Python call: its class's, so that a wrapper
-    delegating its attributes, whose ``do_step`` is another, is not bypassed); otherwise its
+@dataclass(frozen=True)
+class Entry:
+    """One instance in the stepping order: its connected inputs and the outputs it produces,
+    by name and by slot (its outputs' slots are consecutive), and its sub-steps."""
+
+    name: str
+    instance: object
+    inputs: tuple
+    in_slots: tuple
+    outputs: tuple
+    out_slots: tuple
+    substeps: int
+
+
+@dataclass(frozen=True)
+class Group:
+    """Consecutive entries stepped ``substeps`` times per communication step together,
+    exchanging their values at every sub-step (one entry when ``substeps`` is 1)."""
+
+    substeps: int
+    entries: tuple
+
+
+class Call(NamedTuple):
+    """One instance's step within a communication step, as :meth:`Stepper.step` runs it
+    (a named tuple: unpacked in one go on the step's path).
+
+    ``pull(reads)`` (None: no inputs) sets the inputs from the list ``reads`` (the values, or a
+    Jacobi snapshot, which the pull of a sub-step's first call takes first);
+    ``step(t + offset, dt)`` steps (False: refused, ``instance.step_refused(t)`` says why);
+    ``values[out] = read(source)`` stores the outputs (``out`` a slice, or an index for one
+    output read as a value)."""
+
+    pull: Callable | None
+    reads: list
+    step: Callable
+    offset: float
+    dt: float
+    read: Callable
+    source: object
+    out: object
+    instance: object
+
+
+class MemberCalls(NamedTuple):
+    """How an instance's inputs are set, its step taken and its outputs read (:func:`member_calls`)."""
+
+    pull: Callable | None
+    step: Callable
+    read: Callable
+    source: object
+    out: object
+    instance: object
+
+
+def member_calls(inst, in_slots, out_slots) -> MemberCalls:
+    """What one step of ``inst`` takes from the stepper's values: ``pull(values)``
+    sets the inputs from the values of ``in_slots`` (None: no inputs); ``step(t, h)`` steps (False: refused); ``values[out] = read(source)``
+    stores the outputs.  An instance offers its own (``inst.step_calls``: the in-process
+    slaves' attributes moved without a Python call: its class's, so that a wrapper delegating
+    its attributes, whose ``do_step`` is another, is not bypassed); otherwise its
     ``set_inputs``, ``do_step`` and ``get_outputs``.  :mod:`benchmarks.bench_master` times these."""
     own = getattr(type(inst), "step_calls", None)
     if own is not None:
-        return own(inst, in_slots, out_slots)
-    pull = None
-    if in_slots:
-        gather, set_inputs = _gatherer(in_slots), inst.set_inputs
-
-        def pull(values):
-            set_inputs(gather(values))
-    return pull, inst.do_step, operator.call, inst.get_outputs, _span(out_slots), inst
+        return MemberCalls(*own(inst, in_slots, out_slots))
+    pull = gathering_pull(inst.set_inputs, in_slots) if in_slots else None
+    return MemberCalls(pull, inst.do_step, operator.call, inst.get_outputs, _span(out_slots), inst)
 
 
 def rate_groups(plan) -> list:
-    """Consecutive plan entries of equal sub-step count > 1 form one group:
-    [(substeps, [(instance, input slots, output slots), ...]), ...]."""
+    """Consecutive :class:`Entry` of equal sub-step count > 1 form one :class:`Group`."""
     groups = []
-    for inst, in_slots, out_slots, substeps in plan:
-        if substeps > 1 and groups and groups[-1][0] == substeps:
-            groups[-1][1].append((inst, in_slots, out_slots))
+    for entry in plan:
+        if entry.substeps > 1 and groups and groups[-1].substeps == entry.substeps:
+            groups[-1] = Group(entry.substeps, groups[-1].entries + (entry,))
         else:
-            groups.append((substeps, [(inst, in_slots, out_slots)]))
+            groups.append(Group(entry.substeps, (entry,)))
     return groups
 
 
-def _exchanges_of(groups) -> list:
-    """Per group of :func:`rate_groups`: [(instance, its inputs' gatherer or None, its outputs'
-    slice)] (a split step's groups differ from the plan's: it needs its own)."""
-    return [[(inst, _gatherer(ins) if ins else None, _span(outs)) for inst, ins, outs in members]
-            for _, members in groups]
+class _Program(NamedTuple):
+    """A step's calls and where each (group, member, sub-step) starts in them."""
+
+    calls: tuple
+    index: dict
 
 
 class Stepper:
@@ -65,9 +131,9 @@ class Stepper:
     ----------
     system : System
     instances : dict
-        Instance name -> back-end instance (``fmus.cosim.master.InProcessInstance`` or an FMU
-        instance): ``variables``, ``bind``, ``initialize``, ``set_inputs``,
-        ``get_outputs``, ``do_step``; ``get_state``, ``set_state`` for :meth:`state`.
+        Instance name -> back-end instance (``fmus.cosim.backends.InProcessInstance`` or an FMU
+        instance): ``variables``, ``bind``, ``enter_initialization``, ``exit_initialization``,
+        ``set_inputs``, ``get_outputs``, ``do_step``; ``get_state``, ``set_state`` for :meth:`state`.
     order : sequence of str
         The stepping order (Gauss-Seidel) or the listing order (Jacobi).
     jacobi : bool
@@ -78,9 +144,6 @@ class Stepper:
     ValueError
         A recorded signal that is neither an output nor a connected input.
     """
-
-    #: Each member's calls (:func:`member_calls`) when one flat loop steps the system, else None.
-    _members = None
 
     def __init__(self, system: System, instances: dict, order, jacobi: bool = False):
         self.system, self.instances, self.order, self.jacobi = system, instances, tuple(order), jacobi
@@ -98,31 +161,57 @@ class Stepper:
             for signal in produced[name]:   # slots of the outputs first: each instance's are one slice
                 self._slot(signal)
         plan = []
-        #: Instance name -> (its connected inputs, the outputs it produces), as bound.
-        self.io_names = {}
         for name in self.order:
             inst = instances[name]
             in_vars = [inst.variables[split_signal(c.target)[1]] for c in feeds[name]]
-            in_slots = [self._slot(c.source) for c in feeds[name]]
-            inst.bind(in_vars, [inst.variables[split_signal(s)[1]] for s in produced[name]])
-            self.io_names[name] = ([v.name for v in in_vars], [split_signal(s)[1] for s in produced[name]])
-            plan.append((inst, in_slots, [self.slots[s] for s in produced[name]], system.component(name).substeps))
+            out_vars = [inst.variables[split_signal(s)[1]] for s in produced[name]]
+            inst.bind(in_vars, out_vars)
+            plan.append(Entry(name, inst, tuple(v.name for v in in_vars), tuple(self._slot(c.source) for c in feeds[name]),
+                              tuple(v.name for v in out_vars), tuple(self.slots[s] for s in produced[name]),
+                              system.component(name).substeps))
         record_inputs = [s for s in system.record if s not in self.slots]
         if record_inputs:
             raise ValueError(f"recorded signals must be outputs or connected inputs: {record_inputs}")
+        #: The entries in stepping order (:class:`Entry`).
+        self.plan = tuple(plan)
+        #: The plan's multi-rate groups (:class:`Group`).
+        self.groups = tuple(rate_groups(self.plan))
         self.record_slots = [self.slots[s] for s in system.record]
         self._record = _gatherer(self.record_slots)
-        self.plan = plan
-        self.groups = rate_groups(plan)
-        self._exchanges = _exchanges_of(self.groups)
-        # Gauss-Seidel at one rate (the usual system): one flat loop over the members' calls.
-        self._members = None if jacobi or any(n > 1 for n, _ in self.groups) else \
-            tuple(member_calls(inst, ins, outs) for inst, ins, outs, _ in plan)
         self.values = [0.0] * len(self.slots)
+        self._calls = {}     # instance name -> its MemberCalls, made once
+        self._program = self._program_of(self.groups)
         self.time = 0.0
 
     def _slot(self, signal):
         return self.slots.setdefault(signal, len(self.slots))
+
+    def _member_calls(self, entry: Entry) -> MemberCalls:
+        calls = self._calls.get(entry.name)
+        if calls is None:
+            calls = self._calls[entry.name] = member_calls(entry.instance, entry.in_slots, entry.out_slots)
+        return calls
+
+    def _program_of(self, groups) -> _Program:
+        """The calls of one step of ``groups``, sub-steps unrolled (module docstring)."""
+        h, values, jacobi = self.system.step, self.values, self.jacobi
+        held = [] if jacobi else values      # Jacobi: the values at the step's start
+        calls, index = [], {}
+        for g, group in enumerate(groups):
+            n = group.substeps
+            dt = h / n
+            reads = list(values) if jacobi and n > 1 else held   # Jacobi: a group's values at its sub-step's start
+            own = [s for e in group.entries for s in e.out_slots]     # one slice: numbered in order
+            produced = slice(min(own), max(own) + 1) if jacobi and n > 1 and own else None
+            for j in range(n):
+                for m, entry in enumerate(group.entries):
+                    pull, step, read, source, out, inst = self._member_calls(entry)
+                    if jacobi and m == 0:
+                        pull = _snapshot(values, held, reads if n > 1 else None, produced, pull,
+                                         first_of_step=g == 0 and j == 0, first_of_group=j == 0)
+                    index[(g, m, j)] = len(calls)
+                    calls.append(Call(pull, reads, step, j * dt, dt, read, source, out, inst))
+        return _Program(tuple(calls), index)
 
     def initialize(self, start_time: float = 0.0) -> None:
         """Initialise every instance with its component's parameters and its connected inputs.
@@ -137,14 +226,14 @@ class Stepper:
         for c in self.system.components:
             self.instances[c.name].enter_initialization(c.parameters, start_time)
         self.time = start_time
-        for inst, _, out_slots, _ in self.plan:
-            self.refresh(inst, out_slots)
+        for entry in self.plan:
+            self._refresh(entry)
         values = self.values
-        for inst, in_slots, out_slots, _ in self.initialization_order():
-            if in_slots:
-                inst.set_inputs([values[i] for i in in_slots])
-            inst.exit_initialization()
-            self.refresh(inst, out_slots)
+        for entry in self.initialization_order():
+            if entry.in_slots:
+                entry.instance.set_inputs([values[i] for i in entry.in_slots])
+            entry.instance.exit_initialization()
+            self._refresh(entry)
 
     def initialization_order(self) -> list:
         """The plan's entries in the order instances leave initialisation mode: every
@@ -156,7 +245,7 @@ class Stepper:
             src, dst = split_signal(conn.source)[0], split_signal(conn.target)[0]
             if src != dst:
                 sources[dst].add(src)
-        entries = dict(zip(self.order, self.plan))
+        entries = {e.name: e for e in self.plan}
         placed, order = set(), []
         while len(order) < len(self.order):
             waiting = [name for name in self.order if name not in placed]
@@ -165,13 +254,14 @@ class Stepper:
             order.append(entries[name])
         return order
 
-    def refresh(self, inst, out_slots=None) -> None:
-        """Read ``inst``'s outputs into the values again (after its state was changed)."""
-        if out_slots is None:
-            out_slots = next(p[2] for p in self.plan if p[0] is inst)
+    def _refresh(self, entry: Entry) -> None:
         values = self.values
-        for i, v in zip(out_slots, inst.get_outputs()):
+        for i, v in zip(entry.out_slots, entry.instance.get_outputs()):
             values[i] = v
+
+    def refresh(self, inst) -> None:
+        """Read ``inst``'s outputs into the values again (after its state was changed)."""
+        self._refresh(next(e for e in self.plan if e.instance is inst))
 
     def state(self) -> dict:
         """A snapshot of the run: time, the signals' values and each instance's state
@@ -186,6 +276,11 @@ class Stepper:
         self.values[:] = state["values"]
         self.time = state["time"]
 
+    def free_state(self, state: dict) -> None:
+        """Release the instances' states in ``state`` (FMU states live in the FMU)."""
+        for name, inst in self.instances.items():
+            inst.free_state(state["instances"][name])
+
     def row(self) -> tuple:
         """The recorded signals' present values, in ``system.record`` order."""
         return self._record(self.values)
@@ -194,73 +289,54 @@ class Stepper:
         """The present value of a connected or recorded ``signal``."""
         return self.values[self.slots[signal]]
 
-    def _step_members(self) -> None:
-        """:meth:`step` of a Gauss-Seidel system at one rate: each member pulls its inputs,
-        steps and stores its outputs (:func:`member_calls`)."""
-        h, t, values = self.system.step, self.time, self.values
-        try:
-            for pull, step, read, source, out, inst in self._members:
-                if pull is not None:
-                    pull(values)
-                if step(t, h) is False:
-                    raise inst.step_refused(t)
-                values[out] = read(source)
-        except CoSimulationError:
-            raise
-        except Exception as exc:  # noqa: BLE001 - as the instance's do_step reports it
-            raise CoSimulationError(inst.name, t, str(exc)) from None
-        self.time = t + h
-
-    def free_state(self, state: dict) -> None:
-        """Release the instances' states in ``state`` (FMU states live in the FMU)."""
-        for name, inst in self.instances.items():
-            inst.free_state(state["instances"][name])
-
-    def step(self, split: dict | None = None, start: tuple = (0, 0, 0)) -> None:
+    def step(self, split: dict | None = None, start: tuple | None = None) -> None:
         """One communication step of every instance from ``time``; ``time`` += h.
 
         ``split`` (instance name -> n) takes this one step with those instances in n times
         their sub-steps (inputs held), as a master retrying a refused step does.  ``start``
         (group, member, sub-step) takes only the rest of the step from there on, as the
         compiled mode does when a kernel declined a step (Gauss-Seidel).  A refusal raises
-        the instance's :class:`fmus.cosim.master.CoSimulationError`."""
-        if self._members is not None and not split and start == (0, 0, 0):
-            self._step_members()
-            return
-        h, t, jacobi, values = self.system.step, self.time, self.jacobi, self.values
-        groups = self.groups
+        the instance's :class:`fmus.cosim.backends.CoSimulationError`."""
+        calls = self._program.calls
         if split:
-            by_instance = {id(inst): name for name, inst in self.instances.items()}
-            groups = rate_groups([(inst, ins, outs, n * split.get(by_instance[id(inst)], 1))
-                                  for inst, ins, outs, n in self.plan])
-        exchanges_by_group = _exchanges_of(groups) if split else self._exchanges
-        held = values[:] if jacobi else values
-        first_group, first_member, first_substep = start
-        for g, ((substeps, members), exchanges) in enumerate(zip(groups, exchanges_by_group, strict=True)):
-            if g < first_group:
-                continue
-            if g > first_group:
-                first_member = first_substep = 0
-            if substeps == 1 and first_member == 0:
-                inst, gather, outputs = exchanges[0]
-                if gather is not None:
-                    inst.set_inputs(gather(held))
-                inst.do_step(t, h)
-                values[outputs] = inst.get_outputs()
-                continue
-            # Components of one rate step together, exchanging values at every
-            # sub-step; what they read from outside the group is held.
-            local = held[:] if jacobi else values
-            dt = h / substeps
-            for j in range(first_substep, substeps):
-                start_of_substep = local[:] if jacobi else local
-                for inst, in_slots, out_slots in members[first_member if j == first_substep else 0:]:
-                    if in_slots:
-                        inst.set_inputs([start_of_substep[i] for i in in_slots])
-                    inst.do_step(t + j * dt, dt)
-                    for i, v in zip(out_slots, inst.get_outputs()):
-                        values[i] = v
-                        local[i] = v
+            calls = self._program_of(rate_groups(
+                [Entry(e.name, e.instance, e.inputs, e.in_slots, e.outputs, e.out_slots,
+                       e.substeps * split.get(e.name, 1)) for e in self.plan])).calls
+        if start is not None:
+            calls = calls[self._program.index[start]:]
+        h, t, values = self.system.step, self.time, self.values
+        try:
+            for pull, reads, step, offset, dt, read, source, out, inst in calls:
+                if pull is not None:
+                    pull(reads)
+                if step(t + offset, dt) is False:
+                    raise inst.step_refused(t + offset)
+                values[out] = read(source)
+        except CoSimulationError:
+            raise
+        except Exception as exc:  # noqa: BLE001 - as the instance's do_step reports it
+            raise CoSimulationError(inst.name, t + offset, str(exc)) from None
         # The communication point advances by adding h, as fmpy's and Ecos' masters do:
         # an exported system then runs there on the very same time points.
         self.time = t + h
+
+
+def _snapshot(values, held, group_reads, produced, pull, first_of_step, first_of_group):
+    """The pull of Jacobi's first call in a group's sub-step: first the values at the step's
+    start into ``held`` (first group), and for a multi-rate group its reads (``group_reads``):
+    ``held`` at its first sub-step, then with its own outputs (the slice ``produced``, or None)
+    as they are now; then the member's own ``pull`` (or None)."""
+    if not first_of_step and group_reads is None:
+        return pull
+
+    def snapshot_and_pull(reads):
+        if first_of_step:
+            held[:] = values
+        if group_reads is not None:
+            if first_of_group:
+                group_reads[:] = held
+            elif produced is not None:
+                group_reads[produced] = values[produced]
+        if pull is not None:
+            pull(reads)
+    return snapshot_and_pull

@@ -32,7 +32,7 @@ FMUS_MODULES = ("__init__.py",
                 "slave/budget.py", "slave/declarations.py", "slave/refusals.py", "slave/identity.py",
                 "slave/designs.py", "slave/registry.py", "slave/sampling.py",
                 "cosim/__init__.py", "cosim/system.py", "cosim/master.py", "cosim/stepper.py", "cosim/backends.py",
-                "cosim/foreign.py", "cosim/slots.py", "cosim/compiled.py", "cosim/adapter.py",
+                "cosim/foreign.py", "cosim/slots.py", "cosim/context.py", "cosim/compiled.py", "cosim/adapter.py",
                 "cosim/compiled_adapters.py",
                 "systemfmu/__init__.py", "systemfmu/cores.py", "systemfmu/slave_base.py")
 #: Top-level names whose imports the bundle rewrites to its private package.

@@ -171,7 +171,7 @@ def loop_image(system, stepper: Stepper) -> LoopImage:
     loop is then run to the system's stop time (module docstring).  Raises NotCompilable for
     what the compiled loop or this image does not cover, naming why."""
     _adapters()
-    plan = Plan(system, stepper, stepper.instances)
+    plan = Plan(system, stepper)
     arenas = _Arenas(candidates([plan.adapters, plan._contexts, stepper.instances]))
     image = LoopImage()
     contexts = []

@@ -20,6 +20,12 @@ typedef struct {
 
 #define PCN_SAMPLING_WORDS ((long)(sizeof(pcn_sampling) / sizeof(double)))
 
+/* Whether the step from t samples (SampledSteps.step): on sub-step sample_phase, except the step
+ * from the start time when hold_first_step is true.  A macro: the slots are the adapter's. */
+#define PCN_SAMPLES(s, in, t)                                                                            \
+    (pc_sampling_samples((s)->substep, (in)->integer[PCN_SLOT_sample_phase]) &&                          \
+     !((in)->boolean[PCN_SLOT_hold_first_step] && (t) == (in)->start_time))
+
 /* SampledSteps.check_step_size's own rule for a step h at t (the generic one passed): h
  * divides T, 0 <= phase < n, n unchanged within a period.  Accepted: s->substeps = n, 0
  * returned; refused: the twin's message (in's step-size message) in `why`, nonzero, nothing

@@ -10,6 +10,13 @@ reads the inputs at t and computes the outputs the model computes at h = T; the 
 hold them (a model whose state moves between samples, the dynamic observer, advances it).  ``sample_phase`` = 0 (the default) samples at each period's start: with h = T
 every step samples, as before sub-stepping existed.
 
+``hold_first_step`` (Boolean, default false): the run's first step (the one from
+fmi2SetupExperiment's start time) does not sample, whatever its phase; the outputs hold their start values over it and the first sample is the next one
+of the phase (at h = T: the second step).  A Jacobi master that feeds 0.0 to every input on
+its first step instead of the outputs after initialisation (fmpy's ``simulate_ssp``) then
+cannot put those zeros into the model: the per-component export sets it on the instances
+that would sample on the first step (docs/ssp.md).
+
 The step size may change only at a period's start (k = 0), to another divisor of T; within
 a period a step whose T / h differs is refused, naming h, T and the time.  The counter is
 FMU state (``_substep``, ``_substeps`` are plain attributes: :mod:`fmus.slave.state` keeps
@@ -36,6 +43,8 @@ _CHANGES_PERIOD = kernels.function("pc_sampling_changes_period", ctypes.c_int, _
 
 #: The phase parameter's name (docs/contract.md): the sub-step of each period that samples.
 PHASE_PARAMETER = "sample_phase"
+#: The Boolean parameter (docs/contract.md): the run's first step does not sample.
+HOLD_FIRST_PARAMETER = "hold_first_step"
 #: Relative tolerance of "h divides T": |T / h - n| <= SAMPLE_TOLERANCE n (pc_sampling.h's
 #: PC_SAMPLING_TOLERANCE, which decides).
 SAMPLE_TOLERANCE = 1e-9
@@ -112,6 +121,10 @@ class SampledSteps:
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
+        self.declare(HOLD_FIRST_PARAMETER, "parameter", False,
+                     "The run's first step does not sample: the outputs hold their start values over it (a master "
+                     "that feeds 0.0 to every input on its first step cannot reach the model); the first sample is "
+                     "the phase's next")
         self._substep = 0     # the next step's index in its period
         self._substeps = 0    # n = T / h of the steps counted (0: none yet)
 
@@ -133,7 +146,7 @@ class SampledSteps:
 
     def step(self, current_time, step_size):
         k = self._substep   # pc_sampling_samples and pc_sampling_next, in Python (module docstring)
-        if k == self.sample_phase:
+        if k == self.sample_phase and not (self.hold_first_step and current_time == self._start_time):
             self.sample(current_time, step_size)
         else:
             self.between_samples(current_time, step_size)

@@ -197,9 +197,9 @@ def inner_work(stepper: Stepper, extra=()) -> tuple:
     component, which bounds its own calls, at INNER_STEP.  ``extra``: instance names stepped once
     more (a corrected model of the plant)."""
     count, seconds = 0, 0.0
-    for name, (inst, _, _, substeps) in zip(stepper.order, stepper.plan):
-        known = getattr(getattr(inst, "slave", None), "known_step_work", None)
-        repeats = substeps + extra.count(name)
+    for entry in stepper.plan:
+        known = getattr(getattr(entry.instance, "slave", None), "known_step_work", None)
+        repeats = entry.substeps + extra.count(entry.name)
         count += repeats
         seconds += repeats * (budget.INNER_STEP + (known() if known is not None else 0.0))
     return count, seconds
@@ -229,7 +229,7 @@ class LoopCore:
 
     def inner_steps(self) -> int:
         """The inner doSteps of one communication step."""
-        return sum(entry[3] for entry in self.stepper.plan)
+        return sum(entry.substeps for entry in self.stepper.plan)
 
     def value(self, signal: str) -> float:
         return self.stepper.value(signal)
@@ -337,7 +337,7 @@ class ChainCore:
 
     def inner_steps(self) -> int:
         """The inner doSteps of one step, the model's corrected step included."""
-        return sum(entry[3] for entry in self.stepper.plan) + 1
+        return sum(entry.substeps for entry in self.stepper.plan) + 1
 
     def state(self) -> dict:
         """The chain's state: the stepper's, the row and snapshot of the sample ahead, the

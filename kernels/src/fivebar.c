@@ -57,6 +57,11 @@ int pc_fivebar_context_size(void)
     return (int)sizeof(pc_fivebar_context);
 }
 
+int pc_fivebar_scratch_words(int n)
+{
+    return PC_FIVEBAR_SCRATCH(n);
+}
+
 /* s_k of E_k (7.3-7.4) and the chain's base x (7.8). */
 static double chain_sign(int k)
 {
@@ -68,18 +73,26 @@ static double chain_base(const pc_fivebar_params *p, int k)
     return k == 0 ? p->l0 : -p->l0;
 }
 
-/* Chain k at joint angles (a, b) and rates (da, db): tip, J_v, tip bias, M, v, g, the tip rows
- * world-aligned (E_k applied) and gravity written in the chain frame (E_k^T g). */
-void pc_fivebar_chain_terms(const pc_fivebar_params *p, int k, double a, double b, double da, double db,
-                            pc_fivebar_terms *t)
+/* sin and cos of a chain's angles: theta_k1 = a, theta_k1 + theta_k2 = a + b, theta_k2 = b. */
+typedef struct {
+    double s1, c1, s12, c12, sb, cb;
+} chain_trig;
+
+static void chain_trig_of(double a, double b, chain_trig *g)
+{
+    pc_sincos(a, &g->s1, &g->c1);
+    pc_sincos(a + b, &g->s12, &g->c12);
+    pc_sincos(b, &g->sb, &g->cb);
+}
+
+/* pc_fivebar_chain_terms from the chain's trigonometry g. */
+static void chain_terms_of(const pc_fivebar_params *p, int k, const chain_trig *g, double da, double db,
+                           pc_fivebar_terms *t)
 {
     const pc_fivebar_chain *c = &p->chain[k];
     const double s = chain_sign(k);
     const double l1 = c->l1, l2 = c->l2, lg1 = c->lg1, lg2 = c->lg2, m1 = c->m1, m2 = c->m2;
-    double c1, s1, c12, s12, cb, sb;
-    pc_sincos(a, &s1, &c1);
-    pc_sincos(a + b, &s12, &c12);
-    pc_sincos(b, &sb, &cb);
+    const double c1 = g->c1, s1 = g->s1, c12 = g->c12, s12 = g->s12, cb = g->cb, sb = g->sb;
     const double w1 = da, w12 = da + db;
     /* Tip (4.4) and J_v (4.13) in the chain frame; only the x, y rows are non-zero. */
     t->tip[0] = s * (l1 * c1 + l2 * c12);
@@ -110,6 +123,56 @@ void pc_fivebar_chain_terms(const pc_fivebar_params *p, int k, double a, double 
     t->g[1] = -(m2 * (g2bx * gx + g2by * gy));
 }
 
+/* Chain k at joint angles (a, b) and rates (da, db): tip, J_v, tip bias, M, v, g, the tip rows
+ * world-aligned (E_k applied) and gravity written in the chain frame (E_k^T g). */
+void pc_fivebar_chain_terms(const pc_fivebar_params *p, int k, double a, double b, double da, double db,
+                            pc_fivebar_terms *t)
+{
+    chain_trig g;
+    chain_trig_of(a, b, &g);
+    chain_terms_of(p, k, &g, da, db, t);
+}
+
+/* The trigonometry of a state's chains kept in a step's scratch (PC_FIVEBAR_TRIG_WORDS after
+ * the RK4 work): [mark, theta11, theta12, theta21, theta22, chain_trig of chain 1, of chain 2].
+ * pc_fivebar_step's report writes it for the trial state; the next step, which starts from that
+ * state once it is taken, reads it in its first evaluation instead of computing the six sin/cos
+ * pairs again.  Read only when marked and its angles are the state's bit for bit (a restored
+ * state, a refused step, another plant sharing the scratch: computed afresh), so the results
+ * are the same bits either way. */
+#define TRIG_MARK 0x1.5ca1ab1e5eedp-3
+
+/* x is k bit for bit (== alone takes -0 for +0, whose sines differ). */
+static int same_bits(double x, double k)
+{
+    return x == k && signbit(x) == signbit(k);
+}
+
+/* Chain k's trigonometry at angles (a, b): from the cache when it holds them, else computed. */
+static void trig_at(const double *cache, int k, double a, double b, chain_trig *g)
+{
+    if (cache && cache[0] == TRIG_MARK && same_bits(a, cache[1 + 2 * k]) && same_bits(b, cache[2 + 2 * k])) {
+        const double *v = cache + 5 + 6 * k;
+        *g = (chain_trig){v[0], v[1], v[2], v[3], v[4], v[5]};
+    } else {
+        chain_trig_of(a, b, g);
+    }
+}
+
+/* Keep chain k's trigonometry g at (a, b) in the cache (mark it once both chains are in). */
+static void keep_trig(double *cache, int k, double a, double b, const chain_trig *g)
+{
+    double *v = cache + 5 + 6 * k;
+    cache[1 + 2 * k] = a;
+    cache[2 + 2 * k] = b;
+    v[0] = g->s1;
+    v[1] = g->c1;
+    v[2] = g->s12;
+    v[3] = g->c12;
+    v[4] = g->sb;
+    v[5] = g->cb;
+}
+
 /* The inverse of the 2x2 row-major m into inv. */
 static void inverse2(const double *m, double *inv)
 {
@@ -127,15 +190,17 @@ static void terms_at(const pc_fivebar_params *p, int k, const double *y, int wit
                            with_rates ? dq[4 + 2 * k] : 0.0, t);
 }
 
-/* dy/dt for y = [q, dq] with u* = (u1, u2) on theta11, theta21 (5.66). */
-void pc_fivebar_derivative(const pc_fivebar_params *p, const double *y, double u1, double u2, double lambda,
-                           double *dydt)
+/* pc_fivebar_derivative, the chains' trigonometry from `cache` when it holds y's angles (NULL: none). */
+static void derivative_of(const pc_fivebar_params *p, const double *y, double u1, double u2, double lambda,
+                          const double *cache, double *dydt)
 {
     pc_fivebar_terms t[2];
     double cinv[2][4], e[2][2];
     const double x = y[0], yy = y[1], dx = y[7], dy = y[8];
     for (int k = 0; k < 2; ++k) {
-        terms_at(p, k, y, 1, &t[k]);
+        chain_trig g;
+        trig_at(cache, k, y[3 + 2 * k], y[4 + 2 * k], &g);
+        chain_terms_of(p, k, &g, y[10 + 2 * k], y[11 + 2 * k], &t[k]);
         const double rx = x - chain_base(p, k) - t[k].tip[0];   /* residual (5.18) */
         const double ry = yy - t[k].tip[1];
         const double dth1 = y[10 + 2 * k], dth2 = y[11 + 2 * k];
@@ -178,18 +243,22 @@ void pc_fivebar_derivative(const pc_fivebar_params *p, const double *y, double u
     }
 }
 
+/* dy/dt for y = [q, dq] with u* = (u1, u2) on theta11, theta21 (5.66). */
+void pc_fivebar_derivative(const pc_fivebar_params *p, const double *y, double u1, double u2, double lambda,
+                           double *dydt)
+{
+    derivative_of(p, y, u1, u2, lambda, NULL, dydt);
+}
+
 /* The world speed of motor m's joint (plant.fivebar.world_rates). */
 static double motor_speed(const pc_fivebar_motor *m, const double *z)
 {
     return m->joint == 0.0 ? z[10] : -z[12];
 }
 
-/* dz/dt for z = [q, dq, i_1 .. i_n]: the plant (5.66) with each motor's shaft torque (B.2) added
- * to the held efforts on its joint (world -> thesis sign on chain 2), and the armature
- * circuits (4.162).  `held` is a pc_fivebar_held (the signature of pc_rk4's derivative). */
-void pc_fivebar_actuated_derivative(const void *held, const double *z, double *dzdt)
+/* pc_fivebar_actuated_derivative with the trigonometry cache of derivative_of (NULL: none). */
+static void actuated_derivative_of(const pc_fivebar_held *m, const double *cache, const double *z, double *dzdt)
 {
-    const pc_fivebar_held *m = held;
     double u1 = m->u1, u2 = m->u2;
     for (int n = 0; n < m->n_motors; ++n) {
         const pc_fivebar_motor *r = &m->motors[n];
@@ -201,7 +270,27 @@ void pc_fivebar_actuated_derivative(const void *held, const double *z, double *d
             u2 -= tau;
         dzdt[N_Y + n] = pc_armature_rate(r->R, r->L, r->ke, m->voltages[n], i, omega);
     }
-    pc_fivebar_derivative(m->params, z, u1, u2, m->lambda, dzdt);
+    derivative_of(m->params, z, u1, u2, m->lambda, cache, dzdt);
+}
+
+/* dz/dt for z = [q, dq, i_1 .. i_n]: the plant (5.66) with each motor's shaft torque (B.2) added
+ * to the held efforts on its joint (world -> thesis sign on chain 2), and the armature
+ * circuits (4.162).  `held` is a pc_fivebar_held (the signature of pc_rk4's derivative). */
+void pc_fivebar_actuated_derivative(const void *held, const double *z, double *dzdt)
+{
+    actuated_derivative_of(held, NULL, z, dzdt);
+}
+
+/* What pc_fivebar_step's RK4 holds: the held inputs and the trigonometry cache. */
+typedef struct {
+    const pc_fivebar_held *held;
+    const double *cache;
+} cached_model;
+
+static void cached_derivative(const void *model, const double *z, double *dzdt)
+{
+    const cached_model *m = model;
+    actuated_derivative_of(m->held, m->cache, z, dzdt);
 }
 
 /* RK4 of the actuated derivative over dt, `substeps` steps, z in place; work: 5 (14 + n) doubles. */
@@ -210,27 +299,26 @@ void pc_fivebar_advance(const pc_fivebar_held *held, double *z, double dt, int s
     pc_rk4(pc_fivebar_actuated_derivative, held, z, N_Y + held->n_motors, dt, substeps, work);
 }
 
-/* Chain k's tip (E_k applied) at joint angles (a, b): the tip rows of pc_fivebar_chain_terms
- * alone (the same expressions, so the same bits), for the residual. */
-static void chain_tip(const pc_fivebar_params *p, int k, double a, double b, double tip[2])
+/* Chain k's rows of the position constraint residual (5.18, 7.7) at y, from the sines and
+ * cosines of theta_k1 and theta_k1 + theta_k2: its tip is that of pc_fivebar_chain_terms (the
+ * same expressions, so the same bits). */
+static void residual_rows(const pc_fivebar_params *p, int k, const double *y, double c1, double s1, double c12,
+                          double s12, double *out)
 {
     const pc_fivebar_chain *c = &p->chain[k];
-    double c1, s1, c12, s12;
-    pc_sincos(a, &s1, &c1);
-    pc_sincos(a + b, &s12, &c12);
-    tip[0] = chain_sign(k) * (c->l1 * c1 + c->l2 * c12);
-    tip[1] = c->l1 * s1 + c->l2 * s12;
+    out[0] = y[0] - chain_base(p, k) - chain_sign(k) * (c->l1 * c1 + c->l2 * c12);
+    out[1] = y[1] - (c->l1 * s1 + c->l2 * s12);
+    out[2] = y[2];
 }
 
 /* The position constraint residual q̄ (5.18, 7.7): 6 entries. */
 void pc_fivebar_residual(const pc_fivebar_params *p, const double *y, double *out)
 {
-    double tip[2];
     for (int k = 0; k < 2; ++k) {
-        chain_tip(p, k, y[3 + 2 * k], y[4 + 2 * k], tip);
-        out[3 * k] = y[0] - chain_base(p, k) - tip[0];
-        out[3 * k + 1] = y[1] - tip[1];
-        out[3 * k + 2] = y[2];
+        double c1, s1, c12, s12;
+        pc_sincos(y[3 + 2 * k], &s1, &c1);
+        pc_sincos(y[3 + 2 * k] + y[4 + 2 * k], &s12, &c12);
+        residual_rows(p, k, y, c1, s1, c12, s12, out + 3 * k);
     }
 }
 
@@ -240,19 +328,25 @@ static double encoder(double q, double offset, double count)
     return count * floor((q + offset) / count + 0.5);
 }
 
-/* What PlantSimulator checks and publishes for the plant state y (14 entries). */
-void pc_fivebar_report_of(const pc_fivebar_params *p, const pc_fivebar_settings *s, const double *y,
-                          pc_fivebar_report *out)
+/* pc_fivebar_report_of; the chains' trigonometry kept in `cache` (NULL: not kept). */
+static void report_of(const pc_fivebar_params *p, const pc_fivebar_settings *s, const double *y,
+                      pc_fivebar_report *out, double *cache)
 {
     int finite = 1;
     for (int i = 0; i < N_Y; ++i) finite = finite && isfinite(y[i]);
     out->finite = finite ? 1.0 : 0.0;
     double res[6], sum = 0.0;
-    pc_fivebar_residual(p, y, res);
+    chain_trig g[2];
+    for (int k = 0; k < 2; ++k) {
+        chain_trig_of(y[3 + 2 * k], y[4 + 2 * k], &g[k]);
+        residual_rows(p, k, y, g[k].c1, g[k].s1, g[k].c12, g[k].s12, res + 3 * k);
+        if (cache) keep_trig(cache, k, y[3 + 2 * k], y[4 + 2 * k], &g[k]);
+    }
+    if (cache) cache[0] = TRIG_MARK;
     for (int i = 0; i < 6; ++i) sum += res[i] * res[i];
     out->residual = sqrt(sum);
-    out->measures[0] = pc_sin(y[4]);
-    out->measures[1] = pc_sin(y[6]);
+    out->measures[0] = g[0].sb;   /* sin theta12 */
+    out->measures[1] = g[1].sb;   /* sin theta22 */
     out->measures[2] = pc_sin((y[3] + y[4]) - (PI - (y[5] + y[6])));
     out->q1 = y[3];
     out->q2 = PI - y[5];
@@ -264,6 +358,13 @@ void pc_fivebar_report_of(const pc_fivebar_params *p, const pc_fivebar_settings 
     out->dy = y[8];
     out->q1_enc = encoder(out->q1, s->offset[0], s->count);
     out->q2_enc = encoder(out->q2, s->offset[1], s->count);
+}
+
+/* What PlantSimulator checks and publishes for the plant state y (14 entries). */
+void pc_fivebar_report_of(const pc_fivebar_params *p, const pc_fivebar_settings *s, const double *y,
+                          pc_fivebar_report *out)
+{
+    report_of(p, s, y, out, NULL);
 }
 
 /* The verdict on a trial state z (n = 14 + motors) and its report: PlantSimulator.accept's
@@ -302,8 +403,10 @@ int pc_fivebar_step(const pc_fivebar_params *p, const pc_fivebar_settings *s, co
     double *trial = scratch;
     for (int i = 0; i < n; ++i) trial[i] = z[i];
     const pc_fivebar_held held = {p, motors, voltages, u1, u2, s->lambda, n_motors};
-    pc_fivebar_advance(&held, trial, dt, (int)s->substeps, scratch + n);
-    pc_fivebar_report_of(p, s, trial, report);
+    double *cache = scratch + 6 * n;   /* the trigonometry of z when the last step's report kept it */
+    const cached_model model = {&held, cache};
+    pc_rk4(cached_derivative, &model, trial, n, dt, (int)s->substeps, scratch + n);
+    report_of(p, s, trial, report, cache);
     return judge(s, trial, n, report, refusal);
 }
 

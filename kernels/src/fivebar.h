@@ -119,8 +119,11 @@ enum {
     PC_FIVEBAR_SINGULAR = 4           /* index: the measure (report.measures), value: it */
 };
 
-/* Scratch of a step of n states: the trial state (n) and RK4's work (5 n). */
-#define PC_FIVEBAR_SCRATCH(n) (6 * (n))
+/* Scratch of a step of n states: the trial state (n), RK4's work (5 n) and the trigonometry
+ * of the last trial state (PC_FIVEBAR_TRIG_WORDS, fivebar.c: read by the next step when it
+ * starts from that state, checked against it; allocate it zeroed). */
+#define PC_FIVEBAR_TRIG_WORDS 17
+#define PC_FIVEBAR_SCRATCH(n) (6 * (n) + PC_FIVEBAR_TRIG_WORDS)
 
 extern const pc_field pc_fivebar_params_fields[];
 extern const pc_field pc_fivebar_chain_fields[];
@@ -132,6 +135,8 @@ extern const pc_field pc_fivebar_report_fields[];
 extern const pc_field pc_fivebar_inverse_fields[];
 
 int pc_fivebar_context_size(void);
+/* PC_FIVEBAR_SCRATCH(n), for callers that cannot read the macro. */
+int pc_fivebar_scratch_words(int n);
 
 void pc_fivebar_chain_terms(const pc_fivebar_params *p, int k, double a, double b, double da, double db,
                             pc_fivebar_terms *t);

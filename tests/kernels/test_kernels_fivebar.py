@@ -86,6 +86,32 @@ def test_plant_io_steps_as_the_simulator_and_publishes_its_outputs():
                                                              "q1_enc", "q2_enc", "residual")]
 
 
+def test_the_trigonometry_kept_for_the_next_step_gives_the_bits_of_a_fresh_scratch():
+    """pc_fivebar_step keeps the trial state's sines and cosines in its scratch for the next
+    step's first evaluation: a run through one scratch (kept, and stale after a state put back
+    or moved) is bit for bit a run whose every step starts from a zeroed one."""
+    sim, kernel = _plant()
+    kept, fresh = sim.y.copy(), sim.y.copy()
+    kept_context, fresh_context = kernel.context(kept), kernel.context(fresh)
+    fresh_scratch = fresh_context.buffers[-1]
+    refusal = kernels.Refusal()
+    earlier = None
+    for k in range(120):
+        x = np.array([0.02 * math.cos(0.1 * k), -0.01 * math.sin(0.07 * k)] + [0.0] * 11)
+        y = x.copy()
+        fresh_scratch[:] = 0.0
+        status = fast5r.plant_io_c(ctypes.addressof(kept_context), kernels.address(x), 0.0, DT, ctypes.byref(refusal))
+        assert status == fast5r.plant_io_c(ctypes.addressof(fresh_context), kernels.address(y), 0.0, DT,
+                                           ctypes.byref(refusal)) == 0
+        assert kept.tobytes() == fresh.tobytes() and x.tobytes() == y.tobytes()
+        if k == 40:
+            earlier = kept.copy()
+        if k == 80:       # a restored state: the kept trigonometry is another state's
+            kept[:], fresh[:] = earlier, earlier
+        if k == 100:      # a nudged angle (the same within 1 ulp): not the kept one
+            kept[3] = fresh[3] = np.nextafter(kept[3], 1.0)
+
+
 @pytest.mark.parametrize("index", [0, 1])
 @pytest.mark.parametrize("value", [math.nan, math.inf, -math.inf])
 def test_a_non_finite_input_is_refused_with_its_code_and_changes_nothing(index, value):
@@ -163,6 +189,8 @@ def test_c_layouts_are_the_python_packing():
         assert places[0][0] == 0 and all(a[1] == b[0] for a, b in zip(places, places[1:]))
     assert fast5r.PARAMS_SIZE == 4 + 2 * 9 and fast5r.MOTOR_COLUMNS == 8 and fast5r.PLANT_STATES == 14
     assert ctypes.sizeof(fast5r.Context) == fast5r.CONTEXT_SIZE
+    scratch_words = kernels.function("pc_fivebar_scratch_words", ctypes.c_int, ctypes.c_int)
+    assert fast5r.SCRATCH_WORDS == scratch_words(fast5r.PLANT_STATES + fast5r.MAX_MOTORS)
 
 
 def test_the_simulator_refuses_with_one_record_and_its_message():

@@ -110,7 +110,7 @@ static int step(pcn_instance *in, double t, double h, pcn_text *why)
 {
     (void)h;
     pcn_sampling *s = counter(in);
-    if (pc_sampling_samples(s->substep, in->integer[PCN_SLOT_sample_phase]) && sample(in, t, why)) return 1;
+    if (PCN_SAMPLES(s, in, t) && sample(in, t, why)) return 1;
     s->substep = pc_sampling_next(s->substep, s->substeps);
     return 0;
 }

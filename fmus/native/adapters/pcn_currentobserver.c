@@ -130,7 +130,7 @@ static int step(pcn_instance *in, double t, double h, pcn_text *why)
     }
     if (code == PC_OK) {
         pcn_sampling *s = counter(in);
-        if (pc_sampling_samples(s->substep, in->integer[PCN_SLOT_sample_phase])) r[PCN_SLOT_i_hat] = i_hat;
+        if (PCN_SAMPLES(s, in, t)) r[PCN_SLOT_i_hat] = i_hat;
         s->substep = pc_sampling_next(s->substep, s->substeps);
         return 0;
     }

@@ -124,7 +124,7 @@ def test_generated_source_follows_the_stepping_order():
 
 def test_python_finishes_a_declined_step_from_the_declining_member_and_sub_step():
     """Catches Python redoing or skipping members when it finishes a declined step."""
-    from fmus.cosim.stepper import Stepper, _exchanges_of
+    from fmus.cosim.stepper import Entry, Stepper, rate_groups
 
     calls = []
 
@@ -144,9 +144,10 @@ def test_python_finishes_a_declined_step_from_the_declining_member_and_sub_step(
     a, b, c, d = (Instance(n) for n in "abcd")
     stepper = Stepper.__new__(Stepper)
     stepper.system = System((), (), (), stop_time=1.0, step=1.0)
-    stepper.values, stepper.jacobi, stepper.time = [], False, 3.0
-    stepper.groups = [(1, [(a, [], [])]), (2, [(b, [], []), (c, [], [])]), (1, [(d, [], [])])]
-    stepper._exchanges = _exchanges_of(stepper.groups)
+    stepper.values, stepper.jacobi, stepper.time, stepper._calls = [], False, 3.0, {}
+    stepper.plan = tuple(Entry(i.name, i, (), (), (), (), n) for i, n in ((a, 1), (b, 2), (c, 2), (d, 1)))
+    stepper.groups = tuple(rate_groups(stepper.plan))
+    stepper._program = stepper._program_of(stepper.groups)
     stepper.step(start=(1, 1, 0))   # c declined in the first of b, c's two sub-steps
     assert calls == [("c", 3.0, 0.5), ("b", 3.5, 0.5), ("c", 3.5, 0.5), ("d", 3.0, 1.0)]
     assert stepper.time == 4.0
