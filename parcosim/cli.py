@@ -6,7 +6,7 @@ Every subcommand is a thin shell over a documented Python call:
 ``parcosim``           ``parcosim run bench_circle_TCMDx`` (the default job)
 ``parcosim demo``      ``scenarios.examples.plant_demo.run(out_dir, preset)``: the plant alone, a table and a PNG
 ``parcosim build``     ``fmus.export.build.build_all(out_dir)``; with ``--native``
-                       ``fmus.native.build.build_native_all(out_dir)`` (docs/native.md)
+                       ``fmus.native.build.build_native_all(out_dir, fmi_version)`` (docs/native.md)
 ``parcosim sweep``     ``scenarios.batch.sweep.run_sweep(scene, samples, uncertainty, seed, distribution,
                        perturb, mode, out_dir, scheduler, workers)``
 ``parcosim identify-motor``  ``motor.cli.identify_main(argv)``
@@ -24,7 +24,7 @@ Every subcommand is a thin shell over a documented Python call:
                        ``scenarios.packaging.per_component.export_per_component(get_scene(name), path, fmu_dir,
                        substeps, internal_observer)``
 ``parcosim export-fmu``  ``fmus.systemfmu.export.export_fmu(get_scene(name).system, path)``; with ``--native``
-                       ``fmus.native.loopbuild.export_native_fmu(get_scene(name).system, path)`` (docs/native.md)
+                       ``fmus.native.loopbuild.export_native_fmu(get_scene(name).system, path, fmi_version=...)`` (docs/native.md)
 ``parcosim build-plant``  ``fmus.export.specfmu.build_plant_fmu(spec, path)`` (docs/spec.md)
 ``parcosim workspace``  ``scenarios.studies.workspace.plot_workspace(preset_or_spec, out_dir)`` (docs/workspace.md)
 =====================  ==============================================
@@ -61,6 +61,12 @@ EXIT_REFUSED = 2
 DEFAULT_SCENE = "bench_circle_TCMDx"
 
 
+def _fmi_version_option(command) -> None:
+    command.add_argument("--fmi-version", type=int, choices=(2, 3), default=2,
+                         help="with --native: FMI 2.0 (default) or FMI 3.0 co-simulation FMUs, the same C under "
+                              "either (docs/native.md)")
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = Parser(prog="parcosim", description=f"Co-simulate the 5R robot's and the wheeled pendulum's scenes, "
                      f"export them as FMUs and SSP packages. Bare `parcosim` runs `parcosim run {DEFAULT_SCENE}` "
@@ -76,6 +82,7 @@ def _parser() -> argparse.ArgumentParser:
                                                    "fmus/build/native/")
     build.add_argument("--native", action="store_true",
                        help="build the native FMUs (C only, no Python in the importer; docs/native.md)")
+    _fmi_version_option(build)
     sub.add_parser("list", help="print the scenes")
     run = sub.add_parser("run", help="run a scene: result.csv, metrics.json and plots")
     run.add_argument("scene", help="a scene name (see `parcosim list`)")
@@ -156,6 +163,7 @@ def _parser() -> argparse.ArgumentParser:
                      help="the scene with its drives inside the plant, RK4 N steps per sample")
     fmu.add_argument("--native", action="store_true",
                      help="a native FMU: the compiled loop in C, no Python in the importer (docs/native.md)")
+    _fmi_version_option(fmu)
     _replace_option(fmu)
     trade = sub.add_parser("trade", help="speed against accuracy: sweep the settings, table and Pareto plot")
     trade.add_argument("scene", nargs="?", default=DEFAULT_SCENE,
@@ -243,6 +251,8 @@ def main(argv: list[str] | None = None) -> int:
             _check_scene(args.scene)
         if getattr(args, "native", False) and args.command == "run" and args.mode != "fmu":
             raise CommandError(f"--native runs native FMUs: it needs --mode fmu, not --mode {args.mode}")
+        if getattr(args, "fmi_version", 2) != 2 and not args.native:
+            raise CommandError(f"--fmi-version {args.fmi_version} is for the native FMUs: it needs --native")
         path, is_file = _output(args)
         if path is not None:
             check_output(path, is_file)
@@ -322,7 +332,7 @@ def _command(args) -> int:
         elif args.command == "export-fmu":
             if args.native:
                 from fmus.native.loopbuild import export_native_fmu
-                print(export_native_fmu(_scene(args).system, args.path))
+                print(export_native_fmu(_scene(args).system, args.path, fmi_version=args.fmi_version))
             else:
                 from fmus.systemfmu.export import export_fmu
                 print(export_fmu(_scene(args).system, args.path))
@@ -339,7 +349,7 @@ def _command(args) -> int:
             print(plot_workspace(args.mechanism, args.out, circles=circles).summary())
         elif args.command == "build" and args.native:
             from fmus.native.build import DEFAULT_NATIVE_OUT, build_native_all
-            for path in build_native_all(args.out or DEFAULT_NATIVE_OUT):
+            for path in build_native_all(args.out or DEFAULT_NATIVE_OUT, args.fmi_version):
                 print(path)
         elif args.command == "build":
             from fmus.export.build import DEFAULT_OUT, build_all

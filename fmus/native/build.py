@@ -3,7 +3,9 @@
 For one model: instantiate its pythonfmu slave with its start values and initialise it (its
 variables and the designs it computes), generate ``model_config.h`` and ``model_table.c``,
 collect the C sources into ``sources/`` with ``buildDescription.xml`` and ``CMakeLists.txt``,
-compile ``binaries/<platform>/<model>.so`` with the system C compiler and zip the FMU.
+compile ``binaries/<platform>/<model>.so`` with the system C compiler and zip the FMU.  FMI
+2.0 (``fmi2_native.c``) or, with ``fmi_version=3``, FMI 3.0 (``fmi3_native.c``, the
+description by :mod:`fmus.native.fmi3xml`): the same core and adapters under either.
 """
 from __future__ import annotations
 
@@ -27,12 +29,15 @@ from fmus.slave.base import START_VALUES_FILE
 from fmus.slave.identity import IDENTITY_FILE
 from fmus.export.modeldescription import model_structure
 from fmus.slave.registry import SLAVES
+from .fmi3xml import fmi3_model_description
 from .models import NATIVE
 
 HERE = Path(__file__).resolve().parent
 KERNELS = HERE.parent.parent / "kernels" / "src"
-#: The generic part every native FMU compiles.
-GENERIC = ("fmi2_native.c", "pcn_values.c", "pcn_state.c", "pcn_text.c", "pcn_text.h", "pcn_model.h", "pcn_native.h")
+#: The generic part every native FMU compiles (of no FMI version; :data:`LAYER` adds its FMI functions).
+GENERIC = ("pcn_core.c", "pcn_values.c", "pcn_state.c", "pcn_text.c", "pcn_text.h", "pcn_model.h", "pcn_native.h")
+#: The FMI layer of each FMI version (``--fmi-version``).
+LAYER = {2: ("fmi2_native.c",), 3: ("fmi3_native.c", "fmi3_refused.c")}
 #: As the kernels' library (kernels/build.py): no FMA contraction, so results match it bit for bit.
 CFLAGS = ("-std=c11", "-O2", "-fPIC", "-fvisibility=hidden", "-ffp-contract=off", "-fno-fast-math")
 #: What a sampled model adds (fmus/slave/sampling.py's sub-stepping): its generic part and the kernels' counting rule.
@@ -48,17 +53,22 @@ class NativeBuildError(RuntimeError):
 
 
 def fmi_headers() -> Path:
-    """The folder of the standard FMI 2.0 headers (fmpy ships them)."""
+    """The folder of the standard FMI 2.0 and 3.0 headers (fmpy ships them)."""
     import fmpy
 
     return Path(fmpy.__file__).resolve().parent / "c-code"
 
 
-def platform_folder() -> str:
-    """FMI 2.0's binaries folder of this machine (linux64 ...)."""
-    from fmpy import platform
+def platform_folder(fmi_version: int = 2) -> str:
+    """The binaries folder of this machine: FMI 2.0's (linux64 ...) or FMI 3.0's (x86_64-linux ...)."""
+    from fmpy import platform, platform_tuple
 
-    return platform
+    return platform_tuple if fmi_version == 3 else platform
+
+
+def _check_version(fmi_version: int) -> None:
+    if fmi_version not in LAYER:
+        raise ValueError(f"FMI version {fmi_version!r}: the native FMUs are FMI 2.0 or 3.0 (2 or 3)")
 
 
 def initialised_slave(model: str, resources: Path):
@@ -161,9 +171,9 @@ def build_description(model: str, sources: list[str]) -> str:
     return ET.tostring(root, encoding="unicode", xml_declaration=True) + "\n"
 
 
-def cmake_lists(model: str, sources: list[str]) -> str:
+def cmake_lists(model: str, sources: list[str], fmi_version: int = 2) -> str:
     """sources/CMakeLists.txt: the FMU's shared library from these sources alone."""
-    return (f"# Builds {model}'s binary from these sources; pass the FMI 2.0 headers' folder:\n"
+    return (f"# Builds {model}'s binary from these sources; pass the FMI {fmi_version}.0 headers' folder:\n"
             f"#   cmake -DFMI_HEADERS=/path/to/headers -S . -B build && cmake --build build\n"
             "cmake_minimum_required(VERSION 3.10)\n"
             f"project({model} C)\n"
@@ -181,9 +191,13 @@ def compile_command(sources_dir: Path, output: Path, compiler: str = "cc") -> li
             "-Wl,--no-undefined", "-lm"]
 
 
-def model_description(slave, model: str, guid: str, sources: list[str], feedthrough: dict) -> bytes:
+def model_description(slave, model: str, guid: str, sources: list[str], feedthrough: dict,
+                      fmi_version: int = 2, time_vr: int | None = None) -> bytes:
     """The native FMU's modelDescription.xml: the slave's (pythonfmu's writer), with its own
-    GUID, no execution tool, the ModelStructure and the source files."""
+    GUID, no execution tool, the ModelStructure and the source files; FMI 3.0's has the same
+    content (:func:`fmus.native.fmi3xml.fmi3_model_description`; its sources are in
+    buildDescription.xml only) and the independent variable ``time`` at value reference
+    ``time_vr``."""
     variable = "false" if getattr(type(slave), "has_sample_period", False) else "true"   # as fmus/export/build.py
     root = slave.to_xml({"canHandleVariableCommunicationStepSize": variable, "canGetAndSetFMUstate": "true",
                          "canSerializeFMUstate": "true", "needsExecutionTool": "false"})
@@ -198,14 +212,17 @@ def model_description(slave, model: str, guid: str, sources: list[str], feedthro
             ET.SubElement(files, "File", name=name)
     root.append(model_structure(root, feedthrough))
     ET.indent(root)
-    return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+    fmi2 = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+    return fmi3_model_description(fmi2, time_vr) if fmi_version == 3 else fmi2
 
 
 def build_native_fmu(model: str, out_dir=DEFAULT_NATIVE_OUT, compiler: str = "cc", start_values=None,
-                     file_name=None) -> Path:
-    """Build ``<out_dir>/<file_name or model>.fmu``, the native FMU of ``model``, and return
-    its path.  ``start_values`` (name -> value) replace the slave's start values: the FMU's
-    defaults and the designs it carries are then theirs (an instance's parameters baked in)."""
+                     file_name=None, fmi_version: int = 2) -> Path:
+    """Build ``<out_dir>/<file_name or model>.fmu``, the native FMU of ``model`` (FMI
+    ``fmi_version``: 2 or 3), and return its path.  ``start_values`` (name -> value) replace
+    the slave's start values: the FMU's defaults and the designs it carries are then theirs
+    (an instance's parameters baked in)."""
+    _check_version(fmi_version)
     if model not in NATIVE:
         raise ValueError(f"no native FMU of {model!r}; native: {', '.join(NATIVE)}")
     native = NATIVE[model]
@@ -223,20 +240,26 @@ def build_native_fmu(model: str, out_dir=DEFAULT_NATIVE_OUT, compiler: str = "cc
         kernels = native.kernels + (SAMPLED_KERNELS if native.sampled else ())
         adapters = [HERE / "adapters" / name for name in (native.adapter, *native.parts)]
         files = [HERE / name for name in generic] + adapters + kernel_files(kernels)
-        return package(model, slave, variables(slave), scalars, arrays, files, {}, target, compiler)
+        return package(model, slave, variables(slave), scalars, arrays, files, {}, target, compiler, fmi_version)
 
 
 def package(model: str, slave, rows: list, scalars: dict, arrays: dict, files: list, generated: dict, target: Path,
-            compiler: str = "cc") -> Path:
-    """Write the native FMU ``target`` of ``model``: ``files`` and the ``generated`` ones
-    (name -> text) besides model_config.h and model_table.c (from ``rows``, ``scalars`` and
-    ``arrays``, :func:`generate`) into ``sources/``, its binary compiled from them, the
-    modelDescription.xml of ``slave`` (the pythonfmu slave, its declarations)."""
+            compiler: str = "cc", fmi_version: int = 2) -> Path:
+    """Write the native FMU ``target`` of ``model``: ``files``, the FMI layer of
+    ``fmi_version`` and the ``generated`` ones (name -> text) besides model_config.h and
+    model_table.c (from ``rows``, ``scalars`` and ``arrays``, :func:`generate`) into
+    ``sources/``, its binary compiled from them, the modelDescription.xml of ``slave`` (the
+    pythonfmu slave, its declarations)."""
+    _check_version(fmi_version)
+    files = [*files, *(HERE / name for name in LAYER[fmi_version])]
     if len({f.name for f in files} | set(generated)) != len(files) + len(generated):   # sources/ is flat
         raise NativeBuildError(f"{model}: two source files share a name: {sorted(f.name for f in files)}")
     digest = hashlib.sha256(repr((model, rows, scalars, {k: np.asarray(v).tobytes() for k, v in arrays.items()},
                                   [f.read_bytes() for f in files], sorted(generated.items()))).encode()).hexdigest()
     guid = str(uuid.uuid5(uuid.NAMESPACE_URL, f"parcosim-native:{model}:{digest}"))
+    time_vr = max(row["vr"] for row in rows) + 1   # FMI 3.0's independent variable "time"
+    if fmi_version == 3:
+        scalars = {**scalars, "time_vr": time_vr}
     config, table = generate(model, rows, scalars, arrays, guid)
     with tempfile.TemporaryDirectory(prefix="parcosim_native_fmu_") as tmp:
         fmu = Path(tmp)
@@ -248,17 +271,18 @@ def package(model: str, slave, rows: list, scalars: dict, arrays: dict, files: l
             (sources / name).write_text(text)
         names = sorted(p.name for p in sources.iterdir() if p.suffix == ".c")
         (sources / "buildDescription.xml").write_text(build_description(model, names))
-        (sources / "CMakeLists.txt").write_text(cmake_lists(model, names))
-        binary = fmu / "binaries" / platform_folder() / f"{model}.so"
+        (sources / "CMakeLists.txt").write_text(cmake_lists(model, names, fmi_version))
+        binary = fmu / "binaries" / platform_folder(fmi_version) / f"{model}.so"
         binary.parent.mkdir(parents=True)
         done = subprocess.run(compile_command(sources, binary, compiler), capture_output=True, text=True)
         if done.returncode != 0:
             raise NativeBuildError(f"{model}: compiling the native FMU failed:\n{done.stderr}")
         (fmu / "resources").mkdir()
         (fmu / "resources" / IDENTITY_FILE).write_text(json.dumps(
-            {"model": model, "built_by": "parcosim", "native": True, "guid": guid, "model_identifier": model}) + "\n")
+            {"model": model, "built_by": "parcosim", "native": True, "guid": guid, "model_identifier": model,
+             "fmi_version": fmi_version}) + "\n")
         (fmu / "modelDescription.xml").write_bytes(model_description(
-            slave, model, guid, names, getattr(type(slave), "feedthrough", {})))
+            slave, model, guid, names, getattr(type(slave), "feedthrough", {}), fmi_version, time_vr))
         target.parent.mkdir(parents=True, exist_ok=True)
         partial = target.parent / f".{target.name}.tmp"
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
@@ -279,9 +303,9 @@ def source_digest() -> str:
     return digest.hexdigest()
 
 
-def build_native_all(out_dir=DEFAULT_NATIVE_OUT) -> list[Path]:
-    """Build every native FMU into ``out_dir``; return their paths."""
-    return [build_native_fmu(model, out_dir) for model in NATIVE]
+def build_native_all(out_dir=DEFAULT_NATIVE_OUT, fmi_version: int = 2) -> list[Path]:
+    """Build every native FMU (FMI ``fmi_version``: 2 or 3) into ``out_dir``; return their paths."""
+    return [build_native_fmu(model, out_dir, fmi_version=fmi_version) for model in NATIVE]
 
 
 if __name__ == "__main__":   # python -m fmus.native.build [OUT]

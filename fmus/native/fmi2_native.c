@@ -1,35 +1,18 @@
-/* The native FMUs' one FMI 2.0 co-simulation implementation (docs/native.md).
- *
- * It behaves as the pythonfmu FMUs under parcosim's wrapper (fmus/slave/base.py,
- * fmus/export/wrapper/parcosim_fmi2.c): the same call-order rules, refusals (fmi2Discard for a
- * refused step, fmi2Error for a refused call, never fmi2Fatal) and messages; the model's own
- * part is its adapter (pcn_model.h).  The FMU state is data with a checked header: a state of
- * another model or GUID, of other parameters, with configuration words changed or damaged, is
- * refused with fmi2Error and nothing changes.  Links libc and libm only.
+/* The native FMUs' FMI 2.0 co-simulation layer (docs/native.md): each fmi2 function is a call
+ * of the core (pcn_core.c, pcn_values.c, pcn_state.c) naming itself; this file holds what is
+ * FMI 2.0's own: fmi2Instantiate's arguments (fmuType, GUID, a file: URI), the logger's printf
+ * format, the types' names in messages and the functions this FMU does not provide.
  */
-#include <math.h>
-#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "fmi2Functions.h"
 #include "pcn_native.h"
 
-/* ---- logging ---- */
-
-static int wants(const native *in, const char *category)
+/* The logger takes a printf format: every '%' doubled (the wrapper's rule). */
+static void log_fmi2(const native *in, pcn_status status, const char *category, const char *message)
 {
-    if (!in->logging_on) return 0;
-    if (in->n_categories == 0) return 1;
-    for (size_t i = 0; i < in->n_categories; ++i)
-        if (strcmp(in->categories[i], category) == 0) return 1;
-    return 0;
-}
-
-/* Forward one message as a printf format with every '%' doubled (the wrapper's rule). */
-void pcn_emit(const native *in, fmi2Status status, const char *category, const char *message)
-{
-    if (in->logger == NULL || (status < fmi2Error && !wants(in, category))) return;
     size_t n = 0;
     for (const char *p = message; *p; ++p) n += *p == '%' ? 2 : 1;
     char *format = malloc(n + 1), *o = format;
@@ -39,78 +22,12 @@ void pcn_emit(const native *in, fmi2Status status, const char *category, const c
         if (*p == '%') *o++ = '%';
     }
     *o = '\0';
-    in->logger(in->env, in->name, status, category, format);
+    ((fmi2CallbackLogger)in->logger)(in->env, in->name, (fmi2Status)status, category, format);
     free(format);
 }
 
-/* A refused FMI call: "<function>: <why> (t = %.9g s)", fmi2Error. */
-fmi2Status pcn_call_error(const native *in, const char *function, const char *why)
-{
-    pcn_text t;
-    pcn_clear(&t);
-    char time[PCN_REPR_SIZE];
-    snprintf(time, sizeof time, "%.9g", in->time);
-    pcn_addf(&t, "%s: %s (t = %s s)", function, why, time);
-    pcn_emit(in, fmi2Error, "logStatusError", t.text);
-    return fmi2Error;
-}
-
-void pcn_set_string(char **slot, const char *value)
-{
-    char *copy = malloc(strlen(value) + 1);
-    if (copy == NULL) return;   /* out of memory: the old value stays */
-    strcpy(copy, value);
-    free(*slot);
-    *slot = copy;
-}
-
-/* GuardedSlave._refuse: log "<instance>: <text>" (error), to stderr too, and keep `error`. */
-static void refuse(native *in, const char *message, int has_time, double time, int repeat, int keep_error)
-{
-    pcn_text text;
-    pcn_clear(&text);
-    if (repeat && has_time) pcn_addf(&text, "%s; step from t = %G s refused", message, time);
-    else if (!has_time || repeat || strstr(message, " t = ")) pcn_addf(&text, "%s", message);
-    else pcn_addf(&text, "%s (step from t = %G s)", message, time);
-    if (!keep_error) pcn_set_string(&in->pub.string[in->error_slot], repeat ? message : text.text);
-    pcn_text line;
-    pcn_clear(&line);
-    pcn_addf(&line, "%s: %s", in->name, text.text);
-    pcn_emit(in, fmi2Error, "logStatusError", line.text);
-    fprintf(stderr, "[parcosim] %s\n", line.text);
-}
-
-void pcn_step_size_message(const pcn_instance *in, pcn_text *why, double t, double h, const char *because)
-{
-    const pcn_model *m = &pcn_this_model;
-    pcn_addf(why, "step size h = %r s at t = %r s %s; %s accepts %s", h, t, because, m->identifier,
-             m->accepted_steps_of ? m->accepted_steps_of(in) : m->accepted_steps);
-}
-
-/* ---- instances ---- */
-
-const pcn_variable *pcn_variable_of(unsigned vr)
-{
-    for (int k = 0; k < pcn_n_variables; ++k)
-        if (pcn_variables[k].vr == vr) return &pcn_variables[k];
-    return NULL;
-}
-
-static void start_values(native *in)
-{
-    for (int k = 0; k < pcn_n_variables; ++k) {
-        const pcn_variable *v = &pcn_variables[k];
-        switch (v->type) {
-        case PCN_REAL: in->pub.real[v->slot] = v->start; break;
-        case PCN_INTEGER: in->pub.integer[v->slot] = (int)v->start; break;
-        case PCN_BOOLEAN: in->pub.boolean[v->slot] = v->start != 0.0; break;
-        case PCN_STRING: pcn_set_string(&in->pub.string[v->slot], v->start_string ? v->start_string : ""); break;
-        }
-    }
-    in->initialising = in->initialised = in->terminated = in->ready = 0;
-    in->initial_outputs = in->built_for_exit = in->has_last = in->has_accepted = 0;
-    in->pub.start_time = in->next_time = in->last_step = in->time = 0.0;
-}
+static const pcn_api FMI2 = {"fmi2Instantiate", "fmi2EnterInitializationMode", "fmi2ExitInitializationMode",
+                             "fmi2Terminate", "fmi2SetFMUstate", {"Real", "Integer", "Boolean", "String"}, log_fmi2};
 
 /* The path of a file: URI (file:///p, file:/p, file://localhost/p), %XX decoded; NULL if
  * another scheme. */
@@ -137,36 +54,14 @@ static char *resource_path(const char *uri)
     return out;
 }
 
-static void free_native(native *in)
-{
-    if (in == NULL) return;
-    for (int k = 0; in->pub.string && k < pcn_n_slots[PCN_STRING]; ++k) free(in->pub.string[k]);
-    for (size_t k = 0; k < in->n_categories; ++k) free(in->categories[k]);
-    free(in->categories);
-    free(in->pub.real);
-    free(in->pub.integer);
-    free(in->pub.boolean);
-    free(in->pub.string);
-    free(in->pub.data);
-    free(in->pub.scratch);
-    free((char *)in->pub.resources);
-    free(in->name);
-    free(in->initial_warning);
-    free(in);
-}
-
-/* calloc of at least one element (a model without variables of a type still gets a pointer). */
-static void *zeros(size_t count, size_t size) { return calloc(count ? count : 1, size); }
-
 fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
                               fmi2String fmuResourceLocation, const fmi2CallbackFunctions *functions,
                               fmi2Boolean visible, fmi2Boolean loggingOn)
 {
     (void)visible;
-    native probe = {0};
-    probe.name = (char *)(instanceName ? instanceName : "");
-    probe.logger = functions ? functions->logger : NULL;
-    probe.env = functions ? functions->componentEnvironment : NULL;
+    const char *name = instanceName ? instanceName : "";
+    pcn_function logger = functions ? (pcn_function)functions->logger : NULL;
+    void *env = functions ? functions->componentEnvironment : NULL;
     pcn_text why;
     pcn_clear(&why);
     if (fmuType != fmi2CoSimulation)
@@ -178,39 +73,14 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     char *resources = why.length ? NULL : resource_path(fmuResourceLocation);
     if (why.length == 0 && resources == NULL)
         pcn_addf(&why, "fmi2Instantiate: the resource location %s is not a file: URI", fmuResourceLocation);
-    native *in = why.length ? NULL : calloc(1, sizeof *in);
-    if (in != NULL) {
-        in->model = &pcn_this_model;
-        in->pub.resources = resources;
-        in->name = malloc(strlen(probe.name) + 1);
-        in->logger = probe.logger;
-        in->env = probe.env;
-        in->logging_on = loggingOn != 0;
-        in->pub.real = zeros((size_t)pcn_n_slots[PCN_REAL], sizeof(double));
-        in->pub.integer = zeros((size_t)pcn_n_slots[PCN_INTEGER], sizeof(int));
-        in->pub.boolean = zeros((size_t)pcn_n_slots[PCN_BOOLEAN], sizeof(int));
-        in->pub.string = zeros((size_t)pcn_n_slots[PCN_STRING], sizeof(char *));
-        in->pub.data = zeros((size_t)pcn_this_model.data_words, sizeof(double));
-        in->pub.scratch = zeros((size_t)pcn_this_model.scratch_words, sizeof(double));
-        in->error_slot = -1;
-        for (int k = 0; k < pcn_n_variables; ++k)
-            if (strcmp(pcn_variables[k].name, "error") == 0) in->error_slot = pcn_variables[k].slot;
-        if (in->name && in->pub.real && in->pub.integer && in->pub.boolean && in->pub.string && in->pub.data &&
-            in->pub.scratch && in->error_slot >= 0) {
-            strcpy(in->name, probe.name);
-            start_values(in);
-            return in;
-        }
-        free_native(in);
-        resources = NULL;
-        pcn_addf(&why, "fmi2Instantiate: out of memory");
-    }
-    free(resources);
-    if (probe.logger) pcn_emit(&probe, fmi2Error, "logStatusError", why.text);
+    native *in = why.length ? NULL : pcn_new(&FMI2, name, resources, logger, env, loggingOn);
+    if (in != NULL) return in;
+    if (why.length == 0) pcn_addf(&why, "fmi2Instantiate: out of memory");
+    if (logger) pcn_refuse_instance(&FMI2, name, logger, env, why.text);
     return NULL;
 }
 
-void fmi2FreeInstance(fmi2Component c) { free_native(c); }
+void fmi2FreeInstance(fmi2Component c) { pcn_free(c); }
 
 const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
 const char *fmi2GetVersion(void) { return fmi2Version; }
@@ -218,209 +88,159 @@ const char *fmi2GetVersion(void) { return fmi2Version; }
 fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
                                const fmi2String categories[])
 {
-    native *in = c;
-    if (in == NULL) return fmi2Error;
-    if (nCategories > 0 && categories == NULL)
-        return pcn_call_error(in, "fmi2SetDebugLogging", "categories (NULL) refused");
-    char **copy = nCategories ? calloc(nCategories, sizeof *copy) : NULL;
-    if (nCategories && copy == NULL) return fmi2Error;
-    for (size_t k = 0; k < nCategories; ++k) {
-        const char *name = categories[k] ? categories[k] : "";
-        copy[k] = malloc(strlen(name) + 1);
-        if (copy[k]) strcpy(copy[k], name);
-    }
-    for (size_t k = 0; k < in->n_categories; ++k) free(in->categories[k]);
-    free(in->categories);
-    in->categories = copy;
-    in->n_categories = nCategories;
-    in->logging_on = loggingOn != 0;
-    return fmi2OK;
-}
-
-/* ---- the state machine (GuardedSlave) ---- */
-
-static const char *mode(const native *in, pcn_text *t)
-{
-    if (in->terminated) pcn_addf(t, "after fmi2Terminate");
-    else if (in->initialised) pcn_addf(t, "in Step Mode (at t = %r s)", in->next_time);
-    else pcn_addf(t, in->initialising ? "in Initialization Mode" : "before fmi2EnterInitializationMode");
-    return t->text;
-}
-
-/* GuardedSlave._refuse_out_of_order: 0 when the call may come now. */
-static int out_of_order(native *in, const char *call, const char *given)
-{
-    if (!(in->initialising || in->initialised || in->terminated)) return 0;
-    pcn_text why, where;
-    pcn_clear(&why);
-    pcn_clear(&where);
-    pcn_addf(&why, "%s%s refused %s: it is allowed only once, between fmi2Instantiate and "
-             "fmi2EnterInitializationMode; nothing was changed", call, given, mode(in, &where));
-    pcn_call_error(in, call, why.text);
-    return 1;
+    return c ? (fmi2Status)pcn_set_debug_logging(c, "fmi2SetDebugLogging", loggingOn, nCategories, categories)
+             : fmi2Error;
 }
 
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
                                fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime)
 {
-    (void)toleranceDefined;
-    (void)tolerance;
-    native *in = c;
-    if (in == NULL) return fmi2Error;
-    pcn_text given, why;
-    pcn_clear(&given);
-    pcn_clear(&why);
-    pcn_addf(&given, " (start_time = %r)", startTime);
-    if (out_of_order(in, "fmi2SetupExperiment", given.text)) return fmi2Error;
-    if (!isfinite(startTime)) pcn_addf(&why, "startTime = %r s is not finite; nothing was set", startTime);
-    else if (startTime + TIME_RESOLUTION == startTime)
-        pcn_addf(&why, "startTime = %r s is too large in magnitude: startTime + %G s == startTime, time could not "
-                 "advance; nothing was set", startTime, TIME_RESOLUTION);
-    else if (stopTimeDefined && !(isfinite(stopTime) && stopTime >= startTime)) {
-        if (!isfinite(stopTime)) pcn_addf(&why, "stopTime = %r s is not finite; nothing was set", stopTime);
-        else pcn_addf(&why, "stopTime = %r s is before startTime = %r s; nothing was set", stopTime, startTime);
-    }
-    if (why.length) return pcn_call_error(in, "fmi2SetupExperiment", why.text);
-    in->pub.start_time = in->time = startTime;
-    in->initial_outputs = in->built_for_exit = 0;
-    return fmi2OK;
+    (void)toleranceDefined, (void)tolerance;
+    return c ? (fmi2Status)pcn_setup_experiment(c, "fmi2SetupExperiment", startTime, stopTimeDefined, stopTime)
+             : fmi2Error;
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 {
-    native *in = c;
-    if (in == NULL) return fmi2Error;
-    if (out_of_order(in, "fmi2EnterInitializationMode", "")) return fmi2Error;
-    in->initialising = 1;
-    return fmi2OK;
+    return c ? (fmi2Status)pcn_enter_initialization(c, "fmi2EnterInitializationMode") : fmi2Error;
 }
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 {
-    native *in = c;
-    if (in == NULL) return fmi2Error;
-    if (!in->initialising) {
-        pcn_text why, where;
-        pcn_clear(&why);
-        pcn_clear(&where);
-        pcn_addf(&why, "fmi2ExitInitializationMode refused %s: it ends Initialization Mode (after "
-                 "fmi2EnterInitializationMode); nothing was changed, the model is not rebuilt", mode(in, &where));
-        return pcn_call_error(in, "fmi2ExitInitializationMode", why.text);
-    }
-    in->initialising = 0;
-    in->has_accepted = 0;
-    in->initialised = 1;
-    in->next_time = in->pub.start_time;
-    in->has_last = 0;
-    pcn_text why;
-    pcn_clear(&why);
-    if (in->built_for_exit || in->model->setup(&in->pub, &why) == 0) {
-        in->ready = 1;
-        pcn_set_string(&in->pub.string[in->error_slot], "");
-    } else {
-        in->ready = 0;
-        pcn_text message;
-        pcn_clear(&message);
-        pcn_addf(&message, "initialisation refused: %s (t = %G s)", why.text, in->pub.start_time);
-        refuse(in, message.text, 0, 0.0, 0, 0);
-    }
-    return fmi2OK;
+    return c ? (fmi2Status)pcn_exit_initialization(c, "fmi2ExitInitializationMode") : fmi2Error;
 }
 
-fmi2Status fmi2Terminate(fmi2Component c)
-{
-    native *in = c;
-    if (in == NULL) return fmi2Error;
-    in->terminated = 1;
-    return fmi2OK;
-}
-
-fmi2Status fmi2Reset(fmi2Component c)
-{
-    native *in = c;
-    if (in == NULL) return fmi2Error;
-    start_values(in);
-    memset(in->pub.data, 0, sizeof(double) * (size_t)in->model->data_words);
-    return fmi2OK;
-}
-
-/* GuardedSlave.check_step_size and the model's rule. */
-static int check_step(native *in, double t, double h, pcn_text *why)
-{
-    const char *because = NULL;
-    char text[64];
-    if (!isfinite(h) || h <= 0.0) because = "is not a finite positive number";
-    else if (h < MIN_STEP) because = "is below the shortest step 1e-09 s";
-    else if (!(t + h <= MAX_TIME)) {
-        snprintf(text, sizeof text, "ends after t = %g s", MAX_TIME);
-        because = text;
-    }
-    if (because) {
-        pcn_step_size_message(&in->pub, why, t, h, because);
-        return 1;
-    }
-    return in->model->check_step ? in->model->check_step(&in->pub, t, h, why) : 0;
-}
-
-/* GuardedSlave._check_communication_point. */
-static int check_point(const native *in, double t, pcn_text *why)
-{
-    double expected = in->next_time, tolerance = 1e-9 * fmax(fabs(expected), 1e-3);
-    if (in->has_last && in->last_step) tolerance = fmin(tolerance, 0.5 * in->last_step);
-    if (fabs(t - expected) <= tolerance) return 0;
-    pcn_addf(why, "communication point t = %r s does not follow the last one: the next doStep must start at t = %r "
-             "s (the last step's end, or the time of the state set by fmi2SetFMUstate)", t, expected);
-    return 1;
-}
+fmi2Status fmi2Terminate(fmi2Component c) { return c ? (fmi2Status)pcn_terminate(c) : fmi2Error; }
+fmi2Status fmi2Reset(fmi2Component c) { return c ? (fmi2Status)pcn_reset(c) : fmi2Error; }
 
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSetFMUStatePriorToCurrentPoint)
 {
     (void)noSetFMUStatePriorToCurrentPoint;
-    native *in = c;
-    if (in == NULL) return fmi2Error;
-    in->time = t;
-    pcn_text why;
-    pcn_clear(&why);
-    if (in->ready && !in->terminated) {
-        int refused = t != in->next_time && check_point(in, t, &why);
-        if (!refused && (!in->has_accepted || h != in->accepted_step || !(t + h <= MAX_TIME))) {
-            refused = check_step(in, t, h, &why);
-            if (!refused) {
-                in->has_accepted = 1;
-                in->accepted_step = h;
-            }
-        }
-        if (!refused) refused = in->model->step(&in->pub, t, h, &why);
-        if (!refused) {
-            in->next_time = t + h;
-            in->last_step = h;
-            in->has_last = 1;
-            in->time = t + h;
-            return fmi2OK;
-        }
-        refuse(in, why.text, 1, t, 0, 0);
-        in->ready = 0;
-        return fmi2Discard;
-    }
-    const char *error = in->pub.string[in->error_slot];
-    if (in->terminated) {
-        pcn_addf(&why, "doStep from t = %r s after fmi2Terminate refused", t);
-        refuse(in, why.text, 0, t, 1, 0);
-    } else if (!in->initialised) {
-        pcn_addf(&why, "doStep from t = %r s before initialisation (fmi2ExitInitializationMode) refused", t);
-        refuse(in, why.text, 0, t, 1, 0);
-    } else if (error[0] && strncmp(error, "initialisation refused", 22) != 0) {
-        pcn_addf(&why, "an earlier step was refused (%s); restore an FMU state taken before it (fmi2SetFMUstate) "
-                 "to go on", error);
-        refuse(in, why.text, 1, t, 1, 1);
-    } else {
-        pcn_addf(&why, "%s", error[0] ? error : "initialisation refused");
-        refuse(in, why.text, 1, t, 1, 0);
-    }
-    return fmi2Discard;
+    return c ? (fmi2Status)pcn_do_step(c, t, h) : fmi2Error;
 }
 
 fmi2Status fmi2CancelStep(fmi2Component c)
 {
-    return c ? pcn_call_error(c, "fmi2CancelStep", "not supported: doStep never returns fmi2Pending") : fmi2Error;
+    return c ? (fmi2Status)pcn_call_error(c, "fmi2CancelStep", "not supported: doStep never returns fmi2Pending")
+             : fmi2Error;
+}
+
+/* ---- values: fmi2Integer and fmi2Boolean are int, the core's ---- */
+
+fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[])
+{
+    return c ? (fmi2Status)pcn_get(c, "fmi2GetReal", vr, nvr, value, PCN_REAL) : fmi2Error;
+}
+fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Integer value[])
+{
+    return c ? (fmi2Status)pcn_get(c, "fmi2GetInteger", vr, nvr, value, PCN_INTEGER) : fmi2Error;
+}
+fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Boolean value[])
+{
+    return c ? (fmi2Status)pcn_get(c, "fmi2GetBoolean", vr, nvr, value, PCN_BOOLEAN) : fmi2Error;
+}
+fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[])
+{
+    return c ? (fmi2Status)pcn_get(c, "fmi2GetString", vr, nvr, (void *)value, PCN_STRING) : fmi2Error;
+}
+fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[])
+{
+    return c ? (fmi2Status)pcn_set(c, "fmi2SetReal", vr, nvr, value, PCN_REAL) : fmi2Error;
+}
+fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Integer value[])
+{
+    return c ? (fmi2Status)pcn_set(c, "fmi2SetInteger", vr, nvr, value, PCN_INTEGER) : fmi2Error;
+}
+fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Boolean value[])
+{
+    return c ? (fmi2Status)pcn_set(c, "fmi2SetBoolean", vr, nvr, value, PCN_BOOLEAN) : fmi2Error;
+}
+fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[])
+{
+    return c ? (fmi2Status)pcn_set(c, "fmi2SetString", vr, nvr, (const void *)value, PCN_STRING) : fmi2Error;
+}
+
+/* ---- the FMU state (pcn_state.c) ---- */
+
+fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state)
+{
+    return c ? (fmi2Status)pcn_get_state(c, "fmi2GetFMUstate", state) : fmi2Error;
+}
+fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state)
+{
+    return c ? (fmi2Status)pcn_set_state(c, "fmi2SetFMUstate", state) : fmi2Error;
+}
+fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *state)
+{
+    return c ? (fmi2Status)pcn_free_state(c, "fmi2FreeFMUstate", state) : fmi2Error;
+}
+fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_t *size)
+{
+    return c ? (fmi2Status)pcn_state_size(c, "fmi2SerializedFMUstateSize", state, size) : fmi2Error;
+}
+fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte bytes[], size_t size)
+{
+    return c ? (fmi2Status)pcn_serialize(c, "fmi2SerializeFMUstate", state, (unsigned char *)bytes, size)
+             : fmi2Error;
+}
+fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte bytes[], size_t size, fmi2FMUstate *state)
+{
+    return c ? (fmi2Status)pcn_deserialize(c, "fmi2DeSerializeFMUstate", (const unsigned char *)bytes, size, state)
+             : fmi2Error;
+}
+
+/* ---- co-simulation functions this FMU does not provide ---- */
+
+static fmi2Status unsupported(fmi2Component c, const char *fn)
+{
+    return c ? (fmi2Status)pcn_call_error(c, fn, "not supported by this FMU") : fmi2Error;
+}
+
+fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
+                                        const fmi2ValueReference vKnown_ref[], size_t nKnown,
+                                        const fmi2Real dvKnown[], fmi2Real dvUnknown[])
+{
+    (void)vUnknown_ref, (void)nUnknown, (void)vKnown_ref, (void)nKnown, (void)dvKnown, (void)dvUnknown;
+    return unsupported(c, "fmi2GetDirectionalDerivative");
+}
+fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                       const fmi2Integer order[], const fmi2Real value[])
+{
+    (void)vr, (void)nvr, (void)order, (void)value;
+    return unsupported(c, "fmi2SetRealInputDerivatives");
+}
+fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                        const fmi2Integer order[], fmi2Real value[])
+{
+    (void)vr, (void)nvr, (void)order, (void)value;
+    return unsupported(c, "fmi2GetRealOutputDerivatives");
+}
+static fmi2Status no_status(fmi2Component c, const char *fn)
+{
+    return c ? (fmi2Status)pcn_call_error(c, fn, "no asynchronous doStep: there is no status to ask for") : fmi2Error;
+}
+fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value)
+{
+    (void)s, (void)value;
+    return no_status(c, "fmi2GetStatus");
+}
+fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value)
+{
+    (void)s, (void)value;
+    return no_status(c, "fmi2GetRealStatus");
+}
+fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value)
+{
+    (void)s, (void)value;
+    return no_status(c, "fmi2GetIntegerStatus");
+}
+fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value)
+{
+    (void)s, (void)value;
+    return no_status(c, "fmi2GetBooleanStatus");
+}
+fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value)
+{
+    (void)s, (void)value;
+    return no_status(c, "fmi2GetStringStatus");
 }

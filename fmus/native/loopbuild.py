@@ -3,8 +3,8 @@
 :func:`export_native_fmu` writes the FMU ``ClosedLoop`` with the model name, variables and
 outputs of the pythonfmu ``ClosedLoop`` that :func:`fmus.export.export_fmu` writes (its
 slave is instantiated here and declares them), whose binary is C alone: the generic native
-layer (fmi2_native.c ...), the adapter ``adapters/pcn_closedloop.c`` running the compiled
-loop's plan (kernels/src/loop.c), the kernels its members call (:func:`needed_kernels`), and ``loop_table.c``: the plan and each
+part (pcn_core.c ...) under its FMI layer (fmi2_native.c or fmi3_native.c), the adapter
+``adapters/pcn_closedloop.c`` running the compiled loop's plan (kernels/src/loop.c), the kernels its members call (:func:`needed_kernels`), and ``loop_table.c``: the plan and each
 component's kernel buffers as the slaves initialised them (:mod:`fmus.native.loopimage`).
 A system the compiled mode does not run in C is refused, naming why.
 """
@@ -118,10 +118,11 @@ def _real_slots(rows) -> dict:
     return {name: k for k, name in enumerate(reals)}
 
 
-def export_native_fmu(system, path, compiler: str = "cc") -> Path:
+def export_native_fmu(system, path, compiler: str = "cc", fmi_version: int = 2) -> Path:
     """``system``'s whole closed loop as the native FMU ``ClosedLoop`` at ``path`` (module
-    docstring).  Raises :class:`NotNative` naming why for a system the compiled mode does not
-    run in C, and ValueError as :func:`fmus.export.export_fmu` does."""
+    docstring), FMI ``fmi_version`` (2 or 3: the same sources under FMI 3.0's layer).  Raises
+    :class:`NotNative` naming why for a system the compiled mode does not run in C, and
+    ValueError as :func:`fmus.export.export_fmu` does."""
     path = Path(path)
     if path.suffix.lower() != ".fmu":
         raise ValueError(f"{path}: an FMU file must end in '.fmu'")
@@ -157,4 +158,5 @@ def export_native_fmu(system, path, compiler: str = "cc") -> Path:
         files = [HERE / n for n in GENERIC + ("pcn_loop.h",)] + [HERE / "adapters" / "pcn_closedloop.c"]
         files += kernel_files(needed_kernels([k for _, _, k, _, _ in image.members] + image.functions))
         table = loop_table(image, outputs, system.step, most)
-        return package(MODEL, fresh, rows, scalars, {}, files, {"loop_table.c": table}, path, compiler)
+        return package(MODEL, fresh, rows, scalars, {}, files, {"loop_table.c": table}, path, compiler,
+                       fmi_version)

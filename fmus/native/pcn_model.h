@@ -1,8 +1,8 @@
-/* The native FMUs' interface between the one generic FMI 2.0 implementation (fmi2_native.c)
- * and a model's adapter (adapters/<model>.c) over its kernel (docs/native.md).
+/* The native FMUs' interface between the one generic co-simulation core (pcn_core.c, under an
+ * FMI 2.0 or 3.0 layer) and a model's adapter (adapters/<model>.c) over its kernel (docs/native.md).
  *
- * Each FMU is compiled from fmi2_native.c, pcn_text.c, its adapter, the kernels it uses and
- * one generated file, model_table.c: the variable table (from the pythonfmu slave's
+ * Each FMU is compiled from the core, its FMI layer (fmi2_native.c or fmi3_native.c), its
+ * adapter, the kernels it uses and one generated file, model_table.c: the variable table (from the pythonfmu slave's
  * declarations: names, value references, types, causality, start values), the model's
  * identity (identifier, GUID) and the data its build computed (designs, presets), as
  * constants.  The instance holds every variable's value in one array per type, in table
@@ -66,7 +66,7 @@ struct pcn_instance {
     double *data;          /* the model data (saved in the FMU state) */
     double *scratch;       /* the model scratch (not saved) */
     const char *resources; /* the resources folder (a path), "" if none was given */
-    double start_time;     /* fmi2SetupExperiment's startTime */
+    double start_time;     /* the experiment's startTime (fmi2SetupExperiment, fmi3EnterInitializationMode) */
 };
 
 /* The step-size message of GuardedSlave.step_size_message. */

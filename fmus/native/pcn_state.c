@@ -6,7 +6,7 @@
  *   model data words u64, flags u8 x 7, times f64 x 4 (start, next, last step, time),
  *   Reals f64, Integers i32, Booleans u8, Strings str32, model data f64,
  *   checksum u64 (FNV-1a of every byte before it).
- * A state is refused (fmi2Error, the instance unchanged) unless every field fits this FMU: its
+ * A state is refused (Error, the instance unchanged) unless every field fits this FMU: its
  * identifier and GUID, the counts, parameters equal to this instance's (the configuration),
  * flags 0/1, strings UTF-8 without NUL, and the adapter's check of the model data (configuration
  * words equal, sizes).
@@ -294,8 +294,8 @@ static void apply(native *in, contents *c)
     memcpy(in->pub.data, c->data, sizeof(double) * (size_t)in->model->data_words);
 }
 
-/* Restore the state's bytes into `in`, or refuse (fmi2Error naming why) and change nothing. */
-static fmi2Status restore(native *in, const char *fn, const unsigned char *bytes, size_t size)
+/* Restore the state's bytes into `in`, or refuse (PCN_ERROR naming why) and change nothing. */
+static pcn_status restore(native *in, const char *fn, const unsigned char *bytes, size_t size)
 {
     reader r = {bytes, size, 0};
     contents c = {0};
@@ -305,14 +305,14 @@ static fmi2Status restore(native *in, const char *fn, const unsigned char *bytes
              (in->model->check_data == NULL || in->model->check_data(&in->pub, c.data, &why) == 0);
     if (ok) apply(in, &c);
     free_contents(&c);
-    if (ok) return fmi2OK;
+    if (ok) return PCN_OK;
     pcn_text message;
     pcn_clear(&message);
     pcn_addf(&message, "%s refused: %s; nothing was changed", size ? "the state" : "an empty state", why.text);
     return pcn_call_error(in, fn, message.text);
 }
 
-static const pcn_state *own_state(const native *in, const char *fn, fmi2FMUstate state)
+static const pcn_state *own_state(const native *in, const char *fn, const void *state)
 {
     const pcn_state *s = state;
     if (s != NULL && s->owner == in) return s;
@@ -320,71 +320,59 @@ static const pcn_state *own_state(const native *in, const char *fn, fmi2FMUstate
     return NULL;
 }
 
-fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state)
+pcn_status pcn_get_state(native *in, const char *fn, void **state)
 {
-    native *in = c;
-    if (in == NULL) return fmi2Error;
-    if (state == NULL) return pcn_call_error(in, "fmi2GetFMUstate", "the FMU state pointer is NULL");
+    if (state == NULL) return pcn_call_error(in, fn, "the FMU state pointer is NULL");
     pcn_state *s = snapshot(in);
-    if (s == NULL) return pcn_call_error(in, "fmi2GetFMUstate", "out of memory");
+    if (s == NULL) return pcn_call_error(in, fn, "out of memory");
     pcn_state *old = *state;
-    if (old != NULL && old->owner == in) free(old);   /* FMI 2.0: the state given is overwritten */
+    if (old != NULL && old->owner == in) free(old);   /* the state given is overwritten */
     *state = s;
-    return fmi2OK;
+    return PCN_OK;
 }
 
-fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state)
+pcn_status pcn_set_state(native *in, const char *fn, void *state)
 {
-    native *in = c;
-    if (in == NULL) return fmi2Error;
-    const pcn_state *s = own_state(in, "fmi2SetFMUstate", state);
-    return s ? restore(in, "fmi2SetFMUstate", s->bytes, s->size) : fmi2Error;
+    const pcn_state *s = own_state(in, fn, state);
+    return s ? restore(in, fn, s->bytes, s->size) : PCN_ERROR;
 }
 
-fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *state)
+pcn_status pcn_free_state(native *in, const char *fn, void **state)
 {
-    native *in = c;
-    if (in == NULL) return fmi2Error;
-    if (state == NULL || *state == NULL) return fmi2OK;
-    if (own_state(in, "fmi2FreeFMUstate", *state) == NULL) return fmi2Error;
+    if (state == NULL || *state == NULL) return PCN_OK;
+    if (own_state(in, fn, *state) == NULL) return PCN_ERROR;
     free(*state);
     *state = NULL;
-    return fmi2OK;
+    return PCN_OK;
 }
 
-fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_t *size)
+pcn_status pcn_state_size(native *in, const char *fn, void *state, size_t *size)
 {
-    native *in = c;
-    if (in == NULL) return fmi2Error;
-    const pcn_state *s = own_state(in, "fmi2SerializedFMUstateSize", state);
-    if (s == NULL) return fmi2Error;
-    if (size == NULL) return pcn_call_error(in, "fmi2SerializedFMUstateSize", "the size pointer is NULL");
+    const pcn_state *s = own_state(in, fn, state);
+    if (s == NULL) return PCN_ERROR;
+    if (size == NULL) return pcn_call_error(in, fn, "the size pointer is NULL");
     *size = s->size;
-    return fmi2OK;
+    return PCN_OK;
 }
 
-fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte bytes[], size_t size)
+pcn_status pcn_serialize(native *in, const char *fn, void *state, unsigned char bytes[], size_t size)
 {
-    native *in = c;
-    if (in == NULL) return fmi2Error;
-    const pcn_state *s = own_state(in, "fmi2SerializeFMUstate", state);
-    if (s == NULL) return fmi2Error;
+    const pcn_state *s = own_state(in, fn, state);
+    if (s == NULL) return PCN_ERROR;
     if (bytes == NULL || size < s->size)
-        return pcn_call_error(in, "fmi2SerializeFMUstate", "the byte array is NULL or shorter than the state");
+        return pcn_call_error(in, fn, "the byte array is NULL or shorter than the state");
     memcpy(bytes, s->bytes, s->size);
-    return fmi2OK;
+    return PCN_OK;
 }
 
-fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte bytes[], size_t size, fmi2FMUstate *state)
+pcn_status pcn_deserialize(native *in, const char *fn, const unsigned char bytes[], size_t size, void **state)
 {
-    native *in = c;
-    if (in == NULL) return fmi2Error;
     if (state == NULL || (bytes == NULL && size > 0))
-        return pcn_call_error(in, "fmi2DeSerializeFMUstate", "the bytes or the state pointer is NULL");
+        return pcn_call_error(in, fn, "the bytes or the state pointer is NULL");
     /* Checked against this instance by restoring it into a scratch copy of the bytes' claims:
-     * a state is kept only if it would be accepted by fmi2SetFMUstate now. */
+     * a state is kept only if it would be accepted by the layer's SetFMUState now. */
     pcn_state *s = malloc(sizeof *s + size);
-    if (s == NULL) return pcn_call_error(in, "fmi2DeSerializeFMUstate", "out of memory");
+    if (s == NULL) return pcn_call_error(in, fn, "out of memory");
     s->owner = in;
     s->size = size;
     if (size) memcpy(s->bytes, bytes, size);
@@ -400,8 +388,8 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte bytes[], size
         pcn_text message;
         pcn_clear(&message);
         pcn_addf(&message, "the state refused: %s; nothing was changed", why.text);
-        return pcn_call_error(in, "fmi2DeSerializeFMUstate", message.text);
+        return pcn_call_error(in, fn, message.text);
     }
     *state = s;
-    return fmi2OK;
+    return PCN_OK;
 }

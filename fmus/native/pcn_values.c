@@ -1,17 +1,16 @@
-/* The native FMUs' variable access: fmi2Get/Set of every type by value reference, with the
- * checks and messages of parcosim's wrapper and GuardedSlave (fmus/slave/base.py), and the
- * co-simulation functions this FMU does not provide (docs/native.md). */
+/* The native FMUs' variable access: get/set of every type by value reference, with the
+ * checks and messages of parcosim's wrapper and GuardedSlave (fmus/slave/base.py), for the FMI
+ * layers' Get/Set functions (docs/native.md). */
 #include <string.h>
 
 #include "pcn_native.h"
 
-static const char *const TYPE_NAME[] = {"Real", "Integer", "Boolean", "String"};
 static const char *const CAUSALITY_NAME[] = {"input", "output", "parameter"};
 
 /* ---- values ---- */
 
 /* The wrapper's check: each vr a variable of this type; else logs the first, nonzero. */
-static int check_vrs(native *in, const char *fn, const fmi2ValueReference vr[], size_t nvr, const void *values,
+static int check_vrs(native *in, const char *fn, const unsigned vr[], size_t nvr, const void *values,
                      pcn_type type)
 {
     pcn_text why;
@@ -27,7 +26,7 @@ static int check_vrs(native *in, const char *fn, const fmi2ValueReference vr[], 
         if (v == NULL) pcn_addf(&why, "value reference %u is not a variable of this FMU", vr[k]);
         else if (v->type != type)
             pcn_addf(&why, "value reference %u ('%s') is a %s variable, not a %s", vr[k], v->name,
-                     TYPE_NAME[v->type], TYPE_NAME[type]);
+                     in->api->type_name[v->type], in->api->type_name[type]);
         if (why.length) {
             pcn_call_error(in, fn, why.text);
             return 1;
@@ -37,7 +36,7 @@ static int check_vrs(native *in, const char *fn, const fmi2ValueReference vr[], 
 }
 
 /* A get of an output before initialisation builds the model first (GuardedSlave._calculate_outputs_for). */
-static void calculate_outputs(native *in, const fmi2ValueReference vr[], size_t nvr)
+static void calculate_outputs(native *in, const unsigned vr[], size_t nvr)
 {
     if (in->initialised || in->initial_outputs) return;
     int wanted = 0;
@@ -55,20 +54,20 @@ static void calculate_outputs(native *in, const fmi2ValueReference vr[], size_t 
     pcn_text message;
     pcn_clear(&message);
     pcn_addf(&message, "%s: the outputs read in Initialization Mode keep their start values: %s; "
-             "fmi2ExitInitializationMode will refuse the initialisation", in->name, why.text);
+             "%s will refuse the initialisation", in->name, why.text, in->api->exit_initialization);
     if (in->initial_warning && strcmp(in->initial_warning, message.text) == 0) return;
     pcn_set_string(&in->initial_warning, message.text);
-    pcn_emit(in, fmi2Warning, "logStatusWarning", message.text);
+    pcn_emit(in, PCN_WARNING, "logStatusWarning", message.text);
 }
 
 /* The old or new value of a variable in a message, as Python's repr. */
 static void value_text(pcn_text *t, pcn_type type, const void *values, size_t k)
 {
     switch (type) {
-    case PCN_REAL: pcn_addf(t, "%r", ((const fmi2Real *)values)[k]); break;
-    case PCN_INTEGER: pcn_addf(t, "%d", (int)((const fmi2Integer *)values)[k]); break;
-    case PCN_BOOLEAN: pcn_addf(t, "%B", (int)((const fmi2Boolean *)values)[k]); break;
-    case PCN_STRING: pcn_addf(t, "'%s'", ((const fmi2String *)values)[k]); break;
+    case PCN_REAL: pcn_addf(t, "%r", ((const double *)values)[k]); break;
+    case PCN_INTEGER: pcn_addf(t, "%d", (int)((const int *)values)[k]); break;
+    case PCN_BOOLEAN: pcn_addf(t, "%B", (int)((const int *)values)[k]); break;
+    case PCN_STRING: pcn_addf(t, "'%s'", ((const char *const *)values)[k]); break;
     }
 }
 
@@ -83,7 +82,7 @@ static void current_text(pcn_text *t, const native *in, const pcn_variable *v)
 }
 
 /* GuardedSlave._refuse_set: nonzero (logged) unless every variable may be set now. */
-static int refuse_set(native *in, const char *fn, const fmi2ValueReference vr[], size_t nvr, const void *values,
+static int refuse_set(native *in, const char *fn, const unsigned vr[], size_t nvr, const void *values,
                       pcn_type type)
 {
     for (size_t k = 0; k < nvr; ++k) {
@@ -111,37 +110,32 @@ static int refuse_set(native *in, const char *fn, const fmi2ValueReference vr[],
     return 0;
 }
 
-static fmi2Status get_values(fmi2Component c, const char *fn, const fmi2ValueReference vr[], size_t nvr,
-                             void *values, pcn_type type)
+pcn_status pcn_get(native *in, const char *fn, const unsigned vr[], size_t nvr, void *values, pcn_type type)
 {
-    native *in = c;
-    if (in == NULL) return fmi2Error;
-    if (check_vrs(in, fn, vr, nvr, values, type)) return fmi2Error;
+    if (check_vrs(in, fn, vr, nvr, values, type)) return PCN_ERROR;
     calculate_outputs(in, vr, nvr);
     for (size_t k = 0; k < nvr; ++k) {
         int slot = pcn_variable_of(vr[k])->slot;
         switch (type) {
-        case PCN_REAL: ((fmi2Real *)values)[k] = in->pub.real[slot]; break;
-        case PCN_INTEGER: ((fmi2Integer *)values)[k] = in->pub.integer[slot]; break;
-        case PCN_BOOLEAN: ((fmi2Boolean *)values)[k] = in->pub.boolean[slot]; break;
-        case PCN_STRING: ((fmi2String *)values)[k] = in->pub.string[slot]; break;
+        case PCN_REAL: ((double *)values)[k] = in->pub.real[slot]; break;
+        case PCN_INTEGER: ((int *)values)[k] = in->pub.integer[slot]; break;
+        case PCN_BOOLEAN: ((int *)values)[k] = in->pub.boolean[slot]; break;
+        case PCN_STRING: ((const char **)values)[k] = in->pub.string[slot]; break;
         }
     }
-    return fmi2OK;
+    return PCN_OK;
 }
 
-static fmi2Status set_values(fmi2Component c, const char *fn, const fmi2ValueReference vr[], size_t nvr,
-                             const void *values, pcn_type type)
+pcn_status pcn_set(native *in, const char *fn, const unsigned vr[], size_t nvr, const void *values, pcn_type type)
 {
-    native *in = c;
-    if (in == NULL) return fmi2Error;
-    if (check_vrs(in, fn, vr, nvr, values, type) || refuse_set(in, fn, vr, nvr, values, type)) return fmi2Error;
+    if (check_vrs(in, fn, vr, nvr, values, type) || refuse_set(in, fn, vr, nvr, values, type)) return PCN_ERROR;
     if (type == PCN_STRING)
         for (size_t k = 0; k < nvr; ++k)
-            if (((const fmi2String *)values)[k] == NULL) {
+            if (((const char *const *)values)[k] == NULL) {
                 pcn_text why;
                 pcn_clear(&why);
-                pcn_addf(&why, "%s (value reference %u): NULL refused; nothing was set", pcn_variable_of(vr[k])->name, vr[k]);
+                pcn_addf(&why, "%s (value reference %u): NULL refused; nothing was set", pcn_variable_of(vr[k])->name,
+                         vr[k]);
                 return pcn_call_error(in, fn, why.text);
             }
     int parameter = 0;
@@ -149,104 +143,15 @@ static fmi2Status set_values(fmi2Component c, const char *fn, const fmi2ValueRef
         const pcn_variable *v = pcn_variable_of(vr[k]);
         parameter |= v->causality == PCN_PARAMETER;
         switch (type) {
-        case PCN_REAL: in->pub.real[v->slot] = ((const fmi2Real *)values)[k]; break;
-        case PCN_INTEGER: in->pub.integer[v->slot] = ((const fmi2Integer *)values)[k]; break;
-        case PCN_BOOLEAN: in->pub.boolean[v->slot] = ((const fmi2Boolean *)values)[k] != 0; break;
-        case PCN_STRING: pcn_set_string(&in->pub.string[v->slot], ((const fmi2String *)values)[k]); break;
+        case PCN_REAL: in->pub.real[v->slot] = ((const double *)values)[k]; break;
+        case PCN_INTEGER: in->pub.integer[v->slot] = ((const int *)values)[k]; break;
+        case PCN_BOOLEAN: in->pub.boolean[v->slot] = ((const int *)values)[k] != 0; break;
+        case PCN_STRING: pcn_set_string(&in->pub.string[v->slot], ((const char *const *)values)[k]); break;
         }
     }
     if (!in->initialised) {   /* GuardedSlave._parameters_set */
         in->built_for_exit = 0;
         if (parameter) in->initial_outputs = 0;
     }
-    return fmi2OK;
-}
-
-fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[])
-{
-    return get_values(c, "fmi2GetReal", vr, nvr, value, PCN_REAL);
-}
-fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Integer value[])
-{
-    return get_values(c, "fmi2GetInteger", vr, nvr, value, PCN_INTEGER);
-}
-fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Boolean value[])
-{
-    return get_values(c, "fmi2GetBoolean", vr, nvr, value, PCN_BOOLEAN);
-}
-fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[])
-{
-    return get_values(c, "fmi2GetString", vr, nvr, (void *)value, PCN_STRING);
-}
-fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[])
-{
-    return set_values(c, "fmi2SetReal", vr, nvr, value, PCN_REAL);
-}
-fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Integer value[])
-{
-    return set_values(c, "fmi2SetInteger", vr, nvr, value, PCN_INTEGER);
-}
-fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Boolean value[])
-{
-    return set_values(c, "fmi2SetBoolean", vr, nvr, value, PCN_BOOLEAN);
-}
-fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[])
-{
-    return set_values(c, "fmi2SetString", vr, nvr, (const void *)value, PCN_STRING);
-}
-
-/* ---- co-simulation functions this FMU does not provide ---- */
-
-static fmi2Status unsupported(fmi2Component c, const char *fn)
-{
-    return c ? pcn_call_error(c, fn, "not supported by this FMU") : fmi2Error;
-}
-
-fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
-                                        const fmi2ValueReference vKnown_ref[], size_t nKnown,
-                                        const fmi2Real dvKnown[], fmi2Real dvUnknown[])
-{
-    (void)vUnknown_ref, (void)nUnknown, (void)vKnown_ref, (void)nKnown, (void)dvKnown, (void)dvUnknown;
-    return unsupported(c, "fmi2GetDirectionalDerivative");
-}
-fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                                       const fmi2Integer order[], const fmi2Real value[])
-{
-    (void)vr, (void)nvr, (void)order, (void)value;
-    return unsupported(c, "fmi2SetRealInputDerivatives");
-}
-fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                                        const fmi2Integer order[], fmi2Real value[])
-{
-    (void)vr, (void)nvr, (void)order, (void)value;
-    return unsupported(c, "fmi2GetRealOutputDerivatives");
-}
-static fmi2Status no_status(fmi2Component c, const char *fn)
-{
-    return c ? pcn_call_error(c, fn, "no asynchronous doStep: there is no status to ask for") : fmi2Error;
-}
-fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value)
-{
-    (void)s, (void)value;
-    return no_status(c, "fmi2GetStatus");
-}
-fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value)
-{
-    (void)s, (void)value;
-    return no_status(c, "fmi2GetRealStatus");
-}
-fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value)
-{
-    (void)s, (void)value;
-    return no_status(c, "fmi2GetIntegerStatus");
-}
-fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value)
-{
-    (void)s, (void)value;
-    return no_status(c, "fmi2GetBooleanStatus");
-}
-fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value)
-{
-    (void)s, (void)value;
-    return no_status(c, "fmi2GetStringStatus");
+    return PCN_OK;
 }
