@@ -3,7 +3,7 @@
 Markers (pyproject.toml): ``slow`` on whole files by their ``pytestmark`` (CI runs ``pytest -m
 "not slow"``, ``pytest -m slow`` the rest), ``fmu`` on files about FMUs and, here, on every test that uses
 an FMU fixture, ``tools`` on files that drive a third-party tool (Ecos, libcosim, MuJoCo,
-cosmic-ray, a sanitizer build); ``-m "not slow and not fmu and not tools"`` is the quick subset.
+cosmic-ray, a sanitizer build); ``-m "not slow and not fmu and not tools and not sweep"`` is the quick subset.
 The test files sit in folders by the layer they test (tests/layout_rules.py).
 """
 import pytest

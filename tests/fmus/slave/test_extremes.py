@@ -27,6 +27,8 @@ from plant.simulator import BAUMGARTE_RK4_LIMIT, RESIDUAL_STOP
 from scenarios.scenes.thesis import Fidelity, bench, thesis_sim_circle
 from tests.support.fmi_support import FmuInstance
 
+pytestmark = [pytest.mark.sweep]
+
 H = 1e-3
 X1 = get_trajectory("triangle").start_point           # (-0.002, 0.108): the bench start (7.28)
 MOTOR_R = {"drive1": 1.101, "drive2": 0.829}          # Tables 16, 18

@@ -39,6 +39,8 @@ from fmus.slave.registry import SLAVES
 from tests.support.fmi_support import FmuInstance
 from tests.fmus.slave.test_extremes import GOOD, slave_class
 
+pytestmark = [pytest.mark.sweep]
+
 H = 1e-3
 #: Start time: where importers start, and where the models evaluate their first sample (a
 #: triangle of side_time 1e-200 s divided by zero at t = 0 only).  The time a step's refusal
