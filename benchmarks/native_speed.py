@@ -29,6 +29,11 @@ when missing).  Each package then runs, side by side in one invocation, in:
   ``doStep`` and a read of ``x``, ``y`` per step, as a Python host steps it), with doSteps of
   its own 1 ms and of 10 ms (ten loop steps per doStep: the host's cost per call shared).
   With ``--loop-only`` only these rows are measured.
+* ``--per-component``: instead, the scene's per-component package of issue 26 (``parcosim
+  export-ssp --per-component``: base step T / n, each sampled component's ``sample_phase``;
+  n the export's trial's, from ``benchmarks/results/tools.json`` when stored there) with its
+  pythonfmu FMUs and with native FMUs (``--native``: each instance's built with its
+  parameters), in the C host, libcosimpy and ecospy; only these rows are measured.
 
 Figures: CPU (user + system, all threads) of the stepping after the first step (loading,
 initialising, which libcosim does in the first step, and that step are "setup") in
@@ -175,6 +180,21 @@ def export_packages(work: Path, native_dir: Path, python_dir: Path, scene: str) 
     return packages
 
 
+def export_per_component_packages(work: Path, python_dir: Path, scene: str) -> dict:
+    """The scene's per-component package (issue 26) with its pythonfmu FMUs and with native
+    FMUs, at the n of the export's trial (stored by scenarios/studies/tools.py, else run):
+    kind -> .ssp."""
+    from scenarios.packaging.per_component import export_per_component
+    from scenarios.scenes.catalogue import get_scene
+    from scenarios.studies.tools import load_results
+
+    stored = load_results().get(f"trial|{scene}|per-component")
+    n = stored["substeps"] if stored else None
+    return {kind: export_per_component(get_scene(scene), work / kind.replace(" ", "_") / f"{scene}.ssp", python_dir,
+                                       substeps=n, native=kind.endswith("native"))
+            for kind in ("per-component pythonfmu", "per-component native")}
+
+
 def subsystem(system, names):
     """The components ``names`` of ``system`` and the connections between them (the inputs
     the others fed keep their start values): the part that has native FMUs."""
@@ -270,18 +290,24 @@ def run_child(code: str, *args) -> dict:
     return json.loads(lines[-1])
 
 
-def measurements(program, packages: dict, stop: float, work: Path, python_dir: Path, without=()) -> list:
-    """One round: [(host, kind, result dict)] for every host and package, then our master's:
-    pythonfmu, native, and native with the models ``without`` left pythonfmu (if any)."""
+def package_measurements(program, packages: dict, stop: float, work: Path) -> list:
+    """One round: [(host, kind, result dict)] for every package host and package."""
     rows = []
     for kind, package in packages.items():
-        preload = libpython() if kind.startswith("pythonfmu") else None      # its FMUs load only so
+        preload = libpython() if "pythonfmu" in kind else None      # its FMUs load only so
         try:
             rows.append(("C host (libcosimc)", kind, run_c_host(program, package, stop, work / f"c_{kind}", preload)))
         except RuntimeError as exc:
             rows.append(("C host (libcosimc)", kind, {"ok": False, "error": str(exc)[-500:]}))
         rows.append(("libcosimpy", kind, run_child(LIBCOSIMPY_CHILD, package, stop)))
         rows.append(("ecospy (1 CPU)", kind, run_child(ECOSPY_CHILD, package, stop)))
+    return rows
+
+
+def measurements(program, packages: dict, stop: float, work: Path, python_dir: Path, without=()) -> list:
+    """One round: [(host, kind, result dict)] for every host and package, then our master's:
+    pythonfmu, native, and native with the models ``without`` left pythonfmu (if any)."""
+    rows = package_measurements(program, packages, stop, work)
     rows.append(("our master --mode fmu", "pythonfmu",
                  run_child(MASTER_CHILD, SCENE, "pythonfmu", python_dir, stop, "")))
     if without:
@@ -329,6 +355,8 @@ def main(argv=None) -> int:
     parser.add_argument("--without", nargs="*", default=[],
                         help="models also left pythonfmu in a --native master row (e.g. DCMotorDrive)")
     parser.add_argument("--loop-only", action="store_true", help="only the whole-loop FMUs (ClosedLoop)")
+    parser.add_argument("--per-component", action="store_true",
+                        help="only the per-component package (issue 26), pythonfmu and native, in the package hosts")
     args = parser.parse_args(argv)
 
     from tests.native_host.host import build_host
@@ -341,6 +369,8 @@ def main(argv=None) -> int:
         from scenarios.scenes import get_scene
         ensure_built(sorted({c.model for c in get_scene(SCENE).system.components}), python_dir)
         packages, loops, program = {}, {}, None
+    elif args.per_component:
+        packages, loops, program = export_per_component_packages(work, python_dir, SCENE), {}, build_host(work)
     else:
         if not args.native_dir and not args.loop_only:
             from fmus.native.build import build_native_all
@@ -350,7 +380,8 @@ def main(argv=None) -> int:
         program = build_host(work)
     load = os.getloadavg()[0]
     rounds = [(loop_measurements(program, loops, args.stop, work) if loops else [])
-              + ([] if args.loop_only else measurements(program, packages, args.stop, work, python_dir, args.without))
+              + ([] if args.loop_only else package_measurements(program, packages, args.stop, work)
+                 if args.per_component else measurements(program, packages, args.stop, work, python_dir, args.without))
               for _ in range(args.rounds)]
     rows = best_of(rounds)
     text = table(rows, args.stop)

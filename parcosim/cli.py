@@ -20,9 +20,9 @@ Every subcommand is a thin shell over a documented Python call:
 ``parcosim trade``     ``scenarios.studies.trade.run_trade(scene, quick, out_dir)``; for a pendulum scene
                        ``scenarios.studies.pendulum_trade.run_pendulum_trade(scene, quick, out_dir)``
 ``parcosim export-ssp``  ``scenarios.packaging.chain.export_package(get_scene(name), path, fmu_dir)``;
-                       with ``--per-component [--substeps N] [--internal-observer]``
+                       with ``--per-component [--substeps N] [--internal-observer] [--native]``
                        ``scenarios.packaging.per_component.export_per_component(get_scene(name), path, fmu_dir,
-                       substeps, internal_observer)``
+                       substeps, internal_observer, native=native)``
 ``parcosim export-fmu``  ``fmus.systemfmu.export.export_fmu(get_scene(name).system, path)``; with ``--native``
                        ``fmus.native.loopbuild.export_native_fmu(get_scene(name).system, path, fmi_version=...)`` (docs/native.md)
 ``parcosim build-plant``  ``fmus.export.specfmu.build_plant_fmu(spec, path)`` (docs/spec.md)
@@ -155,6 +155,9 @@ def _parser() -> argparse.ArgumentParser:
                      help="with --per-component: N base steps per 1 ms period (default: chosen from the chain)")
     ssp.add_argument("--internal-observer", action="store_true",
                      help="with --per-component: each drive estimates its own current (no obs1/obs2 instances)")
+    ssp.add_argument("--native", action="store_true",
+                     help="with --per-component: every instance a native FMU built with its parameters (C only, "
+                          "no Python in the importer; in FMU_DIR/native, default fmus/build/native; docs/native.md)")
     _replace_option(ssp)
     fmu = sub.add_parser("export-fmu", help="write a scene's whole closed loop as one FMI 2.0 co-simulation FMU")
     fmu.add_argument("scene", help="a scene name (see `parcosim list`)")
@@ -323,10 +326,10 @@ def _command(args) -> int:
             if args.per_component:
                 from scenarios.packaging.per_component import export_per_component
                 print(export_per_component(_scene(args), args.path, args.fmu_dir, args.substeps,
-                                           args.internal_observer))
+                                           args.internal_observer, native=args.native))
             else:
-                if args.substeps is not None or args.internal_observer:
-                    raise ValueError("--substeps and --internal-observer go with --per-component")
+                if args.substeps is not None or args.internal_observer or args.native:
+                    raise ValueError("--substeps, --internal-observer and --native go with --per-component")
                 from scenarios.packaging.chain import export_package
                 print(export_package(_scene(args), args.path, args.fmu_dir))
         elif args.command == "export-fmu":

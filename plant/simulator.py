@@ -401,6 +401,16 @@ class PlantSimulator:
     def dq(self):
         return self.y[7:]
 
+    def output_values(self) -> list:
+        """:meth:`outputs`' values in its order (:data:`fmus.slave.declarations.PLANT_OUTPUTS`'),
+        without the dict: after a step of the C kernel, its report's values (an FMU's doStep)."""
+        last = self._last
+        if last is not None and last[0] is self.y and last[2] is not None:
+            values = last[2][fast5r.REPORT_OUTPUTS:fast5r.REPORT_OUTPUTS + 10]
+            values.append(last[1])
+            return values
+        return list(self.outputs().values())
+
     def outputs(self) -> dict:
         """The FiveBarPlant outputs of the component contract, as Python floats."""
         last = self._last

@@ -79,6 +79,7 @@ RULES = [
     ("test_master*.py", "fmus/cosim"),
     ("test_compiled*.py", "fmus/cosim"),
     ("test_stepper*.py", "fmus/cosim"),
+    ("test_inprocess*.py", "fmus/cosim"),
     ("test_foreign*.py", "fmus/cosim"),
     ("test_export_fmu*.py", "fmus/systemfmu"),
     ("test_embedded*.py", "fmus/systemfmu"),

@@ -1,7 +1,7 @@
 """The long hostile-use campaign (issue 13): thousands of cases through fmpy, a summary table.
 
     python -m fmus.hostile.campaign --cases 3000 [--fmu-dir DIR] [--out out/hostile] [--seed 0]
-    python -m fmus.hostile.campaign --native --cases 3000 [--fmu-dir DIR]   # issue 28
+    python -m fmus.hostile.campaign --native --cases 3000 [--fmu-dir DIR] [--loop SCENE]   # issue 28
 
 Runs ``--cases`` cases (spread evenly over the FMUs, every kind in turn) from
 :func:`fmus.hostile.cases.make_case` in worker subprocesses (:func:`fmus.hostile.cases.run_cases`),
@@ -14,7 +14,9 @@ With ``--native`` the FMUs are parcosim's native ones (of ``--fmu-dir``, or buil
 ``parcosim build --native``), each compiled again from its own sources with
 ``-fsanitize=address,undefined`` and driven with the sanitizers' runtime
 (:func:`fmus.hostile.cases.sanitizer_env`; their reports go to ``OUT/sanitizer``), every
-kind of case; ``--no-sanitize`` drives the FMUs as built.
+kind of case; ``--no-sanitize`` drives the FMUs as built; ``--loop SCENE`` adds the scene's
+whole loop as one native FMU (``parcosim export-fmu SCENE OUT.fmu --native``), ``--models
+ClosedLoop`` alone.
 """
 from __future__ import annotations
 
@@ -39,16 +41,21 @@ def main(argv=None) -> int:
     parser.add_argument("--native", action="store_true",
                         help="parcosim's native FMUs, rebuilt with AddressSanitizer and UBSan (issue 28)")
     parser.add_argument("--no-sanitize", action="store_true", help="with --native: the FMUs as built")
+    parser.add_argument("--loop", default=None, metavar="SCENE",
+                        help="with --native: also the native ClosedLoop of SCENE (export-fmu --native)")
     args = parser.parse_args(argv)
 
     work = Path(tempfile.mkdtemp(prefix="parcosim-hostile-"))
     env = None
     if args.native:
         sanitize = not args.no_sanitize
-        unzipped = hostile.prepared_native_fmus(args.fmu_dir, args.models, work, sanitize=sanitize)
+        unzipped = hostile.prepared_native_fmus(args.fmu_dir, args.models, work, sanitize=sanitize,
+                                                loop_scene=args.loop)
         env = hostile.sanitizer_env(Path(args.out) / "sanitizer") if sanitize else None
         wrapper = {model: hostile.is_native(path) for model, path in unzipped.items()}
     else:
+        if args.loop:
+            parser.error("--loop goes with --native")
         unzipped = hostile.prepared_fmus(args.fmu_dir, args.models, work)
         wrapper = {model: hostile.wrapper_is_ours(path, model) for model, path in unzipped.items()}
     per_model = -(-args.cases // len(unzipped))
@@ -80,8 +87,8 @@ def main(argv=None) -> int:
     if args.native:
         binaries = "native FMUs" + (", rebuilt with -fsanitize=address,undefined" if env else "")
     text = (f"{len(results)} cases, {wall:.0f} s wall ({binaries}); "
-            f"`python -m fmus.hostile.campaign{' --native' if args.native else ''} --cases {args.cases} "
-            f"--seed {args.seed}`\n\n"
+            f"`python -m fmus.hostile.campaign{' --native' if args.native else ''}"
+            f"{f' --loop {args.loop}' if args.loop else ''} --cases {args.cases} --seed {args.seed}`\n\n"
             + hostile.markdown_summary(results) + "\n")
     (out / "summary.md").write_text(text, encoding="utf-8")
     print(text)

@@ -445,16 +445,21 @@ def sanitized_from_sources(fmu, out_dir) -> Path:
     return target
 
 
-def prepared_native_fmus(fmu_dir, models, work, sanitize: bool = True) -> dict:
+def prepared_native_fmus(fmu_dir, models, work, sanitize: bool = True, loop_scene: str | None = None) -> dict:
     """The native FMUs to drive, extracted under ``work``: those of ``fmu_dir`` (every
-    ``*.fmu``) or, without it, all of ``parcosim build --native`` built under ``work``;
-    with ``sanitize`` each rebuilt from its own sources by :func:`sanitized_from_sources`.
-    Model -> its directory."""
+    ``*.fmu``) or, without it, all of ``parcosim build --native`` built under ``work``, and
+    with ``loop_scene`` the native ClosedLoop of that scene (``parcosim export-fmu SCENE
+    OUT.fmu --native``); with ``sanitize`` each rebuilt from its own sources by
+    :func:`sanitized_from_sources`.  Model -> its directory."""
     if fmu_dir:
         paths = {p.stem: p for p in Path(fmu_dir).glob("*.fmu")}
     else:
         from fmus.native.build import build_native_all
         paths = {p.stem: p for p in build_native_all(Path(work) / "native")}
+    if loop_scene:
+        from fmus.native.loopbuild import export_native_fmu
+        from scenarios.scenes.catalogue import get_scene
+        paths["ClosedLoop"] = export_native_fmu(get_scene(loop_scene).system, Path(work) / "loop" / "ClosedLoop.fmu")
     if models:
         unknown = [m for m in models.split(",") if m not in paths]
         if unknown:

@@ -4,11 +4,15 @@
 initialised by its slave) and hands ``pc_loop_run`` (kernels/src/loop.c) a plan of pointers.
 :func:`loop_image` takes that plan apart into data a C file can carry: every buffer the
 members' contexts point to, as bytes (the **data** arena, saved in the FMU state), the
-contexts themselves (the **scratch** arena, rebuilt at set-up: they hold addresses) with a
-relocation per pointer field, the plan's integer arrays, the stepper's values and each
-member's ``x``.  Nothing here knows a model: a context is read through its ctypes fields, a
-pointer resolved to the buffer that holds its address (found by walking the adapters, their
-slaves and the contexts) or to a function of the kernels' library.
+contexts themselves as C initialisers (:attr:`LoopImage.contexts`: each context's fields by
+name, its pointers as expressions into the instance's arenas; the compiler lays the
+**scratch** arena out, so no byte layout of this machine's C ABI travels), the plan's
+integer arrays, the stepper's values and each member's ``x``.  The data arena holds 8-byte
+words only (float64 or 64-bit integers), written as their bit patterns: the same on any
+machine with IEEE doubles, whatever its byte order.  Nothing here knows a model: a context
+is read through its ctypes fields and its C type found by its field names among the
+kernels' headers, a pointer resolved to the buffer that holds its address (found by walking
+the adapters, their slaves and the contexts) or to a function of the kernels' library.
 
 Then the loop runs over the system's stop time on the Python side (the same C kernels):
 a member that declines a step there (the compiled mode would take that step in Python)
@@ -28,11 +32,11 @@ import kernels
 
 from fmus.cosim.compiled import NotCompilable, Plan, _adapters
 from fmus.cosim.stepper import Stepper
-from fmus.native.build import KERNELS
+from fmus.native.build import KERNELS, _c_double
 
 WORD = 8
-#: Relocation kinds (fmus/native/pcn_loop.h): into the data arena, the scratch arena, a function.
-TO_DATA, TO_SCRATCH, TO_FUNCTION = 0, 1, 2
+#: A context's integer fields must hold in 32 bits: a C ``long`` is 4 bytes on Windows.
+PORTABLE_INT = (-2**31, 2**31 - 1)
 
 
 @dataclass
@@ -42,7 +46,7 @@ class Block:
     address: int
     size: int
     ctype: type | None = None     # the ctypes Structure of a context
-    offset: int = 0               # in its arena, bytes
+    offset: int = 0               # data blocks: in the data arena, bytes; contexts: their index
 
 
 @dataclass
@@ -51,10 +55,9 @@ class LoopImage:
     ``*_word``."""
 
     data: bytes = b""                 # the data arena's initial bytes
-    scratch: bytes = b""              # the contexts' bytes, pointer fields zero
-    relocations: list = field(default_factory=list)   # (scratch byte offset, kind, target)
+    contexts: list = field(default_factory=list)      # (C type, initialiser) of scratch context k (b<k>)
     functions: list = field(default_factory=list)     # names of the kernel functions pointed to
-    members: list = field(default_factory=list)       # (name, model, kernel, context byte offset in scratch, x word)
+    members: list = field(default_factory=list)       # (name, model, kernel, its context's index, x word)
     groups: list = field(default_factory=list)        # (substeps, end)
     inputs: list = field(default_factory=list)        # per member: [(index in x, slot)]
     outputs: list = field(default_factory=list)
@@ -81,6 +84,92 @@ def pointer_fields(ctype, base: int = 0):
             yield from pointer_fields(ctype._type_, base + k * ctypes.sizeof(ctype._type_))
     elif _is_pointer(ctype):
         yield base, ""
+
+
+def struct_types() -> dict:
+    """(member names, in order) -> [C type names] of every ``typedef struct {...} NAME;``
+    of the kernels' headers (kernels/src/*.h; no nested braces)."""
+    found = {}
+    for header in sorted(KERNELS.glob("*.h")):
+        text = re.sub(r"//[^\n]*", "", re.sub(r"/\*.*?\*/", "", header.read_text(), flags=re.S))
+        for body, name in re.findall(r"typedef\s+struct\s*\w*\s*\{([^{}]*)\}\s*(\w+)\s*;", text):
+            names = []
+            for decl in filter(None, (d.strip() for d in body.split(";"))):
+                pointer = re.search(r"\(\s*\*\s*(?:const\s+)?(\w+)\s*\)", decl)   # a function pointer
+                names += [pointer[1]] if pointer else [re.search(r"(\w+)\s*(?:\[[^\]]*\]\s*)*$", piece.strip())[1]
+                                                       for piece in decl.split(",")]
+            found.setdefault(tuple(names), []).append(name)
+    return found
+
+
+def c_type_of(ctype, types: dict) -> str:
+    """The kernels' C type of the ctypes Structure ``ctype``: the one whose members are its
+    fields, by name and in order; NotCompilable when none or several are."""
+    names = tuple(name for name, *_ in ctype._fields_)
+    found = types.get(names, [])
+    if len(found) != 1:
+        raise NotCompilable(f"context {ctype.__name__} (fields {', '.join(names)}): "
+                            f"{'no' if not found else len(found)} C types of the kernels' headers have these members"
+                            + (f" ({', '.join(found)})" if found else ""))
+    return found[0]
+
+
+def initialiser(ctype, address: int, pointer) -> str:
+    """A C designated initialiser of the ctypes Structure at ``address``: each field by name,
+    doubles exactly (repr), integers checked to hold in 32 bits, each pointer as
+    ``pointer(address)`` gives it (an expression)."""
+    def value(ftype, at, what):
+        if issubclass(ftype, ctypes.Structure):
+            return initialiser(ftype, at, pointer)
+        if issubclass(ftype, ctypes.Array):
+            size = ctypes.sizeof(ftype._type_)
+            return "{" + ", ".join(value(ftype._type_, at + k * size, f"{what}[{k}]")
+                                   for k in range(ftype._length_)) + "}"
+        if _is_pointer(ftype):
+            return pointer(ctypes.c_void_p.from_address(at).value, f"{ctype.__name__}.{what}")
+        if ftype in (ctypes.c_double, ctypes.c_float):
+            return _c_double(ftype.from_address(at).value)
+        if ftype in (ctypes.c_int, ctypes.c_long, ctypes.c_longlong, ctypes.c_short, ctypes.c_uint, ctypes.c_ulong):
+            number = ftype.from_address(at).value
+            if not PORTABLE_INT[0] <= number <= PORTABLE_INT[1]:
+                raise NotCompilable(f"{ctype.__name__}.{what} = {number}: beyond 32 bits (a C long on Windows)")
+            return str(number)
+        raise NotCompilable(f"{ctype.__name__}.{what}: a field of ctypes type {ftype.__name__} has no portable "
+                            "initialiser here")
+
+    fields = []
+    for name, ftype, *bits in ctype._fields_:
+        if bits:
+            raise NotCompilable(f"{ctype.__name__}.{name}: a bit field")
+        fields.append(f".{name} = {value(ftype, address + getattr(ctype, name).offset, name)}")
+    return "{" + ", ".join(fields) + "}"
+
+
+def _words_only(obj, what: str) -> None:
+    """Refuse a data buffer that is not in 8-byte words (float64, 64-bit integers): another
+    element size would depend on the target's byte order."""
+    if isinstance(obj, np.ndarray):
+        ok = obj.dtype.itemsize == WORD and obj.dtype.kind in "fiu"
+        kind = str(obj.dtype)
+    else:
+        ctype = obj if isinstance(obj, type) else type(obj)
+        while issubclass(ctype, ctypes.Array):
+            ctype = ctype._type_
+        fields = [f[1] for f in getattr(ctype, "_fields_", [(None, ctype)])]
+        ok = all(t in (ctypes.c_double, ctypes.c_int64, ctypes.c_uint64) or
+                 (issubclass(t, (ctypes.Structure, ctypes.Array)) and _words_ok(t)) for t in fields)
+        kind = ctype.__name__
+    if not ok:
+        raise NotCompilable(f"{what}: a buffer of {kind}, not of 8-byte words (float64, 64-bit integers): its bytes "
+                            "would depend on the target's byte order")
+
+
+def _words_ok(ctype) -> bool:
+    try:
+        _words_only(ctype, "")
+    except NotCompilable:
+        return False
+    return True
 
 
 def _extent(obj):
@@ -180,52 +269,63 @@ def loop_image(system, stepper: Stepper) -> LoopImage:
         if block.ctype is None:
             block.ctype = type(context)
         contexts.append((adapter, block, at))
-    # every pointer of every context (and of the contexts they point to) resolved
-    relocations, pending = [], [b for b in arenas.blocks]
+    # every context the members' contexts point to (and those they point to) found
+    pending = list(arenas.blocks)
     while pending:
         block = pending.pop()
         for offset, name in pointer_fields(block.ctype):
             value = ctypes.c_void_p.from_address(block.address + offset).value
-            if value is None:
-                continue
-            relocations.append((block, offset, name, value))
-            if not any(s <= value < s + n for s, n, _ in arenas.found):
+            if value is None or not any(s <= value < s + n for s, n, _ in arenas.found):
                 continue
             before = len(arenas.blocks)
             target, _ = arenas.block_of(value, f"{block.ctype.__name__}.{name}")
             if len(arenas.blocks) > before and target.ctype is not None:
                 pending.append(target)
-    data, scratch = bytearray(), bytearray()
+    data, scratch = bytearray(), [b for b in arenas.blocks if b.ctype is not None]
+    objects = {start: obj for start, _, obj in arenas.found}
     for b in arenas.blocks:
-        arena = scratch if b.ctype is not None else data
-        b.offset = len(arena)
-        arena += _pad(ctypes.string_at(b.address, b.size))
-    for block, offset, name, value in relocations:
-        at = block.offset + offset
-        scratch[at:at + WORD] = bytes(WORD)
+        if b.ctype is None:
+            _words_only(objects[b.address], f"a buffer of {b.size} bytes")
+            b.offset = len(data)
+            data += _pad(ctypes.string_at(b.address, b.size))
+    for k, b in enumerate(scratch):
+        b.offset = k
+
+    def pointer(value, what):
+        if value is None:
+            return "0"
         inside = [b for b in arenas.blocks if b.address <= value < b.address + b.size]
+        if inside and inside[0].ctype is not None:
+            if value != inside[0].address:
+                raise NotCompilable(f"{what}: points {value - inside[0].address} bytes into a context, a layout "
+                                    "of this machine's C ABI")
+            return f"&s->b{inside[0].offset}"
         if inside:
-            target = inside[0]
-            image.relocations.append((at, TO_SCRATCH if target.ctype is not None else TO_DATA,
-                                      target.offset + value - target.address))
-            continue
+            at = inside[0].offset + value - inside[0].address
+            if at % WORD:
+                raise NotCompilable(f"{what}: points between the 8-byte words of a buffer")
+            return f"(void *)(data + {at // WORD})"
         if value in arenas.empty:       # an empty array (no motors...): any valid address
-            image.relocations.append((at, TO_DATA, 0))
-            continue
+            return "(void *)data"
         if arenas.functions is None:
             arenas.functions = kernel_functions()
         if value not in arenas.functions:
-            raise NotCompilable(f"{block.ctype.__name__}.{name}: {value:#x} is neither a buffer of the loop's "
-                                "components nor a function of the kernels")
+            raise NotCompilable(f"{what}: {value:#x} is neither a buffer of the loop's components nor a function "
+                                "of the kernels")
         fn = arenas.functions[value]
         if fn not in image.functions:
             image.functions.append(fn)
-        image.relocations.append((at, TO_FUNCTION, image.functions.index(fn)))
+        return fn
+
+    types = struct_types()
+    image.contexts = [(c_type_of(b.ctype, types), initialiser(b.ctype, b.address, pointer)) for b in scratch]
     image.values_word = len(data) // WORD
     image.n_values = len(stepper.values)
     data += np.asarray(stepper.values, dtype=np.float64).tobytes()
     for adapter, block, at in contexts:
-        image.members.append((adapter.name, adapter.model, adapter.kernel, block.offset + at, len(data) // WORD))
+        if at:
+            raise NotCompilable(f"component {adapter.name}'s context is {at} bytes into another")
+        image.members.append((adapter.name, adapter.model, adapter.kernel, block.offset, len(data) // WORD))
         data += adapter.x.astype(np.float64).tobytes()
     image.time_word = len(data) // WORD
     data += np.float64(stepper.time).tobytes()
@@ -234,7 +334,7 @@ def loop_image(system, stepper: Stepper) -> LoopImage:
         image.outputs.append(member.outputs)
     ends = plan.loop._arrays["group_end"].tolist()
     image.groups = list(zip(plan.loop._arrays["group_substeps"].tolist(), ends))
-    image.data, image.scratch, image.slots = bytes(data), bytes(scratch), dict(stepper.slots)
+    image.data, image.slots = bytes(data), dict(stepper.slots)
     image.fixed = _run_to_stop(system, plan, stepper, arenas, image)
     return image
 

@@ -1,11 +1,13 @@
 /* A system's compiled loop as build data (fmus/native/loopimage.py, docs/native.md): the
  * native ClosedLoop's adapter (adapters/pcn_closedloop.c) lays it out in an instance and runs
- * it with pc_loop_run (kernels/src/loop.c).  The generated loop_table.c defines pcn_loop.
+ * it with pc_loop_run (kernels/src/loop.c).  The generated loop_table.c defines pcn_loop and
+ * pcn_loop_fill (loop_contexts.h).
  *
- * Two arenas of 8-byte words per instance: the data (every buffer the members' kernels read
- * and write, the stepper's values, each member's x, the loop's time; saved in the FMU state)
- * and the scratch (the members' contexts, which hold addresses: copied from their image and
- * relocated at set-up, never saved). */
+ * Two arenas per instance: the data (8-byte words: every buffer the members' kernels read and
+ * write, the stepper's values, each member's x, the loop's time; saved in the FMU state;
+ * its initial words are bit patterns, the same doubles on any IEEE target) and the scratch
+ * (the members' contexts, which hold addresses: the struct pcn_loop_contexts, laid out by the
+ * compiler and filled by pcn_loop_fill at set-up from C initialisers, never saved). */
 #ifndef PCN_LOOP_H
 #define PCN_LOOP_H
 
@@ -13,30 +15,15 @@
 
 #include "loop.h"
 
-enum { PCN_TO_DATA, PCN_TO_SCRATCH, PCN_TO_FUNCTION };
-
-/* A pointer field at byte `at` of the scratch arena: the data or scratch arena's byte
- * `target`, or function number `target`. */
-typedef struct {
-    long at;
-    int kind;
-    long target;
-} pcn_relocation;
-
-typedef void (*pcn_function)(void);
-
 typedef struct {
     const char *name, *model, *kernel;   /* the instance, its model, its I/O step */
-    long context;                        /* byte offset of its context in the scratch arena */
+    long context;                        /* byte offset of its context in pcn_loop_contexts */
     long x;                              /* word offset of its x in the data arena */
 } pcn_member;
 
 typedef struct {
-    long data_words, scratch_words;
-    const uint64_t *data, *scratch;      /* the arenas' initial words */
-    int n_relocations;
-    const pcn_relocation *relocations;
-    const pcn_function *functions;
+    long data_words;
+    const uint64_t *data;                /* the data arena's initial words */
     int n_members;
     const pcn_member *members;
     const pc_io_fn *io;

@@ -28,11 +28,36 @@ def native_fmu_for(model: str, parameters: dict, out_dir=DEFAULT_NATIVE_OUT, dig
     return build_native_fmu(model, out_dir, start_values=dict(parameters), file_name=name)
 
 
+def refuse_without_native(system, what: str) -> None:
+    """Refuse, in one line that names them, ``system``'s components whose model has no
+    native FMU (SpecPlant); components given as FMU files go as they are.
+
+    Raises
+    ------
+    ValueError
+        ``what`` (e.g. "scene bench_x: export-ssp --native") and each such component with its model.
+    """
+    from fmus.cosim.foreign import is_fmu_file
+
+    missing = [f"{c.name} ({c.model})" for c in system.components if c.model not in NATIVE and not is_fmu_file(c.model)]
+    if missing:
+        raise ValueError(f"{what}: no native FMU of {', '.join(missing)} (native: {', '.join(NATIVE)}); "
+                         "export it without --native")
+
+
+def native_instances(system, out_dir=DEFAULT_NATIVE_OUT) -> dict:
+    """Instance -> the native FMU file built with that instance's parameters as its start
+    values (:func:`native_fmu_for`), for every component of a natively built model."""
+    digest = source_digest()
+    return {c.name: native_fmu_for(c.model, c.parameters, out_dir, digest) for c in system.components
+            if c.model in NATIVE}
+
+
 def native_system(system, out_dir=DEFAULT_NATIVE_OUT):
     """``system`` with every component of a natively built model run as its native FMU file."""
-    digest = source_digest()
-    components = tuple(replace(c, model=str(native_fmu_for(c.model, c.parameters, out_dir, digest).resolve()))
-                       if c.model in NATIVE else c for c in system.components)
+    built = native_instances(system, out_dir)
+    components = tuple(replace(c, model=str(built[c.name].resolve())) if c.name in built else c
+                       for c in system.components)
     return replace(system, components=components)
 
 

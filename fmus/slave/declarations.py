@@ -218,8 +218,11 @@ def correct_plant(sim, snapshot, measured: dict, redo, step: float) -> bool:
 
 
 def publish_plant(slave, sim) -> None:
-    """Copy the plant's outputs to the slave's variables."""
-    vars(slave).update(sim.outputs())   # Python floats already (PlantSimulator.outputs)
+    """Copy the plant's outputs to the slave's variables (Python floats already,
+    :meth:`plant.simulator.PlantSimulator.output_values`; stored one attribute after another:
+    about half the time of a dict built and merged, on every step)."""
+    (slave.q1, slave.q2, slave.dq1, slave.dq2, slave.x, slave.y, slave.dx, slave.dy, slave.q1_enc, slave.q2_enc,
+     slave.residual) = sim.output_values()
 
 
 # --- a drive ---------------------------------------------------------------------------------

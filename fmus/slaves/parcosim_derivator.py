@@ -88,11 +88,14 @@ class Derivator(SampledSteps, GuardedSlave):
         q1, q2 = self.q1, self.q2
         if not (abs(q1) <= ABSURD and abs(q2) <= ABSURD):   # NaN fails too: named below
             self._refuse_inputs(current_time)
-        estimates = tuple(self.derivator.step_values((q1, q2), ABSURD))    # dq1, dq2, ddq1, ddq2
-        if not all(map(math.isfinite, estimates)):
-            raise ValueError(f"the estimates (dq1, dq2, ddq1, ddq2) = {estimates!r} at t = {current_time:.6g} s "
-                             f"are not finite (inputs q1 = {self.q1!r}, q2 = {self.q2!r} rad)")
-        self.dq1, self.dq2, self.ddq1, self.ddq2 = estimates
+        estimates = self.derivator.step_values((q1, q2), ABSURD)
+        dq1, dq2, ddq1, ddq2 = estimates
+        # One check of the sum in the usual case: a NaN or an infinity makes it not finite (so do
+        # finite values whose sum overflows: they are checked one by one then).
+        if not math.isfinite(dq1 + dq2 + ddq1 + ddq2) and not all(map(math.isfinite, estimates)):
+            raise ValueError(f"the estimates (dq1, dq2, ddq1, ddq2) = {tuple(estimates)!r} at t = "
+                             f"{current_time:.6g} s are not finite (inputs q1 = {self.q1!r}, q2 = {self.q2!r} rad)")
+        self.dq1, self.dq2, self.ddq1, self.ddq2 = dq1, dq2, ddq1, ddq2
 
     def _refuse_inputs(self, current_time):
         """Raise ValueError naming the first input that is not finite or is absurd."""

@@ -56,4 +56,6 @@ class Trajectory(GuardedSlave):
         self._publish(current_time + step_size)
 
     def _publish(self, t):
-        vars(self).update(zip(OUTPUTS, sample_values(self.trajectory, t, *self.__buffers)))
+        values, refusal = self.__buffers   # the OUTPUTS, stored one attribute after another (no zip, no dict)
+        self.x_d, self.y_d, self.dx_d, self.dy_d, self.ddx_d, self.ddy_d = sample_values(self.trajectory, t, values,
+                                                                                         refusal)

@@ -73,7 +73,8 @@ def _q(prefix: str, tag: str) -> str:
 
 # --- export ---------------------------------------------------------------------------------
 
-def export_ssp(system: System, path, fmu_dir=None, fmus: dict | None = None, bake: bool = True) -> Path:
+def export_ssp(system: System, path, fmu_dir=None, fmus: dict | None = None, bake: bool = True,
+               instance_fmus: dict | None = None) -> Path:
     """Write ``system`` as an SSP 1.0 package to ``path`` and return its path.
 
     Parameters
@@ -95,6 +96,10 @@ def export_ssp(system: System, path, fmu_dir=None, fmus: dict | None = None, bak
         parameters start at the instance's values (:func:`fmus.systemfmu.export.with_start_values`),
         so they hold in tools that ignore parameter bindings (fmpy's SSP runner).  False:
         one ``resources/<Model>.fmu`` per model, the values in the bindings only.
+    instance_fmus : dict, optional
+        Instance -> the FMU file its copy is made from, in place of its model's (with
+        ``bake``): an FMU of the instance's model built for that instance (the native FMUs of
+        ``export-ssp --per-component --native``, whose compiled defaults are its parameters).
 
     Raises
     ------
@@ -111,10 +116,21 @@ def export_ssp(system: System, path, fmu_dir=None, fmus: dict | None = None, bak
         if c.substeps != 1:
             raise ValueError(f"component {c.name}: substeps = {c.substeps}; SSP 1.0 has no per-component "
                              "step, so multi-rate systems cannot be exported (set substeps=1)")
+    instance_fmus = dict(instance_fmus or {})
+    if instance_fmus and not bake:
+        raise ValueError("instance_fmus: an instance's own FMU goes into the package only with bake=True")
+    unknown = set(instance_fmus) - {c.name for c in system.components}
+    if unknown:
+        raise ValueError(f"instance_fmus: no instance {', '.join(sorted(unknown))} in the system")
     given = dict(fmus or {})
     fmus = _fmu_paths([c.model for c in system.components if c.model not in given], fmu_dir)
     fmus.update({model: Path(fmu) for model, fmu in given.items()})
     variables = {model: _read_variables(model, fmu) for model, fmu in fmus.items()}
+    for instance, fmu in instance_fmus.items():
+        model = system.component(instance).model
+        if set(_read_variables(model, Path(fmu))) != set(variables[model]):
+            raise ValueError(f"instance_fmus: {fmu} for {instance} has other variables than {fmus[model]} "
+                             f"(model {model})")
     connectors, values = _plan(system, variables)
     sources = {c.name: f"resources/{c.name if bake else c.model}.fmu" for c in system.components}
     ssd = _ssd(system, path.stem, connectors, values, sources)
@@ -130,7 +146,8 @@ def export_ssp(system: System, path, fmu_dir=None, fmus: dict | None = None, bak
 
                 for c in system.components:
                     start = {name: value for name, (_, value) in values[c.name].items()}
-                    copy = with_start_values(fmus[c.model], start, Path(copies) / f"{c.name}.fmu")
+                    own = instance_fmus.get(c.name, fmus[c.model])
+                    copy = with_start_values(own, start, Path(copies) / f"{c.name}.fmu")
                     zf.write(copy, sources[c.name], compress_type=zipfile.ZIP_STORED)
             else:
                 for model, fmu in fmus.items():

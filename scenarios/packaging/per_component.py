@@ -382,10 +382,10 @@ def trial(scene: Scene, internal_observer: bool = False, goal: float = TRACKING_
 
 
 def export_per_component(scene: Scene | System, path, fmu_dir=None, substeps: int | None = None,
-                         internal_observer: bool = False, goal: float = TRACKING_GOAL) -> Path:
+                         internal_observer: bool = False, goal: float = TRACKING_GOAL, native: bool = False) -> Path:
     """Write ``scene`` (or a system) as a per-component SSP package for Jacobi masters
     (module docstring) to ``path`` and return its path (``parcosim export-ssp SCENE PATH
-    --per-component [--substeps N] [--internal-observer]``).
+    --per-component [--substeps N] [--internal-observer] [--native]``).
 
     ``substeps`` None: chosen by :func:`choose_substeps_by_trial` for a scene (``goal``),
     the smallest that holds the stages for a system; given for a scene, the package is run
@@ -394,10 +394,21 @@ def export_per_component(scene: Scene | System, path, fmu_dir=None, substeps: in
     a task-space PD scene oscillates).  Components that name an FMU file
     (``--replace``) go into the package as they are; parameters their FMU lacks are left
     out with a warning (:func:`fmus.cosim.foreign.named_models`).
+
+    ``native``: the same package (instances, base step, phases, bindings) whose instances
+    are native FMUs (docs/native.md), each built with its instance's parameters, phase
+    included, as its compiled start values (``<fmu_dir>/native``, default
+    ``fmus/build/native``; :func:`fmus.native.run.native_instances`).  A component of a
+    model with no native FMU (SpecPlant) refuses the export by name before anything is built.
     """
     from fmus.ssp.export import export_ssp
 
     system = scene.system if isinstance(scene, Scene) else scene
+    if native:
+        from fmus.native.run import refuse_without_native
+
+        name = scene.name if isinstance(scene, Scene) else "system"
+        refuse_without_native(system, f"{name}: export-ssp --per-component --native")
     if internal_observer:
         system = with_internal_observers(system)
     named, fmus, variables = _variables(system, fmu_dir)
@@ -406,4 +417,15 @@ def export_per_component(scene: Scene | System, path, fmu_dir=None, substeps: in
     elif isinstance(scene, Scene):
         check_tracking(scene, system, variables, choose_substeps(0, substeps))
     stepped, _ = per_component_system(named, variables, substeps)
-    return export_ssp(stepped, path, fmu_dir, fmus=fmus)
+    if not native:
+        return export_ssp(stepped, path, fmu_dir, fmus=fmus)
+    from fmus.native.build import DEFAULT_NATIVE_OUT
+    from fmus.native.run import native_instances
+
+    given = {c.name for c in system.components if _foreign(c.model)}   # --replace: as they are
+    ours = dataclasses.replace(stepped, components=tuple(c for c in stepped.components if c.name not in given))
+    own = native_instances(ours, Path(fmu_dir) / "native" if fmu_dir else DEFAULT_NATIVE_OUT)
+    first = {}
+    for instance, fmu in own.items():
+        first.setdefault(stepped.component(instance).model, fmu)
+    return export_ssp(stepped, path, fmu_dir, fmus={**first, **fmus}, instance_fmus=own)

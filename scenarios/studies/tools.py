@@ -56,8 +56,10 @@ TOOLS = ("fmpy", "ecos", "libcosim")
 #: Package kinds: the default two-instance package (scenarios.packaging.chain), the per-component
 #: package (scenarios.packaging.per_component) as exported, with both drives swapped for the C drive
 #: of the foreign-FMU tests (tests/support/cfmu/dcdrive.c) in the package file, and with
-#: the drives' internal observers at the chosen base step and at the plain 1 ms step.
-KINDS = ("default", "per-component", "per-component+c-drive", "internal-observer", "internal-observer-1ms")
+#: the drives' internal observers at the chosen base step and at the plain 1 ms step, and the
+#: per-component package of native FMUs (``--native``: same instances, base step and phases).
+KINDS = ("default", "per-component", "per-component+c-drive", "internal-observer", "internal-observer-1ms",
+         "per-component-native")
 #: The scenes of the table: the thesis' simulation and the 16 bench scenes of the thesis'
 #: strategies (any other scene of ``scene_names()`` runs when named).
 TABLE_SCENES = ("thesis_sim_circle",) + tuple(f"bench_{kind}_{s}" for kind in ("circle", "triangle")
@@ -132,7 +134,7 @@ def export_kind(kind: str, scene: Scene, directory, c_drive=None, substeps: int 
         path = export_per_component(scene, path, substeps=1 if kind.endswith("1ms") else substeps,
                                     internal_observer=True)
     else:
-        path = export_per_component(scene, path, substeps=substeps)
+        path = export_per_component(scene, path, substeps=substeps, native=kind == "per-component-native")
     from fmus.ssp.export import read_ssp_experiment
 
     step = read_ssp_experiment(path)[2]

@@ -6,6 +6,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "loop_contexts.h"
 #include "model_config.h"
 #include "pcn_loop.h"
 #include "pcn_model.h"
@@ -18,32 +19,19 @@ typedef struct {
 
 #define HEAD_WORDS ((long)((sizeof(loop_head) + sizeof(double) - 1) / sizeof(double)))
 
-/* The contexts' image is in the byte layout of the machine that exported it (ctypes' view of
- * its C ABI): compiled for another (32-bit, or Windows' 4-byte long), it would be misread. */
-_Static_assert(sizeof(int) == PCN_LOOP_SIZEOF_INT && sizeof(long) == PCN_LOOP_SIZEOF_LONG &&
-                   sizeof(void *) == PCN_LOOP_SIZEOF_VOID_P && sizeof(double) == PCN_LOOP_SIZEOF_DOUBLE,
-               "the loop was exported on a machine with other C type sizes: export it again on the target's ABI");
+/* The plan's context and x pointer arrays take a word each. */
 _Static_assert(sizeof(void *) <= sizeof(double), "a pointer fits a word of the scratch arena");
 
 static loop_head *head(const pcn_instance *in) { return (loop_head *)(in->scratch + PCN_LOOP_SCRATCH_WORDS); }
 
-/* The contexts copied from their image and every pointer field relocated into this
- * instance's arenas; the plan over them.  Depends on the arenas' addresses only. */
+/* The contexts filled in, their pointers into this instance's arenas; the plan over them.
+ * Depends on the arenas' addresses only. */
 static pc_loop_plan *plan_of(pcn_instance *in)
 {
     loop_head *h = head(in);
     if (h->built) return &h->plan;
-    unsigned char *scratch = (unsigned char *)in->scratch, *data = (unsigned char *)in->data;
-    memcpy(scratch, pcn_loop.scratch, sizeof(double) * (size_t)pcn_loop.scratch_words);
-    for (int k = 0; k < pcn_loop.n_relocations; ++k) {
-        const pcn_relocation *r = &pcn_loop.relocations[k];
-        if (r->kind == PCN_TO_FUNCTION) {
-            memcpy(scratch + r->at, &pcn_loop.functions[r->target], sizeof(pcn_function));
-        } else {
-            void *p = (r->kind == PCN_TO_DATA ? data : scratch) + r->target;
-            memcpy(scratch + r->at, &p, sizeof p);
-        }
-    }
+    unsigned char *scratch = (unsigned char *)in->scratch;
+    pcn_loop_fill((pcn_loop_contexts *)in->scratch, in->data);
     void **contexts = (void **)(in->scratch + PCN_LOOP_SCRATCH_WORDS + HEAD_WORDS);
     double **x = (double **)(in->scratch + PCN_LOOP_SCRATCH_WORDS + HEAD_WORDS + PCN_LOOP_MEMBERS);
     for (int m = 0; m < pcn_loop.n_members; ++m) {

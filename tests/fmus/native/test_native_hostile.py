@@ -120,6 +120,21 @@ def state_cases(model: str, unzipped: dict) -> list:
     return cases
 
 
+@pytest.fixture(scope="module")
+def loop_sanitized(native_loop_fmu, tmp_path_factory):
+    """The native ClosedLoop (``export-fmu --native``) and, for another model's state bytes,
+    the native Derivator, each rebuilt from its own sources with the sanitizers, extracted."""
+    from fmus.native.build import build_native_fmu
+
+    work = tmp_path_factory.mktemp("loop")
+    _sanitizer_env_or_skip(None)
+    fmus = {"ClosedLoop": native_loop_fmu, "Derivator": build_native_fmu("Derivator", work / "native")}
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        sanitized = dict(zip(fmus, pool.map(lambda p: hostile.sanitized_from_sources(p, work / "sanitized"),
+                                            fmus.values())))
+    return hostile.extract_fmus(sanitized, work / "fmus")
+
+
 @pytest.mark.parametrize("model", list(NATIVE))
 def test_native_fmu_under_hostile_use_and_sanitizers(model, native_sanitized, tmp_path):
     """No crash (ASan, UBSan), no hang, no fmi2Fatal, no NaN with fmi2OK, every refusal with
@@ -128,6 +143,17 @@ def test_native_fmu_under_hostile_use_and_sanitizers(model, native_sanitized, tm
     (checksum left wrong), pickled (the issue-30 exploit, a legacy state), another model's:
     fmi2Error, no command run; forged (checksum recomputed): refused or, if taken, the steps
     after it clean.  One worker process for all the cases of a model."""
+    campaign(model, native_sanitized, tmp_path)
+
+
+def test_native_closed_loop_under_hostile_use_and_sanitizers(loop_sanitized, tmp_path):
+    """The same campaign against a scene's whole loop as one native FMU (bench_circle_TCMDx:
+    eight members' kernels, a 26 042-word data arena in its state)."""
+    campaign("ClosedLoop", loop_sanitized, tmp_path)
+
+
+def campaign(model: str, native_sanitized: dict, tmp_path) -> None:
+    """Every kind of case, then every state variant, against ``model`` (the tests above)."""
     assert hostile.is_native(native_sanitized[model])
     cases = hostile.cases_for(model, native_sanitized[model], range(SEED, SEED + CASES_PER_FMU), wrapper=True,
                               kinds=list(hostile.KINDS))
