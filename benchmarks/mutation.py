@@ -38,6 +38,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+from tests.layout_rules import path_of
+
 ROOT = Path(__file__).resolve().parent.parent
 
 _CTRL = ("test_control_law", "test_seed_law", "test_controller", "test_kernels_law")
@@ -112,8 +114,7 @@ def _session(workdir: Path, source: str) -> Path:
 
 
 def _test_command(source: str) -> str:
-    tests = " ".join(f"tests/{name}.py" if "::" not in name else "tests/{}.py::{}".format(*name.split("::"))
-                     for name in TARGETS[source])
+    tests = " ".join(path_of(file) + sep + test for file, sep, test in (name.partition("::") for name in TARGETS[source]))
     return f"{sys.executable} -m pytest -x -q -p no:cacheprovider -o addopts= {tests}"
 
 

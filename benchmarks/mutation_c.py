@@ -39,9 +39,9 @@ from kernels import build as kbuild
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results" / "mutation_c.json"
-TESTS = sorted(str(p.relative_to(ROOT)) for p in (ROOT / "tests").glob("test_kernels_*.py"))
+TESTS = sorted(str(p.relative_to(ROOT)) for p in (ROOT / "tests" / "kernels").glob("test_kernels_*.py"))
 #: the compiled co-simulation loop (loop.c) is exercised by the compiled-loop tests too
-EXTRA_TESTS = {"loop.c": ["tests/test_compiled.py"]}
+EXTRA_TESTS = {"loop.c": ["tests/fmus/cosim/test_compiled.py"]}
 
 _IDENT = r"[A-Za-z_]\w*"
 _NUMBER = re.compile(r"(?<![\w.])(\d+\.\d*|\.\d+|\d+)([eE][+-]?\d+)?([fFuUlL]*)(?![\w.])")

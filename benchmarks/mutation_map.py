@@ -33,7 +33,7 @@ ROOT = Path(__file__).resolve().parent.parent
 KEYED = ("plant", "motor", "controller", "fmus", "scenarios", "parcosim", "kernels", "tests", "pyproject.toml")
 #: Test files no mutant runs (the mutation tools' own, the sanitizer build of pristine C): not
 #: in the map, and not in its key.
-NOT_RUN = ("tests/test_mutation", "tests/test_sanitizers.py")
+NOT_RUN = ("tests/benchmarks/test_mutation", "tests/kernels/test_sanitizers.py")
 #: Not a test: coverage's context of lines run outside one (import, collection, subprocess).
 OUTSIDE = ""
 

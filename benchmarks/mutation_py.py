@@ -65,7 +65,7 @@ PACKAGES = ("plant", "motor", "controller", "fmus", "scenarios", "parcosim", "ke
 #: Test files no mutant runs: the mutation tools' own, and the sanitizer build of pristine C.
 NOT_RUN = mutation_map.NOT_RUN
 #: The tests a C mutant runs (besides mutation_c's extra ones): the kernels' and the oracles'.
-C_TESTS = ("tests/test_kernels_*.py", "tests/test_oracles_*.py")
+C_TESTS = ("tests/kernels/test_kernels_*.py", "tests/**/test_oracles_*.py")
 #: How many imports away a test may reach a module and still run for its mutants, and how
 #: many test files (the nearest, then the smallest) a mutant runs at most.
 NEAR, MOST_TESTS = 2, 6
@@ -408,7 +408,7 @@ def test_map(root: Path = ROOT) -> dict:
     for path in [root / f for f in python_files()] + sorted((root / "tests").rglob("*.py")):
         own = module_name(str(path.relative_to(root)))
         graph[own] = _imports(path, own)
-    tests = [p for p in sorted((root / "tests").glob("test_*.py"))
+    tests = [p for p in sorted((root / "tests").rglob("test_*.py"))
              if not str(p.relative_to(root)).startswith(NOT_RUN) and not SLOW.search(p.read_text())]
     mapping = {}
     for test in tests:

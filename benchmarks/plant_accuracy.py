@@ -14,7 +14,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from plant import ACCURATE, IntegratorSettings, PlantError, PlantSimulator, get_preset  # noqa: E402
-from tests.test_plant_dynamics import held_reference  # noqa: E402
+from tests.plant.test_plant_dynamics import held_reference  # noqa: E402
 
 CASES = (("thesis_sim", 0.07, 0.17), ("bench", -0.002, 0.108))
 SETTINGS = {

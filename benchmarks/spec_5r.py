@@ -3,7 +3,7 @@
 ``python benchmarks/spec_5r.py``: for ``thesis_sim_5r`` and ``bench_5r``, the spec-built
 plant (:class:`plant.specsim.SpecSimulator`, the model of the ``parcosim build-plant``
 FMU) and :class:`plant.PlantSimulator` with both kernels, from rest at (0.07, 0.17) under
-the torque profile of ``tests/test_spec_plant.py`` held over 1 ms steps (RK4, Baumgarte
+the torque profile of ``tests/plant/test_spec_plant.py`` held over 1 ms steps (RK4, Baumgarte
 10/s): the largest end-effector distance over the second.
 """
 import math
@@ -15,7 +15,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from plant import IntegratorSettings, PlantSimulator, get_preset  # noqa: E402
 from plant import spec as plant_spec  # noqa: E402
 from plant.specsim import SpecSimulator  # noqa: E402
-from tests.test_spec_plant import START, torques  # noqa: E402
+from tests.plant.test_spec_plant import START, torques  # noqa: E402
 
 
 def compare(spec_name, preset, t_end=1.0, h=1e-3):

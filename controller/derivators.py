@@ -52,7 +52,7 @@ sample 31 on, the acceleration of a parabola within 1e-9 (relative) of its
 curvature from sample 96 on, and the acceleration of a ramp below 1e-9 x slope/s
 from sample 129 on; past that only rounding remains (below 2e-11 relative for
 angles of a few rad).
-``tests/test_derivators.py`` checks these from sample 150.
+``tests/controller/test_derivators.py`` checks these from sample 150.
 
 Default cut-offs (measured numbers: ``docs/derivators.md``)
 -----------------------------------------------------------

@@ -3,8 +3,8 @@
 
 Inverse kinematics in the "elbows outward" working mode, direct kinematics, the Jacobians
 J_X, J_Theta of ``J_X dX + J_Theta dq = 0`` (002 eq. 15-17) and their time derivatives, the
-thesis' coordinates (7.12) and rates (5.56).  ``tests/test_kernels_law.py`` and
-``tests/test_controller_kinematics.py`` hold them against the general algorithm
+thesis' coordinates (7.12) and rates (5.56).  ``tests/kernels/test_kernels_law.py`` and
+``tests/controller/test_controller_kinematics.py`` hold them against the general algorithm
 (:mod:`plant.serial`, :mod:`plant.parallel`) and :mod:`plant.fivebar`.
 
 Change of variables x = FK(q) used by the joint-space controller:

@@ -95,7 +95,7 @@ class ExactModel:
     kernel : {"fast", "general"}
         :func:`plant.fast5r.inverse_terms` (compiled, the 5R specialisation) or
         :func:`plant.parallel.inverse_dynamics_terms` (the general algorithm); equal to
-        round-off (``tests/test_controller_fast.py``).
+        round-off (``tests/controller/test_controller_fast.py``).
     """
 
     kind = "exact"

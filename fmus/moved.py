@@ -5,7 +5,7 @@
 An old name imports the new module itself (``sys.modules`` holds one object under both
 names, so a monkeypatch through either is seen by both), and ``python -m OLD`` runs the new
 module's code as ``__main__``.  The tables are in ``fmus/__init__.py`` and
-``scenarios/__init__.py``; tests/test_layout.py checks that every new name exists and that
+``scenarios/__init__.py``; tests/repo/test_layout.py checks that every new name exists and that
 no product module imports an old one.
 """
 from __future__ import annotations

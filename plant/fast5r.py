@@ -11,8 +11,8 @@ This module packs :class:`~plant.presets.FiveBarParams` into the C struct ``pc_f
 (counter-masses, seed 001 (55)-(64), absorbed into each chain's links by
 :func:`composite_link`), reads every buffer offset from the library (:func:`kernels.layout`),
 and offers :class:`FastKernel`, the simulator's binding with its buffers' addresses computed
-once.  ``tests/test_plant_dynamics.py`` holds the kernel against the general algorithm
-(:mod:`plant.serial`, :mod:`plant.parallel`), ``tests/test_kernels_fivebar.py`` checks energy,
+once.  ``tests/plant/test_plant_dynamics.py`` holds the kernel against the general algorithm
+(:mod:`plant.serial`, :mod:`plant.parallel`), ``tests/kernels/test_kernels_fivebar.py`` checks energy,
 refusals and layouts.
 """
 from __future__ import annotations
@@ -96,7 +96,7 @@ CONTEXT_SIZE = kernels.function("pc_fivebar_context_size", _i)()
 #: fivebar.h: the trial state, RK4's work (5 n) and the last report's trigonometry
 #: (``PC_FIVEBAR_TRIG_WORDS``), which must start zeroed.  Written out rather than asked of the
 #: library, so that this side also drives an older build (benchmarks/bench_compiled_libs.py);
-#: tests/test_kernels_fivebar.py holds it to ``pc_fivebar_scratch_words``.
+#: tests/kernels/test_kernels_fivebar.py holds it to ``pc_fivebar_scratch_words``.
 SCRATCH_WORDS = 6 * (PLANT_STATES + MAX_MOTORS) + 17
 #: The address of ``pc_fivebar_terms_of``: the inverse terms as the position law's terms function
 #: (``pc_law_terms_fn``; its model a ``pc_fivebar_params`` buffer, its terms :data:`INVERSE_SIZE` words).

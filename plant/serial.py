@@ -21,7 +21,7 @@ Notation (thesis -> code)
 ``alpha_i`` (4.83) velocity-quadratic link angular accel.    ``alpha_link_bias[i]``
 
 Typos of the printed thesis corrected here (verified against finite
-differences in ``tests/test_serial.py``):
+differences in ``tests/plant/test_serial.py``):
 
 * (4.63) prints ``dq_j J_v,i,j ^ (...)``; the cross product is with the joint
   axis ``dq_j J_w,j`` (as in 4.57), otherwise the centripetal term vanishes.

@@ -134,7 +134,7 @@ def refusal_error(refusal: kernels.Refusal, time: float, psi: float, limit: floa
 
 
 #: Default RK4 substeps per 1 ms communication step: 2 keeps the error below 1e-9 rad
-#: against a tight-tolerance solution (docs/pendulum.md, tests/test_wheeled.py).
+#: against a tight-tolerance solution (docs/pendulum.md, tests/plant/test_wheeled.py).
 SUBSTEPS = 2
 MAX_SUBSTEPS = kernel.MAX_SUBSTEPS
 

@@ -1,9 +1,10 @@
 """Shared fixtures: the FMUs are built once per test session.
 
-Markers (pyproject.toml): ``slow`` on whole files by their ``pytestmark`` (``pytest -m "not
-slow"`` is the quick subset), ``fmu`` on files about FMUs and, here, on every test that uses
-:func:`built_fmus`, ``tools`` on files that drive a third-party tool (Ecos, libcosim, MuJoCo,
-cosmic-ray, a sanitizer build).
+Markers (pyproject.toml): ``slow`` on whole files by their ``pytestmark`` (CI runs ``pytest -m
+"not slow"``, ``pytest -m slow`` the rest), ``fmu`` on files about FMUs and, here, on every test that uses
+an FMU fixture, ``tools`` on files that drive a third-party tool (Ecos, libcosim, MuJoCo,
+cosmic-ray, a sanitizer build); ``-m "not slow and not fmu and not tools and not sweep"`` is the quick subset.
+The test files sit in folders by the layer they test (tests/layout_rules.py).
 """
 import pytest
 
@@ -18,9 +19,10 @@ def built_fmus(tmp_path_factory):
 
 
 def pytest_collection_modifyitems(config, items):
-    """A test that uses the built FMUs (directly or through another fixture) is an ``fmu`` test."""
+    """A test that uses an FMU fixture (one named ``*_fmu`` or ``*_fmus``: :func:`built_fmus`,
+    :func:`native_fmus` ..., directly or through another fixture) is an ``fmu`` test."""
     for item in items:
-        if "built_fmus" in getattr(item, "fixturenames", ()):
+        if any(name.endswith(("_fmu", "_fmus")) for name in getattr(item, "fixturenames", ())):
             item.add_marker(pytest.mark.fmu)
 
 

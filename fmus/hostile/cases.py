@@ -17,7 +17,7 @@ and reports each case's outcome:
   message, a call over :data:`CALL_LIMIT` seconds);
 * ``crash``: the worker process died; ``hang``: the case took over :data:`CASE_TIMEOUT`.
 
-``tests/test_hostile.py`` runs 30 derandomised cases per FMU; ``python -m
+``tests/fmus/hostile/test_hostile.py`` runs 30 derandomised cases per FMU; ``python -m
 fmus.hostile.campaign --cases 3000`` the long campaign.
 """
 from __future__ import annotations
@@ -376,7 +376,7 @@ ASAN_EXIT, UBSAN_EXIT = 99, 98
 def sanitizer_env(log_dir=None) -> dict:
     """The environment of a worker that loads FMUs built with ``-fsanitize=address,undefined``:
     the ASan runtime preloaded (Python is not built with it; libstdc++ after it, as in
-    tests/test_sanitizers.py), Python's allocations through malloc and not checked for leaks,
+    tests/kernels/test_sanitizers.py), Python's allocations through malloc and not checked for leaks,
     and any report ending the worker (a crash of the case), written under ``log_dir`` if
     given (files ``asan.PID``, ``ubsan.PID``)."""
     from kernels import build

@@ -6,7 +6,7 @@
  * pi/2 (33 + 33 + 53 bits; k p1, k p2 exact), |r| <= pi/4; sin r and cos r by their Taylor
  * series (through r^17 and r^16: truncation below 1e-19 at pi/4, alternating series) in
  * Estrin's scheme; then the quadrant k mod 4.  Within 1 ulp of libm's sin and cos there and
- * within 1.5 ulp of the true values (1.18 seen; libm's own within 0.51): tests/test_kernels_trig.py.
+ * within 1.5 ulp of the true values (1.18 seen; libm's own within 0.51): tests/kernels/test_kernels_trig.py.
  * Up to 1e4 rad the reduction's two roundings would reach 2 ulps: hence the range.
  * |x| < 2^-27: sin x = x, cos x = 1 (correctly rounded, the sign of -0 kept).  Elsewhere
  * (large, NaN, inf): libm. */

@@ -5,7 +5,7 @@ bench scenes and the 4 of seed 001's sliding-mode law (:func:`regression_scenes`
     python -m scenarios.batch.regression --write      # regenerate it (after a change you mean)
     python -m scenarios.batch.regression --sensitivity   # the spread a 1e-12 m start offset causes
 
-``tests/test_regression.py`` runs the comparison in the default suite (21 runs, ~1 min).
+``tests/scenarios/batch/test_regression.py`` runs the comparison in the default suite (21 runs, ~1 min).
 The stored file holds, per scene, the metrics of (7.31-7.32) (e_ef, tau_ef), the settled
 steady-state error, its settling time and the earlier one-second value (:mod:`scenarios.run.metrics`),
 the peak error, and the git commit that wrote them.

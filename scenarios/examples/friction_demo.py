@@ -9,7 +9,7 @@ mass integrated with the step's mean friction (:func:`push`: ``pc_lugre_push`` o
 kernels/src/drive.c).  Three panels: presliding (a
 force below Fc: an elastic displacement ~ F/σ0 with hysteresis), break-away under ramped forces
 (near Fs when slow, lower when fast), and a spring (k = 2 N/m) pulled at 0.1 m/s (stick-slip)
-and at 0.5 m/s (steady sliding).  tests/test_friction.py checks the same runs against scipy.
+and at 0.5 m/s (steady sliding).  tests/motor/test_friction.py checks the same runs against scipy.
 """
 from __future__ import annotations
 

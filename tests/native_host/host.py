@@ -3,7 +3,7 @@
 :func:`build_host` compiles ``host.c`` against the ``libcosimc.so`` that the libcosimpy
 wheel ships (its header is not shipped: ``cosim_api.h`` declares the functions used);
 :func:`run_host` writes a configuration, runs the host and returns its CSV and its report
-(:class:`HostRun`).  Used by tests/test_native_host.py and benchmarks/native_speed.py.
+(:class:`HostRun`).  Used by tests/fmus/native/test_native_host.py and benchmarks/native_speed.py.
 """
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """Raw FMI 2.0 calls through ctypes, for driving an FMU's binary with hostile arguments
 (bytes that are not UTF-8, invalid value references, NULL arrays) that fmpy's checked
-wrappers would not pass.  Used by tests/test_wrapper.py, always in a subprocess."""
+wrappers would not pass.  Used by tests/fmus/export/test_wrapper.py, always in a subprocess."""
 from __future__ import annotations
 
 import ctypes

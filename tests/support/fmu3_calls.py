@@ -14,7 +14,7 @@ from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi3 import FMU3Slave
 
-from support.fmu_calls import Step
+from tests.support.fmu_calls import Step
 
 #: FMI 2.0's functions as FMI 3.0 names them (fmi2SetupExperiment's part is fmi3EnterInitializationMode's);
 #: the others are fmi2X -> fmi3X.

@@ -1,6 +1,6 @@
 """Drive one FMU through fmpy with a script of FMI calls and record what it answers.
 
-The equality tests of the native FMUs (tests/test_native_equality.py) run the same script
+The equality tests of the native FMUs (tests/fmus/native/test_native_equality.py) run the same script
 on a native FMU and on its pythonfmu twin and compare the traces: each call's status, the
 values read, and every message the FMU logged (as the logger received it).
 """

@@ -1,4 +1,4 @@
-"""Run in a subprocess under AddressSanitizer (tests/test_native_sanitized.py): drive one
+"""Run in a subprocess under AddressSanitizer (tests/fmus/native/test_native_sanitized.py): drive one
 unzipped native FMU through fmpy with careless calls and forged states; any memory error
 ends the process with ASan's exit status.  A big state (a whole loop's, 200 kB) is cut at a
 sample of places, and its forgeries checksummed in C (Python's fnv1a takes 0.17 s on it).

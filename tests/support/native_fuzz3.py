@@ -1,4 +1,4 @@
-"""Run in a subprocess under AddressSanitizer and UBSan (tests/test_native_fmi3.py): drive one
+"""Run in a subprocess under AddressSanitizer and UBSan (tests/fmus/native/test_native_fmi3.py): drive one
 unzipped FMI 3.0 native FMU through fmpy's raw FMI 3.0 functions with careless calls and
 forged states; any memory error or undefined behaviour ends the process with the sanitizer's
 exit status.  What FMI 3.0 adds to the FMI 2.0 campaign (tests/support/native_fuzz.py): the

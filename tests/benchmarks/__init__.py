@@ -1,0 +1,1 @@
+"""Tests of benchmarks/ (tests/layout_rules.py)."""

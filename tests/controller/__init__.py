@@ -1,0 +1,1 @@
+"""Tests of controller/ (tests/layout_rules.py)."""

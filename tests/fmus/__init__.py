@@ -1,0 +1,1 @@
+"""Tests of fmus/ (tests/layout_rules.py)."""

@@ -1,0 +1,1 @@
+"""Tests of fmus/cosim/ (tests/layout_rules.py)."""

@@ -1,0 +1,1 @@
+"""Tests of fmus/export/ (tests/layout_rules.py)."""

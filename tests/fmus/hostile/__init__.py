@@ -1,0 +1,1 @@
+"""Tests of fmus/hostile/ (tests/layout_rules.py)."""

@@ -1,0 +1,1 @@
+"""Tests of fmus/native/ (tests/layout_rules.py)."""

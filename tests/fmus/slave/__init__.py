@@ -1,0 +1,1 @@
+"""Tests of fmus/slave/ (tests/layout_rules.py)."""

@@ -1,0 +1,1 @@
+"""Tests of fmus/slaves/ (tests/layout_rules.py)."""

@@ -1,0 +1,1 @@
+"""Tests of fmus/ssp/ (tests/layout_rules.py)."""

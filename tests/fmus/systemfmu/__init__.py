@@ -1,0 +1,1 @@
+"""Tests of fmus/systemfmu/ (tests/layout_rules.py)."""

@@ -1,0 +1,1 @@
+"""Tests of kernels/ (tests/layout_rules.py)."""

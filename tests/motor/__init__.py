@@ -1,0 +1,1 @@
+"""Tests of motor/ (tests/layout_rules.py)."""

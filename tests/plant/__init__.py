@@ -1,0 +1,1 @@
+"""Tests of plant/ (tests/layout_rules.py)."""

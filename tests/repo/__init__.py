@@ -1,0 +1,1 @@
+"""Tests of repo/ (tests/layout_rules.py)."""

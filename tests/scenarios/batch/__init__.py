@@ -1,0 +1,1 @@
+"""Tests of scenarios/batch/ (tests/layout_rules.py)."""

@@ -1,0 +1,1 @@
+"""Tests of scenarios/packaging/ (tests/layout_rules.py)."""

@@ -1,0 +1,1 @@
+"""Tests of scenarios/run/ (tests/layout_rules.py)."""

@@ -1,0 +1,1 @@
+"""Tests of scenarios/scenes/ (tests/layout_rules.py)."""

@@ -1,0 +1,1 @@
+"""Tests of scenarios/studies/ (tests/layout_rules.py)."""
