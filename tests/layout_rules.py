@@ -68,11 +68,14 @@ RULES = [
     ("test_sampling*.py", "fmus/slave"),
     # fmus/slaves: each model's FMU through fmpy
     ("test_fmu_*.py", "fmus/slaves"),
+    ("test_slaves_*.py", "fmus/slaves"),
+    ("test_sample_time_*.py", "fmus/slaves"),
     ("test_internal_observer*.py", "fmus/slaves"),
     ("test_drive_twin*.py", "fmus/slaves"),
     # fmus/export: FMU files, the C wrapper, what an FMU carries
     ("test_wrapper*.py", "fmus/export"),
     ("test_oracles_export.py", "fmus/export"),
+    ("test_model_description*.py", "fmus/export"),
     ("test_cold_start*.py", "fmus/export"),
     # fmus/native, fmus/cosim, fmus/systemfmu, fmus/ssp, fmus/hostile
     ("test_native_*.py", "fmus/native"),
@@ -81,6 +84,8 @@ RULES = [
     ("test_stepper*.py", "fmus/cosim"),
     ("test_inprocess*.py", "fmus/cosim"),
     ("test_foreign*.py", "fmus/cosim"),
+    ("test_rate_groups*.py", "fmus/cosim"),
+    ("test_system_*.py", "fmus/cosim"),
     ("test_export_fmu*.py", "fmus/systemfmu"),
     ("test_embedded*.py", "fmus/systemfmu"),
     ("test_ssp*.py", "fmus/ssp"),
@@ -89,10 +94,16 @@ RULES = [
     # scenarios: scenes, running one, batch work, packaging, studies
     ("test_scenes*.py", "scenarios/scenes"),
     ("test_vertical*.py", "scenarios/scenes"),
+    ("test_pendulum_scene*.py", "scenarios/scenes"),
+    ("test_perturb*.py", "scenarios/scenes"),
+    ("test_transforms*.py", "scenarios/scenes"),
     ("test_contour*.py", "scenarios/run"),
     ("test_settling*.py", "scenarios/run"),
+    ("test_metrics*.py", "scenarios/run"),
+    ("test_run_*.py", "scenarios/run"),
     ("test_reference_*.py", "scenarios/run"),
     ("test_sweep*.py", "scenarios/batch"),
+    ("test_engine*.py", "scenarios/batch"),
     ("test_regression*.py", "scenarios/batch"),
     ("test_report*.py", "scenarios/batch"),
     ("test_package*.py", "scenarios/packaging"),
@@ -103,6 +114,9 @@ RULES = [
     ("test_twin*.py", "scenarios/studies"),
     ("test_workspace*.py", "scenarios/studies"),
     ("test_tools*.py", "scenarios/studies"),
+    ("test_balancing*.py", "scenarios/studies"),
+    ("test_pendulum_trade*.py", "scenarios/studies"),
+    ("test_robustness*.py", "scenarios/studies"),
     # the command line
     ("test_cli_*.py", "cli"),
     # benchmarks/ and the mutation tools

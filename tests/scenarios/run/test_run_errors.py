@@ -20,8 +20,8 @@ from fmus.cosim.system import Component, System
 from fmus.status import EXIT_STATUS, FMI_STATUS, FmiStatus, RunStatus, RunError
 from scenarios.run.runner import run_scene
 from scenarios.scenes.scene import Scene
+from tests.support.paths import ROOT
 
-ROOT = Path(__file__).resolve().parents[1]
 #: What identifies a refusal, compared across the back ends.
 FIELDS = ("kind", "instance", "time", "variable", "value", "unit", "code", "reason", "message")
 

@@ -10,7 +10,7 @@ import zipfile
 
 from fmus.cosim.system import Component, Connection, System
 from fmus.ssp.export import export_ssp, read_ssp_parameters
-from tests.test_oracles_export import fake_fmu
+from tests.fmus.export.test_oracles_export import fake_fmu
 
 
 def _connectors(path):
