@@ -14,7 +14,7 @@ from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi3 import FMU3Slave
 
-from tests.support.fmu_calls import Step
+from tests.support.fmu_calls import Step, Values
 
 #: FMI 2.0's functions as FMI 3.0 names them (fmi2SetupExperiment's part is fmi3EnterInitializationMode's);
 #: the others are fmi2X -> fmi3X.
@@ -33,7 +33,7 @@ def as_fmi3(message: str) -> str:
     return re.sub(r"\b(a|not a) (Real|Integer)\b", lambda m: f"{m.group(1)} {TYPES[m.group(2)]}", message)
 
 
-class Driver3:
+class Driver3(Values):
     """An instance of the FMI 3.0 FMU at ``path`` with a logger that keeps every message."""
 
     def __init__(self, path, instance: str = "inst", unzipped=None):
@@ -50,24 +50,6 @@ class Driver3:
 
     def _keep(self, env, status, category, message):
         self.log.append((status, category.decode(), message.decode(errors="replace")))
-
-    def _by_type(self, names):
-        groups = {}
-        for name in names:
-            v = self.variables[name]
-            groups.setdefault(v.type, []).append((name, v.valueReference))
-        return groups
-
-    def _set(self, values: dict):
-        for kind, pairs in self._by_type(values).items():
-            getattr(self.fmu, f"set{kind}")([vr for _, vr in pairs], [values[n] for n, _ in pairs])
-
-    def _get(self, names):
-        got = {}
-        for kind, pairs in self._by_type(names).items():
-            read = getattr(self.fmu, f"get{kind}")([vr for _, vr in pairs])
-            got.update({n: (x.decode() if isinstance(x, bytes) else x) for (n, _), x in zip(pairs, read)})
-        return [got[n] for n in names]
 
     def _step(self, t, h):
         self.last_step = self.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)

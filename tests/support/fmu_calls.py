@@ -30,7 +30,30 @@ class Step:
     messages: list = field(default_factory=list)
 
 
-class Driver:
+class Values:
+    """Set and get variables by name, grouped by type (fmpy's ``set<Type>``/``get<Type>``):
+    what the FMI 2.0 and FMI 3.0 drivers share (``self.variables``, ``self.fmu``)."""
+
+    def _by_type(self, names):
+        groups = {}
+        for name in names:
+            v = self.variables[name]
+            groups.setdefault(v.type, []).append((name, v.valueReference))
+        return groups
+
+    def _set(self, values: dict):
+        for kind, pairs in self._by_type(values).items():
+            getattr(self.fmu, f"set{kind}")([vr for _, vr in pairs], [values[n] for n, _ in pairs])
+
+    def _get(self, names):
+        got = {}
+        for kind, pairs in self._by_type(names).items():
+            read = getattr(self.fmu, f"get{kind}")([vr for _, vr in pairs])
+            got.update({n: (x.decode() if isinstance(x, bytes) else x) for (n, _), x in zip(pairs, read)})
+        return [got[n] for n in names]
+
+
+class Driver(Values):
     """An instance of the FMU at ``path`` with a logger that keeps every message."""
 
     def __init__(self, path, instance: str = "inst", unzipped=None):
@@ -50,24 +73,6 @@ class Driver:
 
     def _keep(self, env, name, status, category, message):
         self.log.append((status, category.decode(), message.decode(errors="replace")))
-
-    def _by_type(self, names):
-        groups = {}
-        for name in names:
-            v = self.variables[name]
-            groups.setdefault(v.type, []).append((name, v.valueReference))
-        return groups
-
-    def _set(self, values: dict):
-        for kind, pairs in self._by_type(values).items():
-            getattr(self.fmu, f"set{kind}")([vr for _, vr in pairs], [values[n] for n, _ in pairs])
-
-    def _get(self, names):
-        got = {}
-        for kind, pairs in self._by_type(names).items():
-            read = getattr(self.fmu, f"get{kind}")([vr for _, vr in pairs])
-            got.update({n: (x.decode() if isinstance(x, bytes) else x) for (n, _), x in zip(pairs, read)})
-        return [got[n] for n in names]
 
     def call(self, op: str, *args):
         """One call of the script: set {name: value}, get [names], setup t0, enter, exit,
