@@ -20,11 +20,10 @@ import pytest
 
 from fmus.ssp.export import read_ssp_experiment, read_ssp_parameters
 from fmus.slave.identity import IDENTITY_FILE
-from fmus.ssp.run import ecos_available
 from scenarios.packaging.per_component import PHASE, export_per_component
 from scenarios.run.runner import run_scene
-from scenarios.scenes.catalogue import get_scene
 from scenarios.studies.tools import run_tool, swap_fmus, tool_metrics
+from tests.support.tools import UNAVAILABLE, short_bench
 
 STOP, WINDOW = 0.3, (0.1, 0.3)
 #: The bench's n (the export's trial chooses 4 for bench_circle_TCMDx, docs/ssp.md): given,
@@ -34,19 +33,10 @@ SUBSTEPS = 4
 BOUND = 0.05
 
 
-def _libcosim_reason():
-    from fmus.ssp.libcosim import libcosim_available
-
-    return libcosim_available()
-
-
-UNAVAILABLE = {"fmpy": None, "ecos": ecos_available(), "libcosim": _libcosim_reason()}
-
 
 @pytest.fixture(scope="module")
 def scene():
-    s = get_scene("bench_circle_TCMDx")
-    return dataclasses.replace(s, system=dataclasses.replace(s.system, stop_time=STOP), window=WINDOW)
+    return short_bench(STOP, WINDOW)
 
 
 @pytest.fixture(scope="module")

@@ -8,18 +8,16 @@ and libcosim as docs/ssp.md says.  Checked: what the user sees, the tracking, ag
 """
 from __future__ import annotations
 
-import dataclasses
 import sys
 import zipfile
 
 import pytest
 
-from fmus.ssp.run import ecos_available
 from scenarios.packaging.per_component import export_per_component
 from scenarios.run.runner import run_scene
-from scenarios.scenes.catalogue import get_scene
 from scenarios.studies.tools import run_tool, tool_metrics
 from tests.support.paths import TESTS
+from tests.support.tools import UNAVAILABLE, short_bench
 
 sys.path.insert(0, str(TESTS / "support" / "cfmu"))
 from build import build_c_fmu, compiler  # noqa: E402
@@ -29,19 +27,10 @@ STOP, WINDOW = 0.5, (0.1, 0.5)
 BOUND = 0.05
 
 
-def _libcosim_reason():
-    from fmus.ssp.libcosim import libcosim_available
-
-    return libcosim_available()
-
-
-UNAVAILABLE = {"fmpy": None, "ecos": ecos_available(), "libcosim": _libcosim_reason()}
-
 
 @pytest.fixture(scope="module")
 def scene():
-    s = get_scene("bench_circle_TCMDx")
-    return dataclasses.replace(s, system=dataclasses.replace(s.system, stop_time=STOP), window=WINDOW)
+    return short_bench(STOP, WINDOW)
 
 
 @pytest.fixture(scope="module")

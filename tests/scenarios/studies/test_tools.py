@@ -14,23 +14,15 @@ import dataclasses
 
 import pytest
 
-from fmus.ssp.run import ecos_available
 from scenarios.scenes.catalogue import get_scene
 from scenarios.studies.tools import compare, short
+from tests.support.tools import UNAVAILABLE
 
 pytestmark = [pytest.mark.slow, pytest.mark.fmu, pytest.mark.tools]
 
 SCENES = ("thesis_sim_circle", "bench_circle_TCMDx", "bench_circle_PDq", "bench_triangle_TCMDx")
 STOP = 2.0
 
-
-def _libcosim_reason():
-    from fmus.ssp.libcosim import libcosim_available
-
-    return libcosim_available()
-
-
-UNAVAILABLE = {"fmpy": None, "ecos": ecos_available(), "libcosim": _libcosim_reason()}
 TOOLS = tuple(t for t, reason in UNAVAILABLE.items() if reason is None)
 
 
