@@ -229,5 +229,7 @@ def run_scene(scene, mode: str = "inprocess", out_dir=None, coupling: str = "gau
 
 def error_message(metrics: dict) -> str:
     """The message of the ``error`` record in a run's ``metrics`` (:func:`run_scene`,
-    :func:`scenarios.batch.engine.run_task`); "" when the run completed."""
-    return (metrics.get("error") or {}).get("message", "")
+    :func:`scenarios.batch.engine.run_task`); "" when the run completed.  A metrics.json
+    written before the record (its ``error`` the message itself) gives that text."""
+    error = metrics.get("error") or {}
+    return error if isinstance(error, str) else error.get("message", "")

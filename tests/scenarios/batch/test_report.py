@@ -1,6 +1,7 @@
 """The reproduction report: its numbers come from the runs' metrics, and it says what differs."""
 import math
 
+from fmus.status import RunError, RunStatus
 from scenarios.batch.report import THESIS_BENCH, bench_scene_names, render
 
 
@@ -13,7 +14,8 @@ def _metrics(e_ef, stopped=()):
         metrics[name] = {"completed": done, "e_ef_mm": value, "tau_ef_Nm": 0.1 + value / 100 if done else math.nan,
                          "e_ss_mm": 0.01 if done else math.nan, "e_ss_x_mm": 0.0, "e_ss_y_mm": 0.01,
                          "window_s": [1.0, 8.0], "simulated_s": 9.0, "wall_s": 1.0, "realtime_factor": 9.0,
-                         "error": None if done else f"{name}: ctrl refused the step from t = 1 s: test"}
+                         "error": None if done else RunError(RunStatus.REFUSED, "ctrl refused the step from t = 1 s: test",
+                                                             "ctrl", 1.0).record()}
     return metrics
 
 
@@ -33,6 +35,15 @@ def test_report_says_when_sliding_modes_do_not_help_and_when_runs_stopped():
     e_ef["triangle"]["TCMDx"] = 2.0                      # worse than TCx's 1.83
     text = render(_metrics(e_ef, stopped=("bench_circle_TCq",)), "fmu")
     assert "does not lower e_ef for TCx→TCMDx" in text
-    assert "Runs stopped early:** bench_circle_TCq" in text
+    assert "Runs stopped early:** bench_circle_TCq: ctrl refused the step from t = 1 s: test" in text
     assert "| TCq | — | 1.14 | — | 0.143 |" in text
     assert "No e_ef for TCq" in text
+
+
+def test_a_metrics_file_from_before_the_error_record_still_reports_its_message():
+    """Catches the report failing on a metrics.json whose ``error`` is the message itself (written
+    before the refusal record), instead of printing it."""
+    e_ef = {kind: {s: v[0] for s, v in table.items()} for kind, table in THESIS_BENCH.items()}
+    metrics = _metrics(e_ef, stopped=("bench_circle_TCq",))
+    metrics["bench_circle_TCq"]["error"] = "ctrl refused the step from t = 1 s: old"
+    assert "Runs stopped early:** bench_circle_TCq: ctrl refused the step from t = 1 s: old" in render(metrics, "fmu")
