@@ -100,6 +100,14 @@ void pcn_clear(pcn_text *t)
 {
     t->text[0] = '\0';
     t->length = 0;
+    t->names_time = 0;
+    t->quantity = (pcn_quantity){0};
+}
+
+pcn_text *pcn_timed(pcn_text *t)
+{
+    t->names_time = 1;
+    return t;
 }
 
 static void append(pcn_text *t, const char *s)

@@ -220,10 +220,10 @@ static void refusal_text(const actuated *a, int status, const pc_refusal *r, con
     pcn_clear(&held);
     pcn_addf(&held, "v1 = %r V, v2 = %r V held", voltages[0], voltages[1]);
     if (status == PC_FIVEBAR_NONFINITE_INPUT) {
-        pcn_addf(why, "integration failed in the step from t = %G s (%s): the held input %d = %r is not finite", t,
+        pcn_addf(pcn_timed(why), "integration failed in the step from t = %G s (%s): the held input %d = %r is not finite", t,
                  held.text, r->index, r->value);
     } else if (status == PC_FIVEBAR_NONFINITE_STATE && r->index >= PCN_PLANT_STATES) {
-        pcn_addf(why, "armature currents [%r, %r] after the step from t = %G s (%s) are not finite",
+        pcn_addf(pcn_timed(why), "armature currents [%r, %r] after the step from t = %G s (%s) are not finite",
                  trial[PCN_PLANT_STATES], trial[PCN_PLANT_STATES + 1], t, held.text);
     } else {
         pcn_plant_refusal(&a->config, status, r, trial, t, h, held.text, why);
@@ -258,7 +258,7 @@ static int projected_step(pcn_instance *in, actuated *a, const double *x, double
                                    a->config.settings.lambda, 2};
     pc_fivebar_advance(&model, trial, h, (int)a->config.settings.substeps, in->scratch + states);
     if (!(isfinite(trial[PCN_PLANT_STATES]) && isfinite(trial[PCN_PLANT_STATES + 1])))
-        return pcn_addf(why, "armature currents [%r, %r] after the step from t = %G s (%s) are not finite",
+        return pcn_addf(pcn_timed(why), "armature currents [%r, %r] after the step from t = %G s (%s) are not finite",
                         trial[PCN_PLANT_STATES], trial[PCN_PLANT_STATES + 1], t, held.text), 1;
     int finite = 1;
     for (int k = 0; k < PCN_PLANT_STATES; ++k) finite &= isfinite(trial[k]);

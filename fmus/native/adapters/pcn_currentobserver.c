@@ -136,7 +136,7 @@ static int step(pcn_instance *in, double t, double h, pcn_text *why)
     }
     if (code == PC_OBSERVER_NONFINITE_INPUT)
         return pcn_addf(why, "%s must be a finite number, got %r", refusal.index ? "omega" : "v", refusal.value), 1;
-    return pcn_addf(why, "the estimate i_hat = %r A at t = %G s is not finite (inputs v = %r V, omega = %r rad/s)",
+    return pcn_addf(pcn_timed(why), "the estimate i_hat = %r A at t = %G s is not finite (inputs v = %r V, omega = %r rad/s)",
                     refusal.value, t, v, omega), 1;
 }
 

@@ -138,7 +138,7 @@ static int step(pcn_instance *in, double t, double h, pcn_text *why)
     double *r = in->real, tau[3] = {r[PCN_SLOT_tau_l], r[PCN_SLOT_tau_r], r[PCN_SLOT_tau_d]};
     for (int k = 0; k < 3; ++k)
         if (fabs(tau[k]) > ABSURD)
-            return pcn_addf(why, "input %s = %r at t = %G s is absurd: |%s| must be <= %G", inputs[k], tau[k], t,
+            return pcn_addf(pcn_timed(why), "input %s = %r at t = %G s is absurd: |%s| must be <= %G", inputs[k], tau[k], t,
                             inputs[k], ABSURD), 1;
     double start = r[PCN_SLOT_push_start], duration = r[PCN_SLOT_push_duration];
     if (start - 1e-9 <= t && t < start + duration - 1e-9) tau[2] += r[PCN_SLOT_push_torque];
@@ -151,9 +151,9 @@ static int step(pcn_instance *in, double t, double h, pcn_text *why)
         return 0;
     }
     if (code == PC_WHEELED_BAD_INPUT)
-        return pcn_addf(why, "input %s = %r at t = %G s is not finite", inputs[refusal.index], refusal.value, t), 1;
+        return pcn_addf(pcn_timed(why), "input %s = %r at t = %G s is not finite", inputs[refusal.index], refusal.value, t), 1;
     if (code != PC_WHEELED_FALLEN_PITCH && code != PC_WHEELED_FALLEN_FLOOR && code != PC_WHEELED_NONFINITE)
-        return pcn_addf(why, "step size %r at t = %G s must be > 0", h, t), 1;
+        return pcn_addf(pcn_timed(why), "step size %r at t = %G s must be > 0", h, t), 1;
     in->boolean[PCN_SLOT_fallen] = 1;
     double end = t + h * taken / substeps;
     char degrees[32];
@@ -161,7 +161,7 @@ static int step(pcn_instance *in, double t, double h, pcn_text *why)
     const char *what = code == PC_WHEELED_FALLEN_PITCH   ? "the robot fell over (pitch beyond 90 degrees)"
                        : code == PC_WHEELED_FALLEN_FLOOR ? "the robot fell over (body touching the floor)"
                                                          : "the state became non-finite";
-    return pcn_addf(why, "%s at t = %G s: psi = %s deg at the last good state", what, end, degrees), 1;
+    return pcn_addf(pcn_timed(why), "%s at t = %G s: psi = %s deg at the last good state", what, end, degrees), 1;
 }
 
 /* Restored data: the parameter words are the instance's parameters (or all zero, before set-up). */
