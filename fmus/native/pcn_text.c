@@ -110,6 +110,19 @@ pcn_text *pcn_timed(pcn_text *t)
     return t;
 }
 
+void pcn_quantify(pcn_text *t, int code, const char *reason, const char *variable, double value, const char *unit,
+                  double time)
+{
+    pcn_quantity *q = &t->quantity;
+    snprintf(q->variable, sizeof q->variable, "%s", variable);
+    q->unit = unit;
+    q->reason = reason;
+    q->value = value;
+    q->code = code;
+    q->has_time = !isnan(time);
+    q->time = time;
+}
+
 static void append(pcn_text *t, const char *s)
 {
     size_t room = PCN_TEXT_SIZE - 1 - t->length, n = strlen(s);

@@ -16,7 +16,8 @@
 /* What a model's refusal is about (kernels.Refused's fields), for the record in `refusal`
  * (pcn_record.c); reason NULL: not a model's refusal, the record's fields are null. */
 typedef struct {
-    const char *variable, *unit, *reason;
+    char variable[64];
+    const char *unit, *reason;
     double value;
     int code;
     int has_time;   /* the refusal's own time (else the step's) */
@@ -46,5 +47,9 @@ void pcn_clear(pcn_text *t);
 void pcn_addf(pcn_text *t, const char *format, ...);
 /* t, marked as naming the step's time (kernels.timed): pcn_addf(pcn_timed(why), "... at t = %G s", ..., t). */
 pcn_text *pcn_timed(pcn_text *t);
+/* t's quantity: a model's refusal `code` named `reason` (static text) of `variable` = `value`
+ * [`unit`] (Python's kernels.Refused fields) at the model's `time`, or the step's when NaN. */
+void pcn_quantify(pcn_text *t, int code, const char *reason, const char *variable, double value, const char *unit,
+                  double time);
 
 #endif

@@ -93,8 +93,11 @@ static int sample(pcn_instance *in, double t, pcn_text *why)
                             inputs[k], ABSURD), 1;
     pc_refusal refusal;
     int code = pc_balance_sample((pc_balance *)in->data, x, t, INFINITY, &refusal);
-    if (code == PC_BALANCE_BAD_INPUT)
-        return pcn_addf(pcn_timed(why), "input %s = %r at t = %G s is not finite", inputs[refusal.index], refusal.value, t), 1;
+    if (code == PC_BALANCE_BAD_INPUT) {   /* controller.balance.REASONS */
+        pcn_quantify(why, code, "input_not_finite", inputs[refusal.index], refusal.value, "", t);
+        return pcn_addf(pcn_timed(why), "input %s = %r at t = %G s is not finite", inputs[refusal.index], refusal.value,
+                        t), 1;
+    }
     if (code != PC_OK)
         return pcn_addf(pcn_timed(why), "the balance controller's buffer word %d = %r at t = %G s is not a size or state index "
                         "its arrays have", refusal.index, refusal.value, t), 1;

@@ -299,14 +299,17 @@ void pcn_plant_refusal(const pcn_plant_config *c, int status, const pc_refusal *
     char value[32], h[32];
     if (status == PC_FIVEBAR_NONFINITE_STATE) {
         pcn_addf(pcn_timed(why), "state became non-finite in the step from t = %G s (%s)", t, held);
+        pcn_quantify(why, status, "nonfinite_state", "state[0]", NAN, "", t);
     } else if (status == PC_FIVEBAR_DIVERGED) {
         pcn_addf(pcn_timed(why), "integration diverged in the step from t = %G s (%s): loop-closure residual %s m > %G m, the "
                  "state no longer closes the loop (motion too fast for RK4 steps of %s s: check the torques, use "
                  "substeps or dopri5)", t, held, g(refusal->value, 3, value, sizeof value), RESIDUAL_STOP,
                  g(dt / c->settings.substeps, 3, h, sizeof h));
+        pcn_quantify(why, status, "diverged", "residual", refusal->value, "m", t);
     } else {
         pcn_addf(pcn_timed(why), "singular pose reached at t = %G s: %s measure %s at x = %G m, y = %G m", t + dt,
                  measures[refusal->index], g(refusal->value, 3, value, sizeof value), trial[0], trial[1]);
+        pcn_quantify(why, status, "singular", measures[refusal->index], refusal->value, "", t + dt);
     }
 }
 

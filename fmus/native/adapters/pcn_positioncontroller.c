@@ -277,6 +277,27 @@ static int check_step(pcn_instance *in, double t, double h, pcn_text *why)
                               h, why);
 }
 
+/* The refusal's quantity as controller/position.py's REASONS name it (code, variable, unit). */
+static void quantify(int code, const pc_refusal *r, double t, pcn_text *why)
+{
+    static const char *const OUTPUTS[6] = {"tau1", "tau2", "i_ref1", "i_ref2", "e1", "e2"};
+    static const char *const TABLE_OUT[2] = {"x", "y"};
+    const char *reason, *variable, *unit = "";
+    switch (code) {
+    case PC_LAW_NONFINITE: reason = "NONFINITE", variable = INPUTS[r->index]; break;
+    case PC_LAW_REF_OUT: reason = "REF_OUT", variable = "(x_d, y_d)", unit = "m"; break;
+    case PC_LAW_REF_BAND: reason = "REF_BAND", variable = "margin"; break;
+    case PC_LAW_NO_ASSEMBLY: reason = "NO_ASSEMBLY", variable = "(q1, q2)", unit = "m"; break;
+    case PC_LAW_MEASURED_SINGULAR: reason = "MEASURED_SINGULAR", variable = "(q1, q2)"; break;
+    case PC_LAW_REF_SINGULAR: reason = "REF_SINGULAR", variable = "(x_d, y_d)"; break;
+    case PC_LAW_TABLE_OUT: reason = "TABLE_OUT", variable = TABLE_OUT[r->index ? 1 : 0], unit = "m"; break;
+    case PC_LAW_TABLE_HOLE: reason = "TABLE_HOLE", variable = "x", unit = "m"; break;
+    case PC_LAW_EXACT_OUT: reason = "EXACT_OUT", variable = "(x, y)", unit = "m"; break;
+    default: reason = "NONFINITE_OUTPUT", variable = OUTPUTS[r->index]; break;
+    }
+    pcn_quantify(why, code, reason, variable, r->value, unit, t);
+}
+
 /* The refusal of a sample in controller/position.py's words (REASONS). */
 static void refusal_text(const pcn_instance *in, const pc_law_scratch *w, int code, const pc_refusal *r, double t,
                          pcn_text *why)
@@ -285,6 +306,7 @@ static void refusal_text(const pcn_instance *in, const pc_law_scratch *w, int co
     const double px = w->task.x, py = w->task.y;
     const char *reference = "reference (x_d, y_d) = (%r, %r) m at t = %G s";
     const char *pose = "measured pose (x, y) = (%G, %G) m at t = %G s: ";
+    quantify(code, r, t, why);
     switch (code) {
     case PC_LAW_NONFINITE:
         pcn_addf(pcn_timed(why), "input %s = %r at t = %G s is not finite", INPUTS[r->index], r->value, t);
