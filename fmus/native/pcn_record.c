@@ -41,7 +41,7 @@ static void puts_(json *j, const char *s) { put(j, s, strlen(s)); }
 
 static void put_unit(json *j, uint32_t u)
 {
-    char escape[8];
+    char escape[16];
     snprintf(escape, sizeof escape, "\\u%04x", (unsigned)u);
     puts_(j, escape);
 }

@@ -233,7 +233,7 @@ static void refusal_text(const actuated *a, int status, const pc_refusal *r, con
     if (status == PC_FIVEBAR_NONFINITE_INPUT) {
         pcn_addf(pcn_timed(why), "integration failed in the step from t = %G s (%s): the held input %d = %r is not "
                  "finite", t, held.text, r->index, r->value);
-        char input[16];
+        char input[32];
         snprintf(input, sizeof input, "input %d", r->index);
         pcn_quantify(why, status, "nonfinite_input", input, r->value, "N m", t);
     } else if (status == PC_FIVEBAR_NONFINITE_STATE && r->index >= PCN_PLANT_STATES) {

@@ -320,12 +320,12 @@ static void refusal_text(const pcn_instance *in, const pc_law_scratch *w, int co
         pcn_addf(why, " is in the near-singular band (margin %g < %G)", r->value, PCN_BAND);
         break;
     case PC_LAW_NO_ASSEMBLY:
-        pcn_addf(pcn_timed(why), "measured (q1, q2) = (%r, %r) rad at t = %G s: no assembly for q1=%G, q2=%G rad (elbow distance "
-                 "%G m)", x->q1, x->q2, t, x->q1, x->q2, r->value);
+        pcn_addf(pcn_timed(why), "measured (q1, q2) = (%r, %r) rad at t = %G s: no assembly for q1=%G, q2=%G rad "
+                 "(elbow distance %G m)", x->q1, x->q2, t, x->q1, x->q2, r->value);
         break;
     case PC_LAW_MEASURED_SINGULAR:
-        pcn_addf(pcn_timed(why), "measured (q1, q2) = (%r, %r) rad at t = %G s: a parallel singularity (det J_X = %g)", x->q1,
-                 x->q2, t, r->value);
+        pcn_addf(pcn_timed(why), "measured (q1, q2) = (%r, %r) rad at t = %G s: a parallel singularity (det J_X = %g)",
+                 x->q1, x->q2, t, r->value);
         break;
     case PC_LAW_REF_SINGULAR:
         pcn_addf(pcn_timed(why), reference, x->x_d, x->y_d, t);
@@ -351,9 +351,9 @@ static void refusal_text(const pcn_instance *in, const pc_law_scratch *w, int co
         int largest = 0;
         for (int k = 1; k < N_INPUTS; ++k)
             if (fabs(v[k]) > fabs(v[largest])) largest = k;
-        pcn_addf(pcn_timed(why), "the law's outputs (tau1, tau2, i_ref1, i_ref2, e1, e2) = (%r, %r, %r, %r, %r, %r) at t = %G s "
-                 "are not finite; largest input: %s = %r", o[0], o[1], o[2], o[3], o[4], o[5], t, INPUTS[largest],
-                 v[largest]);
+        pcn_addf(pcn_timed(why), "the law's outputs (tau1, tau2, i_ref1, i_ref2, e1, e2) = (%r, %r, %r, %r, %r, %r) at "
+                 "t = %G s are not finite; largest input: %s = %r", o[0], o[1], o[2], o[3], o[4], o[5], t,
+                 INPUTS[largest], v[largest]);
     }
     }
 }

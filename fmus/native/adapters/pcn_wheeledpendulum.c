@@ -138,8 +138,8 @@ static int step(pcn_instance *in, double t, double h, pcn_text *why)
     double *r = in->real, tau[3] = {r[PCN_SLOT_tau_l], r[PCN_SLOT_tau_r], r[PCN_SLOT_tau_d]};
     for (int k = 0; k < 3; ++k)
         if (fabs(tau[k]) > ABSURD)
-            return pcn_addf(pcn_timed(why), "input %s = %r at t = %G s is absurd: |%s| must be <= %G", inputs[k], tau[k], t,
-                            inputs[k], ABSURD), 1;
+            return pcn_addf(pcn_timed(why), "input %s = %r at t = %G s is absurd: |%s| must be <= %G", inputs[k],
+                            tau[k], t, inputs[k], ABSURD), 1;
     double start = r[PCN_SLOT_push_start], duration = r[PCN_SLOT_push_duration];
     if (start - 1e-9 <= t && t < start + duration - 1e-9) tau[2] += r[PCN_SLOT_push_torque];
     pendulum *pd = (pendulum *)in->data;
