@@ -60,3 +60,19 @@ def test_a_models_quantity_survives_repeats_and_the_fmu_state(native_fmus, twin_
     assert [s.status for s in native_trace] == [s.status for s in twin_trace]
     twin.close()
     native.close()
+
+
+def test_a_refusal_at_initialisation_carries_the_kernels_quantity(native_fmus, twin_fmus):
+    """A trajectory started at t = -1 s: its kernel refuses the time (bad_time, variable t, the
+    model's own time) at initialisation, and says so again at the first step."""
+    twin, native = _both(native_fmus, twin_fmus, "Trajectory", "traj")
+    calls = [("setup", -1.0), ("enter",), ("exit",), ("get", ["refusal"]), ("step", -1.0, 1e-3), ("get", ["refusal"])]
+    twin_trace, native_trace = _run(twin, calls), _run(native, calls)
+    assert [(s.status, s.result, s.messages) for s in native_trace] == [
+        (s.status, s.result, s.messages) for s in twin_trace]
+    record = json.loads(native_trace[3].result[0])
+    assert (record["kind"], record["variable"], record["unit"], record["reason"], record["time"]) == (
+        "initialisation", "t", "s", "bad_time", -1.0)
+    assert native_trace[5].result == native_trace[3].result and native_trace[4].status == 2
+    twin.close()
+    native.close()
