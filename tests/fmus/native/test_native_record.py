@@ -11,7 +11,7 @@ import json
 import math
 
 from fmus.status import RunError, RunStatus
-from support.fmu_calls import Driver
+from tests.support.fmu_calls import Driver
 
 #: A preset name with a Latin letter (U+00F6) and a symbol past U+FFFF (U+1D11E).
 PRESET = "m\u00f6tor-\U0001D11E"
