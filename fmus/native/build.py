@@ -35,7 +35,7 @@ from .models import NATIVE
 HERE = Path(__file__).resolve().parent
 KERNELS = HERE.parent.parent / "kernels" / "src"
 #: The generic part every native FMU compiles (of no FMI version; :data:`LAYER` adds its FMI functions).
-GENERIC = ("pcn_core.c", "pcn_values.c", "pcn_state.c", "pcn_text.c", "pcn_text.h", "pcn_model.h", "pcn_native.h")
+GENERIC = ("pcn_core.c", "pcn_record.c", "pcn_values.c", "pcn_state.c", "pcn_text.c", "pcn_text.h", "pcn_model.h", "pcn_native.h")
 #: The FMI layer of each FMI version (``--fmi-version``).
 LAYER = {2: ("fmi2_native.c",), 3: ("fmi3_native.c", "fmi3_refused.c")}
 #: As the kernels' library (kernels/build.py): no FMA contraction, so results match it bit for bit.
@@ -83,21 +83,14 @@ def initialised_slave(model: str, resources: Path):
     return slave
 
 
-#: The slave's String output a native FMU does not have: the refusal's record (fmus/status.py),
-#: which its C does not write (its refusals are the messages in ``error`` and the log).
-NOT_NATIVE = "refusal"
-
-
 def variables(slave) -> list[dict]:
-    """The slave's variables in value-reference order (but :data:`NOT_NATIVE`, the last): name,
+    """The slave's variables in value-reference order: name,
     vr, type, causality, tunable, start (its value before initialisation: the start value),
     description."""
     fresh = type(slave)(instance_name=slave.instance_name, resources=slave.resources)
     rows = []
     for vr in sorted(slave.vars):
         v = slave.vars[vr]
-        if v.name == NOT_NATIVE:
-            continue
         rows.append({"name": v.name, "vr": vr, "type": type(v).__name__, "causality": v.causality.name,
                      "tunable": v.variability is not None and v.variability.name == "tunable",
                      "start": getattr(fresh, v.name)})
@@ -211,10 +204,6 @@ def model_description(slave, model: str, guid: str, sources: list[str], feedthro
                          "canSerializeFMUstate": "true", "needsExecutionTool": "false"})
     root.set("guid", guid)
     root.set("generationTool", "parcosim native (fmus/native)")
-    listed = root.find("ModelVariables")
-    for v in listed.findall("ScalarVariable"):
-        if v.get("name") == NOT_NATIVE:       # the last: the other variables' indices stay
-            listed.remove(v)
     if root.find("ModelStructure") is not None:
         root.remove(root.find("ModelStructure"))
     cosim = root.find("CoSimulation")

@@ -52,15 +52,22 @@ void pcn_set_string(char **slot, const char *value)
     *slot = copy;
 }
 
-/* GuardedSlave._refuse: log "<instance>: <text>" (error), to stderr too, and keep `error`. */
-static void refuse(native *in, const char *message, int has_time, double time, int repeat, int keep_error)
+/* GuardedSlave._refuse: log "<instance>: <text>" (error), to stderr too, and, unless keep_error,
+ * keep it in `error` and its record of `kind` at `when` in `refusal` (with why's quantity, if
+ * any).  The step's time is added unless why names it (names_time) or the refusal repeats. */
+static void refuse(native *in, const char *message, const pcn_text *why, int has_time, double time, int repeat,
+                   int keep_error, const char *kind, double when)
 {
     pcn_text text;
     pcn_clear(&text);
     if (repeat && has_time) pcn_addf(&text, "%s; step from t = %G s refused", message, time);
-    else if (!has_time || repeat || strstr(message, " t = ")) pcn_addf(&text, "%s", message);
+    else if (!has_time || repeat || (why && why->names_time)) pcn_addf(&text, "%s", message);
     else pcn_addf(&text, "%s (step from t = %G s)", message, time);
-    if (!keep_error) pcn_set_string(&in->pub.string[in->error_slot], repeat ? message : text.text);
+    if (!keep_error) {
+        const char *error = repeat ? message : text.text;
+        pcn_set_string(&in->pub.string[in->error_slot], error);
+        pcn_write_refusal(in, kind, error, when, why);
+    }
     pcn_text line;
     pcn_clear(&line);
     pcn_addf(&line, "%s: %s", in->name, text.text);
@@ -71,6 +78,7 @@ static void refuse(native *in, const char *message, int has_time, double time, i
 void pcn_step_size_message(const pcn_instance *in, pcn_text *why, double t, double h, const char *because)
 {
     const pcn_model *m = &pcn_this_model;
+    why->names_time = 1;
     pcn_addf(why, "step size h = %r s at t = %r s %s; %s accepts %s", h, t, because, m->identifier,
              m->accepted_steps_of ? m->accepted_steps_of(in) : m->accepted_steps);
 }
@@ -96,7 +104,7 @@ static void start_values(native *in)
         }
     }
     in->initialising = in->initialised = in->terminated = in->ready = 0;
-    in->initial_outputs = in->built_for_exit = in->has_last = in->has_accepted = 0;
+    in->initial_outputs = in->built_for_exit = in->has_last = in->has_accepted = in->step_refused = 0;
     in->pub.start_time = in->next_time = in->last_step = in->time = 0.0;
 }
 
@@ -142,11 +150,13 @@ native *pcn_new(const pcn_api *api, const char *name, char *resources, pcn_funct
     in->pub.string = zeros((size_t)pcn_n_slots[PCN_STRING], sizeof(char *));
     in->pub.data = zeros((size_t)pcn_this_model.data_words, sizeof(double));
     in->pub.scratch = zeros((size_t)pcn_this_model.scratch_words, sizeof(double));
-    in->error_slot = -1;
-    for (int k = 0; k < pcn_n_variables; ++k)
+    in->error_slot = in->refusal_slot = -1;
+    for (int k = 0; k < pcn_n_variables; ++k) {
         if (strcmp(pcn_variables[k].name, "error") == 0) in->error_slot = pcn_variables[k].slot;
+        if (strcmp(pcn_variables[k].name, "refusal") == 0) in->refusal_slot = pcn_variables[k].slot;
+    }
     if (in->name && in->pub.real && in->pub.integer && in->pub.boolean && in->pub.string && in->pub.data &&
-        in->pub.scratch && in->error_slot >= 0) {
+        in->pub.scratch && in->error_slot >= 0 && in->refusal_slot >= 0) {
         strcpy(in->name, name);
         start_values(in);
         return in;
@@ -252,15 +262,17 @@ pcn_status pcn_exit_initialization(native *in, const char *fn)
     in->has_last = 0;
     pcn_text why;
     pcn_clear(&why);
+    in->step_refused = 0;
     if (in->built_for_exit || in->model->setup(&in->pub, &why) == 0) {
         in->ready = 1;
         pcn_set_string(&in->pub.string[in->error_slot], "");
+        pcn_set_string(&in->pub.string[in->refusal_slot], "");
     } else {
         in->ready = 0;
         pcn_text message;
         pcn_clear(&message);
         pcn_addf(&message, "initialisation refused: %s (t = %G s)", why.text, in->pub.start_time);
-        refuse(in, message.text, 0, 0.0, 0, 0);
+        refuse(in, message.text, &why, 0, 0.0, 0, 0, "initialisation", in->pub.start_time);
     }
     return PCN_OK;
 }
@@ -302,6 +314,7 @@ static int check_point(const native *in, double t, pcn_text *why)
     double expected = in->next_time, tolerance = 1e-9 * fmax(fabs(expected), 1e-3);
     if (in->has_last && in->last_step) tolerance = fmin(tolerance, 0.5 * in->last_step);
     if (fabs(t - expected) <= tolerance) return 0;
+    why->names_time = 1;
     pcn_addf(why, "communication point t = %r s does not follow the last one: the next doStep must start at t = %r "
              "s (the last step's end, or the time of the state set by %s)", t, expected, in->api->set_state);
     return 1;
@@ -329,24 +342,26 @@ pcn_status pcn_do_step(native *in, double t, double h)
             in->time = t + h;
             return PCN_OK;
         }
-        refuse(in, why.text, 1, t, 0, 0);
+        refuse(in, why.text, &why, 1, t, 0, 0, "refused", t);
         in->ready = 0;
+        in->step_refused = 1;
         return PCN_DISCARD;
     }
     const char *error = in->pub.string[in->error_slot];
     if (in->terminated) {
         pcn_addf(&why, "doStep from t = %r s after %s refused", t, in->api->terminate);
-        refuse(in, why.text, 0, t, 1, 0);
+        refuse(in, why.text, NULL, 0, t, 1, 0, "refused", t);
     } else if (!in->initialised) {
         pcn_addf(&why, "doStep from t = %r s before initialisation (%s) refused", t, in->api->exit_initialization);
-        refuse(in, why.text, 0, t, 1, 0);
-    } else if (error[0] && strncmp(error, "initialisation refused", 22) != 0) {
+        refuse(in, why.text, NULL, 0, t, 1, 0, "refused", t);
+    } else if (in->step_refused) {
         pcn_addf(&why, "an earlier step was refused (%s); restore an FMU state taken before it (%s) to go on", error,
                  in->api->set_state);
-        refuse(in, why.text, 1, t, 1, 1);
+        refuse(in, why.text, NULL, 1, t, 1, 1, "refused", t);
+    } else if (error[0]) {   /* the initialisation's refusal, said again (its record kept) */
+        refuse(in, error, NULL, 1, t, 1, 1, "initialisation", t);
     } else {
-        pcn_addf(&why, "%s", error[0] ? error : "initialisation refused");
-        refuse(in, why.text, 1, t, 1, 0);
+        refuse(in, "initialisation refused", NULL, 1, t, 1, 0, "initialisation", t);
     }
     return PCN_DISCARD;
 }

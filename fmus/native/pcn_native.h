@@ -44,12 +44,14 @@ struct native {
     size_t n_categories;
     /* GuardedSlave's flags and times (saved in the FMU state) */
     int initialising, initialised, terminated, ready, initial_outputs, built_for_exit, has_last;
+    int step_refused;       /* a step was refused (not the initialisation): later steps say so */
     double next_time, last_step;   /* and pub.start_time */
     double time;            /* the wrapper's time for messages */
     /* derived, not saved */
     int has_accepted;
     double accepted_step;
     int error_slot;         /* the String output "error" */
+    int refusal_slot;       /* the String output "refusal" (the record, pcn_record.c) */
     char *initial_warning;
 };
 
@@ -78,6 +80,13 @@ pcn_status pcn_terminate(native *in);
 pcn_status pcn_reset(native *in);
 /* One communication step from t by h: PCN_OK, or PCN_DISCARD with the refusal logged. */
 pcn_status pcn_do_step(native *in, double t, double h);
+
+/* ---- pcn_record.c ---- */
+
+/* `refusal` := the record of a refusal of `kind` ("refused", "initialisation") with the message
+ * `message` (as `error` has it), at `time` unless `why`'s quantity has its own; its fields of
+ * the model's quantity if `why` (or NULL) names one. */
+void pcn_write_refusal(native *in, const char *kind, const char *message, double time, const pcn_text *why);
 
 /* ---- pcn_values.c: values by type (double, int, int 0/1, const char *) ---- */
 

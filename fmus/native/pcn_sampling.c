@@ -26,14 +26,14 @@ int pcn_sampling_check(pcn_sampling *s, const pcn_instance *in, double T, int ph
         return 1;
     }
     if (!(phase >= 0 && phase < n))
-        return pcn_addf(why, "parameter sample_phase = %d must be a whole number in [0, T / h) = [0, %s) for the step "
-                        "size h = %r s at t = %r s (T = %r s)", phase, whole(n, n_text, sizeof n_text), h, t, T), 1;
+        return pcn_addf(pcn_timed(why), "parameter sample_phase = %d must be a whole number in [0, T / h) = [0, %s) "
+                        "for the step size h = %r s at t = %r s (T = %r s)", phase, whole(n, n_text, sizeof n_text), h,
+                        t, T), 1;
     if (pc_sampling_changes_period(s->substep, s->substeps, n))
-        return pcn_addf(why, "step size h = %r s at t = %r s changes the step within a sample period (T = %r s, "
-                        "sub-step %s of %s, steps of %r s): %s accepts a new step size only at a period's start", h,
-                        t, T, whole(s->substep, substep_text, sizeof substep_text),
-                        whole(s->substeps, counted_text, sizeof counted_text), T / s->substeps,
-                        pcn_this_model.identifier), 1;
+        return pcn_addf(pcn_timed(why), "step size h = %r s at t = %r s changes the step within a sample period (T = "
+                        "%r s, sub-step %s of %s, steps of %r s): %s accepts a new step size only at a period's start",
+                        h, t, T, whole(s->substep, substep_text, sizeof substep_text), whole(s->substeps, counted_text,
+                        sizeof counted_text), T / s->substeps, pcn_this_model.identifier), 1;
     s->substeps = n;
     return 0;
 }

@@ -3,7 +3,7 @@
  * Bytes (host byte order; a state is read back on the platform that wrote it):
  *   magic "PCNSTATE" (8), format version u32, whole length u64 (checksum included),
  *   identifier str16, GUID str16, counts u32 x 4 (Real, Integer, Boolean, String slots),
- *   model data words u64, flags u8 x 7, times f64 x 4 (start, next, last step, time),
+ *   model data words u64, flags u8 x 8, times f64 x 4 (start, next, last step, time),
  *   Reals f64, Integers i32, Booleans u8, Strings str32, model data f64,
  *   checksum u64 (FNV-1a of every byte before it).
  * A state is refused (Error, the instance unchanged) unless every field fits this FMU: its
@@ -18,8 +18,8 @@
 #include "pcn_native.h"
 
 #define MAGIC "PCNSTATE"
-#define VERSION 1u
-#define FLAGS 7
+#define VERSION 2u   /* 2: the flag step_refused (8 flags) */
+#define FLAGS 8
 
 typedef struct {
     const native *owner;   /* the instance that issued it: no other may use it */
@@ -67,7 +67,7 @@ static uint64_t fnv1a(const unsigned char *bytes, size_t n)
 static int flag(const native *in, int k)
 {
     const int flags[FLAGS] = {in->initialising, in->initialised, in->terminated, in->ready,
-                              in->initial_outputs, in->built_for_exit, in->has_last};
+                              in->initial_outputs, in->built_for_exit, in->has_last, in->step_refused};
     return flags[k];
 }
 
@@ -276,7 +276,7 @@ static int same_parameters(const native *in, const contents *c, pcn_text *why)
 static void apply(native *in, contents *c)
 {
     int *flags[FLAGS] = {&in->initialising, &in->initialised, &in->terminated, &in->ready,
-                         &in->initial_outputs, &in->built_for_exit, &in->has_last};
+                         &in->initial_outputs, &in->built_for_exit, &in->has_last, &in->step_refused};
     for (int k = 0; k < FLAGS; ++k) *flags[k] = c->flags[k];
     in->pub.start_time = c->times[0];
     in->next_time = c->times[1];

@@ -100,6 +100,27 @@ void pcn_clear(pcn_text *t)
 {
     t->text[0] = '\0';
     t->length = 0;
+    t->names_time = 0;
+    t->quantity = (pcn_quantity){0};
+}
+
+pcn_text *pcn_timed(pcn_text *t)
+{
+    t->names_time = 1;
+    return t;
+}
+
+void pcn_quantify(pcn_text *t, int code, const char *reason, const char *variable, double value, const char *unit,
+                  double time)
+{
+    pcn_quantity *q = &t->quantity;
+    snprintf(q->variable, sizeof q->variable, "%s", variable);
+    q->unit = unit;
+    q->reason = reason;
+    q->value = value;
+    q->code = code;
+    q->has_time = !isnan(time);
+    q->time = time;
 }
 
 static void append(pcn_text *t, const char *s)

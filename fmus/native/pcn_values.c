@@ -42,7 +42,7 @@ static void calculate_outputs(native *in, const unsigned vr[], size_t nvr)
     int wanted = 0;
     for (size_t k = 0; k < nvr; ++k) {
         const pcn_variable *v = pcn_variable_of(vr[k]);
-        wanted |= v->causality == PCN_OUTPUT && strcmp(v->name, "error") != 0;
+        wanted |= v->causality == PCN_OUTPUT && strcmp(v->name, "error") != 0 && strcmp(v->name, "refusal") != 0;
     }
     if (!wanted) return;
     pcn_text why;

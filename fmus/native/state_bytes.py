@@ -8,7 +8,7 @@ import struct
 import numpy as np
 
 MAGIC = b"PCNSTATE"
-FLAGS = 7
+FLAGS = 8
 
 
 def fnv1a(data: bytes) -> int:

@@ -204,6 +204,17 @@ static int check_inputs(const double *x, pcn_text *why)
     return 0;
 }
 
+/* ActuatedPlant._currents_refusal: the step's armature currents (trial's last two) not all finite. */
+static int currents_refusal(const double *trial, double t, const char *held, pcn_text *why)
+{
+    const double *i = trial + PCN_PLANT_STATES;
+    const int bad = isfinite(i[0]) ? 1 : 0;
+    pcn_addf(pcn_timed(why), "armature currents [%r, %r] after the step from t = %G s (%s) are not finite", i[0], i[1],
+             t, held);
+    pcn_quantify(why, PC_FIVEBAR_NONFINITE_STATE, "nonfinite_state", bad ? "i2" : "i1", i[bad], "", t);
+    return 1;
+}
+
 /* ActuatedPlant._refuse_kernel_step: the refusal of a pc_actuated_step that returned `status`. */
 static void refusal_text(const actuated *a, int status, const pc_refusal *r, const double *x, const double *trial,
                          double t, double h, pcn_text *why)
@@ -220,11 +231,13 @@ static void refusal_text(const actuated *a, int status, const pc_refusal *r, con
     pcn_clear(&held);
     pcn_addf(&held, "v1 = %r V, v2 = %r V held", voltages[0], voltages[1]);
     if (status == PC_FIVEBAR_NONFINITE_INPUT) {
-        pcn_addf(why, "integration failed in the step from t = %G s (%s): the held input %d = %r is not finite", t,
-                 held.text, r->index, r->value);
+        pcn_addf(pcn_timed(why), "integration failed in the step from t = %G s (%s): the held input %d = %r is not "
+                 "finite", t, held.text, r->index, r->value);
+        char input[32];
+        snprintf(input, sizeof input, "input %d", r->index);
+        pcn_quantify(why, status, "nonfinite_input", input, r->value, "N m", t);
     } else if (status == PC_FIVEBAR_NONFINITE_STATE && r->index >= PCN_PLANT_STATES) {
-        pcn_addf(why, "armature currents [%r, %r] after the step from t = %G s (%s) are not finite",
-                 trial[PCN_PLANT_STATES], trial[PCN_PLANT_STATES + 1], t, held.text);
+        currents_refusal(trial, t, held.text, why);
     } else {
         pcn_plant_refusal(&a->config, status, r, trial, t, h, held.text, why);
     }
@@ -258,8 +271,7 @@ static int projected_step(pcn_instance *in, actuated *a, const double *x, double
                                    a->config.settings.lambda, 2};
     pc_fivebar_advance(&model, trial, h, (int)a->config.settings.substeps, in->scratch + states);
     if (!(isfinite(trial[PCN_PLANT_STATES]) && isfinite(trial[PCN_PLANT_STATES + 1])))
-        return pcn_addf(why, "armature currents [%r, %r] after the step from t = %G s (%s) are not finite",
-                        trial[PCN_PLANT_STATES], trial[PCN_PLANT_STATES + 1], t, held.text), 1;
+        return currents_refusal(trial, t, held.text, why);
     int finite = 1;
     for (int k = 0; k < PCN_PLANT_STATES; ++k) finite &= isfinite(trial[k]);
     if (finite) pc_fivebar_project(&a->config.params, trial, PROJECTIONS);

@@ -89,15 +89,18 @@ static int sample(pcn_instance *in, double t, pcn_text *why)
     double *r = in->real, x[15] = {r[PCN_SLOT_enc_l], r[PCN_SLOT_enc_r], r[PCN_SLOT_gyro]};
     for (int k = 0; k < 3; ++k)   /* refuse_absurd_inputs: NaN passes, the kernel names it */
         if (fabs(x[k]) > ABSURD)
-            return pcn_addf(why, "input %s = %r at t = %G s is absurd: |%s| must be <= %G", inputs[k], x[k], t,
-                            inputs[k], ABSURD), 1;
+            return pcn_addf(pcn_timed(why), "input %s = %r at t = %G s is absurd: |%s| must be <= %G", inputs[k], x[k],
+                            t, inputs[k], ABSURD), 1;
     pc_refusal refusal;
     int code = pc_balance_sample((pc_balance *)in->data, x, t, INFINITY, &refusal);
-    if (code == PC_BALANCE_BAD_INPUT)
-        return pcn_addf(why, "input %s = %r at t = %G s is not finite", inputs[refusal.index], refusal.value, t), 1;
+    if (code == PC_BALANCE_BAD_INPUT) {   /* controller.balance.REASONS */
+        pcn_quantify(why, code, "input_not_finite", inputs[refusal.index], refusal.value, "", t);
+        return pcn_addf(pcn_timed(why), "input %s = %r at t = %G s is not finite", inputs[refusal.index], refusal.value,
+                        t), 1;
+    }
     if (code != PC_OK)
-        return pcn_addf(why, "the balance controller's buffer word %d = %r at t = %G s is not a size or state index "
-                        "its arrays have", refusal.index, refusal.value, t), 1;
+        return pcn_addf(pcn_timed(why), "the balance controller's buffer word %d = %r at t = %G s is not a size or "
+                        "state index its arrays have", refusal.index, refusal.value, t), 1;
     const int slots[12] = {PCN_SLOT_v_l, PCN_SLOT_v_r, PCN_SLOT_tau_l, PCN_SLOT_tau_r, PCN_SLOT_x_d, PCN_SLOT_y_d,
                            PCN_SLOT_theta_hat, PCN_SLOT_psi_hat, PCN_SLOT_phi_hat, PCN_SLOT_dtheta_hat,
                            PCN_SLOT_dpsi_hat, PCN_SLOT_dphi_hat};

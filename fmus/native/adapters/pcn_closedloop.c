@@ -110,8 +110,8 @@ static int check_step(pcn_instance *in, double t, double h, pcn_text *why)
     (void)in;
     const double n = nearbyint(h / pcn_loop.step);
     if (n > (double)pcn_loop.most_steps)
-        return pcn_addf(why, "step size h = %r s at t = %r s needs %G of its steps h = %r s, more than the %d one call "
-                        "takes; take steps of at most %G s (%d of its steps)", h, t, n, pcn_loop.step,
+        return pcn_addf(pcn_timed(why), "step size h = %r s at t = %r s needs %G of its steps h = %r s, more than the "
+                        "%d one call takes; take steps of at most %G s (%d of its steps)", h, t, n, pcn_loop.step,
                         (int)pcn_loop.most_steps, (double)pcn_loop.most_steps * pcn_loop.step,
                         (int)pcn_loop.most_steps), 1;
     return 0;
@@ -124,20 +124,21 @@ static int step(pcn_instance *in, double t, double h, pcn_text *why)
     double *time = in->data + pcn_loop.time;
     const double n = isfinite(h) && h > 0.0 ? nearbyint(h / H) : 0.0;
     if (n < 1.0 || !isclose(h, n * H, 1e-9, 0.0))
-        return pcn_addf(why, "step size %r s at t = %G s: this FMU steps its system at its communication step; the "
-                        "step size must be a whole multiple of h = %r s", h, t, H), 1;
+        return pcn_addf(pcn_timed(why), "step size %r s at t = %G s: this FMU steps its system at its communication "
+                        "step; the step size must be a whole multiple of h = %r s", h, t, H), 1;
     if (!isclose(t, *time, 0.0, 1e-6 * H))
-        return pcn_addf(why, "communication point t = %r s does not follow the last one (%r s)", t, *time), 1;
+        return pcn_addf(pcn_timed(why), "communication point t = %r s does not follow the last one (%r s)", t,
+                        *time), 1;
     pc_loop_stop stop;
     pc_loop_run(plan_of(in), in->data + pcn_loop.values, NULL, 0, (int)n, *time, H, &stop);
     *time = stop.time;
     publish(in);
     if (stop.member < 0) return 0;
     const pcn_member *m = &pcn_loop.members[stop.member];
-    return pcn_addf(why, "component %s (%s): its kernel %s declined the step from t = %r s (sub-step %d; refusal code "
-                    "%d, quantity %d = %r); the pythonfmu ClosedLoop takes such a step in Python, this native FMU "
-                    "has no Python", m->name, m->model, m->kernel, stop.time, stop.substep, stop.refusal.code,
-                    stop.refusal.index, stop.refusal.value), 1;
+    return pcn_addf(pcn_timed(why), "component %s (%s): its kernel %s declined the step from t = %r s (sub-step %d; "
+                    "refusal code %d, quantity %d = %r); the pythonfmu ClosedLoop takes such a step in Python, this "
+                    "native FMU has no Python", m->name, m->model, m->kernel, stop.time, stop.substep,
+                    stop.refusal.code, stop.refusal.index, stop.refusal.value), 1;
 }
 
 /* Saved data is this build's: all zero (a state taken before set-up), or every word the loop

@@ -134,10 +134,13 @@ static int step(pcn_instance *in, double t, double h, pcn_text *why)
         s->substep = pc_sampling_next(s->substep, s->substeps);
         return 0;
     }
-    if (code == PC_OBSERVER_NONFINITE_INPUT)
+    if (code == PC_OBSERVER_NONFINITE_INPUT) {   /* motor.kernel.OBSERVER_REASONS */
+        pcn_quantify(why, code, "nonfinite_input", refusal.index ? "omega" : "v", refusal.value, "", NAN);
         return pcn_addf(why, "%s must be a finite number, got %r", refusal.index ? "omega" : "v", refusal.value), 1;
-    return pcn_addf(why, "the estimate i_hat = %r A at t = %G s is not finite (inputs v = %r V, omega = %r rad/s)",
-                    refusal.value, t, v, omega), 1;
+    }
+    pcn_quantify(why, code, "diverged", "i_hat", refusal.value, "A", NAN);
+    return pcn_addf(pcn_timed(why), "the estimate i_hat = %r A at t = %G s is not finite (inputs v = %r V, omega = "
+                    "%r rad/s)", refusal.value, t, v, omega), 1;
 }
 
 /* Restored data: is_static and ke are the parameters' (configuration); the coefficients, if

@@ -88,20 +88,21 @@ static int sample(pcn_instance *in, double t, pcn_text *why)
     const double q[CHANNELS] = {r[PCN_SLOT_q1], r[PCN_SLOT_q2]};
     const char *names[CHANNELS] = {"q1", "q2"};
     for (int k = 0; k < CHANNELS; ++k) {
-        if (!isfinite(q[k])) return pcn_addf(why, "input %s = %r at t = %G s is not finite", names[k], q[k], t), 1;
+        if (!isfinite(q[k]))
+            return pcn_addf(pcn_timed(why), "input %s = %r at t = %G s is not finite", names[k], q[k], t), 1;
         if (fabs(q[k]) > ABSURD)
-            return pcn_addf(why, "input %s = %r rad at t = %G s is absurd: |%s| must be <= %G rad", names[k], q[k], t,
-                            names[k], ABSURD), 1;
+            return pcn_addf(pcn_timed(why), "input %s = %r rad at t = %G s is absurd: |%s| must be <= %G rad", names[k],
+                            q[k], t, names[k], ABSURD), 1;
     }
     pc_derivator_context c = context(in);
     double out[2 * CHANNELS];
     pc_refusal refusal;
     int code = pc_derivator_step(&c, q, ABSURD, out, &refusal);
     if (code == PC_DERIVATOR_NONFINITE_OUTPUT)
-        return pcn_addf(why, "the estimates (dq1, dq2, ddq1, ddq2) = (%r, %r, %r, %r) at t = %G s are not finite "
-                        "(inputs q1 = %r, q2 = %r rad)", out[0], out[1], out[2], out[3], t, q[0], q[1]), 1;
+        return pcn_addf(pcn_timed(why), "the estimates (dq1, dq2, ddq1, ddq2) = (%r, %r, %r, %r) at t = %G s are not "
+                        "finite (inputs q1 = %r, q2 = %r rad)", out[0], out[1], out[2], out[3], t, q[0], q[1]), 1;
     if (code != PC_OK)
-        return pcn_addf(why, "the derivator's buffer was refused (code %d, word %d = %r) at t = %G s", code,
+        return pcn_addf(pcn_timed(why), "the derivator's buffer was refused (code %d, word %d = %r) at t = %G s", code,
                         refusal.index, refusal.value, t), 1;
     r[PCN_SLOT_dq1] = out[0];
     r[PCN_SLOT_dq2] = out[1];

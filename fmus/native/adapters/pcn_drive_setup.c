@@ -276,8 +276,12 @@ void pcn_drive_prepare(pcn_drive_data *d, double h)
 static int refused(const pcn_drive_data *d, const pc_refusal *r, const double out[3], double h, pcn_text *why)
 {
     static const char *const INPUTS[4] = {"omega", "i_ref", "v_ref", "i_hat"};   /* PC_DRIVE_OMEGA ... */
-    if (r->code == PC_DRIVE_NONFINITE_INPUT)
+    static const char *const DIVERGED[2] = {"i", "tau"};                              /* motor.kernel.DRIVE_REASONS */
+    if (r->code == PC_DRIVE_NONFINITE_INPUT) {
+        pcn_quantify(why, r->code, "nonfinite_input", INPUTS[r->index], r->value, "", NAN);
         return pcn_addf(why, "%s must be a finite number, got %r", INPUTS[r->index], r->value), 1;
+    }
+    pcn_quantify(why, r->code, "diverged", DIVERGED[r->index], r->value, "", NAN);
     pcn_addf(why, "armature current i = %r A, shaft torque tau = %r N m after this step are not finite", out[2],
              out[0]);
     double a = d->drive.a;

@@ -42,7 +42,10 @@ static int check_torques(double tau1, double tau2, double t, pcn_text *why)
 {
     if (isfinite(tau1) && isfinite(tau2)) return 0;
     const int first = !isfinite(tau1);
-    pcn_addf(why, "input %s = %r at t = %G s is not finite", first ? "tau1" : "tau2", first ? tau1 : tau2, t);
+    const char *name = first ? "tau1" : "tau2";
+    const double value = first ? tau1 : tau2;
+    pcn_addf(pcn_timed(why), "input %s = %r at t = %G s is not finite", name, value, t);
+    pcn_quantify(why, PC_FIVEBAR_NONFINITE_INPUT, "nonfinite_input", name, value, "N m", t);
     return 1;
 }
 

@@ -272,11 +272,11 @@ int pcn_plant_check_step(const pcn_plant_config *c, double t, double dt, pcn_tex
     if (!(s->lambda * dt / s->substeps > BAUMGARTE_RK4_LIMIT)) return 0;
     const double h = dt / s->substeps;
     char product[32], limit[32], stability[32];
-    pcn_addf(why, "baumgarte = %r /s with RK4 steps of %G s (step from t = %G s): baumgarte * h = %s > %G, RK4 no "
-             "longer damps the loop-closure residual (unstable beyond %s); use baumgarte <= %s /s (the thesis advises "
-             "<= 1/h), more substeps or dopri5", s->lambda, h, t, g(s->lambda * h, 4, product, sizeof product),
-             BAUMGARTE_RK4_LIMIT, g(RK4_REAL_STABILITY, 4, stability, sizeof stability),
-             g(BAUMGARTE_RK4_LIMIT / h, 4, limit, sizeof limit));
+    pcn_addf(pcn_timed(why), "baumgarte = %r /s with RK4 steps of %G s (step from t = %G s): baumgarte * h = %s > %G, "
+             "RK4 no longer damps the loop-closure residual (unstable beyond %s); use baumgarte <= %s /s (the thesis "
+             "advises <= 1/h), more substeps or dopri5", s->lambda, h, t, g(s->lambda * h, 4, product, sizeof product),
+             BAUMGARTE_RK4_LIMIT, g(RK4_REAL_STABILITY, 4, stability, sizeof stability), g(BAUMGARTE_RK4_LIMIT / h, 4,
+             limit, sizeof limit));
     return 1;
 }
 
@@ -298,15 +298,18 @@ void pcn_plant_refusal(const pcn_plant_config *c, int status, const pc_refusal *
                                             "distal links (parallel)"};
     char value[32], h[32];
     if (status == PC_FIVEBAR_NONFINITE_STATE) {
-        pcn_addf(why, "state became non-finite in the step from t = %G s (%s)", t, held);
+        pcn_addf(pcn_timed(why), "state became non-finite in the step from t = %G s (%s)", t, held);
+        pcn_quantify(why, status, "nonfinite_state", "state[0]", NAN, "", t);
     } else if (status == PC_FIVEBAR_DIVERGED) {
-        pcn_addf(why, "integration diverged in the step from t = %G s (%s): loop-closure residual %s m > %G m, the "
-                 "state no longer closes the loop (motion too fast for RK4 steps of %s s: check the torques, use "
-                 "substeps or dopri5)", t, held, g(refusal->value, 3, value, sizeof value), RESIDUAL_STOP,
+        pcn_addf(pcn_timed(why), "integration diverged in the step from t = %G s (%s): loop-closure residual %s m > %G "
+                 "m, the state no longer closes the loop (motion too fast for RK4 steps of %s s: check the torques, "
+                 "use substeps or dopri5)", t, held, g(refusal->value, 3, value, sizeof value), RESIDUAL_STOP,
                  g(dt / c->settings.substeps, 3, h, sizeof h));
+        pcn_quantify(why, status, "diverged", "residual", refusal->value, "m", t);
     } else {
-        pcn_addf(why, "singular pose reached at t = %G s: %s measure %s at x = %G m, y = %G m", t + dt,
+        pcn_addf(pcn_timed(why), "singular pose reached at t = %G s: %s measure %s at x = %G m, y = %G m", t + dt,
                  measures[refusal->index], g(refusal->value, 3, value, sizeof value), trial[0], trial[1]);
+        pcn_quantify(why, status, "singular", measures[refusal->index], refusal->value, "", t + dt);
     }
 }
 

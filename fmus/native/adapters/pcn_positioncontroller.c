@@ -277,6 +277,27 @@ static int check_step(pcn_instance *in, double t, double h, pcn_text *why)
                               h, why);
 }
 
+/* The refusal's quantity as controller/position.py's REASONS name it (code, variable, unit). */
+static void quantify(int code, const pc_refusal *r, double t, pcn_text *why)
+{
+    static const char *const OUTPUTS[6] = {"tau1", "tau2", "i_ref1", "i_ref2", "e1", "e2"};
+    static const char *const TABLE_OUT[2] = {"x", "y"};
+    const char *reason, *variable, *unit = "";
+    switch (code) {
+    case PC_LAW_NONFINITE: reason = "NONFINITE", variable = INPUTS[r->index]; break;
+    case PC_LAW_REF_OUT: reason = "REF_OUT", variable = "(x_d, y_d)", unit = "m"; break;
+    case PC_LAW_REF_BAND: reason = "REF_BAND", variable = "margin"; break;
+    case PC_LAW_NO_ASSEMBLY: reason = "NO_ASSEMBLY", variable = "(q1, q2)", unit = "m"; break;
+    case PC_LAW_MEASURED_SINGULAR: reason = "MEASURED_SINGULAR", variable = "(q1, q2)"; break;
+    case PC_LAW_REF_SINGULAR: reason = "REF_SINGULAR", variable = "(x_d, y_d)"; break;
+    case PC_LAW_TABLE_OUT: reason = "TABLE_OUT", variable = TABLE_OUT[r->index ? 1 : 0], unit = "m"; break;
+    case PC_LAW_TABLE_HOLE: reason = "TABLE_HOLE", variable = "x", unit = "m"; break;
+    case PC_LAW_EXACT_OUT: reason = "EXACT_OUT", variable = "(x, y)", unit = "m"; break;
+    default: reason = "NONFINITE_OUTPUT", variable = OUTPUTS[r->index]; break;
+    }
+    pcn_quantify(why, code, reason, variable, r->value, unit, t);
+}
+
 /* The refusal of a sample in controller/position.py's words (REASONS). */
 static void refusal_text(const pcn_instance *in, const pc_law_scratch *w, int code, const pc_refusal *r, double t,
                          pcn_text *why)
@@ -285,43 +306,44 @@ static void refusal_text(const pcn_instance *in, const pc_law_scratch *w, int co
     const double px = w->task.x, py = w->task.y;
     const char *reference = "reference (x_d, y_d) = (%r, %r) m at t = %G s";
     const char *pose = "measured pose (x, y) = (%G, %G) m at t = %G s: ";
+    quantify(code, r, t, why);
     switch (code) {
     case PC_LAW_NONFINITE:
-        pcn_addf(why, "input %s = %r at t = %G s is not finite", INPUTS[r->index], r->value, t);
+        pcn_addf(pcn_timed(why), "input %s = %r at t = %G s is not finite", INPUTS[r->index], r->value, t);
         break;
     case PC_LAW_REF_OUT:
-        pcn_addf(why, reference, x->x_d, x->y_d, t);
+        pcn_addf(pcn_timed(why), reference, x->x_d, x->y_d, t);
         pcn_addf(why, " is outside the workspace");
         break;
     case PC_LAW_REF_BAND:
-        pcn_addf(why, reference, x->x_d, x->y_d, t);
+        pcn_addf(pcn_timed(why), reference, x->x_d, x->y_d, t);
         pcn_addf(why, " is in the near-singular band (margin %g < %G)", r->value, PCN_BAND);
         break;
     case PC_LAW_NO_ASSEMBLY:
-        pcn_addf(why, "measured (q1, q2) = (%r, %r) rad at t = %G s: no assembly for q1=%G, q2=%G rad (elbow distance "
-                 "%G m)", x->q1, x->q2, t, x->q1, x->q2, r->value);
+        pcn_addf(pcn_timed(why), "measured (q1, q2) = (%r, %r) rad at t = %G s: no assembly for q1=%G, q2=%G rad "
+                 "(elbow distance %G m)", x->q1, x->q2, t, x->q1, x->q2, r->value);
         break;
     case PC_LAW_MEASURED_SINGULAR:
-        pcn_addf(why, "measured (q1, q2) = (%r, %r) rad at t = %G s: a parallel singularity (det J_X = %g)", x->q1,
-                 x->q2, t, r->value);
+        pcn_addf(pcn_timed(why), "measured (q1, q2) = (%r, %r) rad at t = %G s: a parallel singularity (det J_X = %g)",
+                 x->q1, x->q2, t, r->value);
         break;
     case PC_LAW_REF_SINGULAR:
-        pcn_addf(why, reference, x->x_d, x->y_d, t);
+        pcn_addf(pcn_timed(why), reference, x->x_d, x->y_d, t);
         pcn_addf(why, ": a chain is stretched or folded there (J_Theta singular)");
         break;
     case PC_LAW_TABLE_OUT:
-        pcn_addf(why, pose, px, py, t);
+        pcn_addf(pcn_timed(why), pose, px, py, t);
         pcn_addf(why, "point (x=%G, y=%G) m is outside the tabulated region x in [%G, %G], y in [%G, %G] m", px, py,
                  in->real[PCN_SLOT_x_min], in->real[PCN_SLOT_x_max], in->real[PCN_SLOT_y_min],
                  in->real[PCN_SLOT_y_max]);
         break;
     case PC_LAW_TABLE_HOLE:
-        pcn_addf(why, pose, px, py, t);
+        pcn_addf(pcn_timed(why), pose, px, py, t);
         pcn_addf(why, "point (x=%G, y=%G) m needs a grid point left out of the table (outside the workspace or "
                  "near-singular)", px, py);
         break;
     case PC_LAW_EXACT_OUT:
-        pcn_addf(why, pose, px, py, t);
+        pcn_addf(pcn_timed(why), pose, px, py, t);
         pcn_addf(why, "point out of reach of a chain (distance %G m)", r->value);
         break;
     default: {   /* PC_LAW_NONFINITE_OUTPUT */
@@ -329,9 +351,9 @@ static void refusal_text(const pcn_instance *in, const pc_law_scratch *w, int co
         int largest = 0;
         for (int k = 1; k < N_INPUTS; ++k)
             if (fabs(v[k]) > fabs(v[largest])) largest = k;
-        pcn_addf(why, "the law's outputs (tau1, tau2, i_ref1, i_ref2, e1, e2) = (%r, %r, %r, %r, %r, %r) at t = %G s "
-                 "are not finite; largest input: %s = %r", o[0], o[1], o[2], o[3], o[4], o[5], t, INPUTS[largest],
-                 v[largest]);
+        pcn_addf(pcn_timed(why), "the law's outputs (tau1, tau2, i_ref1, i_ref2, e1, e2) = (%r, %r, %r, %r, %r, %r) at "
+                 "t = %G s are not finite; largest input: %s = %r", o[0], o[1], o[2], o[3], o[4], o[5], t,
+                 INPUTS[largest], v[largest]);
     }
     }
 }

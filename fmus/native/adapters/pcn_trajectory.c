@@ -106,9 +106,14 @@ static int publish(pcn_instance *in, const kind *k, double t, pcn_text *why)
     double out[6];
     pc_refusal r;
     int code = pc_trajectory_sample(k->buffer, k->words, t, out, &r);
-    if (code == PC_TRAJECTORY_BAD_TIME) return pcn_addf(why, "trajectory time must be >= 0 s, got %r", r.value), 1;
-    if (code != PC_OK)
+    if (code == PC_TRAJECTORY_BAD_TIME) {   /* controller.trajectories._REASONS */
+        pcn_quantify(why, code, "bad_time", "t", r.value, "s", t);
+        return pcn_addf(why, "trajectory time must be >= 0 s, got %r", r.value), 1;
+    }
+    if (code != PC_OK) {
+        pcn_quantify(why, code, "bad_layout", "", r.value, "", t);
         return pcn_addf(why, "the trajectory's buffer is damaged: word %d = %r does not fit it", r.index, r.value), 1;
+    }
     const int slots[6] = {PCN_SLOT_x_d, PCN_SLOT_y_d, PCN_SLOT_dx_d, PCN_SLOT_dy_d, PCN_SLOT_ddx_d, PCN_SLOT_ddy_d};
     for (int j = 0; j < 6; ++j) in->real[slots[j]] = out[j];
     return 0;

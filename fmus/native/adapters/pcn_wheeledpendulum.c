@@ -138,8 +138,8 @@ static int step(pcn_instance *in, double t, double h, pcn_text *why)
     double *r = in->real, tau[3] = {r[PCN_SLOT_tau_l], r[PCN_SLOT_tau_r], r[PCN_SLOT_tau_d]};
     for (int k = 0; k < 3; ++k)
         if (fabs(tau[k]) > ABSURD)
-            return pcn_addf(why, "input %s = %r at t = %G s is absurd: |%s| must be <= %G", inputs[k], tau[k], t,
-                            inputs[k], ABSURD), 1;
+            return pcn_addf(pcn_timed(why), "input %s = %r at t = %G s is absurd: |%s| must be <= %G", inputs[k],
+                            tau[k], t, inputs[k], ABSURD), 1;
     double start = r[PCN_SLOT_push_start], duration = r[PCN_SLOT_push_duration];
     if (start - 1e-9 <= t && t < start + duration - 1e-9) tau[2] += r[PCN_SLOT_push_torque];
     pendulum *pd = (pendulum *)in->data;
@@ -150,10 +150,17 @@ static int step(pcn_instance *in, double t, double h, pcn_text *why)
         publish(in);
         return 0;
     }
-    if (code == PC_WHEELED_BAD_INPUT)
-        return pcn_addf(why, "input %s = %r at t = %G s is not finite", inputs[refusal.index], refusal.value, t), 1;
-    if (code != PC_WHEELED_FALLEN_PITCH && code != PC_WHEELED_FALLEN_FLOOR && code != PC_WHEELED_NONFINITE)
-        return pcn_addf(why, "step size %r at t = %G s must be > 0", h, t), 1;
+    /* plant.wheeled.REASONS */
+    static const char *const states[8] = {"theta", "psi", "phi", "x", "y", "dtheta", "dpsi", "dphi"};
+    if (code == PC_WHEELED_BAD_INPUT) {
+        pcn_quantify(why, code, "input_not_finite", inputs[refusal.index], refusal.value, "N m", t);
+        return pcn_addf(pcn_timed(why), "input %s = %r at t = %G s is not finite", inputs[refusal.index], refusal.value,
+                        t), 1;
+    }
+    if (code != PC_WHEELED_FALLEN_PITCH && code != PC_WHEELED_FALLEN_FLOOR && code != PC_WHEELED_NONFINITE) {
+        if (code == PC_WHEELED_BAD_STEP) pcn_quantify(why, code, "bad_step", "dt", refusal.value, "s", t);
+        return pcn_addf(pcn_timed(why), "step size %r at t = %G s must be > 0", h, t), 1;
+    }
     in->boolean[PCN_SLOT_fallen] = 1;
     double end = t + h * taken / substeps;
     char degrees[32];
@@ -161,7 +168,12 @@ static int step(pcn_instance *in, double t, double h, pcn_text *why)
     const char *what = code == PC_WHEELED_FALLEN_PITCH   ? "the robot fell over (pitch beyond 90 degrees)"
                        : code == PC_WHEELED_FALLEN_FLOOR ? "the robot fell over (body touching the floor)"
                                                          : "the state became non-finite";
-    return pcn_addf(why, "%s at t = %G s: psi = %s deg at the last good state", what, end, degrees), 1;
+    if (code == PC_WHEELED_NONFINITE)
+        pcn_quantify(why, code, "nonfinite_state", states[refusal.index], refusal.value, "", end);
+    else
+        pcn_quantify(why, code, code == PC_WHEELED_FALLEN_PITCH ? "fallen_pitch" : "fallen_floor", "psi", refusal.value,
+                     "rad", end);
+    return pcn_addf(pcn_timed(why), "%s at t = %G s: psi = %s deg at the last good state", what, end, degrees), 1;
 }
 
 /* Restored data: the parameter words are the instance's parameters (or all zero, before set-up). */
