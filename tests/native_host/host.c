@@ -17,8 +17,9 @@
  *
  * On success it prints "key value" lines to stdout: steps, simulated_s, setup_cpu_s (loading,
  * wiring and the first step, in which libcosim initialises the FMUs), then for the steps
- * after it timed_s (their simulated time), cpu_s (CPU of all threads) and wall_s, CSV rows
- * included; libpython_mapped
+ * after it timed_s (their simulated time), cpu_s (CPU of all threads), thread_cpu_s (CPU of
+ * the calling thread alone: the rest is libcosim's worker threads) and wall_s, CSV rows
+ * included; threads (the process's threads after the steps, from /proc/self/status); libpython_mapped
  * (lines of /proc/self/maps naming libpython), python_symbol (whether Py_Initialize resolves
  * in the process) and fmu_binaries (the mapped FMU binaries, by file name).  Exit status 2 on
  * any error, with libcosim's message on stderr.
@@ -81,6 +82,27 @@ static double cpu_seconds(void)
     struct timespec t;
     clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+static double thread_cpu_seconds(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* The process's threads now ("Threads:" of /proc/self/status), -1 when unreadable. */
+static long thread_count(void)
+{
+    FILE *status = fopen("/proc/self/status", "r");
+    char line[LINE_SIZE];
+    long threads = -1;
+    while (status && fgets(line, sizeof line, status))
+        if (!strncmp(line, "Threads:", 8))
+            threads = strtol(line + 8, NULL, 10);
+    if (status)
+        fclose(status);
+    return threads;
 }
 
 static double wall_seconds(void)
@@ -351,16 +373,18 @@ int main(int argc, char **argv)
         step_once(execution, csv, observer, refs, &config, &steps, &now, rows);
     setup_cpu = cpu_seconds() - setup_cpu;
     const cosim_time_point timed_from = now;
-    double cpu = cpu_seconds(), wall = wall_seconds();
+    double cpu = cpu_seconds(), own = thread_cpu_seconds(), wall = wall_seconds();
     while (now < stop)
         step_once(execution, csv, observer, refs, &config, &steps, &now, rows);
     cpu = cpu_seconds() - cpu;
+    own = thread_cpu_seconds() - own;
     wall = wall_seconds() - wall;
     if (fclose(csv) != 0)
         fail("cannot write", argv[2]);
 
-    printf("steps %ld\nsimulated_s %.9f\ntimed_s %.9f\nsetup_cpu_s %.6f\ncpu_s %.6f\nwall_s %.6f\n", steps,
-           1e-9 * (double)now, 1e-9 * (double)(now - timed_from), setup_cpu, cpu, wall);
+    printf("steps %ld\nsimulated_s %.9f\ntimed_s %.9f\nsetup_cpu_s %.6f\ncpu_s %.6f\nthread_cpu_s %.6f\nwall_s %.6f\n"
+           "threads %ld\n", steps, 1e-9 * (double)now, 1e-9 * (double)(now - timed_from), setup_cpu, cpu, own, wall,
+           thread_count());
     report_mappings();
     cosim_execution_destroy(execution);
     if (observer)
