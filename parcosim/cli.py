@@ -64,10 +64,19 @@ EXIT_REFUSED = EXIT_STATUS[RunStatus.INVALID]
 DEFAULT_SCENE = "bench_circle_TCMDx"
 
 
-def _fmi_version_option(command) -> None:
-    command.add_argument("--fmi-version", type=int, choices=(2, 3), default=2,
-                         help="with --native: FMI 2.0 (default) or FMI 3.0 co-simulation FMUs, the same C under "
-                              "either (docs/native.md)")
+def _fmi_version_option(command, text: str = "with --native: FMI 2.0 (default) or FMI 3.0 co-simulation FMUs, the "
+                                                  "same C under either (docs/native.md)") -> None:
+    command.add_argument("--fmi-version", type=int, choices=(2, 3), default=2, help=text)
+
+
+#: Why ``run --mode fmu --native --fmi-version 3`` is refused: the master's FMU back end
+#: (``fmus.cosim.backends._FmuInstance``: fmpy's FMU2Slave, the fmi2 set/get/doStep/state calls of
+#: the step path) is FMI 2.0 throughout; FMI 3.0 changes every one of those calls, so it
+#: would be a second back end, to run the same C as the FMI 2.0 FMUs (docs/native.md "FMI 3.0").
+FMI3_RUN_REFUSED = ("--fmi-version 3: parcosim run --mode fmu --native runs FMI 2.0 FMUs only (the master's FMU "
+                    "back end is FMI 2.0); the FMI 3.0 native FMUs, the same C, are for FMI 3.0 importers: "
+                    "parcosim build --native --fmi-version 3, parcosim export-fmu SCENE OUT.fmu --native "
+                    "--fmi-version 3")
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -110,6 +119,8 @@ def _parser() -> argparse.ArgumentParser:
                      help="integrate the drives inside the plant (ActuatedFiveBarPlant), RK4 N steps per "
                           "sample; 8 is 2.2e4x more accurate than separate drives (docs/actuated.md)")
     _replace_option(run)
+    _fmi_version_option(run, "with --mode fmu --native: 2 (default); 3 is refused: the master's FMU back end is "
+                              "FMI 2.0 (docs/native.md)")
     report = sub.add_parser("report", help="run the 16 bench scenes; markdown report beside the thesis' Tables 9-14")
     report.add_argument("--mode", choices=("inprocess", "fmu"), default="inprocess",
                         help="slaves in process (default) or the built FMUs through fmpy")
@@ -259,6 +270,8 @@ def main(argv: list[str] | None = None) -> int:
             raise CommandError(f"--native runs native FMUs: it needs --mode fmu, not --mode {args.mode}")
         if getattr(args, "fmi_version", 2) != 2 and not args.native:
             raise CommandError(f"--fmi-version {args.fmi_version} is for the native FMUs: it needs --native")
+        if args.command == "run" and args.fmi_version == 3:
+            raise CommandError(FMI3_RUN_REFUSED)
         path, is_file = _output(args)
         if path is not None:
             check_output(path, is_file)
