@@ -87,6 +87,10 @@ void pcn_step_size_message(const pcn_instance *in, pcn_text *why, double t, doub
 
 const pcn_variable *pcn_variable_of(unsigned vr)
 {
+    /* The generator numbers the variables 0, 1, ... in table order: one look (every get and
+     * set asks, per value reference; the search was a fifth of a per-component package's
+     * CPU in a C host, docs/native.md); any other table is searched. */
+    if (vr < (unsigned)pcn_n_variables && pcn_variables[vr].vr == vr) return &pcn_variables[vr];
     for (int k = 0; k < pcn_n_variables; ++k)
         if (pcn_variables[k].vr == vr) return &pcn_variables[k];
     return NULL;

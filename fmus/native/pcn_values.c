@@ -9,30 +9,31 @@ static const char *const CAUSALITY_NAME[] = {"input", "output", "parameter"};
 
 /* ---- values ---- */
 
-/* The wrapper's check: each vr a variable of this type; else logs the first, nonzero. */
+/* The wrapper's check: each vr a variable of this type; else logs the first, nonzero.  The
+ * message is written only for a refusal: an accepted call (every get and set of a step)
+ * fills no text. */
 static int check_vrs(native *in, const char *fn, const unsigned vr[], size_t nvr, const void *values,
                      pcn_type type)
 {
+    const pcn_variable *v = NULL;
+    size_t k = 0;
+    if (nvr > 0 && vr != NULL && values != NULL)
+        for (; k < nvr; ++k) {
+            v = pcn_variable_of(vr[k]);
+            if (v == NULL || v->type != type) break;
+        }
+    if (k == nvr) return 0;
     pcn_text why;
     pcn_clear(&why);
-    if (nvr > 0 && (vr == NULL || values == NULL)) {
+    if (vr == NULL || values == NULL)
         pcn_addf(&why, "%s (NULL) with %d values refused", vr == NULL ? "the value reference array" : "the value array",
                  (int)nvr);
-        pcn_call_error(in, fn, why.text);
-        return 1;
-    }
-    for (size_t k = 0; k < nvr; ++k) {
-        const pcn_variable *v = pcn_variable_of(vr[k]);
-        if (v == NULL) pcn_addf(&why, "value reference %u is not a variable of this FMU", vr[k]);
-        else if (v->type != type)
-            pcn_addf(&why, "value reference %u ('%s') is a %s variable, not a %s", vr[k], v->name,
-                     in->api->type_name[v->type], in->api->type_name[type]);
-        if (why.length) {
-            pcn_call_error(in, fn, why.text);
-            return 1;
-        }
-    }
-    return 0;
+    else if (v == NULL) pcn_addf(&why, "value reference %u is not a variable of this FMU", vr[k]);
+    else
+        pcn_addf(&why, "value reference %u ('%s') is a %s variable, not a %s", vr[k], v->name,
+                 in->api->type_name[v->type], in->api->type_name[type]);
+    pcn_call_error(in, fn, why.text);
+    return 1;
 }
 
 /* A get of an output before initialisation builds the model first (GuardedSlave._calculate_outputs_for). */

@@ -3,9 +3,11 @@
 (an SSP package stepped by Ecos's C library ``libecosc.so`` from the ecospy wheel).
 
 :func:`plain_config` writes the plain host's configuration from FMU files or from an SSP
-package (its components and connections; it sets no parameters, as fmpy's SSP runner:
-the per-component native FMUs carry theirs compiled in).  Used by
-benchmarks/native_speed.py (``--c-hosts``) and tests/fmus/native/test_native_c_hosts.py.
+package (:func:`ssp_parts`: its components and connections; it sets no parameters, as fmpy's
+SSP runner: the per-component native FMUs carry theirs compiled in).
+:func:`one_fmu_package` wraps one FMU as an SSP package whose OSP annotation sets libcosim's
+worker threads (libcosimc's API has no other way to set them).  Used by
+benchmarks/native_c_hosts.py and tests/fmus/native/test_native_c_hosts.py.
 """
 from __future__ import annotations
 
@@ -74,9 +76,10 @@ def _unpacked(fmu: Path, into: Path) -> tuple:
 
 
 def plain_config(work, step: float, stop: float, fmus: dict, connections=(), outputs=(),
-                 profile: bool = False) -> str:
+                 profile: bool = False, reals=()) -> str:
     """The plain host's configuration: ``fmus`` instance -> FMU file, ``connections``
-    ("a.y", "b.u") of Real variables, ``outputs`` "instance.variable" read every step."""
+    ("a.y", "b.u") of Real variables, ``outputs`` "instance.variable" read every step,
+    ``reals`` ("a.u", value) set in Initialization Mode."""
     vrs, lines = {}, [f"step {step!r}", f"stop {float(stop)!r}", f"profile {int(profile)}"]
     for name, fmu in fmus.items():
         binary, identifier, guid, uri, md = _unpacked(Path(fmu), Path(work) / "unpacked" / name)
@@ -90,8 +93,23 @@ def plain_config(work, step: float, stop: float, fmus: dict, connections=(), out
         return f"{instance} {vrs[instance][variable]}"
 
     lines += [f"connect {ref(a)} {ref(b)}" for a, b in connections]
+    lines += [f"real {ref(name)} {float(value)!r}" for name, value in reals]
     lines += [f"output {ref(o)}" for o in outputs]
     return "\n".join(lines) + "\n"
+
+
+def one_fmu_package(fmu: Path, path: Path, step: float, worker_threads: int | None = 0) -> Path:
+    """``fmu`` alone as an SSP package at ``path`` (instance ``loop``) whose OSP annotation
+    gives ``step`` and ``worker_threads`` (0: libcosim steps the FMU on the calling thread;
+    None: its default pool of ``hardware_concurrency - 1`` worker threads)."""
+    from fmus.cosim.system import Component, System
+    from fmus.ssp.export import export_ssp
+    from fmus.ssp.libcosim import with_libcosim_annotation
+
+    fmu, path = Path(fmu), Path(path)
+    system = System(components=(Component("loop", fmu.stem),), connections=(), record=(), stop_time=1.0, step=step)
+    plain = export_ssp(system, path.with_name(path.stem + "_plain.ssp"), fmus={fmu.stem: fmu}, bake=False)
+    return with_libcosim_annotation(plain, path, step, worker_threads)
 
 
 def ssp_parts(path, into) -> tuple:
@@ -128,7 +146,9 @@ def run_fmi2_host(program, work, config: str, timeout: float = 600.0) -> HostRun
 
 
 def run_ecos_host(program, package, step: float, stop: float, parameter_set: str | None = None,
-                  one_cpu: bool = True, timeout: float = 600.0) -> HostRun:
-    """Run the Ecos host on ``package``; raise RuntimeError with its stderr if it fails."""
-    argv = [str(program), str(package), repr(float(step)), repr(float(stop)), parameter_set or "-", str(int(one_cpu))]
+                  one_cpu: bool = True, values=(), timeout: float = 600.0) -> HostRun:
+    """Run the Ecos host on ``package`` (``values``: "instance.variable" Reals to read at the
+    end, reported as ``value.instance::variable``); raise RuntimeError with its stderr if it fails."""
+    argv = [str(program), str(package), repr(float(step)), repr(float(stop)), parameter_set or "-", str(int(one_cpu)),
+            *(v.replace(".", "::", 1) for v in values)]
     return _report(subprocess.run(argv, capture_output=True, text=True, timeout=timeout), "Ecos host")

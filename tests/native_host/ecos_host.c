@@ -1,7 +1,7 @@
 /* An SSP package stepped by Ecos's C library (libecosc.so, shipped in the ecospy wheel) in a
  * C program: no Python in the process (issue 28, item 6).
  *
- *     ecos_host PACKAGE.ssp STEP STOP PARAMETER_SET ONE_CPU
+ *     ecos_host PACKAGE.ssp STEP STOP PARAMETER_SET ONE_CPU [INSTANCE::VARIABLE ...]
  *
  * STEP, STOP in seconds; PARAMETER_SET the set ecos_simulation_init applies ("-": none);
  * ONE_CPU 1 binds the process to one CPU first (as fmus.ssp.run runs Ecos: its steps use
@@ -9,7 +9,8 @@
  * host stepping and reading each step would.  It prints "key value" lines: steps,
  * simulated_s, setup_cpu_s (loading, initialising and the first step), timed_s, cpu_s
  * (CPU of all threads, the later steps), thread_cpu_s (the calling thread's), wall_s,
- * threads.  Exit status 2 on any error, with Ecos's message on stderr.
+ * threads; then value.INSTANCE::VARIABLE, each Real named after ONE_CPU at the end, %.17g.
+ * Exit status 2 on any error, with Ecos's message on stderr.
  *
  * Ecos's C header is not in the wheel: the functions used are declared below from the
  * ctypes signatures of ecospy (EcosSimulation.py, lib.py).
@@ -28,6 +29,7 @@ void *ecos_simulation_create_from_ssp(const char *ssp_path, double step_size);
 bool ecos_simulation_init(void *sim, double start_time, const char *parameter_set);
 double ecos_simulation_step(void *sim, size_t steps);
 double ecos_simulation_get_time(void *sim);
+bool ecos_simulation_get_real(void *sim, const char *identifier, double *value);
 bool ecos_simulation_terminate(void *sim);
 void ecos_simulation_destroy(void *sim);
 const char *ecos_last_error_msg(void);
@@ -92,8 +94,9 @@ static void one_cpu(void)
 
 int main(int argc, char **argv)
 {
-    if (argc != 6) {
-        fprintf(stderr, "usage: %s PACKAGE.ssp STEP STOP PARAMETER_SET|- ONE_CPU(0|1)\n", argv[0]);
+    if (argc < 6) {
+        fprintf(stderr, "usage: %s PACKAGE.ssp STEP STOP PARAMETER_SET|- ONE_CPU(0|1) [INSTANCE::VARIABLE ...]\n",
+                argv[0]);
         return 2;
     }
     const double step = parse_number(argv[2], "STEP"), stop = parse_number(argv[3], "STOP");
@@ -126,6 +129,12 @@ int main(int argc, char **argv)
         fail("the simulation stopped early");
     printf("steps %ld\nsimulated_s %.9f\ntimed_s %.9f\nsetup_cpu_s %.6f\ncpu_s %.6f\nthread_cpu_s %.6f\nwall_s %.6f\n"
            "threads %ld\n", steps, reached, reached - step, setup_cpu, cpu, own, wall, thread_count());
+    for (int i = 6; i < argc; i++) {
+        double value;
+        if (!ecos_simulation_get_real(sim, argv[i], &value))
+            fail(argv[i]);
+        printf("value.%s %.17g\n", argv[i], value);
+    }
     ecos_simulation_terminate(sim);
     ecos_simulation_destroy(sim);
     return 0;

@@ -1,8 +1,10 @@
 /* A plain FMI 2.0 co-simulation host in C: no co-simulation library, no Python.  It loads
  * each FMU's binary with dlopen, calls its fmi2 functions itself and steps the FMUs as a
  * Jacobi master (every FMU steps from t = k h, then every connection copies its output to
- * its input), on the calling thread.  What it costs is the FMUs' own cost plus a few
- * fmi2GetReal/fmi2SetReal calls: the floor any C host starts from (issue 28, item 6).
+ * its input), on the calling thread.  The connections move in one fmi2GetReal per FMU that
+ * feeds any and one fmi2SetReal per FMU fed (as libcosim gets and sets per slave).  What it
+ * costs is the FMUs' own cost plus those calls: the floor any C host starts from (issue 28,
+ * item 6).
  *
  *     fmi2_host CONFIG
  *
@@ -15,6 +17,7 @@
  *                                                     binary is BINARY (URI: its resources)
  *     connect FROM VR TO VR                           Real output VR of slave FROM feeds
  *                                                     Real input VR of slave TO
+ *     real NAME VR VALUE                              a Real set in Initialization Mode
  *     output NAME VR                                  a Real read after every step
  *     profile 1                                       time each FMU's doSteps and the
  *                                                     transfers apart (monotonic clock)
@@ -57,6 +60,10 @@ typedef struct {
     fmi2TerminateTYPE *terminate;
     fmi2FreeInstanceTYPE *free_instance;
     double dostep_s;
+    /* the outputs it feeds (each once) and the inputs it is fed, with their values */
+    int n_gets, n_sets;
+    fmi2ValueReference get_vrs[MAX_LINKS], set_vrs[MAX_LINKS];
+    double got[MAX_LINKS], put[MAX_LINKS];
 } Slave;
 
 /* A Real variable of a slave, by index. */
@@ -74,6 +81,10 @@ typedef struct {
     int n_links;
     Ref from[MAX_LINKS];
     Ref to[MAX_LINKS];
+    int got_at[MAX_LINKS], put_at[MAX_LINKS];   /* each connection's place in got[] and put[] */
+    int n_initial;
+    Ref initial[MAX_LINKS];
+    double initial_values[MAX_LINKS];
     int n_outputs;
     Ref outputs[MAX_LINKS];
     double values[MAX_LINKS];
@@ -198,6 +209,11 @@ static void parse_line(Host *h, char *line)
             fail("too many lines of", key);
         h->from[h->n_links] = parse_ref(h, a[0], a[1], key);
         h->to[h->n_links++] = parse_ref(h, a[2], a[3], key);
+    } else if (!strcmp(key, "real")) {
+        if (h->n_initial >= MAX_LINKS)
+            fail("too many lines of", key);
+        h->initial[h->n_initial] = parse_ref(h, a[0], a[1], key);
+        h->initial_values[h->n_initial++] = parse_number(a[2], key);
     } else if (!strcmp(key, "output")) {
         if (h->n_outputs >= MAX_LINKS)
             fail("too many lines of", key);
@@ -239,17 +255,46 @@ static void initialise(Host *h)
             fail("fmi2Instantiate failed for", s->name);
         check(s->setup_experiment(s->instance, fmi2False, 0.0, 0.0, fmi2False, 0.0), s, "fmi2SetupExperiment");
         check(s->enter_initialization(s->instance), s, "fmi2EnterInitializationMode");
+        for (int k = 0; k < h->n_initial; k++)
+            if (h->initial[k].slave == i)
+                check(s->set_real(s->instance, &h->initial[k].vr, 1, &h->initial_values[k]), s, "fmi2SetReal");
         check(s->exit_initialization(s->instance), s, "fmi2ExitInitializationMode");
+    }
+}
+
+/* Each connection's places in its source's got[] (an output feeding several inputs is got
+ * once) and its target's put[] (an input fed twice is refused). */
+static void plan_transfers(Host *h)
+{
+    for (int i = 0; i < h->n_links; i++) {
+        Slave *from = &h->slaves[h->from[i].slave], *to = &h->slaves[h->to[i].slave];
+        int k = 0;
+        while (k < from->n_gets && from->get_vrs[k] != h->from[i].vr)
+            k++;
+        if (k == from->n_gets)
+            from->get_vrs[from->n_gets++] = h->from[i].vr;
+        h->got_at[i] = k;
+        for (int j = 0; j < to->n_sets; j++)
+            if (to->set_vrs[j] == h->to[i].vr)
+                fail("an input is fed by two connections, of", to->name);
+        h->put_at[i] = to->n_sets;
+        to->set_vrs[to->n_sets++] = h->to[i].vr;
     }
 }
 
 static void transfer(Host *h)
 {
-    for (int i = 0; i < h->n_links; i++) {
-        Slave *from = &h->slaves[h->from[i].slave], *to = &h->slaves[h->to[i].slave];
-        double value;
-        check(from->get_real(from->instance, &h->from[i].vr, 1, &value), from, "fmi2GetReal");
-        check(to->set_real(to->instance, &h->to[i].vr, 1, &value), to, "fmi2SetReal");
+    for (int i = 0; i < h->n_slaves; i++) {
+        Slave *s = &h->slaves[i];
+        if (s->n_gets)
+            check(s->get_real(s->instance, s->get_vrs, (size_t)s->n_gets, s->got), s, "fmi2GetReal");
+    }
+    for (int i = 0; i < h->n_links; i++)
+        h->slaves[h->to[i].slave].put[h->put_at[i]] = h->slaves[h->from[i].slave].got[h->got_at[i]];
+    for (int i = 0; i < h->n_slaves; i++) {
+        Slave *s = &h->slaves[i];
+        if (s->n_sets)
+            check(s->set_real(s->instance, s->set_vrs, (size_t)s->n_sets, s->put), s, "fmi2SetReal");
     }
 }
 
@@ -294,6 +339,7 @@ int main(int argc, char **argv)
     }
     static Host host;
     read_config(argv[1], &host);
+    plan_transfers(&host);
     const long steps = (long)(host.stop_s / host.step_s + 0.5);
     double setup_cpu = clock_seconds(CLOCK_PROCESS_CPUTIME_ID), transfer_s = 0.0;
     initialise(&host);
