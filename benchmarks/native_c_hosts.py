@@ -17,7 +17,8 @@ FMUs cost), libcosim's C library ``libcosimc`` (``host.c``) and Ecos's C library
   that package (1 CPU);
 * the per-component native package (``parcosim export-ssp SCENE OUT.ssp --per-component
   --native``) at each ``--substeps`` n (base step T / n; 4: the export's trial's): in the
-  plain host (once plain, once with each FMU's doSteps and the transfers timed apart), in
+  plain host (once plain, once with each FMU's doSteps and the transfers timed apart: their
+  shares, and those shares of the untimed run's CPU), in
   libcosim as exported (``numWorkerThreads="0"``) and with libcosim's default pool, in Ecos
   on 1 CPU and on all.
 
@@ -175,18 +176,25 @@ def table(rows: list) -> str:
 
 
 def profile_table(rows: list) -> str:
-    """The timed plain-host rows: each FMU's doSteps and the transfers, wall µs per simulated ms."""
+    """The timed plain-host rows: each FMU's doSteps and the transfers as shares of their sum
+    (the thread's CPU clock around each, less its least cost per reading), and those shares
+    of the untimed plain row's CPU in µs per simulated ms (a CPU clock reading is a system
+    call: the timed run costs more, its shares are what is kept)."""
+    plain = {(what, step): r for (host, what, step), r in rows if host == "plain FMI 2.0 C host" and r.get("ok")}
     lines = []
     for (host, what, step), r in rows:
-        if not r.get("ok") or "transfer_s" not in r or "timed per FMU" not in host:
+        untimed = plain.get((what, step))
+        if not r.get("ok") or "transfer_s" not in r or untimed is None:
             continue
-        parts = {k.split(".", 1)[1]: per_ms(v, r) for k, v in r.items() if k.startswith("dostep_s.")}
-        lines += [f"\n{what} (doStep {step}), wall µs per simulated ms, plain host timed per FMU "
-                  f"(process CPU {per_ms(r['cpu_s'], r):.2f}):", "",
-                  "| " + " | ".join(parts) + " | all doSteps | transfers |",
-                  "|" + "---:|" * (len(parts) + 2),
-                  "| " + " | ".join(f"{v:.2f}" for v in parts.values()) +
-                  f" | {sum(parts.values()):.2f} | {per_ms(r['transfer_s'], r):.2f} |"]
+        parts = {k.split(".", 1)[1]: v for k, v in r.items() if k.startswith("dostep_s.")}
+        parts["all doSteps"] = sum(parts.values())
+        parts["transfers"] = r["transfer_s"]
+        total = parts["all doSteps"] + parts["transfers"]
+        lines += [f"\n{what} (doStep {step}): each FMU's doSteps and the transfers in the plain host, share and "
+                  f"CPU µs per simulated ms of its untimed run ({per_ms(untimed['cpu_s'], untimed):.2f}):", "",
+                  "| " + " | ".join(parts) + " |", "|" + "---:|" * len(parts),
+                  "| " + " | ".join(f"{v / total:.0%}: {per_ms(untimed['cpu_s'], untimed) * v / total:.2f}"
+                                    for v in parts.values()) + " |"]
     return "\n".join(lines)
 
 

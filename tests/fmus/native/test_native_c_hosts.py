@@ -74,6 +74,20 @@ def test_the_plain_host_steps_a_lowpass_chain_as_the_closed_form_jacobi_master(p
     np.testing.assert_allclose(values(run, ["a.1", "b.1"]), [a, b], rtol=1e-12)
 
 
+def test_the_plain_hosts_profile_times_without_changing_the_run(plain, lowpass, tmp_path):
+    """``profile 1`` (each FMU's doSteps and the transfers timed apart) gives the same values
+    as the plain run, bit for bit, and a time for every FMU and the transfers.  Catches the
+    timed path stepping or transferring otherwise than the plain one."""
+    fmus, links = {"a": lowpass, "b": lowpass}, [("a.y", "b.u")]
+    reals, outputs = [("a.u", U), ("a.tau", TAU_A), ("b.tau", TAU_B)], ["a.y", "b.y"]
+    runs = [run_fmi2_host(plain, tmp_path / str(p), plain_config(tmp_path / str(p), H, 0.1, fmus, links, outputs,
+                                                                 profile=p, reals=reals)) for p in (False, True)]
+    assert values(runs[0], ["a.1", "b.1"]).tolist() == values(runs[1], ["a.1", "b.1"]).tolist()
+    assert {k for k in runs[1].report if k.startswith(("dostep_s.", "transfer_s"))} == \
+        {"dostep_s.a", "dostep_s.b", "transfer_s"}
+    assert "transfer_s" not in runs[0].report
+
+
 def test_the_plain_host_refuses_an_input_fed_twice(plain, lowpass, tmp_path):
     """Catches a plan that lets the second connection into one input silently win."""
     fmu = lowpass
