@@ -28,7 +28,10 @@ when missing).  Each package then runs, side by side in one invocation, in:
   no connections; the pythonfmu one with libpython preloaded) and in fmpy (``FMU2Slave``:
   ``doStep`` and a read of ``x``, ``y`` per step, as a Python host steps it), with doSteps of
   its own 1 ms and of 10 ms (ten loop steps per doStep: the host's cost per call shared).
-  With ``--loop-only`` only these rows are measured.
+  With ``--loop-only`` only these rows are measured.  (The C host adds it with
+  ``cosim_execution_create``: libcosim's default worker thread takes each step.  The native
+  FMUs in three C hosts, libcosim's with ``numWorkerThreads="0"`` among them, side by side:
+  benchmarks/native_c_hosts.py.)
 * ``--per-component``: instead, the scene's per-component package of issue 26 (``parcosim
   export-ssp --per-component``: base step T / n, each sampled component's ``sample_phase``;
   n the export's trial's, from ``benchmarks/results/tools.json`` when stored there) with its
