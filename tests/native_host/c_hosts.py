@@ -61,7 +61,8 @@ def build_ecos_host(out_dir) -> Path:
 
 
 def _unpacked(fmu: Path, into: Path) -> tuple:
-    """(binary, model identifier, guid, resources URI) of ``fmu`` unpacked into ``into``."""
+    """(binary, model identifier, guid, resources URI, model description) of ``fmu`` unpacked
+    into ``into``."""
     from fmpy import extract, read_model_description
 
     md = read_model_description(str(fmu))

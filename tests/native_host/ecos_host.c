@@ -25,6 +25,8 @@
 #include <string.h>
 #include <time.h>
 
+#include "host_clock.h"
+
 void *ecos_simulation_create_from_ssp(const char *ssp_path, double step_size);
 bool ecos_simulation_init(void *sim, double start_time, const char *parameter_set);
 double ecos_simulation_step(void *sim, size_t steps);
@@ -54,26 +56,6 @@ static double parse_number(const char *text, const char *what)
         exit(2);
     }
     return value;
-}
-
-static double clock_seconds(clockid_t id)
-{
-    struct timespec t;
-    clock_gettime(id, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
-
-static long thread_count(void)
-{
-    FILE *status = fopen("/proc/self/status", "r");
-    char line[LINE_SIZE];
-    long threads = -1;
-    while (status && fgets(line, sizeof line, status))
-        if (!strncmp(line, "Threads:", 8))
-            threads = strtol(line + 8, NULL, 10);
-    if (status)
-        fclose(status);
-    return threads;
 }
 
 /* Binds the process to the lowest CPU it may run on. */

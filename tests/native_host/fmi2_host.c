@@ -41,6 +41,7 @@
 #include <time.h>
 
 #include "fmi2Functions.h"
+#include "host_clock.h"
 
 enum { MAX_SLAVES = 64, MAX_LINKS = 256, TEXT_SIZE = 4096, LINE_SIZE = 16384 };
 
@@ -96,13 +97,6 @@ static void fail(const char *what, const char *detail)
 {
     fprintf(stderr, "fmi2_host: %s%s%s\n", what, detail ? ": " : "", detail ? detail : "");
     exit(2);
-}
-
-static double clock_seconds(clockid_t id)
-{
-    struct timespec t;
-    clock_gettime(id, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
 static void logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status status, fmi2String category,
@@ -336,19 +330,6 @@ static void step(Host *h, long k, double *transfer_s)
     }
     if (h->profile)
         *transfer_s += profile_clock() - w;
-}
-
-static long thread_count(void)
-{
-    FILE *status = fopen("/proc/self/status", "r");
-    char line[LINE_SIZE];
-    long threads = -1;
-    while (status && fgets(line, sizeof line, status))
-        if (!strncmp(line, "Threads:", 8))
-            threads = strtol(line + 8, NULL, 10);
-    if (status)
-        fclose(status);
-    return threads;
 }
 
 int main(int argc, char **argv)

@@ -33,6 +33,7 @@
 #include <time.h>
 
 #include "cosim_api.h"
+#include "host_clock.h"
 
 enum { MAX_ITEMS = 64, NAME_SIZE = 256, PATH_SIZE = 4096, LINE_SIZE = 8192 };
 
@@ -75,41 +76,6 @@ static void fail(const char *what, const char *detail)
 static void fail_cosim(const char *what)
 {
     fail(what, cosim_last_error_message());
-}
-
-static double cpu_seconds(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
-
-static double thread_cpu_seconds(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
-
-/* The process's threads now ("Threads:" of /proc/self/status), -1 when unreadable. */
-static long thread_count(void)
-{
-    FILE *status = fopen("/proc/self/status", "r");
-    char line[LINE_SIZE];
-    long threads = -1;
-    while (status && fgets(line, sizeof line, status))
-        if (!strncmp(line, "Threads:", 8))
-            threads = strtol(line + 8, NULL, 10);
-    if (status)
-        fclose(status);
-    return threads;
-}
-
-static double wall_seconds(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
 static void copy_text(char *to, size_t size, const char *from, const char *what)
@@ -345,7 +311,7 @@ int main(int argc, char **argv)
     static Config config;
     read_config(argv[1], &config);
     cosim_log_set_output_level(COSIM_LOG_ERROR);
-    double setup_cpu = cpu_seconds();
+    double setup_cpu = clock_seconds(CLOCK_PROCESS_CPUTIME_ID);
     cosim_execution *execution = create_execution(&config);
     wire(execution, &config);
     /* An observer reads every variable of every slave after each step: only when rows are wanted. */
@@ -371,14 +337,15 @@ int main(int argc, char **argv)
     /* libcosim initialises the FMUs in the first step: that step counts as set-up. */
     if (now < stop)
         step_once(execution, csv, observer, refs, &config, &steps, &now, rows);
-    setup_cpu = cpu_seconds() - setup_cpu;
+    setup_cpu = clock_seconds(CLOCK_PROCESS_CPUTIME_ID) - setup_cpu;
     const cosim_time_point timed_from = now;
-    double cpu = cpu_seconds(), own = thread_cpu_seconds(), wall = wall_seconds();
+    double cpu = clock_seconds(CLOCK_PROCESS_CPUTIME_ID), own = clock_seconds(CLOCK_THREAD_CPUTIME_ID),
+           wall = clock_seconds(CLOCK_MONOTONIC);
     while (now < stop)
         step_once(execution, csv, observer, refs, &config, &steps, &now, rows);
-    cpu = cpu_seconds() - cpu;
-    own = thread_cpu_seconds() - own;
-    wall = wall_seconds() - wall;
+    cpu = clock_seconds(CLOCK_PROCESS_CPUTIME_ID) - cpu;
+    own = clock_seconds(CLOCK_THREAD_CPUTIME_ID) - own;
+    wall = clock_seconds(CLOCK_MONOTONIC) - wall;
     if (fclose(csv) != 0)
         fail("cannot write", argv[2]);
 
