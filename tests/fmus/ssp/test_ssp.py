@@ -13,6 +13,7 @@ from fmus.cosim.master import simulate
 from fmus.ssp.export import NS, PARAMETER_SET, export_ssp, read_ssp_experiment, read_ssp_parameters
 from fmus.ssp.run import ecos_available, simulate_ssp_ecos, simulate_ssp_fmpy
 from fmus.cosim.system import Component, Connection, System
+from fmus.status import RunStatus
 from scenarios.scenes.catalogue import get_scene
 from scenarios.scenes.transforms import drives_in_plant
 
@@ -241,8 +242,11 @@ def refusing(fmu_dir, tmp_path_factory):
 
 
 def test_fmpy_run_that_an_fmu_refuses_names_the_reason(refusing):
-    with pytest.raises(RuntimeError, match=r"plant: initialisation refused: start point x0=5\.0"):
-        simulate_ssp_fmpy(refusing)
+    """fmpy raises on fmi2Discard and its rows are lost: the run has none and its error is the
+    plant's record (kind initialisation, the plant, t = 0)."""
+    run = simulate_ssp_fmpy(refusing)
+    assert (run.error.kind, run.error.instance, run.error.time) == (RunStatus.INITIALISATION, "plant", 0.0)
+    assert "initialisation refused: start point x0=5.0" in str(run.error) and len(run.time) == 0
 
 
 def test_ecos_run_stops_at_a_refused_step_like_the_master(refusing):
@@ -250,7 +254,8 @@ def test_ecos_run_stops_at_a_refused_step_like_the_master(refusing):
     if reason is not None:
         pytest.skip(f"Ecos not available ({reason}): pip install ecospy and apt-get install libtbb12")
     run = simulate_ssp_ecos(refusing, list(SIGNALS))
-    assert run.error.startswith("plant refused the step from t = 0 s: initialisation refused")
+    assert str(run.error).startswith("plant refused the step from t = 0 s: initialisation refused")
+    assert (run.error.kind, run.error.instance) == (RunStatus.INITIALISATION, "plant")
     assert len(run.time) == 1 and run.time[0] == 0.0   # the master keeps the same single row
 
 
