@@ -131,8 +131,9 @@ def test_bad_parameters_named():
     """Catches a pendulum built with a negative mass, a pitch past 90 degrees or an unknown model."""
     with pytest.raises(ValueError, match="parameter M = -1"):
         WheeledPendulum(SEED.with_(M=-1.0))
-    with pytest.raises(ValueError, match="initial state: pitch beyond 90"):
+    with pytest.raises(ValueError, match=r"initial psi = 2.0 rad is no standing robot \(fallen_pitch\)") as fallen:
         WheeledPendulum(initial=dict(psi=2.0))
+    assert (fallen.value.name, fallen.value.value) == ("psi", 2.0)
     with pytest.raises(ValueError, match="model = 'other'"):
         WheeledPendulum(model="other")
 
