@@ -73,6 +73,8 @@ def test_the_pages_name_many_commands():
 
 
 def test_every_command_and_option_named_exists():
+    """Catches a page naming a command, an option or a choice the parser does not have (renamed or removed
+    without the docs)."""
     wrong = []
     for where, command, rest in MENTIONS:
         if command not in COMMANDS:
@@ -131,6 +133,7 @@ def _exists(path: str) -> bool:
 
 
 def test_every_repository_path_named_exists():
+    """Catches a page pointing at a file that moved or was deleted."""
     named = list(_repository_paths())
     assert len(named) > 100
     missing = [f"{where}: {path}" for where, path in named if not _exists(path)]
@@ -138,6 +141,7 @@ def test_every_repository_path_named_exists():
 
 
 def test_every_python_module_named_exists():
+    """Catches a page's python -m command whose module no longer exists."""
     modules = {(f"{page.relative_to(ROOT)}", m) for page in PAGES
                for m in re.findall(r"python -m ([\w.]+)", page.read_text(encoding="utf-8"))}
     assert len(modules) > 5
@@ -175,6 +179,8 @@ def _matches(action, stated: str) -> bool:
 
 
 def test_the_reference_states_the_parsers_defaults():
+    """Catches docs/index.md stating a default the parser does not have, or an option it does not list at
+    all."""
     stated = list(_stated_defaults())
     assert len(stated) >= 35
     wrong = [f"parcosim {c} {o}: docs/index.md says {s!r}" + (

@@ -95,6 +95,8 @@ def test_ssd_is_well_formed(exported):
 
 
 def test_package_validates_against_the_ssp_schema(exported):
+    """Catches an SSD or parameter file that breaks the SSP 1.0 schema (element order, a missing
+    attribute), which strict tools refuse to load."""
     from fmpy.ssp.ssd import read_ssd
 
     _, path, _ = exported
@@ -102,6 +104,8 @@ def test_package_validates_against_the_ssp_schema(exported):
 
 
 def test_parameter_set_holds_the_scene_parameters(exported):
+    """Catches a binding lost or retyped in the export (an Integer written as a Real, a Real not read back
+    to the same double) or a parameter set a tool cannot select by its name."""
     system, path, _ = exported
     expected = {f"{c.name}.{n}": v for c in system.components for n, v in c.parameters.items()}
     got = read_ssp_parameters(path)
@@ -151,6 +155,8 @@ def test_plain_fmpy_runs_the_package_without_its_parameter_bindings(exported):
 
 
 def test_string_and_boolean_parameters_round_trip(fmu_dir, tmp_path):
+    """Catches Strings with XML special characters or Booleans and Integers that do not read back as
+    written."""
     system = System(
         (Component("plant", "FiveBarPlant", {"preset": "bench", "project": True, "encoder_counts": 4000,
                                              "x0": -0.002, "y0": 0.108, "kernel": 'a "quoted" & <odd>'}),),
@@ -163,6 +169,8 @@ def test_string_and_boolean_parameters_round_trip(fmu_dir, tmp_path):
 # --- running it elsewhere --------------------------------------------------------------------
 
 def test_fmpy_simulate_ssp_matches_the_jacobi_master(exported):
+    """Catches fmpy's runner given other parameters, initial outputs or time labels than our Jacobi master
+    (its row k is the master's row k + 1)."""
     system, path, reference = exported
     run = simulate_ssp_fmpy(path)
     # fmpy labels the values after the step [t, t + h] with t and has no row for t = 0:
@@ -181,6 +189,8 @@ def test_fmpy_without_initial_outputs_starts_from_zero_inputs(exported):
 
 
 def test_ecos_matches_the_jacobi_master(exported):
+    """Catches Ecos run with other parameters (a parameter set it did not apply) or its rows read at other
+    times than our Jacobi master's."""
     reason = ecos_available()
     if reason is not None:
         pytest.skip(f"Ecos not available ({reason}): pip install ecospy and apt-get install libtbb12")
@@ -219,6 +229,8 @@ def _system(**changes):
                      Component("ctrl", "PositionController"))}, "not a parameter"),
 ])
 def test_what_cannot_be_exported_is_a_value_error(fmu_dir, tmp_path, changes, message):
+    """Catches an export that writes a package a tool cannot run (sub-steps, an unknown model, a recorded
+    input, a wrong connection or parameter type), or leaves a partial file behind."""
     with pytest.raises(ValueError, match=message):
         export_ssp(_system(**changes), tmp_path / "bad.ssp", fmu_dir)
     assert not (tmp_path / "bad.ssp").exists()
@@ -250,6 +262,8 @@ def test_fmpy_run_that_an_fmu_refuses_names_the_reason(refusing):
 
 
 def test_ecos_run_stops_at_a_refused_step_like_the_master(refusing):
+    """Catches an Ecos run that steps on past a refusal (Ecos does) or loses the plant's record; it keeps
+    the master's single row."""
     reason = ecos_available()
     if reason is not None:
         pytest.skip(f"Ecos not available ({reason}): pip install ecospy and apt-get install libtbb12")
