@@ -73,6 +73,8 @@ REFUSED = {
 
 @pytest.mark.parametrize("case", sorted(REFUSED))
 def test_a_refused_command_says_one_line_exits_2_and_leaves_nothing(case, tmp_path, monkeypatch, capfd, no_work):
+    """Catches a refused command that prints a traceback or several lines, writes to stdout, exits
+    otherwise than 2, or leaves a file or folder behind."""
     argv, expected = REFUSED[case]
     monkeypatch.chdir(tmp_path)
     (tmp_path / "blocker").write_text("")
@@ -114,6 +116,8 @@ def _actions(parser: argparse.ArgumentParser, prefix: str = "parcosim"):
 
 
 def test_every_option_and_command_has_help():
+    """Catches an option or command added without help text, or a top-level help that does not say what
+    bare parcosim runs."""
     from motor.cli import _parser as identify_parser
 
     parser = _parser()

@@ -240,6 +240,8 @@ def test_the_balance_controller_refuses_a_non_finite_input_by_name_and_time():
 
 
 def test_every_balance_refusal_code_has_its_message():
+    """Catches a balance controller refusal code without its message (a KeyError where the refusal is
+    reported) or a message naming the wrong buffer word."""
     import kernels
     from controller import fastbalance
     from controller.balance import REASONS

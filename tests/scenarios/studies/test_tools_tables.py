@@ -55,6 +55,7 @@ def test_a_tools_finer_rows_are_read_at_the_scenes_2ms_points():
 
 
 def test_a_run_that_stopped_early_or_failed_is_not_completed():
+    """Catches a tool's run that stopped before its end, or carries an error, counted as completed."""
     scene = _scene()
     assert tools.tool_metrics(scene, _run(end=0.1), COLUMNS)["completed"] is False
     refused = RunError(RunStatus.REFUSED, "plant refused the step from t = 0.1 s: singular", instance="plant", time=0.1)
@@ -92,6 +93,8 @@ def test_the_comparison_table_gives_each_tools_ratios_step_and_cpu():
 
 
 def test_the_summary_gives_each_tools_ranges_over_the_scenes():
+    """Catches the summary's ranges, completion counts or CPU figures computed over the wrong rows, or a
+    tool that never ran given numbers."""
     results = _results()
     results[("default", "bench_triangle_TCMDx")] = [
         ("fmpy", {"e_ef_mm": 0.8, "tau_ef_Nm": 0.03, "completed": True, "cpu_s": 0.5, "simulated_s": 0.2,
