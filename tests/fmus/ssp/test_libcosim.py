@@ -62,6 +62,8 @@ def libcosim_run(thesis):
 # --- the step-size annotation (no libcosim needed) ------------------------------------------
 
 def test_annotation_text_is_what_libcosim_reads():
+    """Catches an OSP annotation libcosim does not read (another type, namespace or attribute name: it
+    would then crash without an algorithm) or a zero step written."""
     text = libcosim_annotation_xml(1e-3)
     root = ET.fromstring(f'<r xmlns:ssc="{NS["ssc"]}" xmlns:osp="{OSP_NS}">{text}</r>')
     annotation = root.find("ssc:Annotation", NS)
@@ -95,6 +97,8 @@ def test_annotated_package_keeps_the_literal_prefixes_and_the_schema(thesis, tmp
 
 @needs_libcosim
 def test_libcosim_matches_the_jacobi_master(thesis, libcosim_run):
+    """Catches libcosim running the package otherwise than our Jacobi master (other parameters, initial
+    outputs, times off k h)."""
     system, _, reference = thesis
     run = libcosim_run
     assert run.error is None and run.tool == "libcosim"
