@@ -90,6 +90,7 @@ def test_the_statistics_are_numpys_over_the_completed_finite_values():
     rows = [_row(k, 0.1 * k * (-1) ** k) for k in range(9)] + [_row(9, 5.0, completed=False, error="x")]
     s = sweep.summarize(rows)
     assert (s["samples"], s["completed"], s["failed"]) == (10, 9, 1)
+    assert list(s["outcomes"].items()) == [("completed", 9), ("refused", 1)]     # RunStatus' words, its order
     for metric in sweep.METRICS:
         v = [r[metric] for r in rows[:9] if math.isfinite(r[metric])]
         assert s[metric]["n"] == len(v)
