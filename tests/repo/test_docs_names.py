@@ -296,8 +296,8 @@ def test_every_default_stated_in_prose_is_the_parsers(monkeypatch):
 
 
 def test_the_prose_default_reader_finds_each_form(monkeypatch):
-    """The reader above is not vacuous: each way the pages state a default is found, and a
-    wrong one is reported."""
+    """Catches a prose-default reader that finds nothing (the check above would pass vacuously): each
+    way the pages state a default is found, and a wrong default is reported."""
     forms = {"`parcosim build [--out DIR]` (default `fmus/build/`; more)": ("parcosim build", "--out", "fmus/build/"),
              "`python -m benchmarks.mutation_py`: `--seed` defaults to 3501; and":
                  ("python -m benchmarks.mutation_py", "--seed", "3501"),
@@ -349,8 +349,8 @@ def test_every_note_is_listed_and_stamped_with_a_commit_of_the_history():
 
 
 def test_the_commit_reader_tells_a_hash_from_a_word():
-    """The stamp reader is not vacuous: a short and a full hash are stamps, words of hex letters,
-    a hex name inside a path and a date are not."""
+    """Catches a stamp reader that misses hashes (the check above would pass vacuously) or takes words
+    of hex letters, a hex name inside a path or a date for one."""
     assert _COMMIT.findall("commit `98328dc` (2026-12-03); full 0824d9d1f2e3a4b5c6d7e8f9a0b1c2d3e4f5a6b7") == [
         "98328dc", "0824d9d1f2e3a4b5c6d7e8f9a0b1c2d3e4f5a6b7"]
     assert _COMMIT.findall("defaced effaced fmus/build/a1b2c3d4 2026-12-03") == []

@@ -254,8 +254,8 @@ def refusing(fmu_dir, tmp_path_factory):
 
 
 def test_fmpy_run_that_an_fmu_refuses_names_the_reason(refusing):
-    """fmpy raises on fmi2Discard and its rows are lost: the run has none and its error is the
-    plant's record (kind initialisation, the plant, t = 0)."""
+    """Catches fmpy's exception on fmi2Discard escaping the runner, or its error given as text: fmpy's
+    rows are lost, so the run has none, and its error is the plant's record (initialisation, t = 0)."""
     run = simulate_ssp_fmpy(refusing)
     assert (run.error.kind, run.error.instance, run.error.time) == (RunStatus.INITIALISATION, "plant", 0.0)
     assert "initialisation refused: start point x0=5.0" in str(run.error) and len(run.time) == 0
