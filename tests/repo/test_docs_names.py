@@ -8,6 +8,7 @@ changed in the parser but not in the reference, a help text whose "(default: X)"
 from __future__ import annotations
 
 import argparse
+import ast
 import importlib.util
 import itertools
 import re
@@ -176,6 +177,32 @@ def _matches(action, stated: str) -> bool:
     if isinstance(action.default, float):
         return float(stated) == pytest.approx(action.default, rel=1e-5)
     return str(action.default).rstrip("/") == stated.rstrip("/")
+
+
+def _module_options(module: str) -> set:
+    """The option strings ``python -m MODULE`` declares: every string starting with "-" given to an
+    ``add_argument`` call in its source (read, not run: some modules' ``main`` works before parsing)."""
+    path = Path(importlib.util.find_spec(module).origin)
+    if path.name == "__init__.py" and (path.parent / "__main__.py").exists():
+        path = path.parent / "__main__.py"
+    return {a.value for node in ast.walk(ast.parse(path.read_text(encoding="utf-8")))
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "add_argument"
+            for a in node.args if isinstance(a, ast.Constant) and isinstance(a.value, str) and a.value.startswith("-")}
+
+
+def test_every_option_of_a_python_module_named_exists():
+    """Catches a page naming an option of a ``python -m`` command that its parser no longer has
+    (``python -m scenarios.tools --stop-time``, removed in session 35, was still in
+    docs/contract.md); ``python -m parcosim`` is the parcosim command checked above."""
+    named = [(f"{page.relative_to(ROOT)}:{number}", m.group(1), option)
+             for page in PAGES for number, code in _code(page.read_text(encoding="utf-8"))
+             for m in re.finditer(r"(?:^|[\s(|])python -m ([\w.]+)([^;`#|]*)", code) if m.group(1) != "parcosim"
+             for option in re.findall(r"(?<![\w-])--[a-z][\w-]*", m.group(2))]
+    assert len(named) > 50
+    declared = {module: _module_options(module) for module in {m for _, m, _ in named}}
+    wrong = [f"{where}: python -m {module} {option}" for where, module, option in named
+             if option not in declared[module]]
+    assert not wrong, wrong
 
 
 def test_the_reference_states_the_parsers_defaults():
