@@ -114,7 +114,7 @@ class FallenError(kernels.Refused, RuntimeError):
     Attributes
     ----------
     code : int
-        :data:`plant.wheeled_kernel.CODES` key.
+        the kernel's refusal code (:data:`REASONS` key).
     psi : float
         Pitch at the last good state [rad].
     """
@@ -131,6 +131,18 @@ def refusal_error(refusal: kernels.Refusal, time: float, psi: float, limit: floa
     ``psi`` the pitch at the last good state [rad])."""
     refused = kernels.refused(REASONS, refusal, time, psi_deg=math.degrees(psi), limit=limit)
     return FallenError(refused, psi) if refusal.code in kernel.FALLS else refused
+
+
+def initial_refusal(refusal: kernels.Refusal) -> ValueError:
+    """The refusal of an initial state the kernel's condition refuses: the state entry and its
+    value as fields (:class:`motor._checks.BadValue`, which a slave renames to its parameter),
+    the reason :data:`REASONS` names for the code."""
+    from motor._checks import BadValue   # the motor package imports python-control: only here
+
+    reason = REASONS[refusal.code]
+    unit = f" {reason.unit}" if reason.unit else ""
+    return BadValue(reason.variables[refusal.index], float(refusal.value),
+                    "initial {name} = {value!r}" + unit + f" is no standing robot ({reason.name})")
 
 
 #: Default RK4 substeps per 1 ms communication step: 2 keeps the error below 1e-9 rad
@@ -182,9 +194,9 @@ class WheeledPendulum:
 
             raise BadValue("dphi", float(self.y[kernel.DPHI]),
                            "initial {name} = {value!r} with the yaw locked (yaw = false) must be 0")
-        code = kernel.condition(self.prm, self.y)
-        if code != kernel.OK:
-            raise ValueError(f"initial state: {kernel.CODES[code]} (psi0 = {float(self.y[kernel.PSI])!r} rad)")
+        refusal = kernels.Refusal()
+        if kernel.condition(self.prm, self.y, refusal) != kernel.OK:
+            raise initial_refusal(refusal)
         self.time = 0.0
         self.fallen = False
 

@@ -38,8 +38,6 @@ MAX_SUBSTEPS = _i.in_dll(kernels.library(), "pc_wheeled_max_substeps").value
 #: an input beyond the compiled loop's limit; a substep count or encoder count out of range.
 OK, FALLEN_PITCH, FALLEN_FLOOR, NONFINITE, BAD_INPUT, BAD_STEP, INPUT_LIMIT, BAD_SETTING = range(8)
 FALLS = (FALLEN_PITCH, FALLEN_FLOOR, NONFINITE)
-CODES = {OK: "ok", FALLEN_PITCH: "pitch beyond 90 degrees", FALLEN_FLOOR: "body touching the floor",
-         NONFINITE: "non-finite state"}
 INPUT_NAMES = ("tau_l", "tau_r", "tau_d")
 #: The sensors and outputs of :func:`sensors`, in order (the ``WheeledPendulum`` FMU's outputs).
 OUTPUT_NAMES = ("theta", "psi", "phi", "dtheta", "dpsi", "dphi", "x", "y", "omega_l", "omega_r", "enc_l", "enc_r",
@@ -107,10 +105,11 @@ def derivative(prm: np.ndarray, y: np.ndarray, tau_l: float, tau_r: float, tau_d
     _derivative(kernels.address(prm), kernels.address(y), tau_l, tau_r, tau_d, kernels.address(out))
 
 
-def condition(prm: np.ndarray, y: np.ndarray) -> int:
-    """OK, or the code of why the state ``y`` is no longer a standing robot."""
+def condition(prm: np.ndarray, y: np.ndarray, refusal: kernels.Refusal | None = None) -> int:
+    """OK, or the code of why the state ``y`` is no longer a standing robot (and, in
+    ``refusal``, which state entry and its value)."""
     _check(prm, PARAMS_SIZE, y, N_STATE)
-    return _condition(kernels.address(prm), kernels.address(y), None)
+    return _condition(kernels.address(prm), kernels.address(y), None if refusal is None else ctypes.addressof(refusal))
 
 
 def energy(prm: np.ndarray, y: np.ndarray) -> float:

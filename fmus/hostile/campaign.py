@@ -69,9 +69,9 @@ def main(argv=None) -> int:
 
     def progress(result):
         done[0] += 1
-        if done[0] % 100 == 0 or result.outcome not in ("ok", "refused"):
+        if done[0] % 100 == 0 or result.outcome not in hostile.ANSWERED:
             print(f"{done[0]}/{len(cases)} {time.perf_counter() - start:.0f} s"
-                  + ("" if result.outcome in ("ok", "refused") else
+                  + ("" if result.outcome in hostile.ANSWERED else
                      f"  {result.outcome}: {result.case['model']} {result.case['kind']} seed {result.case['seed']} "
                      f"{result.problems[:1]}"), file=sys.stderr, flush=True)
 
@@ -92,7 +92,7 @@ def main(argv=None) -> int:
             + hostile.markdown_summary(results) + "\n")
     (out / "summary.md").write_text(text, encoding="utf-8")
     print(text)
-    bad = [r for r in results if r.outcome not in ("ok", "refused")]
+    bad = [r for r in results if r.outcome not in hostile.ANSWERED]
     return 1 if bad else 0
 
 

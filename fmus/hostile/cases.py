@@ -33,6 +33,8 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from fmus.status import RunStatus
+
 #: Longest an FMI call may take [s].
 CALL_LIMIT = 10.0
 #: A case taking longer (all its calls) is a hang.
@@ -45,8 +47,13 @@ KINDS = ("parameters", "inputs", "steps", "order", "strings", "sets", "state", "
 #: returns fmi2Fatal there; checked only when the FMU's binary is parcosim's wrapper
 #: (:data:`fmus.slave.base.WRAPPER_SYMBOL`).
 WRAPPER_KINDS = ("sets", "state", "start", "lifecycle")
-#: Outcomes, in the order of the summary table.
-OUTCOMES = ("ok", "refused", "fatal", "violation", "crash", "hang")
+#: A case's outcomes, in the order of the summary table: the FMU answered every call as FMI
+#: allows (``ok``) or refused one so (``refused``: :class:`fmus.status.RunStatus`'s word); the
+#: others (fmi2Fatal, a broken rule, a dead or hung worker) are findings.
+OK, REFUSED = "ok", RunStatus.REFUSED.value
+OUTCOMES = (OK, REFUSED, "fatal", "violation", "crash", "hang")
+#: The outcomes that are no finding.
+ANSWERED = (OK, REFUSED)
 #: The worker's exit status after a case whose call returned fmi2Fatal (its instance may not be
 #: called again): the case is ``fatal``, not a ``crash``.
 EXIT_AFTER_FATAL = 3

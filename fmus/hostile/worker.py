@@ -26,7 +26,7 @@ from fmpy.fmi2 import FMU2Slave
 
 from fmus.native.state_bytes import MAGIC as NATIVE_STATE_MAGIC
 from fmus.native.state_bytes import fnv1a
-from fmus.hostile.cases import CALL_LIMIT, EXIT_AFTER_FATAL
+from fmus.hostile.cases import CALL_LIMIT, EXIT_AFTER_FATAL, OK, REFUSED
 from fmus.status import FMI_STATUS, FmiStatus, RunError, RunStatus, step_failed
 
 #: Bytes of the checksum that ends a serialised parcosim state (docs/state.md).
@@ -72,7 +72,7 @@ class Runner:
     def call(self, label: str, function, *args):
         """Call ``function``; record its status; raise Fatal on fmi2Fatal."""
         start = time.perf_counter()
-        status = 0
+        status = FmiStatus.OK
         result = None
         try:
             result = function(*args)
@@ -145,7 +145,7 @@ class Runner:
         if not outputs:
             return
         status, values = self.call("get outputs", self.fmu.getReal, [v.valueReference for v in outputs])
-        if status == 0:
+        if status == FmiStatus.OK:
             bad = {v.name: x for v, x in zip(outputs, values) if not math.isfinite(x)}
             if bad:
                 self.problems.append(f"non-finite outputs after the fmi2OK {label}: {bad}")
@@ -174,7 +174,7 @@ class Runner:
         for op in case["ops"]:
             if op[0] == "step_before_init":
                 status, _ = self.call("doStep before initialisation", lambda: f.doStep(op[1], op[2]))
-                if status == 0:
+                if status == FmiStatus.OK:
                     self.problems.append("doStep before initialisation returned fmi2OK")
         for name, value in case["parameters"]:
             self.set(name, value)
@@ -192,7 +192,7 @@ class Runner:
                 h = op[2]
                 label = f"doStep({point!r}, {h!r})"
                 status, _ = self.call(label, lambda: f.doStep(point, h))
-                if status == 0:
+                if status == FmiStatus.OK:
                     self.check_outputs(label)
                     expected = t + last
                     if not (math.isfinite(h) and h > 0.0):
@@ -212,7 +212,7 @@ class Runner:
                 terminated = True
             elif kind == "get_state" and not terminated:
                 status, state = self.call("getFMUstate", f.getFMUState)
-                if status == 0:
+                if status == FmiStatus.OK:
                     self.state, state_time = state, t + last
             elif kind in ("exit_init_again", "enter_init_again", "setup_again"):
                 call = {"exit_init_again": ("exitInitializationMode", f.exitInitializationMode),
@@ -227,7 +227,7 @@ class Runner:
                     t, last = point, 0.0
             elif kind == "set_state" and self.state is not None and not terminated:
                 status, _ = self.call("setFMUstate", lambda: f.setFMUState(self.state))
-                if status == 0:
+                if status == FmiStatus.OK:
                     t, last = state_time, 0.0
         if self.state is not None:
             self.call("freeFMUstate", lambda: f.freeFMUState(self.state))
@@ -295,13 +295,13 @@ class Runner:
             status, state = self.call(label, self.fmu.deSerializeFMUstate, data)
             if os.path.exists(marker):
                 self.problems.append(f"{label}: the state's bytes ran a command in the importer")
-        if status == 0 and variant != "forged" and not (variant == "foreign" and other == self.case["model"]):
+        if status == FmiStatus.OK and variant != "forged" and not (variant == "foreign" and other == self.case["model"]):
             self.problems.append(f"{label} returned fmi2OK for bytes that are not a state of this FMU")
         if status != 0:
             return None
         status, _ = self.call(f"setFMUstate ({variant})", self.fmu.setFMUState, state)
         self.call(f"freeFMUstate ({variant})", self.fmu.freeFMUState, state)
-        return now if status == 0 else None
+        return now if status == FmiStatus.OK else None
 
 
 def forged_native_state(data: bytes, rng: random.Random) -> bytes:
@@ -323,13 +323,13 @@ def main() -> int:
         md = descriptions.get(unzip_dir) or descriptions.setdefault(unzip_dir, read_model_description(unzip_dir))
         start = time.perf_counter()
         runner = Runner(case, unzip_dir, md, job["unzipped"])
-        outcome = "ok"
+        outcome = OK
         try:
             runner.run()
         except Fatal:
             outcome = "fatal"
         if outcome != "fatal":
-            outcome = "violation" if runner.problems else ("refused" if runner.refused else "ok")
+            outcome = "violation" if runner.problems else (REFUSED if runner.refused else OK)
         out.write(json.dumps({"outcome": outcome, "statuses": runner.statuses, "problems": runner.problems,
                               "seconds": time.perf_counter() - start}) + "\n")
         out.flush()

@@ -50,7 +50,8 @@ import numpy as np
 
 from fmus.export.archive import rewrite
 from fmus.ssp.export import NS, OSP_ANNOTATION, OSP_NS, _threads_text, libcosim_annotation, read_ssp_experiment
-from fmus.ssp.run import SspRun
+from fmus.ssp.run import SspRun, tool_refusal
+from fmus.status import RunError, RunStatus
 from fmus.cosim.system import split_signal
 
 NS_PER_S = 1_000_000_000
@@ -219,8 +220,11 @@ def simulate_ssp_libcosim(path, signals, stop_time=None, step_size=None, log_lev
 
     When an FMU refuses a step (fmi2Discard, fmi2Error, or an error while initialising)
     libcosim fails it; the run stops there, keeps the rows so far and says why in
-    ``SspRun.error``: "<instance> refused the step from t = ... s: <its String output
-    'error'>" (parcosim FMUs have one), else libcosim's own message.  ``extra`` has
+    ``SspRun.error`` (:func:`fmus.ssp.run.tool_refusal`): the record of the first component
+    (in the package's order) whose String output ``refusal`` is not empty (parcosim FMUs have
+    one), else a record with libcosim's message and no instance (libcosim does not say whose
+    FMU failed the step; kind ``initialisation`` when not even the state after initialisation
+    was observed).  ``extra`` has
     ``load_s`` (unpack, load, instantiate), ``init_s`` (the first ``step()``: libcosim
     initialises the FMUs in it, then takes the first step), ``steps_s`` (the others).
     """
@@ -266,7 +270,7 @@ def simulate_ssp_libcosim(path, signals, stop_time=None, step_size=None, log_lev
         for slave, reference in dict.fromkeys(refs):
             series.start_time_series(slave, reference, CosimVariableType.REAL)
         # A last-value observer exposes every variable for reading after each fmi2DoStep,
-        # so the String outputs 'error' are fresh after a refused step (see _refusal).
+        # so the String outputs 'refusal' are fresh after a refused step (see _refusal).
         last = CosimObserver.create_last_value()
         execution.add_observer(last)
         loaded = _time.perf_counter()
@@ -288,9 +292,10 @@ def simulate_ssp_libcosim(path, signals, stop_time=None, step_size=None, log_lev
             if j == 0:
                 times = t
         rows = min((len(d) for d in data), default=0)
-        if error is not None and first is None and refs and rows == 0:
+        if error is not None and error.instance is None and first is None and refs and rows == 0:
             # Not even the state after initialisation was observed: it failed.
-            error = f"libcosim could not initialise the FMUs: {message.strip() or 'no reason given'}"
+            error = tool_refusal(None, 0.0, "", f"libcosim could not initialise the FMUs: {message.strip()}",
+                                 RunStatus.INITIALISATION)
         del execution, series, last
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
@@ -302,29 +307,27 @@ def simulate_ssp_libcosim(path, signals, stop_time=None, step_size=None, log_lev
                          "step_ns": step_ns, "worker_threads": worker_threads})
 
 
-def _refusal(execution, slaves: dict, variables: dict, t: float, message: str) -> str:
-    """Who refused the step from t and why: the components' String output ``error``,
-    else libcosim's message.  libcosim does not observe after a failed step, but it has
-    read every exposed variable after each ``fmi2DoStep``, refused or not, and an
-    observer added now observes at once: the values the FMUs hold after the refusal."""
+def _refusal(execution, slaves: dict, variables: dict, t: float, message: str) -> RunError:
+    """The record of the step from t that failed (:func:`fmus.ssp.run.tool_refusal`): the first
+    component's String output ``refusal`` that is not empty, else libcosim's message.  libcosim
+    does not observe after a failed step, but it has read every exposed variable after each
+    ``fmi2DoStep``, refused or not, and an observer added now observes at once: the values the
+    FMUs hold after the refusal."""
     from libcosimpy.CosimEnums import CosimVariableType
     from libcosimpy.CosimObserver import CosimObserver
 
-    reasons = []
     with contextlib.suppress(Exception):
         observer = CosimObserver.create_last_value()
         execution.add_observer(observer)
         for name, index in sorted(slaves.items(), key=lambda item: item[1]):
-            v = variables[name].get("error")
+            v = variables[name].get("refusal")
             if v is None or CosimVariableType(v.type) is not CosimVariableType.STRING:
                 continue
             value = observer.last_string_values(index, [v.reference])[0]
             text = value.decode(errors="replace") if isinstance(value, bytes) else (value or "")
             if text:
-                reasons.append(f"{name} refused the step from t = {t:.6g} s: {text}")
-    if reasons:
-        return "; ".join(reasons)
-    return f"libcosim stopped at the step from t = {t:.6g} s: {message.strip() or 'no reason given'}"
+                return tool_refusal(name, t, text, message)
+    return tool_refusal(None, t, "", f"libcosim stopped at the step from t = {t:.6g} s: {message.strip()}")
 
 
 # --- in a child process -----------------------------------------------------------------------

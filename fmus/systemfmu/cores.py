@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import json
 import math
-import re
 
 from plant.correction import MEASURABLE
 
@@ -118,7 +117,7 @@ def _in_process(system: System) -> Stepper:
     return SystemStepper(system, instances, order)
 
 
-# --- refusals named as the FMU names the parameters ------------------------------------------
+# --- refusals of the components --------------------------------------------------------------
 
 class InitialisationRefused(CoSimulationError):
     """A component of a system inside an FMU refused its initialisation."""
@@ -127,51 +126,24 @@ class InitialisationRefused(CoSimulationError):
         return f"{self.instance}: {self.message}"
 
 
-def qualified(message: str, instance: str, parameters) -> str:
-    """``message`` of the component ``instance`` with its ``parameters`` written
-    ``<instance>.<parameter>`` where it names a value by them: ``lam = ...``, ``lam: ...``,
-    ``(lam) = ...``, ``lam must ...``, ``|lam|``, ``parameter lam``, ``parameters lam``.
-    Elsewhere (a unit ``m``, a word such as ``model``) the text stays as it is."""
-    names = "|".join(re.escape(name) for name in sorted(parameters, key=len, reverse=True))
-    if not names:
-        return message
-    name = rf"(?:{names})(?![\w.])"
-    naming = re.compile(rf"(?<![\w.]){name}(?=\s*(?:=(?!=)|:(?!:))|\)\s*=|\s+must\b|\|)"
-                        rf"|(?<=parameter ){name}|(?<=parameters ){name}")
-    return naming.sub(lambda m: f"{instance}.{m.group(0)}", message)
-
-
 class SystemStepper(Stepper):
     """The :class:`fmus.cosim.stepper.Stepper` of a system inside an FMU.
 
-    A component's refusal names the component's parameters as the FMU does,
-    ``<instance>.<parameter>`` (:func:`qualified`); a component that refused its
-    initialisation refuses the system's (:class:`InitialisationRefused`): no step, no sample
-    is taken from a component that has no model (the ControlChain's first sample read its
-    plant model's state, and failed with "'NoneType' object has no attribute 'y'").
+    A component's refusal stays in the component's words: who refused is the record's
+    ``instance`` (``<FMU instance>.<component>``, :func:`fmus.status.refusal_of`), and the
+    message names the component.  A component that refused its initialisation refuses the
+    system's (:class:`InitialisationRefused`): no step, no sample is taken from a component
+    that has no model (the ControlChain's first sample read its plant model's state, and
+    failed with "'NoneType' object has no attribute 'y'").
     """
-
-    def __init__(self, system: System, instances: dict, order):
-        super().__init__(system, instances, order)
-        self.parameters = {name: [v.name for v in inst.variables.values() if v.causality == "parameter"]
-                           for name, inst in instances.items()}
 
     def initialize(self, start_time: float = 0.0) -> None:
         super().initialize(start_time)
         for name, inst in self.instances.items():
             slave = getattr(inst, "slave", None)        # an in-process slave's refusal, in its own words
             if slave is not None and slave.error:
-                reason = slave.refused_because or slave.error
-                raise InitialisationRefused(name, start_time, qualified(reason, name, self.parameters[name]),
+                raise InitialisationRefused(name, start_time, slave.refused_because or slave.error,
                                             RunError.from_json(slave.refusal))
-
-    def step(self, split: dict | None = None) -> None:
-        try:
-            super().step(split)
-        except CoSimulationError as exc:
-            raise CoSimulationError(exc.instance, exc.time,
-                                    qualified(exc.message, exc.instance, self.parameters[exc.instance]),
-                                    exc.run_error) from None
 
 
 def _steps_in(time: float, current_time: float, step_size: float, h: float, multiples: bool) -> int:

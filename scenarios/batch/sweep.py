@@ -36,6 +36,7 @@ retries) is a row with ``completed`` false, its ``outcome`` and its error's fiel
 """
 from __future__ import annotations
 
+import collections
 import csv
 import io
 import json
@@ -46,6 +47,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fmus.status import RunStatus
 from scenarios.batch.engine import Task, run_tasks
 from scenarios.scenes.perturb import DISTRIBUTIONS, draw, load_perturb_file, perturbable, perturbed, uncertainties
 from scenarios.run.runner import atomic_write, check_writable, write_json
@@ -214,9 +216,13 @@ class _Appender:
 
 def summarize(rows: list) -> dict:
     """Metric -> {"n", "mean", "std", "min", "p05", "median", "p95", "max"} over the completed
-    rows with a finite value, and "samples", "completed", "failed" counts."""
+    rows with a finite value, "samples", "completed", "failed" counts ("failed": every sample
+    not completed, whatever its outcome) and "outcomes": the count of each outcome
+    (:class:`fmus.status.RunStatus`' word) among the rows, in that class' order."""
     done = [r for r in rows if r["completed"]]
     summary = {"samples": len(rows), "completed": len(done), "failed": len(rows) - len(done)}
+    counts = collections.Counter(r["outcome"] for r in rows)
+    summary["outcomes"] = {s.value: counts[s.value] for s in RunStatus if counts[s.value]}
     for metric in METRICS:
         v = np.array([r[metric] for r in done if math.isfinite(r[metric])])
         if not len(v):

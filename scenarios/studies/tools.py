@@ -45,6 +45,7 @@ import numpy as np
 
 from controller.strategies import STRATEGY_NAMES
 from fmus.ssp.run import SspRun
+from fmus.status import RunError, RunStatus
 
 from scenarios.run.metrics import scene_metrics
 from scenarios.packaging.chain import export_package, package_scene
@@ -150,18 +151,28 @@ def export_kind(kind: str, scene: Scene, directory, c_drive=None, substeps: int 
 def run_tool(tool: str, path, signals, stop_time: float, step: float, bindings: bool = False) -> SspRun:
     """Run the package ``path`` in ``tool`` (one of :data:`TOOLS`) in this process, plainly
     (fmpy with ``bindings``: its runner given the package's bindings), and return what it
-    recorded with the true time of each row."""
+    recorded with the true time of each row, or, for a run a component stopped, ``error``
+    (the record :func:`fmus.ssp.run.tool_refusal` makes; fmpy's rows are lost then)."""
     if tool == "fmpy":
+        from fmpy.fmi1 import FMICallException
+
+        from fmus.ssp.run import fmpy_watch, simulate_ssp_fmpy
+
         start = _time.perf_counter()
         if bindings:
-            from fmus.ssp.run import simulate_ssp_fmpy
-
             run = simulate_ssp_fmpy(path, stop_time, step, initial_outputs=False)
             time, rows = run.time, run.signals
+            if run.error is not None:
+                return run
         else:
             from fmpy.ssp.simulation import simulate_ssp
 
-            rows = simulate_ssp(str(path), stop_time=stop_time, step_size=step)
+            with fmpy_watch() as watch:    # only to know who refused: the run is fmpy's own
+                try:
+                    rows = simulate_ssp(str(path), stop_time=stop_time, step_size=step)
+                except FMICallException as exc:
+                    return SspRun(time=np.empty(0), signals={s: np.empty(0) for s in signals}, tool="fmpy",
+                                  wall_s=_time.perf_counter() - start, error=watch.refusal(exc))
             time = rows["time"] + step   # fmpy labels the values after the step from t with t
         wall = _time.perf_counter() - start
         keep = time <= stop_time + 1e-6 * step   # it may take a step more
@@ -216,7 +227,8 @@ def compare(scene: Scene, tools=TOOLS, isolated: bool = True, out_dir=None, kind
             c_drive=None, ours: dict | None = None, substeps: int | None = None) -> list:
     """Export ``scene`` as ``kind`` (:func:`export_kind`), run it in each tool and (unless
     ``ours`` is given) in our master; one row per tool: (tool, tool's metrics, our metrics,
-    error or None).  The tool's metrics carry ``cpu_s`` when ``isolated``."""
+    :class:`fmus.status.RunError` or None: the run's ``error``, or a tool that could not run
+    at all, kind ``failed``).  The tool's metrics carry ``cpu_s`` when ``isolated``."""
     ours = run_scene(scene, mode="inprocess").metrics if ours is None else ours
     rows = []
     with tempfile.TemporaryDirectory(prefix="parcosim_pkg_") as tmp:
@@ -227,7 +239,7 @@ def compare(scene: Scene, tools=TOOLS, isolated: bool = True, out_dir=None, kind
                 run = runner(tool, exported.path, list(exported.columns), scene.system.stop_time, exported.step,
                              bindings=exported.foreign and tool == "fmpy")
             except Exception as exc:  # noqa: BLE001 - a tool's failure is a row of the table
-                rows.append((tool, None, ours, f"{type(exc).__name__}: {exc}"))
+                rows.append((tool, None, ours, RunError(RunStatus.FAILED, f"{type(exc).__name__}: {exc}")))
                 continue
             m = tool_metrics(scene, run, exported.columns)
             m["cpu_s"] = run.extra.get("cpu_s", float("nan"))
@@ -333,6 +345,11 @@ def _store(path, key: str, value: dict) -> dict:
     return stored
 
 
+def _stored_error(value: dict) -> RunError | None:
+    """The error of a stored run (its record as :meth:`fmus.status.RunError.record` wrote it)."""
+    return RunError.from_record(value["error"]) if value.get("error") else None
+
+
 def _has_drives(scene: Scene) -> bool:
     return {"drive1", "drive2"} <= {c.name for c in scene.system.components}
 
@@ -379,12 +396,13 @@ def measure(scenes, tools, kinds, results=RESULTS, progress=print) -> dict:
                     start = _time.perf_counter()
                     for tool, m, _, error in compare(scene, todo, kind=kind, c_drive=c_drive,
                                                      ours=stored[ours_key], substeps=substeps):
-                        stored = _store(results, _key(kind, name, tool), {"metrics": m, "error": error})
+                        stored = _store(results, _key(kind, name, tool),
+                                        {"metrics": m, "error": error.record() if error else None})
                         progress(f"{kind} {name} {tool}: " + (f"e_ef x{_ratio(m['e_ef_mm'], stored[ours_key]['e_ef_mm']):.4f}"
                                  if m else f"failed ({error})") + f" [{_time.perf_counter() - start:.0f} s]")
                 table_rows[(kind, name)] = [
                     (t, stored[_key(kind, name, t)]["metrics"], stored[ours_key],
-                     stored[_key(kind, name, t)]["error"]) for t in tools]
+                     _stored_error(stored[_key(kind, name, t)])) for t in tools]
     return table_rows
 
 
@@ -397,7 +415,7 @@ def stored_rows(stored: dict, tools=TOOLS) -> dict:
         ours = stored.get(_key("ours", scene, "parcosim"))
         if kind in ("ours", "trial") or tool not in tools or ours is None:
             continue
-        found.setdefault((kind, scene), []).append((tool, value["metrics"], ours, value["error"]))
+        found.setdefault((kind, scene), []).append((tool, value["metrics"], ours, _stored_error(value)))
 
     def order(item):
         (kind, scene), _ = item

@@ -46,12 +46,16 @@ def test_a_parameter_switch_reaches_the_components_it_names_and_no_other(switche
 
 
 def test_without_viscous_friction_the_current_loop_stays_designed_for_the_motors_b():
+    """Catches switching viscous friction off also changing the current controller's design (b_design
+    follows b to 0), or changing other components."""
     changed, added, removed = _changes(bench("TCMDx", "circle", fidelity=Fidelity(viscous=False)))
     assert changed == {f"drive{j}": {"b": 0.0, "b_design": get_motor_preset(f"motor{j}").b} for j in (1, 2)}
     assert get_motor_preset("motor1").b != get_motor_preset("motor2").b and not added and not removed
 
 
 def test_exact_angles_rewire_the_encoders_readers_to_the_angles():
+    """Catches exact angles that leave a reader (controller or derivator) on the quantised encoder, or
+    rewire something else."""
     changed, added, removed = _changes(bench("TCMDx", "circle", fidelity=Fidelity(encoder=False)))
     assert changed == {}
     for j in (1, 2):
@@ -61,6 +65,8 @@ def test_exact_angles_rewire_the_encoders_readers_to_the_angles():
 
 
 def test_without_observers_the_current_loops_read_the_drives_own_current():
+    """Catches removing the observers without rewiring the current loops to the drives' own current
+    (dangling inputs held at 0)."""
     changed, added, removed = _changes(bench("TCMDx", "circle", fidelity=Fidelity(observer=False)))
     assert changed == {"obs1": "removed", "obs2": "removed"}
     assert added == {("drive1.i", "drive1.i_hat"), ("drive2.i", "drive2.i_hat")}

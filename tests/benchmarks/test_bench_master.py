@@ -28,6 +28,9 @@ def _system():
 
 @pytest.mark.parametrize("model", list(SLAVES))
 def test_passthrough_slave_has_the_real_variables_and_copies(model, classes):
+    """Catches a passthrough slave (the master benchmark's stand-in) whose variables differ from the real
+    slave's, or whose outputs are not the copies of their inputs (the benchmark would time another data
+    flow)."""
     cls = classes[passthrough.passthrough_model(model)]
     real = passthrough.variable_specs(model)
     slave = cls(instance_name="p")
@@ -52,6 +55,8 @@ def test_passthrough_slave_has_the_real_variables_and_copies(model, classes):
 
 
 def test_passthrough_system_runs_in_both_modes_with_outputs_equal_to_inputs(classes, tmp_path):
+    """Catches the passthrough system stepped in another order than the scene, giving other rows through
+    the FMUs than in process, or a connection that reads its source a step late or early."""
     system = _system()
     # Record every connected output, so each copy can be checked against its source.
     record = tuple(dict.fromkeys(list(system.record) + [c.source for c in system.connections]))

@@ -21,6 +21,8 @@ BOUND_MB = 3.0
 
 @pytest.mark.parametrize("mode", ["inprocess", "compiled"])
 def test_repeated_runs_do_not_grow_the_resident_set(mode):
+    """Catches a leak per run (instances, kernel buffers, compiled plans kept alive) growing the resident
+    set past its bound over 30 runs."""
     system = replace(get_scene("bench_circle_TCMDx").system, stop_time=0.02)
     loop(system, mode, 5, 5, report=lambda line: None)          # caches, compilation, allocator pools
     samples = loop(system, mode, 30, 5, report=lambda line: None)

@@ -54,6 +54,7 @@ def test_mjcf_settings():
 
 
 def test_initial_state_closes_at_the_requested_tip():
+    """Catches the MuJoCo model's initial joint angles not closing both chains at the requested tip."""
     params = ref.params_thesis_sim()
     model, data = _model_and_data(params)
     data.qpos[:] = mujoco_5r.mujoco_initial_state(params, 0.07, 0.17)
@@ -63,6 +64,8 @@ def test_initial_state_closes_at_the_requested_tip():
 
 
 def test_mass_matrix_and_bias_forces_match_reference():
+    """Catches the MuJoCo 5R's mass matrix, bias forces or rotor armature differing from the reference
+    model (mapped through the relative-to-absolute angles)."""
     params = _bench_with_tip_mass_and_gravity()
     model, data = _model_and_data(params)
     phi = np.array(ref.ik(params, -0.03, 0.19)) + [0.1, -0.2, 0.3, 0.05]  # any angles: open chains
@@ -96,6 +99,8 @@ def _sinusoidal_torques(t):
     ("thesis_sim", 0.07, 0.17, lambda t: (-0.01, 0.008)),
 ])
 def test_trajectory_with_constant_torques_matches_reference(preset, x0, y0, tau_fn):
+    """Catches the MuJoCo model moving otherwise than the reference under constant torques beyond its soft
+    closure's tolerance, or not moving."""
     params = {"bench": ref.params_bench, "thesis_sim": ref.params_thesis_sim}[preset]()
     t, x, y, gap = mujoco_5r.mujoco_trajectory(params, x0, y0, tau_fn, 0.4)
     _, x_ref, y_ref, _, _ = ref.simulate(params, x0, y0, tau_fn, 0.4, t_eval=t)
@@ -105,6 +110,8 @@ def test_trajectory_with_constant_torques_matches_reference(preset, x0, y0, tau_
 
 
 def test_trajectory_with_held_torques_matches_reference():
+    """Catches the MuJoCo run holding the torques over other intervals than the reference's zero-order
+    hold."""
     params = ref.params_bench()
     t, x, y, _ = mujoco_5r.mujoco_trajectory(params, 0.0, 0.17, _sinusoidal_torques, 0.3)
     t_ref, x_ref, y_ref = mujoco_5r.reference_zoh_trajectory(params, 0.0, 0.17,

@@ -36,6 +36,8 @@ def _changes(operator):
 
 
 def test_every_mutant_applies_and_compiles_and_changes_the_tree():
+    """Catches an operator that yields a syntax error or an equivalent (unchanged) tree, or an operator
+    never drawn."""
     found = _mutants()
     assert {m.operator for m in found} == set(mp.PY_OPERATORS) | {"replace_var"}
     original = ast.dump(ast.parse(SNIPPET))
@@ -46,12 +48,15 @@ def test_every_mutant_applies_and_compiles_and_changes_the_tree():
 
 
 def test_docstrings_annotations_and_f_strings_are_not_mutated():
+    """Catches mutants drawn in docstrings, annotations or f-strings, which no test can kill."""
     for m in _mutants():
         assert "docstring" not in m.before and "kt i - b omega" not in m.before
         assert m.line not in (1, 5, 6, 10) or "float" not in m.before and "{" not in m.before, m
 
 
 def test_the_new_operators_make_their_changes():
+    """Catches drop_term, swap_args, drop_arg, swap_index or constant producing another change than the one
+    each promises."""
     assert ("kt * i - b * omega + offset", "(kt * i - b * omega)") in _changes("drop_term")
     assert ("kt * i", "(kt)") in _changes("drop_term")
     assert ("combine(kt, i, limit=scale)", "(combine(i, kt, limit=scale))") in _changes("swap_args")
@@ -64,6 +69,8 @@ def test_the_new_operators_make_their_changes():
 
 
 def test_replace_var_takes_a_local_of_the_same_kind_defined_before():
+    """Catches replace_var swapping in a name of another kind or one not yet defined (mutants that fail on
+    a NameError or a type error, not on a test)."""
     changes = _changes("replace_var")
     assert ("scale", "(offset)") in changes            # both assigned numbers; offset defined before use
     assert ("kt", "(i)") in changes                    # both annotated float
@@ -80,6 +87,8 @@ def test_classic_operators():
 
 
 def test_the_draw_is_seeded_and_distinct(monkeypatch):
+    """Catches a draw that depends on anything but the seed, draws a mutant twice, or ignores the files'
+    line counts as weights."""
     monkeypatch.setattr(mp, "line_count", lambda name: {"a.py": 900, "b.py": 100}[name])
     pool = {"a.py": mp.mutants_of_python("a.py", SNIPPET), "b.py": mp.mutants_of_python("b.py", SNIPPET)}
     first, again = mp.draw(pool, 7, 40), mp.draw(pool, 7, 40)
@@ -88,6 +97,8 @@ def test_the_draw_is_seeded_and_distinct(monkeypatch):
 
 
 def test_the_map_finds_direct_importers_and_modules_named_in_strings():
+    """Catches a test map missing the tests that import a module only by a string name, listing tests that
+    are not run, or exceeding the cap per module."""
     mapping = mp.test_map()
     assert mapping["fmus.ssp.export"][:2] and "tests/fmus/export/test_oracles_export.py" in mapping["fmus.ssp.export"]
     assert mapping["fmus.slaves.parcosim_derivator"]          # loaded by importlib from a "fmus.slaves." name
@@ -106,6 +117,8 @@ def _linemap():
 
 
 def test_a_mutant_runs_the_tests_that_execute_its_lines_nearest_and_cheapest_first_within_the_budget():
+    """Catches a selection that counts a shared fixture twice, ignores the budget, orders tests otherwise,
+    or runs tests for lines only executed at import."""
     mm, record = _linemap()
     assert mm.cost(record, record["tests"][2:]) == 102.0                  # a shared fixture once, with its test
     assert mm.cost(record, record["tests"]) == 153.0
@@ -123,6 +136,7 @@ def test_a_mutant_runs_the_tests_that_execute_its_lines_nearest_and_cheapest_fir
 
 
 def test_a_bundled_copy_counts_as_its_product_file():
+    """Catches coverage of the copy an FMU bundles (or a test file) not mapped back to the product file."""
     from benchmarks import mutation_map as mm
     products = {"plant/drive.py", "fmus/slaves/parcosim_plant.py"}
     assert mm._product_file("/tmp/fmpy_x/resources/parcosim_b1/plant/drive.py", products) == "plant/drive.py"
@@ -131,6 +145,8 @@ def test_a_bundled_copy_counts_as_its_product_file():
 
 
 def test_the_report_counts_per_area_and_lists_survivors():
+    """Catches a report that counts a mutant in the wrong area, miscounts the score, or leaves a survivor
+    out of the list."""
     from benchmarks.mutation_report import area, table
     assert area("kernels/src/drive.c") == "kernels C" and area("controller/law.py") == "law"
     assert area("fmus/ssp.py") == "fmus export/SSP/state/refusals" and area("fmus/slaves/parcosim_derivator.py") == "fmus other"
@@ -151,6 +167,8 @@ def test_the_report_counts_per_area_and_lists_survivors():
 
 
 def test_a_run_of_several_test_files_splits_into_each_files_map_and_merges_back():
+    """Catches a split or merge of the line map that loses lines or tests, or selects a test that fails on
+    the unmutated tree."""
     mm, record = _linemap()
     record.update(commit="c", returncode=0, shared_of=[[], [], ["session::built_fmus"]],
                   failed=["tests/test_b.py::test_dear"])

@@ -57,6 +57,8 @@ def module(tmp_path, monkeypatch):
 
 
 def test_an_unchanged_file_gives_back_every_mutant(module):
+    """Catches a resumed campaign that cannot relocate mutants of a file that did not change (they would be
+    dropped)."""
     recorded = _mutants(module)
     assert len(recorded) == 4
     for spec, diff in recorded:
@@ -77,6 +79,8 @@ def test_an_edit_above_shifts_the_mutants_and_the_retest_finds_each_again(module
 
 
 def test_a_changed_line_is_not_re_run(module):
+    """Catches a resumed campaign re-running a stored mutant whose line changed since (its outcome no
+    longer applies), or dropping one whose line did not."""
     recorded = _mutants(module)
     module.write_text(SOURCE.replace("    return a + b", "    return a + 2 * b"))
     assert mutation._relocated(*recorded[3]) is None                    # g's line changed

@@ -73,6 +73,8 @@ REFUSED = {
 
 @pytest.mark.parametrize("case", sorted(REFUSED))
 def test_a_refused_command_says_one_line_exits_2_and_leaves_nothing(case, tmp_path, monkeypatch, capfd, no_work):
+    """Catches a refused command that prints a traceback or several lines, writes to stdout, exits
+    otherwise than 2, or leaves a file or folder behind."""
     argv, expected = REFUSED[case]
     monkeypatch.chdir(tmp_path)
     (tmp_path / "blocker").write_text("")
@@ -114,6 +116,8 @@ def _actions(parser: argparse.ArgumentParser, prefix: str = "parcosim"):
 
 
 def test_every_option_and_command_has_help():
+    """Catches an option or command added without help text, or a top-level help that does not say what
+    bare parcosim runs."""
     from motor.cli import _parser as identify_parser
 
     parser = _parser()
@@ -128,6 +132,8 @@ def test_every_option_and_command_has_help():
 
 
 def test_a_pendulum_run_names_its_pitch_and_plots_the_pendulum(tmp_path, short_runs, capsys):
+    """Catches a pendulum run that prints the 5R's e_ef as its result, or plots its tracking error instead
+    of pitch, wheel speeds and voltages."""
     assert main(["run", "pendulum_balance", "--out", str(tmp_path)]) == 0
     last = capsys.readouterr().out.strip().splitlines()[-1]
     metrics = json.loads((tmp_path / "metrics.json").read_text())
@@ -142,6 +148,8 @@ def test_a_pendulum_run_names_its_pitch_and_plots_the_pendulum(tmp_path, short_r
 
 @pytest.mark.parametrize("mask", [0o022, 0o007])
 def test_written_files_follow_the_umask(mask, tmp_path, short_runs, capsys):
+    """Catches result files and rewritten archives written 0600 (a temporary file's mode) instead of
+    following the user's umask."""
     old = os.umask(mask)
     try:
         assert main(["run", SCENE, "--out", str(tmp_path / "run")]) == 0

@@ -36,6 +36,7 @@ def short_runs(monkeypatch):
 
 
 def test_an_unwritable_out_is_reported_before_the_run(tmp_path, monkeypatch, capsys):
+    """Catches an unwritable --out found only after the whole run, or reported in more than one line."""
     def never(*args, **kwargs):
         raise AssertionError("the run started")
 
@@ -48,6 +49,7 @@ def test_an_unwritable_out_is_reported_before_the_run(tmp_path, monkeypatch, cap
 
 
 def test_the_files_are_written_whole(tmp_path, short_runs, capsys):
+    """Catches torn rows or a temporary file left in the output folder after a normal run."""
     assert main(["run", SCENE, "--out", str(tmp_path)]) == 0
     rows = (tmp_path / "result.csv").read_text().splitlines()
     assert len(rows) == 52 and len({row.count(",") for row in rows}) == 1
@@ -56,6 +58,8 @@ def test_the_files_are_written_whole(tmp_path, short_runs, capsys):
 
 
 def test_a_full_disk_names_the_file_and_keeps_the_previous_one(tmp_path, short_runs, monkeypatch, capsys):
+    """Catches a write error on a full disk that truncates the previous result.csv, leaves a temporary, or
+    does not name the file."""
     (tmp_path / "result.csv").write_text("previous\n")
 
     def full(*args, **kwargs):
@@ -70,6 +74,7 @@ def test_a_full_disk_names_the_file_and_keeps_the_previous_one(tmp_path, short_r
 
 
 def test_a_failed_metrics_write_names_metrics_json(tmp_path, short_runs, monkeypatch, capsys):
+    """Catches a failed metrics.json write reported under another file's name or as a success."""
     real = run_module.atomic_write
 
     def failing(path, write):
@@ -83,6 +88,8 @@ def test_a_failed_metrics_write_names_metrics_json(tmp_path, short_runs, monkeyp
 
 
 def test_the_master_returns_the_rows_so_far_on_keyboard_interrupt(monkeypatch):
+    """Catches Ctrl-C losing the rows recorded so far, a half-written row, or an interruption not recorded
+    as its own kind with its time."""
     from fmus.cosim import stepper as stepper_module
     from fmus.cosim.master import simulate
     from scenarios.scenes.catalogue import get_scene
@@ -123,6 +130,8 @@ SLOW_RUN = textwrap.dedent("""
 
 @pytest.mark.parametrize("mode", ["inprocess", "fmu"])
 def test_sigint_during_a_run_writes_what_was_recorded_and_exits_130(mode, tmp_path, built_fmus):
+    """Catches SIGINT in a real process ending in a traceback, another exit status, torn files, or
+    metrics.json without the interruption's record."""
     out = tmp_path / "out"
     args = ["run", SCENE, "--mode", mode, "--out", str(out)]
     if mode == "fmu":

@@ -38,6 +38,8 @@ def run(derivator, q):
 
 @pytest.mark.parametrize("order, fc", [(2, 100.0), (8, 40.0), (2, 60.0), (8, 60.0), (8, 200.0)])
 def test_designed_low_pass_is_the_prewarped_bilinear_bessel(order, fc):
+    """Catches the derivator's filter design departing from the prewarped bilinear Bessel (response off the
+    analog one, -3 dB not at fc, DC gain not 1, an unstable pole)."""
     sos = bessel_lowpass_sos(order, fc, T)
     f = np.linspace(0.0, 450.0, 901)
     _, response = signal.sosfreqz(sos, worN=2 * np.pi * f * T)

@@ -36,6 +36,8 @@ def test_the_loaded_library_carries_the_hash_of_its_sources_and_flags():
 
 
 def test_the_compiler_is_cc_from_the_environment_else_one_on_the_path(monkeypatch):
+    """Catches a compiler choice that ignores CC, fails on a CC that does not exist instead of falling
+    back, or fails without saying what to install."""
     gcc = shutil.which("gcc") or shutil.which("cc")
     monkeypatch.setenv("CC", gcc)
     assert build.compiler() == gcc

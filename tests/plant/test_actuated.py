@@ -98,6 +98,9 @@ def test_energy_balance_with_kt_equal_ke():
 
 
 def test_rk4_steps_beyond_the_electrical_pole_are_refused_by_name():
+    """Catches an in-plant drive whose RK4 step exceeds its electrical pole's stability limit stepped
+    anyway (a diverging current), refused without the numbers and the substeps that would do, or with
+    the state changed."""
     a = _actuated(L=1e-5)
     state = a.state()
     with pytest.raises(PlantError, match=r"drive on joint 1: RK4 steps of 0.001 s are unstable.*R h / L = 110.1 > 2.785 "
@@ -168,6 +171,8 @@ def test_fmu_and_inprocess_identical(built_fmus):
 
 
 def test_the_reference_of_an_in_plant_scene_points_to_its_original():
+    """Catches the monolithic reference run on a scene whose drives were moved into the plant (it would
+    compare the model with itself) instead of pointing to the original scene."""
     from scenarios.reference import ReferenceError
 
     with pytest.raises(ReferenceError, match="plant is an ActuatedFiveBarPlant: its truth is the reference of the "

@@ -129,6 +129,8 @@ def test_released_at_rest_it_stays(kernel, seconds):
 
 
 def test_counter_masses_with_an_end_effector_mass_or_too_light_are_refused():
+    """Catches counter masses accepted with an end-effector mass (the balance then fails silently), a near-
+    zero counter mass (ill-conditioned), or a negative one."""
     with pytest.raises(ValueError, match=r"m0 = 0\.02 kg with counter-masses.*set m0 = 0"):
         PlantSimulator(replace(balanced(), m0=0.02), 0.0, 0.15)
     with pytest.raises(ValueError, match=r"chain1\.counter_mass2 = 1e-06 kg is too light"):
@@ -138,6 +140,8 @@ def test_counter_masses_with_an_end_effector_mass_or_too_light_are_refused():
 
 
 def test_zero_counter_masses_leave_the_fast_kernel_bit_identical():
+    """Catches zero counter masses changing the fast kernel's parameters (the unbalanced bench's results
+    would move)."""
     from plant.fast5r import pack_params
 
     bench = get_preset("bench")

@@ -59,6 +59,8 @@ def world_phi(q, dq):
 
 @pytest.mark.parametrize("preset", PRESETS)
 def test_accelerations_equal_the_lagrange_formulation(preset):
+    """Catches the plant's constrained forward dynamics (thesis ch. 5) differing from an independent
+    Lagrange formulation of the 5R beyond 1e-10."""
     params = variant(preset)
     rp = reference_params(params)
     mech, states = random_states(params, 20, seed=3)
@@ -77,6 +79,8 @@ def test_accelerations_equal_the_lagrange_formulation(preset):
 @pytest.mark.parametrize("balanced", [False, True])
 @pytest.mark.parametrize("preset", PRESETS)
 def test_fast_kernel_equals_the_general_algorithm(preset, balanced):
+    """Catches the 5R fast kernel's derivative or residual (Baumgarte terms included, off the manifold)
+    differing from the general algorithm's."""
     params = variant(preset, balanced)
     kernel = FastKernel(params)
     mech, states = random_states(params, 20, seed=5)
@@ -95,6 +99,8 @@ def test_fast_kernel_equals_the_general_algorithm(preset, balanced):
 
 @pytest.mark.parametrize("preset", PRESETS)
 def test_inverse_dynamics_inverts_forward_dynamics(preset):
+    """Catches inverse dynamics that is not the inverse of forward dynamics, a C matrix outside A's null
+    space, or a mass matrix that is not positive definite."""
     params = variant(preset)
     mech, states = random_states(params, 10, seed=7)
     rng = np.random.default_rng(8)
@@ -130,6 +136,7 @@ def held_with_wobble(out, t):
 
 @pytest.mark.parametrize("project", [True, False])
 def test_constraint_residual_stays_closed_over_ten_seconds(project):
+    """Catches a loop closure that drifts over 10 s of moving (with and without projection) beyond 1e-10."""
     sim = PlantSimulator(get_preset("thesis_sim"), 0.0, 0.17, IntegratorSettings(project=project))
     worst = 0.0
     for k in range(10000):

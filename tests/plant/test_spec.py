@@ -43,6 +43,8 @@ def random_states(n=20, seed=1):
 
 
 def test_rr_equals_the_closed_form_54():
+    """Catches the spec plant's serial dynamics (mass matrix, velocity or gravity terms) of an RR arm
+    differing from the closed form (5.4) beyond 1e-12."""
     spec = plant_spec.load("rr")
     for q, dq in random_states():
         dyn = serial_terms(spec, q, dq)
@@ -53,6 +55,8 @@ def test_rr_equals_the_closed_form_54():
 
 
 def test_rr_with_counter_masses_equals_57_to_63():
+    """Catches counter masses placed on the wrong side or link (negative offsets) in the spec plant's
+    dynamics, against (5.7)-(5.63)."""
     spec = plant_spec.load("rr_counter_masses")   # M1 = 0.3 kg at L1 = -0.05 m, M2 = 0.1 kg at L2 = -0.04 m
     for q, dq in random_states(seed=2):
         dyn = serial_terms(spec, q, dq)
@@ -64,6 +68,8 @@ def test_rr_with_counter_masses_equals_57_to_63():
 
 
 def test_balanced_rr_has_no_gravity_nor_velocity_terms_and_a_constant_mass_matrix():
+    """Catches the balancing formula (64, as corrected) or the spec's counter masses being off: gravity or
+    velocity terms left, or a pose-dependent mass matrix."""
     spec = plant_spec.load("rr_balanced")          # M1 = 0.5 kg, M2 = 0.2 kg by the corrected (64)
     at1, at2 = balancing(0.5, 0.2)
     assert (at1, at2) == pytest.approx((-0.1062, -0.064125), abs=1e-15)   # the spec's comment
@@ -130,6 +136,8 @@ mass = 0.2
     ('name = "q2"', 'name = "q2"\nactuated = true\ninput = "tau1"', 16, "chains[0].links[1].input", "tau1"),
 ])
 def test_a_bad_value_is_named_with_its_line_key_and_value(old, new, line, key, value):
+    """Catches a spec error that names another line or key than the offending one, or omits its value (a
+    negative mass, a misspelled key, a wrong type)."""
     text = GOOD.replace(old, new)
     if line is None:
         assert plant_spec.loads(text).chains[0].chain.dof == 2

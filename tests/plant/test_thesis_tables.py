@@ -60,6 +60,8 @@ def _chain_dict(params, chain):
 
 
 def test_thesis_sim_is_table_3():
+    """Catches the simulation preset drifting from Table 3 or given motor inertia (the thesis' simulation
+    has no motors)."""
     p = get_preset("thesis_sim")
     for chain in ("chain1", "chain2"):
         assert _chain_dict(p, chain) == {k: v for k, v in TABLE_3.items() if k != "m0"}
@@ -68,6 +70,8 @@ def test_thesis_sim_is_table_3():
 
 
 def test_bench_is_tables_4_and_5_with_the_rotors_of_16_and_18():
+    """Catches the bench preset's links drifting from Tables 4-5, an end-effector mass, or rotors not those
+    of Tables 16 and 18."""
     p = get_preset("bench")
     assert _chain_dict(p, "chain1") == TABLE_4
     assert _chain_dict(p, "chain2") == TABLE_5
@@ -98,6 +102,8 @@ def test_the_eight_strategies_of_7_2():
 
 @pytest.mark.parametrize("name", ["PDq", "TCMDx"])
 def test_gains_are_critically_damped_7_29_7_30(name):
+    """Catches controller gains that are not kp = lambda^2, kv = 2 lambda (an under- or over-damped error
+    dynamics)."""
     ctrl = PositionController(get_preset("bench"), get_strategy(name), model="exact")
     lam = get_strategy(name).lam
     assert (ctrl.kp, ctrl.kv) == (lam ** 2, 2 * lam)
@@ -113,6 +119,7 @@ def test_motor_presets_are_tables_16_and_18(motor, table):
 
 @pytest.mark.parametrize("motor, table", [("motor1", TABLE_15), ("motor2", TABLE_17)])
 def test_shipped_measurements_are_tables_15_and_17(motor, table):
+    """Catches the shipped motor data drifting from Tables 15 and 17 (the identification's input)."""
     u, i, omega = identification.read_motor_csv(Path(identification.__file__).parent / "data" / f"{motor}.csv")
     assert np.column_stack([u, i, omega]).tolist() == [list(r) for r in table]
 

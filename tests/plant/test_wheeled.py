@@ -131,8 +131,9 @@ def test_bad_parameters_named():
     """Catches a pendulum built with a negative mass, a pitch past 90 degrees or an unknown model."""
     with pytest.raises(ValueError, match="parameter M = -1"):
         WheeledPendulum(SEED.with_(M=-1.0))
-    with pytest.raises(ValueError, match="initial state: pitch beyond 90"):
+    with pytest.raises(ValueError, match=r"initial psi = 2.0 rad is no standing robot \(fallen_pitch\)") as fallen:
         WheeledPendulum(initial=dict(psi=2.0))
+    assert (fallen.value.name, fallen.value.value) == ("psi", 2.0)
     with pytest.raises(ValueError, match="model = 'other'"):
         WheeledPendulum(model="other")
 
@@ -239,6 +240,8 @@ def test_the_balance_controller_refuses_a_non_finite_input_by_name_and_time():
 
 
 def test_every_balance_refusal_code_has_its_message():
+    """Catches a balance controller refusal code without its message (a KeyError where the refusal is
+    reported) or a message naming the wrong buffer word."""
     import kernels
     from controller import fastbalance
     from controller.balance import REASONS

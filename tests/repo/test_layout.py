@@ -153,6 +153,7 @@ def test_the_reader_finds_lazy_and_relative_imports(tmp_path):
 
 
 def test_every_module_is_in_a_layer():
+    """Catches a new folder or module no layer names, which the direction check would skip."""
     unplaced = []
     for module in MODULES:
         try:
@@ -196,6 +197,8 @@ def _moved_tables() -> dict:
 
 
 def test_old_module_names_lead_to_existing_modules():
+    """Catches an alias table entry pointing to a module that moved again or was removed, or an old name
+    that became a module again."""
     moved = _moved_tables()
     assert len(moved) > 50
     assert not [f"{old} -> {new}" for old, new in moved.items() if new not in MODULES]
@@ -203,6 +206,8 @@ def test_old_module_names_lead_to_existing_modules():
 
 
 def test_the_product_imports_no_old_name():
+    """Catches product code importing a module by its pre-layout name (it works through the alias, so
+    nothing else fails)."""
     moved = _moved_tables()
     old = []
     for module, path in MODULES.items():
@@ -215,6 +220,8 @@ def test_the_product_imports_no_old_name():
 
 
 def test_an_old_name_is_the_new_module_and_runs_with_python_m():
+    """Catches an alias that loads a second copy of the module (its globals then differ) or a moved command
+    that python -m no longer runs."""
     import fmus.cosim.master
     import scenarios.studies.tools
 
@@ -231,6 +238,8 @@ def test_an_old_name_is_the_new_module_and_runs_with_python_m():
                                             ("scenarios.scenes", "with_fmu_files"), ("scenarios.run", "run_scene"),
                                             ("fmus.ssp", "export_ssp")])
 def test_a_package_that_was_a_module_keeps_its_public_names(old, attribute):
+    """Catches a module turned into a package that no longer re-exports the names user code imports from
+    it."""
     assert callable(getattr(importlib.import_module(old), attribute))
     assert importlib.util.find_spec(old).submodule_search_locations is not None
 

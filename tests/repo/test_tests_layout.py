@@ -29,6 +29,8 @@ def test_the_rules_see_the_test_files():
 
 
 def test_every_folder_of_tests_is_a_package():
+    """Catches a tests folder without __init__.py, whose test files then collide by basename under pytest's
+    rootdir import mode."""
     for folder in {p.parent for p in layout_rules.test_files()}:
         for here in (folder, *folder.parents[:len(folder.relative_to(TESTS).parts)]):
             assert (here / "__init__.py").exists(), f"{here.relative_to(ROOT)} has no __init__.py"

@@ -14,6 +14,8 @@ from plant import PlantSimulator, get_preset
 
 
 def test_plant_output_values_are_outputs_in_the_declared_order():
+    """Catches the fast output path (the C kernel's report) giving other values, another order or numpy
+    scalars than outputs(), or a stale report after the state is set from outside."""
     sim = PlantSimulator(get_preset("bench"), -0.002, 0.108)
     names = [name for name, _ in PLANT_OUTPUTS]
     assert list(sim.outputs()) == names
@@ -49,6 +51,8 @@ class _Fixed:
 
 
 def test_derivator_accepts_finite_estimates_whose_sum_overflows():
+    """Catches a finiteness check written on a sum of the estimates (which overflows to inf for finite
+    values) refusing a good step."""
     slave = _slave()
     slave.derivator = _Fixed((1e308, 1e308, -0.5, 2.0))
     assert slave.do_step(0.0, 1e-3)
@@ -58,6 +62,8 @@ def test_derivator_accepts_finite_estimates_whose_sum_overflows():
 @pytest.mark.parametrize("estimates", [(math.nan, 0.0, 0.0, 0.0), (0.0, 0.0, math.inf, 0.0),
                                        (math.inf, -math.inf, 0.0, 0.0), (1e308, 1e308, math.nan, 0.0)])
 def test_derivator_refuses_estimates_that_are_not_finite(estimates):
+    """Catches a NaN or infinite derivative estimate published, or a refusal that overwrites the last good
+    estimates."""
     slave = _slave()
     slave.derivator = _Fixed(estimates)
     assert not slave.do_step(0.0, 1e-3)
@@ -66,6 +72,8 @@ def test_derivator_refuses_estimates_that_are_not_finite(estimates):
 
 
 def test_derivator_angles_in_any_form_numpy_takes_give_the_same_estimates():
+    """Catches the derivator's fast path giving other estimates for angles given as strings, float32 or
+    arrays, or accepting three angles."""
     floats, others = Derivator(60.0, 30.0, 1e-3), Derivator(60.0, 30.0, 1e-3)
     floats.reset([0.1, 0.2])
     others.reset([0.1, 0.2])

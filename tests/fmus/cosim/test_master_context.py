@@ -39,6 +39,8 @@ def _counting(monkeypatch):
 
 
 def test_a_declined_setting_falls_back_without_loading_or_initialising_twice(monkeypatch):
+    """Catches the compiled mode's fallback loading or initialising the components a second time, or its
+    in-process run giving other rows than a plain in-process run."""
     system = _system(method="dopri5")      # the plant's adaptive integrator has no compiled step
     counts = _counting(monkeypatch)
     with pytest.warns(UserWarning, match="compiled mode: component plant: .*method='dopri5'.*running in process"):
@@ -52,6 +54,8 @@ def test_a_declined_setting_falls_back_without_loading_or_initialising_twice(mon
 
 
 def test_a_compiled_run_loads_and_initialises_once(monkeypatch):
+    """Catches the compiled mode instantiating or initialising a component twice (once to judge
+    compilability, once to run)."""
     system = _system()
     counts = _counting(monkeypatch)
     result = simulate(system, mode="compiled")
@@ -60,6 +64,8 @@ def test_a_compiled_run_loads_and_initialises_once(monkeypatch):
 
 
 def test_the_plan_and_program_are_records_in_stepping_order():
+    """Catches a plan or program whose records are out of stepping order, a multi-rate group unrolled with
+    wrong offsets or step sizes, or outputs not laid out as one slice per instance."""
     from fmus.cosim.master import _close, _instantiate, stepping_order
     from fmus.cosim.stepper import Stepper
 

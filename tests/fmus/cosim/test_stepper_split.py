@@ -29,6 +29,8 @@ SYSTEM = with_parameters(with_parameters(get_scene("bench_circle_TCMDq").system,
 
 @pytest.mark.parametrize("name", ["plant", "drive1", "drive2"])
 def test_split_step_equals_a_system_built_with_the_split_substeps(name):
+    """Catches the retry's split of one instance's step giving other rows than a system built with that
+    many sub-steps (offsets or inputs held wrongly)."""
     own = SYSTEM.component(name).substeps
     split, order = _stepped(SYSTEM, {name: 2})
     built, _ = _stepped(with_parameters(SYSTEM, name, component_substeps=2 * own))

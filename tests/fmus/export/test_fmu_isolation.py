@@ -83,6 +83,8 @@ def test_every_import_form_is_rewritten_and_binds_what_it_bound(tmp_path):
 
 
 def test_no_bundled_source_keeps_an_import_of_a_plain_name(tmp_path):
+    """Catches a bundled module importing "plant" or "fmus" by its plain name, which would load another
+    FMU's (or the host's) copy of parcosim in the same process."""
     from fmus.export.bundle import write_bundle
 
     package = write_bundle(tmp_path)
@@ -288,6 +290,8 @@ def test_pythonfmus_binary_still_runs_the_bundle(built_fmus, tmp_path):
 # --- the FMU's identity ------------------------------------------------------------------------------
 
 def test_the_identity_names_the_fmus_guid_binary_and_bundle(built_fmus):
+    """Catches an FMU whose identity file names another model, GUID or bundle than its modelDescription and
+    slave module."""
     from fmpy import read_model_description
 
     for model, path in built_fmus.items():
@@ -314,6 +318,8 @@ def test_a_slave_knows_its_fmus_guid(built_fmus, tmp_path):
 
 @needs_wrapper
 def test_a_guid_that_is_not_the_fmus_is_refused_naming_both(built_fmus, tmp_path):
+    """Catches fmi2Instantiate accepting a GUID of another FMU (a modelDescription and binary that do not
+    match), or refusing its own afterwards."""
     where = unzip(built_fmus["Trajectory"], tmp_path / "Trajectory")
     result = run_case(f"""
         fmu = RawFmu({str(where)!r})
@@ -330,6 +336,8 @@ def test_a_guid_that_is_not_the_fmus_is_refused_naming_both(built_fmus, tmp_path
 
 @needs_wrapper
 def test_resources_of_another_fmu_are_refused_before_any_of_their_code_runs(built_fmus, tmp_path):
+    """Catches a binary that imports another FMU's bundled Python code from a resource URI before checking
+    whose resources they are."""
     trajectory = unzip(built_fmus["Trajectory"], tmp_path / "Trajectory")
     drive = unzip(built_fmus["DCMotorDrive"], tmp_path / "DCMotorDrive")
     result = run_case(f"""
@@ -343,6 +351,8 @@ def test_resources_of_another_fmu_are_refused_before_any_of_their_code_runs(buil
 
 @needs_wrapper
 def test_resources_of_another_build_of_the_same_model_are_refused(built_fmus, other_version, tmp_path):
+    """Catches a binary that loads the resources of another build of the same model (another version of the
+    code)."""
     ours = unzip(built_fmus["Trajectory"], tmp_path / "ours")
     theirs = unzip(other_version, tmp_path / "theirs")
     result = run_case(f"""
@@ -399,6 +409,8 @@ def test_calls_out_of_order_are_refused_and_change_nothing(built_fmus, tmp_path)
 
 
 def test_in_process_the_slave_refuses_the_same_calls():
+    """Catches the in-process slave accepting calls out of order that the FMU's wrapper refuses, so the two
+    back ends would behave differently."""
     from fmus.slave.base import FmiError
     from tests.fmus.slave.test_extremes import make_slave
 

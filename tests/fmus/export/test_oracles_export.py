@@ -93,6 +93,8 @@ def test_baked_fmus_start_at_the_instances_values_exactly(tmp_path, fmus):
 
 
 def test_result_csv_reads_back_every_double_exactly(tmp_path):
+    """Catches result.csv written with fewer digits than a double needs (subnormals, extreme exponents not
+    read back bit for bit)."""
     rng = np.random.default_rng(31)
     t = np.arange(50) * (1e-3 / 3.0)
     columns = {"t": t, "plant.x": rng.normal(0, 1, 50) * 10.0 ** rng.integers(-300, 300, 50),
@@ -105,6 +107,8 @@ def test_result_csv_reads_back_every_double_exactly(tmp_path):
 
 
 def test_metrics_json_reads_back_exactly_with_non_finite_values_as_null(tmp_path):
+    """Catches metrics.json written with NaN or Infinity (not JSON), rounded doubles, or non-ASCII text
+    mangled."""
     metrics = {"e_ef_mm": 0.1 + 0.2, "t_settle_s": math.inf, "nested": {"a": [1.0 / 3.0, math.nan, 7]},
                "completed": True, "name": "bench \u00e9"}
     path = scenario_run.write_json(tmp_path / "metrics.json", metrics)

@@ -114,6 +114,7 @@ def prober(tmp_path_factory) -> Path:
 
 
 def test_every_built_fmu_carries_parcosims_wrapper(built_fmus):
+    """Catches a build that ships pythonfmu's own binary instead of parcosim's FMI wrapper."""
     assert built_fmus and all(has_wrapper(path) for path in built_fmus.values())
     result = run_case(f"""
         import ctypes, zipfile, tempfile
@@ -152,6 +153,8 @@ def test_printf_directives_reach_the_logger_as_text_never_as_a_format(drive, whe
 
 
 def test_instance_name_that_is_not_utf8_is_decoded_with_replacement(drive):
+    """Catches a wrapper that crashes on an instance name that is not UTF-8, or puts the name into the
+    error output."""
     result = run_case(f"""
         fmu = RawFmu({str(drive)!r})
         ok = bool(fmu.instantiate(name=b"\\xff\\xfe"))
@@ -186,6 +189,8 @@ def test_fmu_unzipped_under_any_directory_name_instantiates(built_fmus, tmp_path
                                          (b"file://server/share/resources", "host other than localhost"),
                                          (b"file:///tmp/%zz", "two hexadecimal digits")])
 def test_resource_uris_that_are_not_local_files_are_refused_with_the_reason(drive, uri, reason):
+    """Catches fmi2Instantiate accepting a remote, non-file or badly escaped resource URI (and then loading
+    nothing) instead of refusing it with the reason."""
     result = run_case(f"""
         fmu = RawFmu({str(drive)!r})
         report(component=fmu.instantiate(uri={uri!r}), text=fmu.text(),
@@ -195,6 +200,7 @@ def test_resource_uris_that_are_not_local_files_are_refused_with_the_reason(driv
 
 
 def test_localhost_uri_form_is_accepted(drive):
+    """Catches the file://localhost/ form of a resource URI (RFC 8089) refused."""
     result = run_case(f"""
         fmu = RawFmu({str(drive)!r})
         uri = b"file://localhost" + fmu.resource_uri()[len(b"file://"):]
@@ -224,6 +230,8 @@ def test_unwritable_stderr_does_not_turn_refusals_into_failures(drive):
 
 
 def test_set_string_with_bytes_that_are_not_utf8_is_fmi2error_naming_the_variable(drive):
+    """Catches bytes that are not UTF-8 set into a String (crash, or mojibake kept) instead of fmi2Error
+    naming the variable with the value unchanged."""
     result = run_case(f"""
         fmu = RawFmu({str(drive)!r})
         fmu.instantiate()
@@ -239,6 +247,8 @@ def test_set_string_with_bytes_that_are_not_utf8_is_fmi2error_naming_the_variabl
 
 
 def test_invalid_and_wrongly_typed_value_references_are_fmi2error_naming_them(drive):
+    """Catches an unknown or wrongly typed value reference, or a NULL array, that reads or writes memory
+    instead of returning fmi2Error naming it."""
     result = run_case(f"""
         fmu = RawFmu({str(drive)!r})
         fmu.instantiate()
@@ -333,6 +343,8 @@ def test_ten_runs_of_instantiate_initialise_step_free_exit_cleanly(drive):
 
 
 def test_instances_neither_grow_sys_path_nor_leak_objects(built_fmus, tmp_path):
+    """Catches each instantiation adding to sys.path or leaving Python objects alive (200 instances then
+    leak memory)."""
     where = unzip(built_fmus["Trajectory"], tmp_path / "Trajectory")
     result = run_case(f"""
         import gc
@@ -354,6 +366,7 @@ def test_instances_neither_grow_sys_path_nor_leak_objects(built_fmus, tmp_path):
 
 
 def test_without_a_compiler_fmus_keep_pythonfmus_binary_with_one_warning(built_fmus, tmp_path, monkeypatch):
+    """Catches a build that fails, or warns once per FMU, when no C compiler is there to build the wrapper."""
     import shutil
     import warnings
 

@@ -68,6 +68,8 @@ def run(model, seeds, extracted, wrapper, kinds):
 @CI
 @given(seeds=SEEDS)
 def test_no_crash_no_fatal_no_nan_under_hostile_use(model, seeds, extracted, wrapper):
+    """Catches an FMU that crashes, returns fmi2Fatal, hangs, gives a NaN output after an accepted step, or
+    breaks an FMI rule under random hostile call sequences."""
     kinds = [k for k in hostile.KINDS if k not in hostile.WRAPPER_KINDS]
     results = run(model, seeds, extracted, wrapper[model], kinds)
     assert len(results) == CASES_PER_FMU

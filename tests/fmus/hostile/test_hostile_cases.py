@@ -45,6 +45,8 @@ def test_the_variable_table_is_each_variables_name_type_causality_variability_an
 
 
 def test_a_seed_makes_the_same_case_and_draws_no_wrapper_kind_unless_asked(table):
+    """Catches cases that are not reproducible from their seed, the same case drawn for two models, or
+    wrapper-only kinds drawn for pythonfmu's binary."""
     _, rows = table
     assert make_case(MODEL, rows, 17) == make_case(MODEL, rows, 17)
     plain = Counter(make_case(MODEL, rows, seed)["kind"] for seed in range(300))
@@ -98,6 +100,8 @@ def test_each_kind_makes_hostile_what_it_is_about_and_keeps_the_rest_sane(table)
 
 
 def test_the_summary_counts_each_outcome_per_fmu_and_kind_and_in_all():
+    """Catches the campaign's summary miscounting an outcome per FMU and kind or in the "all" row, or
+    ordering its table otherwise."""
     cases = [({"model": "A", "kind": "steps"}, "ok"), ({"model": "A", "kind": "steps"}, "refused"),
              ({"model": "A", "kind": "state"}, "refused"), ({"model": "B", "kind": "steps"}, "crash")]
     results = [CaseResult(case, outcome) for case, outcome in cases]

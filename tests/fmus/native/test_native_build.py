@@ -44,6 +44,8 @@ def fmu_of(request):
 
 @pytest.mark.parametrize("model", WITH_LOOP)
 def test_binary_needs_only_libc_and_libm_and_the_fmu_validates(model, fmu_of, tmp_path):
+    """Catches a native FMU binary that links libpython (or anything but libc and libm), an FMU fmpy's
+    validation refuses, or one that claims to need an execution tool."""
     unzipped = extract(str(fmu_of(model)), str(tmp_path))
     binary = tmp_path / "binaries" / platform_folder() / f"{model}.so"
     assert needed(binary) <= ALLOWED
@@ -71,6 +73,8 @@ def _rebuilt(fmu, tmp_path):
 
 @pytest.mark.parametrize("model", WITH_LOOP)
 def test_fmu_compiled_from_its_own_sources_runs_as_shipped(model, fmu_of, tmp_path):
+    """Catches shipped sources that are not the ones the binary was built from (a rebuild from the FMU's
+    sources/ steps differently)."""
     fmu = fmu_of(model)
     rebuilt = _rebuilt(fmu, tmp_path)
     shipped = simulate_fmu(str(fmu), stop_time=0.2, output_interval=1e-3, step_size=1e-3)
@@ -81,6 +85,8 @@ def test_fmu_compiled_from_its_own_sources_runs_as_shipped(model, fmu_of, tmp_pa
 
 
 def test_cmake_builds_the_binary_from_the_sources(native_fmus, tmp_path):
+    """Catches an FMU's sources/ folder that does not build with its own CMakeLists (a missing file or
+    header path)."""
     cmake = shutil.which("cmake")
     if cmake is None:
         pytest.skip("no cmake")
@@ -98,6 +104,8 @@ def test_cmake_builds_the_binary_from_the_sources(native_fmus, tmp_path):
 
 @pytest.mark.parametrize("model", MODELS)
 def test_states_of_the_twin_and_damaged_states_are_refused(model, native_fmus, twin_fmus):
+    """Catches a native FMU that deserialises its pythonfmu twin's state, a flipped byte, a truncated state
+    or another GUID's, or a twin that takes the native state."""
     twin, native = Driver(twin_fmus[model]), Driver(native_fmus[model])
     assert twin.md.guid != native.md.guid
     for d in (twin, native):

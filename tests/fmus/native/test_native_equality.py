@@ -243,6 +243,8 @@ def compare(twin_path, native_path, scenario: Scenario, parameters: dict, extra=
 
 @pytest.mark.parametrize("model", sorted(SCENARIOS))
 def test_native_fmu_equals_its_pythonfmu_twin(model, native_fmus, twin_fmus):
+    """Catches a native FMU whose C stepping differs from its pythonfmu twin's in any scenario and
+    parameter set."""
     scenario = SCENARIOS[model]
     for parameters in scenario.parameters:
         compare(twin_fmus[model], native_fmus[model], scenario, parameters)

@@ -112,6 +112,8 @@ def test_substepped_fmi3_fmu_equals_its_fmi2_twin(model, native_fmus, native3_fm
 
 @pytest.mark.parametrize("model", MODELS)
 def test_fmi3_fmu_validates_and_declares_the_fmi2_variables(model, native_fmus, native3_fmus, tmp_path):
+    """Catches an FMI 3.0 native FMU whose variables, references, outputs or binary differ from its FMI 2.0
+    twin's, that reuses its GUID, or that fmpy's validation refuses."""
     fmu = native3_fmus[model]
     assert validate_fmu(str(fmu)) == []
     md2, md3 = read_model_description(str(native_fmus[model])), read_model_description(str(fmu))
@@ -133,6 +135,8 @@ def test_fmi3_fmu_validates_and_declares_the_fmi2_variables(model, native_fmus, 
 
 @pytest.mark.parametrize("model", MODELS)
 def test_simulate_fmu_runs_the_fmi3_fmu_as_its_fmi2_twin(model, native_fmus, native3_fmus):
+    """Catches the FMI 3.0 entry points stepping the same C otherwise than FMI 2.0's (a time or step size
+    passed differently)."""
     experiment = read_model_description(str(native_fmus[model])).defaultExperiment
     step = float(experiment.stepSize) if experiment and experiment.stepSize else 1e-3
     runs = [simulate_fmu(str(path), stop_time=40 * step, step_size=step, output_interval=step,

@@ -59,6 +59,8 @@ def chained_lowpass_expected(steps: int):
 
 
 def test_the_host_runs_a_c_fmu_chain_with_no_python_in_its_process(host, lowpass, tmp_path):
+    """Catches the C host loading libpython (so the claim "no Python" is false), or stepping the chained
+    FMUs otherwise than the analytic low-pass chain."""
     run = run_host(host, tmp_path, chained_lowpass_config(lowpass, 0.05))
     assert run.report["steps"] == "50"
     assert run.columns["time"][-1] == pytest.approx(0.05, abs=1e-12)
@@ -81,6 +83,8 @@ def test_the_mapping_check_sees_libpython_when_it_is_there(host, lowpass, tmp_pa
 
 
 def test_the_host_names_what_it_cannot_find(host, lowpass, tmp_path):
+    """Catches the C host running on (or crashing) when its configuration names a variable the FMU does not
+    have."""
     config = chained_lowpass_config(lowpass, 0.01).replace("output b.y", "output b.nonsense")
     with pytest.raises(RuntimeError, match="nonsense"):
         run_host(host, tmp_path, config)

@@ -68,6 +68,8 @@ def sane_lowpass_case(seed: int) -> dict:
 
 @pytest.mark.parametrize("short_allocation", (False, True))
 def test_the_sanitized_campaign_sees_an_fmu_write_past_its_allocation(tmp_path, short_allocation):
+    """Catches a sanitized hostile campaign that misses a heap overflow in an FMU (reports it as ok), or
+    flags a sound FMU."""
     env = _sanitizer_env_or_skip(tmp_path / "logs")
     fmu = sanitized_lowpass(tmp_path, short_allocation)
     unzipped = hostile.extract_fmus({"LowPass": fmu}, tmp_path / "fmus")

@@ -33,6 +33,9 @@ def _columns(result) -> dict:
 
 
 def test_native_loop_in_fmpy_tracks_as_parcosim_run(native_loop_fmu):
+    """Catches a native ClosedLoop whose tracking in another importer (fmpy, 9 s) differs from parcosim
+    run's beyond 1e-9 relative: a missing component, a wrong order or a stale parameter in the generated
+    loop."""
     scene = get_scene(LOOP_SCENE)
     stop = scene.window[1] + 1.0                 # the window [1, 8] s and a second more: 9 s
     scene = replace(scene, system=replace(scene.system, stop_time=stop))
@@ -43,6 +46,8 @@ def test_native_loop_in_fmpy_tracks_as_parcosim_run(native_loop_fmu):
 
 
 def test_native_loop_declares_what_the_pythonfmu_closed_loop_declares(native_loop_fmu, twin_loop_fmu):
+    """Catches a native loop FMU whose modelDescription (variables, references, starts, default experiment,
+    identifier) drifts from the pythonfmu ClosedLoop it replaces, or that reuses the twin's GUID."""
     native, twin = read_model_description(str(native_loop_fmu)), read_model_description(str(twin_loop_fmu))
 
     def declared(md):
@@ -57,6 +62,8 @@ def test_native_loop_declares_what_the_pythonfmu_closed_loop_declares(native_loo
 
 
 def test_native_loop_equals_the_pythonfmu_closed_loop(native_loop_fmu, twin_loop_fmu):
+    """Catches a native loop whose outputs differ from the pythonfmu twin's beyond 1e-12 of their peak over
+    0.4 s, or one that does not move at all."""
     native = simulate_fmu(str(native_loop_fmu), stop_time=0.4, step_size=H, output_interval=H)
     twin = simulate_fmu(str(twin_loop_fmu), stop_time=0.4, step_size=H, output_interval=H)
     assert native.dtype.names == twin.dtype.names and len(native) == len(twin) == 401
@@ -76,6 +83,9 @@ def _steps(driver, k0, k1, h=H):
 
 
 def test_state_restored_serialised_and_in_a_fresh_instance_steps_on_as_the_twin(native_loop_fmu, twin_loop_fmu):
+    """Catches an FMU state that misses part of the loop (a restored, deserialised or fresh-instance state
+    stepping on differently from the uninterrupted run), and a fresh instance that cannot take a state
+    before initialisation."""
     native, twin, fresh = Driver(native_loop_fmu), Driver(twin_loop_fmu), Driver(native_loop_fmu, "fresh")
     start = [("setup", 0.0), ("enter",), ("exit",)]
     for d in (native, twin):
@@ -107,6 +117,8 @@ def _fixed_runs(fmu) -> list:
 
 
 def test_forged_and_foreign_states_are_refused(native_loop_fmu, twin_loop_fmu):
+    """Catches a deserialiser that accepts another FMU's state, a flipped byte, a truncated state or a
+    changed build-fixed data word, or one that refuses the run state it must accept."""
     native, twin = Driver(native_loop_fmu), Driver(twin_loop_fmu)
     for d in (native, twin):
         d.run([("setup", 0.0), ("enter",), ("exit",), ("step", 0.0, H), ("getstate", "s"), ("serialize", "s")])
@@ -135,6 +147,8 @@ def test_forged_and_foreign_states_are_refused(native_loop_fmu, twin_loop_fmu):
 
 
 def test_step_sizes_and_communication_points_as_the_twin(native_loop_fmu, twin_loop_fmu):
+    """Catches a native loop that accepts a step size or communication point its twin refuses (or the
+    reverse), says it in other words, or steps a multiple of h differently from h steps one by one."""
     start = [("setup", 0.0), ("enter",), ("exit",), ("getstate", "0")]
     script = [("step", 0.0, 1.5e-3), ("setstate", "0"), ("step", 2e-3, H), ("setstate", "0"), ("step", 0.0, 5 * H),
               ("step", 5 * H, 2 * H)]
@@ -158,6 +172,8 @@ def test_step_sizes_and_communication_points_as_the_twin(native_loop_fmu, twin_l
 
 
 def test_a_step_beyond_the_call_budget_is_refused_and_the_most_is_taken(native_loop_fmu, twin_loop_fmu):
+    """Catches a call budget that is off by one step (the largest step it names refused, or one more
+    accepted) or a huge step that is taken instead of refused."""
     native, twin = Driver(native_loop_fmu), Driver(twin_loop_fmu)
     for d in (native, twin):
         d.run([("setup", 0.0), ("enter",), ("exit",), ("getstate", "0")])
@@ -173,6 +189,8 @@ def test_a_step_beyond_the_call_budget_is_refused_and_the_most_is_taken(native_l
 
 
 def test_a_parameter_away_from_the_build_is_refused_by_name(native_loop_fmu):
+    """Catches a native loop that silently runs with its built value when a parameter is set to another
+    (the C has the build's values compiled in)."""
     native = Driver(native_loop_fmu)
     steps = native.run([("set", {"ctrl.lam": 30.0}), ("setup", 0.0), ("enter",), ("exit",), ("step", 0.0, H)])
     assert steps[-1].status == 2
@@ -182,6 +200,8 @@ def test_a_parameter_away_from_the_build_is_refused_by_name(native_loop_fmu):
 
 
 def test_a_scene_the_compiled_mode_steps_in_python_is_refused_in_one_line(tmp_path, capsys):
+    """Catches export-fmu --native writing a loop FMU for a scene whose controller table has holes (stepped
+    in Python), or a refusal with a traceback or a file left behind."""
     from parcosim.cli import main
 
     out = tmp_path / "loop.fmu"
@@ -192,6 +212,8 @@ def test_a_scene_the_compiled_mode_steps_in_python_is_refused_in_one_line(tmp_pa
 
 
 def test_a_component_given_as_an_fmu_file_is_refused_by_name(tmp_path):
+    """Catches a native loop export that drops or mis-builds a component given as a foreign FMU file
+    instead of refusing it by name."""
     from fmus.native.loopbuild import NotNative, export_native_fmu
 
     system = get_scene(LOOP_SCENE).system

@@ -58,6 +58,8 @@ def _laid_out_otherwise(sources, types) -> int:
 
 
 def test_the_loop_compiled_with_its_contexts_laid_out_otherwise_runs_as_shipped(native_loop_fmu, tmp_path):
+    """Catches generated loop code that depends on its structs' memory layout (offsets hard-coded instead
+    of named fields): reordered fields under strict flags must give the same run."""
     fmu = _unzipped(native_loop_fmu, tmp_path / "fmu")
     sources = fmu / "sources"
     types = _contexts(sources)

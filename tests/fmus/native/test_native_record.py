@@ -27,6 +27,8 @@ def _run(driver, calls):
 
 
 def test_non_ascii_message_and_instance_are_escaped_as_json_dumps_does(native_fmus, twin_fmus):
+    """Catches the C record writer escaping non-ASCII text (or a surrogate pair) otherwise than json.dumps,
+    so the native and pythonfmu FMUs' records differ or do not parse."""
     twin, native = _both(native_fmus, twin_fmus, "CurrentObserver")
     calls = [("set", {"preset": PRESET}), ("setup", 0.0), ("enter",), ("exit",), ("get", ["refusal", "error"])]
     (a, b) = (_run(d, calls)[-1].result for d in (twin, native))

@@ -26,6 +26,8 @@ pytestmark = [pytest.mark.slow, pytest.mark.fmu, pytest.mark.tools,
 
 @pytest.mark.parametrize("model", sorted(NATIVE) + ["ClosedLoop"])
 def test_native_fmu_survives_careless_calls_and_forged_states_under_asan(model, request, tmp_path):
+    """Catches an out-of-bounds access, use after free or undefined behaviour in a native FMU under
+    careless calls and forged states, which only the sanitizers see."""
     fmu = request.getfixturevalue("native_loop_fmu") if model == "ClosedLoop" else \
         request.getfixturevalue("native_fmus")[model]
     folder = tmp_path / "fmu"

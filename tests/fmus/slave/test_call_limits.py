@@ -101,6 +101,8 @@ def system_slave(tmp_path, role: str, system, name: str = "", **parameters):
 @pytest.mark.parametrize("model, parameters", GENERAL)
 def test_rk4_substeps_over_the_limit_are_refused_at_initialisation_without_evaluating(
         model, parameters, rhs_calls, tmp_path):
+    """Catches a substep count whose step would exceed the per-call budget accepted (the importer then
+    hangs), refused after evaluating, or refused off by one."""
     probe = plant_slave(model, parameters, tmp_path)
     unit = budget.plant_evaluation_cost("general", "rk4", budget.joints_of(sim_of(probe).mechanism))
     limit = budget.per_call(unit)
@@ -127,6 +129,8 @@ def test_the_compiled_integrators_fit_one_call_at_any_substeps():
 @pytest.mark.parametrize("model, parameters", GENERAL + [("FiveBarPlant", {"kernel": "fast", **GRAVITY})])
 def test_a_dopri5_step_that_exhausts_the_limit_is_refused_and_changes_nothing(
         model, parameters, rhs_calls, monkeypatch, tmp_path):
+    """Catches an adaptive step that overruns the call budget, or that is refused with a half-advanced
+    state or outputs, so that restoring the state does not give the same run."""
     slave = plant_slave(model, {**parameters, "method": "dopri5"}, tmp_path)
     sim = sim_of(slave)
     assert slave.do_step(0.0, 1e-3), slave.error
@@ -251,6 +255,8 @@ def test_control_chain_counts_the_model_of_the_plant_and_its_correction(rhs_call
 
 
 def test_control_chain_names_the_step_it_accepts_not_the_limit(tmp_path):
+    """Catches the ControlChain answering a huge step with a budget message instead of the step size it
+    accepts."""
     slave = system_slave(tmp_path, "chain", get_scene("bench_circle_TCMDx").system)
     assert not slave.do_step(0.0, 1e9)
     assert "the step size must be h = 0.001 s" in slave.error
@@ -263,18 +269,23 @@ def test_control_chain_names_the_step_it_accepts_not_the_limit(tmp_path):
     (1e17, None, "startTime = 1e+17"), (0.0, math.inf, "stopTime = inf"), (1.0, 0.5, "stopTime = 0.5 s is before"),
 ])
 def test_start_times_time_cannot_advance_from_are_refused(start, stop, named):
+    """Catches start times where t + 1 µs == t (time would stand still) or a stop time before the start
+    accepted."""
     with pytest.raises(FmiError, match=re.escape(named)):
         check_experiment_times(start, stop)
 
 
 @pytest.mark.parametrize("start", [0.0, -1e9, 1e9, 5e9])
 def test_start_times_a_microsecond_can_follow_are_accepted(start):
+    """Catches the start-time check refusing ordinary large or negative start times."""
     check_experiment_times(start, start + 1.0)
     assert start + 1e-6 != start
 
 
 @pytest.mark.parametrize("model", ["Trajectory", "FiveBarPlant"])
 def test_a_refused_start_time_is_an_fmi_error_and_the_instance_stays_usable(model, built_fmus):
+    """Catches a refused fmi2SetupExperiment that returns fmi2Fatal, or that changes the start time it
+    refused, so the instance cannot go on."""
     fmu = FmuInstance(built_fmus[model], instance_name="t", setup=False)
     raw = fmu.fmu
     raw.setupExperiment(startTime=2.0)

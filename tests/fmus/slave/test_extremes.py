@@ -132,6 +132,8 @@ def test_reference_entering_the_band_is_refused_by_the_controller():
 
 
 def test_reference_outside_the_workspace_is_refused_at_once():
+    """Catches a controller that tracks a reference outside the workspace (and drives the plant into a
+    singularity) instead of refusing its first step."""
     r = refused(simulate(hold_scene("TCMDx", (0.0, 0.35), X1)), "ctrl",
                 "t = 0 s", "(x_d, y_d) = (0.0, 0.35) m", "outside the workspace")
     assert len(r.time) == 1
@@ -296,6 +298,8 @@ def test_communication_step_of_the_thesis_simulation(h, rms_bound):
 
 @pytest.mark.parametrize("h", [3e-4, 1e-2])
 def test_bench_step_not_dividing_T_is_refused_by_the_derivator(h):
+    """Catches a scene run at a step that does not divide the derivator's 1 ms sample time, which would
+    then sample at drifting times."""
     r = simulate(short(bench("TCMDx"), 0.1, step=h))
     refused(r, "deriv", "t = 0 s", f"step size h = {h!r} s at t = 0.0 s does not divide the sample time T = 0.001 s")
 
@@ -508,6 +512,9 @@ ALLOWED_INTEGERS |= {(model, "sample_phase", 0) for model in ("Derivator", "Posi
 
 @pytest.mark.parametrize("model, name, causality, value", _variable_cases())
 def test_every_input_and_parameter_refuses_nan_inf_and_absurd_values(model, name, causality, value):
+    """Catches an input or parameter at NaN, inf or an absurd value accepted into the model (non-finite
+    outputs later), refused without naming it, or a refused step that changes the outputs or lets later
+    steps through."""
     parameters, inputs = GOOD[model]
     slave = slave_class(model)(instance_name=model)
     set_variables(slave, {**parameters, **({name: value} if causality == "parameter" else {})})
@@ -555,6 +562,8 @@ def refused_step(fmu, h=H, **inputs):
     ("Trajectory", {"side_time": math.inf}, {}, H, ("side_time = inf is not finite",)),
 ])
 def test_fmu_refusals_are_discards_naming_the_cause(built_fmus, model, parameters, inputs, h, fragments):
+    """Catches a built FMU that refuses with fmi2Error or fmi2Fatal instead of fmi2Discard, does not log
+    the cause, or changes its outputs on a refused step."""
     fmu = FmuInstance(built_fmus[model], parameters)
     if inputs.get("tau1") == 1e300:
         fmu.step(H, tau1=0.01)                                   # one good step first

@@ -50,6 +50,8 @@ def other_value(v, old):
 
 @pytest.mark.parametrize("model", MODELS)
 def test_a_parameter_set_after_initialisation_is_refused_and_keeps_its_value(model):
+    """Catches a parameter set after initialisation that changes the model behind the running FMU, a
+    refusal that does not name the parameter, value and time, or one that stops the FMU for good."""
     slave = stepped(model)
     parameters = variables(slave, "parameter")
     assert parameters
@@ -67,6 +69,8 @@ def test_a_parameter_set_after_initialisation_is_refused_and_keeps_its_value(mod
 
 @pytest.mark.parametrize("model", MODELS)
 def test_a_parameter_set_before_initialisation_is_taken(model):
+    """Catches the after-initialisation guard applied too early: parameters set in initialisation mode
+    ignored."""
     slave = slave_class(model)(instance_name=model)
     slave.setup_experiment(0.0, None, None)
     slave.enter_initialization_mode()
@@ -77,6 +81,8 @@ def test_a_parameter_set_before_initialisation_is_taken(model):
 
 @pytest.mark.parametrize("model", MODELS)
 def test_an_output_set_is_refused_before_and_after_initialisation(model):
+    """Catches an importer able to overwrite an output (the FMU then publishes a value it did not compute),
+    before initialisation as well as after."""
     fresh = slave_class(model)(instance_name=model)
     slave = stepped(model)
     for instance in (fresh, slave):
@@ -90,6 +96,8 @@ def test_an_output_set_is_refused_before_and_after_initialisation(model):
 
 
 def test_a_refused_set_changes_nothing_of_the_same_call():
+    """Catches a set call applied value by value up to the refused one: its earlier valid values (i_ref)
+    must not be taken either."""
     slave = stepped("DCMotorDrive")
     inputs = {v.name: v.value_reference for v in variables(slave, "input")}
     output = next(v for v in variables(slave, "output") if v.name == "tau")
@@ -100,6 +108,8 @@ def test_a_refused_set_changes_nothing_of_the_same_call():
 
 
 def test_unknown_and_wrongly_typed_value_references_are_fmi_errors():
+    """Catches an unknown value reference read or written as some other variable, or a String read or set
+    through the Real/Integer calls, instead of an fmi2Error naming it."""
     slave = stepped("Trajectory")
     with pytest.raises(FmiError, match="value reference 99999 .*is no variable of Trajectory"):
         slave.set_real([99999], [1.0])
@@ -134,6 +144,8 @@ STEP_CASES = [
 @pytest.mark.parametrize("model", MODELS)
 @pytest.mark.parametrize("h", NEVER, ids=repr)
 def test_absurd_step_sizes_are_refused_naming_h_and_what_is_accepted(model, h):
+    """Catches a NaN, zero, negative or huge step size stepped (the outputs change) or refused without
+    naming h and what the FMU accepts."""
     slave = make_slave(model)
     set_variables(slave, GOOD[model][1], initialise=False)
     before = real_outputs(slave)
@@ -144,6 +156,8 @@ def test_absurd_step_sizes_are_refused_naming_h_and_what_is_accepted(model, h):
 
 @pytest.mark.parametrize("model, h, accepted", STEP_CASES)
 def test_each_fmu_accepts_the_steps_its_model_can_honour(model, h, accepted):
+    """Catches a sampled FMU that steps with an h its sample time T = 1 ms does not divide, or one that
+    refuses the steps it can honour."""
     slave = make_slave(model)
     set_variables(slave, GOOD[model][1], initialise=False)
     ok = slave.do_step(0.0, h)
@@ -155,6 +169,8 @@ def test_each_fmu_accepts_the_steps_its_model_can_honour(model, h, accepted):
 
 
 def test_multi_rate_sub_steps_of_a_drive_follow_each_other():
+    """Catches the drive's check of consecutive communication points failing on quarter-millisecond sub-
+    steps (rounding of t + h)."""
     slave = make_slave("DCMotorDrive")
     set_variables(slave, GOOD["DCMotorDrive"][1], initialise=False)
     t = 0.0
@@ -167,6 +183,8 @@ def test_multi_rate_sub_steps_of_a_drive_follow_each_other():
 
 @pytest.mark.parametrize("model", MODELS)
 def test_a_communication_point_that_does_not_follow_the_last_is_refused(model):
+    """Catches an FMU that steps again from an earlier time without a state being restored (its state would
+    be at 1 ms, the step from 0)."""
     slave = stepped(model)
     assert not slave.do_step(0.0, H)                      # back to the start
     assert "communication point t = 0.0 s does not follow the last one" in slave.error
@@ -185,6 +203,8 @@ def test_the_first_step_starts_at_the_start_time_and_points_may_round():
 
 
 def test_after_set_state_the_next_point_is_the_states_time():
+    """Catches fmi2SetFMUstate that does not restore the expected next communication point (the time the
+    state was taken)."""
     slave = stepped("FiveBarPlant")
     state = slave._get_fmu_state()                        # at t = 1 ms
     assert slave.do_step(H, H) and slave.do_step(2 * H, H)
@@ -197,6 +217,7 @@ def test_after_set_state_the_next_point_is_the_states_time():
 # --- the call order ------------------------------------------------------------------------------
 
 def test_do_step_after_terminate_is_refused():
+    """Catches an FMU that keeps stepping after fmi2Terminate."""
     slave = stepped("Derivator")
     slave.terminate()
     assert not slave.do_step(H, H)
@@ -204,6 +225,8 @@ def test_do_step_after_terminate_is_refused():
 
 
 def test_a_refusal_before_initialisation_is_cleared_by_a_good_initialisation():
+    """Catches an error left over from a doStep called before initialisation that poisons the FMU after a
+    good initialisation."""
     slave = slave_class("Trajectory")(instance_name="t")
     slave.setup_experiment(0.0, None, None)
     assert not slave.do_step(0.0, H)
@@ -215,6 +238,8 @@ def test_a_refusal_before_initialisation_is_cleared_by_a_good_initialisation():
 
 
 def test_after_a_refused_step_every_step_is_refused_until_a_state_is_restored():
+    """Catches an FMU that steps on after a refused step (FMI 2.0 stepFailed), that overwrites the
+    refusal's cause, or that stays refused after a state from before is restored."""
     slave = stepped("Derivator")
     state = slave._get_fmu_state()
     assert not slave.do_step(H, 2 * H)
@@ -242,6 +267,8 @@ def test_after_a_refused_step_every_step_is_refused_until_a_state_is_restored():
     ("PositionController", {"T": 5e-324}, "T"),
 ])
 def test_tiny_parameters_are_refused_at_initialisation_naming_them(model, parameters, name):
+    """Catches a denormal or zero parameter the model divides by accepted at initialisation (inf or NaN
+    later), or refused without its name and value."""
     slave = make_slave(model, parameters)
     assert not slave._ready
     value = parameters[name]
@@ -251,6 +278,8 @@ def test_tiny_parameters_are_refused_at_initialisation_naming_them(model, parame
 
 @pytest.mark.parametrize("value", [1.7976931348623157e308, -1.7976931348623157e308])
 def test_derivator_refuses_dbl_max_naming_the_input(value):
+    """Catches the derivator's difference quotient overflowing on a finite but huge input, or a refusal
+    that changes the outputs."""
     slave = stepped("Derivator")
     before = real_outputs(slave)
     slave.q1 = value
@@ -307,6 +336,8 @@ def _table(cache_dir, monkeypatch):
 
 
 def test_a_corrupt_table_cache_is_rebuilt_with_a_warning_naming_it(tmp_path, monkeypatch):
+    """Catches a corrupt controller table cache that is loaded (or crashes the load) instead of being
+    rebuilt to the same table."""
     good = _table(tmp_path, monkeypatch)
     (cache,) = tmp_path.glob("model_*.npz")
     cache.write_bytes(b"not a table")
@@ -316,6 +347,8 @@ def test_a_corrupt_table_cache_is_rebuilt_with_a_warning_naming_it(tmp_path, mon
 
 
 def test_an_unwritable_table_cache_keeps_the_table_in_memory(tmp_path, monkeypatch):
+    """Catches an unwritable cache directory that fails the table's construction instead of keeping it in
+    memory."""
     blocker = tmp_path / "file"
     blocker.write_text("a file where the cache directory should be")
     with pytest.warns(UserWarning, match="cannot be written.*stays in memory"):
@@ -324,6 +357,8 @@ def test_an_unwritable_table_cache_keeps_the_table_in_memory(tmp_path, monkeypat
 
 
 def test_a_controller_with_an_unwritable_cache_initialises(tmp_path, monkeypatch):
+    """Catches the PositionController FMU refusing its initialisation when its table cache cannot be
+    written."""
     blocker = tmp_path / "file"
     blocker.write_text("")
     monkeypatch.setenv("PARCOSIM_CACHE", str(blocker / "cache"))

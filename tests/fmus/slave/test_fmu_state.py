@@ -79,11 +79,15 @@ def _check_continuations(system, make):
 
 @pytest.mark.parametrize("scene", ["bench", "thesis_sim", "actuated"])
 def test_in_process_state_continues_bit_for_bit(scene):
+    """Catches a slave state (get/set) that misses part of a model's state in process: the run continued
+    from it differs from the uninterrupted one."""
     _check_continuations(_scenes()[scene], lambda c: InProcessInstance(c.model, c.name))
 
 
 @pytest.mark.parametrize("scene", ["bench", "thesis_sim", "actuated"])
 def test_fmu_state_continues_bit_for_bit(scene, built_fmus):
+    """Catches an FMU state (fmi2Get/SetFMUstate through the built FMUs) that misses part of a model's
+    state: the continued run differs bit for bit."""
     _check_continuations(_scenes()[scene], lambda c: _FmuInstance(built_fmus[c.model], c.name))
 
 
@@ -128,6 +132,8 @@ def _steps(inst, start, k0, steps, h=1e-3):
 
 @pytest.mark.parametrize("model", ["ClosedLoop", "ControlChain"])
 def test_system_fmu_state_is_the_whole_inner_system(model, system_fmus):
+    """Catches a system FMU's state that leaves out an inner component or its time, so restoring it (or
+    deserialising it into a fresh instance) continues differently."""
     path = system_fmus[model]
     inst = _FmuInstance(path, "a")
     start = _measurements(_bind_all(inst))
@@ -152,6 +158,8 @@ def test_system_fmu_state_is_the_whole_inner_system(model, system_fmus):
 
 
 def test_after_set_state_the_system_fmu_time_is_the_states(system_fmus):
+    """Catches a system FMU that keeps its later time after fmi2SetFMUstate (a step from the state's time
+    refused, a later one accepted)."""
     from fmus.cosim.master import CoSimulationError
 
     inst = _FmuInstance(system_fmus["ClosedLoop"], "loop")
@@ -221,6 +229,8 @@ def _spin_up(stop_time=0.3):
 
 @pytest.mark.parametrize("mode", ["inprocess", "fmu"])
 def test_retry_in_sub_steps_completes_a_run_a_full_step_stops(mode, built_fmus):
+    """Catches --retry-substeps not retrying the refused step from the state before it (the run still
+    stops), retrying elsewhere, or changing the rows before the refusal."""
     fmu_dir = next(iter(built_fmus.values())).parent
     stopped = simulate(_spin_up(), mode=mode, fmu_dir=fmu_dir)
     assert not stopped.completed and "plant refused the step from t = 0.165 s" in str(stopped.error)

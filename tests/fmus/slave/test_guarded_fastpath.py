@@ -18,6 +18,8 @@ def _vr(slave, name):
 
 
 def test_an_accepted_step_size_is_refused_when_the_step_ends_after_max_time():
+    """Catches the fast path's cached acceptance of a step size letting a step through that ends after the
+    largest time."""
     slave = slave_class("Trajectory")(instance_name="traj")
     start = MAX_TIME - 1.5e-3
     slave.setup_experiment(start, None, None)
@@ -30,6 +32,7 @@ def test_an_accepted_step_size_is_refused_when_the_step_ends_after_max_time():
 
 
 def test_another_step_size_is_checked_again():
+    """Catches the fast path's cache accepting a new step size without the checks the first one had."""
     slave = make_slave("Derivator")            # h must divide its sample time T = 1 ms
     assert slave.do_step(0.0, 1e-3)
     assert slave.do_step(1e-3, 1e-3)
@@ -38,6 +41,7 @@ def test_another_step_size_is_checked_again():
 
 
 def test_a_communication_point_off_the_last_step_is_refused():
+    """Catches the fast path skipping the check that a step starts where the last one ended."""
     slave = make_slave("Derivator")
     assert slave.do_step(0.0, 1e-3)
     assert slave.do_step(1e-3 + 1e-6, 1e-3) is False
@@ -45,6 +49,8 @@ def test_a_communication_point_off_the_last_step_is_refused():
 
 
 def test_a_parameter_set_before_initialisation_is_refused_after_it_with_the_same_list():
+    """Catches the setter's cache, filled before initialisation, letting a parameter through after it, or
+    applying part of a refused call."""
     slave = slave_class("DCMotorDrive")(instance_name="drive")
     slave.setup_experiment(0.0, None, None)
     slave.enter_initialization_mode()

@@ -9,10 +9,10 @@ The rule a message must follow (:func:`naming_problem`): it holds the time of th
 call as ``t = <number> s`` (the number within 1e-5 of the time), and, with those time
 clauses taken out, the value as set, spelled as Python's ``repr`` spells it (``5e-324``,
 ``-0.0``, ``nan``, ``-2147483648``, ``''``, ``'no_such_name'``) as a whole token, and the
-parameter's FMU name (``lam``; ``ctrl.lam`` in a system FMU) where it names a value:
-``lam = ...``, ``lam: ...``, ``(lam) = ...``, ``lam must ...``, ``|lam|``, ``parameter lam``
-(not ``preset`` in "unknown preset 'x'").  A system FMU writes its components' parameters
-so (:func:`fmus.systemfmu.cores.qualified`): each atomic refusal is checked in that form too.
+parameter's name (``lam``; in a system FMU, whose parameter is ``ctrl.lam``, the component's
+own ``lam``) where it names a value: ``lam = ...``, ``lam: ...``, ``(lam) = ...``, ``lam must
+...``, ``|lam|``, ``parameter lam`` (not ``preset`` in "unknown preset 'x'").  A system FMU
+says which component refused in its record (``refusal``): the instance ``<FMU>.<component>``.
 
 In process: every parameter of every atomic FMU at every value of its type, in several
 configurations (so that a parameter only one branch of a model uses is exercised); the system
@@ -34,7 +34,8 @@ import pytest
 from fmpy.fmi1 import FMICallException
 from pythonfmu import Boolean, Integer, Real, String
 
-from fmus.systemfmu.cores import SYSTEM_FILE, qualified, system_to_dict
+from fmus.status import RunError
+from fmus.systemfmu.cores import SYSTEM_FILE, system_to_dict
 from fmus.slave.registry import SLAVES
 from tests.support.fmi_support import FmuInstance
 from tests.fmus.slave.test_extremes import GOOD, slave_class
@@ -182,20 +183,19 @@ def run_case(slave, parameters: dict, inputs: dict, name: str, value, t0: float)
 
 
 def check(slave, parameters, inputs, name, value, t0) -> list:
-    """:func:`run_case`; the problems of its refusal's message, as it is and inside a system FMU."""
+    """:func:`run_case`; the problems of its refusal: the message (:func:`naming_problem`, a
+    system FMU's component's parameter by its own name) and, in a system FMU, the record's
+    instance, which must be the component's (``<FMU>.<component>``)."""
     outcome, message, time = run_case(slave, parameters, inputs, name, value, t0)
     if outcome == "accepted":
         return []
-    problems = []
-    problem = naming_problem(message, name, value, time)
-    if problem:
-        problems.append(f"{name} = {value!r} ({outcome}): {problem}: {message!r}")
-    elif "." not in name:   # an atomic FMU's message, as a system FMU writes it for its component "inner"
-        inner = qualified(message, "inner", [n for n, _ in _parameters(slave)])
-        problem = naming_problem(inner, f"inner.{name}", value, time)
-        if problem:
-            problems.append(f"{name} = {value!r} ({outcome}) inside a system: {problem}: {inner!r}")
-    return problems
+    component, _, parameter = name.rpartition(".")
+    problem = naming_problem(message, parameter, value, time)
+    if problem is None and component:
+        instance = RunError.from_json(slave.refusal).instance
+        if instance != f"{slave.instance_name}.{component}":
+            problem = f"the record's instance is {instance!r}"
+    return [f"{name} = {value!r} ({outcome}): {problem}: {message!r}"] if problem else []
 
 
 # --- the atomic FMUs ---------------------------------------------------------------------------
@@ -311,7 +311,7 @@ def _system_cases():
 
 
 @pytest.mark.parametrize("model, name, value", _system_cases())
-def test_a_system_fmu_refusal_names_the_inner_parameter_by_its_full_name(model, name, value):
+def test_a_system_fmu_refusal_names_the_inner_parameter_and_its_component_in_the_record(model, name, value):
     _, _, measured = _system(model)
     problems = check(new_system_slave(model), {}, measured, name, value, 0.0)
     assert not problems, "\n".join(problems)
@@ -383,4 +383,4 @@ def test_through_fmpy_the_refusal_is_the_in_process_one_and_never_fatal(built_fm
     expected = run_case(slave, parameters, inputs, name, value, 0.0)
     assert run_through_fmpy(path, parameters, inputs, name, value) == expected
     if expected[0] != "accepted":
-        assert naming_problem(expected[1], name, value, expected[2]) is None, expected[1]
+        assert naming_problem(expected[1], name.rpartition(".")[2], value, expected[2]) is None, expected[1]

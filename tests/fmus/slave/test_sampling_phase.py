@@ -214,6 +214,8 @@ def test_the_drive_holds_its_voltage_and_its_electrics_advance_every_sub_step(n)
 
 
 def test_the_drive_phase_shifts_its_sample_by_phase_steps():
+    """Catches a drive's sample_phase that shifts its sampling by another number of sub-steps, or lets it
+    act before its first sample."""
     n, p = 4, 2
     base = drive_run(n, 6)
     shifted = drive_run(n, 6, phase=p, delay=p)
@@ -225,6 +227,8 @@ def test_the_drive_phase_shifts_its_sample_by_phase_steps():
 
 @pytest.mark.parametrize("model", ["Derivator", "CurrentObserver", "DCMotorDrive"])
 def test_a_state_restored_mid_period_continues_bit_for_bit(model):
+    """Catches a sampled slave's state that misses its position within the period (or its phase): restored
+    mid-period, in place or serialised into another instance, it samples at other sub-steps."""
     inst = InProcessInstance(model, "x")
     inst.initialize({"sample_phase": 2}, 0.0)
     n, h = 4, T / 4

@@ -15,6 +15,8 @@ T = 2e-3
 @pytest.mark.parametrize("h, n", [(2e-3, 1), (1e-3, 2), (5e-4, 4), (T / 3, 3), (T / 7, 7), (2e-4, 10),
                                   (5e-4 * (1 + 5e-10), 4)])
 def test_a_step_dividing_2ms_gives_its_whole_number_of_sub_steps(h, n):
+    """Catches the sub-step count of a 2 ms sample time rounded down (or refused) for steps that divide it
+    up to rounding, such as T/3 or 5e-4 (1 + 5e-10)."""
     assert substeps_of(T, h) == n
 
 

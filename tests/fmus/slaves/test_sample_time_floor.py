@@ -14,6 +14,8 @@ EXTRA = {"ActuatedFiveBarPlant": {"preset": "bench", "x0": -0.002, "y0": 0.108},
 @pytest.mark.parametrize("model", ["DCMotorDrive", "ActuatedFiveBarPlant", "CurrentObserver", "PositionController",
                                    "BalanceController", "Derivator"])
 def test_a_sample_time_below_the_shortest_step_is_refused_naming_it(model):
+    """Catches a sample time below the shortest step a master may take accepted (each call then runs
+    millions of samples) or refused without naming T."""
     instance = InProcessInstance(model, "x")
     instance.initialize({"T": MIN_STEP / 2, **EXTRA.get(model, {})}, 0.0)
     error = instance.slave.error

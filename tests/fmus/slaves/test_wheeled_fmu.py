@@ -57,7 +57,7 @@ def test_fall_is_fmi2discard_naming_psi_and_time(built_fmus):
 @pytest.mark.parametrize("parameters, expected", [
     ({"M": -0.6}, "parameter M = -0.6"),
     ({"model": "lagrange"}, "model = 'lagrange'"),
-    ({"psi0": 2.0}, "pitch beyond 90 degrees"),
+    ({"psi0": 2.0}, "initial psi0 = 2.0 rad is no standing robot (fallen_pitch)"),
     ({"g": float("nan")}, "parameter g = nan"),
 ])
 def test_bad_plant_parameters_refused_by_name(built_fmus, parameters, expected):

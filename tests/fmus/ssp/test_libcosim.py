@@ -23,6 +23,7 @@ from fmus.cosim.master import simulate
 from fmus.ssp.export import NS, OSP_ANNOTATION, OSP_NS, export_ssp, libcosim_annotation_xml
 from fmus.ssp.run import ecos_available, simulate_ssp_ecos
 from fmus.cosim.system import Component, System
+from fmus.status import RunStatus
 from scenarios.scenes.catalogue import get_scene
 
 pytestmark = [pytest.mark.slow, pytest.mark.fmu, pytest.mark.tools]
@@ -61,6 +62,8 @@ def libcosim_run(thesis):
 # --- the step-size annotation (no libcosim needed) ------------------------------------------
 
 def test_annotation_text_is_what_libcosim_reads():
+    """Catches an OSP annotation libcosim does not read (another type, namespace or attribute name: it
+    would then crash without an algorithm) or a zero step written."""
     text = libcosim_annotation_xml(1e-3)
     root = ET.fromstring(f'<r xmlns:ssc="{NS["ssc"]}" xmlns:osp="{OSP_NS}">{text}</r>')
     annotation = root.find("ssc:Annotation", NS)
@@ -94,6 +97,8 @@ def test_annotated_package_keeps_the_literal_prefixes_and_the_schema(thesis, tmp
 
 @needs_libcosim
 def test_libcosim_matches_the_jacobi_master(thesis, libcosim_run):
+    """Catches libcosim running the package otherwise than our Jacobi master (other parameters, initial
+    outputs, times off k h)."""
     system, _, reference = thesis
     run = libcosim_run
     assert run.error is None and run.tool == "libcosim"
@@ -155,7 +160,8 @@ def test_a_refused_step_stops_the_run_like_the_master(fmu_dir, tmp_path):
                        for c in system.components)
     path = export_ssp(dataclasses.replace(system, components=components), tmp_path / "refusing.ssp", fmu_dir)
     run = simulate_ssp_libcosim(path, list(SIGNALS), isolated=True)
-    assert run.error.startswith("plant refused the step from t = 0 s: initialisation refused: start point x0=5.0")
+    assert str(run.error).startswith("plant refused the step from t = 0 s: initialisation refused: start point x0=5.0")
+    assert (run.error.kind, run.error.instance, run.error.time) == (RunStatus.INITIALISATION, "plant", 0.0)
     assert len(run.time) == 1 and run.time[0] == 0.0
 
 
@@ -207,8 +213,9 @@ def test_an_fmu_error_while_initialising_is_a_failed_run_not_an_abort(tmp_path, 
         zf.writestr("SystemStructure.ssd", ssd)
         zf.write(fmu, "resources/Failer.fmu")
     run = simulate_ssp_libcosim(path, ["bad.y"], step_size=1e-3, isolated=True)
-    assert run.error.startswith("libcosim could not initialise the FMUs: Model error")
-    assert "exitInitializationMode" in run.error and len(run.time) == 0
+    assert str(run.error).startswith("libcosim could not initialise the FMUs: Model error")
+    assert (run.error.kind, run.error.instance) == (RunStatus.INITIALISATION, None)
+    assert "exitInitializationMode" in str(run.error) and len(run.time) == 0
     if (os.cpu_count() or 1) > 1:   # libcosim uses at most hardware_concurrency - 1 workers
         with pytest.raises(RuntimeError, match="exit status -6"):
             simulate_ssp_libcosim(path, ["bad.y"], step_size=1e-3, worker_threads=1, isolated=True)

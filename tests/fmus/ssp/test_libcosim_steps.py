@@ -15,6 +15,8 @@ def experiment(monkeypatch):
 
 
 def test_a_step_of_whole_nanoseconds_is_taken_as_their_count(experiment):
+    """Catches a step size converted to nanoseconds by truncation (3e-9 s as 2 ns) or the package's own
+    experiment ignored."""
     assert experiment(2.0, 2e-3) == (2.0, 2e-3, 2_000_000)
     assert experiment(None, None) == (1.0, 1e-3, 1_000_000)          # the package's own experiment
     assert experiment(1.0, 3e-9) == (1.0, 3e-9, 3)

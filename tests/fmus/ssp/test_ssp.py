@@ -13,6 +13,7 @@ from fmus.cosim.master import simulate
 from fmus.ssp.export import NS, PARAMETER_SET, export_ssp, read_ssp_experiment, read_ssp_parameters
 from fmus.ssp.run import ecos_available, simulate_ssp_ecos, simulate_ssp_fmpy
 from fmus.cosim.system import Component, Connection, System
+from fmus.status import RunStatus
 from scenarios.scenes.catalogue import get_scene
 from scenarios.scenes.transforms import drives_in_plant
 
@@ -94,6 +95,8 @@ def test_ssd_is_well_formed(exported):
 
 
 def test_package_validates_against_the_ssp_schema(exported):
+    """Catches an SSD or parameter file that breaks the SSP 1.0 schema (element order, a missing
+    attribute), which strict tools refuse to load."""
     from fmpy.ssp.ssd import read_ssd
 
     _, path, _ = exported
@@ -101,6 +104,8 @@ def test_package_validates_against_the_ssp_schema(exported):
 
 
 def test_parameter_set_holds_the_scene_parameters(exported):
+    """Catches a binding lost or retyped in the export (an Integer written as a Real, a Real not read back
+    to the same double) or a parameter set a tool cannot select by its name."""
     system, path, _ = exported
     expected = {f"{c.name}.{n}": v for c in system.components for n, v in c.parameters.items()}
     got = read_ssp_parameters(path)
@@ -150,6 +155,8 @@ def test_plain_fmpy_runs_the_package_without_its_parameter_bindings(exported):
 
 
 def test_string_and_boolean_parameters_round_trip(fmu_dir, tmp_path):
+    """Catches Strings with XML special characters or Booleans and Integers that do not read back as
+    written."""
     system = System(
         (Component("plant", "FiveBarPlant", {"preset": "bench", "project": True, "encoder_counts": 4000,
                                              "x0": -0.002, "y0": 0.108, "kernel": 'a "quoted" & <odd>'}),),
@@ -162,6 +169,8 @@ def test_string_and_boolean_parameters_round_trip(fmu_dir, tmp_path):
 # --- running it elsewhere --------------------------------------------------------------------
 
 def test_fmpy_simulate_ssp_matches_the_jacobi_master(exported):
+    """Catches fmpy's runner given other parameters, initial outputs or time labels than our Jacobi master
+    (its row k is the master's row k + 1)."""
     system, path, reference = exported
     run = simulate_ssp_fmpy(path)
     # fmpy labels the values after the step [t, t + h] with t and has no row for t = 0:
@@ -180,6 +189,8 @@ def test_fmpy_without_initial_outputs_starts_from_zero_inputs(exported):
 
 
 def test_ecos_matches_the_jacobi_master(exported):
+    """Catches Ecos run with other parameters (a parameter set it did not apply) or its rows read at other
+    times than our Jacobi master's."""
     reason = ecos_available()
     if reason is not None:
         pytest.skip(f"Ecos not available ({reason}): pip install ecospy and apt-get install libtbb12")
@@ -218,6 +229,8 @@ def _system(**changes):
                      Component("ctrl", "PositionController"))}, "not a parameter"),
 ])
 def test_what_cannot_be_exported_is_a_value_error(fmu_dir, tmp_path, changes, message):
+    """Catches an export that writes a package a tool cannot run (sub-steps, an unknown model, a recorded
+    input, a wrong connection or parameter type), or leaves a partial file behind."""
     with pytest.raises(ValueError, match=message):
         export_ssp(_system(**changes), tmp_path / "bad.ssp", fmu_dir)
     assert not (tmp_path / "bad.ssp").exists()
@@ -241,16 +254,22 @@ def refusing(fmu_dir, tmp_path_factory):
 
 
 def test_fmpy_run_that_an_fmu_refuses_names_the_reason(refusing):
-    with pytest.raises(RuntimeError, match=r"plant: initialisation refused: start point x0=5\.0"):
-        simulate_ssp_fmpy(refusing)
+    """Catches fmpy's exception on fmi2Discard escaping the runner, or its error given as text: fmpy's
+    rows are lost, so the run has none, and its error is the plant's record (initialisation, t = 0)."""
+    run = simulate_ssp_fmpy(refusing)
+    assert (run.error.kind, run.error.instance, run.error.time) == (RunStatus.INITIALISATION, "plant", 0.0)
+    assert "initialisation refused: start point x0=5.0" in str(run.error) and len(run.time) == 0
 
 
 def test_ecos_run_stops_at_a_refused_step_like_the_master(refusing):
+    """Catches an Ecos run that steps on past a refusal (Ecos does) or loses the plant's record; it keeps
+    the master's single row."""
     reason = ecos_available()
     if reason is not None:
         pytest.skip(f"Ecos not available ({reason}): pip install ecospy and apt-get install libtbb12")
     run = simulate_ssp_ecos(refusing, list(SIGNALS))
-    assert run.error.startswith("plant refused the step from t = 0 s: initialisation refused")
+    assert str(run.error).startswith("plant refused the step from t = 0 s: initialisation refused")
+    assert (run.error.kind, run.error.instance) == (RunStatus.INITIALISATION, "plant")
     assert len(run.time) == 1 and run.time[0] == 0.0   # the master keeps the same single row
 
 

@@ -70,6 +70,8 @@ CHANGES = {"thesis_sim_circle": {"ctrl.lam": 20.0}, "bench_circle_TCMDx": {"plan
 
 
 def test_an_inner_parameter_changes_the_path_as_in_the_scene(exported):
+    """Catches an exported system FMU whose inner parameters, set as its start values, are ignored or set
+    on another component."""
     name, system, path = exported
     change = CHANGES[name]
     changed = simulate(_system(name, **change))
@@ -104,6 +106,8 @@ def test_the_tools_run_the_fmu_as_parcosim_run(exported, tmp_path, tool):
 
 
 def test_a_step_that_is_not_a_whole_number_of_its_steps_is_refused(exported):
+    """Catches a system FMU that steps a fraction of its communication step (its inner clock then drifts),
+    or refuses it without its record."""
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave
 

@@ -30,6 +30,8 @@ def test_the_stored_scenes_are_the_bench_scenes_without_the_twin():
 
 @pytest.mark.parametrize("name", regression.regression_scenes())
 def test_full_run_matches_the_stored_metrics(name):
+    """Catches any change of a regression scene's metrics beyond the stored tolerance (a physics,
+    controller or master change), or a metric that became defined or undefined."""
     now, stored = _metrics(name), STORED[name]
     for key in regression.METRICS:
         if stored[key] is None:

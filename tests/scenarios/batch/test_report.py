@@ -31,6 +31,8 @@ def test_report_numbers_come_from_the_metrics():
 
 
 def test_report_says_when_sliding_modes_do_not_help_and_when_runs_stopped():
+    """Catches the report claiming the sliding-mode term helps where it does not, hiding a stopped run, or
+    giving a stopped run's e_ef."""
     e_ef = {kind: {s: v[0] for s, v in table.items()} for kind, table in THESIS_BENCH.items()}
     e_ef["triangle"]["TCMDx"] = 2.0                      # worse than TCx's 1.83
     text = render(_metrics(e_ef, stopped=("bench_circle_TCq",)), "fmu")

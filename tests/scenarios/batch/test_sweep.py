@@ -41,6 +41,8 @@ def _same(a: float, b: float) -> bool:
 
 
 def test_zero_uncertainty_is_the_nominal_run_bit_for_bit(client):
+    """Catches a sweep that perturbs a parameter at U = 0 (a draw applied as an absolute offset) or runs
+    the scene otherwise than parcosim run does."""
     sweep = run_sweep(SCENE, 1, 0.0, client=client)
     nominal = run_scene(SCENE, plots=False).metrics
     assert math.isfinite(nominal["e_ef_mm"]) and math.isfinite(nominal["e_ss_mm"])
@@ -53,6 +55,8 @@ def test_zero_uncertainty_is_the_nominal_run_bit_for_bit(client):
 
 
 def test_cli_sweep_at_zero_uncertainty_matches_cli_run(process_client, tmp_path):
+    """Catches the command line's sweep running another scene setup (mode, stop time, parameters) than its
+    run, or leaving out summary.md or the plot."""
     from parcosim.cli import main
 
     address = process_client.scheduler.address
@@ -70,6 +74,8 @@ def test_cli_sweep_at_zero_uncertainty_matches_cli_run(process_client, tmp_path)
 
 
 def test_draws_depend_only_on_seed_sample_and_parameter():
+    """Catches draws that depend on the parameters' order or number (a shared random stream), alias across
+    seed and sample, or repeat one value for all parameters."""
     params = perturbable(get_scene(SCENE))
     spread = uncertainties(params, 0.3)
     a = draw(params, spread, seed=5, sample=7)
@@ -159,6 +165,8 @@ def test_design_parameters_keep_the_current_controller():
 
 
 def test_encoder_offset_shifts_the_reading_by_whole_counts():
+    """Catches an encoder offset applied to the true angle (moving the mechanism) or by a fraction of a
+    count."""
     from plant import PlantSimulator, get_preset
 
     params = get_preset("bench")
@@ -189,6 +197,8 @@ def test_chain_parameters_reach_the_plant():
 
 
 def test_a_failing_run_is_a_row_with_its_error(client):
+    """Catches a refused sample dropped from the rows, marked completed, given no error naming the
+    parameter, or miscounted in the summary."""
     scene = with_stop_time(get_scene(SCENE), SHORT)
     params = perturbable(scene)
     spec = {"uncertainty": {"drive1.R": 5.0}}          # factor 1 + 5 xi: negative for xi < -0.2
@@ -203,6 +213,8 @@ def test_a_failing_run_is_a_row_with_its_error(client):
 
 
 def test_an_interrupted_sweep_computes_only_what_is_missing(client, tmp_path):
+    """Catches a resumed sweep that recomputes done samples, keeps a torn row, rewrites the file's good
+    rows, gives other values than a fresh sweep, or resumes with another seed."""
     out = tmp_path / "s"
     first = run_sweep(SCENE, 3, 0.3, stop_time=SHORT, out_dir=out, client=client, plots=False)
     assert first.computed == [0, 1, 2]
@@ -251,6 +263,8 @@ def test_a_killed_worker_loses_no_sample(process_client, client):
 
 
 def test_report_engine_gives_the_serial_results(client, tmp_path):
+    """Catches the Dask engine's report running a scene otherwise than the serial run (other metrics) or
+    not writing each scene's files."""
     from scenarios.batch.report import run_bench
 
     names = ["bench_circle_TCMDx", "bench_triangle_PDMDq"]

@@ -71,6 +71,8 @@ def test_a_torn_last_row_is_left_out_and_cut_off_only_when_repairing(tmp_path):
 
 
 def test_another_sweeps_file_is_refused_and_an_empty_or_header_only_one_has_no_rows(tmp_path):
+    """Catches a resume from another sweep's file (other parameters), or a header torn by a kill read as
+    rows."""
     path = tmp_path / "sweep.csv"
     path.write_bytes(b"")
     assert sweep.read_rows(path, HEADER) == []
@@ -88,6 +90,7 @@ def test_the_statistics_are_numpys_over_the_completed_finite_values():
     rows = [_row(k, 0.1 * k * (-1) ** k) for k in range(9)] + [_row(9, 5.0, completed=False, error="x")]
     s = sweep.summarize(rows)
     assert (s["samples"], s["completed"], s["failed"]) == (10, 9, 1)
+    assert list(s["outcomes"].items()) == [("completed", 9), ("refused", 1)]     # RunStatus' words, its order
     for metric in sweep.METRICS:
         v = [r[metric] for r in rows[:9] if math.isfinite(r[metric])]
         assert s[metric]["n"] == len(v)
@@ -112,6 +115,8 @@ def test_the_statistics_are_numpys_over_the_completed_finite_values():
 
 
 def test_summary_md_states_the_settings_and_each_statistic_to_four_digits():
+    """Catches summary.md stating other settings or counts than the sweep's, statistics to other digits, or
+    a failed sample left out of its list."""
     rows = [_row(0, 0.2), _row(1, 0.4), _row(2, 0.1, completed=False, error="drive1: refused at t = 0.5 s")]
     result = sweep.Sweep("bench_circle_TCMDx", ["drive1.R", "plant.l0"], rows, sweep.summarize(rows), [0, 1, 2],
                          {"uncertainty": 0.25, "distribution": "normal", "seed": 7, "mode": "inprocess"})

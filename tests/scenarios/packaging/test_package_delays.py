@@ -34,6 +34,8 @@ def fmu_dir(built_fmus):
 
 
 def test_a_plain_period_package_of_a_task_space_pd_scene_is_named_at_export(fmu_dir, tmp_path):
+    """Catches the export of a package known to track badly (task-space PD at one sub-step) without its
+    warning, with the warning twice, or refused instead of written."""
     scene = _short("bench_circle_PDx")
     with pytest.warns(TrackingWarning, match=r"bench_circle_PDx \(strategy PDx\).* 1 sub-step.*tau_ef x") as caught:
         path = export_per_component(scene, tmp_path / "pdx.ssp", fmu_dir, substeps=1, internal_observer=True)
@@ -68,6 +70,8 @@ def test_plain_fmpy_runs_the_1ms_package_as_the_scene(fmu_dir, tmp_path):
 
 @pytest.mark.parametrize("name, substeps", [("bench_circle_PDx", 4), ("bench_circle_TCMDx", 1)])
 def test_packages_that_track_export_without_a_warning(fmu_dir, tmp_path, name, substeps):
+    """Catches the tracking warning raised for packages that track well (a false alarm a user learns to
+    ignore)."""
     scene = _short(name)
     with warnings.catch_warnings():
         warnings.simplefilter("error", TrackingWarning)

@@ -60,6 +60,8 @@ def test_a_loop_of_samples_has_no_phases():
 
 
 def test_the_last_stage_samples_at_the_period_start_and_each_earlier_one_a_sub_step_before():
+    """Catches phases that make a sample wait a whole period in a Jacobi master (one sub-step per
+    connection): a chain a -> b -> c whose phases are not n - 2, n - 1, 0."""
     timing = component_timing(_chain_system(), _chain_variables())
     n = timing.substeps
     assert n >= 3 and timing.phases == {"a": n - 2, "b": n - 1, "c": 0}
@@ -80,6 +82,8 @@ def test_no_stage_that_reads_the_plant_samples_on_the_runs_first_step():
 
 
 def test_a_foreign_reader_of_samples_counts_as_sampling_at_its_period_start():
+    """Catches a foreign FMU (no sample phase of its own) left out of the chain's timing, so its upstream
+    stages are phased for nothing."""
     system = _chain_system()
     system = dataclasses.replace(system, components=tuple(
         dataclasses.replace(c, model="/x/drive.fmu") if c.name == "c" else c for c in system.components))
@@ -127,6 +131,8 @@ def bench_package(tmp_path_factory, built_fmus):
 
 
 def test_the_package_states_its_base_step_where_the_tools_read_it(bench_package):
+    """Catches a package whose base step is not a whole fraction of 1 ms, or not in the OSP annotation
+    libcosim reads (with numWorkerThreads 0)."""
     from fmus.ssp.libcosim import read_libcosim_step
 
     step = read_ssp_experiment(bench_package)[2]
@@ -175,6 +181,8 @@ def ours(short_bench):
 
 @pytest.mark.parametrize("internal", [False, True], ids=["observers", "internal-observer"])
 def test_in_a_jacobi_master_the_package_tracks_as_our_master(short_bench, ours, bench_variables, internal):
+    """Catches a per-component package whose phases or sub-steps leave a delay in a Jacobi master: its e_ef
+    more than 5 % off our master's, with or without internal observers."""
     system = with_internal_observers(short_bench.system) if internal else short_bench.system
     variables = {n: v for n, v in bench_variables.items() if n in {c.name for c in system.components}}
     if internal:
@@ -195,6 +203,8 @@ def test_without_phases_the_jacobi_master_leaves_the_circle(short_bench, ours):
 # --- the export's choice of n: the trial's rule and the scene's own reproducibility -----------
 
 def test_the_trial_scales_n_to_the_deviation_above_the_floor():
+    """Catches the export's trial scaling the sub-steps by the whole deviation instead of the part above
+    the scene's own floor, taking a NaN deviation, or going beyond its largest choice."""
     from scenarios.per_component import SUBSTEP_CHOICES, next_substeps
 
     assert next_substeps(4, 0.009, 0.01) is None                  # within the goal: taken

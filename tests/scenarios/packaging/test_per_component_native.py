@@ -65,6 +65,8 @@ def _same_run(a, b, signals):
 
 
 def test_the_native_package_is_the_pythonfmu_package_with_native_fmus(packages, tmp_path):
+    """Catches a native package whose SSD, bindings or experiment differ from the pythonfmu package's, an
+    FMU that is not native, or a phase not compiled in (fmpy sets no parameter)."""
     from fmpy import read_model_description
     from fmpy.fmi2 import FMU2Slave
 
@@ -100,6 +102,8 @@ def test_the_native_package_is_the_pythonfmu_package_with_native_fmus(packages, 
 
 @pytest.mark.parametrize("tool", ("fmpy", "ecos", "libcosim"))
 def test_in_each_tool_the_native_package_runs_as_the_pythonfmu_package(scene, packages, tool):
+    """Catches a native FMU that steps differently from its pythonfmu twin in a tool, or a package whose
+    tracking in the tool leaves the bound around our master's."""
     if UNAVAILABLE[tool] is not None:
         pytest.skip(f"{tool} cannot be loaded here: {UNAVAILABLE[tool]}")
     python, native = packages
@@ -128,6 +132,8 @@ def test_one_native_fmu_swapped_for_its_twin_runs_the_same(scene, packages, tmp_
 
 
 def test_a_model_without_a_native_fmu_is_refused_by_name_before_any_build(scene, tmp_path):
+    """Catches --native building FMUs (or a package) before finding a model that has no native FMU, or
+    refusing without naming it."""
     plant = next(c for c in scene.system.components if c.model == "FiveBarPlant")
     system = dataclasses.replace(scene.system, components=tuple(
         dataclasses.replace(c, model="SpecPlant", parameters={}) if c is plant else c for c in scene.system.components))

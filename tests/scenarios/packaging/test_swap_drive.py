@@ -71,6 +71,8 @@ def _tracking_ratios(scene, path, tool, bindings=False):
 
 @pytest.mark.parametrize("tool", ("fmpy", "ecos", "libcosim"))
 def test_the_per_component_package_tracks_in_the_tool_used_plainly(scene, package, ours, tool):
+    """Catches a per-component package that a tool, used as its documentation says, runs with other
+    parameters or phases than ours (tracking beyond the bound)."""
     if UNAVAILABLE[tool] is not None:
         pytest.skip(f"{tool} cannot be loaded here: {UNAVAILABLE[tool]}")
     m = _tracking_ratios(scene, package, tool)
@@ -81,6 +83,8 @@ def test_the_per_component_package_tracks_in_the_tool_used_plainly(scene, packag
 
 @pytest.mark.parametrize("tool", ("fmpy", "ecos", "libcosim"))
 def test_a_supplier_drive_swapped_into_the_package_tracks_in_the_tool(scene, swapped, ours, tool):
+    """Catches a package that stops tracking when a supplier's C drive replaces ours (bindings not applied
+    to the foreign FMU, its String parameter not set)."""
     if UNAVAILABLE[tool] is not None:
         pytest.skip(f"{tool} cannot be loaded here: {UNAVAILABLE[tool]}")
     # fmpy ignores the package's bindings and cannot set a String: the C drive's own start

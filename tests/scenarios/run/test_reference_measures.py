@@ -36,6 +36,8 @@ def _runs():
 
 
 def test_the_grids_meet_at_every_second_reference_row_to_a_nanosecond():
+    """Catches the run-to-reference row matching done by exact time equality (the grids are ulps apart,
+    nothing would match) or pairing the wrong rows."""
     run, reference, _, _ = _runs()
     assert not np.array_equal(run.time, reference.time[::2])          # ulps apart
     ia, ib = common_rows(run.time, reference.time)
@@ -58,12 +60,16 @@ def test_the_deviation_over_a_window_is_its_definition_over_the_common_rows():
 
 
 def test_encoder_differences_count_the_common_rows_that_differ_and_the_first_time():
+    """Catches encoder differences counted over rows the runs do not share, or a first time given when
+    nothing differs."""
     run, reference, _, _ = _runs()
     assert encoder_differences(run, reference) == (1, pytest.approx(0.06, abs=1e-12))
     assert encoder_differences(reference, reference) == (0, pytest.approx(math.nan, nan_ok=True))
 
 
 def test_with_parameters_changes_one_instance_and_its_sub_steps_only():
+    """Catches a reference variant that changes other instances too, keeps sub-steps it was told to change
+    (or changes them when not told), or ignores an unknown instance."""
     system = get_scene("bench_circle_TCMDx").system
     changed = with_parameters(system, "drive2", component_substeps=4, R=1.5, T=2e-3)
     for before, after in zip(system.components, changed.components, strict=True):

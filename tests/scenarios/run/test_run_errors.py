@@ -52,6 +52,9 @@ def refused_runs(tmp_path_factory, built_fmus):
 
 
 def test_a_refused_plant_step_is_one_record_in_every_mode(refused_runs):
+    """Catches a back end that loses the model's fields on the way (the FMU or the compiled loop giving
+    only a message), a time outside the refused step, or metrics.json's record differing from
+    Result.error."""
     outcome, metrics = refused_runs["inprocess"]
     error = outcome.result.error
     assert isinstance(error, RunError) and error.kind is RunStatus.REFUSED and outcome.result.status is RunStatus.REFUSED
@@ -69,6 +72,8 @@ def test_a_refused_plant_step_is_one_record_in_every_mode(refused_runs):
 
 
 def test_the_cli_line_is_the_records_message_and_its_exit_status_the_tables(monkeypatch, tmp_path, capsys):
+    """Catches the CLI printing another text than the record's message, or an exit status that is not
+    EXIT_STATUS's for a refusal."""
     import parcosim.cli as cli
 
     monkeypatch.setattr(cli, "_scene", lambda args: _open_loop(stop_time=0.4))
@@ -102,6 +107,8 @@ def test_an_interruption_inside_a_component_is_the_kind_interrupted(monkeypatch)
 
 @pytest.mark.parametrize("mode", ["inprocess", "fmu"])
 def test_a_refused_initialisation_is_the_kind_initialisation(mode, built_fmus):
+    """Catches a refused initialisation reported as a refused step (the kind once came from the message's
+    first words), or without the plant and t = 0."""
     result = simulate(_open_loop(stop_time=0.01, x0=5.0).system, mode=mode,
                       fmu_dir=next(iter(built_fmus.values())).parent)
     assert result.status is RunStatus.INITIALISATION and len(result.time) == 1
@@ -236,6 +243,8 @@ def _message_reads(tree: ast.AST):
 
 
 def test_no_product_module_learns_what_happened_by_reading_a_message():
+    """Catches product code that branches on a message's text (startswith, "..." in, a regular expression)
+    instead of the record's fields."""
     found = []
     for package in PRODUCT:
         for path in sorted((ROOT / package).rglob("*.py")):

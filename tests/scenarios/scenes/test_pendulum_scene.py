@@ -61,6 +61,8 @@ def test_ideal_electrics_wire_the_controllers_torques_to_the_plant_and_drop_the_
 
 
 def test_quasi_static_drives_without_friction_have_no_viscous_term_and_are_wired_side_by_side():
+    """Catches the pendulum's drives crossed (left controller output to the right drive), or friction left
+    on when switched off."""
     scene = pendulum_scene("pendulum_push", PendulumFidelity(friction=False))
     assert scene.system.component("drive_l").parameters["b"] == 0.0
     pairs = {(c.source, c.target) for c in scene.system.connections}

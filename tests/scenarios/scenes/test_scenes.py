@@ -31,6 +31,8 @@ def test_scene_names_cover_the_contract():
 
 
 def test_every_twin_scene_name_resolves_to_that_twin_scene():
+    """Catches a twin scene name that resolves to the plain bench scene underneath (no LuGre drives) or to
+    another strategy's."""
     from scenarios.scenes.twin import twin_scene_names
 
     names = twin_scene_names()
@@ -69,6 +71,8 @@ def test_every_scene_starts_and_runs(name):
 
 
 def test_metrics_are_the_thesis_formulas():
+    """Catches e_ef or tau_ef computed over another window, divided by another count, or not the RMS norms
+    of the thesis (7.31-7.32)."""
     scene = _shortened("bench_triangle_TCx", 0.3)
     scene = replace(scene, window=(0.1, 0.25))
     outcome = run_scene(scene)
@@ -97,6 +101,8 @@ def test_thesis_sim_circle_exact_model_tracks_to_the_hold_error():
 
 
 def test_run_command_writes_the_contract_files(tmp_path, monkeypatch):
+    """Catches parcosim run writing result.csv without the contract columns, metrics.json without the
+    contract keys, or no plot."""
     short = _shortened("bench_circle_PDx", 0.05)
     monkeypatch.setattr(scenes, "get_scene", lambda name: short)   # what the command looks up
     assert main(["run", "bench_circle_PDx", "--out", str(tmp_path)]) == 0
@@ -109,6 +115,7 @@ def test_run_command_writes_the_contract_files(tmp_path, monkeypatch):
 
 
 def test_run_command_bad_scene_one_line(capsys):
+    """Catches an unknown scene ending in a traceback or several lines instead of one line and exit 2."""
     assert main(["run", "bench_circle_nope"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "unknown scene 'bench_circle_nope'" in err[0]
@@ -116,6 +123,7 @@ def test_run_command_bad_scene_one_line(capsys):
 
 def test_stopped_run_keeps_what_was_recorded(tmp_path):
     # open loop 0.3 N m: the mechanism reaches a singular pose and the plant refuses
+    """Catches a refused run that writes no rows, all of its planned rows, or metrics claiming completion."""
     components = (Component("traj", "Trajectory", {"kind": "hold"}),
                   Component("ctrl", "PositionController", {"strategy": "PDx"}),
                   Component("plant", "FiveBarPlant", {"preset": "bench", "x0": -0.002, "y0": 0.108,
@@ -133,6 +141,8 @@ def test_stopped_run_keeps_what_was_recorded(tmp_path):
 
 
 def test_fidelity_switches_remove_what_they_switch_off():
+    """Catches a fidelity switch that leaves its model in the scene (an ideal drive still stepped, the
+    encoder still wired, friction still on) or accepts an unknown value."""
     from scenarios.scenes.thesis import Fidelity, bench
 
     def models(**switches):
@@ -210,6 +220,8 @@ def test_with_sample_time_sets_every_sample_time():
 
 
 def test_run_command_with_the_drives_in_the_plant(tmp_path, capsys):
+    """Catches --drives-in-plant changing the tracking beyond 1 % of the separate drives', losing the drive
+    columns, or accepted for a scene without drives."""
     out = tmp_path / "in_plant"
     assert main(["run", "bench_triangle_PDx", "--drives-in-plant", "8", "--out", str(out)]) == 0
     metrics = json.loads((out / "metrics.json").read_text())

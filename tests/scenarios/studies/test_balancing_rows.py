@@ -72,6 +72,8 @@ def test_break_even_is_where_the_straight_lines_between_the_points_cross():
 
 
 def test_the_csv_has_the_columns_in_order_and_six_significant_digits(tmp_path):
+    """Catches balancing.csv with its columns out of order or its numbers rounded to other than six
+    significant digits."""
     path = tmp_path / "balancing.csv"
     row = {name: 0.0 for name in balancing.COLUMNS} | {"strategy": "TCx", "balanced": False, "error": "",
                                                        "e_ef_mm": 1.23456789, "frequency_Hz": 0.25}

@@ -41,6 +41,8 @@ def test_the_sample_time_sweep_runs_each_T_with_the_plant_at_half_a_millisecond(
 
 
 def test_the_battery_sweep_sets_the_voltage_of_the_controller_and_both_drives(runs):
+    """Catches the battery sweep setting the voltage on the controller alone (the drives still saturating
+    at the old value), or on one drive."""
     rows = pendulum_trade.battery_rows((1.45, 8.0))
     for scene, v in zip(runs, (1.45, 8.0)):
         assert scene.system.component("ctrl").parameters["v_battery"] == v
@@ -49,6 +51,7 @@ def test_the_battery_sweep_sets_the_voltage_of_the_controller_and_both_drives(ru
 
 
 def test_balanced_needs_a_completed_run_within_the_band_over_the_last_second():
+    """Catches a stopped run counted as balanced, or the band's edge tested with the wrong inequality."""
     assert pendulum_trade.balanced({"completed": True, "last_second_pitch_deg": 0.1})
     assert not pendulum_trade.balanced({"completed": True, "last_second_pitch_deg": 0.1000001})
     assert not pendulum_trade.balanced({"completed": False, "last_second_pitch_deg": 0.0})

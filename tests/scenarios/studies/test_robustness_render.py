@@ -49,6 +49,8 @@ def test_a_strategys_row_is_its_nominal_and_the_percentiles_of_its_completed_sam
 
 
 def test_the_reading_ranks_by_the_95_percent_quantile_and_gives_each_pairs_median_change():
+    """Catches the robustness reading ranking by the mean or median instead of the 95 % quantile, or
+    computing the sliding-mode term's change from the wrong medians."""
     lines = robustness.render(_found(), uncertainties=(0.2,)).splitlines()
     p95 = {"PDq": np.percentile([0.5, 0.7, 0.6, 0.9], 95), "PDMDq": np.percentile([0.30, 0.45, 0.35, 0.40, 0.50], 95),
            "TCx": np.percentile([0.2, 0.8, 0.3, 0.25], 95)}

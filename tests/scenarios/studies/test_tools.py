@@ -34,6 +34,8 @@ def compared(request, tmp_path_factory):
 
 @pytest.mark.parametrize("tool", ("fmpy", "ecos", "libcosim"))
 def test_the_package_tracks_in_the_tool_as_in_our_master(compared, tool):
+    """Catches a package that a tool runs otherwise than our master (another parameter set, initial
+    outputs, step): e_ef or tau_ef more than 5 % off."""
     if UNAVAILABLE[tool] is not None:
         pytest.skip(f"{tool} cannot be loaded here: {UNAVAILABLE[tool]}")
     scene, rows = compared
@@ -46,6 +48,8 @@ def test_the_package_tracks_in_the_tool_as_in_our_master(compared, tool):
 # --- the measurement's bookkeeping (no tool runs) ----------------------------------------------
 
 def test_a_stored_run_is_not_run_again_and_a_new_one_is_merged(tmp_path, monkeypatch):
+    """Catches the tools study running again what it stored, or overwriting a run another process stored
+    meanwhile."""
     import json
 
     import scenarios.studies.tools as tools
@@ -82,6 +86,8 @@ def test_a_stored_run_is_not_run_again_and_a_new_one_is_merged(tmp_path, monkeyp
 
 
 def test_swap_fmus_replaces_only_the_named_member(tmp_path):
+    """Catches a swap that changes other members than the named FMU, or silently adds a member the package
+    does not have."""
     import zipfile
 
     from scenarios.studies.tools import swap_fmus

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from fmus.ssp.run import SspRun
+from fmus.status import RunError, RunStatus
 from scenarios.run.metrics import scene_metrics
 from scenarios.scenes import get_scene
 from scenarios.studies import tools
@@ -54,9 +55,24 @@ def test_a_tools_finer_rows_are_read_at_the_scenes_2ms_points():
 
 
 def test_a_run_that_stopped_early_or_failed_is_not_completed():
+    """Catches a tool's run that stopped before its end, or carries an error, counted as completed."""
     scene = _scene()
     assert tools.tool_metrics(scene, _run(end=0.1), COLUMNS)["completed"] is False
-    assert tools.tool_metrics(scene, _run(error="fmi2Error"), COLUMNS)["completed"] is False
+    refused = RunError(RunStatus.REFUSED, "plant refused the step from t = 0.1 s: singular", instance="plant", time=0.1)
+    assert tools.tool_metrics(scene, _run(error=refused), COLUMNS)["completed"] is False
+
+
+def test_a_stored_runs_error_reads_back_as_its_record(tmp_path):
+    """Catches a tool's error stored as text (or not stored: json cannot write a RunError) and
+    read back as a string or a dict: the rows of the stored runs carry the same record."""
+    error = RunError(RunStatus.REFUSED, "plant refused the step from t = 0.1 s: singular", instance="plant",
+                     time=0.1, variable="det", value=-1e-4, unit="", code=4, reason="singular")
+    results = tmp_path / "tools.json"
+    tools._store(results, tools._key("ours", "bench_circle_TCMDx", "parcosim"), {"e_ef_mm": 0.5})
+    tools._store(results, tools._key("default", "bench_circle_TCMDx", "ecos"), {"metrics": None, "error": error.record()})
+    stored = tools.load_results(results)
+    (tool, _, _, read), = tools.stored_rows(stored)[("default", "bench_circle_TCMDx")]
+    assert tool == "ecos" and read == error
 
 
 def _results():
@@ -64,7 +80,7 @@ def _results():
     fmpy = {"e_ef_mm": 0.55, "tau_ef_Nm": 0.021, "completed": True, "cpu_s": 0.3, "simulated_s": 0.2, "step": H}
     ecos = {"e_ef_mm": 0.45, "tau_ef_Nm": 0.019, "completed": True, "cpu_s": 0.6, "simulated_s": 0.2, "step": 1e-3}
     return {("default", "bench_circle_TCMDx"): [("fmpy", fmpy, ours, None), ("ecos", ecos, ours, None),
-                                                ("libcosim", None, ours, "RuntimeError: no")]}
+                                                ("libcosim", None, ours, RunError(RunStatus.FAILED, "RuntimeError: no"))]}
 
 
 def test_the_comparison_table_gives_each_tools_ratios_step_and_cpu():
@@ -77,6 +93,8 @@ def test_the_comparison_table_gives_each_tools_ratios_step_and_cpu():
 
 
 def test_the_summary_gives_each_tools_ranges_over_the_scenes():
+    """Catches the summary's ranges, completion counts or CPU figures computed over the wrong rows, or a
+    tool that never ran given numbers."""
     results = _results()
     results[("default", "bench_triangle_TCMDx")] = [
         ("fmpy", {"e_ef_mm": 0.8, "tau_ef_Nm": 0.03, "completed": True, "cpu_s": 0.5, "simulated_s": 0.2,

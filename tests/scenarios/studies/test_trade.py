@@ -20,6 +20,8 @@ def _csv_rows(out):
 
 
 def test_quick_sweep_writes_csv_markdown_and_plot(quick):
+    """Catches the trade study writing a file empty or missing, a setting twice, no defaults row, or a
+    table that does not name its plot and command."""
     trade, out = quick
     assert isinstance(trade, Trade) and trade.scene == "bench_circle_TCMDx" and trade.stop_time == 1.0
     for name in ("trade.csv", "trade.md", "trade.png"):
@@ -33,6 +35,8 @@ def test_quick_sweep_writes_csv_markdown_and_plot(quick):
 
 
 def test_every_run_completed_with_finite_positive_errors(quick):
+    """Catches a setting whose run stopped or whose error against the reference is zero, NaN or an RMS
+    above its maximum (a reference compared with itself, rows misaligned)."""
     trade, _ = quick
     for r in trade.rows:
         assert not r["error"], (r["setting"], r["error"])
@@ -62,6 +66,8 @@ def test_a_tighter_plant_is_not_worse(quick):
 
 
 def test_drive_columns_only_where_there_are_drives(quick):
+    """Catches drive current and energy errors computed for a scene without drives (from columns that are
+    not there) or missing where there are drives."""
     trade, _ = quick
     base, ideal = trade.row("defaults"), trade.row("ideal actuators")
     assert math.isfinite(base["current_err_A"]) and base["current_err_A"] > 0.0
@@ -71,6 +77,8 @@ def test_drive_columns_only_where_there_are_drives(quick):
 
 
 def test_fidelity_rows_are_never_on_the_front(quick):
+    """Catches a Pareto front that admits settings which change the model (fidelity), or misses the most
+    accurate setting."""
     trade, _ = quick
     front = [r for r in trade.rows if r["pareto"]]
     assert front and all(r["kind"] == "accuracy" for r in front)
@@ -95,6 +103,7 @@ def test_pareto_front():
 
 
 def test_cli_refuses_an_unknown_scene(capsys):
+    """Catches parcosim trade starting its runs (or tracing back) for a scene that does not exist."""
     from parcosim.cli import main
 
     assert main(["trade", "no_such_scene", "--quick", "--out", "unused"]) == 2
@@ -124,6 +133,8 @@ class _Run:
 
 
 def test_a_run_at_a_longer_step_meets_every_kth_reference_row():
+    """Catches the comparison of a 2 ms run with the 1 ms reference by exact time equality (t += h drifts,
+    no row would match) or at the wrong rows."""
     from scenarios.reference import common_rows, deviation
 
     reference = _Run([k * 1e-3 for k in range(11)], [k * 1e-3 for k in range(11)])

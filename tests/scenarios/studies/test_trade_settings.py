@@ -30,6 +30,8 @@ def _differences(before, after):
 
 
 def test_the_names_are_unique_and_the_quick_sweep_is_part_of_the_full_one():
+    """Catches two trade settings of one name (their rows would overwrite each other), defaults not first,
+    or a quick setting the full sweep does not have."""
     names = [s.name for s in settings()]
     assert len(names) == len(set(names)) and names[0] == "defaults"
     assert {s.name for s in settings(quick=True)} <= set(names)

@@ -18,6 +18,8 @@ from tests.support.paths import ROOT
 
 
 def test_the_twin_file_round_trips_and_refuses_bad_values(tmp_path):
+    """Catches a twin file that does not read back as written (quoting, the fit's record), accepts an out-
+    of-range parameter, or loads with a misspelled one."""
     twin = Twin(friction_scale=2.5, stiction_ratio=1.7, stribeck_speed=0.05, current_offset=-0.1,
                 current_noise=0.02, inertia_error=-0.2)
     path = write_twin(twin, {"loss": 0.125, "seeds": [1, 2], "note": 'a "quoted" text'}, tmp_path / "t.toml")
@@ -81,6 +83,8 @@ def test_twin_scene_runs_the_same_rows_compiled_and_in_process():
 
 
 def test_noise_is_a_function_of_the_seed_only():
+    """Catches current noise that depends on anything but its seed (two runs of one seed differ) or on
+    nothing (two seeds agree)."""
     twin = Twin(current_noise=0.05)
     a = simulate(_short(bench_real("TCx", "circle", twin, seed=3)), mode="compiled")
     b = simulate(_short(bench_real("TCx", "circle", twin, seed=3)), mode="compiled")
@@ -126,6 +130,8 @@ def _thesis_means(kind, factor=1.0):
 def test_loss_is_the_mean_squared_log_ratio():
     # The bench itself: only Table 11's rounding is left (its percentages come from unrounded
     # Table 9 values: PDq -> PDMDq 2.37/3.15 - 1 = -24.76 %, printed -24.9 %).
+    """Catches the twin's loss with other weights or terms than the mean squared log ratios, or a NaN
+    metric that does not make the loss infinite."""
     exact = twin_fit.loss(_thesis_means("circle"))
     assert 0.0 < exact < 1e-5
     # Twice everything: each e_ef and tau_ef term ln²2, each e_ss term 0.5 ln²2 (all above the

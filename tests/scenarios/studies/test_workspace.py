@@ -26,6 +26,8 @@ def parallel_singular_point(params, x=0.0, lo=0.03, hi=0.1):
 
 
 def test_signed_measures_are_the_jacobians_determinants():
+    """Catches the workspace map's singularity measures normalised otherwise, or of other Jacobians, than
+    det J_X / l2^2 and det J_theta / (l1 l2)^2 at each point."""
     params = get_preset("bench")
     ws = fivebar.workspace_map(params, step=0.02, extent=(-0.1, 0.1, 0.05, 0.25))
     det_x, det_t = workspace.signed_measures(params, ws)
@@ -39,6 +41,8 @@ def test_signed_measures_are_the_jacobians_determinants():
 
 
 def test_the_thesis_trajectories_are_accepted_and_bad_circles_refused_with_their_reason():
+    """Catches a trajectory check that refuses the thesis paths, accepts a circle leaving the workspace or
+    crossing the parallel singularity, or gives no time of the first refusal."""
     params = get_preset("bench")
     for name, ref in workspace.thesis_trajectories("bench").items():
         check = workspace.check_trajectory(params, name, ref, ref.duration)
@@ -71,6 +75,8 @@ def test_first_refusal_time_is_the_sample_index_times_the_sample_time():
 
 
 def test_spec_measures_vanish_on_the_parallel_locus():
+    """Catches the spec mechanism's singularity measures not vanishing on the 5R's parallel singular locus
+    (another measure, or the wrong closure)."""
     spec = plant_spec.load("bench_5r")
     x, y = parallel_singular_point(get_preset("bench"))
     near = assemble(spec, (x, y + 1e-7, 0.0))
@@ -79,6 +85,8 @@ def test_spec_measures_vanish_on_the_parallel_locus():
 
 
 def test_cli_writes_the_figure_and_the_verdicts(tmp_path):
+    """Catches parcosim workspace writing no figure or JSON, dropping the thesis paths, or accepting a
+    malformed --circle."""
     out = subprocess.run([sys.executable, "-m", "parcosim", "workspace", "bench", "--out", str(tmp_path),
                           "--circle", "0,0.2,0.09"], capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr
