@@ -57,7 +57,7 @@ class _LoopPlan(ctypes.Structure):
 class _LoopStop(ctypes.Structure):
     """``pc_loop_stop`` (kernels/src/loop.h)."""
 
-    _fields_ = [("step", ctypes.c_int), ("member", ctypes.c_int), ("substep", ctypes.c_int),
+    _fields_ = [("step", ctypes.c_int64), ("member", ctypes.c_int), ("substep", ctypes.c_int),
                 ("time", ctypes.c_double), ("refusal", Refusal)]
 
 
@@ -106,11 +106,11 @@ class LoopPlan:
         fields.update({name: a.ctypes.data_as(ctypes.POINTER(ctypes.c_void_p)) for name, a in self._pointers.items()})
         self.struct = _LoopPlan(n_groups=len(group_substeps), n_record=len(arrays["record_slot"]), **fields)
 
-    def run(self, values: np.ndarray, record: np.ndarray, k0: int, k1: int, t: float, h: float) -> _LoopStop:
-        """Steps k0 .. k1-1 in C (``values`` and the C-contiguous ``record`` are written in
-        place); the stop says where and why it ended."""
+    def run(self, values: np.ndarray, record: np.ndarray, k0: int, k1: int, t0: float, h: float) -> _LoopStop:
+        """Steps k0 .. k1-1 in C, step k from t0 + k h (``values`` and the C-contiguous ``record``
+        are written in place); the stop says where and why it ended."""
         stop = _LoopStop()
-        _loop_run()(ctypes.byref(self.struct), kernels.address(values), kernels.address(record), k0, k1, t, h,
+        _loop_run()(ctypes.byref(self.struct), kernels.address(values), kernels.address(record), k0, k1, t0, h,
                     ctypes.byref(stop))
         return stop
 
@@ -169,14 +169,14 @@ class Plan:
             lines.append(f"# {a.name} ({a.model}): {a.kernel}" + (f", {substeps} sub-steps" if substeps > 1 else ""))
         return "\n".join(lines)
 
-    def run(self, values, record, k0, k1, t, h) -> _LoopStop:
+    def run(self, values, record, k0, k1, t0, h) -> _LoopStop:
         """:meth:`LoopPlan.run` of the system's plan."""
-        return self.loop.run(values, record, k0, k1, t, h)
+        return self.loop.run(values, record, k0, k1, t0, h)
 
 
 def _loop_run():
-    return kernels.function("pc_loop_run", None, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int,
-                            ctypes.c_int, ctypes.c_double, ctypes.c_double, ctypes.c_void_p)
+    return kernels.function("pc_loop_run", None, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int64,
+                            ctypes.c_int64, ctypes.c_double, ctypes.c_double, ctypes.c_void_p)
 
 
 def check_compilable(system, coupling: str, retry_substeps) -> None:
@@ -213,7 +213,7 @@ def run_compiled(run, stepper, plan: Plan) -> Outcome:
     data[0] = stepper.row()
     values = np.array(stepper.values, dtype=float)
     start, cpu_start = _time.perf_counter(), _time.thread_time()
-    error, interrupted, done, t = None, False, 0, 0.0
+    error, interrupted, done = None, False, 0
     chunk = max(1, steps // 100)
     python_steps = 0
     try:
@@ -221,20 +221,19 @@ def run_compiled(run, stepper, plan: Plan) -> Outcome:
             if run.interrupt.requested:
                 raise KeyboardInterrupt
             end = min(steps, done + chunk)
-            stop = plan.run(values, data, done, end, t, h)
-            done, t = stop.step, stop.time
+            stop = plan.run(values, data, done, end, stepper.start_time, h)
+            done = stop.step
             if stop.member >= 0:     # a kernel declined step k: the Python path takes the rest of it
                 for a in plan.adapters:
                     a.to_python()
                     a.slave._next_time = None   # the slaves did not see the compiled steps
                 stepper.values[:] = values.tolist()
                 g, m = plan.positions[stop.member]
-                stepper.time = t
+                stepper.at_step(done)
                 stepper.step(start=(g, m, stop.substep))
                 for a in plan.adapters:
                     a.from_python()
                 values[:] = stepper.values
-                t = stepper.time
                 done += 1
                 data[done] = stepper.row()
                 python_steps += 1

@@ -144,7 +144,8 @@ def test_python_finishes_a_declined_step_from_the_declining_member_and_sub_step(
     a, b, c, d = (Instance(n) for n in "abcd")
     stepper = Stepper.__new__(Stepper)
     stepper.system = System((), (), (), stop_time=1.0, step=1.0)
-    stepper.values, stepper.jacobi, stepper.time, stepper._calls = [], False, 3.0, {}
+    stepper.values, stepper.jacobi, stepper._calls = [], False, {}
+    stepper.start_time, stepper.k, stepper.time = 0.0, 3, 3.0
     stepper.plan = tuple(Entry(i.name, i, (), (), (), (), n) for i, n in ((a, 1), (b, 2), (c, 2), (d, 1)))
     stepper.groups = tuple(rate_groups(stepper.plan))
     stepper._program = stepper._program_of(stepper.groups)
