@@ -12,11 +12,14 @@ order: the rows are bit-identical to the in-process run.  Nothing is generated o
 at run time: ``compile_s`` is building the plan.
 
 Refusals: a kernel that cannot do exactly what the Python model would (a refused input,
-a diverged step, a controller sample off its table) returns a non-zero status without
-changing anything; the loop stops there, and the rest of that step runs in Python through
-the same slave objects (:meth:`fmus.cosim.adapter.Adapter.to_python` first), which raise the refusal's
-message or take the sample (e.g. the exact model where the table has a hole); then the
-compiled loop goes on from the next step.
+a diverged step, a controller sample off its table) returns a non-zero status and its record
+(``pc_refusal``) without changing anything; the loop stops there.  Where the adapter makes the
+refusal from that record as the slave's own step would (:meth:`fmus.cosim.adapter.Adapter.refused`:
+the position controller's samples), the instance refuses the step with it and the run stops,
+nothing run again.  Otherwise the rest of that step runs in Python through the same slave objects
+(:meth:`fmus.cosim.adapter.Adapter.to_python` first), which take the sample (e.g. the exact model
+where the table has a hole) or raise the refusal; then the compiled loop goes on from the next
+step.
 
 A model without an adapter, a component given as an FMU file, Jacobi coupling, retried
 steps or a stop time past the slaves' last time (:func:`check_compilable`) make the run fall back
@@ -203,6 +206,17 @@ def _adapters() -> dict:
     return ADAPTERS
 
 
+def _refuse_declined(adapter, instance, stop, dt) -> None:
+    """Raise the refusal of the (sub-)step ``adapter``'s kernel declined at ``stop``, made from the
+    kernel's record (:meth:`fmus.cosim.adapter.Adapter.refused`), as the instance's own step
+    would; return when the Python path is to take that step."""
+    t = stop.time + stop.substep * dt
+    refused = adapter.refused(stop.refusal, t)
+    if refused is not None:
+        adapter.slave.refuse_step(refused, t)
+        raise instance.step_refused(t)
+
+
 def run_compiled(run, stepper, plan: Plan) -> Outcome:
     """Step ``run.system`` (a :class:`fmus.cosim.context.RunContext`) from its initialised
     ``stepper`` in the compiled loop ``plan``; the rest of a step a kernel declines runs in
@@ -227,8 +241,10 @@ def run_compiled(run, stepper, plan: Plan) -> Outcome:
                 for a in plan.adapters:
                     a.to_python()
                     a.slave._next_time = None   # the slaves did not see the compiled steps
-                stepper.values[:] = values.tolist()
                 g, m = plan.positions[stop.member]
+                group = stepper.groups[g]
+                _refuse_declined(plan.adapters[stop.member], group.entries[m].instance, stop, h / group.substeps)
+                stepper.values[:] = values.tolist()
                 stepper.at_step(done)
                 stepper.step(start=(g, m, stop.substep))
                 for a in plan.adapters:

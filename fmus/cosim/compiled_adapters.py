@@ -86,6 +86,16 @@ class PositionControllerAdapter(Adapter):
             raise NotCompilable(f"component {name}: the controller's kernel {c.kernel!r} is not compiled")
         self.controller, self.delayed = c, slave.delayed
 
+    def refused(self, refusal, t):
+        """The controller's own refusal (:meth:`controller.position.PositionController.step_with_errors`):
+        the sample's inputs are still in ``x`` and the kernel's scratch is the controller's; None for
+        what the Python controller finishes itself (the exact model's terms, a sample off the table
+        with ``table_fallback``)."""
+        c, code = self.controller, refusal.code
+        if code == law.NEEDS_TERMS or (code in law.TABLE_CODES and c._fallback is not None):
+            return None
+        return c._refused(refusal, t, tuple(self.x[:len(self.inputs)].tolist()))
+
     def context(self):
         c = self.controller
         exact = c.model_kind == "exact"

@@ -89,6 +89,29 @@ def test_a_refusal_stops_at_the_same_step_with_the_same_message():
     _same_rows(fast.result, slow.result)
 
 
+def test_a_refused_sample_runs_once_its_record_from_the_kernel(monkeypatch):
+    # Off the table without table_fallback: the law's kernel refuses its sample at some step k.
+    """Catches a compiled loop that runs a declined controller sample again in Python to learn
+    its refusal (counted: the Python law runs no sample at all), or whose record differs."""
+    from controller.position import PositionController
+
+    runs = []
+    python_sample = PositionController.step_with_errors
+
+    def counted(self, t, *args, **kwargs):
+        runs.append(t)
+        return python_sample(self, t, *args, **kwargs)
+
+    monkeypatch.setattr(PositionController, "step_with_errors", counted)
+    scene = _with(_short(get_scene("bench_circle_TCx"), 1.2), "ctrl", x_max=0.02, table_fallback=False)
+    fast = simulate(scene.system, mode="compiled")
+    assert runs == [] and fast.mode == "compiled" and fast.extra["python_steps"] == 0
+    slow = simulate(scene.system, mode="inprocess")
+    assert len(runs) == len(slow.time) and runs[-1] == slow.error.time    # in process: one a step, the last refused
+    assert fast.error == slow.error and fast.error.variable and fast.error.code is not None
+    _same_rows(fast, slow)
+
+
 def test_foreign_fmus_jacobi_and_retries_fall_back_with_a_reason():
     """Catches compiled mode accepting a foreign FMU, Jacobi or retries, or falling back silently."""
     system = System((Component("drive1", "/tmp/supplier_drive.fmu"),), (), (), stop_time=0.01)
