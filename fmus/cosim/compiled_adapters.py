@@ -210,6 +210,15 @@ class FiveBarPlantAdapter(_PlantState):
     def _sim(self):
         return self.slave.sim
 
+    def refused(self, refusal, t):
+        """The plant's own refusal (:meth:`plant.simulator.PlantSimulator.kernel_refusal`): the
+        torques are still in ``x``, the trial state in the context's scratch."""
+        sim = self.slave.sim
+        sim.time = t                 # as the slave's step sets it
+        tau1, tau2 = self.x[:2].tolist()
+        trial = self._context.buffers[-1][:len(self.state)].copy()
+        return sim.kernel_refusal(tau1, tau2, self.h, refusal.code, refusal, trial)
+
     def context(self):
         return self._context
 
