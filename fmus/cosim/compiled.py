@@ -15,8 +15,8 @@ Refusals: a kernel that cannot do exactly what the Python model would (a refused
 a diverged step, a controller sample off its table) returns a non-zero status and its record
 (``pc_refusal``) without changing anything; the loop stops there.  Where the adapter makes the
 refusal from that record as the slave's own step would (:meth:`fmus.cosim.adapter.Adapter.refused`:
-the position controller's samples, the FiveBarPlant's steps), the instance refuses the step with
-it and the run stops, nothing run again.  Otherwise the rest of that step runs in Python through the same slave objects
+the position controller's samples, the FiveBarPlant's and ActuatedFiveBarPlant's steps), the
+instance refuses the step with it and the run stops, nothing run again.  Otherwise the rest of that step runs in Python through the same slave objects
 (:meth:`fmus.cosim.adapter.Adapter.to_python` first), which take the sample (e.g. the exact model
 where the table has a hole) or raise the refusal; then the compiled loop goes on from the next
 step.

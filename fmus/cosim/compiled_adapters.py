@@ -256,6 +256,16 @@ class ActuatedFiveBarPlantAdapter(_PlantState):
     def _sim(self):
         return self.slave.actuated.plant
 
+    def refused(self, refusal, t):
+        """The plant's own refusal (:meth:`plant.actuated.ActuatedPlant.kernel_refusal`): the drives'
+        inputs are still in ``x``, the trial state in the plant context's scratch."""
+        a = self.slave.actuated
+        a.plant.time = t             # as the slave's step sets it
+        i_ref1, i_hat1, v_ref1, i_ref2, i_hat2, v_ref2 = self.x[:len(self.inputs)].tolist()
+        trial = self._context.buffers[0].buffers[-1][:len(self.state)].copy()
+        return a.kernel_refusal(refusal.code, refusal, trial, (i_ref1, i_ref2), (i_hat1, i_hat2), (v_ref1, v_ref2),
+                                self.h)
+
     def from_python(self):
         super().from_python()
         for n, (_, drive) in enumerate(self.slave.actuated.drives):
