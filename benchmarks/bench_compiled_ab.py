@@ -48,7 +48,7 @@ def _call_loop(run, plan_struct, values, record, k0: int, k1: int, t: float, h: 
 
     stop = compiled._LoopStop()
     run(ctypes.byref(plan_struct), ctypes.c_void_p(address(values)), ctypes.c_void_p(address(record)),
-        ctypes.c_int(k0), ctypes.c_int(k1), ctypes.c_double(t), ctypes.c_double(h), ctypes.byref(stop))
+        ctypes.c_int64(k0), ctypes.c_int64(k1), ctypes.c_double(t), ctypes.c_double(h), ctypes.byref(stop))
     return stop
 
 

@@ -350,9 +350,21 @@ def get_trajectory(kind, **params):
 PRESET_CYCLES = -1
 
 
-def from_parameters(kind, cycles=PRESET_CYCLES, side_time=0.75, frequency=1.0, x_hold=BENCH_START[0],
-                    y_hold=BENCH_START[1]):
-    """The trajectory of the Trajectory FMU's parameters (a scene's ``Trajectory`` component).
+#: The Trajectory FMU's parameters and their start values: all a scene's ``Trajectory`` component
+#: may set (:func:`from_parameters` takes the rest from here; the slave declares these; the real
+#: ones are checked in this order).
+PARAMETERS = {"kind": "circle", "cycles": PRESET_CYCLES, "side_time": 0.75, "x_hold": BENCH_START[0],
+              "y_hold": BENCH_START[1], "frequency": 1.0}
+
+
+def parameters_of(owner) -> dict:
+    """The :data:`PARAMETERS` as ``owner`` (a Trajectory slave) holds them, by name."""
+    return {name: getattr(owner, name) for name in PARAMETERS}
+
+
+def from_parameters(kind=PARAMETERS["kind"], cycles=PRESET_CYCLES, **others):
+    """The trajectory of the Trajectory FMU's parameters (a scene's ``Trajectory`` component, the
+    slave's values, the native FMU's build): the one place they become a trajectory.
 
     Parameters
     ----------
@@ -360,19 +372,23 @@ def from_parameters(kind, cycles=PRESET_CYCLES, side_time=0.75, frequency=1.0, x
         As :func:`get_trajectory`.
     cycles : int
         Rounds of circle and triangle; :data:`PRESET_CYCLES` for the kind's default.
-    side_time : float
-        Triangle: time per side [s].
-    frequency : float
-        Circle: turns per second [Hz].
-    x_hold, y_hold : float
-        Hold: the point [m].
+    **others
+        ``side_time`` (triangle: time per side [s]), ``frequency`` (circle: turns per second
+        [Hz]), ``x_hold``, ``y_hold`` (hold: the point [m]); those not given: :data:`PARAMETERS`.
 
     Raises
     ------
     ValueError
         Naming the parameter and its value: ``cycles`` < 1 (not the preset), a ``side_time`` or
-        ``frequency`` <= 0 where the kind uses it, an unknown ``kind``.
+        ``frequency`` <= 0 where the kind uses it, an unknown ``kind``, a name the Trajectory
+        does not have.
     """
+    unknown = [name for name in others if name not in PARAMETERS]
+    if unknown:
+        raise ValueError(f"parameter {unknown[0]}: the Trajectory has no such parameter; its parameters: "
+                         f"{', '.join(PARAMETERS)}")
+    values = {**PARAMETERS, **others}
+    side_time, frequency, x_hold, y_hold = (values[n] for n in ("side_time", "frequency", "x_hold", "y_hold"))
     if kind == "hold":
         kwargs = {"x": x_hold, "y": y_hold}
     else:

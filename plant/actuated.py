@@ -227,23 +227,32 @@ class ActuatedPlant:
         z[fast5r.PLANT_STATES:] = d1.i, d2.i
         status = k.call(dt)
         if status != fast5r.OK:
-            self._refuse_kernel_step(k, status, i_ref, i_hat, v_ref, dt)
+            raise self.kernel_refusal(status, k.refusal, k.trial[:k.z.size].copy(), i_ref, i_hat, v_ref, dt)
         outputs = x[_FIRST:_FIRST + fast5r.PLANT_OUTPUT_COUNT].tolist()   # ..., q2_enc, residual
         report = [0.0] * fast5r.REPORT_SIZE     # what PlantSimulator.outputs reads; the rest 0
         report[_OUTPUTS], report[fast5r.REPORT_RESIDUAL] = outputs[:-1], outputs[-1]
         plant.accept(z[:fast5r.PLANT_STATES].copy(), dt, None, (fast5r.OK, 0, outputs[-1], report))
         return 4 * plant.settings.substeps
 
-    def _refuse_kernel_step(self, k: KernelStep, status: int, i_ref, i_hat, v_ref, dt: float):
-        """Raise the refusal of a ``pc_actuated_step`` that returned ``status``, with :meth:`advance`'s
-        messages (the voltages held named as the drives would have sampled them)."""
+    def kernel_refusal(self, status: int, r, trial, i_ref, i_hat, v_ref, dt: float) -> Exception:
+        """The refusal of a ``pc_actuated_step`` from the present state that returned ``status``
+        with its refusal ``r`` (index, value) and left its trial state (plant and currents) in
+        ``trial``, with :meth:`advance`'s messages (the voltages held named as the drives would
+        have sampled them).  The compiled loop makes the refusal of a step its kernel declined
+        with it too."""
+        try:
+            return self._kernel_refusal(status, r, trial, i_ref, i_hat, v_ref, dt)
+        except ValueError as exc:     # PlantError, a drive's input named: raised where each is found
+            return exc
+
+    def _kernel_refusal(self, status, r, trial, i_ref, i_hat, v_ref, dt):
         if status == fast5r.NONFINITE_INPUT:
             self._check_inputs(i_ref, i_hat, v_ref)     # a drive's input: named as ever
         snapshots = [d.controller_state() for _, d in self.drives]
         voltages = [d.sample_voltage(i_ref[n], v_ref[n], i_hat[n], dt) for n, (_, d) in enumerate(self.drives)]
         for (_, d), snapshot in zip(self.drives, snapshots):
             d.restore_controller_state(snapshot)
-        plant, r = self.plant, k.refusal
+        plant = self.plant
 
         def held():
             return self._held_text(voltages)
@@ -252,7 +261,6 @@ class ActuatedPlant:
             raise plant._record(f"integration failed in the step from t = {plant.time:.6g} s ({held()}): the held "
                                 f"input {r.index} = {r.value!r} is not finite", status, f"input {r.index}", r.value,
                                 plant.time)
-        trial = k.trial[:k.z.size].copy()
         if status == fast5r.NONFINITE_STATE and r.index >= fast5r.PLANT_STATES:
             raise self._currents_refusal(trial[fast5r.PLANT_STATES:].tolist(), held)
         plant.accept(trial[:fast5r.PLANT_STATES], dt, held, (status, r.index, r.value, None))

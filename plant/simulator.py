@@ -235,19 +235,28 @@ class PlantSimulator:
         fast = self._fast
         status = fast.step(self.y, tau1, -tau2, dt)
         if status != fast5r.OK:
-            self._check_torques(tau1, tau2)
-
-            def held():
-                return f"tau1 = {tau1!r}, tau2 = {tau2!r} N m held"
-
-            r = fast.refusal
-            self.accept(fast.scratch[:fast5r.PLANT_STATES].copy(), dt, held, (status, r.index, r.value, None))
+            raise self.kernel_refusal(tau1, tau2, dt, status, fast.refusal, fast.scratch[:fast5r.PLANT_STATES].copy())
         y = fast.scratch[:fast5r.PLANT_STATES].copy()
         report = fast.report.tolist()
         self.y = y
         self._last = (y, report[fast5r.REPORT_RESIDUAL], report)
         self.time += dt
         return self._evaluations
+
+    def kernel_refusal(self, tau1, tau2, dt: float, status: int, refusal, trial) -> PlantRefused:
+        """The refusal of a C kernel step from the present state, tau1, tau2 held over dt, that
+        returned ``status`` with its ``refusal`` (index, value) and left its trial state in
+        ``trial``: a non-finite torque named first, as :meth:`step` names it.  The compiled loop
+        makes the refusal of a step its kernel declined with it too."""
+        try:
+            self._check_torques(tau1, tau2)
+        except PlantRefused as exc:
+            return exc
+
+        def held():
+            return f"tau1 = {tau1!r}, tau2 = {tau2!r} N m held"
+
+        return self._refusal(status, refusal.index, refusal.value, trial, dt, held)
 
     def evaluations_per_step(self) -> int | None:
         """Right-hand-side evaluations of one step when known before it: 4 per RK4 substep;

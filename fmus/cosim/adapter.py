@@ -66,6 +66,14 @@ class Adapter:
         """The address of the I/O step: :attr:`kernel` in the kernels' library."""
         return ctypes.cast(getattr(kernels.library(), self.kernel), ctypes.c_void_p).value
 
+    def refused(self, refusal, t: float) -> Exception | None:
+        """The refusal of the step from ``t`` the kernel declined with ``refusal`` (its
+        ``pc_refusal``), as the slave's own step raises it, made from the kernel's record and the
+        buffers it left unchanged: nothing runs again.  None: the Python path takes that step
+        (a sample off the controller's table with ``table_fallback``, a kernel whose refusals
+        have no record builder here)."""
+        return None
+
     def to_python(self) -> None:
         """Put state the kernel keeps outside the slave's objects back into them (before
         the Python path takes a step)."""

@@ -12,11 +12,14 @@ order: the rows are bit-identical to the in-process run.  Nothing is generated o
 at run time: ``compile_s`` is building the plan.
 
 Refusals: a kernel that cannot do exactly what the Python model would (a refused input,
-a diverged step, a controller sample off its table) returns a non-zero status without
-changing anything; the loop stops there, and the rest of that step runs in Python through
-the same slave objects (:meth:`fmus.cosim.adapter.Adapter.to_python` first), which raise the refusal's
-message or take the sample (e.g. the exact model where the table has a hole); then the
-compiled loop goes on from the next step.
+a diverged step, a controller sample off its table) returns a non-zero status and its record
+(``pc_refusal``) without changing anything; the loop stops there.  Where the adapter makes the
+refusal from that record as the slave's own step would (:meth:`fmus.cosim.adapter.Adapter.refused`:
+the position controller's samples, the FiveBarPlant's and ActuatedFiveBarPlant's steps), the
+instance refuses the step with it and the run stops, nothing run again.  Otherwise the rest of that step runs in Python through the same slave objects
+(:meth:`fmus.cosim.adapter.Adapter.to_python` first), which take the sample (e.g. the exact model
+where the table has a hole) or raise the refusal; then the compiled loop goes on from the next
+step.
 
 A model without an adapter, a component given as an FMU file, Jacobi coupling, retried
 steps or a stop time past the slaves' last time (:func:`check_compilable`) make the run fall back
@@ -57,7 +60,7 @@ class _LoopPlan(ctypes.Structure):
 class _LoopStop(ctypes.Structure):
     """``pc_loop_stop`` (kernels/src/loop.h)."""
 
-    _fields_ = [("step", ctypes.c_int), ("member", ctypes.c_int), ("substep", ctypes.c_int),
+    _fields_ = [("step", ctypes.c_int64), ("member", ctypes.c_int), ("substep", ctypes.c_int),
                 ("time", ctypes.c_double), ("refusal", Refusal)]
 
 
@@ -106,11 +109,11 @@ class LoopPlan:
         fields.update({name: a.ctypes.data_as(ctypes.POINTER(ctypes.c_void_p)) for name, a in self._pointers.items()})
         self.struct = _LoopPlan(n_groups=len(group_substeps), n_record=len(arrays["record_slot"]), **fields)
 
-    def run(self, values: np.ndarray, record: np.ndarray, k0: int, k1: int, t: float, h: float) -> _LoopStop:
-        """Steps k0 .. k1-1 in C (``values`` and the C-contiguous ``record`` are written in
-        place); the stop says where and why it ended."""
+    def run(self, values: np.ndarray, record: np.ndarray, k0: int, k1: int, t0: float, h: float) -> _LoopStop:
+        """Steps k0 .. k1-1 in C, step k from t0 + k h (``values`` and the C-contiguous ``record``
+        are written in place); the stop says where and why it ended."""
         stop = _LoopStop()
-        _loop_run()(ctypes.byref(self.struct), kernels.address(values), kernels.address(record), k0, k1, t, h,
+        _loop_run()(ctypes.byref(self.struct), kernels.address(values), kernels.address(record), k0, k1, t0, h,
                     ctypes.byref(stop))
         return stop
 
@@ -169,14 +172,14 @@ class Plan:
             lines.append(f"# {a.name} ({a.model}): {a.kernel}" + (f", {substeps} sub-steps" if substeps > 1 else ""))
         return "\n".join(lines)
 
-    def run(self, values, record, k0, k1, t, h) -> _LoopStop:
+    def run(self, values, record, k0, k1, t0, h) -> _LoopStop:
         """:meth:`LoopPlan.run` of the system's plan."""
-        return self.loop.run(values, record, k0, k1, t, h)
+        return self.loop.run(values, record, k0, k1, t0, h)
 
 
 def _loop_run():
-    return kernels.function("pc_loop_run", None, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int,
-                            ctypes.c_int, ctypes.c_double, ctypes.c_double, ctypes.c_void_p)
+    return kernels.function("pc_loop_run", None, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int64,
+                            ctypes.c_int64, ctypes.c_double, ctypes.c_double, ctypes.c_void_p)
 
 
 def check_compilable(system, coupling: str, retry_substeps) -> None:
@@ -203,6 +206,17 @@ def _adapters() -> dict:
     return ADAPTERS
 
 
+def _refuse_declined(adapter, instance, stop, dt) -> None:
+    """Raise the refusal of the (sub-)step ``adapter``'s kernel declined at ``stop``, made from the
+    kernel's record (:meth:`fmus.cosim.adapter.Adapter.refused`), as the instance's own step
+    would; return when the Python path is to take that step."""
+    t = stop.time + stop.substep * dt
+    refused = adapter.refused(stop.refusal, t)
+    if refused is not None:
+        adapter.slave.refuse_step(refused, t)
+        raise instance.step_refused(t)
+
+
 def run_compiled(run, stepper, plan: Plan) -> Outcome:
     """Step ``run.system`` (a :class:`fmus.cosim.context.RunContext`) from its initialised
     ``stepper`` in the compiled loop ``plan``; the rest of a step a kernel declines runs in
@@ -213,7 +227,7 @@ def run_compiled(run, stepper, plan: Plan) -> Outcome:
     data[0] = stepper.row()
     values = np.array(stepper.values, dtype=float)
     start, cpu_start = _time.perf_counter(), _time.thread_time()
-    error, interrupted, done, t = None, False, 0, 0.0
+    error, interrupted, done = None, False, 0
     chunk = max(1, steps // 100)
     python_steps = 0
     try:
@@ -221,20 +235,21 @@ def run_compiled(run, stepper, plan: Plan) -> Outcome:
             if run.interrupt.requested:
                 raise KeyboardInterrupt
             end = min(steps, done + chunk)
-            stop = plan.run(values, data, done, end, t, h)
-            done, t = stop.step, stop.time
+            stop = plan.run(values, data, done, end, stepper.start_time, h)
+            done = stop.step
             if stop.member >= 0:     # a kernel declined step k: the Python path takes the rest of it
                 for a in plan.adapters:
                     a.to_python()
                     a.slave._next_time = None   # the slaves did not see the compiled steps
-                stepper.values[:] = values.tolist()
                 g, m = plan.positions[stop.member]
-                stepper.time = t
+                group = stepper.groups[g]
+                _refuse_declined(plan.adapters[stop.member], group.entries[m].instance, stop, h / group.substeps)
+                stepper.values[:] = values.tolist()
+                stepper.at_step(done)
                 stepper.step(start=(g, m, stop.substep))
                 for a in plan.adapters:
                     a.from_python()
                 values[:] = stepper.values
-                t = stepper.time
                 done += 1
                 data[done] = stepper.row()
                 python_steps += 1

@@ -86,6 +86,16 @@ class PositionControllerAdapter(Adapter):
             raise NotCompilable(f"component {name}: the controller's kernel {c.kernel!r} is not compiled")
         self.controller, self.delayed = c, slave.delayed
 
+    def refused(self, refusal, t):
+        """The controller's own refusal (:meth:`controller.position.PositionController.step_with_errors`):
+        the sample's inputs are still in ``x`` and the kernel's scratch is the controller's; None for
+        what the Python controller finishes itself (the exact model's terms, a sample off the table
+        with ``table_fallback``)."""
+        c, code = self.controller, refusal.code
+        if code == law.NEEDS_TERMS or (code in law.TABLE_CODES and c._fallback is not None):
+            return None
+        return c._refused(refusal, t, tuple(self.x[:len(self.inputs)].tolist()))
+
     def context(self):
         c = self.controller
         exact = c.model_kind == "exact"
@@ -200,6 +210,15 @@ class FiveBarPlantAdapter(_PlantState):
     def _sim(self):
         return self.slave.sim
 
+    def refused(self, refusal, t):
+        """The plant's own refusal (:meth:`plant.simulator.PlantSimulator.kernel_refusal`): the
+        torques are still in ``x``, the trial state in the context's scratch."""
+        sim = self.slave.sim
+        sim.time = t                 # as the slave's step sets it
+        tau1, tau2 = self.x[:2].tolist()
+        trial = self._context.buffers[-1][:len(self.state)].copy()
+        return sim.kernel_refusal(tau1, tau2, self.h, refusal.code, refusal, trial)
+
     def context(self):
         return self._context
 
@@ -236,6 +255,16 @@ class ActuatedFiveBarPlantAdapter(_PlantState):
 
     def _sim(self):
         return self.slave.actuated.plant
+
+    def refused(self, refusal, t):
+        """The plant's own refusal (:meth:`plant.actuated.ActuatedPlant.kernel_refusal`): the drives'
+        inputs are still in ``x``, the trial state in the plant context's scratch."""
+        a = self.slave.actuated
+        a.plant.time = t             # as the slave's step sets it
+        i_ref1, i_hat1, v_ref1, i_ref2, i_hat2, v_ref2 = self.x[:len(self.inputs)].tolist()
+        trial = self._context.buffers[0].buffers[-1][:len(self.state)].copy()
+        return a.kernel_refusal(refusal.code, refusal, trial, (i_ref1, i_ref2), (i_hat1, i_hat2), (v_ref1, v_ref2),
+                                self.h)
 
     def from_python(self):
         super().from_python()

@@ -34,12 +34,11 @@ Recorded signals: row 0 holds the outputs after initialisation (t = 0), row k th
 the k-th step (t = k h): for a continuous output the value at t, for a sampled output the
 sample held over [t - h, t].
 
-The clock: the stepper steps from t_0 = 0 and adds h after each step (t_{k+1} = t_k + h in
-double, in Python and in the C loop alike: :class:`fmus.cosim.stepper.Stepper`, kernels/src/loop.c);
-the rows are labelled k h.  Stepping at t_k = k h instead (libcosim's and fmpy 0.3's clock) was
-measured to move the bench circle's e_ef by 5.9e-9 relative and bench_circle_PDx's e_ss by
-3.2e-6 (beyond the regression's 1.5e-6): a change of results, left to a decision of its own
-(docs/master.md, "The clock").
+The clock: one time base, t_k = t_0 + k h with k the integer count of steps taken (t_0 = 0),
+computed from k and never summed, in Python and in the C loop alike
+(:class:`fmus.cosim.stepper.Stepper`, kernels/src/loop.c, the native ClosedLoop); a multi-rate
+group's sub-step j of step k starts at t_k + j h / n (a retried step's split sub-steps too), and
+row k is labelled k h, the time its step k - 1 ended at (docs/master.md, "The clock").
 
 How a run is laid out (one record each, no argument lists handed down): :func:`simulate` checks
 its arguments and makes a :class:`fmus.cosim.context.RunContext`; ``_simulate`` decides what the

@@ -23,6 +23,10 @@ The structure, built once:
   (the compiled mode) are the same loop.  Jacobi coupling is the same program reading from
   snapshots (the values at the step's start, and a multi-rate group's values at each of its
   sub-steps' start) that the pull of a sub-step's first call takes.
+
+The clock: step k starts at ``start_time + k h`` (:meth:`Stepper.at_step`; k the integer count
+of steps taken), a call's sub-step j of n at that time plus ``j h / n``: every time is computed
+from integers, none is a running sum (kernels/src/loop.c the same).
 """
 from __future__ import annotations
 
@@ -181,7 +185,9 @@ class Stepper:
         self.values = [0.0] * len(self.slots)
         self._calls = {}     # instance name -> its MemberCalls, made once
         self._program = self._program_of(self.groups)
-        self.time = 0.0
+        #: The clock: step ``k`` (steps taken since :meth:`initialize`) starts at ``time`` =
+        #: ``start_time + k h``, computed from the integer k, never summed (module docstring).
+        self.start_time, self.k, self.time = 0.0, 0, 0.0
 
     def _slot(self, signal):
         return self.slots.setdefault(signal, len(self.slots))
@@ -225,7 +231,7 @@ class Stepper:
         """
         for c in self.system.components:
             self.instances[c.name].enter_initialization(c.parameters, start_time)
-        self.time = start_time
+        self.at_step(0, start_time)
         for entry in self.plan:
             self._refresh(entry)
         values = self.values
@@ -234,6 +240,13 @@ class Stepper:
                 entry.instance.set_inputs([values[i] for i in entry.in_slots])
             entry.instance.exit_initialization()
             self._refresh(entry)
+
+    def at_step(self, k: int, start_time: float | None = None) -> None:
+        """Set the clock to step ``k`` (from ``start_time``, or the one it has): ``time`` =
+        ``start_time + k h``."""
+        if start_time is not None:
+            self.start_time = start_time
+        self.k, self.time = k, self.start_time + k * self.system.step
 
     def initialization_order(self) -> list:
         """The plan's entries in the order instances leave initialisation mode: every
@@ -264,9 +277,9 @@ class Stepper:
         self._refresh(next(e for e in self.plan if e.instance is inst))
 
     def state(self) -> dict:
-        """A snapshot of the run: time, the signals' values and each instance's state
-        (``inst.get_state()``); :meth:`restore` goes back to it."""
-        return {"time": self.time, "values": list(self.values),
+        """A snapshot of the run: its clock (start time, step, time), the signals' values and
+        each instance's state (``inst.get_state()``); :meth:`restore` goes back to it."""
+        return {"start_time": self.start_time, "step": self.k, "time": self.time, "values": list(self.values),
                 "instances": {name: inst.get_state() for name, inst in self.instances.items()}}
 
     def restore(self, state: dict) -> None:
@@ -274,7 +287,7 @@ class Stepper:
         for name, inst in self.instances.items():
             inst.set_state(state["instances"][name])
         self.values[:] = state["values"]
-        self.time = state["time"]
+        self.at_step(state["step"], state["start_time"])
 
     def free_state(self, state: dict) -> None:
         """Release the instances' states in ``state`` (FMU states live in the FMU)."""
@@ -290,7 +303,8 @@ class Stepper:
         return self.values[self.slots[signal]]
 
     def step(self, split: dict | None = None, start: tuple | None = None) -> None:
-        """One communication step of every instance from ``time``; ``time`` += h.
+        """One communication step of every instance from ``time`` (step k: ``start_time + k h``);
+        then the clock stands at step k + 1 (:meth:`at_step`: computed, not ``time + h``).
 
         ``split`` (instance name -> n) takes this one step with those instances in n times
         their sub-steps (inputs held), as a master retrying a refused step does.  ``start``
@@ -316,9 +330,10 @@ class Stepper:
             raise
         except Exception as exc:  # noqa: BLE001 - as the instance's do_step reports it
             raise CoSimulationError(inst.name, t + offset, str(exc)) from None
-        # The communication point advances by adding h, as fmpy's and Ecos' masters do:
-        # an exported system then runs there on the very same time points.
-        self.time = t + h
+        # The next communication point from the step count, as libcosim's and fmpy 0.3's
+        # masters time their steps: t + h would carry each step's rounding into the next.
+        self.k = k = self.k + 1
+        self.time = self.start_time + k * h
 
 
 def _snapshot(values, held, group_reads, produced, pull, first_of_step, first_of_group):

@@ -111,7 +111,7 @@ def loop_table(image: LoopImage, outputs: list, step: float, most: int) -> str:
              "const pcn_loop_table pcn_loop = {",
              f"    {len(image.data) // 8}, data_image, {len(image.members)}, members, io,",
              f"    {len(image.groups)}, group_substeps, group_end, in_end, in_x, in_slot, out_end, out_x, out_slot,",
-             f"    {image.values_word}, {image.n_values}, {image.time_word},",
+             f"    {image.values_word}, {image.n_values}, {image.steps_word},",
              f"    {len(outputs)}, output_variable, output_value,",
              f"    {len(image.fixed)}, fixed, {step!r}, {most}L,", "};", ""]
     return "\n".join(lines)

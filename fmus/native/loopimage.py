@@ -63,7 +63,7 @@ class LoopImage:
     outputs: list = field(default_factory=list)
     values_word: int = 0
     n_values: int = 0
-    time_word: int = 0
+    steps_word: int = 0               # the steps taken k (a whole double): the loop's time is k h
     slots: dict = field(default_factory=dict)         # signal -> slot
     fixed: list = field(default_factory=list)         # (first word, words) never changed by the run
 
@@ -327,8 +327,8 @@ def loop_image(system, stepper: Stepper) -> LoopImage:
             raise NotCompilable(f"component {adapter.name}'s context is {at} bytes into another")
         image.members.append((adapter.name, adapter.model, adapter.kernel, block.offset, len(data) // WORD))
         data += adapter.x.astype(np.float64).tobytes()
-    image.time_word = len(data) // WORD
-    data += np.float64(stepper.time).tobytes()
+    image.steps_word = len(data) // WORD
+    data += np.float64(stepper.k).tobytes()
     for member in plan.loop.members:
         image.inputs.append(member.inputs)
         image.outputs.append(member.outputs)
@@ -361,15 +361,13 @@ def _run_to_stop(system, plan, stepper, arenas, image) -> list:
     changed = [np.zeros(b.size, dtype=bool) for b in blocks]
     values = np.array(stepper.values, dtype=float)
     record = np.zeros((system.steps + 1, len(stepper.record_slots)))
-    t = 0.0
     for k in range(system.steps):      # step by step: a word that changes and comes back is run state
-        stop = plan.run(values, record, k, k + 1, t, system.step)
+        stop = plan.run(values, record, k, k + 1, stepper.start_time, system.step)
         if stop.member >= 0:
             a = plan.adapters[stop.member]
             raise NotCompilable(f"component {a.name} ({a.model}): its kernel {a.kernel} declines the step from t = "
                                 f"{stop.time!r} s ({refusal_name(a.kernel, stop.refusal.code)}), which the compiled "
                                 "mode takes in Python; a native FMU has no Python to take it")
-        t = stop.time
         for c, v, v0 in zip(changed, views, initial):
             c |= v != v0
     same = np.ones(image.values_word, dtype=bool)

@@ -39,14 +39,14 @@ def _derivator(slave):
 
 
 def _trajectory(slave):
-    from controller.trajectories import TRAJECTORY_KINDS, from_parameters
+    from controller.trajectories import TRAJECTORY_KINDS, from_parameters, parameters_of
 
-    used = {"side_time": slave.side_time, "frequency": slave.frequency, "x_hold": slave.x_hold,
-            "y_hold": slave.y_hold}
-    scalars = {"built_cycles": int(slave.cycles), **{f"built_{k}": float(v) for k, v in used.items()}}
+    values = parameters_of(slave)
+    scalars = {"built_cycles": int(slave.cycles),
+               **{f"built_{k}": float(v) for k, v in values.items() if k not in ("kind", "cycles")}}
     arrays = {}
     for kind in TRAJECTORY_KINDS:
-        trajectory = from_parameters(kind, slave.cycles, **used)
+        trajectory = from_parameters(**{**values, "kind": kind})
         arrays[f"buffer_{kind}"] = trajectory.buf
         scalars[f"start_x_{kind}"], scalars[f"start_y_{kind}"] = (float(v) for v in trajectory.start_point)
     return scalars, arrays

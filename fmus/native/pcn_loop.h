@@ -4,7 +4,7 @@
  * pcn_loop_fill (loop_contexts.h).
  *
  * Two arenas per instance: the data (8-byte words: every buffer the members' kernels read and
- * write, the stepper's values, each member's x, the loop's time; saved in the FMU state;
+ * write, the stepper's values, each member's x, the loop's step count; saved in the FMU state;
  * its initial words are bit patterns, the same doubles on any IEEE target) and the scratch
  * (the members' contexts, which hold addresses: the struct pcn_loop_contexts, laid out by the
  * compiler and filled by pcn_loop_fill at set-up from C initialisers, never saved). */
@@ -32,7 +32,7 @@ typedef struct {
     const int *in_end, *in_x, *in_slot, *out_end, *out_x, *out_slot;
     long values;                         /* word offset of the values (n_values slots) */
     int n_values;
-    long time;                           /* word offset of the loop's time */
+    long steps;                          /* word offset of the steps taken k (a whole double): time k h */
     int n_outputs;
     const int *output_variable;          /* Real slot of each output ... */
     const int *output_value;             /* ... and the value slot it publishes */

@@ -496,9 +496,7 @@ class GuardedSlave(SlaveState, Fmi2Slave):
                 self._ready, self._step_refused = False, True
                 return False
             except Exception as exc:  # noqa: BLE001
-                self.refused_because = str(exc)
-                self._refuse(str(exc), current_time, cause=(exc, RunStatus.REFUSED, current_time))
-                self._ready, self._step_refused = False, True
+                self.refuse_step(exc, current_time)
                 return False
         if self._terminated:
             self._refuse(f"doStep from t = {current_time!r} s after fmi2Terminate refused", repeat=True,
@@ -518,6 +516,14 @@ class GuardedSlave(SlaveState, Fmi2Slave):
             self._refuse("initialisation refused", current_time, repeat=True,
                          cause=(None, RunStatus.INITIALISATION, current_time))
         return False
+
+    def refuse_step(self, exc: Exception, current_time: float) -> None:
+        """Refuse the step from ``current_time`` for ``exc`` (its message, its record), as
+        ``do_step`` does when the step raises it; the compiled loop uses it for a step a kernel
+        declined, with the record the kernel returned (:meth:`fmus.cosim.adapter.Adapter.refused`)."""
+        self.refused_because = str(exc)
+        self._refuse(str(exc), current_time, cause=(exc, RunStatus.REFUSED, current_time))
+        self._ready, self._step_refused = False, True
 
     def _check_communication_point(self, current_time: float) -> None:
         """Raise ValueError unless ``current_time`` is the last point plus the last step, to

@@ -11,7 +11,7 @@ process share one Python interpreter and its module cache.
 """
 from __future__ import annotations
 
-from controller.trajectories import BENCH_START, PRESET_CYCLES, from_parameters, sample_buffers, sample_values
+from controller.trajectories import PARAMETERS, from_parameters, parameters_of, sample_buffers, sample_values
 from fmus.slave.base import GuardedSlave
 from fmus.slave.refusals import refuse_absurd, refuse_tiny, require_finite
 
@@ -33,22 +33,23 @@ class Trajectory(GuardedSlave):
             d(name, "output", 0.0, f"{text}, at the end of the last step")
         d("x_start", "output", 0.0, "Where the mechanism starts at rest, x [m] (7.17, 7.28)")
         d("y_start", "output", 0.0, "Where the mechanism starts at rest, y [m] (7.17, 7.28)")
-        d("kind", "parameter", "circle", "'thesis_circle' (7.18), 'circle' (7.23), 'triangle' (7.24-7.27), 'hold'")
-        d("cycles", "parameter", PRESET_CYCLES, "Cycles of circle/triangle (-1: thesis_circle 2, circle 8, triangle 2)")
-        d("side_time", "parameter", 0.75, "Triangle: time per side [s]")
-        d("frequency", "parameter", 1.0, "circle: turns per second [Hz] (the thesis' 7.23: 1)")
-        d("x_hold", "parameter", BENCH_START[0], "hold: the point held, x [m] (default x_1, 7.28)")
-        d("y_hold", "parameter", BENCH_START[1], "hold: the point held, y [m] (default x_1, 7.28)")
+        for name, text in (("kind", "'thesis_circle' (7.18), 'circle' (7.23), 'triangle' (7.24-7.27), 'hold'"),
+                           ("cycles", "Cycles of circle/triangle (-1: thesis_circle 2, circle 8, triangle 2)"),
+                           ("side_time", "Triangle: time per side [s]"),
+                           ("frequency", "circle: turns per second [Hz] (the thesis' 7.23: 1)"),
+                           ("x_hold", "hold: the point held, x [m] (default x_1, 7.28)"),
+                           ("y_hold", "hold: the point held, y [m] (default x_1, 7.28)")):
+            d(name, "parameter", PARAMETERS[name], text)
         self.trajectory = None
         self.__buffers = sample_buffers()   # reused by every sample; "__": not FMU state
 
     def setup(self):
-        used_or_not = {"side_time": self.side_time, "x_hold": self.x_hold, "y_hold": self.y_hold,
-                       "frequency": self.frequency}
+        values = parameters_of(self)
+        used_or_not = {name: value for name, value in values.items() if isinstance(PARAMETERS[name], float)}
         require_finite(**used_or_not)
         refuse_absurd(**used_or_not)
         refuse_tiny(side_time=self.side_time)     # the triangle divides by side_time squared
-        self.trajectory = from_parameters(self.kind, self.cycles, **used_or_not)
+        self.trajectory = from_parameters(**values)
         self.x_start, self.y_start = (float(v) for v in self.trajectory.start_point)
         self._publish(self._start_time)
 

@@ -15,10 +15,11 @@ static int step_member(const pc_loop_plan *p, int m, double *values, double t, d
     return PC_OK;
 }
 
-void pc_loop_run(const pc_loop_plan *p, double *values, double *record, int k0, int k1, double t, double h,
+void pc_loop_run(const pc_loop_plan *p, double *values, double *record, int64_t k0, int64_t k1, double t0, double h,
                  pc_loop_stop *stop)
 {
-    for (int k = k0; k < k1; ++k) {
+    for (int64_t k = k0; k < k1; ++k) {
+        const double t = t0 + (double)k * h;     /* from the step count, never summed */
         for (int g = 0; g < p->n_groups; ++g) {
             const int substeps = p->group_substeps[g];
             const double dt = h / substeps;
@@ -37,11 +38,10 @@ void pc_loop_run(const pc_loop_plan *p, double *values, double *record, int k0, 
                 }
             }
         }
-        t = t + h;
         for (int c = 0; c < p->n_record; ++c) record[(size_t)(k + 1) * p->n_record + c] = values[p->record_slot[c]];
     }
     stop->step = k1;
     stop->member = -1;
     stop->substep = 0;
-    stop->time = t;
+    stop->time = t0 + (double)k1 * h;
 }

@@ -5,6 +5,8 @@
 #ifndef PC_LOOP_H
 #define PC_LOOP_H
 
+#include <stdint.h>
+
 #include "pc_common.h"
 
 typedef struct {
@@ -27,16 +29,18 @@ typedef struct {
 /* Where a run stopped: the step reached, and when a member declined (status != PC_OK), which
  * member, which sub-step and the step's start time; `refusal` is the member's. */
 typedef struct {
-    int step;
+    int64_t step;
     int member;                  /* -1: every step of [k0, k1) done */
     int substep;
     double time;
     pc_refusal refusal;
 } pc_loop_stop;
 
-/* Steps k0 .. k1-1 of length h from the time *t (accumulated t + h per step, as the in-process
- * stepper); row k + 1 of `record` (n_record columns) gets the recorded slots after step k. */
-void pc_loop_run(const pc_loop_plan *plan, double *values, double *record, int k0, int k1, double t, double h,
-                 pc_loop_stop *stop);
+/* Steps k0 .. k1-1 of length h, step k from t0 + k h (the step count times h, never a sum, as
+ * the in-process stepper; a group's sub-step j from there + j h / n); row k + 1 of `record`
+ * (n_record columns) gets the recorded slots after step k.  `stop->time`: the start of the
+ * step declined, or t0 + k1 h. */
+void pc_loop_run(const pc_loop_plan *plan, double *values, double *record, int64_t k0, int64_t k1, double t0,
+                 double h, pc_loop_stop *stop);
 
 #endif

@@ -20,7 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 from controller.strategies import ALL_STRATEGY_NAMES
-from controller.trajectories import get_trajectory
+from controller.trajectories import from_parameters
 from fmus.cosim.system import Component, Connection, System
 from motor import get_motor_preset
 from motor.drive import FRICTION_MODELS
@@ -156,10 +156,11 @@ def thesis_sim_circle(model_error: float = 0.0, lam: float = 40.0, model: str = 
     The controller reads the plant's exact angles and velocities (no derivator, no motors);
     its model's inertial parameters are ``1 + model_error`` times the plant's.
     """
-    trajectory = get_trajectory("thesis_circle", cycles=cycles)
+    reference = {"kind": "thesis_circle", "cycles": cycles}
+    trajectory = from_parameters(**reference)
     x0, y0 = trajectory.start_point
     components = (
-        Component("traj", "Trajectory", {"kind": "thesis_circle", "cycles": cycles}),
+        Component("traj", "Trajectory", reference),
         Component("ctrl", "PositionController", {
             "strategy": "TCx", "lam": lam, "model": model, "model_error": model_error,
             "preset": "thesis_sim"}),
@@ -189,7 +190,7 @@ def bench(strategy: str, kind: str = "circle", model: str = "tabulated",
     if strategy not in ALL_STRATEGY_NAMES:
         raise ValueError(f"strategy = {strategy!r}; valid: {', '.join(ALL_STRATEGY_NAMES)}")
     f = fidelity
-    trajectory = get_trajectory(kind)
+    trajectory = from_parameters(kind)
     x0, y0 = trajectory.start_point
     drives = f.electrics != "ideal"
     observers = drives and f.observer
@@ -285,9 +286,10 @@ def vertical_circle(strategy: str, balanced: bool = False, model: str = "tabulat
     f = replace(fidelity, gravity=VERTICAL_GRAVITY, model_gravity=True, counter_masses=counter)
     scene = bench(strategy, "circle", model, f)
     if frequency != 1.0:
-        trajectory = get_trajectory("circle", frequency=frequency)
-        components = tuple(replace(c, parameters={**c.parameters, "frequency": frequency}) if c.name == "traj"
-                           else c for c in scene.system.components)
+        reference = {**scene.system.component("traj").parameters, "frequency": frequency}
+        trajectory = from_parameters(**reference)
+        components = tuple(replace(c, parameters=reference) if c.name == "traj" else c
+                           for c in scene.system.components)
         system = replace(scene.system, components=components, stop_time=trajectory.duration + SETTLE_TIME)
         scene = replace(scene, system=system, window=(1.0 / frequency, trajectory.duration),
                         reference_end=trajectory.duration)

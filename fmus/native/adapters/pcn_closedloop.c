@@ -121,17 +121,19 @@ static int check_step(pcn_instance *in, double t, double h, pcn_text *why)
 static int step(pcn_instance *in, double t, double h, pcn_text *why)
 {
     const double H = pcn_loop.step;
-    double *time = in->data + pcn_loop.time;
+    double *steps = in->data + pcn_loop.steps;    /* the loop's clock: step k starts at k H, never a sum */
+    const double now = *steps * H;
     const double n = isfinite(h) && h > 0.0 ? nearbyint(h / H) : 0.0;
     if (n < 1.0 || !isclose(h, n * H, 1e-9, 0.0))
         return pcn_addf(pcn_timed(why), "step size %r s at t = %G s: this FMU steps its system at its communication "
                         "step; the step size must be a whole multiple of h = %r s", h, t, H), 1;
-    if (!isclose(t, *time, 0.0, 1e-6 * H))
+    if (!isclose(t, now, 0.0, 1e-6 * H))
         return pcn_addf(pcn_timed(why), "communication point t = %r s does not follow the last one (%r s)", t,
-                        *time), 1;
+                        now), 1;
     pc_loop_stop stop;
-    pc_loop_run(plan_of(in), in->data + pcn_loop.values, NULL, 0, (int)n, *time, H, &stop);
-    *time = stop.time;
+    const int64_t k = (int64_t)*steps;
+    pc_loop_run(plan_of(in), in->data + pcn_loop.values, NULL, k, k + (int64_t)n, 0.0, H, &stop);
+    *steps = (double)stop.step;
     publish(in);
     if (stop.member < 0) return 0;
     const pcn_member *m = &pcn_loop.members[stop.member];

@@ -89,6 +89,61 @@ def test_a_refusal_stops_at_the_same_step_with_the_same_message():
     _same_rows(fast.result, slow.result)
 
 
+def test_a_refused_sample_runs_once_its_record_from_the_kernel(monkeypatch):
+    # Off the table without table_fallback: the law's kernel refuses its sample at some step k.
+    """Catches a compiled loop that runs a declined controller sample again in Python to learn
+    its refusal (counted: the Python law runs no sample at all), or whose record differs."""
+    from controller.position import PositionController
+
+    runs = []
+    python_sample = PositionController.step_with_errors
+
+    def counted(self, t, *args, **kwargs):
+        runs.append(t)
+        return python_sample(self, t, *args, **kwargs)
+
+    monkeypatch.setattr(PositionController, "step_with_errors", counted)
+    scene = _with(_short(get_scene("bench_circle_TCx"), 1.2), "ctrl", x_max=0.02, table_fallback=False)
+    fast = simulate(scene.system, mode="compiled")
+    assert runs == [] and fast.mode == "compiled" and fast.extra["python_steps"] == 0
+    slow = simulate(scene.system, mode="inprocess")
+    assert len(runs) == len(slow.time) and runs[-1] == slow.error.time    # in process: one a step, the last refused
+    assert fast.error == slow.error and fast.error.variable and fast.error.code is not None
+    _same_rows(fast, slow)
+
+
+@pytest.mark.parametrize("model, parameters, variable", [
+    ("FiveBarPlant", {"preset": "thesis_sim", "tau1": 3.0, "tau2": -3.0}, "residual"),
+    ("FiveBarPlant", {"preset": "thesis_sim", "tau1": 3.0, "tau2": -3.0, "substeps": 16}, "chain 1 elbow (serial)"),
+    ("ActuatedFiveBarPlant", {"mode": "voltage", "v_ref1": 200.0, "v_ref2": -200.0, "v_max1": 200.0,
+                              "v_max2": 200.0}, "residual")], ids=["diverged", "singular", "actuated"])
+def test_a_refused_plant_step_runs_once_its_record_from_the_kernel(monkeypatch, model, parameters, variable):
+    # The thesis_sim arms under a constant 3 N m torque step spin up until an RK4 step of 1 ms
+    # no longer closes the loop (t = 0.116 s), or, in 16 RK4 steps, reach a singular pose
+    # (t = 0.352 s; its message gives the refused trial pose); the bench arms driven at 200 V
+    # diverge at t = 0.05 s: the plant's kernel refuses the step.
+    """Catches a compiled loop that takes a plant step its kernel refused again in Python to learn
+    the refusal (counted: the Python plant steps none), or whose record differs from in process."""
+    from plant.actuated import ActuatedPlant
+    from plant.simulator import PlantSimulator
+
+    runs = []
+    for cls in (PlantSimulator, ActuatedPlant):
+        def counted(self, *args, python_step=cls.step, **kwargs):
+            runs.append(cls)
+            return python_step(self, *args, **kwargs)
+
+        monkeypatch.setattr(cls, "step", counted)
+    plant = Component("plant", model, parameters)
+    system = System((plant,), (), ("plant.x", "plant.y", "plant.residual"), 0.5)
+    fast = simulate(system, mode="compiled")
+    assert runs == [] and fast.mode == "compiled" and fast.extra["python_steps"] == 0
+    slow = simulate(system, mode="inprocess")
+    assert len(runs) == len(slow.time) and slow.error.variable == variable and 0.04 < slow.error.time < 0.5
+    assert fast.error == slow.error
+    _same_rows(fast, slow)
+
+
 def test_foreign_fmus_jacobi_and_retries_fall_back_with_a_reason():
     """Catches compiled mode accepting a foreign FMU, Jacobi or retries, or falling back silently."""
     system = System((Component("drive1", "/tmp/supplier_drive.fmu"),), (), (), stop_time=0.01)
@@ -144,7 +199,8 @@ def test_python_finishes_a_declined_step_from_the_declining_member_and_sub_step(
     a, b, c, d = (Instance(n) for n in "abcd")
     stepper = Stepper.__new__(Stepper)
     stepper.system = System((), (), (), stop_time=1.0, step=1.0)
-    stepper.values, stepper.jacobi, stepper.time, stepper._calls = [], False, 3.0, {}
+    stepper.values, stepper.jacobi, stepper._calls = [], False, {}
+    stepper.start_time, stepper.k, stepper.time = 0.0, 3, 3.0
     stepper.plan = tuple(Entry(i.name, i, (), (), (), (), n) for i, n in ((a, 1), (b, 2), (c, 2), (d, 1)))
     stepper.groups = tuple(rate_groups(stepper.plan))
     stepper._program = stepper._program_of(stepper.groups)

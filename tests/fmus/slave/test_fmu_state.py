@@ -71,7 +71,7 @@ def _check_continuations(system, make):
             inst.set_state(state)
             inst.free_state(state)
         fresh.values[:] = snapshot["values"]
-        fresh.time = snapshot["time"]
+        fresh.at_step(snapshot["step"], snapshot["start_time"])
         np.testing.assert_array_equal(_run(fresh, AFTER), reference)
     finally:
         _close(fresh)
