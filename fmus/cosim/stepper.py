@@ -23,9 +23,15 @@ The structure, built once:
   (the compiled mode) are the same loop.  Jacobi coupling is the same program reading from
   snapshots (the values at the step's start, and a multi-rate group's values at each of its
   sub-steps' start) that the pull of a sub-step's first call takes.
+
+With ``kernels`` (the master's in-process mode), the groups of in-process slaves with a
+compiled step become one call each run of them, a C call of their kernels
+(:mod:`fmus.cosim.segments`); the program's other calls stay, and a split or partial step
+runs the plain program after :meth:`Stepper.release`.
 """
 from __future__ import annotations
 
+import ctypes
 import operator
 from dataclasses import dataclass
 from typing import Callable, NamedTuple
@@ -138,6 +144,10 @@ class Stepper:
         The stepping order (Gauss-Seidel) or the listing order (Jacobi).
     jacobi : bool
         Every instance reads the values all held at the step's start.
+    kernels : bool
+        Gauss-Seidel only: the in-process slaves whose models have a compiled step take it
+        (:mod:`fmus.cosim.segments`: consecutive ones in one C call a step, their values in
+        ``values``, a C array; :meth:`release` hands them back to Python).
 
     Raises
     ------
@@ -145,7 +155,10 @@ class Stepper:
         A recorded signal that is neither an output nor a connected input.
     """
 
-    def __init__(self, system: System, instances: dict, order, jacobi: bool = False):
+    #: The kernel segments (:class:`fmus.cosim.segments.Segments`), False before the first step, None without.
+    _kernels = None
+
+    def __init__(self, system: System, instances: dict, order, jacobi: bool = False, kernels: bool = False):
         self.system, self.instances, self.order, self.jacobi = system, instances, tuple(order), jacobi
         self.slots = {}
         feeds = {c.name: [] for c in system.components}
@@ -178,9 +191,11 @@ class Stepper:
         self.groups = tuple(rate_groups(self.plan))
         self.record_slots = [self.slots[s] for s in system.record]
         self._record = _gatherer(self.record_slots)
-        self.values = [0.0] * len(self.slots)
+        self.values = (ctypes.c_double * len(self.slots))() if kernels and not jacobi else [0.0] * len(self.slots)
         self._calls = {}     # instance name -> its MemberCalls, made once
         self._program = self._program_of(self.groups)
+        if not isinstance(self.values, list):
+            self._kernels = False       # built on the first step (the slaves set up)
         self.time = 0.0
 
     def _slot(self, signal):
@@ -261,16 +276,21 @@ class Stepper:
 
     def refresh(self, inst) -> None:
         """Read ``inst``'s outputs into the values again (after its state was changed)."""
+        self.release()
         self._refresh(next(e for e in self.plan if e.instance is inst))
 
     def state(self) -> dict:
         """A snapshot of the run: time, the signals' values and each instance's state
         (``inst.get_state()``); :meth:`restore` goes back to it."""
+        self.release()
         return {"time": self.time, "values": list(self.values),
                 "instances": {name: inst.get_state() for name, inst in self.instances.items()}}
 
     def restore(self, state: dict) -> None:
         """Go back to ``state`` (of :meth:`state`; it can be restored again)."""
+        if self._kernels:       # a slave's state may come with new buffers: the segments are made again
+            self._kernels.release()
+            self._kernels = False
         for name, inst in self.instances.items():
             inst.set_state(state["instances"][name])
         self.values[:] = state["values"]
@@ -285,6 +305,19 @@ class Stepper:
         """The recorded signals' present values, in ``system.record`` order."""
         return self._record(self.values)
 
+    def recorder(self, data):
+        """``record(k)``: :meth:`row` into ``data[k]`` (a float64 array, one column per recorded
+        signal; with kernel segments, C-contiguous: written in one C call)."""
+        if self._kernels is not None:
+            from fmus.cosim.segments import row_writer
+
+            return row_writer(self.values, self.record_slots, data)
+        row = self.row
+
+        def record(k):
+            data[k] = row()
+        return record
+
     def value(self, signal: str) -> float:
         """The present value of a connected or recorded ``signal``."""
         return self.values[self.slots[signal]]
@@ -298,13 +331,26 @@ class Stepper:
         compiled mode does when a kernel declined a step (Gauss-Seidel).  A refusal raises
         the instance's :class:`fmus.cosim.backends.CoSimulationError`."""
         calls = self._program.calls
+        if self._kernels is not None:
+            if split or start is not None:
+                self.release()
+            else:
+                calls = (self._kernels or self._segments()).acquire()
         if split:
             calls = self._program_of(rate_groups(
                 [Entry(e.name, e.instance, e.inputs, e.in_slots, e.outputs, e.out_slots,
                        e.substeps * split.get(e.name, 1)) for e in self.plan])).calls
         if start is not None:
             calls = calls[self._program.index[start]:]
-        h, t, values = self.system.step, self.time, self.values
+        t = self.time
+        self._run(calls, t)
+        # The communication point advances by adding h, as fmpy's and Ecos' masters do:
+        # an exported system then runs there on the very same time points.
+        self.time = t + self.system.step
+
+    def _run(self, calls, t: float) -> None:
+        """Run ``calls`` (of a program) in the step from ``t``."""
+        values = self.values
         try:
             for pull, reads, step, offset, dt, read, source, out, inst in calls:
                 if pull is not None:
@@ -316,9 +362,18 @@ class Stepper:
             raise
         except Exception as exc:  # noqa: BLE001 - as the instance's do_step reports it
             raise CoSimulationError(inst.name, t + offset, str(exc)) from None
-        # The communication point advances by adding h, as fmpy's and Ecos' masters do:
-        # an exported system then runs there on the very same time points.
-        self.time = t + h
+
+    def _segments(self):
+        from fmus.cosim.segments import Segments
+
+        self._kernels = Segments(self)
+        return self._kernels
+
+    def release(self) -> None:
+        """Hand the slaves stepped in C back to Python: their inputs' and outputs' attributes
+        and their models' state as the Python path keeps them (:mod:`fmus.cosim.segments`)."""
+        if self._kernels:
+            self._kernels.release()
 
 
 def _snapshot(values, held, group_reads, produced, pull, first_of_step, first_of_group):
