@@ -32,8 +32,10 @@ calls (about 1 % and 100 % of the steps), also given for the best round and in C
 thread (``time.thread_time``: not counting the time other jobs on a shared machine hold the
 CPU, so steadier there; cache effects of their load remain).
 
-Where the time goes: each round also runs every case once more with timers (not in the table
-above): every instance's inputs set, step and outputs read as the master's stepper calls them
+Where the time goes: each round also runs every case but the in-process one with kernel segments
+(which has one C call a step, nothing per instance to time) and the compiled loop once more with
+timers (not in the table above): every instance's inputs set, step and outputs read as the master's
+stepper calls them
 (``fmus.cosim.stepper.member_calls``: in process the slave's attributes and its ``do_step``; through
 FMUs ``fmi2SetReal``, ``fmi2DoStep``, ``fmi2GetReal``), and inside the step the slave's own
 Python ``do_step`` (``fmus.slave.base.GuardedSlave``; the FMUs loaded in this process share that

@@ -33,6 +33,7 @@ from fmus.cosim.adapter import NotCompilable
 import kernels
 from fmus.cosim.compiled import LoopPlan, Member, _LoopStop, _adapters, adapter_of
 from fmus.cosim.stepper import Call
+from fmus.slave.registry import SLAVES
 
 
 def kernel_adapters(stepper) -> list:
@@ -48,8 +49,10 @@ def kernel_adapters(stepper) -> list:
             model = stepper.system.component(entry.name).model
             slave = getattr(entry.instance, "slave", None)
             cls = adapters.get(model)
-            # a slave not initialised (or refused) says so from its Python step
-            if slave is None or cls is None or type(slave).__name__ != model or not getattr(slave, "_ready", False):
+            # parcosim's own class of the model only; a slave not initialised (or refused) says so
+            # from its Python step
+            if slave is None or cls is None or _qualified(type(slave)) != f"fmus.slaves.{SLAVES.get(model)}.{model}" \
+                    or not getattr(slave, "_ready", False):
                 break
             try:
                 members.append(adapter_of(entry, model, h / group.substeps))
@@ -57,6 +60,10 @@ def kernel_adapters(stepper) -> list:
                 break
         found.append(members if len(members) == len(group.entries) else None)
     return found
+
+
+def _qualified(cls) -> str:
+    return f"{cls.__module__}.{cls.__qualname__}"
 
 
 class Segment:

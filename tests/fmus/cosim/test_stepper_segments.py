@@ -143,3 +143,28 @@ def test_the_row_writer_writes_the_rows_and_refuses_a_row_outside_the_array():
             record(k)
     with pytest.raises(ValueError):
         stepper.recorder(np.zeros((4, len(system.record)), dtype=np.float32))
+
+
+def test_a_slave_of_another_class_steps_in_python_between_segments():
+    # A user's class derived from a parcosim model (here one that counts its Python steps) is
+    # not the class its model's adapter knows: it keeps its own Python step.
+    """Catches a kernel taking the step of a slave whose class is not parcosim's own of the model
+    (a user's override would be skipped)."""
+    system = _bench(stop_time=0.05)
+    stepper = _stepper(system, kernels=True)
+    obs = stepper.instances["obs1"].slave
+    base = type(obs)
+    steps = []
+
+    class Counted(base):
+        def step(self, current_time, step_size):
+            steps.append(current_time)
+            return base.step(self, current_time, step_size)
+
+    obs.__class__ = Counted
+    python = _stepper(system, kernels=False)
+    for _ in range(20):
+        stepper.step()
+        python.step()
+        assert stepper.row() == python.row()
+    assert len(steps) == 20 and len(stepper._kernels.segments) == 2
