@@ -156,6 +156,8 @@ class Segments:
                               stepper.groups[g].entries[0].instance))
             g = end
         self.calls = tuple(calls)
+        #: The one segment when it is the whole step (its call alone, in place of the program's loop).
+        self.whole = self.segments[0] if len(self.calls) == 1 and self.segments else None
 
     def acquire(self) -> tuple:
         """Take the slaves (their values into the kernels' buffers); the program's calls."""

@@ -330,12 +330,18 @@ class Stepper:
         (group, member, sub-step) takes only the rest of the step from there on, as the
         compiled mode does when a kernel declined a step (Gauss-Seidel).  A refusal raises
         the instance's :class:`fmus.cosim.backends.CoSimulationError`."""
-        calls = self._program.calls
-        if self._kernels is not None:
+        kernels = self._kernels
+        if kernels is not None:
             if split or start is not None:
                 self.release()
-            else:
-                calls = (self._kernels or self._segments()).acquire()
+            elif kernels and kernels.owned and kernels.whole is not None:   # the usual case: one C call
+                t = self.time
+                kernels.whole.step(t, self.system.step)
+                self.time = t + self.system.step
+                return
+        calls = self._program.calls
+        if kernels is not None and not split and start is None:
+            calls = (kernels or self._segments()).acquire()
         if split:
             calls = self._program_of(rate_groups(
                 [Entry(e.name, e.instance, e.inputs, e.in_slots, e.outputs, e.out_slots,
