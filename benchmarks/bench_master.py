@@ -131,7 +131,7 @@ def python_slaves():
     original = master.Stepper
 
     class PythonStepper(original):
-        def __init__(self, *args, kernels=False, **kwargs):
+        def __init__(self, *args, kernels=None, **kwargs):
             super().__init__(*args, **kwargs)
 
     master.Stepper = PythonStepper

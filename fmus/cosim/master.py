@@ -384,8 +384,10 @@ def _simulate(run: RunContext) -> Result:
                  if run.coupling == "gauss-seidel" else tuple(c.name for c in system.components))
         # In process, slaves with a compiled step take it (fmus.cosim.segments); a retried step
         # takes states of every instance each step, which the Python path keeps.
-        stepper = Stepper(system, instances, order, jacobi=run.coupling == "jacobi",
-                          kernels=run.mode == "inprocess" and run.retry_substeps is None)
+        kernels = None
+        if run.mode == "inprocess" and run.retry_substeps is None:
+            from fmus.cosim.segments import Segments as kernels
+        stepper = Stepper(system, instances, order, jacobi=run.coupling == "jacobi", kernels=kernels)
         init_start = _time.perf_counter()
         try:
             stepper.initialize(0.0)

@@ -29,8 +29,10 @@ from __future__ import annotations
 
 import ctypes
 
-from fmus.cosim.adapter import NotCompilable
+import numpy as np
+
 import kernels
+from fmus.cosim.adapter import NotCompilable
 from fmus.cosim.compiled import LoopPlan, Member, _LoopStop, _adapters, adapter_of
 from fmus.cosim.stepper import Call
 from fmus.slave.registry import SLAVES
@@ -85,8 +87,7 @@ class Segment:
                 self.positions.append((g, m))
             loop_groups.append((group.substeps, loop))
         last = stepper.groups[groups[-1]]
-        #: The segment's calls in the stepper's program: [first, end).
-        self.first = stepper._program.index[(groups[0], 0, 0)]
+        #: Where the segment's calls end in the stepper's program (a declined step goes on there).
         self.end = stepper._program.index[(groups[-1], len(last.entries) - 1, last.substeps - 1)] + 1
         self.loop = LoopPlan(loop_groups, ())
         self._call = _LoopCall(plan=ctypes.addressof(self.loop.struct), values=ctypes.addressof(stepper.values),
@@ -99,7 +100,7 @@ class Segment:
         kernel declined, the rest of the segment through the stepper's Python calls.  True (a
         refusal raises)."""
         call = self._call
-        call.t = t
+        call.t = t      # the stepper's clock (k stays 0: pc_loop_run starts the step at t)
         if self._run(self._ref) >= 0:
             stop = call.stop
             g, m = self.positions[stop.member]
@@ -174,27 +175,24 @@ class Segments:
                 segment.release()
             self.owned = False
 
+    @staticmethod
+    def row_writer(values, slots, data):
+        """``record(k)``: the values of ``slots`` in ``values`` (a C array of doubles) into row ``k``
+        of ``data`` (C-contiguous float64, one column per slot) in one C call: ``pc_loop_run``
+        of a plan with no members, which records row k after "step" k - 1."""
+        if data.dtype != np.float64 or not data.flags.c_contiguous or data.ndim != 2 or data.shape[1] != len(slots):
+            raise ValueError(f"a row writer needs a C-contiguous float64 array of {len(slots)} columns")
+        plan, run, rows = LoopPlan([], slots), _call_step(), data.shape[0]
+        call = _LoopCall(plan=ctypes.addressof(plan.struct), values=ctypes.addressof(values), record=data.ctypes.data)
+        ref = ctypes.byref(call)
 
-
-def row_writer(values, slots, data):
-    """``record(k)``: the values of ``slots`` in ``values`` (a C array of doubles) into row ``k``
-    of ``data`` (C-contiguous float64, one column per slot) in one C call: ``pc_loop_run``
-    of a plan with no members, which records row k after "step" k - 1."""
-    import numpy as np
-
-    if data.dtype != np.float64 or not data.flags.c_contiguous or data.ndim != 2 or data.shape[1] != len(slots):
-        raise ValueError(f"a row writer needs a C-contiguous float64 array of {len(slots)} columns")
-    plan, run, rows = LoopPlan([], slots), _call_step(), data.shape[0]
-    call = _LoopCall(plan=ctypes.addressof(plan.struct), values=ctypes.addressof(values), record=data.ctypes.data)
-    ref = ctypes.byref(call)
-
-    def record(k: int) -> None:
-        if not 0 < k < rows:
-            raise IndexError(f"row {k} of {rows}")
-        call.k = k - 1
-        run(ref)
-    record.keep = (plan, data)     # what the addresses point into, alive as long as record
-    return record
+        def record(k: int) -> None:
+            if not 0 < k < rows:
+                raise IndexError(f"row {k} of {rows}")
+            call.k = k - 1
+            run(ref)
+        record.keep = (plan, data)     # what the addresses point into, alive as long as record
+        return record
 
 
 class _LoopCall(ctypes.Structure):

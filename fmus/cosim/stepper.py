@@ -144,10 +144,11 @@ class Stepper:
         The stepping order (Gauss-Seidel) or the listing order (Jacobi).
     jacobi : bool
         Every instance reads the values all held at the step's start.
-    kernels : bool
-        Gauss-Seidel only: the in-process slaves whose models have a compiled step take it
-        (:mod:`fmus.cosim.segments`: consecutive ones in one C call a step, their values in
-        ``values``, a C array; :meth:`release` hands them back to Python).
+    kernels : class, optional
+        Gauss-Seidel only: :class:`fmus.cosim.segments.Segments` (given by the master, which
+        imports it: the stepper does not), the in-process slaves whose models have a compiled
+        step take it (consecutive ones in one C call a step, their values in ``values``, a C
+        array; :meth:`release` hands them back to Python).  None: every instance's own calls.
 
     Raises
     ------
@@ -158,7 +159,7 @@ class Stepper:
     #: The kernel segments (:class:`fmus.cosim.segments.Segments`), False before the first step, None without.
     _kernels = None
 
-    def __init__(self, system: System, instances: dict, order, jacobi: bool = False, kernels: bool = False):
+    def __init__(self, system: System, instances: dict, order, jacobi: bool = False, kernels=None):
         self.system, self.instances, self.order, self.jacobi = system, instances, tuple(order), jacobi
         self.slots = {}
         feeds = {c.name: [] for c in system.components}
@@ -191,11 +192,12 @@ class Stepper:
         self.groups = tuple(rate_groups(self.plan))
         self.record_slots = [self.slots[s] for s in system.record]
         self._record = _gatherer(self.record_slots)
-        self.values = (ctypes.c_double * len(self.slots))() if kernels and not jacobi else [0.0] * len(self.slots)
         self._calls = {}     # instance name -> its MemberCalls, made once
+        self.values = [0.0] * len(self.slots)
+        if kernels is not None and not jacobi:
+            self.values = (ctypes.c_double * len(self.slots))()
+            self._kernels, self._kernels_type = False, kernels     # built on the first step (the slaves set up)
         self._program = self._program_of(self.groups)
-        if not isinstance(self.values, list):
-            self._kernels = False       # built on the first step (the slaves set up)
         self.time = 0.0
 
     def _slot(self, signal):
@@ -309,9 +311,7 @@ class Stepper:
         """``record(k)``: :meth:`row` into ``data[k]`` (a float64 array, one column per recorded
         signal; with kernel segments, C-contiguous: written in one C call)."""
         if self._kernels is not None:
-            from fmus.cosim.segments import row_writer
-
-            return row_writer(self.values, self.record_slots, data)
+            return self._kernels_type.row_writer(self.values, self.record_slots, data)
         row = self.row
 
         def record(k):
@@ -370,9 +370,7 @@ class Stepper:
             raise CoSimulationError(inst.name, t + offset, str(exc)) from None
 
     def _segments(self):
-        from fmus.cosim.segments import Segments
-
-        self._kernels = Segments(self)
+        self._kernels = self._kernels_type(self)
         return self._kernels
 
     def release(self) -> None:

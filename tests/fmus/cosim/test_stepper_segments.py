@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from fmus.cosim.master import _instantiate, simulate, stepping_order
+from fmus.cosim.segments import Segments
 from fmus.cosim.stepper import Stepper
 from scenarios.scenes.catalogue import get_scene
 from tests.support.inprocess import python_slaves
@@ -42,7 +43,7 @@ def _same_rows(a, b):
 def _stepper(system, kernels):
     instances = _instantiate(system, "inprocess", None)
     order = stepping_order(system, {n: i.variables for n, i in instances.items()})
-    stepper = Stepper(system, instances, order, kernels=kernels)
+    stepper = Stepper(system, instances, order, kernels=Segments if kernels else None)
     stepper.initialize(0.0)
     return stepper
 
