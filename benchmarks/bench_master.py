@@ -7,7 +7,10 @@ beside the floor of pass-through FMUs in the same topology, measured in one run.
 Four cases run the same system (same instances, connections, recorded signals and step
 count, Gauss-Seidel):
 
-* ``in-process``: ``simulate(system, mode="inprocess")``, the slave objects called directly;
+* ``in-process``: ``simulate(system, mode="inprocess")``, the slave objects called directly,
+  those whose model has a compiled step through it (:mod:`fmus.cosim.segments`);
+* ``in-process, Python slaves``: the same with every slave's Python ``do_step`` (the stepper's
+  kernel segments off: :func:`python_slaves`), the in-process path before them;
 * ``through FMUs``: ``simulate(system, mode="fmu")``, the built FMUs through fmpy's raw
   ``fmi2SetReal/fmi2DoStep/fmi2GetReal`` (real FMUs in ``--fmu-dir``, default ``fmus/build``,
   built when missing or stale);
@@ -29,8 +32,10 @@ calls (about 1 % and 100 % of the steps), also given for the best round and in C
 thread (``time.thread_time``: not counting the time other jobs on a shared machine hold the
 CPU, so steadier there; cache effects of their load remain).
 
-Where the time goes: each round also runs every case once more with timers (not in the table
-above): every instance's inputs set, step and outputs read as the master's stepper calls them
+Where the time goes: each round also runs every case but the in-process one with kernel segments
+(which has one C call a step, nothing per instance to time) and the compiled loop once more with
+timers (not in the table above): every instance's inputs set, step and outputs read as the master's
+stepper calls them
 (``fmus.cosim.stepper.member_calls``: in process the slave's attributes and its ``do_step``; through
 FMUs ``fmi2SetReal``, ``fmi2DoStep``, ``fmi2GetReal``), and inside the step the slave's own
 Python ``do_step`` (``fmus.slave.base.GuardedSlave``; the FMUs loaded in this process share that
@@ -73,17 +78,19 @@ QUICK_STOP_TIME = 2.0
 WARMUP_STOP_TIME = 0.05
 CASES = (  # key, label, mode, floor
     ("inprocess", "in-process", "inprocess", False),
+    ("inprocess_python", "in-process, Python slaves", "inprocess", False),
     ("fmu", "through FMUs", "fmu", False),
     ("floor_inprocess", "floor (pass-through), in-process", "inprocess", True),
     ("floor_fmu", "floor (pass-through), through FMUs", "fmu", True),
     ("compiled", "compiled loop", "compiled", False),
 )
 #: Cases timed per component (the compiled loop has no per-instance calls to time).
-TIMED_CASES = ("inprocess", "fmu", "floor_inprocess", "floor_fmu")
+TIMED_CASES = ("inprocess_python", "fmu", "floor_inprocess", "floor_fmu")
 
 
-def run_case(system, mode, fmu_dir, classes=None) -> dict:
-    """One run: setup, wall, µs per step (stepping only, wall clock and CPU time), order."""
+def run_case(system, mode, fmu_dir, classes=None, python=False) -> dict:
+    """One run: setup, wall, µs per step (stepping only, wall clock and CPU time), order;
+    ``python``: the in-process slaves all through their Python ``do_step``."""
     stamps = []
     clock, cpu = time.perf_counter, time.thread_time
 
@@ -91,7 +98,7 @@ def run_case(system, mode, fmu_dir, classes=None) -> dict:
         stamps.append((fraction, clock(), cpu()))
 
     registration = passthrough.registered(classes) if (classes and mode == "inprocess") else _nothing()
-    with registration:
+    with registration, (python_slaves() if python else _nothing()):
         start = clock()
         result = simulate(system, mode=mode, fmu_dir=fmu_dir, progress=progress)
         total = clock() - start
@@ -113,6 +120,25 @@ def run_case(system, mode, fmu_dir, classes=None) -> dict:
 @contextmanager
 def _nothing():
     yield
+
+
+@contextmanager
+def python_slaves():
+    """Within the block, ``simulate(mode="inprocess")`` steps every slave through its Python
+    ``do_step`` (its stepper without kernel segments)."""
+    from fmus.cosim import master
+
+    original = master.Stepper
+
+    class PythonStepper(original):
+        def __init__(self, *args, kernels=None, **kwargs):
+            super().__init__(*args, **kwargs)
+
+    master.Stepper = PythonStepper
+    try:
+        yield
+    finally:
+        master.Stepper = original
 
 
 # --- per-component breakdown ---------------------------------------------------------------
@@ -204,10 +230,10 @@ def timer_overhead(n=100_000) -> tuple:
     return best
 
 
-def breakdown(system, mode, fmu_dir, classes=None) -> dict:
+def breakdown(system, mode, fmu_dir, classes=None, python=False) -> dict:
     """Per-instance µs per communication step in each method, and the rest of the loop."""
     with timed_instances() as table:
-        run = run_case(system, mode, fmu_dir, classes)
+        run = run_case(system, mode, fmu_dir, classes, python)
     steps = system.steps
     # get_outputs is also called once after initialisation (1 call in steps + 1): ignored.
     per = {name: {c: 1e6 * cells.get(c, [0, 0.0])[1] / steps for c in CELLS} for name, cells in table.items()}
@@ -295,7 +321,8 @@ def report(scene_name, system, runs, breakdowns, info_before, info_after, overhe
         out.append(f"| {label} | {us[a] - us[b]:.0f} | {best[a] - best[b]:.0f} |")
     cpu = {k: statistics.median(r["cpu_us_per_step"] for r in rs) for k, rs in runs.items()}
     for label, a, b in (("FMUs / FMU floor (goal <= 1.3)", "fmu", "floor_fmu"),
-                        ("in-process / in-process floor", "inprocess", "floor_inprocess")):
+                        ("in-process / in-process floor", "inprocess", "floor_inprocess"),
+                        ("in-process with Python slaves / in-process", "inprocess_python", "inprocess")):
         if a in us and b in us:
             out.append(f"| {label}, ratio (CPU time: {cpu[a] / cpu[b]:.2f}) | {us[a] / us[b]:.2f} | "
                        f"{best[a] / best[b]:.2f} |")
@@ -315,12 +342,12 @@ def report(scene_name, system, runs, breakdowns, info_before, info_after, overhe
                 "FMUs: ctypes, pythonfmu's C wrapper, the GIL); **set/get**: inputs written and outputs "
                 "read (in process: attributes; through FMUs: fmi2SetReal + fmi2GetReal); **master**: the "
                 "loop itself (copies between slots, the recorded row)."]
-        for title, pair in (("Real models", ("inprocess", "fmu")),
+        for title, pair in (("Real models", ("inprocess_python", "fmu")),
                             ("Pass-through floor", ("floor_inprocess", "floor_fmu"))):
             keys = [k for k in pair if k in breakdowns]     # both, or the one --cases ran
             if not keys:
                 continue
-            sides = ["in-process" if "inprocess" in k else "FMU" for k in keys]
+            sides = ["in-process" if "inprocess" in k else "FMU" for k in keys]   # Python slaves
             out += ["", f"{title}:", "",
                     "| instance | model | " + " | ".join(f"{s} model | {s} call | {s} set/get" for s in sides) + " |",
                     "|---|---|" + "---:|---:|---:|" * len(keys)]
@@ -370,7 +397,7 @@ def measure(system, repeats: int, fmu_dir=None, with_breakdown: bool = True, key
             if stop is not None:
                 s = replace(s, stop_time=stop)
             run = breakdown if timed else run_case
-            return run(s, mode, floor_dir if floor else fmu_dir, classes if floor else None)
+            return run(s, mode, floor_dir if floor else fmu_dir, classes if floor else None, key == "inprocess_python")
 
         print("warm-up ...", file=sys.stderr)
         warm = {key: case(key, WARMUP_STOP_TIME) for key, *_ in cases}

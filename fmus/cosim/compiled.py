@@ -118,6 +118,28 @@ class LoopPlan:
         return stop
 
 
+def adapter_of(entry, model: str, h: float):
+    """The compiled adapter of ``entry`` (a :class:`fmus.cosim.stepper.Entry` of an in-process slave of
+    ``model``) stepping ``h``, its ``x`` filled from the slave; :class:`NotCompilable` when there is none
+    or it declines the slave's settings or connections."""
+    name, slave = entry.name, entry.instance.slave
+    cls = ADAPTERS.get(model)
+    if cls is None:
+        raise NotCompilable(f"component {name}: model {model!r} has no compiled adapter")
+    try:
+        slave.check_step_size(0.0, h)
+    except ValueError as exc:
+        raise NotCompilable(f"component {name}: {exc}") from None
+    adapter = cls(name, slave, h)
+    for kind, names, known in (("input", entry.inputs, cls.inputs), ("output", entry.outputs, cls.outputs)):
+        unknown = [n for n in names if n not in known]
+        if unknown:
+            raise NotCompilable(f"component {name}: {kind}s {', '.join(unknown)} of {model} are not "
+                                "in its compiled adapter")
+    adapter.x = np.array([float(getattr(slave, n)) for n in cls.inputs + cls.outputs])
+    return adapter
+
+
 class Plan:
     """The compiled loop of one system: its adapters in stepping order and their
     :class:`LoopPlan`."""
@@ -132,7 +154,7 @@ class Plan:
         for g, group in enumerate(stepper.groups):
             members = []
             for m, entry in enumerate(group.entries):
-                adapter = self._adapter(entry, system.component(entry.name).model, h / group.substeps)
+                adapter = adapter_of(entry, system.component(entry.name).model, h / group.substeps)
                 layout = adapter.inputs + adapter.outputs
                 context = adapter.context()
                 self._contexts.append(context)
@@ -144,25 +166,6 @@ class Plan:
             groups.append((group.substeps, members))
         self.loop = LoopPlan(groups, stepper.record_slots)
         self.description = self._describe()
-
-    @staticmethod
-    def _adapter(entry, model, h):
-        name, slave = entry.name, entry.instance.slave
-        cls = ADAPTERS.get(model)
-        if cls is None:
-            raise NotCompilable(f"component {name}: model {model!r} has no compiled adapter")
-        try:
-            slave.check_step_size(0.0, h)
-        except ValueError as exc:
-            raise NotCompilable(f"component {name}: {exc}") from None
-        adapter = cls(name, slave, h)
-        for kind, names, known in (("input", entry.inputs, cls.inputs), ("output", entry.outputs, cls.outputs)):
-            unknown = [n for n in names if n not in known]
-            if unknown:
-                raise NotCompilable(f"component {name}: {kind}s {', '.join(unknown)} of {model} are not "
-                                    "in its compiled adapter")
-        adapter.x = np.array([float(getattr(slave, n)) for n in cls.inputs + cls.outputs])
-        return adapter
 
     def _describe(self) -> str:
         """The stepping order as text: one line per member (``# name (model): kernel``)."""

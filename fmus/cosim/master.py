@@ -381,7 +381,12 @@ def _simulate(run: RunContext) -> Result:
         run = replace(run, system=system)
         order = (stepping_order(system, {n: inst.variables for n, inst in instances.items()})
                  if run.coupling == "gauss-seidel" else tuple(c.name for c in system.components))
-        stepper = Stepper(system, instances, order, jacobi=run.coupling == "jacobi")
+        # In process, slaves with a compiled step take it (fmus.cosim.segments); a retried step
+        # takes states of every instance each step, which the Python path keeps.
+        kernels = None
+        if run.mode == "inprocess" and run.retry_substeps is None:
+            from fmus.cosim.segments import Segments as kernels
+        stepper = Stepper(system, instances, order, jacobi=run.coupling == "jacobi", kernels=kernels)
         init_start = _time.perf_counter()
         try:
             stepper.initialize(0.0)
@@ -478,7 +483,7 @@ def _step_in_python(run: RunContext, stepper: Stepper) -> Outcome:
     steps = system.steps
     data = np.full((steps + 1, len(system.record)), np.nan)
     data[0] = stepper.row()
-    record, done, error, interrupted = stepper.row, 0, None, False
+    record, done, error, interrupted = stepper.recorder(data), 0, None, False
     report_every = max(1, steps // 100)
     start, cpu_start = _time.perf_counter(), _time.thread_time()
     try:
@@ -486,7 +491,7 @@ def _step_in_python(run: RunContext, stepper: Stepper) -> Outcome:
             if interrupt.requested:
                 raise KeyboardInterrupt
             advance()
-            data[k] = record()
+            record(k)
             done = k
             if progress is not None and k % report_every == 0:
                 progress(k / steps)
@@ -495,5 +500,6 @@ def _step_in_python(run: RunContext, stepper: Stepper) -> Outcome:
     except KeyboardInterrupt:
         interrupted = True
     wall, cpu = _time.perf_counter() - start, _time.thread_time() - cpu_start
+    stepper.release()
     extra = {"cpu_s": cpu, **({"retried": retried} if run.retry_substeps is not None else {})}
     return Outcome(data[:done + 1], error, interrupted, wall, extra=extra)

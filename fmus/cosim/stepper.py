@@ -27,9 +27,15 @@ The structure, built once:
 The clock: step k starts at ``start_time + k h`` (:meth:`Stepper.at_step`; k the integer count
 of steps taken), a call's sub-step j of n at that time plus ``j h / n``: every time is computed
 from integers, none is a running sum (kernels/src/loop.c the same).
+
+With ``kernels`` (the master's in-process mode), the groups of in-process slaves with a
+compiled step become one call each run of them, a C call of their kernels
+(:mod:`fmus.cosim.segments`); the program's other calls stay, and a split or partial step
+runs the plain program after :meth:`Stepper.release`.
 """
 from __future__ import annotations
 
+import ctypes
 import operator
 from dataclasses import dataclass
 from typing import Callable, NamedTuple
@@ -142,6 +148,11 @@ class Stepper:
         The stepping order (Gauss-Seidel) or the listing order (Jacobi).
     jacobi : bool
         Every instance reads the values all held at the step's start.
+    kernels : class, optional
+        Gauss-Seidel only: :class:`fmus.cosim.segments.Segments` (given by the master, which
+        imports it: the stepper does not), the in-process slaves whose models have a compiled
+        step take it (consecutive ones in one C call a step, their values in ``values``, a C
+        array; :meth:`release` hands them back to Python).  None: every instance's own calls.
 
     Raises
     ------
@@ -149,7 +160,10 @@ class Stepper:
         A recorded signal that is neither an output nor a connected input.
     """
 
-    def __init__(self, system: System, instances: dict, order, jacobi: bool = False):
+    #: The kernel segments (:class:`fmus.cosim.segments.Segments`), False before the first step, None without.
+    _kernels = None
+
+    def __init__(self, system: System, instances: dict, order, jacobi: bool = False, kernels=None):
         self.system, self.instances, self.order, self.jacobi = system, instances, tuple(order), jacobi
         self.slots = {}
         feeds = {c.name: [] for c in system.components}
@@ -182,8 +196,11 @@ class Stepper:
         self.groups = tuple(rate_groups(self.plan))
         self.record_slots = [self.slots[s] for s in system.record]
         self._record = _gatherer(self.record_slots)
-        self.values = [0.0] * len(self.slots)
         self._calls = {}     # instance name -> its MemberCalls, made once
+        self.values = [0.0] * len(self.slots)
+        if kernels is not None and not jacobi:
+            self.values = (ctypes.c_double * len(self.slots))()
+            self._kernels, self._kernels_type = False, kernels     # built on the first step (the slaves set up)
         self._program = self._program_of(self.groups)
         #: The clock: step ``k`` (steps taken since :meth:`initialize`) starts at ``time`` =
         #: ``start_time + k h``, computed from the integer k, never summed (module docstring).
@@ -274,16 +291,21 @@ class Stepper:
 
     def refresh(self, inst) -> None:
         """Read ``inst``'s outputs into the values again (after its state was changed)."""
+        self.release()
         self._refresh(next(e for e in self.plan if e.instance is inst))
 
     def state(self) -> dict:
         """A snapshot of the run: its clock (start time, step, time), the signals' values and
         each instance's state (``inst.get_state()``); :meth:`restore` goes back to it."""
+        self.release()
         return {"start_time": self.start_time, "step": self.k, "time": self.time, "values": list(self.values),
                 "instances": {name: inst.get_state() for name, inst in self.instances.items()}}
 
     def restore(self, state: dict) -> None:
         """Go back to ``state`` (of :meth:`state`; it can be restored again)."""
+        if self._kernels:       # a slave's state may come with new buffers: the segments are made again
+            self._kernels.release()
+            self._kernels = False
         for name, inst in self.instances.items():
             inst.set_state(state["instances"][name])
         self.values[:] = state["values"]
@@ -298,6 +320,17 @@ class Stepper:
         """The recorded signals' present values, in ``system.record`` order."""
         return self._record(self.values)
 
+    def recorder(self, data):
+        """``record(k)``: :meth:`row` into ``data[k]`` (a float64 array, one column per recorded
+        signal; with kernel segments, C-contiguous: written in one C call)."""
+        if self._kernels is not None:
+            return self._kernels_type.row_writer(self.values, self.record_slots, data)
+        row = self.row
+
+        def record(k):
+            data[k] = row()
+        return record
+
     def value(self, signal: str) -> float:
         """The present value of a connected or recorded ``signal``."""
         return self.values[self.slots[signal]]
@@ -311,14 +344,33 @@ class Stepper:
         (group, member, sub-step) takes only the rest of the step from there on, as the
         compiled mode does when a kernel declined a step (Gauss-Seidel).  A refusal raises
         the instance's :class:`fmus.cosim.backends.CoSimulationError`."""
+        kernels = self._kernels
+        if kernels is not None:
+            if split or start is not None:
+                self.release()
+            elif kernels and kernels.owned and kernels.whole is not None:   # the usual case: one C call
+                t = self.time
+                kernels.whole.step(t, self.system.step)
+                self.at_step(self.k + 1)
+                return
         calls = self._program.calls
+        if kernels is not None and not split and start is None:
+            calls = (kernels or self._segments()).acquire()
         if split:
             calls = self._program_of(rate_groups(
                 [Entry(e.name, e.instance, e.inputs, e.in_slots, e.outputs, e.out_slots,
                        e.substeps * split.get(e.name, 1)) for e in self.plan])).calls
         if start is not None:
             calls = calls[self._program.index[start]:]
-        h, t, values = self.system.step, self.time, self.values
+        t = self.time
+        self._run(calls, t)
+        # The next communication point from the step count, as libcosim's and fmpy 0.3's
+        # masters time their steps: t + h would carry each step's rounding into the next.
+        self.at_step(self.k + 1)
+
+    def _run(self, calls, t: float) -> None:
+        """Run ``calls`` (of a program) in the step from ``t``."""
+        values = self.values
         try:
             for pull, reads, step, offset, dt, read, source, out, inst in calls:
                 if pull is not None:
@@ -330,10 +382,16 @@ class Stepper:
             raise
         except Exception as exc:  # noqa: BLE001 - as the instance's do_step reports it
             raise CoSimulationError(inst.name, t + offset, str(exc)) from None
-        # The next communication point from the step count, as libcosim's and fmpy 0.3's
-        # masters time their steps: t + h would carry each step's rounding into the next.
-        self.k = k = self.k + 1
-        self.time = self.start_time + k * h
+
+    def _segments(self):
+        self._kernels = self._kernels_type(self)
+        return self._kernels
+
+    def release(self) -> None:
+        """Hand the slaves stepped in C back to Python: their inputs' and outputs' attributes
+        and their models' state as the Python path keeps them (:mod:`fmus.cosim.segments`)."""
+        if self._kernels:
+            self._kernels.release()
 
 
 def _snapshot(values, held, group_reads, produced, pull, first_of_step, first_of_group):

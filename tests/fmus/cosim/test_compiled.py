@@ -14,6 +14,7 @@ from fmus.cosim.system import Component, System
 from scenarios.run.runner import run_scene
 from scenarios.scenes.catalogue import get_scene
 from scenarios.scenes.transforms import drives_in_plant
+from tests.support.inprocess import python_slaves
 
 
 def _short(scene, stop_time):
@@ -41,7 +42,8 @@ def test_compiled_rows_are_the_in_process_rows(name, drives_inside):
     if drives_inside:
         scene = drives_in_plant(scene, substeps=2)
     fast = simulate(scene.system, mode="compiled")
-    slow = simulate(scene.system, mode="inprocess")
+    with python_slaves():   # every slave through its Python step, not the kernels
+        slow = simulate(scene.system, mode="inprocess")
     assert fast.error is None and fast.mode == "compiled" and "fallback" not in fast.extra
     assert fast.extra["python_steps"] == 0
     _same_rows(fast, slow)
@@ -60,7 +62,8 @@ def test_every_parameter_a_sweep_perturbs_reaches_the_compiled_loop():
     assert any(name.endswith("encoder_offset1") for name in values)
     scene = perturbed(base, parameters, values)
     fast = simulate(scene.system, mode="compiled")
-    slow = simulate(scene.system, mode="inprocess")
+    with python_slaves():   # every slave through its Python step, not the kernels
+        slow = simulate(scene.system, mode="inprocess")
     assert fast.error is None and fast.extra["python_steps"] == 0
     _same_rows(fast, slow)
 
@@ -71,7 +74,8 @@ def test_a_sample_off_the_table_is_taken_by_python_and_the_loop_goes_on():
     """Catches a compiled loop that stops or differs where the table declines a sample."""
     scene = _with(_short(get_scene("bench_circle_TCx"), 1.2), "ctrl", x_max=0.02)
     fast = simulate(scene.system, mode="compiled")
-    slow = simulate(scene.system, mode="inprocess")
+    with python_slaves():   # every slave through its Python step, not the kernels
+        slow = simulate(scene.system, mode="inprocess")
     assert fast.error is None
     assert 100 < fast.extra["python_steps"] < 1200
     _same_rows(fast, slow)
@@ -81,7 +85,8 @@ def test_a_refusal_stops_at_the_same_step_with_the_same_message():
     """Catches a compiled refusal at another step or with another message than in process."""
     scene = _with(_short(get_scene("bench_circle_TCx"), 1.2), "ctrl", x_max=0.02, table_fallback=False)
     fast = run_scene(scene, mode="compiled")
-    slow = run_scene(scene, mode="inprocess")
+    with python_slaves():   # every slave through its Python step, not the kernels
+        slow = run_scene(scene, mode="inprocess")
     assert "outside the tabulated region" in str(slow.result.error) and slow.result.error.instance == "ctrl"
     assert fast.result.error == slow.result.error
     assert fast.metrics["completed"] is False
@@ -218,7 +223,8 @@ def test_the_pendulum_scenes_compiled_are_the_in_process_rows(name):
     """Catches compiled pendulum scenes that differ from in process or fall back to Python."""
     scene = get_scene(name)
     fast = simulate(scene.system, mode="compiled")
-    slow = simulate(scene.system, mode="inprocess")
+    with python_slaves():   # every slave through its Python step, not the kernels
+        slow = simulate(scene.system, mode="inprocess")
     assert fast.error is None and fast.mode == "compiled" and fast.extra["python_steps"] == 0
     _same_rows(fast, slow)
     assert len(fast.time) == 5001
@@ -230,7 +236,8 @@ def test_a_pendulum_falling_in_the_compiled_loop_stops_with_the_in_process_messa
     scene = _with(_with(get_scene("pendulum_balance"), "ctrl", v_battery=0.5), "drive_l", v_max=0.5)
     scene = _with(_short(scene, 1.0), "drive_r", v_max=0.5)
     fast = run_scene(scene, mode="compiled")
-    slow = run_scene(scene, mode="inprocess")
+    with python_slaves():   # every slave through its Python step, not the kernels
+        slow = run_scene(scene, mode="inprocess")
     assert "the robot fell over (pitch beyond 90 degrees)" in str(slow.result.error)
     assert fast.result.error == slow.result.error and fast.metrics["mode"] == "compiled"
     assert fast.metrics["completed"] is False and fast.metrics["python_steps"] == 0
