@@ -71,36 +71,34 @@ int pc_derivator_reset(const pc_derivator_context *c, const double *q0, pc_refus
     return PC_OK;
 }
 
-/* Entry j of channel ch's state: the state, or not started the rest state at q_ch. */
-static inline double entry(const double *rest, const double *state, long m, long j, long ch, const double *q,
-                           int started)
-{
-    return started ? state[j * m + ch] : rest[j] * q[ch];
-}
+/* Rows of the step matrix per pass of rows_times: their sums, two channels each, run side by side
+ * (independent additions; the channel pair in one SSE2 register where the compiler vectorises). */
+#define PASS_ROWS 7
 
-/* Rows `row` and `row2` of the step matrix times [state_ch; q_ch] for every channel into out[m]
- * and out2[m], each sum in index order (numpy's BLAS may differ in the last bit).  Two rows and
- * two channels at a time: the four sums are independent, so they run side by side instead of
- * each waiting on its own additions.  An odd last row or channel pairs with itself. */
-static void rows_times(const double *matrix, const double *rest, const double *state, long n, long m, long row,
-                       long row2, const double *q, int started, double *out, double *out2)
+/* Rows [row, row + count) (count <= PASS_ROWS) of the step matrix times [x_ch; q_ch] of the channel
+ * pair (ch, other), x[2 j] and x[2 j + 1] entry j of their states: each sum in index order (numpy's
+ * BLAS may differ in the last bit).  Row 0 goes to out[ch] (velocity), row 1 to out[m + ch]
+ * (acceleration), row 2 + j to next[j m + ch] (the next state).  A short pass repeats its last row. */
+static void rows_times(const double *matrix, long n, long m, long row, long count, const double *x, long ch,
+                       long other, const double *q, double *out, double *next)
 {
-    const double *w = matrix + row * (n + 1), *w2 = matrix + row2 * (n + 1);
-    for (long ch = 0; ch < m; ch += 2) {
-        const long other = ch + 1 < m ? ch + 1 : ch;
-        double sum0 = 0.0, sum1 = 0.0, sum2 = 0.0, sum3 = 0.0;
-        for (long j = 0; j < n; ++j) {
-            const double x0 = entry(rest, state, m, j, ch, q, started);
-            const double x1 = entry(rest, state, m, j, other, q, started);
-            sum0 += w[j] * x0;
-            sum1 += w[j] * x1;
-            sum2 += w2[j] * x0;
-            sum3 += w2[j] * x1;
+    const double *w[PASS_ROWS];
+    double sum[PASS_ROWS][2];
+    for (long r = 0; r < PASS_ROWS; ++r) {
+        w[r] = matrix + (row + (r < count ? r : count - 1)) * (n + 1);
+        sum[r][0] = sum[r][1] = 0.0;
+    }
+    for (long j = 0; j < n; ++j) {
+        const double x0 = x[2 * j], x1 = x[2 * j + 1];
+        for (long r = 0; r < PASS_ROWS; ++r) {
+            sum[r][0] += w[r][j] * x0;
+            sum[r][1] += w[r][j] * x1;
         }
-        out[ch] = sum0 + w[n] * q[ch];
-        out[other] = sum1 + w[n] * q[other];
-        out2[ch] = sum2 + w2[n] * q[ch];
-        out2[other] = sum3 + w2[n] * q[other];
+    }
+    for (long r = 0; r < count; ++r) {
+        double *dest = row + r < 2 ? out + (row + r) * m : next + (row + r - 2) * m;
+        dest[ch] = sum[r][0] + w[r][n] * q[ch];
+        dest[other] = sum[r][1] + w[r][n] * q[other];
     }
 }
 
@@ -115,13 +113,20 @@ int pc_derivator_step(const pc_derivator_context *c, const double *q, double lim
     const double *matrix = d->data, *rest = d->data + (2 + n) * (n + 1);
     double *state = d->data + (2 + n) * (n + 1) + n;
     const int started = d->started != 0.0;
-    rows_times(matrix, rest, state, n, m, 0, 1, q, started, out, out + m);   /* the estimates: rows C, D */
+    double x[2 * PC_DERIVATOR_MAX_STATES];   /* a channel pair's states side by side */
+    for (long ch = 0; ch < m; ch += 2) {   /* an odd last channel pairs with itself */
+        const long other = ch + 1 < m ? ch + 1 : ch;
+        for (long j = 0; j < n; ++j) {     /* not started: the rest state at q */
+            x[2 * j] = started ? state[j * m + ch] : rest[j] * q[ch];
+            x[2 * j + 1] = started ? state[j * m + other] : rest[j] * q[other];
+        }
+        for (long row = 0; row < 2 + n; row += PASS_ROWS) {   /* estimates (rows C, D), next state (A, B) */
+            const long count = 2 + n - row < PASS_ROWS ? 2 + n - row : PASS_ROWS;
+            rows_times(matrix, n, m, row, count, x, ch, other, q, out, c->scratch);
+        }
+    }
     for (long k = 0; k < 2 * m; ++k)
         if (!isfinite(out[k])) return pc_refuse(r, PC_DERIVATOR_NONFINITE_OUTPUT, (int)k, out[k]);
-    for (long j = 0; j < n; j += 2) {             /* the next state: rows A and B, kept apart first */
-        const long j2 = j + 1 < n ? j + 1 : j;
-        rows_times(matrix, rest, state, n, m, 2 + j, 2 + j2, q, started, c->scratch + j * m, c->scratch + j2 * m);
-    }
     for (long k = 0; k < n * m; ++k) state[k] = c->scratch[k];
     for (long ch = 0; ch < m; ++ch) state[n * m + ch] = q[ch];
     d->started = 1.0;
