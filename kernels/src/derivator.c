@@ -71,34 +71,57 @@ int pc_derivator_reset(const pc_derivator_context *c, const double *q0, pc_refus
     return PC_OK;
 }
 
-/* Rows of the step matrix per pass of rows_times: their sums, two channels each, run side by side
- * (independent additions; the channel pair in one SSE2 register where the compiler vectorises). */
+/* Rows of the step matrix per pass of rows_times: their sums run side by side (independent additions). */
 #define PASS_ROWS 7
 
+/* A channel pair's two numbers: one SSE2 register with GCC and clang (each lane the scalar's
+ * operations in the scalar's order, so the same bits), two doubles elsewhere. */
+#if defined(__GNUC__)
+typedef double pair __attribute__((vector_size(16)));
+#define PAIR(a, b) ((pair){(a), (b)})
+#define LANE(p, i) ((p)[i])
+#else
+typedef struct {
+    double v[2];
+} pair;
+static pair pair_of(double a, double b)
+{
+    pair p = {{a, b}};
+    return p;
+}
+#define PAIR(a, b) pair_of((a), (b))
+#define LANE(p, i) ((p).v[i])
+#endif
+
+/* sum + w * x, lane by lane. */
+static inline pair pair_madd(pair sum, double w, pair x)
+{
+#if defined(__GNUC__)
+    return sum + w * x;
+#else
+    return PAIR(sum.v[0] + w * x.v[0], sum.v[1] + w * x.v[1]);
+#endif
+}
+
 /* Rows [row, row + count) (count <= PASS_ROWS) of the step matrix times [x_ch; q_ch] of the channel
- * pair (ch, other), x[2 j] and x[2 j + 1] entry j of their states: each sum in index order (numpy's
- * BLAS may differ in the last bit).  Row 0 goes to out[ch] (velocity), row 1 to out[m + ch]
- * (acceleration), row 2 + j to next[j m + ch] (the next state).  A short pass repeats its last row. */
-static void rows_times(const double *matrix, long n, long m, long row, long count, const double *x, long ch,
+ * pair (ch, other), x[j] entry j of their states: each sum in index order (numpy's BLAS may differ
+ * in the last bit).  Row 0 goes to out[ch] (velocity), row 1 to out[m + ch] (acceleration), row
+ * 2 + j to next[j m + ch] (the next state).  A short pass repeats its last row. */
+static void rows_times(const double *matrix, long n, long m, long row, long count, const pair *x, long ch,
                        long other, const double *q, double *out, double *next)
 {
     const double *w[PASS_ROWS];
-    double sum[PASS_ROWS][2];
+    pair sum[PASS_ROWS];
     for (long r = 0; r < PASS_ROWS; ++r) {
         w[r] = matrix + (row + (r < count ? r : count - 1)) * (n + 1);
-        sum[r][0] = sum[r][1] = 0.0;
+        sum[r] = PAIR(0.0, 0.0);
     }
-    for (long j = 0; j < n; ++j) {
-        const double x0 = x[2 * j], x1 = x[2 * j + 1];
-        for (long r = 0; r < PASS_ROWS; ++r) {
-            sum[r][0] += w[r][j] * x0;
-            sum[r][1] += w[r][j] * x1;
-        }
-    }
+    for (long j = 0; j < n; ++j)
+        for (long r = 0; r < PASS_ROWS; ++r) sum[r] = pair_madd(sum[r], w[r][j], x[j]);
     for (long r = 0; r < count; ++r) {
         double *dest = row + r < 2 ? out + (row + r) * m : next + (row + r - 2) * m;
-        dest[ch] = sum[r][0] + w[r][n] * q[ch];
-        dest[other] = sum[r][1] + w[r][n] * q[other];
+        dest[ch] = LANE(sum[r], 0) + w[r][n] * q[ch];
+        dest[other] = LANE(sum[r], 1) + w[r][n] * q[other];
     }
 }
 
@@ -113,13 +136,11 @@ int pc_derivator_step(const pc_derivator_context *c, const double *q, double lim
     const double *matrix = d->data, *rest = d->data + (2 + n) * (n + 1);
     double *state = d->data + (2 + n) * (n + 1) + n;
     const int started = d->started != 0.0;
-    double x[2 * PC_DERIVATOR_MAX_STATES];   /* a channel pair's states side by side */
+    pair x[PC_DERIVATOR_MAX_STATES];   /* a channel pair's states side by side */
     for (long ch = 0; ch < m; ch += 2) {   /* an odd last channel pairs with itself */
         const long other = ch + 1 < m ? ch + 1 : ch;
-        for (long j = 0; j < n; ++j) {     /* not started: the rest state at q */
-            x[2 * j] = started ? state[j * m + ch] : rest[j] * q[ch];
-            x[2 * j + 1] = started ? state[j * m + other] : rest[j] * q[other];
-        }
+        for (long j = 0; j < n; ++j)       /* not started: the rest state at q */
+            x[j] = started ? PAIR(state[j * m + ch], state[j * m + other]) : PAIR(rest[j] * q[ch], rest[j] * q[other]);
         for (long row = 0; row < 2 + n; row += PASS_ROWS) {   /* estimates (rows C, D), next state (A, B) */
             const long count = 2 + n - row < PASS_ROWS ? 2 + n - row : PASS_ROWS;
             rows_times(matrix, n, m, row, count, x, ch, other, q, out, c->scratch);

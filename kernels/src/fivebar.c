@@ -81,8 +81,9 @@ typedef struct {
 static void chain_trig_of(double a, double b, chain_trig *g)
 {
     pc_sincos(a, &g->s1, &g->c1);
-    pc_sincos(a + b, &g->s12, &g->c12);
     pc_sincos(b, &g->sb, &g->cb);
+    g->s12 = g->s1 * g->cb + g->c1 * g->sb;   /* the angle sum's: two sin/cos pairs instead of three */
+    g->c12 = g->c1 * g->cb - g->s1 * g->sb;
 }
 
 /* pc_fivebar_chain_terms from the chain's trigonometry g. */
@@ -300,8 +301,8 @@ void pc_fivebar_advance(const pc_fivebar_held *held, double *z, double dt, int s
 }
 
 /* Chain k's rows of the position constraint residual (5.18, 7.7) at y, from the sines and
- * cosines of theta_k1 and theta_k1 + theta_k2: its tip is that of pc_fivebar_chain_terms (the
- * same expressions, so the same bits). */
+ * cosines of theta_k1 and theta_k1 + theta_k2 (chain_trig_of's): its tip is that of
+ * pc_fivebar_chain_terms (the same expressions, so the same bits). */
 static void residual_rows(const pc_fivebar_params *p, int k, const double *y, double c1, double s1, double c12,
                           double s12, double *out)
 {
@@ -315,10 +316,9 @@ static void residual_rows(const pc_fivebar_params *p, int k, const double *y, do
 void pc_fivebar_residual(const pc_fivebar_params *p, const double *y, double *out)
 {
     for (int k = 0; k < 2; ++k) {
-        double c1, s1, c12, s12;
-        pc_sincos(y[3 + 2 * k], &s1, &c1);
-        pc_sincos(y[3 + 2 * k] + y[4 + 2 * k], &s12, &c12);
-        residual_rows(p, k, y, c1, s1, c12, s12, out + 3 * k);
+        chain_trig g;
+        chain_trig_of(y[3 + 2 * k], y[4 + 2 * k], &g);
+        residual_rows(p, k, y, g.c1, g.s1, g.c12, g.s12, out + 3 * k);
     }
 }
 
@@ -347,7 +347,8 @@ static void report_of(const pc_fivebar_params *p, const pc_fivebar_settings *s, 
     out->residual = sqrt(sum);
     out->measures[0] = g[0].sb;   /* sin theta12 */
     out->measures[1] = g[1].sb;   /* sin theta22 */
-    out->measures[2] = pc_sin((y[3] + y[4]) - (PI - (y[5] + y[6])));
+    /* sin(phi12 - phi22) = sin(theta11 + theta12 - (pi - (theta21 + theta22))) = -sin(sum of both) */
+    out->measures[2] = -(g[0].s12 * g[1].c12 + g[0].c12 * g[1].s12);
     out->q1 = y[3];
     out->q2 = PI - y[5];
     out->dq1 = y[10];

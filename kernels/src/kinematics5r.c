@@ -17,8 +17,7 @@ int pc_5r_chain_ik(double l1, double l2, double px, double py, double elbow_sign
         return PC_5R_OUT_OF_REACH;
     }
     const double beta = elbow_sign * acos(cos_b);                     /* the distal link's relative angle */
-    double sb, cb;
-    pc_sincos(beta, &sb, &cb);
+    const double sb = elbow_sign * sqrt((1.0 - cos_b) * (1.0 + cos_b)), cb = cos_b;   /* sin beta, cos beta */
     const double p1 = atan2(py, px) - atan2(l2 * sb, l1 + l2 * cb);
     *phi1 = p1;
     *phi2 = p1 + beta;
