@@ -115,8 +115,12 @@ static void chain_terms_of(const pc_fivebar_params *p, int k, const chain_trig *
     /* (4.86): Coriolis and centripetal efforts. */
     t->v[0] = -h * sb * (2.0 * da * db + db * db);
     t->v[1] = h * sb * da * da;
-    /* (4.87) with gravity in the chain frame, E_k^T g. */
+    /* (4.87) with gravity in the chain frame, E_k^T g; none without gravity. */
     const double gx = s * p->gravity[0], gy = p->gravity[1];
+    if (gx == 0.0 && gy == 0.0) {
+        t->g[0] = t->g[1] = 0.0;
+        return;
+    }
     const double gc1x = lg1 * -s1, gc1y = lg1 * c1;
     const double g2ax = -l1 * s1 - lg2 * s12, g2ay = l1 * c1 + lg2 * c12;
     const double g2bx = -lg2 * s12, g2by = lg2 * c12;
