@@ -153,15 +153,43 @@ static int same_bits(double x, double k)
     return x == k && signbit(x) == signbit(k);
 }
 
-/* Chain k's trigonometry at angles (a, b): from the cache when it holds them, else computed. */
-static void trig_at(const double *cache, int k, double a, double b, chain_trig *g)
+/* Largest angle an RK4 stage's trigonometry is turned by from the step's start, rad (2^-5). */
+#define TURN_MAX 0x1p-5
+
+/* sin and cos of x + d from those of x (s, c) and |d| <= TURN_MAX: sin d and cos d by their
+ * Taylor series (through d^7 and d^8, the first left out below 3e-18 of the kept at 2^-5), then the
+ * angle sum. */
+static void turned(double s, double c, double d, double *sin_xd, double *cos_xd)
 {
-    if (cache && cache[0] == TRIG_MARK && same_bits(a, cache[1 + 2 * k]) && same_bits(b, cache[2 + 2 * k])) {
+    const double z = d * d;
+    const double sd = d + d * z * (-1.0 / 6.0 + z * (8.333333333333333e-03 + z * -1.984126984126984e-04));
+    const double cd = 1.0 - z * (0.5 - z * (0.041666666666666664 + z * (-0.001388888888888889 +
+                                                                       z * 2.48015873015873e-05)));
+    *sin_xd = s * cd + c * sd;
+    *cos_xd = c * cd - s * sd;
+}
+
+/* Chain k's trigonometry at angles (a, b): from the cache when it holds them, turned from the
+ * cache's when `turn` and both are within TURN_MAX of its (an RK4 stage from the step's start),
+ * else computed. */
+static void trig_at(const double *cache, int k, double a, double b, int turn, chain_trig *g)
+{
+    if (cache && cache[0] == TRIG_MARK) {
         const double *v = cache + 5 + 6 * k;
-        *g = (chain_trig){v[0], v[1], v[2], v[3], v[4], v[5]};
-    } else {
-        chain_trig_of(a, b, g);
+        if (same_bits(a, cache[1 + 2 * k]) && same_bits(b, cache[2 + 2 * k])) {
+            *g = (chain_trig){v[0], v[1], v[2], v[3], v[4], v[5]};
+            return;
+        }
+        const double da = a - cache[1 + 2 * k], db = b - cache[2 + 2 * k];
+        if (turn && fabs(da) <= TURN_MAX && fabs(db) <= TURN_MAX) {
+            turned(v[0], v[1], da, &g->s1, &g->c1);
+            turned(v[4], v[5], db, &g->sb, &g->cb);
+            g->s12 = g->s1 * g->cb + g->c1 * g->sb;
+            g->c12 = g->c1 * g->cb - g->s1 * g->sb;
+            return;
+        }
     }
+    chain_trig_of(a, b, g);
 }
 
 /* Keep chain k's trigonometry g at (a, b) in the cache (mark it once both chains are in). */
@@ -204,7 +232,7 @@ static void derivative_of(const pc_fivebar_params *p, const double *y, double u1
     const double x = y[0], yy = y[1], dx = y[7], dy = y[8];
     for (int k = 0; k < 2; ++k) {
         chain_trig g;
-        trig_at(cache, k, y[3 + 2 * k], y[4 + 2 * k], &g);
+        trig_at(cache, k, y[3 + 2 * k], y[4 + 2 * k], 1, &g);
         chain_terms_of(p, k, &g, y[10 + 2 * k], y[11 + 2 * k], &t[k]);
         const double rx = x - chain_base(p, k) - t[k].tip[0];   /* residual (5.18) */
         const double ry = yy - t[k].tip[1];
@@ -409,7 +437,14 @@ int pc_fivebar_step(const pc_fivebar_params *p, const pc_fivebar_settings *s, co
     for (int i = 0; i < n; ++i) trial[i] = z[i];
     const pc_fivebar_held held = {p, motors, voltages, u1, u2, s->lambda, n_motors};
     double *cache = scratch + 6 * n;   /* the trigonometry of z when the last step's report kept it */
-    const cached_model model = {&held, cache};
+    double start[PC_FIVEBAR_TRIG_WORDS];   /* z's: the RK4 stages turn it */
+    for (int k = 0; k < 2; ++k) {
+        chain_trig g;
+        trig_at(cache, k, z[3 + 2 * k], z[4 + 2 * k], 0, &g);   /* the cache's if it holds z's angles */
+        keep_trig(start, k, z[3 + 2 * k], z[4 + 2 * k], &g);
+    }
+    start[0] = TRIG_MARK;
+    const cached_model model = {&held, start};
     pc_rk4(cached_derivative, &model, trial, n, dt, (int)s->substeps, scratch + n);
     report_of(p, s, trial, report, cache);
     return judge(s, trial, n, report, refusal);
