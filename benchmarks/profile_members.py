@@ -10,13 +10,17 @@ mode="compiled")``), in turn:
 * **timed**: every member's I/O step replaced in the loop's plan by ``pc_timed_io``
   (benchmarks/member_timer.c, built here with the kernels' flags), which calls the member's own
   step with its own context and adds the time-stamp counter's ticks of the call to the member's
-  tally; rows, state and results are the run's own.
+  tally; rows, state and results are the run's own (checked: a timed run's rows differing from
+  the untimed run's stop the tool).
 
 Printed: per member its kernel and its ns a call inside the loop (the timer's own cost, the
 tally of a member that does nothing timed the same way, taken off), and its share of the
 untimed step; then the loop's own part (copying inputs and outputs between the members' arrays
 and the value slots, recording the row, calling through the plan's pointers): the untimed step
-minus the members' sum.  The counter's ticks are turned into ns against ``time.perf_counter_ns``
+minus the members' sum.  Last, that part alone: the run's plan with every member's step replaced
+by one that does nothing (``pc_timed_nothing``), all the run's steps in one call, with the
+recorded row and without it (``n_record`` 0): minimum and median CPU ns per step of
+``--repeats`` x 2 runs.  The counter's ticks are turned into ns against ``time.perf_counter_ns``
 over the runs.  On a shared machine read the shares, and compare builds with
 bench_compiled_ab.py (the load average is printed).
 """
@@ -92,10 +96,11 @@ def profile(scene, timer, repeats: int, per_ns: float) -> dict:
     from fmus.cosim.master import simulate
 
     state = {"timed": False, "tallies": None}
-    chunks, tallies, names = [], [], []
+    chunks, tallies, names, rows = [], [], [], {}
     original = compiled.Plan.run
 
     def run(plan, values, record, k0, k1, t, h):
+        state["plan"] = plan
         if state["timed"] and state["tallies"] is None:
             pointers = plan.loop._pointers
             items = [_Timed(int(io), int(ctx), 0.0, 0.0, CAP_NS * per_ns, 0.0)
@@ -118,11 +123,37 @@ def profile(scene, timer, repeats: int, per_ns: float) -> dict:
                 result = simulate(scene.system, mode="compiled")
                 if result.error or not result.completed or result.extra.get("python_steps"):
                     raise RuntimeError(f"compiled run: {result.error or 'not completed in C'}")
+                rows[timed] = result.signals
                 if timed:
                     tallies.append([(item.ticks, item.calls, item.dropped) for item in state["tallies"]])
+                    if any(rows[True][k].tobytes() != rows[False][k].tobytes() for k in rows[False]):
+                        raise RuntimeError("a timed run's rows differ from the untimed run's")
     finally:
         compiled.Plan.run = original
-    return {"chunks": chunks, "tallies": tallies, "names": names}
+    return {"chunks": chunks, "tallies": tallies, "names": names, "plan": state["plan"]}
+
+
+def hollow(plan, timer, steps: int, runs: int) -> dict:
+    """CPU ns per step of ``plan``'s loop with every member's step doing nothing, with the
+    row recorded and without: (minimum, median) of ``runs`` runs of ``steps`` steps each."""
+    import numpy as np
+
+    pointers, struct = plan.loop._pointers, plan.loop.struct
+    pointers["io"][:] = _address(timer, "pc_timed_nothing")
+    values = np.zeros(max(int(np.max(plan.loop._arrays[name], initial=0)) for name in ("in_slot", "out_slot",
+                                                                                      "record_slot")) + 1)
+    n_record, found = struct.n_record, {}
+    for label, recorded in (("with the row", n_record), ("without the row", 0)):
+        struct.n_record = recorded
+        record = np.zeros((steps + 1, max(n_record, 1)))
+        times = []
+        for _ in range(runs):
+            start = time.thread_time_ns()
+            plan.loop.run(values, record, 0, steps, 0.0, 1e-3)
+            times.append((time.thread_time_ns() - start) / steps)
+        found[label] = (min(times), statistics.median(times))
+    struct.n_record = n_record
+    return found
 
 
 def main(argv=None) -> int:
@@ -138,6 +169,7 @@ def main(argv=None) -> int:
         per_ns = ticks_per_ns(timer)
         found = profile(scene, timer, args.repeats, per_ns)
         own = calibration(timer, per_ns)
+        alone = hollow(found["plan"], timer, scene.system.steps, 2 * args.repeats)
     names = found["names"]
     step = statistics.median(found["chunks"])
     # per member: the median over the timed runs of its ns a call, the timer's own cost off
@@ -156,6 +188,10 @@ def main(argv=None) -> int:
     rest = step - sum(members)
     print(f"| the loop's own (copies, row, calls) | {rest:.0f} | {100 * rest / step:.1f} % |")
     print(f"| step (untimed) | {step:.0f} | 100 % |")
+    print("\n| the loop alone, members doing nothing | CPU ns a step, min | median |")
+    print("|---|---:|---:|")
+    for label, (least, middle) in alone.items():
+        print(f"| {label} | {least:.0f} | {middle:.0f} |")
     return 0
 
 
