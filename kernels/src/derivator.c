@@ -71,36 +71,57 @@ int pc_derivator_reset(const pc_derivator_context *c, const double *q0, pc_refus
     return PC_OK;
 }
 
-/* Entry j of channel ch's state: the state, or not started the rest state at q_ch. */
-static inline double entry(const double *rest, const double *state, long m, long j, long ch, const double *q,
-                           int started)
+/* Rows of the step matrix per pass of rows_times: their sums run side by side (independent additions). */
+#define PASS_ROWS 7
+
+/* A channel pair's two numbers: one SSE2 register with GCC and clang (each lane the scalar's
+ * operations in the scalar's order, so the same bits), two doubles elsewhere. */
+#if defined(__GNUC__)
+typedef double pair __attribute__((vector_size(16)));
+#define PAIR(a, b) ((pair){(a), (b)})
+#define LANE(p, i) ((p)[i])
+#else
+typedef struct {
+    double v[2];
+} pair;
+static pair pair_of(double a, double b)
 {
-    return started ? state[j * m + ch] : rest[j] * q[ch];
+    pair p = {{a, b}};
+    return p;
+}
+#define PAIR(a, b) pair_of((a), (b))
+#define LANE(p, i) ((p).v[i])
+#endif
+
+/* sum + w * x, lane by lane. */
+static inline pair pair_madd(pair sum, double w, pair x)
+{
+#if defined(__GNUC__)
+    return sum + w * x;
+#else
+    return PAIR(sum.v[0] + w * x.v[0], sum.v[1] + w * x.v[1]);
+#endif
 }
 
-/* Rows `row` and `row2` of the step matrix times [state_ch; q_ch] for every channel into out[m]
- * and out2[m], each sum in index order (numpy's BLAS may differ in the last bit).  Two rows and
- * two channels at a time: the four sums are independent, so they run side by side instead of
- * each waiting on its own additions.  An odd last row or channel pairs with itself. */
-static void rows_times(const double *matrix, const double *rest, const double *state, long n, long m, long row,
-                       long row2, const double *q, int started, double *out, double *out2)
+/* Rows [row, row + count) (count <= PASS_ROWS) of the step matrix times [x_ch; q_ch] of the channel
+ * pair (ch, other), x[j] entry j of their states: each sum in index order (numpy's BLAS may differ
+ * in the last bit).  Row 0 goes to out[ch] (velocity), row 1 to out[m + ch] (acceleration), row
+ * 2 + j to next[j m + ch] (the next state).  A short pass repeats its last row. */
+static void rows_times(const double *matrix, long n, long m, long row, long count, const pair *x, long ch,
+                       long other, const double *q, double *out, double *next)
 {
-    const double *w = matrix + row * (n + 1), *w2 = matrix + row2 * (n + 1);
-    for (long ch = 0; ch < m; ch += 2) {
-        const long other = ch + 1 < m ? ch + 1 : ch;
-        double sum0 = 0.0, sum1 = 0.0, sum2 = 0.0, sum3 = 0.0;
-        for (long j = 0; j < n; ++j) {
-            const double x0 = entry(rest, state, m, j, ch, q, started);
-            const double x1 = entry(rest, state, m, j, other, q, started);
-            sum0 += w[j] * x0;
-            sum1 += w[j] * x1;
-            sum2 += w2[j] * x0;
-            sum3 += w2[j] * x1;
-        }
-        out[ch] = sum0 + w[n] * q[ch];
-        out[other] = sum1 + w[n] * q[other];
-        out2[ch] = sum2 + w2[n] * q[ch];
-        out2[other] = sum3 + w2[n] * q[other];
+    const double *w[PASS_ROWS];
+    pair sum[PASS_ROWS];
+    for (long r = 0; r < PASS_ROWS; ++r) {
+        w[r] = matrix + (row + (r < count ? r : count - 1)) * (n + 1);
+        sum[r] = PAIR(0.0, 0.0);
+    }
+    for (long j = 0; j < n; ++j)
+        for (long r = 0; r < PASS_ROWS; ++r) sum[r] = pair_madd(sum[r], w[r][j], x[j]);
+    for (long r = 0; r < count; ++r) {
+        double *dest = row + r < 2 ? out + (row + r) * m : next + (row + r - 2) * m;
+        dest[ch] = LANE(sum[r], 0) + w[r][n] * q[ch];
+        dest[other] = LANE(sum[r], 1) + w[r][n] * q[other];
     }
 }
 
@@ -115,13 +136,18 @@ int pc_derivator_step(const pc_derivator_context *c, const double *q, double lim
     const double *matrix = d->data, *rest = d->data + (2 + n) * (n + 1);
     double *state = d->data + (2 + n) * (n + 1) + n;
     const int started = d->started != 0.0;
-    rows_times(matrix, rest, state, n, m, 0, 1, q, started, out, out + m);   /* the estimates: rows C, D */
+    pair x[PC_DERIVATOR_MAX_STATES];   /* a channel pair's states side by side */
+    for (long ch = 0; ch < m; ch += 2) {   /* an odd last channel pairs with itself */
+        const long other = ch + 1 < m ? ch + 1 : ch;
+        for (long j = 0; j < n; ++j)       /* not started: the rest state at q */
+            x[j] = started ? PAIR(state[j * m + ch], state[j * m + other]) : PAIR(rest[j] * q[ch], rest[j] * q[other]);
+        for (long row = 0; row < 2 + n; row += PASS_ROWS) {   /* estimates (rows C, D), next state (A, B) */
+            const long count = 2 + n - row < PASS_ROWS ? 2 + n - row : PASS_ROWS;
+            rows_times(matrix, n, m, row, count, x, ch, other, q, out, c->scratch);
+        }
+    }
     for (long k = 0; k < 2 * m; ++k)
         if (!isfinite(out[k])) return pc_refuse(r, PC_DERIVATOR_NONFINITE_OUTPUT, (int)k, out[k]);
-    for (long j = 0; j < n; j += 2) {             /* the next state: rows A and B, kept apart first */
-        const long j2 = j + 1 < n ? j + 1 : j;
-        rows_times(matrix, rest, state, n, m, 2 + j, 2 + j2, q, started, c->scratch + j * m, c->scratch + j2 * m);
-    }
     for (long k = 0; k < n * m; ++k) state[k] = c->scratch[k];
     for (long ch = 0; ch < m; ++ch) state[n * m + ch] = q[ch];
     d->started = 1.0;

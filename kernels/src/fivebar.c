@@ -81,8 +81,9 @@ typedef struct {
 static void chain_trig_of(double a, double b, chain_trig *g)
 {
     pc_sincos(a, &g->s1, &g->c1);
-    pc_sincos(a + b, &g->s12, &g->c12);
     pc_sincos(b, &g->sb, &g->cb);
+    g->s12 = g->s1 * g->cb + g->c1 * g->sb;   /* the angle sum's: two sin/cos pairs instead of three */
+    g->c12 = g->c1 * g->cb - g->s1 * g->sb;
 }
 
 /* pc_fivebar_chain_terms from the chain's trigonometry g. */
@@ -114,8 +115,12 @@ static void chain_terms_of(const pc_fivebar_params *p, int k, const chain_trig *
     /* (4.86): Coriolis and centripetal efforts. */
     t->v[0] = -h * sb * (2.0 * da * db + db * db);
     t->v[1] = h * sb * da * da;
-    /* (4.87) with gravity in the chain frame, E_k^T g. */
+    /* (4.87) with gravity in the chain frame, E_k^T g; none without gravity. */
     const double gx = s * p->gravity[0], gy = p->gravity[1];
+    if (gx == 0.0 && gy == 0.0) {
+        t->g[0] = t->g[1] = 0.0;
+        return;
+    }
     const double gc1x = lg1 * -s1, gc1y = lg1 * c1;
     const double g2ax = -l1 * s1 - lg2 * s12, g2ay = l1 * c1 + lg2 * c12;
     const double g2bx = -lg2 * s12, g2by = lg2 * c12;
@@ -148,15 +153,43 @@ static int same_bits(double x, double k)
     return x == k && signbit(x) == signbit(k);
 }
 
-/* Chain k's trigonometry at angles (a, b): from the cache when it holds them, else computed. */
-static void trig_at(const double *cache, int k, double a, double b, chain_trig *g)
+/* Largest angle an RK4 stage's trigonometry is turned by from the step's start, rad (2^-5). */
+#define TURN_MAX 0x1p-5
+
+/* sin and cos of x + d from those of x (s, c) and |d| <= TURN_MAX: sin d and cos d by their
+ * Taylor series (through d^7 and d^8, the first left out below 3e-18 of the kept at 2^-5), then the
+ * angle sum. */
+static void turned(double s, double c, double d, double *sin_xd, double *cos_xd)
 {
-    if (cache && cache[0] == TRIG_MARK && same_bits(a, cache[1 + 2 * k]) && same_bits(b, cache[2 + 2 * k])) {
+    const double z = d * d;
+    const double sd = d + d * z * (-1.0 / 6.0 + z * (8.333333333333333e-03 + z * -1.984126984126984e-04));
+    const double cd = 1.0 - z * (0.5 - z * (0.041666666666666664 + z * (-0.001388888888888889 +
+                                                                       z * 2.48015873015873e-05)));
+    *sin_xd = s * cd + c * sd;
+    *cos_xd = c * cd - s * sd;
+}
+
+/* Chain k's trigonometry at angles (a, b): from the cache when it holds them, turned from the
+ * cache's when `turn` and both are within TURN_MAX of its (an RK4 stage from the step's start),
+ * else computed. */
+static void trig_at(const double *cache, int k, double a, double b, int turn, chain_trig *g)
+{
+    if (cache && cache[0] == TRIG_MARK) {
         const double *v = cache + 5 + 6 * k;
-        *g = (chain_trig){v[0], v[1], v[2], v[3], v[4], v[5]};
-    } else {
-        chain_trig_of(a, b, g);
+        if (same_bits(a, cache[1 + 2 * k]) && same_bits(b, cache[2 + 2 * k])) {
+            *g = (chain_trig){v[0], v[1], v[2], v[3], v[4], v[5]};
+            return;
+        }
+        const double da = a - cache[1 + 2 * k], db = b - cache[2 + 2 * k];
+        if (turn && fabs(da) <= TURN_MAX && fabs(db) <= TURN_MAX) {
+            turned(v[0], v[1], da, &g->s1, &g->c1);
+            turned(v[4], v[5], db, &g->sb, &g->cb);
+            g->s12 = g->s1 * g->cb + g->c1 * g->sb;
+            g->c12 = g->c1 * g->cb - g->s1 * g->sb;
+            return;
+        }
     }
+    chain_trig_of(a, b, g);
 }
 
 /* Keep chain k's trigonometry g at (a, b) in the cache (mark it once both chains are in). */
@@ -199,7 +232,7 @@ static void derivative_of(const pc_fivebar_params *p, const double *y, double u1
     const double x = y[0], yy = y[1], dx = y[7], dy = y[8];
     for (int k = 0; k < 2; ++k) {
         chain_trig g;
-        trig_at(cache, k, y[3 + 2 * k], y[4 + 2 * k], &g);
+        trig_at(cache, k, y[3 + 2 * k], y[4 + 2 * k], 1, &g);
         chain_terms_of(p, k, &g, y[10 + 2 * k], y[11 + 2 * k], &t[k]);
         const double rx = x - chain_base(p, k) - t[k].tip[0];   /* residual (5.18) */
         const double ry = yy - t[k].tip[1];
@@ -300,8 +333,8 @@ void pc_fivebar_advance(const pc_fivebar_held *held, double *z, double dt, int s
 }
 
 /* Chain k's rows of the position constraint residual (5.18, 7.7) at y, from the sines and
- * cosines of theta_k1 and theta_k1 + theta_k2: its tip is that of pc_fivebar_chain_terms (the
- * same expressions, so the same bits). */
+ * cosines of theta_k1 and theta_k1 + theta_k2 (chain_trig_of's): its tip is that of
+ * pc_fivebar_chain_terms (the same expressions, so the same bits). */
 static void residual_rows(const pc_fivebar_params *p, int k, const double *y, double c1, double s1, double c12,
                           double s12, double *out)
 {
@@ -315,10 +348,9 @@ static void residual_rows(const pc_fivebar_params *p, int k, const double *y, do
 void pc_fivebar_residual(const pc_fivebar_params *p, const double *y, double *out)
 {
     for (int k = 0; k < 2; ++k) {
-        double c1, s1, c12, s12;
-        pc_sincos(y[3 + 2 * k], &s1, &c1);
-        pc_sincos(y[3 + 2 * k] + y[4 + 2 * k], &s12, &c12);
-        residual_rows(p, k, y, c1, s1, c12, s12, out + 3 * k);
+        chain_trig g;
+        chain_trig_of(y[3 + 2 * k], y[4 + 2 * k], &g);
+        residual_rows(p, k, y, g.c1, g.s1, g.c12, g.s12, out + 3 * k);
     }
 }
 
@@ -347,7 +379,8 @@ static void report_of(const pc_fivebar_params *p, const pc_fivebar_settings *s, 
     out->residual = sqrt(sum);
     out->measures[0] = g[0].sb;   /* sin theta12 */
     out->measures[1] = g[1].sb;   /* sin theta22 */
-    out->measures[2] = pc_sin((y[3] + y[4]) - (PI - (y[5] + y[6])));
+    /* sin(phi12 - phi22) = sin(theta11 + theta12 - (pi - (theta21 + theta22))) = -sin(sum of both) */
+    out->measures[2] = -(g[0].s12 * g[1].c12 + g[0].c12 * g[1].s12);
     out->q1 = y[3];
     out->q2 = PI - y[5];
     out->dq1 = y[10];
@@ -404,7 +437,14 @@ int pc_fivebar_step(const pc_fivebar_params *p, const pc_fivebar_settings *s, co
     for (int i = 0; i < n; ++i) trial[i] = z[i];
     const pc_fivebar_held held = {p, motors, voltages, u1, u2, s->lambda, n_motors};
     double *cache = scratch + 6 * n;   /* the trigonometry of z when the last step's report kept it */
-    const cached_model model = {&held, cache};
+    double start[PC_FIVEBAR_TRIG_WORDS];   /* z's: the RK4 stages turn it */
+    for (int k = 0; k < 2; ++k) {
+        chain_trig g;
+        trig_at(cache, k, z[3 + 2 * k], z[4 + 2 * k], 0, &g);   /* the cache's if it holds z's angles */
+        keep_trig(start, k, z[3 + 2 * k], z[4 + 2 * k], &g);
+    }
+    start[0] = TRIG_MARK;
+    const cached_model model = {&held, start};
     pc_rk4(cached_derivative, &model, trial, n, dt, (int)s->substeps, scratch + n);
     report_of(p, s, trial, report, cache);
     return judge(s, trial, n, report, refusal);

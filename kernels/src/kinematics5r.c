@@ -17,9 +17,14 @@ int pc_5r_chain_ik(double l1, double l2, double px, double py, double elbow_sign
         return PC_5R_OUT_OF_REACH;
     }
     const double beta = elbow_sign * acos(cos_b);                     /* the distal link's relative angle */
-    double sb, cb;
-    pc_sincos(beta, &sb, &cb);
-    const double p1 = atan2(py, px) - atan2(l2 * sb, l1 + l2 * cb);
+    const double sb = elbow_sign * sqrt((1.0 - cos_b) * (1.0 + cos_b)), cb = cos_b;   /* sin beta, cos beta */
+    /* phi1 = atan2(py, px) - atan2(b, a): the angle of (px, py) turned back by that of (a, b), one atan2;
+     * then the difference's own branch, (-2 pi, 2 pi): past +-pi when the two angles' signs (their
+     * y's sign bits, as atan2 takes them) differ and the turned angle came out of the other sign. */
+    const double a = l1 + l2 * cb, b = l2 * sb;
+    double p1 = atan2(a * py - b * px, a * px + b * py);
+    if (!signbit(py) && signbit(b) && p1 < 0.0) p1 += 2.0 * PC_PI;
+    else if (signbit(py) && !signbit(b) && p1 > 0.0) p1 -= 2.0 * PC_PI;
     *phi1 = p1;
     *phi2 = p1 + beta;
     return PC_5R_OK;

@@ -89,6 +89,33 @@ def test_kinematics_refuse_what_the_mechanism_cannot_take():
         kin.forward(0.0, math.pi)
 
 
+def test_chain_ik_takes_the_branch_of_the_difference_of_two_atan2():
+    """Catches the one-atan2 inverse kinematics (pc_5r_chain_ik turns (px, py) back by the elbow
+    triangle's angle and puts the result on the branch of atan2(py, px) - atan2(b, a)) slipping by
+    2 pi or taking the wrong elbow: phi1 within 1e-14 rad of the two-atan2 formula written here,
+    and the chain closing on the point, at random points of the annulus of reach, both elbows,
+    and on the axes with +0 and -0 (where atan2 takes the sign bit)."""
+    d, p = ctypes.c_double, ctypes.POINTER(ctypes.c_double)
+    chain_ik = kernels.function("pc_5r_chain_ik", ctypes.c_int, d, d, d, d, d, p, p, p)
+    rng = np.random.default_rng(27)
+    points = [(r * math.cos(a), r * math.sin(a)) for r, a in zip(rng.uniform(0.03, 0.27, 4000),
+                                                                 rng.uniform(-math.pi, math.pi, 4000))]
+    points += [(sx * r, sy * 0.0) for r in (0.05, 0.15, 0.25) for sx in (1.0, -1.0) for sy in (1.0, -1.0)]
+    points += [(sx * 0.0, sy * r) for r in (0.05, 0.15, 0.25) for sx in (1.0, -1.0) for sy in (1.0, -1.0)]
+    l1, l2 = 0.15, 0.13
+    for px, py in points:
+        for elbow in (1.0, -1.0):
+            phi1, phi2, distance = d(), d(), d()
+            assert chain_ik(l1, l2, px, py, elbow, phi1, phi2, distance) == 0
+            beta = elbow * math.acos((px * px + py * py - l1 * l1 - l2 * l2) / (2.0 * l1 * l2))
+            expected = math.atan2(py, px) - math.atan2(l2 * math.sin(beta), l1 + l2 * math.cos(beta))
+            assert abs(phi1.value - expected) < 1e-14, (px, py, elbow, phi1.value, expected)
+            assert abs(phi2.value - (expected + beta)) < 1e-14
+            tip = (l1 * math.cos(phi1.value) + l2 * math.cos(phi2.value),
+                   l1 * math.sin(phi1.value) + l2 * math.sin(phi2.value))
+            assert np.allclose(tip, (px, py), rtol=0, atol=1e-15)
+
+
 # --- the law, one sample at a time ----------------------------------------------------------
 #: A measured motion of the end effector and the reference a few mm away, moving differently.
 MEASURED = (0.010, 0.150, 0.10, -0.05, 0.8, -0.6)
