@@ -66,6 +66,7 @@ RULES = [
     ("test_guarded*.py", "fmus/slave"),
     ("test_call_limits*.py", "fmus/slave"),
     ("test_sampling*.py", "fmus/slave"),
+    ("test_refusals*.py", "fmus/slave"),
     # fmus/slaves: each model's FMU through fmpy
     ("test_fmu_*.py", "fmus/slaves"),
     ("test_slaves_*.py", "fmus/slaves"),

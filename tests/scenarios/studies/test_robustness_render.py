@@ -79,3 +79,36 @@ def test_the_study_reads_back_the_sweeps_it_finds_under_its_folders(tmp_path):
         written["triangle", "TCMDx", U] = rows
     found = robustness.load(tmp_path, kinds=("triangle",), uncertainties=(0.1, 0.2))
     assert repr(found) == repr(written)     # exact, a completed row's NaN error time and value included
+
+
+def test_the_study_runs_the_nominal_runs_then_each_stage_of_every_sweep_in_its_folder(tmp_path, monkeypatch):
+    """run_study with the sweeps and the cluster replaced: first one nominal run (U = 0) of
+    every scene, then each stage below N and N itself, every U, every scene, each in
+    ``<out>/<scene>/U<U>``.  Catches a stage at or above N run, a scene or U left out, a
+    sweep written to another sweep's folder, and the cluster not shared."""
+    import contextlib
+    from types import SimpleNamespace
+
+    calls, clients = [], []
+
+    @contextlib.contextmanager
+    def open_client(scheduler, workers):
+        clients.append((scheduler, workers))
+        yield "the client"
+
+    def run_sweep(scene, n, U, mode, out_dir, client, plots):
+        calls.append((scene, n, U, out_dir))
+        assert client == "the client" and plots is False and mode == "compiled"
+        return SimpleNamespace(computed=list(range(n)), summary={"failed": 0})
+
+    monkeypatch.setattr(robustness, "open_client", open_client)
+    monkeypatch.setattr(robustness, "run_sweep", run_sweep)
+    said = []
+    robustness.run_study(tmp_path, samples=8, stages=(2, 8, 4), uncertainties=(0.1, 0.4), kinds=("triangle",),
+                         workers=3, mode="compiled", say=said.append)
+    scenes = [f"bench_triangle_{s}" for s in robustness.STRATEGIES]
+    nominal = [(s, 1, 0.0, tmp_path / s / "U0") for s in scenes]
+    staged = [(s, n, U, tmp_path / s / f"U{U:g}") for n in (2, 4, 8) for U in (0.1, 0.4) for s in scenes]
+    assert calls == nominal + staged and clients == [(None, 3)]
+    assert said[0].startswith("bench_triangle_PDq U=0.1 N=2: 2 run in ") and said[0].endswith(" s, 0 failed")
+    assert len(said) == len(staged)

@@ -1,0 +1,90 @@
+"""The compiled mode's choices and the master's reported times (fmus/cosim/master.py,
+compiled_adapters.py): every plant setting the compiled loop does not step (an adaptive
+integrator, the general kernel, the projection) falls back to in process with its reason and
+the in-process rows, the plant's default settings do not; and a run's ``init_s`` is the loading
+plus the initialisation, disjoint from the stepping's ``wall_s`` and the plan's ``compile_s``,
+all within the call's own wall time (issue 31: seed 3501's survivors [59], the compiled mode's
+``init_s`` as a sum of two clock readings, and [75], the plant check's ``kernel != "fast"``
+inverted)."""
+from __future__ import annotations
+
+import time
+import warnings
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from fmus.cosim import master
+from fmus.cosim.master import simulate
+from fmus.cosim.stepper import Stepper
+from scenarios.scenes.catalogue import get_scene
+
+
+def _system(stop_time=0.02, **plant):
+    system = get_scene("bench_circle_PDq").system
+    components = tuple(replace(c, parameters={**c.parameters, **plant}) if c.name == "plant" else c
+                       for c in system.components)
+    return replace(system, components=components, stop_time=stop_time)
+
+
+def _rows(result, system):
+    return np.column_stack([result[s] for s in system.record])
+
+
+@pytest.mark.parametrize("setting, text", [
+    ({"kernel": "general"}, "method='rk4', kernel='general', project=False"),
+    ({"project": True}, "method='rk4', kernel='fast', project=True"),
+    ({"method": "dopri5"}, "method='dopri5', kernel='fast', project=False"),
+])
+def test_each_plant_setting_without_a_compiled_step_falls_back_naming_it(setting, text):
+    """Catches a setting's test inverted or dropped (the general kernel or the projection run
+    by the compiled loop's fast RK4 step, other rows than the settings ask for), the reason
+    without the setting's value, and the fallback's rows not those of the in-process run."""
+    system = _system(**setting)
+    with pytest.warns(UserWarning, match="running in process instead") as caught:
+        fast = simulate(system, mode="compiled")
+    reason = f"component plant: the plant's settings {text} are not compiled (rk4, fast, no projection are)"
+    assert fast.mode == "inprocess" and fast.error is None and fast.extra["fallback"] == reason
+    assert [str(w.message) for w in caught] == [f"compiled mode: {reason}; running in process instead"]
+    assert np.array_equal(_rows(fast, system), _rows(simulate(system, mode="inprocess"), system))
+
+
+def test_the_plants_default_settings_run_compiled_without_a_warning():
+    """rk4, the fast kernel, no projection: the compiled loop's own step.  Catches the plant
+    check refusing its own settings (every compiled run would fall back)."""
+    system = _system()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        result = simulate(system, mode="compiled")
+    assert result.mode == "compiled" and "fallback" not in result.extra and result.extra["python_steps"] == 0
+
+
+@pytest.mark.parametrize("mode", ["inprocess", "compiled"])
+def test_init_s_is_the_loading_and_the_initialisation_and_no_more(monkeypatch, mode):
+    """Loading made 30 ms and initialising 50 ms slower: ``init_s`` holds both, and with the
+    stepping's ``wall_s`` (and the compiled plan's ``compile_s``) fits in the call's own wall
+    time.  Catches a duration taken as a sum or a reversed difference of clock readings
+    (3501's [59]), the loading or the initialisation left out, and the initialisation counted
+    in the stepping."""
+    instantiate, initialize = master._instantiate, Stepper.initialize
+
+    def slow_instantiate(*args, **kwargs):
+        time.sleep(0.03)
+        return instantiate(*args, **kwargs)
+
+    def slow_initialize(self, *args, **kwargs):
+        time.sleep(0.05)
+        return initialize(self, *args, **kwargs)
+
+    monkeypatch.setattr(master, "_instantiate", slow_instantiate)
+    monkeypatch.setattr(Stepper, "initialize", slow_initialize)
+    system = _system()
+    start = time.perf_counter()
+    result = simulate(system, mode=mode)
+    elapsed = time.perf_counter() - start
+    assert result.mode == mode and result.error is None
+    compile_s = result.extra.get("compile_s", 0.0)
+    assert 0.08 <= result.init_s and 0.0 < result.wall_s < 0.05 and compile_s >= 0.0
+    assert result.init_s + compile_s + result.wall_s <= elapsed
+    assert ("compile_s" in result.extra) == (mode == "compiled")

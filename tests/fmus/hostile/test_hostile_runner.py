@@ -1,0 +1,147 @@
+"""fmus/hostile/worker.py's Runner, the judge of the hostile campaign, against made-up FMUs whose
+behaviour the test sets: one that accepts every call must be found out on exactly the calls it
+should have refused (a step size <= 0, a communication point that does not follow the last one,
+a step after fmi2Terminate, a bad start time, a call out of order), and on none of the calls it
+may accept (consecutive steps, a state set back); one that refuses must leave its message and
+its record, with the record's status.  The campaign's own runs drive real FMUs in worker
+processes and are of the slow kind (issue 31: seed 3501's survivor [22], the expected point
+``t + last`` taken as ``t - last``, which only those runs reached)."""
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import pytest
+from fmpy.fmi1 import FMICallException
+
+from fmus.hostile import worker
+from fmus.status import FmiStatus, RunError, RunStatus
+
+#: The made-up FMU's variables: a Real output, the String outputs every parcosim FMU has.
+VARIABLES = [SimpleNamespace(name="x", causality="output", type="Real", valueReference=0),
+             SimpleNamespace(name="k", causality="parameter", type="Real", valueReference=1),
+             SimpleNamespace(name="error", causality="output", type="String", valueReference=2),
+             SimpleNamespace(name="refusal", causality="output", type="String", valueReference=3)]
+
+
+class MadeUpFMU:
+    """Stands for fmpy's FMU2Slave: records each doStep's (point, size) and accepts every call,
+    except a doStep at a point in ``refuse_at``, refused with ``status`` leaving ``error`` and
+    ``refusal`` as given."""
+
+    refuse_at: tuple = ()
+    status = FmiStatus.DISCARD
+    error = ""
+    refusal = ""
+    x = 1.5
+
+    def __init__(self, **kwargs):
+        self.steps, self.states = [], 0
+
+    def doStep(self, point, h):
+        if point in self.refuse_at:
+            raise FMICallException("doStep", int(self.status))
+        self.steps.append((point, h))
+
+    def getReal(self, refs):
+        return [self.x for _ in refs]
+
+    def getString(self, refs):
+        return [{2: self.error, 3: self.refusal}[r].encode() for r in refs]
+
+    def getFMUState(self):
+        self.states += 1
+        return f"state{self.states}"
+
+    def __getattr__(self, name):      # instantiate, setupExperiment, setReal, terminate ...: accepted
+        return lambda *args, **kwargs: None
+
+
+def _run(monkeypatch, ops, start_time=0.25, fmu=MadeUpFMU, parameters=()):
+    monkeypatch.setattr(worker, "FMU2Slave", fmu)
+    md = SimpleNamespace(guid="{g}", coSimulation=SimpleNamespace(modelIdentifier="M"), modelVariables=VARIABLES)
+    case = {"model": "M", "instance_name": "inst", "logging": False, "start_time": start_time,
+            "ops": ops, "parameters": list(parameters)}
+    runner = worker.Runner(case, "unused", md)
+    runner.run()
+    return runner
+
+
+def test_consecutive_steps_and_a_state_set_back_are_no_problem(monkeypatch):
+    """Steps of 1, 1 and 2 ms from 0.25 s, a state taken after the first and set back after
+    the third, then a step from the state's time: the runner asks for the points that follow
+    (t + last) and finds nothing wrong.  Catches the expected point taken as t - last (3501's
+    [22]) or as t, the point asked for not following the last step, and the time of a state set
+    back lost."""
+    runner = _run(monkeypatch, [["step", None, 1e-3], ["get_state"], ["step", None, 1e-3],
+                                ["step", None, 2e-3], ["set_state"], ["step", None, 1e-3], ["get"]],
+                  parameters=[["k", 3.0]])
+    assert runner.problems == [] and runner.refused is False
+    assert runner.fmu.steps == [(0.25, 1e-3), (0.25 + 1e-3, 1e-3), (0.25 + 1e-3 + 1e-3, 2e-3), (0.25 + 1e-3, 1e-3)]
+    assert all(status == "OK" for _, status in runner.statuses)
+    labels = [label for label, _ in runner.statuses]
+    assert labels[:5] == ["instantiate", "setupExperiment", "enterInitializationMode", "set k", "exitInitializationMode"]
+    assert labels[-3:] == ["freeFMUstate", "terminate", "freeInstance"]
+
+
+@pytest.mark.parametrize("op, problem", [
+    (["step", 0.3, 1e-3], "doStep(0.3, 0.001) accepted a communication point that does not follow the last one "
+                          "(0.251)"),
+    (["step", None, 0.0], "doStep(0.251, 0.0) accepted a step size that is not finite and > 0"),
+    (["step", None, -1e-3], "doStep(0.251, -0.001) accepted a step size that is not finite and > 0"),
+    (["step", None, math.inf], "doStep(0.251, inf) accepted a step size that is not finite and > 0"),
+    (["exit_init_again"], "exitInitializationMode in Step Mode returned OK, not fmi2Error"),
+    (["setup_again"], "setupExperiment in Step Mode returned OK, not fmi2Error"),
+])
+def test_an_fmu_that_accepts_everything_is_found_out_on_each_call_it_should_refuse(monkeypatch, op, problem):
+    """After a good 1 ms step from 0.25 s, one bad call: exactly its problem, worded as the
+    campaign reports it.  Catches a check inverted, dropped or reporting another call."""
+    runner = _run(monkeypatch, [["step", None, 1e-3], op])
+    assert runner.problems == [problem]
+
+
+def test_a_step_after_terminate_and_an_unusable_start_time_are_found_out(monkeypatch):
+    """Catches ``terminated`` not followed, and a start time where 1 us does not count (or not
+    finite) accepted without a problem."""
+    runner = _run(monkeypatch, [["step", None, 1e-3], ["terminate"], ["step", None, 1e-3]])
+    assert runner.problems == ["doStep(0.251, 0.001) after fmi2Terminate returned fmi2OK"]
+    assert [label for label, _ in runner.statuses].count("terminate") == 1
+    for start in (1e12, math.inf):
+        runner = _run(monkeypatch, [], start_time=start)
+        assert runner.problems == [f"setupExperiment({start!r}) returned OK, not fmi2Error"]
+
+
+def test_non_finite_outputs_after_an_accepted_step_are_found_out(monkeypatch):
+    """Catches the outputs not read after an fmi2OK step, or read and not checked."""
+    fmu = type("NaNFMU", (MadeUpFMU,), {"x": math.nan})
+    runner = _run(monkeypatch, [["step", None, 1e-3]], fmu=fmu)
+    assert runner.problems == ["non-finite outputs after the fmi2OK doStep(0.25, 0.001): {'x': nan}"]
+
+
+def _refusing(error, refusal, status=FmiStatus.DISCARD):
+    return type("RefusingFMU", (MadeUpFMU,), {"refuse_at": (0.25 + 1e-3,), "error": error, "refusal": refusal,
+                                             "status": status})
+
+
+def test_a_refused_step_must_leave_its_message_and_its_record_with_the_records_status(monkeypatch):
+    """The second step refused: with a message naming a variable and its record, nothing is
+    wrong and the case is a refusal; an empty message, a record of another message or of
+    another instance, no record, and a status other than the record's kind's are each one
+    problem.  Catches each of these checks dropped or inverted."""
+    message = "input x = nan at t = 0.251 s is not finite"
+    good = RunError(RunStatus.REFUSED, message, instance="inst", time=0.251).to_json()
+    ops = [["step", None, 1e-3], ["step", None, 1e-3]]
+    runner = _run(monkeypatch, ops, fmu=_refusing(message, good))
+    label = "doStep(0.251, 0.001)"
+    assert runner.problems == [] and runner.refused is True and runner.statuses[6] == [label, "Discard"]
+
+    assert _run(monkeypatch, ops, fmu=_refusing("", good)).problems[0] == \
+        f"the refused {label} left error = '', naming nothing"
+    other = RunError(RunStatus.REFUSED, message, instance="another", time=0.251).to_json()
+    for refusal in (other, RunError(RunStatus.REFUSED, "another message", instance="inst").to_json()):
+        assert _run(monkeypatch, ops, fmu=_refusing(message, refusal)).problems == [
+            f"the refused {label} left refusal = {refusal.encode()!r}, not the record of error = {message!r}"]
+    problems = _run(monkeypatch, ops, fmu=_refusing(message, "")).problems
+    assert problems == [f"the refused {label} left refusal = b'', not the record of error = {message!r}"]
+    assert _run(monkeypatch, ops, fmu=_refusing(message, good, FmiStatus.ERROR)).problems == [
+        f"the refused {label} returned Error, not the Discard of a refused refusal"]

@@ -1,0 +1,97 @@
+"""scenarios/batch/sweep_plots.py on made-up sweeps: each group's box (median, quartiles, the 5-95 %
+whiskers) and violin read back from the axes against numpy's percentiles of that group's
+completed, finite values only; a group of one value gets a box and no violin, an empty group
+neither; the panels' order, titles and log scale (issue 31: the scenarios' weakest area; every
+plotted value read back)."""
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import matplotlib
+import numpy as np
+import pytest
+
+from scenarios.batch import sweep_plots
+
+matplotlib.use("Agg")
+
+
+def _rows(values, failed=()):
+    """Rows of completed runs with ``values`` as every metric (scaled per metric), then runs that
+    stopped, with values that must not count."""
+    rows = [{"completed": True, "e_ef_mm": v, "tau_ef_Nm": 10.0 * v, "e_ss_mm": v + 1.0} for v in values]
+    rows += [{"completed": False, "e_ef_mm": v, "tau_ef_Nm": v, "e_ss_mm": v} for v in failed]
+    return rows
+
+
+@pytest.fixture
+def kept(monkeypatch):
+    import matplotlib.pyplot as plt
+
+    figures = []
+    close = plt.close
+    monkeypatch.setattr(plt, "close", lambda fig=None: figures.append(fig) or close(fig))
+    return figures
+
+
+def _levels(ax, position):
+    """The heights of the box-plot lines drawn at ``position``: the horizontal ones (median,
+    caps) and those of the box's outline (quartiles)."""
+    levels = set()
+    for line in ax.lines:
+        x, y = np.asarray(line.get_xdata(), float), np.asarray(line.get_ydata(), float)
+        if len(x) and np.all(np.abs(x - position) < 0.2) and (np.ptp(y) == 0.0 or len(y) == 5):
+            levels.update(y.tolist())
+    return levels
+
+
+def _wanted(data):
+    """Median, quartiles, and the whiskers' ends: the extreme values within the 5-95 % percentiles
+    (matplotlib's rule for ``whis=(5, 95)``), by numpy."""
+    p5, q1, median, q3, p95 = np.percentile(data, [5, 25, 50, 75, 95])
+    return {median, q1, q3, float(data[data >= p5].min()), float(data[data <= p95].max())}
+
+
+def _violin_spans(ax):
+    return sorted((float(p.get_paths()[0].vertices[:, 0].mean().round()),
+                   float(p.get_paths()[0].vertices[:, 1].min()), float(p.get_paths()[0].vertices[:, 1].max()))
+                  for p in ax.collections)
+
+
+def test_each_group_is_drawn_at_its_place_from_its_completed_finite_values(kept, tmp_path):
+    """Three groups: twenty values (with a stopped run and a NaN left out), none, one value.
+    Catches a stopped run's or a NaN's value counted, groups drawn at each other's places, the
+    whiskers at other percentiles than 5 and 95, a violin for a single value, and the log
+    scale on the wrong metric."""
+    rng = np.random.default_rng(5)
+    many = list(rng.lognormal(0.0, 0.5, 20))
+    groups = {"A": _rows(many + [math.nan], failed=[1e3]), "B": _rows([], failed=[7.0]), "C": _rows([2.5])}
+    path = sweep_plots.plot_groups({"strategies": groups}, tmp_path / "groups.png")
+    assert path == tmp_path / "groups.png" and path.stat().st_size > 0
+    e_ef, tau = kept[0].axes
+    assert e_ef.get_yscale() == "log" and tau.get_yscale() == "linear"
+    assert e_ef.get_title() == "strategies: e_ef [mm]" and tau.get_title() == "strategies: τ_ef [N m]"
+    assert [t.get_text() for t in e_ef.get_xticklabels()] == ["A", "B", "C"]
+    for ax, scale in ((e_ef, 1.0), (tau, 10.0)):
+        data = scale * np.array(many)
+        assert _levels(ax, 0) == _wanted(data), ax.get_title()
+        assert _levels(ax, 1) == set() and _levels(ax, 2) == {2.5 * scale}
+        (centre, low, high), = _violin_spans(ax)        # one violin: group A's
+        assert centre == 0.0 and low == pytest.approx(data.min(), rel=1e-12) and high == pytest.approx(data.max(), rel=1e-12)
+
+
+def test_one_sweep_is_three_panels_of_its_rows_titled_with_its_settings(kept, tmp_path):
+    """Catches a metric's panel missing or of another metric, the title's uncertainty,
+    distribution, seed or count of samples wrong."""
+    values = [0.5, 1.0, 1.5, 2.0, 4.0]
+    sweep = SimpleNamespace(scene="bench_x", rows=_rows(values, failed=[9.0]),
+                            settings={"uncertainty": 0.05, "distribution": "uniform", "seed": 7})
+    sweep_plots.plot_sweep(sweep, tmp_path / "sweep.png")
+    fig = kept[0]
+    assert fig._suptitle.get_text() == "bench_x: 6 samples, U = 0.05 (uniform), seed 7"
+    for ax, (metric, label), shift, scale in zip(fig.axes, sweep_plots._LABELS.items(), (0.0, 0.0, 1.0),
+                                                 (1.0, 10.0, 1.0)):
+        data = scale * np.array(values) + shift
+        assert ax.get_ylabel() == label and [t.get_text() for t in ax.get_xticklabels()] == ["bench_x"]
+        assert _levels(ax, 0) == _wanted(data), metric

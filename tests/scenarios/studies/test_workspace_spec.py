@@ -1,0 +1,99 @@
+"""scenarios/studies/workspace/spec.py, the workspace slice of any mechanism spec, on the bench 5R's
+spec against the 5R's closed-form workspace (:func:`plant.fivebar.workspace_map` on the same
+grid, an independent computation) and the chains' reach written here: every point the slice
+assembles is one the closed form assembles and both chains reach; each status follows from the
+margin; the assembled points are one connected region around the start; the slice's files
+read back (issue 31: the scenarios' weakest area; a design compared with an independent
+computation).  A coarse grid (11 x 11) keeps it fast."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from plant import fivebar, get_preset
+from plant import spec as plant_spec
+from scenarios.studies.workspace import spec as ws_spec
+from scenarios.studies.workspace.figure import thesis_trajectories
+
+EXTENT = (-0.2, 0.3, -0.05, 0.45)
+BAND = 0.1
+
+
+@pytest.fixture(scope="module")
+def sliced():
+    spec = plant_spec.load("bench_5r")
+    grid, ws_spec.SPEC_GRID = ws_spec.SPEC_GRID, 11
+    try:
+        ws, serial, parallel = ws_spec.slice_map(spec, BAND, extent=EXTENT)
+    finally:
+        ws_spec.SPEC_GRID = grid
+    return spec, ws, serial, parallel
+
+
+def test_every_point_of_the_slice_is_one_the_closed_form_assembles_and_both_chains_reach(sliced):
+    """Catches a point kept where Newton failed or that no 5R of these links can reach, a grid
+    other than the extent's, and a slice that assembles almost nothing."""
+    spec, ws, _, _ = sliced
+    step = (EXTENT[1] - EXTENT[0]) / 10
+    closed = fivebar.workspace_map(get_preset("bench"), step=step, extent=EXTENT)
+    assert np.allclose(closed.x, ws.x, atol=1e-12) and np.allclose(closed.y, ws.y, atol=1e-12)
+    inside = ws.status != ws.OUTSIDE
+    assert np.count_nonzero(inside) >= 10 and not np.any(inside & (closed.status == closed.OUTSIDE))
+    for chain in spec.chains:
+        a1, a2 = (j.a for j in chain.chain.joints)
+        for iy, ix in zip(*np.nonzero(inside)):
+            r = np.hypot(ws.x[ix] - chain.base[0], ws.y[iy] - chain.base[1])
+            assert abs(a1 - a2) - 1e-12 <= r <= a1 + a2 + 1e-12, (ws.x[ix], ws.y[iy])
+
+
+def test_each_status_follows_from_the_smaller_measure_and_the_band(sliced):
+    """Catches the margin taken as the larger measure, the band compared the wrong way, and a
+    point with measures left OUTSIDE."""
+    _, ws, serial, parallel = sliced
+    margin = np.fmin(serial, parallel)
+    assert np.array_equal(ws.margin, margin, equal_nan=True)
+    assert np.array_equal(ws.status == ws.OUTSIDE, np.isnan(margin))
+    known = ~np.isnan(margin)
+    assert np.array_equal(ws.status[known] == ws.NEAR_SINGULAR, margin[known] < BAND)
+    assert np.all((0.0 <= margin[known]) & (margin[known] <= 1.0))
+
+
+def test_the_slice_is_one_region_grown_from_the_start(sliced):
+    """Every assembled point is reached from the start's grid point through assembled
+    neighbours.  Catches a start point other than the grid's nearest, and a fill that
+    jumps."""
+    spec, ws, _, _ = sliced
+    inside = ws.status != ws.OUTSIDE
+    start = (int(np.argmin(np.abs(ws.y - spec.start[1]))), int(np.argmin(np.abs(ws.x - spec.start[0]))))
+    assert inside[start]
+    seen, todo = {start}, [start]
+    while todo:
+        iy, ix = todo.pop()
+        for dy, dx in ((1, 0), (-1, 0), (0, 1), (0, -1)):
+            n = (iy + dy, ix + dx)
+            if 0 <= n[0] < ws.y.size and 0 <= n[1] < ws.x.size and inside[n] and n not in seen:
+                seen.add(n)
+                todo.append(n)
+    assert len(seen) == np.count_nonzero(inside)
+
+
+def test_the_figure_and_json_of_a_spec_and_a_serial_spec_refused(tmp_path, monkeypatch):
+    """plot_spec_slice's JSON read back: the mechanism, band, grid step, points inside and each
+    thesis trajectory's verdict as its own summary.  Catches a count of another status, the
+    step of another axis, a trajectory left out; a serial spec refused naming its file."""
+    monkeypatch.setattr(ws_spec, "SPEC_GRID", 11)
+    report = ws_spec.plot_spec_slice("bench_5r", tmp_path, BAND)
+    data = json.loads((tmp_path / "workspace.json").read_text())
+    assert (tmp_path / "workspace.png").stat().st_size > 0 and report.png == tmp_path / "workspace.png"
+    spec = plant_spec.load("bench_5r")
+    ws, _, _ = ws_spec.slice_map(spec, BAND)
+    assert data["mechanism"] == "bench_5r" == report.mechanism and data["band"] == BAND
+    assert data["step"] == float(ws.x[1] - ws.x[0])
+    assert data["points_inside"] == int(np.count_nonzero(ws.status != ws.OUTSIDE))
+    assert data["trajectories"] == [json.loads(json.dumps(c.summary())) for c in report.trajectories]
+    expected = {**thesis_trajectories("thesis_sim"), **thesis_trajectories("bench")}
+    assert [t["name"] for t in data["trajectories"]] == list(expected) and len(expected) >= 2
+    with pytest.raises(ValueError, match=r"rr\.toml: a serial chain \(no \[platform\]\) has no parallel workspace"):
+        ws_spec.plot_spec_slice("rr", tmp_path, BAND)
