@@ -31,7 +31,7 @@ from dataclasses import replace
 import numpy as np
 from pythonfmu.enums import Fmi2Status
 
-from controller.law import delay
+from controller.law import MAX_PREDICT, delay
 from controller.model import DEFAULT_EXTENT, DEFAULT_GRID_STEP
 from controller.position import PositionController as _Controller
 from controller.strategies import get_strategy
@@ -106,6 +106,10 @@ class PositionController(SampledSteps, GuardedSlave):
         d("gravity_y", "parameter", 0.0, "Gravity the model assumes, world y [m/s2]")
         d("delay_steps", "parameter", 0, "Computation delay: tau1, tau2, i_ref1, i_ref2 are applied this many "
           f"samples after they were computed (0-{MAX_DELAY_STEPS}; the bench: 1)")
+        d("delay_compensation", "parameter", 0, "Periods of delay of the measured angles before the commands take "
+          f"effect, which the law predicts over with its model (0-{MAX_PREDICT}; 0: none; docs/contract.md)")
+        d("velocity_delay_compensation", "parameter", 0, "Periods of delay of the measured rates dq1, dq2 before the "
+          f"commands take effect, which the law predicts over (0-{MAX_PREDICT}; 0: none)")
         declare_counter_masses(self)
         self.controller = None
         self.delayed = np.zeros((0, len(OUTPUTS)))
@@ -141,6 +145,10 @@ class PositionController(SampledSteps, GuardedSlave):
         # The commands computed but not yet applied, oldest first (changed in place: the
         # compiled loop shares the array).
         self.delayed = np.zeros((self.delay_steps, len(OUTPUTS)))
+        for name in ("delay_compensation", "velocity_delay_compensation"):
+            value = getattr(self, name)
+            if not (isinstance(value, int) and 0 <= value <= MAX_PREDICT):
+                raise ValueError(f"parameter {name} = {value!r} must be an integer in [0, {MAX_PREDICT}]")
         from controller.position import default_kt
         kt = tuple(d if v == PRESET_VALUE else v for v, d in zip((self.kt1, self.kt2), default_kt()))
         for name, value in zip(("kt1", "kt2"), kt):
@@ -151,7 +159,8 @@ class PositionController(SampledSteps, GuardedSlave):
         self.controller = _Controller(
             with_counter_masses(self, params), strategy, model=self.model, model_error=self.model_error,
             grid_step=self.grid_step, extent=(self.x_min, self.x_max, self.y_min, self.y_max),
-            kt=kt, T=self.T, cache=bool(self.cache), table_fallback=bool(self.table_fallback))
+            kt=kt, T=self.T, cache=bool(self.cache), table_fallback=bool(self.table_fallback),
+            delay_compensation=(self.delay_compensation, self.velocity_delay_compensation))
         built = getattr(self.controller.model, "build_seconds", 0.0)
         if built:
             self.log(f"{self.instance_name}: the tabulated model was built at initialisation in {built:.2f} s "
