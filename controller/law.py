@@ -128,6 +128,7 @@ _run = kernels.function("pc_law_run", _i, _v, _d, _v)
 _resume = kernels.function("pc_law_resume", _i, _v, _d, _v)
 _exact_pose = kernels.function("pc_law_exact_pose", _i, _v, _v, _v)
 _delay = kernels.function("pc_law_delay", None, _v, _i, _v)
+_predict = kernels.function("pc_law_predict", None, _v, _v, _v, _i, _i, _d, _v)
 #: ``pc_law_terms_fn``: the exact model's terms at (q, dq) into terms (model, q, dq, terms).
 TERMS_FN = ctypes.CFUNCTYPE(None, _v, ctypes.POINTER(_d), ctypes.POINTER(_d), ctypes.POINTER(_d))
 
@@ -139,6 +140,23 @@ def delay(delayed, commands):
     now = np.array(commands, dtype=np.float64)
     _delay(kernels.address(delayed), len(delayed), kernels.address(now))
     return tuple(now.tolist())
+
+
+def predict(measured, past, bias, a, b, h):
+    """``pc_law_predict``: the joint state (q1, q2, dq1, dq2) at the commands' time from
+    ``measured`` angles ``a`` periods and rates ``b`` periods before it, ``past`` the joint
+    accelerations commanded over the last max(a, b) periods (rows of 2, newest first) and
+    ``bias`` the part of them the plant does not follow (rad/s^2), periods of ``h`` s."""
+    m = np.ascontiguousarray(measured, dtype=np.float64)
+    p = np.ascontiguousarray(past, dtype=np.float64).reshape(-1)
+    o = np.ascontiguousarray(bias, dtype=np.float64)
+    if m.shape != (4,) or o.shape != (2,) or len(p) < 2 * max(a, b):
+        raise ValueError(f"predict: measured {m.shape}, bias {o.shape}, past of {len(p) // 2} rows for "
+                         f"a = {a}, b = {b}: need 4, 2 and max(a, b) rows")
+    joint = np.zeros(4)
+    _predict(kernels.address(m), kernels.address(p) if len(p) else None, kernels.address(o), a, b, h,
+             kernels.address(joint))
+    return joint
 
 
 def interpolate(table_buf, x, y, out):
