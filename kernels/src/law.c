@@ -72,7 +72,7 @@ int pc_law_prepare(const pc_law_params *p, const pc_law_state *s, pc_law_scratch
     const double measured[4] = {in->q1, in->q2, in->dq1, in->dq2};
     double *j = w->joint;
     if (p->predict[0] > 0.0 || p->predict[1] > 0.0)
-        pc_law_predict(measured, s->past, s->bias, (int)p->predict[0], (int)p->predict[1], h, j);
+        pc_law_predict(measured, s->past, s->offset, (int)p->predict[0], (int)p->predict[1], h, j);
     else
         memcpy(j, measured, sizeof measured);
     /* The reference at the commands' time: a periods on along its own derivatives. */
@@ -148,29 +148,42 @@ static double component(const pc_law_params *p, pc_law_state *s, int i, double e
     return ddr_d + feedback + s->integral[i];                     /* (7.21) */
 }
 
+/* J^-1 (f0, f1) into out (task space; joint space: f itself). */
+static void to_joints(const pc_law_params *p, const pc_law_scratch *w, double f0, double f1, double out[2])
+{
+    if (p->space != PC_LAW_SPACE_X) {
+        out[0] = f0;
+        out[1] = f1;
+        return;
+    }
+    const double *J = w->task.J;
+    const double det = J[0] * J[3] - J[1] * J[2];
+    out[0] = (J[3] * f0 - J[1] * f1) / det;
+    out[1] = (J[0] * f1 - J[2] * f0) / det;
+}
+
 /* With predict: the joint accelerations the commanded (a0, a1) make in the model, newest in
- * s->past (task space: q'' = J^-1 (a' - beta) at the pose the law acted on). */
+ * s->past (task space: q'' = J^-1 (a' - beta) at the pose the law acted on), and the part of
+ * them the plant is taken not to follow (s->offset): the integral, the law's own estimate of
+ * what its model misses, and the feedback's low-passed part (at lam: a steady feedback balances
+ * a disturbance, it does not accelerate the plant). */
 static void remember(const pc_law_params *p, const pc_law_scratch *w, double a0, double a1, double h,
                      pc_law_state *s)
 {
     const int n = (int)fmax(p->predict[0], p->predict[1]);
     if (n <= 0) return;
-    double qa0 = a0, qa1 = a1, fb0 = a0 - w->rd[4], fb1 = a1 - w->rd[5];
-    if (p->space == PC_LAW_SPACE_X) {
-        const double *J = w->task.J, *beta = w->task.beta;
-        const double det = J[0] * J[3] - J[1] * J[2], f0 = a0 - beta[0], f1 = a1 - beta[1];
-        qa0 = (J[3] * f0 - J[1] * f1) / det;
-        qa1 = (J[0] * f1 - J[2] * f0) / det;
-        const double g0 = fb0, g1 = fb1;
-        fb0 = (J[3] * g0 - J[1] * g1) / det;
-        fb1 = (J[0] * g1 - J[2] * g0) / det;
-    }
+    const double *beta = p->space == PC_LAW_SPACE_X ? w->task.beta : (const double[2]){0.0, 0.0};
+    double acc[2], feedback[2], integral[2];
+    to_joints(p, w, a0 - beta[0], a1 - beta[1], acc);
+    to_joints(p, w, a0 - w->rd[4] - s->integral[0], a1 - w->rd[5] - s->integral[1], feedback);
+    to_joints(p, w, s->integral[0], s->integral[1], integral);
     const double alpha = h * p->lam / (1.0 + h * p->lam);
-    s->bias[0] += alpha * (fb0 - s->bias[0]);
-    s->bias[1] += alpha * (fb1 - s->bias[1]);
     memmove(s->past + 2, s->past, sizeof(double) * 2 * (size_t)(n - 1));
-    s->past[0] = qa0;
-    s->past[1] = qa1;
+    for (int i = 0; i < 2; ++i) {
+        s->past[i] = acc[i];
+        s->bias[i] += alpha * (feedback[i] - s->bias[i]);
+        s->offset[i] = s->bias[i] + integral[i];
+    }
 }
 
 /* u' = J^T f: the torques of a task-space effort (the actuators' power balance). */
@@ -298,7 +311,8 @@ const pc_field pc_law_params_fields[] = {
     PC_FIELD(pc_law_params, kt), PC_FIELD(pc_law_params, predict), {0, 0, 0}};
 const pc_field pc_law_state_fields[] = {
     PC_FIELD(pc_law_state, integral), PC_FIELD(pc_law_state, k), PC_FIELD(pc_law_state, s_prev),
-    PC_FIELD(pc_law_state, s), PC_FIELD(pc_law_state, e), PC_FIELD(pc_law_state, past), PC_FIELD(pc_law_state, bias), {0, 0, 0}};
+    PC_FIELD(pc_law_state, s), PC_FIELD(pc_law_state, e), PC_FIELD(pc_law_state, past), PC_FIELD(pc_law_state, bias),
+    PC_FIELD(pc_law_state, offset), {0, 0, 0}};
 const pc_field pc_law_table_fields[] = {
     PC_FIELD(pc_law_table, x0), PC_FIELD(pc_law_table, y0), PC_FIELD(pc_law_table, inv_step),
     PC_FIELD(pc_law_table, nx), PC_FIELD(pc_law_table, ny),

@@ -20,7 +20,11 @@
  * produce when the model is exact), over the commands it has sent since: the rates from b
  * periods back to a, then angles and rates over the a periods, constant acceleration over each
  * period, and acts on the prediction, against the reference at that time (a T on along its
- * given derivatives, x_d + a T dx_d + (a T)^2 ddx_d / 2, dx_d + a T ddx_d).  It keeps the last max(a, b) commanded joint accelerations
+ * given derivatives, x_d + a T dx_d + (a T)^2 ddx_d / 2, dx_d + a T ddx_d).  Less what the
+ * plant is taken not to follow: the integral I (the law's estimate of what its model misses)
+ * and the rest of the feedback low-passed at lam (a steady feedback balances a disturbance:
+ * without this the prediction runs ahead of the plant by the disturbance, and the damping
+ * term acts on that, e_ef x1.43 on bench_circle_PDx).  It keeps the last max(a, b) commanded joint accelerations
  * (task space: J^-1 (a' - beta) at the pose it acted on).  ddq is taken as measured.
  *
  * A sample refuses (nothing in the state changes, `pc_refusal` names the quantity): a non-
@@ -91,7 +95,8 @@ typedef struct {
     double e[2];               /* e = r_d - r of the last sample (6.5) */
     double past[2 * PC_LAW_MAX_PREDICT];   /* with predict: the joint accelerations (q1, q2) the last
                                             * samples commanded, newest first, rad/s^2 */
-    double bias[2];            /* with predict: the feedback part of those, low-passed at lam */
+    double bias[2];            /* with predict: their feedback part (integral aside), low-passed at lam */
+    double offset[2];          /* bias + the integral in joints: what the plant is taken not to follow */
 } pc_law_state;
 
 /* The tabulated model (7.2.5): a square grid, row-major (ny + 1) x (nx + 1) rows of
