@@ -11,7 +11,11 @@ models a computation delay (docs/twin.md: on the bench of 7.2.1 a Raspberry Pi 2
 encoders at a sample and computes the law; the thesis does not say when the commands reach
 the driver, the twin assumes at the next sample): the outputs ``tau1``,
 ``tau2``, ``i_ref1``, ``i_ref2`` of ``doStep(t)`` are those computed n samples earlier (zero
-before), ``e1``, ``e2`` stay the present errors.
+before), ``e1``, ``e2`` stay the present errors.  ``delay_compensation`` = a and
+``velocity_delay_compensation`` = b > 0: the angles and rates are a and b periods old when the
+commands take effect (a per-component package at 1 ms in a Jacobi master: 2 and 3); the law
+acts on the joint state its model predicts for then and on the reference a periods on
+(``kernels/src/law.h``), and ``e1``, ``e2`` are the errors of that prediction.
 
 Numeric parameters ``lam``, ``m_star``, ``phi``, ``k1``, ``k2``, ``kt1``, ``kt2`` start at -1,
 meaning "the strategy preset's value" (Tables 6-8; ``trajectory`` picks Table 6 or 7 for
