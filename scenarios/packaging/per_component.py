@@ -44,9 +44,11 @@ ignores bindings) and binds them in the SSD (libcosim, Ecos' ``init(t, "paramete
 its current loop): the observers ``obs1``/``obs2`` and their connections go, which takes
 the one connection inside the 1 ms current loop out of the Jacobi master.  At n = 1 the
 chain still costs 2 periods on the position and 3 on the velocity feedback, at the stability
-limit of the task-space PD laws (``benchmarks/jacobi_delay_margin.py``): a ``substeps``
-given for a scene is therefore checked by a run (:func:`check_tracking`, a
-:class:`TrackingWarning` by name outside :data:`TRACKING_BOUND`).
+limit of the task-space PD laws (``benchmarks/jacobi_delay_margin.py``): the position
+controller gets them as its :data:`COMPENSATION` (:func:`feedback_delays`) and its law
+predicts over them (docs/ssp.md "Delay compensation").  A ``substeps`` given for a scene is
+checked by a run (:func:`check_tracking`, a :class:`TrackingWarning` by name outside
+:data:`TRACKING_BOUND`).
 """
 from __future__ import annotations
 
@@ -277,7 +279,9 @@ def check_tracking(scene: Scene, system: System, variables: dict, n: int, bound:
     than ``bound`` (issue 26's must: 5 %).  At n below the chain's stages + 1 every
     connection costs a whole period: at 1 ms the bench's chain adds 2 periods to the
     position and 3 to the velocity feedback, which the task-space PD laws (lam = 70/s,
-    m* = 0.207 kg above the task-space inertia's 0.128 kg) do not survive (docs/ssp.md)."""
+    m* = 0.207 kg above the task-space inertia's 0.128 kg) do not survive unless the
+    controller compensates them (:data:`COMPENSATION`; a replacement controller without
+    the parameters; docs/ssp.md)."""
     ratios = jacobi_ratios(scene, system, variables, n)
     if max(abs(r - 1.0) for r in ratios) > bound:
         import warnings
