@@ -37,6 +37,9 @@ TERMS_SIZE = kernels.size(TERMS)
 SCRATCH_SIZE = kernels.size(SCRATCH)
 #: Entries of a table row (H00, H01, H11, cxx, cyy, cxy, g).
 N_TERMS = 11
+#: Most periods of delay the law predicts over (``PC_LAW_MAX_PREDICT``: the commanded
+#: accelerations it keeps).
+MAX_PREDICT = (STATE["past"].stop - STATE["past"].start) // 2
 
 #: Where each field lies in a controller's ``buf`` (state first, then parameters).
 BUF = {**STATE, **{name: slice(STATE_SIZE + s.start, STATE_SIZE + s.stop) for name, s in PARAMS.items()}}
@@ -48,6 +51,8 @@ OUT = SCRATCH["out"]
 _TASK0 = SCRATCH["task"].start
 POSE = slice(_TASK0 + TASK["x"].start, _TASK0 + TASK["y"].stop)
 Q, DQ = SCRATCH["q"], SCRATCH["dq"]
+#: Where scratch holds the joint state (q1, q2, dq1, dq2) the last sample acted on.
+JOINT = SCRATCH["joint"]
 
 SPACES = {"q": 0.0, "x": 1.0}
 MODELS = {None: 0.0, "tabulated": 1.0, "exact": 2.0}
@@ -66,7 +71,7 @@ def run_state_words(buf):
     return range(STATE_SIZE)
 
 
-def pack(kin, band, space, model, lam, phi, gamma, m_star, kt, law="unified"):
+def pack(kin, band, space, model, lam, phi, gamma, m_star, kt, law="unified", predict=(0, 0)):
     """A controller's ``buf``: the state zero, then its parameters.
 
     Parameters
@@ -82,6 +87,9 @@ def pack(kin, band, space, model, lam, phi, gamma, m_star, kt, law="unified"):
         Adaptation rates (6.66); None: constant gains.
     kt : (float, float)
     law : {"unified", "seed001"}
+    predict : (int, int)
+        Delay compensation: periods of delay of the angles and of the rates the law predicts
+        over (``kernels/src/law.h``); (0, 0): none.
     """
     buf = np.zeros(STATE_SIZE + PARAMS_SIZE)
     buf[BUF["geometry"]] = (kin.l0, kin.l11, kin.l12, kin.l21, kin.l22)
@@ -93,6 +101,7 @@ def pack(kin, band, space, model, lam, phi, gamma, m_star, kt, law="unified"):
         buf[BUF["gamma"]] = gamma
     buf[BUF["m_star"]] = m_star
     buf[BUF["kt"]] = kt
+    buf[BUF["predict"]] = predict
     return buf
 
 
@@ -119,6 +128,7 @@ _run = kernels.function("pc_law_run", _i, _v, _d, _v)
 _resume = kernels.function("pc_law_resume", _i, _v, _d, _v)
 _exact_pose = kernels.function("pc_law_exact_pose", _i, _v, _v, _v)
 _delay = kernels.function("pc_law_delay", None, _v, _i, _v)
+_predict = kernels.function("pc_law_predict", None, _v, _v, _v, _i, _i, _d, _v)
 #: ``pc_law_terms_fn``: the exact model's terms at (q, dq) into terms (model, q, dq, terms).
 TERMS_FN = ctypes.CFUNCTYPE(None, _v, ctypes.POINTER(_d), ctypes.POINTER(_d), ctypes.POINTER(_d))
 
@@ -130,6 +140,23 @@ def delay(delayed, commands):
     now = np.array(commands, dtype=np.float64)
     _delay(kernels.address(delayed), len(delayed), kernels.address(now))
     return tuple(now.tolist())
+
+
+def predict(measured, past, bias, a, b, h):
+    """``pc_law_predict``: the joint state (q1, q2, dq1, dq2) at the commands' time from
+    ``measured`` angles ``a`` periods and rates ``b`` periods before it, ``past`` the joint
+    accelerations commanded over the last max(a, b) periods (rows of 2, newest first) and
+    ``bias`` the part of them the plant does not follow (rad/s^2), periods of ``h`` s."""
+    m = np.ascontiguousarray(measured, dtype=np.float64)
+    p = np.ascontiguousarray(past, dtype=np.float64).reshape(-1)
+    o = np.ascontiguousarray(bias, dtype=np.float64)
+    if m.shape != (4,) or o.shape != (2,) or len(p) < 2 * max(a, b):
+        raise ValueError(f"predict: measured {m.shape}, bias {o.shape}, past of {len(p) // 2} rows for "
+                         f"a = {a}, b = {b}: need 4, 2 and max(a, b) rows")
+    joint = np.zeros(4)
+    _predict(kernels.address(m), kernels.address(p) if len(p) else None, kernels.address(o), a, b, h,
+             kernels.address(joint))
+    return joint
 
 
 def interpolate(table_buf, x, y, out):

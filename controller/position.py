@@ -123,6 +123,11 @@ class PositionController:
         corner (near the workspace's edge or the singular band), evaluate the exact model
         there instead of refusing (counted in :attr:`fallbacks`).  The bench triangle's
         upper vertices (7.24) lie within 2.5 mm of the bench's reach.
+    delay_compensation : (int, int)
+        Periods of delay of the measured angles and of their rates before the commands take
+        effect: the law acts on the joint state its model predicts for that time from the
+        accelerations it commanded since (``kernels/src/law.h``; a per-component package at
+        1 ms in a Jacobi master: (2, 3), docs/ssp.md).  (0, 0): the measurements as they are.
 
     Attributes
     ----------
@@ -141,7 +146,8 @@ class PositionController:
 
     def __init__(self, params: FiveBarParams, strategy: Strategy, model="tabulated", model_error=0.0,
                  grid_step=DEFAULT_GRID_STEP, extent=DEFAULT_EXTENT, kt=None, T=SAMPLE_TIME,
-                 band=fivebar.NEAR_SINGULAR_MARGIN, cache=True, kernel="fast", table_fallback=True):
+                 band=fivebar.NEAR_SINGULAR_MARGIN, cache=True, kernel="fast", table_fallback=True,
+                 delay_compensation=(0, 0)):
         if kernel not in KERNELS:
             raise ValueError(f"kernel = {kernel!r} is unknown; valid: {', '.join(KERNELS)}")
         _check_strategy(strategy)
@@ -149,6 +155,7 @@ class PositionController:
             raise ValueError(f"model = {model!r} is unknown; valid: {', '.join(MODEL_KINDS)}")
         if not (math.isfinite(T) and T > 0.0):
             raise ValueError(f"T = {T!r} s must be > 0")
+        self.delay_compensation = _check_compensation(delay_compensation)
         self.params, self.strategy, self.T, self.band = params.validate(), strategy, float(T), float(band)
         self.kin = Kinematics(params)
         self.kp, self.kv = strategy.lam ** 2, 2.0 * strategy.lam
@@ -169,7 +176,7 @@ class PositionController:
         self.kernel = kernel
         self.compiled = kernel == "fast"
         self._buf = law.pack(self.kin, self.band, strategy.space, self.model_kind, strategy.lam, strategy.phi,
-                             strategy.gamma, strategy.m_star, self.kt, strategy.law)
+                             strategy.gamma, strategy.m_star, self.kt, strategy.law, self.delay_compensation)
         self._scratch = np.zeros(law.SCRATCH_SIZE)
         self._terms = np.zeros(max(INVERSE_SIZE, law.TERMS_SIZE))   # inverse_terms writes all its words
         self.reset()
@@ -275,6 +282,16 @@ class PositionController:
         return kernels.refused(REASONS, refusal, t, x_d=x_d, y_d=y_d, q1=q1, q2=q2, x=x, y=y, band=self.band,
                                detail=detail, outputs=tuple(self._scratch[law.OUT].tolist()),
                                largest=(MEASUREMENTS + REFERENCES)[largest], largest_value=inputs[largest])
+
+
+def _check_compensation(value) -> tuple:
+    """``delay_compensation`` as (int, int) in [0, law.MAX_PREDICT], or a ValueError naming it."""
+    pair = tuple(value)
+    if len(pair) != 2 or not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool)
+                                 and 0 <= v <= law.MAX_PREDICT for v in pair):
+        raise ValueError(f"delay_compensation = {value!r} must be two whole numbers of periods in "
+                         f"[0, {law.MAX_PREDICT}] (angles, rates)")
+    return int(pair[0]), int(pair[1])
 
 
 def _check_strategy(strategy: Strategy) -> None:

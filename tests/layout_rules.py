@@ -111,6 +111,7 @@ RULES = [
     ("test_per_component*.py", "scenarios/packaging"),
     ("test_swap_*.py", "scenarios/packaging"),
     ("test_twin_linear_margin*.py", "benchmarks"),
+    ("test_jacobi_delay_margin*.py", "benchmarks"),
     ("test_trade*.py", "scenarios/studies"),
     ("test_twin*.py", "scenarios/studies"),
     ("test_workspace*.py", "scenarios/studies"),

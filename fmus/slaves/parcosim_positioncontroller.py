@@ -11,7 +11,11 @@ models a computation delay (docs/twin.md: on the bench of 7.2.1 a Raspberry Pi 2
 encoders at a sample and computes the law; the thesis does not say when the commands reach
 the driver, the twin assumes at the next sample): the outputs ``tau1``,
 ``tau2``, ``i_ref1``, ``i_ref2`` of ``doStep(t)`` are those computed n samples earlier (zero
-before), ``e1``, ``e2`` stay the present errors.
+before), ``e1``, ``e2`` stay the present errors.  ``delay_compensation`` = a and
+``velocity_delay_compensation`` = b > 0: the angles and rates are a and b periods old when the
+commands take effect (a per-component package at 1 ms in a Jacobi master: 2 and 3); the law
+acts on the joint state its model predicts for then and on the reference a periods on
+(``kernels/src/law.h``), and ``e1``, ``e2`` are the errors of that prediction.
 
 Numeric parameters ``lam``, ``m_star``, ``phi``, ``k1``, ``k2``, ``kt1``, ``kt2`` start at -1,
 meaning "the strategy preset's value" (Tables 6-8; ``trajectory`` picks Table 6 or 7 for
@@ -31,7 +35,7 @@ from dataclasses import replace
 import numpy as np
 from pythonfmu.enums import Fmi2Status
 
-from controller.law import delay
+from controller.law import MAX_PREDICT, delay
 from controller.model import DEFAULT_EXTENT, DEFAULT_GRID_STEP
 from controller.position import PositionController as _Controller
 from controller.strategies import get_strategy
@@ -106,6 +110,10 @@ class PositionController(SampledSteps, GuardedSlave):
         d("gravity_y", "parameter", 0.0, "Gravity the model assumes, world y [m/s2]")
         d("delay_steps", "parameter", 0, "Computation delay: tau1, tau2, i_ref1, i_ref2 are applied this many "
           f"samples after they were computed (0-{MAX_DELAY_STEPS}; the bench: 1)")
+        d("delay_compensation", "parameter", 0, "Periods of delay of the measured angles before the commands take "
+          f"effect, which the law predicts over with its model (0-{MAX_PREDICT}; 0: none; docs/contract.md)")
+        d("velocity_delay_compensation", "parameter", 0, "Periods of delay of the measured rates dq1, dq2 before the "
+          f"commands take effect, which the law predicts over (0-{MAX_PREDICT}; 0: none)")
         declare_counter_masses(self)
         self.controller = None
         self.delayed = np.zeros((0, len(OUTPUTS)))
@@ -141,6 +149,10 @@ class PositionController(SampledSteps, GuardedSlave):
         # The commands computed but not yet applied, oldest first (changed in place: the
         # compiled loop shares the array).
         self.delayed = np.zeros((self.delay_steps, len(OUTPUTS)))
+        for name in ("delay_compensation", "velocity_delay_compensation"):
+            value = getattr(self, name)
+            if not (isinstance(value, int) and 0 <= value <= MAX_PREDICT):
+                raise ValueError(f"parameter {name} = {value!r} must be an integer in [0, {MAX_PREDICT}]")
         from controller.position import default_kt
         kt = tuple(d if v == PRESET_VALUE else v for v, d in zip((self.kt1, self.kt2), default_kt()))
         for name, value in zip(("kt1", "kt2"), kt):
@@ -151,7 +163,8 @@ class PositionController(SampledSteps, GuardedSlave):
         self.controller = _Controller(
             with_counter_masses(self, params), strategy, model=self.model, model_error=self.model_error,
             grid_step=self.grid_step, extent=(self.x_min, self.x_max, self.y_min, self.y_max),
-            kt=kt, T=self.T, cache=bool(self.cache), table_fallback=bool(self.table_fallback))
+            kt=kt, T=self.T, cache=bool(self.cache), table_fallback=bool(self.table_fallback),
+            delay_compensation=(self.delay_compensation, self.velocity_delay_compensation))
         built = getattr(self.controller.model, "build_seconds", 0.0)
         if built:
             self.log(f"{self.instance_name}: the tabulated model was built at initialisation in {built:.2f} s "

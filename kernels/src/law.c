@@ -45,35 +45,67 @@ static int check_inputs(const pc_law_inputs *in, pc_refusal *r)
     return PC_OK;
 }
 
-int pc_law_prepare(const pc_law_params *p, pc_law_scratch *w, pc_refusal *r)
+void pc_law_predict(const double measured[4], const double *past, const double bias[2], int a, int b, double h,
+                    double joint[4])
+{
+    for (int i = 0; i < 2; ++i) {
+        double q = measured[i], v = measured[2 + i];
+        const double o = bias[i];
+        for (int k = b; k > a; --k) v += h * (past[2 * (k - 1) + i] - o);        /* the rates, on to the angles' time */
+        for (int k = b + 1; k <= a; ++k) v -= h * (past[2 * (k - 1) + i] - o);   /* or back to it */
+        for (int k = a; k >= 1; --k) {                                           /* both over the angles' delay */
+            const double acc = past[2 * (k - 1) + i] - o;
+            q += h * v + 0.5 * h * h * acc;
+            v += h * acc;
+        }
+        joint[i] = q;
+        joint[2 + i] = v;
+    }
+}
+
+int pc_law_prepare(const pc_law_params *p, const pc_law_state *s, pc_law_scratch *w, double h, pc_refusal *r)
 {
     const pc_law_inputs *in = &w->in;
     const pc_5r_geometry *g = &p->geometry;
     int rc = check_inputs(in, r);
     if (rc != PC_OK) return rc;
+    const double measured[4] = {in->q1, in->q2, in->dq1, in->dq2};
+    double *j = w->joint;
+    if (p->predict[0] > 0.0 || p->predict[1] > 0.0)
+        pc_law_predict(measured, s->past, s->offset, (int)p->predict[0], (int)p->predict[1], h, j);
+    else
+        memcpy(j, measured, sizeof measured);
+    /* The reference at the commands' time: a periods on along its own derivatives. */
+    double d[6];
+    memcpy(d, &in->x_d, sizeof d);
+    const double ahead = p->predict[0] * h;
+    if (ahead > 0.0)
+        for (int i = 0; i < 2; ++i) {
+            d[i] += ahead * d[2 + i] + 0.5 * ahead * ahead * d[4 + i];
+            d[2 + i] += ahead * d[4 + i];
+        }
     /* The reference: inverse kinematics and the singularity margin. */
     double distance = 0.0;
     double *a = w->angles;
-    if (pc_5r_chain_ik(g->l11, g->l12, in->x_d - g->l0, in->y_d, 1.0, &a[0], &a[1], &distance) != PC_5R_OK)
+    if (pc_5r_chain_ik(g->l11, g->l12, d[0] - g->l0, d[1], 1.0, &a[0], &a[1], &distance) != PC_5R_OK)
         return pc_refuse(r, PC_LAW_REF_OUT, 0, distance);
-    if (pc_5r_chain_ik(g->l21, g->l22, in->x_d + g->l0, in->y_d, -1.0, &a[2], &a[3], &distance) != PC_5R_OK)
+    if (pc_5r_chain_ik(g->l21, g->l22, d[0] + g->l0, d[1], -1.0, &a[2], &a[3], &distance) != PC_5R_OK)
         return pc_refuse(r, PC_LAW_REF_OUT, 1, distance);
     const double margin = pc_5r_margin(a);
     if (margin < p->band) return pc_refuse(r, PC_LAW_REF_BAND, 0, margin);
     /* The measured task state. */
     pc_5r_task *t = &w->task;
-    rc = pc_5r_task_state(g, in->q1, in->q2, in->dq1, in->dq2, in->ddq1, in->ddq2, t);
+    rc = pc_5r_task_state(g, j[0], j[1], j[2], j[3], in->ddq1, in->ddq2, t);
     if (rc == PC_5R_NO_ASSEMBLY) return pc_refuse(r, PC_LAW_NO_ASSEMBLY, 0, t->distance);
     if (rc == PC_5R_SINGULAR) return pc_refuse(r, PC_LAW_MEASURED_SINGULAR, 0, t->det);
     if (p->space == PC_LAW_SPACE_X) {
-        const double measured[6] = {t->x, t->y, t->dx, t->dy, t->ddx, t->ddy};
-        memcpy(w->r, measured, sizeof measured);
-        memcpy(w->rd, &in->x_d, sizeof w->rd);
+        const double task[6] = {t->x, t->y, t->dx, t->dy, t->ddx, t->ddy};
+        memcpy(w->r, task, sizeof task);
+        memcpy(w->rd, d, sizeof w->rd);
     } else {
-        const double measured[6] = {in->q1, in->q2, in->dq1, in->dq2, in->ddq1, in->ddq2};
-        memcpy(w->r, measured, sizeof measured);
-        if (pc_5r_joint_reference(g, in->x_d, in->y_d, in->dx_d, in->dy_d, in->ddx_d, in->ddy_d, a[0], a[2], w->rd)
-            != PC_5R_OK)
+        const double joint[6] = {j[0], j[1], j[2], j[3], in->ddq1, in->ddq2};
+        memcpy(w->r, joint, sizeof joint);
+        if (pc_5r_joint_reference(g, d[0], d[1], d[2], d[3], d[4], d[5], a[0], a[2], w->rd) != PC_5R_OK)
             return pc_refuse(r, PC_LAW_REF_SINGULAR, 0, 0.0);
     }
     return PC_OK;
@@ -114,6 +146,44 @@ static double component(const pc_law_params *p, pc_law_state *s, int i, double e
     if (seed) return ddr_d + feedback + k * sat(sv / p->phi);
     if (k != 0.0) s->integral[i] += h * k * sat(sv / p->phi);    /* (6.65): rectangle rule, this sample included */
     return ddr_d + feedback + s->integral[i];                     /* (7.21) */
+}
+
+/* J^-1 (f0, f1) into out (task space; joint space: f itself). */
+static void to_joints(const pc_law_params *p, const pc_law_scratch *w, double f0, double f1, double out[2])
+{
+    if (p->space != PC_LAW_SPACE_X) {
+        out[0] = f0;
+        out[1] = f1;
+        return;
+    }
+    const double *J = w->task.J;
+    const double det = J[0] * J[3] - J[1] * J[2];
+    out[0] = (J[3] * f0 - J[1] * f1) / det;
+    out[1] = (J[0] * f1 - J[2] * f0) / det;
+}
+
+/* With predict: the joint accelerations the commanded (a0, a1) make in the model, newest in
+ * s->past (task space: q'' = J^-1 (a' - beta) at the pose the law acted on), and the part of
+ * them the plant is taken not to follow (s->offset): the integral, the law's own estimate of
+ * what its model misses, and the feedback's low-passed part (at lam: a steady feedback balances
+ * a disturbance, it does not accelerate the plant). */
+static void remember(const pc_law_params *p, const pc_law_scratch *w, double a0, double a1, double h,
+                     pc_law_state *s)
+{
+    const int n = (int)fmax(p->predict[0], p->predict[1]);
+    if (n <= 0) return;
+    const double *beta = p->space == PC_LAW_SPACE_X ? w->task.beta : (const double[2]){0.0, 0.0};
+    double acc[2], feedback[2], integral[2];
+    to_joints(p, w, a0 - beta[0], a1 - beta[1], acc);
+    to_joints(p, w, a0 - w->rd[4] - s->integral[0], a1 - w->rd[5] - s->integral[1], feedback);
+    to_joints(p, w, s->integral[0], s->integral[1], integral);
+    const double alpha = h * p->lam / (1.0 + h * p->lam);
+    memmove(s->past + 2, s->past, sizeof(double) * 2 * (size_t)(n - 1));
+    for (int i = 0; i < 2; ++i) {
+        s->past[i] = acc[i];
+        s->bias[i] += alpha * (feedback[i] - s->bias[i]);
+        s->offset[i] = s->bias[i] + integral[i];
+    }
 }
 
 /* u' = J^T f: the torques of a task-space effort (the actuators' power balance). */
@@ -168,6 +238,7 @@ int pc_law_finish(const pc_law_params *p, const pc_law_table *table, const pc_la
     const double *rr = w->r, *rd = w->rd;
     const double a0 = component(p, &next, 0, rd[0] - rr[0], rd[2] - rr[2], rd[4] - rr[4], rd[4], h);
     const double a1 = component(p, &next, 1, rd[1] - rr[1], rd[3] - rr[3], rd[5] - rr[5], rd[5], h);
+    remember(p, w, a0, a1, h, &next);
     pc_law_outputs *out = &w->out;
     if (pd) {                                                     /* PD: H^ = m* 1, h^ = 0 */
         const double u0 = p->m_star * a0, u1 = p->m_star * a1;
@@ -194,7 +265,7 @@ int pc_law_finish(const pc_law_params *p, const pc_law_table *table, const pc_la
 int pc_law_run(const pc_law_context *c, double h, pc_refusal *r)
 {
     const pc_law_params *p = c->params;
-    int rc = pc_law_prepare(p, c->scratch, r);
+    int rc = pc_law_prepare(p, c->state, c->scratch, h, r);
     if (rc != PC_OK) return rc;
     if (p->model != PC_LAW_MODEL_EXACT) return pc_law_finish(p, c->table, NULL, c->state, c->scratch, h, r);
     rc = pc_law_exact_pose(p, c->scratch, r);
@@ -237,10 +308,11 @@ const pc_field pc_law_params_fields[] = {
     PC_FIELD(pc_law_params, model), PC_FIELD(pc_law_params, law), PC_FIELD(pc_law_params, kp),
     PC_FIELD(pc_law_params, kv), PC_FIELD(pc_law_params, lam), PC_FIELD(pc_law_params, phi),
     PC_FIELD(pc_law_params, adaptive), PC_FIELD(pc_law_params, gamma), PC_FIELD(pc_law_params, m_star),
-    PC_FIELD(pc_law_params, kt), {0, 0, 0}};
+    PC_FIELD(pc_law_params, kt), PC_FIELD(pc_law_params, predict), {0, 0, 0}};
 const pc_field pc_law_state_fields[] = {
     PC_FIELD(pc_law_state, integral), PC_FIELD(pc_law_state, k), PC_FIELD(pc_law_state, s_prev),
-    PC_FIELD(pc_law_state, s), PC_FIELD(pc_law_state, e), {0, 0, 0}};
+    PC_FIELD(pc_law_state, s), PC_FIELD(pc_law_state, e), PC_FIELD(pc_law_state, past), PC_FIELD(pc_law_state, bias),
+    PC_FIELD(pc_law_state, offset), {0, 0, 0}};
 const pc_field pc_law_table_fields[] = {
     PC_FIELD(pc_law_table, x0), PC_FIELD(pc_law_table, y0), PC_FIELD(pc_law_table, inv_step),
     PC_FIELD(pc_law_table, nx), PC_FIELD(pc_law_table, ny),
@@ -251,7 +323,8 @@ const pc_field pc_law_terms_fields[] = {
 const pc_field pc_law_scratch_fields[] = {
     PC_FIELD(pc_law_scratch, in), PC_FIELD(pc_law_scratch, out), PC_FIELD(pc_law_scratch, task),
     PC_FIELD(pc_law_scratch, angles), PC_FIELD(pc_law_scratch, r), PC_FIELD(pc_law_scratch, rd),
-    PC_FIELD(pc_law_scratch, m), PC_FIELD(pc_law_scratch, q), PC_FIELD(pc_law_scratch, dq), {0, 0, 0}};
+    PC_FIELD(pc_law_scratch, m), PC_FIELD(pc_law_scratch, q), PC_FIELD(pc_law_scratch, dq),
+    PC_FIELD(pc_law_scratch, joint), {0, 0, 0}};
 const pc_field pc_5r_task_fields[] = {
     PC_FIELD(pc_5r_task, x), PC_FIELD(pc_5r_task, y), PC_FIELD(pc_5r_task, dx), PC_FIELD(pc_5r_task, dy),
     PC_FIELD(pc_5r_task, ddx), PC_FIELD(pc_5r_task, ddy), PC_FIELD(pc_5r_task, jx), PC_FIELD(pc_5r_task, jt),

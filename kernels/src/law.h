@@ -13,6 +13,20 @@
  * beta) + h).  Torques: joint space u' itself; task space J^T u' (PD, tabulated) or u* solving
  * u' = Z^T u* (5.72) with the exact model's Z (tau2 = -u*_theta21).  Current references tau/kt.
  *
+ * Delay compensation (predict = a, b periods of T, the sample's h): the angles were measured a
+ * periods and the rates b periods before the commands take effect (a per-component package in
+ * a Jacobi master at 1 ms: 2 and 3, docs/ssp.md).  The law predicts the joint state at that
+ * time with its own model, r'' = a' (the commanded acceleration, which the model's torques
+ * produce when the model is exact), over the commands it has sent since: the rates from b
+ * periods back to a, then angles and rates over the a periods, constant acceleration over each
+ * period, and acts on the prediction, against the reference at that time (a T on along its
+ * given derivatives, x_d + a T dx_d + (a T)^2 ddx_d / 2, dx_d + a T ddx_d).  Less what the
+ * plant is taken not to follow: the integral I (the law's estimate of what its model misses)
+ * and the rest of the feedback low-passed at lam (a steady feedback balances a disturbance:
+ * without this the prediction runs ahead of the plant by the disturbance, and the damping
+ * term acts on that, e_ef x1.43 on bench_circle_PDx).  It keeps the last max(a, b) commanded joint accelerations
+ * (task space: J^-1 (a' - beta) at the pose it acted on).  ddq is taken as measured.
+ *
  * A sample refuses (nothing in the state changes, `pc_refusal` names the quantity): a non-
  * finite input, a reference out of reach or in the near-singular band, a measured pose without
  * assembly, a point off the table or in a cell with a left-out corner, non-finite outputs.
@@ -35,6 +49,9 @@
 #define PC_LAW_MODEL_EXACT 2.0
 #define PC_LAW_UNIFIED 0.0
 #define PC_LAW_SEED 1.0
+
+/* Most periods of feedback delay the law predicts over (pc_law_params.predict). */
+#define PC_LAW_MAX_PREDICT 8
 
 /* Refusal codes; `index` and `value` of each in brackets. */
 enum {
@@ -65,6 +82,8 @@ typedef struct {
     double gamma[2];           /* adaptation rates (6.66) */
     double m_star;             /* PD: H^ = m* 1 (kg m^2 or kg) */
     double kt[2];              /* torque constants, N m/A: i_ref = tau / kt */
+    double predict[2];         /* delay compensation: periods of delay of the angles and of the rates
+                                * (0 0: the law acts on the measurements as they are, see below) */
 } pc_law_params;
 
 /* What a sample advances (FMU state). */
@@ -74,6 +93,10 @@ typedef struct {
     double s_prev[2];          /* s of the previous sample */
     double s[2];               /* s of the last sample (7.22) */
     double e[2];               /* e = r_d - r of the last sample (6.5) */
+    double past[2 * PC_LAW_MAX_PREDICT];   /* with predict: the joint accelerations (q1, q2) the last
+                                            * samples commanded, newest first, rad/s^2 */
+    double bias[2];            /* with predict: their feedback part (integral aside), low-passed at lam */
+    double offset[2];          /* bias + the integral in joints: what the plant is taken not to follow */
 } pc_law_state;
 
 /* The tabulated model (7.2.5): a square grid, row-major (ny + 1) x (nx + 1) rows of
@@ -115,6 +138,7 @@ typedef struct {
     double rd[6];              /* r_d, dr_d, ddr_d */
     double m[PC_LAW_TERMS];    /* the interpolated table row */
     double q[7], dq[7];        /* the thesis' coordinates of the measured pose (exact model) */
+    double joint[4];           /* q1, q2, dq1, dq2 the law acts on: measured, or predicted (predict) */
 } pc_law_scratch;
 
 /* A terms function: the exact model's terms at the thesis' q, dq (the plant's inverse terms). */
@@ -139,8 +163,15 @@ typedef struct {
 int pc_law_interpolate(const pc_law_table *table, double x, double y, double out[PC_LAW_TERMS], pc_refusal *r);
 
 /* The checks and kinematics of a sample (scratch->in set): inputs finite, reference in
- * reach and out of the band, measured task state, r and r_d. */
-int pc_law_prepare(const pc_law_params *p, pc_law_scratch *w, pc_refusal *r);
+ * reach and out of the band, the joint state the law acts on (predicted over p->predict with
+ * s->past), its task state, r and r_d. */
+int pc_law_prepare(const pc_law_params *p, const pc_law_state *s, pc_law_scratch *w, double h, pc_refusal *r);
+
+/* The joint state (q1, q2, dq1, dq2) at the commands' time from angles measured a periods and
+ * rates b periods before it, with `past` the joint accelerations commanded over the last
+ * max(a, b) periods, newest first (constant over each period of length h). */
+void pc_law_predict(const double measured[4], const double *past, const double bias[2], int a, int b, double h,
+                    double joint[4]);
 
 /* The thesis' q, dq of the prepared measured pose into scratch (the exact model's point). */
 int pc_law_exact_pose(const pc_law_params *p, pc_law_scratch *w, pc_refusal *r);

@@ -44,9 +44,11 @@ ignores bindings) and binds them in the SSD (libcosim, Ecos' ``init(t, "paramete
 its current loop): the observers ``obs1``/``obs2`` and their connections go, which takes
 the one connection inside the 1 ms current loop out of the Jacobi master.  At n = 1 the
 chain still costs 2 periods on the position and 3 on the velocity feedback, at the stability
-limit of the task-space PD laws (``benchmarks/jacobi_delay_margin.py``): a ``substeps``
-given for a scene is therefore checked by a run (:func:`check_tracking`, a
-:class:`TrackingWarning` by name outside :data:`TRACKING_BOUND`).
+limit of the task-space PD laws (``benchmarks/jacobi_delay_margin.py``): the position
+controller gets them as its :data:`COMPENSATION` (:func:`feedback_delays`) and its law
+predicts over them (docs/ssp.md "Delay compensation").  A ``substeps`` given for a scene is
+checked by a run (:func:`check_tracking`, a :class:`TrackingWarning` by name outside
+:data:`TRACKING_BOUND`).
 """
 from __future__ import annotations
 
@@ -73,6 +75,9 @@ TRACKING_BOUND = 0.05
 START_SHIFT = 1e-9
 #: The observer model whose instances ``internal_observer`` folds into their drives.
 OBSERVER_MODEL = "CurrentObserver"
+#: The Integer parameters of the position controller: periods of delay of its angles and of
+#: its rates before its commands take effect, which its law predicts over (docs/contract.md).
+COMPENSATION = ("delay_compensation", "velocity_delay_compensation")
 
 
 @dataclass(frozen=True)
@@ -274,7 +279,9 @@ def check_tracking(scene: Scene, system: System, variables: dict, n: int, bound:
     than ``bound`` (issue 26's must: 5 %).  At n below the chain's stages + 1 every
     connection costs a whole period: at 1 ms the bench's chain adds 2 periods to the
     position and 3 to the velocity feedback, which the task-space PD laws (lam = 70/s,
-    m* = 0.207 kg above the task-space inertia's 0.128 kg) do not survive (docs/ssp.md)."""
+    m* = 0.207 kg above the task-space inertia's 0.128 kg) do not survive unless the
+    controller compensates them (:data:`COMPENSATION`; a replacement controller without
+    the parameters; docs/ssp.md)."""
     ratios = jacobi_ratios(scene, system, variables, n)
     if max(abs(r - 1.0) for r in ratios) > bound:
         import warnings
@@ -340,13 +347,51 @@ def with_internal_observers(system: System) -> System:
     return dataclasses.replace(system, components=tuple(components), connections=tuple(keep), record=record)
 
 
+def _hops(system: System, start: str) -> dict:
+    """Instance -> the fewest connections from ``start`` to it (``start``: 0)."""
+    edges = {}
+    for conn in system.connections:
+        src, dst = split_signal(conn.source)[0], split_signal(conn.target)[0]
+        if src != dst:
+            edges.setdefault(src, set()).add(dst)
+    hops, frontier = {start: 0}, [start]
+    while frontier:
+        following = []
+        for name in frontier:
+            for dst in sorted(edges.get(name, ())):
+                if dst not in hops:
+                    hops[dst] = hops[name] + 1
+                    following.append(dst)
+        frontier = following
+    return hops
+
+
+def feedback_delays(system: System, name: str) -> tuple:
+    """(angles, rates): the periods by which a Jacobi master stepping ``system`` at its period
+    (n = 1: each connection costs a step) delays instance ``name``'s inputs ``q1`` and ``dq1``
+    before the commands it computes from them take effect, against our master's loop: the
+    connections from ``name`` back to the instance its angles come from (ctrl -> drive ->
+    plant: 2), and for the rates those from that instance to the one they come from
+    (plant -> deriv: 1 more).  (0, 0) when an input is not connected or no path closes."""
+    source = {split_signal(c.target)[1]: split_signal(c.source)[0] for c in system.connections
+              if split_signal(c.target)[0] == name}
+    if "q1" not in source or "dq1" not in source:
+        return 0, 0
+    angles = _hops(system, name).get(source["q1"])
+    rates = _hops(system, source["q1"]).get(source["dq1"])
+    if angles is None or rates is None:
+        return 0, 0
+    return angles, angles + rates
+
+
 def per_component_system(system: System, variables: dict, substeps: int | None = None) -> tuple:
     """(``system`` stepped at its package's base step with each sampled component's
     :data:`PHASE`, its :class:`Timing`).  A phase of 0 (the default) is not set, so a
     replacement FMU without the parameter takes the same bindings.  An instance that samples
     on the run's first step (phase 0: every one at n = 1) and has :data:`HOLD_FIRST` gets it
     true: fmpy's runner feeds 0.0 to every input on that step, which the sample would take as
-    the plant's angles and the reference (module docstring)."""
+    the plant's angles and the reference (module docstring).  At n = 1 an instance with
+    :data:`COMPENSATION` gets its :func:`feedback_delays`, which its law predicts over."""
     if any(c.substeps != 1 for c in system.components):
         raise ValueError("multi-rate components (substeps > 1) cannot be exported per component")
     timing = component_timing(system, variables, substeps)
@@ -356,6 +401,9 @@ def per_component_system(system: System, variables: dict, substeps: int | None =
             return c
         phase = timing.phases[c.name]
         extra = {PHASE: phase} if phase else ({HOLD_FIRST: True} if HOLD_FIRST in variables[c.name] else {})
+        if timing.substeps == 1 and all(p in variables[c.name] for p in COMPENSATION):
+            delays = feedback_delays(system, c.name)
+            extra.update({p: d for p, d in zip(COMPENSATION, delays) if d})
         return dataclasses.replace(c, parameters={**c.parameters, **extra}) if extra else c
 
     components = tuple(timed(c) for c in system.components)

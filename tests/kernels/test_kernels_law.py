@@ -274,7 +274,8 @@ def inverse_terms_into(p, q, dq, out):
 
 def test_layouts_come_from_the_c_structs():
     """The buffers' sizes and fields are the C structs' (one source of offsets)."""
-    assert law.STATE_SIZE == 10 and list(law.STATE) == ["integral", "k", "s_prev", "s", "e"]
+    assert law.STATE_SIZE == 10 + 2 * law.MAX_PREDICT + 4
+    assert list(law.STATE) == ["integral", "k", "s_prev", "s", "e", "past", "bias", "offset"]
     assert law.TERMS["Z"] == slice(fast5r.INVERSE_Z, fast5r.INVERSE_Z + 4)   # a prefix of the plant's terms
     assert law.SCRATCH["in"].stop - law.SCRATCH["in"].start == 12 and law.OUT.stop - law.OUT.start == 6
-    assert list(law.run_state_words(np.zeros(law.STATE_SIZE + law.PARAMS_SIZE))) == list(range(10))
+    assert list(law.run_state_words(np.zeros(law.STATE_SIZE + law.PARAMS_SIZE))) == list(range(law.STATE_SIZE))

@@ -5,7 +5,7 @@
  * 6-8, seed 001's; pcn_strategies, from controller/strategies.py at the build, per trajectory
  * name), the parameters' overrides of lam, m_star, phi, k, gamma and kt, the table's and
  * delay's checks, the plant preset's geometry and its counter-mass check (pcn_preset_*), and
- * the kernel's pc_law_params.  The model (H^, h^) is made in Python at the FMU's build for its
+ * the kernel's pc_law_params (delay_compensation, velocity_delay_compensation: its predict).  The model (H^, h^) is made in Python at the FMU's build for its
  * plant parameters then (preset, gravity_x, gravity_y, counter_mass1, counter_mass2,
  * model_error; the table also for grid_step, x_min ... y_max): the exact model's
  * pc_fivebar_params (pcn_model_params) and the tabulated model's pc_law_table (pcn_model_table)
@@ -121,6 +121,12 @@ static int check_numbers(const pcn_instance *in, const double *v, double kt[2], 
     if (!(delay >= 0 && delay <= PCN_MAX_DELAY_STEPS))
         return pcn_addf(why, "parameter delay_steps = %d must be an integer in [0, %d]", delay,
                         PCN_MAX_DELAY_STEPS), 1;
+    static const char *const compensation[2] = {"delay_compensation", "velocity_delay_compensation"};
+    const int periods[2] = {in->integer[PCN_SLOT_delay_compensation], in->integer[PCN_SLOT_velocity_delay_compensation]};
+    for (int k = 0; k < 2; ++k)
+        if (!(periods[k] >= 0 && periods[k] <= PC_LAW_MAX_PREDICT))
+            return pcn_addf(why, "parameter %s = %d must be an integer in [0, %d]", compensation[k], periods[k],
+                            PC_LAW_MAX_PREDICT), 1;
     const double preset_kt[2] = {PCN_DEFAULT_KT1, PCN_DEFAULT_KT2};
     for (int k = 0; k < 2; ++k) {
         kt[k] = v[8 + k] == PRESET_VALUE ? preset_kt[k] : v[8 + k];
@@ -254,6 +260,8 @@ static int configure(const pcn_instance *in, pc_law_params *p, double k[2], pcn_
     p->m_star = m_star;
     p->kt[0] = kt[0];
     p->kt[1] = kt[1];
+    p->predict[0] = in->integer[PCN_SLOT_delay_compensation];
+    p->predict[1] = in->integer[PCN_SLOT_velocity_delay_compensation];
     return 0;
 }
 

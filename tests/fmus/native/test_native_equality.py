@@ -63,11 +63,13 @@ CONTROLLER_PARAMETERS = (
        {"strategy": "TCx", "model": "exact"}, {"strategy": "TCMDq", "model": "exact", "delay_steps": 2},
        {"strategy": "SMCx", "model": "exact"}, {"strategy": "TCMDx", "delay_steps": 1, "kt1": 0.05},
        {"strategy": "PDx", "lam": 40.0, "m_star": 0.3, "phi": 3.0, "k1": 20.0, "k2": 5.0, "preset": "thesis_sim"},
-       {"table_fallback": False},
+       {"table_fallback": False}, {"strategy": "PDx", "delay_compensation": 2, "velocity_delay_compensation": 3},
+       {"strategy": "TCMDq", "model": "exact", "delay_compensation": 1, "delay_steps": 1},
        # refusals at initialisation, in the slave's order
        {"strategy": "PD"}, {"trajectory": "square"}, {"T": 0.0}, {"lam": math.nan}, {"phi": 2e6},
        {"gamma2": -1.0}, {"kt1": -2.0}, {"kt2": 0.0}, {"kt1": 1e-13}, {"grid_step": 0.0},
-       {"y_min": 0.3}, {"grid_step": 1e-4}, {"delay_steps": 101}, {"preset": "nope"},
+       {"y_min": 0.3}, {"grid_step": 1e-4}, {"delay_steps": 101}, {"delay_compensation": 9},
+       {"velocity_delay_compensation": -1}, {"preset": "nope"},
        {"counter_mass1": -0.1}, {"counter_mass2": 1e-4}, {"lam": -2.0}, {"strategy": "PDx", "m_star": 0.0},
        {"k2": -3.0}, {"model": "lookup"}, {"model_error": -1.0}])
 

@@ -503,6 +503,8 @@ ALLOWED_INTEGERS |= {(model, f"{name}{suffix}", value)
                      for value in (0, 2 ** 31 - 1)}
 #: No computation delay (the default; docs/twin.md); 2**31 - 1 samples are refused (at most 100).
 ALLOWED_INTEGERS.add(("PositionController", "delay_steps", 0))
+#: No delay compensation (the default; docs/contract.md); -5 and 2**31 - 1 periods are refused (0-8).
+ALLOWED_INTEGERS |= {("PositionController", name, 0) for name in ("delay_compensation", "velocity_delay_compensation")}
 #: Sampling on the period's first sub-step (the default; docs/master.md "Sub-stepping sampled
 #: components"); 2**31 - 1 sub-steps is refused by name at the first step.
 ALLOWED_INTEGERS |= {(model, "sample_phase", 0) for model in ("Derivator", "PositionController",

@@ -3,8 +3,9 @@
 At a plain 1 ms step every connection of a Jacobi master costs a whole period: the bench's
 chain plant -> derivator -> controller -> drive -> plant adds 2 periods to the position and
 3 to the velocity feedback.  The task-space PD laws lose their margin to that and oscillate
-near 36 Hz (docs/ssp.md, "A drive that closes its own current loop"); the export must say so
-by name instead of writing a package that gives several times the scene's torque.
+near 36 Hz (docs/ssp.md, "A drive that closes its own current loop") unless the position
+controller compensates the delays (its ``delay_compensation``, set by the export at n = 1);
+a package that still misses the scene is named at export instead of written silently.
 """
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ import numpy as np
 
 import pytest
 
-from scenarios.packaging.per_component import TrackingWarning, check_tracking, export_per_component, _variables, \
+from scenarios.packaging.per_component import COMPENSATION, TrackingWarning, check_tracking, export_per_component, _variables, \
     with_internal_observers
 from scenarios.scenes.catalogue import get_scene
 
@@ -33,14 +34,18 @@ def fmu_dir(built_fmus):
     return next(iter(built_fmus.values())).parent
 
 
-def test_a_plain_period_package_of_a_task_space_pd_scene_is_named_at_export(fmu_dir, tmp_path):
-    """Catches the export of a package known to track badly (task-space PD at one sub-step) without its
-    warning, with the warning twice, or refused instead of written."""
+def test_a_plain_period_package_of_a_task_space_pd_scene_tracks_with_its_compensation(fmu_dir, tmp_path):
+    """The 1 ms package of bench_circle_PDx (x1.31 e_ef, x7.2 tau_ef without the controller's
+    delay compensation) is written with the compensation and without a warning.  Catches the
+    export not setting it in the package's FMU (the check runs the exported system)."""
     scene = _short("bench_circle_PDx")
-    with pytest.warns(TrackingWarning, match=r"bench_circle_PDx \(strategy PDx\).* 1 sub-step.*tau_ef x") as caught:
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", TrackingWarning)
         path = export_per_component(scene, tmp_path / "pdx.ssp", fmu_dir, substeps=1, internal_observer=True)
-    assert zipfile.is_zipfile(path)   # warned, still written: the user asked for that step
-    assert len([w for w in caught if issubclass(w.category, TrackingWarning)]) == 1
+    with zipfile.ZipFile(path) as z:
+        ssv = z.read("resources/ctrl.ssv").decode()
+    for name, periods in (("delay_compensation", 2), ("velocity_delay_compensation", 3)):
+        assert f'<ssv:Parameter name="{name}">\n      <ssv:Integer value="{periods}"' in ssv, ssv
 
 
 def test_the_plain_period_package_with_the_observers_outside_is_named_too(fmu_dir, tmp_path):
@@ -79,16 +84,20 @@ def test_packages_that_track_export_without_a_warning(fmu_dir, tmp_path, name, s
 
 
 def test_the_check_measures_the_oscillation_it_names(fmu_dir):
-    """The ratios the warning quotes are the Jacobi run's: the 1 ms package's torque several
-    times ours, the 0.25 ms package's within the bound (independent of the warning's text)."""
+    """The ratios the warning quotes are the Jacobi run's: a 1 ms package whose controller
+    lacks the delay compensation (a replacement FMU without the parameters: the export cannot
+    set them) gives several times our torque, the one with it and the 0.25 ms package stay
+    within the bound (independent of the warning's text)."""
     scene = _short("bench_circle_PDx")
     system = with_internal_observers(scene.system)
     variables = _variables(system, fmu_dir)[2]
+    without = {name: {k: v for k, v in vs.items() if k not in COMPENSATION} for name, vs in variables.items()}
     with pytest.warns(TrackingWarning):
-        _, tau_1ms = check_tracking(scene, system, variables, 1)
-    e_4, tau_4 = check_tracking(scene, system, variables, 4)
+        _, tau_1ms = check_tracking(scene, system, without, 1)
     assert tau_1ms > 2.0
-    assert abs(e_4 - 1.0) < 0.05 and abs(tau_4 - 1.0) < 0.05
+    for n in (1, 4):
+        e, tau = check_tracking(scene, system, variables, n)
+        assert abs(e - 1.0) < 0.05 and abs(tau - 1.0) < 0.05, (n, e, tau)
 
 
 @pytest.mark.parametrize("model", ["Derivator", "PositionController", "BalanceController", "CurrentObserver"])
