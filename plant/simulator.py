@@ -353,7 +353,7 @@ class PlantSimulator:
         residual = self._residual_of(y)
         if not residual <= RESIDUAL_STOP:
             return fast5r.DIVERGED, 0, residual, None
-        for k, value in enumerate(self._pose_measures(y)):
+        for k, value in enumerate(self._measures_of(y)):
             if abs(value) < SINGULAR_STOP:
                 return fast5r.SINGULAR, k, value, None
         return fast5r.OK, 0, residual, None
@@ -393,6 +393,15 @@ class PlantSimulator:
             q -= Qo @ left_inverse_solve(st.A @ Qo, st.residual)
         C = mechanism_state(mech, q, dq).C
         return np.concatenate([q, C @ (Qs.T @ dq)])
+
+    def _measures_of(self, y) -> list:
+        """The pose measures of y (:meth:`_pose_measures`) as the C kernel's report computes them
+        when there is one, so a projected state is judged with the same bits as a kernel step's."""
+        if self._fast is None:
+            return list(self._pose_measures(y))
+        out = np.empty(fast5r.REPORT_SIZE)
+        fast5r.report(self._fast.p, y, 1.0, 0.0, 0.0, out)
+        return out[fast5r.REPORT_MEASURES:fast5r.REPORT_MEASURES + 3].tolist()
 
     @staticmethod
     def _pose_measures(y):

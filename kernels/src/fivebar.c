@@ -326,10 +326,28 @@ static void cached_derivative(const void *model, const double *z, double *dzdt)
     actuated_derivative_of(m->held, m->cache, z, dzdt);
 }
 
+/* RK4 of the actuated derivative over dt, `substeps` steps, z (n words) in place, each stage's
+ * trigonometry turned from z's at the start (z's own from `cache` when it holds them, or NULL);
+ * work: 5 n doubles.  pc_fivebar_step and pc_fivebar_advance both integrate through here, so a
+ * step and an advance of the same state give the same bits. */
+static void advance_turned(const pc_fivebar_held *held, const double *cache, double *z, int n, double dt,
+                           int substeps, double *work)
+{
+    double start[PC_FIVEBAR_TRIG_WORDS];
+    for (int k = 0; k < 2; ++k) {
+        chain_trig g;
+        trig_at(cache, k, z[3 + 2 * k], z[4 + 2 * k], 0, &g);   /* the cache's if it holds z's angles */
+        keep_trig(start, k, z[3 + 2 * k], z[4 + 2 * k], &g);
+    }
+    start[0] = TRIG_MARK;
+    const cached_model model = {held, start};
+    pc_rk4(cached_derivative, &model, z, n, dt, substeps, work);
+}
+
 /* RK4 of the actuated derivative over dt, `substeps` steps, z in place; work: 5 (14 + n) doubles. */
 void pc_fivebar_advance(const pc_fivebar_held *held, double *z, double dt, int substeps, double *work)
 {
-    pc_rk4(pc_fivebar_actuated_derivative, held, z, N_Y + held->n_motors, dt, substeps, work);
+    advance_turned(held, NULL, z, N_Y + held->n_motors, dt, substeps, work);
 }
 
 /* Chain k's rows of the position constraint residual (5.18, 7.7) at y, from the sines and
@@ -437,15 +455,7 @@ int pc_fivebar_step(const pc_fivebar_params *p, const pc_fivebar_settings *s, co
     for (int i = 0; i < n; ++i) trial[i] = z[i];
     const pc_fivebar_held held = {p, motors, voltages, u1, u2, s->lambda, n_motors};
     double *cache = scratch + 6 * n;   /* the trigonometry of z when the last step's report kept it */
-    double start[PC_FIVEBAR_TRIG_WORDS];   /* z's: the RK4 stages turn it */
-    for (int k = 0; k < 2; ++k) {
-        chain_trig g;
-        trig_at(cache, k, z[3 + 2 * k], z[4 + 2 * k], 0, &g);   /* the cache's if it holds z's angles */
-        keep_trig(start, k, z[3 + 2 * k], z[4 + 2 * k], &g);
-    }
-    start[0] = TRIG_MARK;
-    const cached_model model = {&held, start};
-    pc_rk4(cached_derivative, &model, trial, n, dt, (int)s->substeps, scratch + n);
+    advance_turned(&held, cache, trial, n, dt, (int)s->substeps, scratch + n);
     report_of(p, s, trial, report, cache);
     return judge(s, trial, n, report, refusal);
 }

@@ -112,13 +112,25 @@ def test_the_trigonometry_kept_for_the_next_step_gives_the_bits_of_a_fresh_scrat
             kept[3] = fresh[3] = np.nextafter(kept[3], 1.0)
 
 
+def _rk4_fresh(kernel, z, u_star, baumgarte, dt, substeps):
+    """Classic RK4 of the kernel's derivative (its trigonometry computed at every evaluation)."""
+    h, y = dt / substeps, z.copy()
+    for _ in range(substeps):
+        k1 = kernel.derivative(y, u_star, baumgarte)
+        k2 = kernel.derivative(y + 0.5 * h * k1, u_star, baumgarte)
+        k3 = kernel.derivative(y + 0.5 * h * k2, u_star, baumgarte)
+        k4 = kernel.derivative(y + h * k3, u_star, baumgarte)
+        y = y + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    return y
+
+
 @pytest.mark.parametrize("dt, steps", [(1e-3, 200), (2e-2, 12)])
 def test_the_rk4_stages_turned_sines_are_the_fresh_ones_within_rounding(dt, steps):
     """pc_fivebar_step turns the step's start sines and cosines by each RK4 stage's angle
     increment (series in the increment, up to 2^-5 rad; beyond, computed afresh).  Catches a
     wrong turn (a sign, a series coefficient, another angle's increment) or a wrong fresh path: each
-    trial state equals RK4 of pc_fivebar_derivative (fresh sines and cosines at every stage,
-    pc_fivebar_advance) within 1e-14 of max(1, |entry|) (2.4e-16 seen), in 1 ms steps (every
+    trial state equals RK4 of pc_fivebar_derivative (fresh sines and cosines at every stage, the
+    RK4 written here: pc_fivebar_advance turns them as the step does) within 1e-14 of max(1, |entry|) (2.4e-16 seen), in 1 ms steps (every
     stage turned) and in 20 ms steps of the same motion (angles move up to 0.09 rad a step:
     stages past 2^-5 rad computed afresh)."""
     sim = PlantSimulator(get_preset("bench"), 0.0, 0.15, dx0=0.4, dy0=0.3)
@@ -129,7 +141,7 @@ def test_the_rk4_stages_turned_sines_are_the_fresh_ones_within_rounding(dt, step
         u1, u2 = 0.02 * math.cos(0.3 * k), -0.01
         assert kernel.step(z, u1, u2, dt) == 0, k
         trial = kernel.scratch[:z.size].copy()
-        fresh = kernel.advance(z, u1, u2, baumgarte, dt, substeps)
+        fresh = _rk4_fresh(kernel, z, (u1, u2), baumgarte, dt, substeps)
         assert np.all(np.abs(trial - fresh) <= 1e-14 * np.maximum(np.abs(fresh), 1.0)), k
         moved = max(moved, float(np.abs(trial[3:7] - z[3:7]).max()))
         z = trial

@@ -121,11 +121,15 @@ static int setup(pcn_instance *in, pcn_text *why)
         return pcn_addf(why, "initial dphi0 = %r with the yaw locked (yaw = false) must be 0", pd.state.dphi), 1;
     pc_refusal refusal;
     int code = pc_wheeled_condition(&pd.params, &pd.state, &refusal);
-    if (code != PC_OK) {
-        const char *what = code == PC_WHEELED_FALLEN_PITCH   ? "pitch beyond 90 degrees"
-                           : code == PC_WHEELED_FALLEN_FLOOR ? "body touching the floor"
-                                                             : "non-finite state";
-        return pcn_addf(why, "initial state: %s (psi0 = %r rad)", what, pd.state.psi), 1;
+    if (code != PC_OK) {    /* as plant.wheeled.initial_refusal, the entry named as its parameter */
+        static const char *const entries[8] = {"theta0", "psi0", "phi0", "x0", "y0", "dtheta0", "dpsi0", "dphi0"};
+        const int fell = code == PC_WHEELED_FALLEN_PITCH || code == PC_WHEELED_FALLEN_FLOOR;
+        const char *reason = code == PC_WHEELED_FALLEN_PITCH   ? "fallen_pitch"
+                             : code == PC_WHEELED_FALLEN_FLOOR ? "fallen_floor"
+                                                               : "nonfinite_state";
+        const int entry = fell ? 1 : (0 <= refusal.index && refusal.index < 8 ? refusal.index : 1);
+        return pcn_addf(why, "initial %s = %r%s is no standing robot (%s)", entries[entry], refusal.value,
+                        fell ? " rad" : "", reason), 1;
     }
     memcpy(in->data, &pd, sizeof pd);
     publish(in);
