@@ -4,7 +4,8 @@ A model's ``data`` function gets the pythonfmu slave after a successful initiali
 its start values and returns what its adapter reads as constants: ``{name: float}`` scalars
 (``#define PCN_<NAME>``) and ``{name: array}`` arrays (``pcn_<name>[]``, with
 ``PCN_<NAME>_WORDS``).  Designs that need scipy or python-control are made here, at build
-time, for the FMU's parameters (docs/native.md says which parameters are then fixed).
+time, for the FMU's parameters (docs/native.md says which parameters are then fixed); the
+designs made in C at set-up need only their presets' data here.
 """
 from __future__ import annotations
 
@@ -99,9 +100,12 @@ def drive_presets() -> dict:
     from fmus.slave.declarations import MOTOR_PARAMETERS
     from motor.presets import MOTOR_PRESETS
 
+    from motor.current_controller import THESIS_POLES
+
     names = sorted(MOTOR_PRESETS)
     return {"preset_names": names, "preset_motor": np.array([[getattr(MOTOR_PRESETS[n], f) for f, _, _ in
-                                                               MOTOR_PARAMETERS] for n in names])}
+                                                               MOTOR_PARAMETERS] for n in names]),
+            "current_poles": np.array(THESIS_POLES, dtype=np.float64)}
 
 
 def drive_design(slave, suffix: str = "") -> dict:
@@ -147,25 +151,20 @@ def _actuated(slave):
 
 def _position(slave):
     """The law's set-up data: the strategies' presets (Tables 6-8, seed 001's) per trajectory
-    name, each plant preset's geometry and chains (its counter-mass check), the motor presets'
-    kt, and the model (Ĥ, ĥ) for the slave's plant parameters: the exact model's
-    ``pc_fivebar_params`` and the tabulated model's ``pc_law_table`` (both made here, so
-    ``strategy``, ``model``, ``trajectory`` and the gains stay free in the FMU)."""
-    from dataclasses import replace
-
+    name, each plant preset's geometry and its whole model (``preset_model``: l0, m0 and both
+    chains' :data:`PLANT_CHAIN_FIELDS`: the counter-mass check, and the model Ĥ, ĥ the adapter
+    makes at set-up with kernels/src/model5r.c), the motor presets' kt
+    (so every parameter of the slave stays free in the FMU)."""
     from controller.kinematics import Kinematics
-    from controller.model import TabulatedModel, perturbed_params
     from controller.position import default_kt
     from controller.strategies import ALL_STRATEGY_NAMES, get_strategy
-    from fmus.slave.declarations import with_counter_masses
     from fmus.slaves.parcosim_positioncontroller import MAX_DELAY_STEPS, MAX_TABLE_POINTS
     from plant import fivebar
-    from plant.fast5r import pack_params
     from plant.presets import COUNTER_REACH, PRESET_NAMES, get_preset
 
     trajectories = ("circle", "triangle", "thesis_circle", "hold")
     arrays = {"strategy_names": list(ALL_STRATEGY_NAMES), "trajectory_names": list(trajectories),
-              "preset_names": list(PRESET_NAMES), "built_preset": [str(slave.preset)]}
+              "preset_names": list(PRESET_NAMES)}
     rows = []
     for trajectory in trajectories:
         for name in ALL_STRATEGY_NAMES:
@@ -174,25 +173,18 @@ def _position(slave):
             rows.append([{"q": 0.0, "x": 1.0}[s.space], float(s.model_based), s.lam, s.m_star, s.phi, *s.k, *gamma,
                          {"unified": 0.0, "seed001": 1.0}[s.law]])
     arrays["strategies"] = np.array(rows)
-    geometry, chains = [], []
+    geometry, models = [], []
     for name in PRESET_NAMES:
         preset = get_preset(name)
         kin = Kinematics(preset)
         geometry.append([kin.l0, kin.l11, kin.l12, kin.l21, kin.l22])
-        chains.append([[c.l1, c.l2, c.lg1, c.lg2, c.m1, c.m2] for c in (preset.chain1, preset.chain2)])
-    arrays["preset_geometry"], arrays["preset_chains"] = np.array(geometry), np.array(chains)
-    params = with_counter_masses(slave, replace(get_preset(slave.preset), gravity=(slave.gravity_x, slave.gravity_y,
-                                                                                   0.0)))
-    model = perturbed_params(params, slave.model_error)
-    table = TabulatedModel(model, slave.grid_step, (slave.x_min, slave.x_max, slave.y_min, slave.y_max), cache=False)
-    arrays["model_params"], arrays["model_table"] = pack_params(model), table.kernel_table
+        models.append([preset.l0, preset.m0, *(getattr(c, f) for c in (preset.chain1, preset.chain2)
+                                               for f in PLANT_CHAIN_FIELDS)])
+    arrays["preset_geometry"], arrays["preset_model"] = np.array(geometry), np.array(models)
     kt1, kt2 = default_kt()
     scalars = {"default_kt1": float(kt1), "default_kt2": float(kt2), "band": float(fivebar.NEAR_SINGULAR_MARGIN),
                "max_delay_steps": int(MAX_DELAY_STEPS), "max_table_points": float(MAX_TABLE_POINTS),
                "counter_reach": float(COUNTER_REACH), "strategy_words": len(rows[0])}
-    for name in ("gravity_x", "gravity_y", "counter_mass1", "counter_mass2", "model_error", "grid_step", "x_min",
-                 "x_max", "y_min", "y_max"):
-        scalars[f"built_{name}"] = float(getattr(slave, name))
     return scalars, arrays
 
 
@@ -202,15 +194,16 @@ NATIVE = {
     "Trajectory": NativeModel("pcn_trajectory.c", ("trajectory.c",), _trajectory),
     "WheeledPendulum": NativeModel("pcn_wheeledpendulum.c", ("wheeled.c",)),
     "BalanceController": NativeModel("pcn_balancecontroller.c", ("balance.c",), _balance, sampled=True),
-    "PositionController": NativeModel("pcn_positioncontroller.c", ("law.c", "kinematics5r.c", "fivebar.c"), _position,
-                                      sampled=True),
+    "PositionController": NativeModel("pcn_positioncontroller.c",
+                                      ("law.c", "kinematics5r.c", "fivebar.c", "model5r.c"), _position, sampled=True),
     "CurrentObserver": NativeModel("pcn_currentobserver.c", ("observer.c", "electrics.c"), _observer, sampled=True),
-    "FiveBarPlant": NativeModel("pcn_fivebarplant.c", ("fivebar.c", "kinematics5r.c"), _plant,
+    "FiveBarPlant": NativeModel("pcn_fivebarplant.c", ("fivebar.c", "kinematics5r.c", "model5r.c"), _plant,
                                 parts=("pcn_plant_setup.c", "pcn_plant_setup.h")),
-    "DCMotorDrive": NativeModel("pcn_dcmotordrive.c", ("drive.c", "observer.c", "electrics.c"), _drive, sampled=True,
+    "DCMotorDrive": NativeModel("pcn_dcmotordrive.c", ("drive.c", "observer.c", "electrics.c", "design.c"), _drive,
+                                sampled=True,
                                 parts=("pcn_drive_setup.c", "pcn_drive_setup.h")),
     "ActuatedFiveBarPlant": NativeModel(
-        "pcn_actuatedfivebarplant.c", ("actuated.c", "fivebar.c", "kinematics5r.c", "drive.c", "electrics.c"),
+        "pcn_actuatedfivebarplant.c", ("actuated.c", "fivebar.c", "kinematics5r.c", "model5r.c", "drive.c", "electrics.c", "design.c"),
         _actuated, sampled=True,
         parts=("pcn_plant_setup.c", "pcn_plant_setup.h", "pcn_drive_setup.c", "pcn_drive_setup.h")),
 }

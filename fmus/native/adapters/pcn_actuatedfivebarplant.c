@@ -2,7 +2,7 @@
  *
  * The set-up is the slave's: its own checks (T, L1, L2), the plant's (pcn_plant_setup.c:
  * build_plant) and each drive's (pcn_drive_setup.c: build_drive with the suffix "1" or "2",
- * the current controllers designed at the build as data), then plant.actuated.ActuatedPlant's
+ * the current controllers: designed at the build as data, or by design.c), then plant.actuated.ActuatedPlant's
  * motor rows and LuGre models (the drive's with sigma2 = 0: b stays in the ODE).  A step is
  * ActuatedPlant.step's one C call (RK4, the C kernel, no projection): the plant's step-size
  * rule, the armature poles' RK4 stability, the drives' coefficients for h, pc_actuated_step;
@@ -96,8 +96,10 @@ static int build(const pcn_instance *in, actuated *a, pcn_text *why)
     memset(a, 0, sizeof *a);
     if (pcn_plant_setup(in, &a->config, a->z, why)) return 1;
     const pcn_drive_design designs[2] = {
-        {PCN_DESIGN1_KEYS_WORDS / PCN_DESIGN_KEY, pcn_design1_keys, pcn_design1_coefficients, pcn_design1_error[0]},
-        {PCN_DESIGN2_KEYS_WORDS / PCN_DESIGN_KEY, pcn_design2_keys, pcn_design2_coefficients, pcn_design2_error[0]}};
+        {PCN_DESIGN1_KEYS_WORDS / PCN_DESIGN_KEY, pcn_design1_keys, pcn_design1_coefficients, pcn_design1_error[0],
+         pcn_current_poles},
+        {PCN_DESIGN2_KEYS_WORDS / PCN_DESIGN_KEY, pcn_design2_keys, pcn_design2_coefficients, pcn_design2_error[0],
+         pcn_current_poles}};
     for (int n = 0; n < 2; ++n) {
         pcn_drive_parameters p = parameters(in, n);
         if (pcn_drive_build(&p, &PRESETS, &designs[n], &a->drive[n], why)) return 1;

@@ -9,6 +9,7 @@
  * then run state), then the sub-step counter.
  */
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "balance.h"
@@ -82,6 +83,22 @@ static int check_step(pcn_instance *in, double t, double h, pcn_text *why)
     return pcn_sampling_check(counter(in), in, in->real[PCN_SLOT_T], in->integer[PCN_SLOT_sample_phase], t, h, why);
 }
 
+/* controller.fastbalance.WORD_NAMES[index]: the field of pc_balance holding the word, with its
+ * element for an array ("K[3]"). */
+static void word_name(int index, char *out, size_t size)
+{
+    const pc_field *const parts[2] = {pc_balance_params_fields, pc_balance_state_fields};
+    snprintf(out, size, "%d", index);
+    for (int p = 0; p < 2; ++p)
+        for (const pc_field *f = parts[p]; f->name; ++f) {
+            const int first = pc_balance_fields[p].offset + f->offset;
+            if (first <= index && index < first + f->count) {
+                if (f->count == 1) snprintf(out, size, "%s", f->name);
+                else snprintf(out, size, "%s[%d]", f->name, index - first);
+            }
+        }
+}
+
 /* The controller's sample at t (the slave's sample). */
 static int sample(pcn_instance *in, double t, pcn_text *why)
 {
@@ -98,9 +115,13 @@ static int sample(pcn_instance *in, double t, pcn_text *why)
         return pcn_addf(pcn_timed(why), "input %s = %r at t = %G s is not finite", inputs[refusal.index], refusal.value,
                         t), 1;
     }
-    if (code != PC_OK)
-        return pcn_addf(pcn_timed(why), "the balance controller's buffer word %d = %r at t = %G s is not a size or "
-                        "state index its arrays have", refusal.index, refusal.value, t), 1;
+    if (code != PC_OK) {   /* PC_BALANCE_BAD_BUFFER */
+        char word[64];
+        word_name(refusal.index, word, sizeof word);
+        pcn_quantify(why, code, "bad_buffer", word, refusal.value, "", t);
+        return pcn_addf(pcn_timed(why), "the balance controller's buffer word %s = %r at t = %G s is not a size or "
+                        "state index its arrays have", word, refusal.value, t), 1;
+    }
     const int slots[12] = {PCN_SLOT_v_l, PCN_SLOT_v_r, PCN_SLOT_tau_l, PCN_SLOT_tau_r, PCN_SLOT_x_d, PCN_SLOT_y_d,
                            PCN_SLOT_theta_hat, PCN_SLOT_psi_hat, PCN_SLOT_phi_hat, PCN_SLOT_dtheta_hat,
                            PCN_SLOT_dpsi_hat, PCN_SLOT_dphi_hat};

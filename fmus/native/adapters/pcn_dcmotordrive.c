@@ -1,9 +1,10 @@
 /* Native DCMotorDrive (fmus/slaves/parcosim_dcmotordrive.py) over pc_drive_step.
  *
  * The drive is set up, started and stepped by pcn_drive_setup.c (build_drive's and
- * motor.Drive's checks and messages); the current controller is designed at the FMU's build
- * for its parameters then and for the motor presets at its T (pcn_design_*); the presets
- * travel as data (pcn_preset_*).
+ * motor.Drive's checks and messages); the current controller is python-control's design made at
+ * the FMU's build for its parameters then and for the motor presets at its T (pcn_design_*),
+ * or for other motor values design.c's (pc_current_design); the presets travel as data
+ * (pcn_preset_*).
  * Current mode: steps h = T / n, the controller sampling on sub-step sample_phase of each
  * period (the kernel's counter, pc_drive.phase); voltage mode: any step.  internal_observer:
  * the controller reads the drive's own estimate (observer.c: motor.CurrentObserver on the
@@ -64,7 +65,7 @@ static int build(const pcn_instance *in, pcn_drive_data *d, pcn_text *why)
         return pcn_addf(why, "parameter T = %r s must be >= %G s", values[0], MIN_STEP), 1;
     pcn_drive_parameters p = parameters(in);
     pcn_drive_design design = {PCN_DESIGN_KEYS_WORDS / PCN_DESIGN_KEY, pcn_design_keys, pcn_design_coefficients,
-                               pcn_design_error[0]};
+                               pcn_design_error[0], pcn_current_poles};
     return pcn_drive_build(&p, &PRESETS, &design, d, why);
 }
 

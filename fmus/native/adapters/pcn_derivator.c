@@ -29,6 +29,24 @@ static pc_derivator_context context(pcn_instance *in)
     return c;
 }
 
+/* A kernel's refusal in controller.derivators._REASONS' words and fields: an angle of `q` not
+ * finite or beyond `limit`, or a word of the damaged buffer (its sizes). */
+static void kernel_refusal(const pc_refusal *r, const double q[CHANNELS], double limit, pcn_text *why)
+{
+    static const char *const ANGLES[CHANNELS] = {"q1", "q2"};
+    static const char *const LAYOUT[4] = {"states", "channels", "length", "scratch length"};
+    if (r->code == PC_DERIVATOR_BAD_INPUT) {
+        pcn_quantify(why, r->code, "bad_input", ANGLES[r->index], r->value, "rad", NAN);
+        pcn_addf(why, "angles q = [%r, %r] rad must be finite with |q| <= ", q[0], q[1]);
+        if (isinf(limit)) pcn_addf(why, "inf");
+        else pcn_addf(why, "%G", limit);
+        return;
+    }
+    pcn_quantify(why, r->code, "bad_layout", LAYOUT[r->index], r->value, "", NAN);
+    pcn_addf(why, "the derivator's buffer of %d words is damaged: %s = %r does not fit it",
+             (int)PCN_DESIGN_BUFFER_WORDS, LAYOUT[r->index], r->value);
+}
+
 /* The slave's parameter checks (require_finite, refuse_absurd, > 0, T, Nyquist, fc T). */
 static int check_parameters(const double *r, pcn_text *why)
 {
@@ -73,7 +91,7 @@ static int setup(pcn_instance *in, pcn_text *why)
     const double q0[CHANNELS] = {r[PCN_SLOT_q1_0], r[PCN_SLOT_q2_0]};
     pc_refusal refusal;
     if (pc_derivator_reset(&c, q0, &refusal) == PC_OK) return 0;
-    return pcn_addf(why, "the derivator refused its start angles (code %d, value %r)", refusal.code, refusal.value), 1;
+    return kernel_refusal(&refusal, q0, INFINITY, why), 1;
 }
 
 static int check_step(pcn_instance *in, double t, double h, pcn_text *why)
@@ -101,9 +119,7 @@ static int sample(pcn_instance *in, double t, pcn_text *why)
     if (code == PC_DERIVATOR_NONFINITE_OUTPUT)
         return pcn_addf(pcn_timed(why), "the estimates (dq1, dq2, ddq1, ddq2) = (%r, %r, %r, %r) at t = %G s are not "
                         "finite (inputs q1 = %r, q2 = %r rad)", out[0], out[1], out[2], out[3], t, q[0], q[1]), 1;
-    if (code != PC_OK)
-        return pcn_addf(pcn_timed(why), "the derivator's buffer was refused (code %d, word %d = %r) at t = %G s", code,
-                        refusal.index, refusal.value, t), 1;
+    if (code != PC_OK) return kernel_refusal(&refusal, q, ABSURD, why), 1;
     r[PCN_SLOT_dq1] = out[0];
     r[PCN_SLOT_dq2] = out[1];
     r[PCN_SLOT_ddq1] = out[2];

@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "design.h"
 #include "electrics.h"
 #include "pc_sampling.h"
 #include "pcn_sampling.h"
@@ -134,57 +135,40 @@ static int lugre(const pcn_drive_parameters *p, const double *m, pc_lugre *f, pc
     return 0;
 }
 
-/* The parameter that set the design's value k (DESIGN_PARAMETERS, then the motor's, then the preset). */
-static void design_source(const pcn_drive_parameters *p, int k, pcn_text *why)
-{
-    const char *s = p->suffix;
-    const int motor_field[PCN_DESIGN_KEY - 1] = {PCN_MOTOR_R, PCN_MOTOR_L, PCN_MOTOR_KT, PCN_MOTOR_KE, PCN_MOTOR_B,
-                                                 PCN_MOTOR_J_ROTOR};
-    if (k == PCN_DESIGN_KEY - 1) pcn_addf(why, "parameter T = %r s", p->T);
-    else if (k < PCN_DESIGN_FIELDS && p->design[k] != PRESET_VALUE)
-        pcn_addf(why, "parameter %s%s = %r", DESIGN_VARIABLES[k], s, p->design[k]);
-    else if (p->motor[motor_field[k]] != PRESET_VALUE)
-        pcn_addf(why, "parameter %s%s = %r", MOTOR_VARIABLES[motor_field[k]], s, p->motor[motor_field[k]]);
-    else pcn_addf(why, "parameter preset%s = '%s'", s, p->preset);
-}
-
-/* The current controller of the design values `key` (motor.drive._design): a built one, or refused
- * naming the parameter that set the first value differing from the nearest built design. */
-static int controller(const pcn_drive_parameters *p, const double *key, const pcn_drive_design *design,
-                      pc_controller *c, pcn_text *why)
+/* The current controller of the design values `key` (motor.drive._design): the one python-control
+ * made at the build for these values if it carries it (the twin's coefficients, bit for bit),
+ * else pc_current_design's (design.c: the same poles, the exact ZOH model). */
+static int controller(const double *key, const pcn_drive_design *design, const char *s, pc_controller *c,
+                      pcn_text *why)
 {
     static const char *const NAMES[PCN_DESIGN_KEY] = {"R", "L", "kt", "ke", "b", "J_rotor", "T"};
-    if (key[1] == 0.0) {   /* design_current_controller's own first refusal */
-        pcn_addf(why, "current controller design (app. C) failed for ");
-        for (int k = 0; k < PCN_DESIGN_KEY; ++k) pcn_addf(why, k ? ", %s = %r" : "%s = %r", NAMES[k], key[k]);
-        return pcn_addf(why, ": current controller design needs L > 0, got L=0.0"), 1;
-    }
-    int nearest = 0, most = -1;
     for (int j = 0; j < design->count; ++j) {
         const double *built = design->keys + j * PCN_DESIGN_KEY;
         int equal = 0;
         for (int k = 0; k < PCN_DESIGN_KEY; ++k) equal += key[k] == built[k];
-        if (equal == PCN_DESIGN_KEY) {
-            if (j == 0 && design->error[0]) return pcn_addf(why, "%s", design->error), 1;
-            const double *a = design->coefficients + 4 * j;
-            *c = (pc_controller){.alpha = a[0], .beta = a[1], .gamma = a[2], .delta = a[3]};
-            return 0;
-        }
-        if (equal > most) {
-            most = equal;
-            nearest = j;
-        }
+        if (equal < PCN_DESIGN_KEY) continue;
+        if (j == 0 && design->error[0]) return pcn_addf(why, "%s", design->error), 1;
+        const double *a = design->coefficients + 4 * j;
+        *c = (pc_controller){.alpha = a[0], .beta = a[1], .gamma = a[2], .delta = a[3]};
+        return 0;
     }
-    const double *built = design->keys + nearest * PCN_DESIGN_KEY;
-    int k = 0;
-    while (key[k] == built[k]) ++k;
-    design_source(p, k, why);
-    pcn_addf(why, ": this native FMU carries the current controller designed (app. C) for ");
-    for (int j = 0; j < PCN_DESIGN_KEY; ++j) pcn_addf(why, j ? ", %s = %r" : "%s = %r", NAMES[j], built[j]);
-    return pcn_addf(why, " (the nearest of the %d designs it carries: its build's parameters, the motor presets at "
-                    "T = %r s), not for %s = %r (the ZOH design needs python-control: build the native FMU with "
-                    "these values as its start values, or use the pythonfmu FMU)", design->count,
-                    design->keys[PCN_DESIGN_KEY - 1], NAMES[k], key[k]), 1;
+    double coefficients[4], detail;
+    const int code = pc_current_design(key, key[PCN_DESIGN_KEY - 1], design->poles, coefficients, &detail);
+    if (code == PC_OK) {
+        *c = (pc_controller){.alpha = coefficients[0], .beta = coefficients[1], .gamma = coefficients[2],
+                             .delta = coefficients[3]};
+        return 0;
+    }
+    pcn_addf(why, "current controller design (app. C) failed for ");
+    for (int k = 0; k < PCN_DESIGN_KEY; ++k) pcn_addf(why, k ? ", %s = %r" : "%s = %r", NAMES[k], key[k]);
+    if (code == PC_DESIGN_NO_L) return pcn_addf(why, ": current controller design needs L > 0, got L=0.0"), 1;
+    if (code == PC_DESIGN_ZERO_AT_ONE)
+        return pcn_addf(why, ": with b = 0 the plant's zero is z = 1, the controller's integrator, and appendix C's "
+                        "system is singular: the native FMU does not pick one of its many solutions as numpy's "
+                        "solve does (set b%s or b_design%s > 0, or use the pythonfmu FMU)", s, s), 1;
+    if (code == PC_DESIGN_NOT_ZOH)
+        return pcn_addf(why, ": the ZOH model's numerator has the leading coefficient %r", detail), 1;
+    return pcn_addf(why, ": a coefficient of K(z) is %r", detail), 1;
 }
 
 int pcn_drive_build(const pcn_drive_parameters *p, const pcn_motor_presets *presets, const pcn_drive_design *design,
@@ -216,7 +200,7 @@ int pcn_drive_build(const pcn_drive_parameters *p, const pcn_motor_presets *pres
         return pcn_addf(why, "method 'euler' needs L%s > 0, got L%s = %r; use 'quasi_static'", s, s, m[PCN_MOTOR_L]), 1;
     if (number("", "T", "", p->T, 1, why)) return 1;
     double v_max = m[PCN_MOTOR_V_MAX];
-    if (mode == 0 && controller(p, key, design, &d.controller, why)) return 1;
+    if (mode == 0 && controller(key, design, s, &d.controller, why)) return 1;
     d.controller.v_max = v_max;   /* the voltage mode's: CurrentController.idle_buffer */
     d.R = m[PCN_MOTOR_R];
     d.L = m[PCN_MOTOR_L];

@@ -7,11 +7,11 @@
  * as they are) and ActuatedFiveBarPlant (each drive's variables followed by "1" or "2": the
  * `suffix` every message appends to a variable's name, as build_drive(slave, suffix) does).
  *
- * The current controller's design (app. C, python-control) is made when the FMU is built,
- * for its parameters then and for each motor preset at its T, and given here as a
- * pcn_drive_design; a drive in current mode whose design values (R, L, kt, ke, b, J_rotor of
- * the design's motor, T) are none of them is refused by name.  The motor presets travel as
- * data too (pcn_motor_presets).
+ * The current controller's design (app. C): python-control's, made when the FMU is built for
+ * its parameters then and for each motor preset at its T (pcn_drive_design: the twin's
+ * coefficients bit for bit), and for any other design values (R, L, kt, ke, b, J_rotor of the
+ * design's motor, T) kernels/src/design.c's pc_current_design at set-up.  The motor presets
+ * travel as data too (pcn_motor_presets).
  */
 #ifndef PCN_DRIVE_SETUP_H
 #define PCN_DRIVE_SETUP_H
@@ -40,12 +40,14 @@ typedef struct {
 } pcn_motor_presets;
 
 /* The current controllers designed at the FMU's build: the first for its parameters then,
- * the others for the motor presets at its T (fmus.native.models.drive_design). */
+ * the others for the motor presets at its T (fmus.native.models.drive_design); the poles any
+ * other design places (motor.current_controller.THESIS_POLES). */
 typedef struct {
     int count;
     const double *keys;           /* count rows of the PCN_DESIGN_KEY values each was designed for */
     const double *coefficients;   /* count rows of alpha, beta, gamma, delta (C.5) */
     const char *error;            /* "" or the message the first's design failed with (motor.drive._design's) */
+    const double *poles;          /* the three requested closed-loop poles */
 } pcn_drive_design;
 
 /* A drive's parameters, as its FMU variables hold them. */

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "kinematics5r.h"
+#include "model5r.h"
 #include "model_config.h"
 
 #define ABSURD 1e6             /* fmus/slave/refusals.py */
@@ -78,12 +79,11 @@ static int chain_overrides(const pcn_instance *in, int k, double chain[CHAIN_FIE
     return 0;
 }
 
-/* plant.presets.ChainParams.counter_offsets: (L1, L2) of the counter-masses (M1, M2). */
-static void counter_offsets(const double c[CHAIN_FIELDS], double M1, double M2, double L[2])
+/* The kernel's chain of the fields l1 .. J_rotor. */
+static pc_fivebar_chain chain_of(const double c[CHAIN_FIELDS])
 {
-    const double l1 = c[0], lg1 = c[2], lg2 = c[3], m1 = c[4], m2 = c[5];
-    L[1] = M2 > 0.0 ? -m2 * lg2 / M2 : 0.0;
-    L[0] = M1 > 0.0 ? -(m1 * lg1 + (M2 + m2) * l1) / M1 : 0.0;
+    return (pc_fivebar_chain){.l1 = c[0], .l2 = c[1], .lg1 = c[2], .lg2 = c[3], .m1 = c[4], .m2 = c[5], .Jz1 = c[6],
+                              .Jz2 = c[7], .J_rotor = c[8]};
 }
 
 /* fmus.slave.declarations.with_counter_masses: checked, named as the FMU's variables. */
@@ -102,7 +102,8 @@ static int counter_masses(const pcn_instance *in, double chains[2][CHAIN_FIELDS]
     for (int k = 0; k < 2; ++k) {   /* FiveBarParams.check_counter_masses */
         const double *c = chains[k], reach = COUNTER_REACH * (c[0] + c[1]);
         double L[2];
-        counter_offsets(c, M[0], M[1], L);
+        const pc_fivebar_chain chain = chain_of(c);
+        pc_model5r_counter_offsets(&chain, M[0], M[1], L);   /* plant.presets.ChainParams.counter_offsets */
         for (int j = 0; j < 2; ++j)
             if (fabs(L[j]) > reach)
                 return pcn_addf(why, "parameter %s = %r kg is too light to balance chain %d: it would sit %s m behind "
@@ -110,27 +111,6 @@ static int counter_masses(const pcn_instance *in, double chains[2][CHAIN_FIELDS]
                                 g(fabs(L[j]), 3, a, sizeof a), COUNTER_REACH, g(reach, 3, b, sizeof b)), 1;
     }
     return 0;
-}
-
-/* plant.fast5r.composite_link: (m, lg, Jz) of a link carrying a point `mass` at `offset`. */
-static void composite_link(double *m, double *lg, double *Jz, double mass, double offset)
-{
-    if (mass == 0.0) return;   /* plant.serial.with_point_mass: the link itself */
-    const double total = *m + mass, com = (*m * *lg + mass * offset) / total;
-    const double r = *lg - com, s = offset - com;
-    *Jz = (*Jz + *m * (r * r)) + mass * (s * s);
-    *lg = com;
-    *m = total;
-}
-
-static void pack_chain(const double c[CHAIN_FIELDS], const double M[2], pc_fivebar_chain *out)
-{
-    double L[2];
-    counter_offsets(c, M[0], M[1], L);
-    *out = (pc_fivebar_chain){.l1 = c[0], .l2 = c[1], .lg1 = c[2], .lg2 = c[3], .m1 = c[4], .m2 = c[5],
-                              .Jz1 = c[6], .Jz2 = c[7], .J_rotor = c[8]};
-    composite_link(&out->m1, &out->lg1, &out->Jz1, M[0], L[0]);
-    composite_link(&out->m2, &out->lg2, &out->Jz2, M[1], L[1]);
 }
 
 /* FiveBarParams.validate beyond what the checks before it leave possible. */
@@ -250,7 +230,10 @@ int pcn_plant_setup(const pcn_instance *in, pcn_plant_config *c, double y[PCN_PL
     c->params.m0 = r[PCN_SLOT_m0];
     c->params.gravity[0] = r[PCN_SLOT_gravity_x];
     c->params.gravity[1] = r[PCN_SLOT_gravity_y];
-    for (int k = 0; k < 2; ++k) pack_chain(chains[k], M, &c->params.chain[k]);
+    for (int k = 0; k < 2; ++k) {   /* plant.fast5r._pack_chain */
+        c->params.chain[k] = chain_of(chains[k]);
+        pc_model5r_pack_chain(&c->params.chain[k], M[0], M[1]);
+    }
     c->settings = (pc_fivebar_settings){.lambda = r[PCN_SLOT_baumgarte], .substeps = in->integer[PCN_SLOT_substeps],
                                         .count = 2.0 * PI / counts, .residual_stop = RESIDUAL_STOP,
                                         .singular_stop = SINGULAR_STOP, .offset = {offset[0], offset[1]}};

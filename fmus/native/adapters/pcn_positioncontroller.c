@@ -5,23 +5,26 @@
  * 6-8, seed 001's; pcn_strategies, from controller/strategies.py at the build, per trajectory
  * name), the parameters' overrides of lam, m_star, phi, k, gamma and kt, the table's and
  * delay's checks, the plant preset's geometry and its counter-mass check (pcn_preset_*), and
- * the kernel's pc_law_params (delay_compensation, velocity_delay_compensation: its predict).  The model (H^, h^) is made in Python at the FMU's build for its
- * plant parameters then (preset, gravity_x, gravity_y, counter_mass1, counter_mass2,
- * model_error; the table also for grid_step, x_min ... y_max): the exact model's
- * pc_fivebar_params (pcn_model_params) and the tabulated model's pc_law_table (pcn_model_table)
- * travel as data; a model-based strategy with one of those away from its build value is
- * refused by name at initialisation (docs/native.md).  PD strategies need no model.
+ * the kernel's pc_law_params (delay_compensation, velocity_delay_compensation: its predict).  The model (H^, h^) of a model-based strategy is made here at
+ * set-up (model5r.c) from the preset's data (pcn_preset_model) and the plant parameters
+ * (gravity_x, gravity_y, counter_mass1, counter_mass2, model_error), as the twin's
+ * PositionController makes it (perturbed_params, plant.fast5r.pack_params): the exact model's
+ * pc_fivebar_params, and with model = tabulated the table on the grid of grid_step, x_min ...
+ * y_max (controller.model.TabulatedModel's kernel_table).  PD strategies need no model.
  *
  * Steps h = T / n sample on sub-step sample_phase and hold the outputs in between
  * (pcn_sampling.h).  Model data (FMU state): the law's state and parameters (as the twin's
  * buffer), the delay queue, the table-fallback count, the sub-step counter; scratch: the
- * kernel's pc_law_scratch and the exact model's terms.
+ * kernel's pc_law_scratch, the exact model's terms, the model (what it was made for, its
+ * pc_fivebar_params, its table: configuration of the parameters, made again when a sample
+ * finds it made for others, e.g. after a state was restored into an instance never set up).
  */
 #include <math.h>
 #include <string.h>
 
 #include "fivebar.h"
 #include "law.h"
+#include "model5r.h"
 #include "model_config.h"
 #include "pcn_model.h"
 #include "pcn_sampling.h"
@@ -41,14 +44,24 @@ typedef struct {
     pcn_sampling counter;
 } controller;
 
+#define MODEL_KEY 12   /* what the model was made for: model kind, preset, the 10 plant and grid values */
+#define PRESET_MODEL_WORDS (2 + 2 * 9)   /* l0, m0, each chain's 9 fields (models.PLANT_CHAIN_FIELDS) */
+/* The largest table: TabulatedModel's checks allow ((x_max - x_min) / step + 1) ((y_max - y_min) / step + 1)
+ * <= MAX_TABLE_POINTS; rounding each count to the nearest whole number gives at most 1.5 times that plus 1. */
+#define TABLE_POINTS ((long)(1.5 * PCN_MAX_TABLE_POINTS) + 1)
+#define TABLE_WORDS ((long)(sizeof(pc_law_table) / sizeof(double)) + TABLE_POINTS * PC_LAW_TERMS)
+
 typedef struct {
     pc_law_scratch w;
     pc_fivebar_inverse terms;   /* its first words are pc_law_terms */
+    double key[MODEL_KEY];      /* NaN words before a model is made */
+    pc_fivebar_params model;    /* the exact model's parameters */
+    double table[];             /* TABLE_WORDS: the tabulated model's pc_law_table */
 } workspace;
 
 #define WORDS(type) ((long)(sizeof(type) / sizeof(double)))
 
-_Static_assert(PCN_MODEL_PARAMS_WORDS == WORDS(pc_fivebar_params), "model_params is a pc_fivebar_params");
+_Static_assert(PCN_PRESET_MODEL_WORDS == PCN_PRESET_NAMES_COUNT * PRESET_MODEL_WORDS, "preset_model rows");
 _Static_assert(PCN_STRATEGY_WORDS == 11, "a strategy row: space, model_based, lam, m_star, phi, k, gamma, law");
 
 enum { S_SPACE, S_MODEL_BASED, S_LAM, S_M_STAR, S_PHI, S_K1, S_K2, S_ADAPTIVE, S_GAMMA1, S_GAMMA2, S_LAW };
@@ -57,8 +70,6 @@ static const char *const INPUTS[N_INPUTS] = {"q1", "q2", "dq1", "dq2", "ddq1", "
                                              "x_d", "y_d", "dx_d", "dy_d", "ddx_d", "ddy_d"};
 
 static controller *data_of(pcn_instance *in) { return (controller *)in->data; }
-static const pc_law_table *table(void) { return (const pc_law_table *)pcn_model_table; }
-static const pc_fivebar_params *model_params(void) { return (const pc_fivebar_params *)pcn_model_params; }
 
 static int find(const char *name, const char *const *names, int n)
 {
@@ -155,10 +166,11 @@ static int check_counter_masses(const pcn_instance *in, int p, pcn_text *why)
     for (int j = 0; j < 2; ++j)
         if (M[j] < 0.0) return pcn_addf(why, "parameter %s = %r kg must be >= 0", names[j], M[j]), 1;
     for (int k = 0; k < 2; ++k) {   /* ChainParams.counter_offsets, FiveBarParams.check_counter_masses */
-        const double *c = pcn_preset_chains + (p * 2 + k) * 6;   /* l1, l2, lg1, lg2, m1, m2 */
-        const double L2 = M[1] > 0.0 ? -c[5] * c[3] / M[1] : 0.0;
-        const double L1 = M[0] > 0.0 ? -(c[4] * c[2] + (M[1] + c[5]) * c[0]) / M[0] : 0.0;
-        const double offset[2] = {L1, L2}, reach = PCN_COUNTER_REACH * (c[0] + c[1]);
+        const double *c = pcn_preset_model + p * PRESET_MODEL_WORDS + 2 + 9 * k;   /* l1, l2, lg1, lg2, m1, m2 ... */
+        const pc_fivebar_chain chain = {.l1 = c[0], .l2 = c[1], .lg1 = c[2], .lg2 = c[3], .m1 = c[4], .m2 = c[5]};
+        double offset[2];
+        pc_model5r_counter_offsets(&chain, M[0], M[1], offset);
+        const double reach = PCN_COUNTER_REACH * (c[0] + c[1]);
         for (int j = 0; j < 2; ++j)
             if (fabs(offset[j]) > reach)
                 return pcn_addf(why, "parameter %s = %r kg is too light to balance chain %d: it would sit %g m behind "
@@ -168,32 +180,55 @@ static int check_counter_masses(const pcn_instance *in, int p, pcn_text *why)
     return 0;
 }
 
-/* A model-based strategy's plant parameters (the table's too) away from the build. */
-static int refuse_unbuilt(const pcn_instance *in, int tabulated, pcn_text *why)
+/* What the model of these parameters is made for (kind: 0 PD, 1 exact, 2 tabulated; the grid's
+ * values only for a table). */
+static void model_key(const pcn_instance *in, const pc_law_params *p, double key[MODEL_KEY])
 {
-    static const char *const names[10] = {"gravity_x", "gravity_y", "counter_mass1", "counter_mass2", "model_error",
-                                          "grid_step", "x_min", "x_max", "y_min", "y_max"};
     const double *r = in->real;
     const int slots[10] = {PCN_SLOT_gravity_x, PCN_SLOT_gravity_y, PCN_SLOT_counter_mass1, PCN_SLOT_counter_mass2,
                            PCN_SLOT_model_error, PCN_SLOT_grid_step, PCN_SLOT_x_min, PCN_SLOT_x_max,
                            PCN_SLOT_y_min, PCN_SLOT_y_max};
-    const double built[10] = {PCN_BUILT_GRAVITY_X, PCN_BUILT_GRAVITY_Y, PCN_BUILT_COUNTER_MASS1,
-                              PCN_BUILT_COUNTER_MASS2, PCN_BUILT_MODEL_ERROR, PCN_BUILT_GRID_STEP, PCN_BUILT_X_MIN,
-                              PCN_BUILT_X_MAX, PCN_BUILT_Y_MIN, PCN_BUILT_Y_MAX};
-    if (strcmp(in->string[PCN_SLOT_preset], pcn_built_preset[0]) != 0) {
-        pcn_addf(why, "parameter preset = '%s'", in->string[PCN_SLOT_preset]);
-    } else {
-        int k = 0;
-        while (k < (tabulated ? 10 : 5) && r[slots[k]] == built[k]) ++k;
-        if (k == (tabulated ? 10 : 5)) return 0;
-        pcn_addf(why, "parameter %s = %r", names[k], r[slots[k]]);
+    const int kind = p->model == PC_LAW_MODEL_PD ? 0 : p->model == PC_LAW_MODEL_EXACT ? 1 : 2;
+    key[0] = kind;
+    key[1] = find(in->string[PCN_SLOT_preset], pcn_preset_names, PCN_PRESET_NAMES_COUNT);
+    for (int k = 0; k < 10; ++k) key[2 + k] = kind == 0 || (kind == 1 && k >= 5) ? 0.0 : r[slots[k]];
+}
+
+/* The model of a model-based strategy (PositionController with perturbed_params): the preset with
+ * the model's gravity and both chains' counter-masses, every mass and inertia scaled by
+ * 1 + model_error, packed (pack_params), and with a table its grid (TabulatedModel); the key
+ * it was made for.  Nonzero (why written) if the table does not fit, which the checks before exclude. */
+static int make_model(const pcn_instance *in, const pc_law_params *p, workspace *w, pcn_text *why)
+{
+    double key[MODEL_KEY];
+    model_key(in, p, key);
+    for (int k = 0; k < MODEL_KEY; ++k) w->key[k] = NAN;
+    if (key[0] == 0.0) return memcpy(w->key, key, sizeof key), 0;
+    const double *m = pcn_preset_model + (long)key[1] * PRESET_MODEL_WORDS, f = 1.0 + key[6];
+    pc_fivebar_params *model = &w->model;
+    model->l0 = m[0];
+    model->m0 = m[1] * f;
+    model->gravity[0] = key[2];
+    model->gravity[1] = key[3];
+    for (int k = 0; k < 2; ++k) {
+        const double *c = m + 2 + 9 * k;
+        model->chain[k] = (pc_fivebar_chain){.l1 = c[0], .l2 = c[1], .lg1 = c[2], .lg2 = c[3], .m1 = c[4] * f,
+                                             .m2 = c[5] * f, .Jz1 = c[6] * f, .Jz2 = c[7] * f, .J_rotor = c[8] * f};
+        pc_model5r_pack_chain(&model->chain[k], key[4] * f, key[5] * f);
     }
-    pcn_addf(why, ": this native FMU carries the controller's model for preset = '%s', gravity_x = %r, gravity_y = %r "
-             "m/s2, counter_mass1 = %r, counter_mass2 = %r kg, model_error = %r, and its table for grid_step = %r, "
-             "x_min = %r, x_max = %r, y_min = %r, y_max = %r m only (they are made in Python: build the native FMU "
-             "with these values as its start values, or use the pythonfmu FMU)", pcn_built_preset[0],
-             built[0], built[1], built[2], built[3], built[4], built[5], built[6], built[7], built[8], built[9]);
-    return 1;
+    if (key[0] == 2.0 && pc_model5r_build_table(model, key + 8, key[7], PCN_BAND, w->table, TABLE_WORDS) < 0)
+        return pcn_addf(why, "the table of grid_step = %r m does not fit the native FMU's %ld words", key[7],
+                        TABLE_WORDS), 1;
+    memcpy(w->key, key, sizeof key);
+    return 0;
+}
+
+/* Whether the model in the workspace was made for these parameters. */
+static int model_current(const pcn_instance *in, const pc_law_params *p, const workspace *w)
+{
+    double key[MODEL_KEY];
+    model_key(in, p, key);
+    return memcmp(key, w->key, sizeof key) == 0;
 }
 
 /* The slave's set-up in its order (PositionController.setup, then the controller's own
@@ -238,10 +273,7 @@ static int configure(const pcn_instance *in, pc_law_params *p, double k[2], pcn_
     const int exact = strcmp(model, "exact") == 0;
     if (!exact && strcmp(model, "tabulated") != 0)
         return pcn_addf(why, "model = '%s' is unknown; valid: exact, tabulated", model), 1;
-    if (model_based) {
-        if (!(v[7] > -1.0)) return pcn_addf(why, "model_error = %r must be finite and > -1", v[7]), 1;
-        if (refuse_unbuilt(in, !exact, why)) return 1;
-    }
+    if (model_based && !(v[7] > -1.0)) return pcn_addf(why, "model_error = %r must be finite and > -1", v[7]), 1;
     /* controller.law.pack */
     memset(p, 0, sizeof *p);
     const double *g = pcn_preset_geometry + preset * 5;
@@ -276,6 +308,10 @@ static int setup(pcn_instance *in, pcn_text *why)
     }
     c->state.k[0] = k[0];
     c->state.k[1] = k[1];
+    if (make_model(in, &c->params, (workspace *)in->scratch, why)) {
+        memset(c, 0, sizeof *c);
+        return 1;
+    }
     return 0;
 }
 
@@ -374,18 +410,20 @@ static int sample(pcn_instance *in, double t, pcn_text *why)
                                          PCN_SLOT_ddx_d, PCN_SLOT_ddy_d};
     controller *c = data_of(in);
     workspace *w = (workspace *)in->scratch;
+    if (!model_current(in, &c->params, w) && make_model(in, &c->params, w, why)) return 1;
     double *r = in->real, *x = &w->w.in.q1;
     for (int k = 0; k < N_INPUTS; ++k) x[k] = r[inputs[k]];
     const int tabulated = c->params.model == PC_LAW_MODEL_TABULATED;
-    const pc_law_context context = {&c->params, tabulated ? table() : NULL, (pc_law_terms *)&w->terms, &c->state,
-                                    &w->w, pc_fivebar_terms_of, model_params(), NULL, 0};
+    const pc_law_context context = {&c->params, tabulated ? (const pc_law_table *)w->table : NULL,
+                                    (pc_law_terms *)&w->terms, &c->state, &w->w, pc_fivebar_terms_of, &w->model, NULL,
+                                    0};
     const double h = r[PCN_SLOT_T];
     pc_refusal refusal;
     int code = pc_law_run(&context, h, &refusal), fell_back = 0;
     if ((code == PC_LAW_TABLE_OUT || code == PC_LAW_TABLE_HOLE) && tabulated && in->boolean[PCN_SLOT_table_fallback]) {
         code = pc_law_exact_pose(&c->params, &w->w, &refusal);   /* the exact model off the table */
         if (code == PC_OK) {
-            pc_fivebar_terms_of(model_params(), w->w.q, w->w.dq, (double *)&w->terms);
+            pc_fivebar_terms_of(&w->model, w->w.q, w->w.dq, (double *)&w->terms);
             code = pc_law_resume(&context, h, &refusal);
             fell_back = code == PC_OK;
         }
@@ -445,7 +483,7 @@ const pcn_model pcn_this_model = {
     .identifier = PCN_IDENTIFIER,
     .accepted_steps = PCN_SAMPLING_ACCEPTS,
     .data_words = WORDS(controller),
-    .scratch_words = WORDS(workspace),
+    .scratch_words = WORDS(workspace) + TABLE_WORDS,
     .setup = setup,
     .check_step = check_step,
     .step = step,

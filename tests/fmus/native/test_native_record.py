@@ -10,7 +10,11 @@ from __future__ import annotations
 import json
 import math
 
-from fmus.status import RunError, RunStatus
+import numpy as np
+
+from controller.derivators import Derivator
+from fmus.native.state_bytes import data_words, with_data_word
+from fmus.status import RunError, RunStatus, refusal_of
 from tests.support.fmu_calls import Driver
 
 #: A preset name with a Latin letter (U+00F6) and a symbol past U+FFFF (U+1D11E).
@@ -78,3 +82,33 @@ def test_a_refusal_at_initialisation_carries_the_kernels_quantity(native_fmus, t
     assert native_trace[5].result == native_trace[3].result and native_trace[4].status == 2
     twin.close()
     native.close()
+
+
+def test_a_damaged_derivator_buffer_is_refused_with_the_twins_record(native_fmus):
+    """A state whose model data is all zero (as one taken before set-up, which the state check
+    admits) restored into a running native Derivator: its kernel refuses the buffer, and the
+    record is the one the twin's own layers make of the same buffer (controller.derivators'
+    refusal, fmus.status.refusal_of, the slave's " (step from t = ...)"), byte for byte.
+    Catches the refusal written with null fields or in other words (code and word index in
+    place of the word's name)."""
+    h = 1e-3
+    native = Driver(native_fmus["Derivator"], "deriv")
+    trace = _run(native, [("setup", 0.0), ("enter",), ("exit",), ("set", {"q1": 0.1, "q2": 0.2}), ("step", 0.0, h),
+                          ("getstate", "s"), ("serialize", "s")])
+    assert [s.status for s in trace] == [0] * 7
+    damaged = native.states["s"]
+    for k in range(len(data_words(damaged))):
+        damaged = with_data_word(damaged, k, 0.0)
+    trace = _run(native, [("bytes", "z", damaged), ("deserialize", "z"), ("setstate", "z"), ("step", h, h),
+                          ("get", ["refusal", "error"])])
+    assert [s.status for s in trace] == [0, 0, 0, 2, 0]
+    twin = Derivator()
+    twin.reset([0.0, 0.0])
+    twin.buf = np.zeros_like(twin.buf)
+    try:
+        twin.step_values((0.1, 0.2), 1e6)
+    except ValueError as exc:
+        message = f"{exc} (step from t = {h:.6g} s)"
+        expected = refusal_of(exc, RunStatus.REFUSED, message, "deriv", h).to_json()
+    assert trace[-1].result == [expected, message]
+    assert json.loads(expected)["reason"] == "bad_layout"
