@@ -33,7 +33,7 @@ FMUS_MODULES = ("__init__.py", "status.py",
                 "slave/designs.py", "slave/registry.py", "slave/sampling.py",
                 "cosim/__init__.py", "cosim/system.py", "cosim/master.py", "cosim/stepper.py", "cosim/backends.py",
                 "cosim/foreign.py", "cosim/slots.py", "cosim/context.py", "cosim/compiled.py", "cosim/adapter.py",
-                "cosim/compiled_adapters.py",
+                "cosim/compiled_adapters.py", "cosim/segments.py",
                 "systemfmu/__init__.py", "systemfmu/cores.py", "systemfmu/slave_base.py")
 #: Top-level names whose imports the bundle rewrites to its private package.
 REWRITTEN = frozenset(PACKAGES + ("fmus",))
