@@ -1,24 +1,7 @@
 """The in-process master with every slave through its Python ``do_step`` (its stepper without
 the kernel segments of :mod:`fmus.cosim.segments`): the independent path that the segments'
-rows, records and states are compared with."""
-from __future__ import annotations
+rows, records and states are compared with.  The benchmark's own context manager, so the
+benchmark's "Python slaves" case and the tests' reference are the same thing."""
+from benchmarks.bench_master import python_slaves
 
-from contextlib import contextmanager
-
-from fmus.cosim import master
-
-
-@contextmanager
-def python_slaves():
-    """Within the block, ``simulate(mode="inprocess")`` steps every slave in Python."""
-    original = master.Stepper
-
-    class PythonStepper(original):
-        def __init__(self, *args, kernels=None, **kwargs):
-            super().__init__(*args, **kwargs)
-
-    master.Stepper = PythonStepper
-    try:
-        yield
-    finally:
-        master.Stepper = original
+__all__ = ["python_slaves"]
