@@ -210,7 +210,7 @@ static double applied(const pc_drive *d, double v)
 {
     double q = d->pwm_quantum;
     if (q == 0.0) return v;
-    return copysign(floor(fabs(v) / q + 0.5) * q, v);
+    return copysign(pc_floor(fabs(v) / q + 0.5) * q, v);
 }
 
 static void voltage(const pc_drive *d, const pc_controller *c, double i_ref, double v_ref, double i_hat,

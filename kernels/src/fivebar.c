@@ -375,7 +375,7 @@ void pc_fivebar_residual(const pc_fivebar_params *p, const double *y, double *ou
 /* The encoder's reading of q with zero error `offset`, quantised to `count`. */
 static double encoder(double q, double offset, double count)
 {
-    return count * floor((q + offset) / count + 0.5);
+    return count * pc_floor((q + offset) / count + 0.5);
 }
 
 /* pc_fivebar_report_of; the chains' trigonometry kept in `cache` (NULL: not kept). */

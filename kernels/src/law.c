@@ -20,7 +20,7 @@ int pc_law_interpolate(const pc_law_table *t, double x, double y, double out[PC_
     const double fx = (x - t->x0) * t->inv_step, fy = (y - t->y0) * t->inv_step;
     if (!(0.0 <= fx && fx < t->nx + 1.0)) return pc_refuse(r, PC_LAW_TABLE_OUT, 0, x);
     if (!(0.0 <= fy && fy < t->ny + 1.0)) return pc_refuse(r, PC_LAW_TABLE_OUT, 1, y);
-    int ix = (int)floor(fx), iy = (int)floor(fy);
+    int ix = (int)fx, iy = (int)fy;               /* floor: both >= 0 here */
     const int nx = (int)t->nx, ny = (int)t->ny;
     if (ix == nx && fx - ix < 1e-9) ix -= 1;      /* the far edge belongs to the last cell */
     if (iy == ny && fy - iy < 1e-9) iy -= 1;

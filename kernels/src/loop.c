@@ -18,9 +18,23 @@ static int step_member(const pc_loop_plan *p, int m, double *values, double t, d
 void pc_loop_run(const pc_loop_plan *p, double *values, double *record, int64_t k0, int64_t k1, double t0, double h,
                  pc_loop_stop *stop)
 {
+    int single = 1;                              /* every group one sub-step: its members in one run */
+    for (int g = 0; g < p->n_groups; ++g) single = single && p->group_substeps[g] == 1;
+    const int members = first_of(p->group_end, p->n_groups);
     for (int64_t k = k0; k < k1; ++k) {
         const double t = t0 + (double)k * h;     /* from the step count, never summed */
-        for (int g = 0; g < p->n_groups; ++g) {
+        for (int m = 0; single && m < members; ++m) {
+            pc_refusal r = {PC_OK, 0, 0.0};
+            if (step_member(p, m, values, t, h, &r) != PC_OK) {
+                stop->step = k;
+                stop->member = m;
+                stop->substep = 0;
+                stop->time = t;
+                stop->refusal = r;
+                return;
+            }
+        }
+        for (int g = 0; !single && g < p->n_groups; ++g) {
             const int substeps = p->group_substeps[g];
             const double dt = h / substeps;
             for (int j = 0; j < substeps; ++j) {

@@ -39,6 +39,16 @@ static inline int pc_refuse(pc_refusal *r, int code, int index, double value)
     return code;
 }
 
+/* floor(x) inline (at -O2/-O3 without SSE4.1, floor is a libm call): below 2^52 by truncation,
+ * one down when that rounded up, the sign of x kept (floor(-0) = -0, floor(0.5) = +0), so the
+ * same bits as floor; libm's from 2^52 on and for NaN and inf. */
+static inline double pc_floor(double x)
+{
+    if (!(fabs(x) < 0x1p52)) return floor(x);
+    const double t = (double)(long long)x;
+    return copysign(t > x ? t - 1.0 : t, x);
+}
+
 /* A field list for the Python layer: name and offset in doubles of each field of a struct
  * made of doubles only, so that numpy's float64 buffers and the C structs share one layout. */
 typedef struct {

@@ -346,3 +346,26 @@ def test_pc_actuated_io_refuses_and_changes_nothing(where):
     assert not math.isfinite(refusal.value)
     assert all(np.array_equal(b, b0, equal_nan=True) for b, b0 in zip(buffers, before))
     assert np.array_equal(x, x_before, equal_nan=True)
+
+
+def test_encoder_counts_are_pythons_floor_bit_for_bit_on_both_sides_of_zero():
+    """Catches an inline floor (pc_floor) that truncates towards zero for negative angles, rounds
+    a tie the wrong way, loses the sign of a zero count or breaks beyond 2^52: the report's
+    encoder readings are ``count * math.floor((q + offset) / count + 0.5)`` to the bit."""
+    p = fast5r.pack_params(get_preset("bench"))
+    count = 2.0 * math.pi / 4096.0
+    y = np.zeros(fast5r.PLANT_STATES)
+    out = np.zeros(fast5r.REPORT_SIZE)
+    enc = fast5r.REPORT_OUTPUTS + 8
+    angles = [0.0, -0.0, 0.25 * count, -0.25 * count, 0.5 * count, -0.5 * count, 1.5 * count, -1.5 * count,
+              3.0 * count, -3.0 * count, 2.5 * count, -2.5 * count, 1e-300, -1e-300, 0.7, -0.7, 3.1, -3.1,
+              1e17, -1e17]
+    for q in angles:
+        for offset in (0.0, 0.3 * count, -0.5 * count):
+            y[3], y[5] = q, math.pi - q                       # q1 = theta11, q2 = pi - theta21
+            fast5r.report(p, y, count, offset, offset, out)
+            want = count * math.floor((q + offset) / count + 0.5)
+            q2 = math.pi - y[5]
+            want2 = count * math.floor((q2 + offset) / count + 0.5)
+            assert (out[enc], math.copysign(1.0, out[enc])) == (want, math.copysign(1.0, want)), (q, offset)
+            assert (out[enc + 1], math.copysign(1.0, out[enc + 1])) == (want2, math.copysign(1.0, want2)), (q, offset)
