@@ -349,9 +349,10 @@ def test_pc_actuated_io_refuses_and_changes_nothing(where):
 
 
 def test_encoder_counts_are_pythons_floor_bit_for_bit_on_both_sides_of_zero():
-    """Catches an inline floor (pc_floor) that truncates towards zero for negative angles, rounds
-    a tie the wrong way, loses the sign of a zero count or breaks beyond 2^52: the report's
-    encoder readings are ``count * math.floor((q + offset) / count + 0.5)`` to the bit."""
+    """Catches an inline floor (pc_floor) that truncates towards zero for negative angles, takes
+    one off a whole number (the ties, where the argument is whole) or breaks beyond 2^52: the
+    report's encoder readings are ``count * math.floor((q + offset) / count + 0.5)`` to the bit,
+    the sign of a zero reading included (the argument is never -0 here: x + 0.5 is +0 at -0.5)."""
     p = fast5r.pack_params(get_preset("bench"))
     count = 2.0 * math.pi / 4096.0
     y = np.zeros(fast5r.PLANT_STATES)
