@@ -15,6 +15,19 @@ static int step_member(const pc_loop_plan *p, int m, double *values, double t, d
     return PC_OK;
 }
 
+/* The next step's row asked into the cache for writing while the members step: rows are
+ * written once each, in order, and a row's store otherwise waits for its lines to come in. */
+static void prefetch_row(const double *row, int n)
+{
+#if defined(__GNUC__)
+    for (int c = 0; c < n; c += 8) __builtin_prefetch(row + c, 1, 3);
+    __builtin_prefetch(row + n - 1, 1, 3);   /* the last line when n is not a multiple of 8 */
+#else
+    (void)row;
+    (void)n;
+#endif
+}
+
 void pc_loop_run(const pc_loop_plan *p, double *values, double *record, int64_t k0, int64_t k1, double t0, double h,
                  pc_loop_stop *stop)
 {
@@ -52,7 +65,11 @@ void pc_loop_run(const pc_loop_plan *p, double *values, double *record, int64_t 
                 }
             }
         }
-        for (int c = 0; c < p->n_record; ++c) record[(size_t)(k + 1) * p->n_record + c] = values[p->record_slot[c]];
+        if (p->n_record > 0) {                   /* record may be NULL without columns */
+            double *row = record + (size_t)(k + 1) * p->n_record;
+            for (int c = 0; c < p->n_record; ++c) row[c] = values[p->record_slot[c]];
+            if (k + 1 < k1) prefetch_row(row + p->n_record, p->n_record);
+        }
     }
     stop->step = k1;
     stop->member = -1;
