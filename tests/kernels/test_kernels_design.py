@@ -117,10 +117,15 @@ def test_zoh_model_is_python_controls_c2d_and_the_exact_one(p, T):
 def test_design_is_the_exact_pole_placement_of_its_model(p, T):
     """Catches a coefficient of the wrong polynomial, a pole dropped or doubled, delta not on
     the plant's zero: alpha, beta, gamma, delta within 1e-13 (relative to the largest) of
-    appendix C's 4x4 system for the same ZOH model solved in 50 digits."""
+    appendix C's 4x4 system for the same ZOH model solved in 50 digits, where that system has one
+    solution (a motor whose armature pole underflows in T, e.g. R T / L = 1000, leaves it singular:
+    such draws are skipped; found by Hypothesis at the s37 merge)."""
     code, c, _ = c_design(p, T)
     assert code == 0
-    exact = exact_placement(*c_zoh(p, T))
+    try:
+        exact = exact_placement(*c_zoh(p, T))
+    except ZeroDivisionError:     # mpmath: the 4x4 system singular in 50 digits (no unique placement)
+        assume(False)
     np.testing.assert_allclose(c, exact, rtol=0, atol=1e-13 * np.abs(exact).max())
 
 
