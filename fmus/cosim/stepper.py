@@ -197,10 +197,11 @@ class Stepper:
         self.record_slots = [self.slots[s] for s in system.record]
         self._record = _gatherer(self.record_slots)
         self._calls = {}     # instance name -> its MemberCalls, made once
-        self.values = [0.0] * len(self.slots)
-        if kernels is not None and not jacobi:
+        if kernels is not None and not jacobi:     # the segments' C call reads and writes the slots in place
             self.values = (ctypes.c_double * len(self.slots))()
             self._kernels, self._kernels_type = False, kernels     # built on the first step (the slaves set up)
+        else:
+            self.values = [0.0] * len(self.slots)
         self._program = self._program_of(self.groups)
         #: The clock: step ``k`` (steps taken since :meth:`initialize`) starts at ``time`` =
         #: ``start_time + k h``, computed from the integer k, never summed (module docstring).
