@@ -13,36 +13,42 @@ from fmus.slave.sampling import accepted_steps_text
 from tests.fmus.slave.test_extremes import GOOD, make_slave, set_variables, slave_class
 
 
-def _followed(model: str, steps, point_offset: float) -> tuple:
-    """A fresh ``model`` stepped by ``steps`` from t = 0, then asked to step from the next
+def _followed(model: str, steps, point_offset: float, start: float = 0.0) -> tuple:
+    """A fresh ``model`` stepped by ``steps`` from ``start``, then asked to step from the next
     point plus ``point_offset``: (accepted, the expected point, the slave)."""
-    slave = make_slave(model)
-    set_variables(slave, GOOD[model][1], initialise=False)
-    t = 0.0
+    slave = slave_class(model)(instance_name=model)
+    slave.setup_experiment(start, None, None)
+    slave.enter_initialization_mode()
+    set_variables(slave, {**GOOD[model][0], **GOOD[model][1]}, initialise=False)
+    slave.exit_initialization_mode()
+    t = start
     for h in steps:
         assert slave.do_step(t, h), slave.error
         t += h
     return slave.do_step(t + point_offset, steps[-1]), t, slave
 
 
-#: (model, steps from t = 0, the tolerance the rule gives at the next point): 1e-9 of 1 ms below
-#: 1 ms, 1e-9 of |t| above it, half the last step when that is less.
-TOLERANCES = [("Trajectory", (1e-3,), 1e-12), ("Derivator", (1e-3,), 1e-12), ("DCMotorDrive", (1e-3,), 1e-12),
-              ("Trajectory", (4e-4,), 1e-12), ("Trajectory", (0.5,), 5e-10),
-              ("Trajectory", (10.0, 1e-8), 5e-9)]
+#: (model, start time, steps from it, the tolerance the rule gives at the next point): 1e-9 of
+#: 1 ms below 1 ms, 1e-9 of |t| above it (before t = 0 too), half the last step when that is less.
+TOLERANCES = [("Trajectory", 0.0, (1e-3,), 1e-12), ("Derivator", 0.0, (1e-3,), 1e-12),
+              ("DCMotorDrive", 0.0, (1e-3,), 1e-12), ("Trajectory", 0.0, (4e-4,), 1e-12),
+              ("Trajectory", 0.0, (0.5,), 5e-10), ("Trajectory", 0.0, (10.0, 1e-8), 5e-9),
+              ("FiveBarPlant", -1000.0, (1e-3,), 1e-9 * (1000.0 - 1e-3))]
 
 
-@pytest.mark.parametrize("model, steps, tolerance", TOLERANCES)
-def test_a_communication_point_is_accepted_within_the_documented_tolerance_and_no_further(model, steps, tolerance):
+@pytest.mark.parametrize("model, start, steps, tolerance", TOLERANCES)
+def test_a_communication_point_is_accepted_within_the_documented_tolerance_and_no_further(model, start, steps,
+                                                                                           tolerance):
     """Points 0.8 and 1.25 times the rule's tolerance after the expected one, and before it:
     the first taken, the second refused naming both points.  Catches the floor of 1 ms taken
     as another time (seed 3601's [1]: 2 ms accepted 1.5e-12 s off at t = 1 ms), the relative
-    factor changed, |t| dropped, or the half-step cap lost (a 10 ns step at t = 10 s would
-    take a point 7 ns off)."""
+    factor changed, |t| dropped or taken as t (a plant started at t = -1000 s refused every
+    rounded point), or the half-step cap lost (a 10 ns step at t = 10 s would take a point
+    7 ns off)."""
     for sign in (1.0, -1.0):
-        accepted, _, slave = _followed(model, steps, sign * 0.8 * tolerance)
+        accepted, _, slave = _followed(model, steps, sign * 0.8 * tolerance, start)
         assert accepted, slave.error
-        accepted, expected, slave = _followed(model, steps, sign * 1.25 * tolerance)
+        accepted, expected, slave = _followed(model, steps, sign * 1.25 * tolerance, start)
         assert not accepted
         assert f"does not follow the last one: the next doStep must start at t = {expected!r} s" in slave.error
 
