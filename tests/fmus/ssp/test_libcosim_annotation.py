@@ -84,3 +84,24 @@ def test_a_package_without_a_communication_step_needs_one_given(tmp_path, packag
     assert not (tmp_path / "out.ssp").exists()
     out = with_libcosim_annotation(bare, tmp_path / "given.ssp", step=4e-3, worker_threads=1)
     assert read_libcosim_step(out) == (4e-3, 1)
+
+
+def test_a_package_without_a_system_structure_is_named(tmp_path):
+    """Catches the missing SystemStructure.ssd surfacing as a KeyError of zipfile."""
+    empty = tmp_path / "empty.ssp"
+    with zipfile.ZipFile(empty, "w") as z:
+        z.writestr("resources/x.txt", "x")
+    with pytest.raises(ValueError, match=f"{empty}: no SystemStructure.ssd"):
+        read_libcosim_step(empty)
+
+
+def test_a_log_level_is_one_of_libcosims_and_warn_is_warning():
+    """Catches an unknown level passed on to libcosim, or the alias "warn" (Ecos' word) refused."""
+    from fmus.ssp.libcosim import libcosim_available, set_libcosim_log_level
+
+    if libcosim_available() is not None:
+        pytest.skip(f"libcosimpy cannot be loaded ({libcosim_available()})")
+    with pytest.raises(ValueError, match=r"log level 'verbose': one of trace, debug, info, warning, error, fatal"):
+        set_libcosim_log_level("verbose")
+    set_libcosim_log_level("WARN")
+    set_libcosim_log_level("warning")
