@@ -90,7 +90,8 @@ def test_a_refused_initialisation_is_said_again_at_each_step_with_its_record():
 
 @pytest.mark.parametrize("where", ["initialisation", "step"])
 def test_an_interruption_is_a_record_of_its_own_kind(where):
-    """Catches a KeyboardInterrupt escaping, or recorded as a refusal of the model."""
+    """Catches a KeyboardInterrupt escaping, recorded as a refusal of the model, or leaving the
+    slave ready to step on (the next step must be refused naming it)."""
     if where == "initialisation":
         slave = _plan(k=99.0)
         message, time = "initialisation refused: interrupted (KeyboardInterrupt) (t = 0 s)", 0.0
@@ -101,6 +102,13 @@ def test_an_interruption_is_a_record_of_its_own_kind(where):
         message, time = "step interrupted (KeyboardInterrupt) at t = 0.001 s", 1e-3
     assert slave.error == message and slave.refused_because == "interrupted (KeyboardInterrupt)"
     assert _record(slave) == (RunStatus.INTERRUPTED, "inst", time, message)
+    x = slave.x
+    slave.stop_at = 1e9
+    assert not slave.do_step(time, 1e-3)
+    assert slave.x == x and slave.error == message
+    again = (f"an earlier step was refused ({message}); restore an FMU state taken before it (fmi2SetFMUstate) "
+             f"to go on" if where == "step" else message)
+    assert slave.log_queue[-1].msg == f"inst: {again}; step from t = {time:.6g} s refused"
 
 
 def test_a_step_after_terminate_or_before_initialisation_is_refused_naming_the_call():
