@@ -43,3 +43,50 @@ def test_peak_memory_is_the_kernels_high_water_mark():
     high = next(int(line.split()[1]) for line in Path("/proc/self/status").read_text().splitlines()
                 if line.startswith("VmHWM:"))
     assert runner.peak_rss_mb() == pytest.approx(high / 1024.0, abs=1.0)
+
+
+def test_the_run_figures_draw_the_path_errors_and_torques_in_their_units(tmp_path, monkeypatch):
+    """path.png: the reference and the end effector in mm; errors.png: e_x = x_d - x and e_y = y_d - y
+    in mm; torques.png: τ1, τ2 in N m; the metric window's edges dotted on every panel.  Catches a
+    panel in the wrong unit, an error of the wrong sign or axis, or the window not marked."""
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    kept = []
+    close = plt.close
+    monkeypatch.setattr(plt, "close", lambda fig=None: kept.append(fig) or close(fig))
+    scene = replace(get_scene("bench_circle_PDq"), window=(0.01, 0.03))
+    t = np.arange(5) * 0.01
+    columns = {"t": t, "x": 0.001 * t, "y": 0.1 + 0.002 * t, "x_d": 0.003 * t, "y_d": 0.1 - t,
+               "tau1": 0.5 * t, "tau2": -0.25 * t}
+    files = runner.plot_run(scene, columns, tmp_path)
+    assert [f.name for f in files] == ["path.png", "errors.png", "torques.png"] and all(f.exists() for f in files)
+    reference, effector = kept[0].axes[0].lines
+    assert np.allclose(reference.get_xydata(), np.column_stack([1e3 * columns["x_d"], 1e3 * columns["y_d"]]))
+    assert np.allclose(effector.get_xydata(), np.column_stack([1e3 * columns["x"], 1e3 * columns["y"]]))
+    expected = {1: (1e3 * (columns["x_d"] - columns["x"]), 1e3 * (columns["y_d"] - columns["y"])),
+                2: (columns["tau1"], columns["tau2"])}
+    for k, (first, second) in expected.items():
+        for ax, values in zip(kept[k].axes, (first, second)):
+            curve, *edges = ax.lines
+            assert np.allclose(curve.get_xdata(), t) and np.allclose(curve.get_ydata(), values, rtol=1e-12, atol=0)
+            assert sorted(e.get_xdata()[0] for e in edges) == [0.01, 0.03]
+
+
+def test_a_results_csv_reads_back_every_double_exactly_and_json_writes_non_finite_as_null(tmp_path):
+    """result.csv holds each value to all 17 digits (read back bit for bit) under the columns'
+    names; metrics.json writes NaN and inf as null, in nested lists and dicts too.  Catches a
+    rounded format, a missing header and a non-finite value written as NaN (not JSON)."""
+    import json
+
+    import numpy as np
+
+    values = {"t": np.array([0.0, 1e-3, 2e-3]), "x": np.array([1 / 3, -2.0 ** -40, 123456.789012345678]),
+              "tau1": np.array([np.pi, np.e, 1e-300])}
+    runner.write_csv(tmp_path / "result.csv", values)
+    lines = (tmp_path / "result.csv").read_text().splitlines()
+    assert lines[0] == "t,x,tau1"
+    back = np.loadtxt(tmp_path / "result.csv", delimiter=",", skiprows=1)
+    assert np.array_equal(back, np.column_stack(list(values.values())))
+    runner.write_json(tmp_path / "m.json", {"a": float("nan"), "b": [1.5, float("inf")], "c": {"d": -float("inf")}})
+    assert json.loads((tmp_path / "m.json").read_text()) == {"a": None, "b": [1.5, None], "c": {"d": None}}
