@@ -129,3 +129,32 @@ def test_a_near_miss_bench_or_vertical_name_is_refused_as_an_unknown_scene(name)
     with pytest.raises(ValueError) as refusal:
         get_scene(name)
     assert str(refusal.value) == f"unknown scene {name!r}; `parcosim list` prints the {len(scene_names())} scenes"
+
+
+def test_each_fidelity_effect_reaches_the_components_it_names():
+    """bench(..., Fidelity(...)): the drives' b = 0 keeps the current loop designed for Tables 16 /
+    18's b (1.226e-4, 2.039e-4 N m s/rad, SYSTEM.md); Euler electrics, the delay, m0, the model
+    error, PWM and noise (each drive its own noise instance 1, 2) reach their components; the
+    description names exactly the changed effects.  Catches an effect set on the wrong component
+    or drive, a design b from the other motor, a dropped switch."""
+    from scenarios.scenes.thesis import Fidelity, bench
+
+    f = Fidelity(electrics="euler", viscous=False, m0=0.03, model_error=0.1, delay_steps=2, pwm_counts=400,
+                 current_noise=0.02, noise_seed=7, link_inertias=False)
+    system = bench("TCq", "triangle", fidelity=f).system
+    for j, b_design in (("1", 1.226e-4), ("2", 2.039e-4)):
+        drive = system.component(f"drive{j}").parameters
+        assert (drive["method"], drive["b"], drive["b_design"]) == ("euler", 0.0, b_design)
+        assert (drive["pwm_counts"], drive["current_noise"], drive["noise_seed"], drive["noise_instance"]) == \
+            (400, 0.02, 7, int(j))
+        assert "mu" not in drive and "friction" not in drive
+    plant, ctrl = system.component("plant").parameters, system.component("ctrl").parameters
+    assert (plant["m0"], plant["link_inertias"]) == (0.03, False)
+    assert (ctrl["model_error"], ctrl["delay_steps"], ctrl["model"]) == (0.1, 2, "tabulated")
+    assert "gravity_x" not in ctrl and "counter_mass1" not in plant
+    description = bench("TCq", "triangle", fidelity=f).description
+    assert description.endswith("; fidelity electrics=euler, viscous=False, link_inertias=False, m0=0.03, "
+                                "model_error=0.1, delay_steps=2, pwm_counts=400, current_noise=0.02, noise_seed=7")
+    full = bench("TCq", "triangle").system
+    assert full.component("drive1").parameters["method"] == "exact" and "delay_steps" not in full.component("ctrl").parameters
+    assert "fidelity" not in bench("TCq", "triangle").description
