@@ -91,3 +91,40 @@ def test_the_calibration_spread_lists_each_descent_end_by_loss_and_each_strategy
     assert second == "| 1 | 0.3000 | " + " | ".join(f"{v:.3g}" for v in other.values().values()) + " |"
     for s in twin_fit.ORDER:
         assert f"| {s} | 0.80–1.20 | 1.00–1.50 |" in lines
+
+
+def test_the_report_tables_give_each_strategys_mean_spread_ratio_and_each_pairs_change():
+    """twin.md's rows from made-up runs: e_ef, τ_ef, e_ss as seed mean [min–max] beside the bench,
+    ratios ours / bench, settled seeds counted; the MD pair's change (mean MD / mean pure - 1) beside
+    Tables 11-12's, 'yes' only when MD is lower for every seed.  Catches a column from the wrong
+    statistic or table entry, a ratio inverted, the change's sign, the every-seed rule as any-seed."""
+    runs = _runs()
+    for kind in runs:
+        for s in twin_fit.ORDER:
+            for k, m in enumerate(runs[kind][s].values()):
+                m.update(settled=k != 0 or s != "TCx", e_contour_sides_mm=[0.1, 0.2, 0.3])
+    # PDx -> PDMDx: MD lower on average and on every seed; TCq -> TCMDq on the circle: not on seed 103
+    runs["circle"]["TCMDq"][103]["e_ef_mm"] = 10.0
+    text = twin_fit.render(runs, twin_fit.START, {"loss": 0.25, "start_loss": 1.5, "evaluations": 7, "seeds": [1]})
+    lines = text.splitlines()
+    circle = lines.index("## Circle: fitted (Tables 9, 13)")
+    triangle = lines.index("## Triangle: predicted without refitting (Tables 10, 14)")
+    for kind, start in (("circle", circle), ("triangle", triangle)):
+        section = lines[start:]
+        for s in twin_fit.ORDER:
+            v = np.array([[runs[kind][s][seed][k] for seed in SEEDS] for k in ("e_ef_mm", "tau_ef_Nm", "e_ss_mm")])
+            mean, low, high = v.mean(axis=1), v.min(axis=1), v.max(axis=1)
+            be, bt, bss = (THESIS_BENCH[kind][s][i] for i in (0, 1, 4))
+            settled = 2 if s == "TCx" else 3
+            row = (f"| {s} | {mean[0]:.3f} [{low[0]:.3f}–{high[0]:.3f}] | {be:.2f} | {mean[0] / be:.2f} | "
+                   f"{mean[1]:.3f} [{low[1]:.3f}–{high[1]:.3f}] | {bt:.3f} | {mean[1] / bt:.2f} | "
+                   f"{mean[2]:.3f} [{low[2]:.3f}–{high[2]:.3f}] | {bss:.3f} | {settled}/3 |")
+            assert row in section, row
+        for pure, md in (("PDx", "PDMDx"), ("TCq", "TCMDq")):
+            e = {x: np.mean([runs[kind][x][seed]["e_ef_mm"] for seed in SEEDS]) for x in (pure, md)}
+            every = all(runs[kind][md][seed]["e_ef_mm"] < runs[kind][pure][seed]["e_ef_mm"] for seed in SEEDS)
+            row = (f"| {pure} → {md} | {100 * (e[md] / e[pure] - 1):+.1f} % | "
+                   f"{twin_fit.THESIS_MD_CHANGE[kind][pure][0]:+.1f} % | {'yes' if every else 'no'} |")
+            assert row in section, row
+    assert any(line.startswith("| TCq → TCMDq |") and line.endswith("| no |") for line in lines[circle:triangle])
+    assert "Fit: loss 0.2500 (start 1.5000), 7 evaluations of 8 circle runs × seeds [1]" in text
