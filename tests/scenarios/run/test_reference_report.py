@@ -45,3 +45,35 @@ def test_the_variants_decompose_the_deviation_of_a_lugre_scene(capsys):
     labels = ("mu = 0 and encoder 2^30: master - reference", "encoder 2^30 counts: master - reference",
               "reference(mean torque) - reference", "  ref(held_speed) - reference: speed held")
     assert all(_rms(out, label) > 0.0 for label in labels)
+
+
+def test_the_reference_refuses_what_it_cannot_integrate_naming_what_and_why():
+    """Each refusal names the culprit: a non-scene (its type), no FiveBarPlant (and, for the scene
+    with its drives in the plant, why), an unknown coupling (the valid ones), an unknown
+    parameter (component, model, name), a drive whose period differs from the step (both values),
+    and a drive the initialisation refuses (its message and time).  Catches a refusal that
+    names another component or value, or a check skipped."""
+    from scenarios.scenes.catalogue import get_scene
+    from scenarios.scenes.transforms import drives_in_plant
+
+    scene = get_scene("bench_circle_PDq")
+
+    def refusal(kind, *args, **kwargs):
+        with pytest.raises(kind) as caught:
+            reference.reference_run(*args, stop_time=0.01, **kwargs)
+        return str(caught.value)
+
+    assert refusal(TypeError, 42) == "expected a scene name, a Scene or a System, got int"
+    assert refusal(reference.ReferenceError, "pendulum_balance") == \
+        "the reference needs exactly one FiveBarPlant, found 0"
+    assert refusal(reference.ReferenceError, drives_in_plant(scene)) == (
+        "the reference needs exactly one FiveBarPlant, found 0 (plant is an ActuatedFiveBarPlant: its truth is "
+        "the reference of the scene before scenarios.scenes.transforms.drives_in_plant)")
+    assert refusal(ValueError, scene, coupling="jacobi") == \
+        f"coupling = 'jacobi'; valid: {', '.join(reference.COUPLINGS)}"
+    assert refusal(reference.ReferenceError, reference.with_parameters(scene.system, "plant", bogus=1.0)) == \
+        "component plant: FiveBarPlant has no parameter 'bogus'"
+    assert refusal(reference.ReferenceError, reference.with_parameters(scene.system, "drive2", T=2e-3)) == \
+        "drive drive2: controller period T = 0.002 s differs from the step 0.001 s"
+    message = refusal(reference.ReferenceError, reference.with_parameters(scene.system, "drive2", L=0.0))
+    assert message.startswith("drive2: initialisation refused: ") and "needs L > 0, got L=0.0 (t = 0 s)" in message
