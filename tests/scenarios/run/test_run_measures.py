@@ -90,3 +90,35 @@ def test_a_results_csv_reads_back_every_double_exactly_and_json_writes_non_finit
     assert np.array_equal(back, np.column_stack(list(values.values())))
     runner.write_json(tmp_path / "m.json", {"a": float("nan"), "b": [1.5, float("inf")], "c": {"d": -float("inf")}})
     assert json.loads((tmp_path / "m.json").read_text()) == {"a": None, "b": [1.5, None], "c": {"d": None}}
+
+
+def test_a_failed_write_keeps_the_old_file_leaves_no_temporary_and_names_the_file(tmp_path):
+    """atomic_write: an OSError while writing (a full disk) raises WriteError naming the file and
+    the reason, with its errno; an interrupt is re-raised; either way the old content stays and
+    no temporary file is left.  check_writable names a directory it cannot create.  Catches a
+    half-written file, a temporary left behind or a message without the path."""
+    import errno
+
+    path = tmp_path / "metrics.json"
+    path.write_text("old\n")
+
+    def full(f):
+        f.write("new, half")
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    with pytest.raises(runner.WriteError) as failure:
+        runner.atomic_write(path, full)
+    assert failure.value.strerror == f"cannot write {path}: No space left on device"
+    assert failure.value.errno == errno.ENOSPC
+
+    def interrupted(f):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        runner.atomic_write(path, interrupted)
+    assert path.read_text() == "old\n" and sorted(p.name for p in tmp_path.iterdir()) == ["metrics.json"]
+    assert runner.atomic_write(path, lambda f: f.write("new\n")) == path and path.read_text() == "new\n"
+    with pytest.raises(runner.WriteError) as failure:
+        runner.check_writable(path / "out")           # under a file: cannot be created
+    assert failure.value.strerror.startswith(f"output directory {path / 'out'} is not writable: ")
+    assert runner.check_writable(tmp_path / "a" / "b") == tmp_path / "a" / "b" and (tmp_path / "a" / "b").is_dir()
