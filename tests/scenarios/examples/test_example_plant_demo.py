@@ -37,3 +37,21 @@ def test_the_figure_draws_the_path_and_marks_its_start(tmp_path, monkeypatch):
     path, start = lines["end-effector path"], lines["start"]
     assert np.array_equal(path.get_xdata(), rows[:, 1]) and np.array_equal(path.get_ydata(), rows[:, 2])
     assert (np.ravel(start.get_xdata())[0], np.ravel(start.get_ydata())[0]) == (rows[0, 1], rows[0, 2])
+
+
+def test_the_demo_prints_every_50_ms_and_writes_its_figure(tmp_path, capsys):
+    """``parcosim demo``'s table: a header, then t, x, y, q1 [deg], q2 [deg], residual every 50 ms
+    from 0 to 0.5 s (11 rows, the simulated rows' values), then the PNG's path.  Catches rows at
+    another stride, angles left in radians, columns swapped, the figure not written."""
+    path = plant_demo.run(tmp_path)
+    assert path == tmp_path / "plant_demo.png" and path.read_bytes()[:4] == b"\x89PNG"
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].split() == ["t", "[s]", "x", "[m]", "y", "[m]", "q1", "[deg]", "q2", "[deg]", "residual", "[m]"]
+    assert lines[-1] == f"wrote {path}" and len(lines) == 13
+    rows = plant_demo.simulate()
+    for line, k in zip(lines[1:-1], range(0, 501, 50)):
+        t, x, y, q1, q2, res = (float(v) for v in line.split())
+        assert t == pytest.approx(k * 1e-3, abs=5e-4)
+        assert (x, y) == pytest.approx((rows[k, 1], rows[k, 2]), abs=6e-6)
+        assert (q1, q2) == pytest.approx((math.degrees(rows[k, 3]), math.degrees(rows[k, 4])), abs=6e-4)
+        assert abs(res - rows[k, 5]) <= 1e-2 * abs(rows[k, 5]) + 1e-300
