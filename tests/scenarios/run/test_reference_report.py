@@ -1,0 +1,79 @@
+"""What the monolithic reference reports besides its rows (scenarios/reference.py): the progress
+it calls back, its mean solver steps per interval, and the lines of ``python -m
+scenarios.reference --variants`` (the decomposition of the master's deviation)."""
+from __future__ import annotations
+
+import re
+
+import pytest
+
+from scenarios import reference
+
+
+def test_progress_rises_to_one_once_per_percent_and_the_mean_steps_count_every_interval():
+    """0.25 s at 1 ms is 250 intervals: progress is called every 2 intervals (250 // 100) with the
+    fraction done, k / 250 for k = 2, 4, ..., 250, ending at exactly 1; the mean solver steps per
+    interval is the plant's steps over the 250 intervals.  Catches a fraction of the step before
+    (never reaching 1), a product instead of a ratio, or a count off by one."""
+    seen = []
+    result = reference.reference_run("thesis_sim_circle", stop_time=0.25, progress=seen.append)
+    assert result.completed and len(result.time) == 251
+    assert seen == [pytest.approx(k / 250, abs=1e-15) for k in range(2, 251, 2)] and seen[-1] == 1.0
+    assert result.extra["mean_steps_per_interval"] == pytest.approx(result.steps / 250, rel=1e-15)
+    assert result.steps >= 250
+
+
+def _rms(out: str, label: str) -> float:
+    line = next(line for line in out.splitlines() if line.startswith(label))
+    return float(re.search(r"all: rms ([0-9.e+-]+)", line).group(1))
+
+
+def test_the_variants_decompose_the_deviation_of_a_lugre_scene(capsys):
+    """``--variants`` on the twin's LuGre scene, 0.02 s: every variant runs (mu = 0 turns the LuGre
+    drives to tanh friction, which LuGre without mu refuses); the reference with the master's
+    coupling deviates from the reference as the master does (they agree to 1e-12 m here, the
+    deviations are 1e-6 m); the master deviates from that reference by < 1e-9 m.  Catches a line
+    comparing a run with itself (0) and a variant the LuGre drives refuse."""
+    assert reference.main(["bench_real_circle_TCMDx", "--stop-time", "0.02", "--variants"]) == 0
+    out = capsys.readouterr().out
+    assert "STOPPED" not in out
+    master = _rms(out, "master - reference")
+    assert master > 1e-7
+    assert _rms(out, "reference(cosim coupling) - reference") == pytest.approx(master, rel=0.02)
+    assert _rms(out, "  master - reference(cosim): plant RK4") < 1e-9
+    assert _rms(out, "mu = 0: master - reference") > 0.0
+    labels = ("mu = 0 and encoder 2^30: master - reference", "encoder 2^30 counts: master - reference",
+              "reference(mean torque) - reference", "  ref(held_speed) - reference: speed held")
+    assert all(_rms(out, label) > 0.0 for label in labels)
+
+
+def test_the_reference_refuses_what_it_cannot_integrate_naming_what_and_why():
+    """Each refusal names the culprit: a non-scene (its type), no FiveBarPlant (and, for the scene
+    with its drives in the plant, why), an unknown coupling (the valid ones), an unknown
+    parameter (component, model, name), a drive whose period differs from the step (both values),
+    and a drive the initialisation refuses (its message and time).  Catches a refusal that
+    names another component or value, or a check skipped."""
+    from scenarios.scenes.catalogue import get_scene
+    from scenarios.scenes.transforms import drives_in_plant
+
+    scene = get_scene("bench_circle_PDq")
+
+    def refusal(kind, *args, **kwargs):
+        with pytest.raises(kind) as caught:
+            reference.reference_run(*args, stop_time=0.01, **kwargs)
+        return str(caught.value)
+
+    assert refusal(TypeError, 42) == "expected a scene name, a Scene or a System, got int"
+    assert refusal(reference.ReferenceError, "pendulum_balance") == \
+        "the reference needs exactly one FiveBarPlant, found 0"
+    assert refusal(reference.ReferenceError, drives_in_plant(scene)) == (
+        "the reference needs exactly one FiveBarPlant, found 0 (plant is an ActuatedFiveBarPlant: its truth is "
+        "the reference of the scene before scenarios.scenes.transforms.drives_in_plant)")
+    assert refusal(ValueError, scene, coupling="jacobi") == \
+        f"coupling = 'jacobi'; valid: {', '.join(reference.COUPLINGS)}"
+    assert refusal(reference.ReferenceError, reference.with_parameters(scene.system, "plant", bogus=1.0)) == \
+        "component plant: FiveBarPlant has no parameter 'bogus'"
+    assert refusal(reference.ReferenceError, reference.with_parameters(scene.system, "drive2", T=2e-3)) == \
+        "drive drive2: controller period T = 0.002 s differs from the step 0.001 s"
+    message = refusal(reference.ReferenceError, reference.with_parameters(scene.system, "drive2", L=0.0))
+    assert message.startswith("drive2: initialisation refused: ") and "needs L > 0, got L=0.0 (t = 0 s)" in message

@@ -1,0 +1,56 @@
+"""The workspace figure (scenarios/studies/workspace: ``user_circle``, ``draw`` through
+``plot_workspace``): what is drawn where, read back from the figure."""
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from controller.model import DEFAULT_EXTENT
+from scenarios.studies.workspace import figure, plot
+
+
+@pytest.mark.parametrize("period", [1.0, 2.5])
+def test_a_user_circle_turns_once_per_period_around_its_centre(period):
+    """Every point at the radius from the centre; a quarter period a quarter turn from the start
+    (cx, cy - r), half a period opposite it, a whole period back.  Catches the angle not 2π t /
+    period (one radian per period, or per second)."""
+    cx, cy, r = 0.01, 0.2, 0.03
+    circle = figure.user_circle(cx, cy, r, period)
+    assert circle(0.0) == pytest.approx((cx, cy - r), abs=1e-15)
+    assert circle(period / 4) == pytest.approx((cx + r, cy), abs=1e-15)
+    assert circle(period / 2) == pytest.approx((cx, cy + r), abs=1e-15)
+    assert circle(period) == pytest.approx((cx, cy - r), abs=1e-15)
+    for t in np.linspace(0.0, period, 17):
+        x, y = circle(t)
+        assert math.hypot(x - cx, y - cy) == pytest.approx(r, rel=1e-12)
+
+
+def test_the_figure_draws_the_controllers_table_and_each_checked_circle_where_they_are(tmp_path, monkeypatch):
+    """plot_workspace("bench") with a user circle: the dotted rectangle spans the controller's
+    table (DEFAULT_EXTENT, also written to workspace.json), the user circle is drawn through its
+    1 ms samples (radius r around its centre, a quarter turn at 250 ms).  Catches the rectangle's
+    width or height from the wrong corners and a circle drawn at another rate."""
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Rectangle
+
+    kept = []
+    close = plt.close
+    monkeypatch.setattr(plt, "close", lambda fig=None: kept.append(fig) or close(fig))
+    cx, cy, r = 0.0, 0.2, 0.03
+    report = plot.plot_workspace("bench", tmp_path, step=0.01, circles=[(cx, cy, r)])
+    ax = kept[0].axes[0]
+    x0, x1, y0, y1 = DEFAULT_EXTENT
+    rectangles = [p for p in ax.patches if isinstance(p, Rectangle) and not p.get_fill()]
+    assert len(rectangles) == 1
+    box = rectangles[0]
+    assert (box.get_x(), box.get_y(), box.get_width(), box.get_height()) == pytest.approx((x0, y0, x1 - x0, y1 - y0))
+    assert json.loads((tmp_path / "workspace.json").read_text())["table_extent"] == list(DEFAULT_EXTENT)
+    check = next(c for c in report.trajectories if c.name.startswith("circle (0, 0.2)"))
+    line = next(li for li in ax.lines if len(li.get_xdata()) == len(check.x)
+                and np.array_equal(li.get_xdata(), check.x) and np.array_equal(li.get_ydata(), check.y))
+    xs, ys = np.asarray(line.get_xdata()), np.asarray(line.get_ydata())
+    assert len(xs) == 1001 and np.allclose(np.hypot(xs - cx, ys - cy), r, rtol=1e-12)
+    assert (xs[250], ys[250]) == pytest.approx((cx + r, cy), abs=1e-12)
