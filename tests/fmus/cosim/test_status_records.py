@@ -97,3 +97,15 @@ def test_the_status_tables_are_docs_contract_tables():
     documented = {RunStatus(word): (FmiStatus[status.upper()], int(code)) for word, status, code in rows}
     assert set(documented) == set(RunStatus)
     assert {k: (FMI_STATUS[k], EXIT_STATUS[k]) for k in RunStatus} == documented
+
+
+def test_fmi_status_is_the_standards_fmi2_status():
+    """Catches an FmiStatus number other than the FMI 2.0 header's (fmpy ships the standard's
+    fmi2FunctionTypes.h): a master would read fmi2Discard as an error or fmi2Fatal as unknown."""
+    from fmus.native.build import fmi_headers
+
+    text = (fmi_headers() / "fmi2FunctionTypes.h").read_text()
+    body = re.search(r"typedef enum \{([^}]*)\} fmi2Status;", text)[1]
+    names = [name.strip() for name in body.split(",")]
+    assert {f"fmi2{s.name.capitalize()}" if s.name != "OK" else "fmi2OK": s.value for s in FmiStatus} == \
+        {name: k for k, name in enumerate(names)}
