@@ -279,17 +279,38 @@ def test_a_refusal_code_is_named_as_its_header_names_it():
     assert refusal_name("pc_nosuchkernel_io", 8) == "refusal code 8"
 
 
-@pytest.fixture(scope="module")
-def loop_and_image(tmp_path_factory):
-    """The image of the native loop's scene (tests/conftest.py LOOP_SCENE), made in process as
-    ``export-fmu --native`` makes it, with the stepper it was taken from."""
+def _pointer_expressions(ctype, address, tree):
+    """(pointer value, its C expression, the field's ctypes type) of every pointer field of the
+    context ``ctype`` at ``address``, the expressions read from the parsed initialiser ``tree``."""
+    for name, ftype, *_ in ctype._fields_:
+        at, node = address + getattr(ctype, name).offset, tree[name]
+        if issubclass(ftype, ctypes.Structure):
+            yield from _pointer_expressions(ftype, at, node)
+        elif issubclass(ftype, ctypes.Array):
+            size = ctypes.sizeof(ftype._type_)
+            for k, item in enumerate(node):
+                if issubclass(ftype._type_, ctypes.Structure):
+                    yield from _pointer_expressions(ftype._type_, at + k * size, item)
+                elif loopimage._is_pointer(ftype._type_):
+                    yield ctypes.c_void_p.from_address(at + k * size).value, item, ftype._type_
+        elif loopimage._is_pointer(ftype):
+            yield ctypes.c_void_p.from_address(at).value, node, ftype
+
+
+@pytest.fixture(scope="module", params=["bench", "drives_in_plant"])
+def loop_and_image(request, tmp_path_factory):
+    """The image of the native loop's scene (tests/conftest.py LOOP_SCENE; with its drives inside
+    the plant: a context that points to another), made in process as ``export-fmu --native``
+    makes it, with the stepper's values before it and the plan it was taken from."""
     import json
 
     from fmus.native import loopbuild
-    from scenarios.scenes import get_scene
+    from scenarios.scenes import drives_in_plant, get_scene
     from tests.conftest import LOOP_SCENE
 
-    system = loopbuild.closed_loop_system(get_scene(LOOP_SCENE).system)
+    scene = get_scene(LOOP_SCENE)
+    scene = scene if request.param == "bench" else drives_in_plant(scene, substeps=4)
+    system = loopbuild.closed_loop_system(scene.system)
     resources = tmp_path_factory.mktemp("loop_image")
     (resources / loopbuild.SYSTEM_FILE).write_text(json.dumps({"role": "loop", "plant": "plant",
                                                                 "system": loopbuild.system_to_dict(system)}))
@@ -299,14 +320,58 @@ def loop_and_image(tmp_path_factory):
     slave.exit_initialization_mode()
     stepper = slave.core.stepper
     values, slots, k = list(stepper.values), dict(stepper.slots), stepper.k
-    return loopimage.loop_image(system, stepper), values, slots, k
+    plans = []
+    real = loopimage.Plan
+
+    def capture(*args):
+        plans.append(real(*args))
+        return plans[-1]
+
+    loopimage.Plan = capture
+    try:
+        image = loopimage.loop_image(system, stepper)
+    finally:
+        loopimage.Plan = real
+    return image, values, slots, k, plans[0]
 
 
+def test_each_pointer_of_a_member_context_is_its_buffer_or_context_in_the_image(loop_and_image):
+    """Catches a context's pointer written as another place of the data arena (its offset in
+    its buffer lost or negated: the words there are not the ones it points to) or as another
+    context (``&s->b<k>`` of another C type), or a member given another context: every pointer
+    of every member's context, read from the live context, against the image.  Only words the
+    run never changed are compared (the image is the state before the run)."""
+    image, _, _, _, plan = loop_and_image
+    fixed = np.zeros(image.values_word, dtype=bool)
+    for start, n in image.fixed:
+        fixed[start:start + n] = True
+    types = struct_types()
+    compared = contexts = 0
+    owners = {ctypes.addressof(c): m[3] for m, c in zip(image.members, plan._contexts)}
+    for member, context in zip(image.members, plan._contexts):
+        ctype_name, text = image.contexts[member[3]]
+        assert ctype_name == c_type_of(type(context), types)
+        for value, expression, ftype in _pointer_expressions(type(context), ctypes.addressof(context), _parse(text)):
+            if value is None:
+                assert expression == "0"
+            elif expression.startswith("&s->b"):
+                target = int(expression[5:])
+                assert target != member[3] and 0 <= target < len(image.contexts), expression
+                assert target == owners.get(value, target), expression     # a member's context: that one
+                contexts += 1
+            elif expression.startswith("(void *)(data + "):
+                word = int(expression[len("(void *)(data + "):-1])
+                assert 0 <= word < image.values_word, expression
+                if fixed[word]:
+                    assert image.data[8 * word:8 * word + 8] == ctypes.string_at(value, 8), expression
+                    compared += 1
+    assert compared > 10
+    assert contexts > 0 or len(image.contexts) == len(image.members)
 def test_the_loop_image_lays_out_values_states_and_the_step_count(loop_and_image):
     """Catches the stepper's values, a member's state ``x`` or the step count written elsewhere
     than the words the image names (or not written): each read back from the data arena, and
     the members' states one after another between the values and the step count."""
-    image, values, slots, k = loop_and_image
+    image, values, slots, k, _ = loop_and_image
     words = np.frombuffer(image.data, dtype=np.float64)
     assert len(image.data) % 8 == 0 and image.slots == slots
     assert image.n_values == len(values)
