@@ -8,11 +8,12 @@ import math
 import shutil
 import struct
 import subprocess
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from fmus.native.build import HERE, build_description, cmake_lists, compile_command, generate
+from fmus.native.build import HERE, KERNELS, build_description, cmake_lists, compile_command, generate, kernel_files
 
 pytestmark = pytest.mark.skipif(shutil.which("cc") is None, reason="needs a C compiler (cc)")
 
@@ -31,7 +32,7 @@ ROWS = [
     {"name": "w", "vr": 14, "type": "Real", "causality": "output", "tunable": False, "start": math.nan},
 ]
 SCALARS = {"data_words": 12, "accepted_steps": "a multiple of 1 ms", "limit": 1e300, "most": -math.inf}
-ARRAYS = {"design": np.arange(18.0).reshape(3, 6) / 7.0 - 1.0, "names": ["q1", 'q"2']}
+ARRAYS = {"design": np.arange(18.0).reshape(3, 6) / 7.0 - 1.0, "names": ["q1", 'q"2'], "gains": [0.5, -2.0, 3.25]}
 TYPES, CAUSALITIES = ("Real", "Integer", "Boolean", "String"), ("input", "output", "parameter")
 
 MAIN = r"""
@@ -61,6 +62,8 @@ int main(void) {
            PCN_SLOT_label, PCN_SLOT_off);
     printf("design %d", PCN_DESIGN_WORDS);
     for (int k = 0; k < PCN_DESIGN_WORDS; k++) { printf(" "); bits(pcn_design[k]); }
+    printf("\ngains %d", PCN_GAINS_WORDS);
+    for (int k = 0; k < PCN_GAINS_WORDS; k++) { printf(" "); bits(pcn_gains[k]); }
     printf("\nnames %d", PCN_NAMES_COUNT);
     for (int k = 0; k < PCN_NAMES_COUNT; k++) { printf(" "); text(pcn_names[k]); }
     printf("\n");
@@ -125,6 +128,7 @@ def test_the_c_header_holds_the_counts_scalars_and_arrays(printed):
     design = ARRAYS["design"].ravel()
     assert int(tags["design"][0]) == design.size and tags["design"][1:] == [_bits(x) for x in design]
     assert tags["names"] == ["2", _hex("q1"), "", _hex('q"2'), ""]
+    assert tags["gains"] == ["3"] + [_bits(x) for x in ARRAYS["gains"]]      # a plain list of numbers
 
 
 def test_the_build_description_is_valid_fmi3_and_names_the_sources(tmp_path):
@@ -153,3 +157,15 @@ def test_the_cmake_lists_and_the_compile_command_take_the_sources(tmp_path):
     assert command[0] == "gcc" and command[command.index("-o") + 1] == str(tmp_path / "out.so")
     assert [c for c in command if c.endswith((".c", ".h"))] == [str(tmp_path / "a.c"), str(tmp_path / "b.c")]
     assert f"-I{tmp_path}" in command and "-lm" in command and "-ffp-contract=off" in command
+
+
+@pytest.mark.parametrize("kernel", ["law.c", "actuated.c", "wheeled.c"])
+def test_a_kernels_files_are_what_the_compiler_includes(kernel):
+    """Catches a header a kernel includes (directly or through another header) left out of a
+    native FMU's sources, or a file named that is not one: the compiler's own list of the
+    dependencies (``cc -MM``) is the reference."""
+    listed = subprocess.run(["cc", "-MM", f"-I{KERNELS}", str(KERNELS / kernel)], check=True, capture_output=True,
+                            text=True).stdout
+    expected = {KERNELS / p.name for p in map(Path, listed.split(":", 1)[1].replace("\\\n", " ").split())}
+    assert set(kernel_files([kernel])) == expected and len(kernel_files([kernel])) == len(expected)
+    assert kernel_files([kernel]) == sorted(expected)
