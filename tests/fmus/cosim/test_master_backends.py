@@ -87,8 +87,11 @@ def test_the_inputs_reach_their_variables_in_order(wheeled_fmu):
 
 
 def test_a_state_taken_and_serialised_steps_on_alike(wheeled_fmu):
-    """Catches a back end's state calls that restore another state or lose one through its bytes."""
-    fmu, inproc = _pair(wheeled_fmu)
+    """Catches a back end's state calls that restore another state or lose one through its bytes,
+    and the FMU's one-call path for Real outputs in order (every parcosim FMU's) reading other
+    values than the in-process slave's."""
+    fmu, inproc = _pair(wheeled_fmu, outputs=("x", "psi", "energy", "dtheta"))
+    assert fmu._outputs.plain and fmu._inputs.plain
     for k in range(20):
         for instance in (fmu, inproc):
             instance.set_inputs([0.01, 0.0, -0.01])
