@@ -87,6 +87,7 @@ RULES = [
     ("test_foreign*.py", "fmus/cosim"),
     ("test_rate_groups*.py", "fmus/cosim"),
     ("test_system_*.py", "fmus/cosim"),
+    ("test_status*.py", "fmus/cosim"),
     ("test_export_fmu*.py", "fmus/systemfmu"),
     ("test_embedded*.py", "fmus/systemfmu"),
     ("test_ssp*.py", "fmus/ssp"),

@@ -12,6 +12,7 @@ from __future__ import annotations
 import ctypes
 import functools
 import importlib
+import itertools
 import operator
 from dataclasses import dataclass
 from pathlib import Path
@@ -108,6 +109,46 @@ def _step_calls(dll):
     return direct
 
 
+#: componentEnvironment -> the messages list of the :class:`_FmuInstance` whose FMU logs with it.
+_LOGS: dict = {}
+_ENVIRONMENTS = itertools.count(1)
+_LOGGER = []      # the one ctypes logger of every _FmuInstance (kept referenced)
+
+
+def _log(environment, instance, status, category, message) -> None:
+    """An FMU's log message (formatted: :func:`_format_messages`) to the messages of the
+    instance whose ``componentEnvironment`` it carries; another FMU's (fmpy's own callbacks
+    share the formatting proxy) to fmpy's printer."""
+    messages = _LOGS.get(environment)
+    if messages is None:
+        from fmpy.fmi2 import printLogMessage
+
+        printLogMessage(environment, instance, status, category, message)
+    else:
+        messages.append(message.decode(errors="replace") if isinstance(message, bytes) else str(message))
+
+
+def _logger(logger_type):
+    if not _LOGGER:
+        _LOGGER.append(logger_type(_log))
+    return _LOGGER[0]
+
+
+def _format_messages(callbacks) -> None:
+    """Route ``callbacks``' logger through fmpy's C proxy (fmpy.logging), which formats the
+    message with its arguments: FMI 2.0's logger is printf-like and variadic, which a ctypes
+    callback cannot read (a C FMU's ``logger(..., "%s", why)`` arrived as "%s", parcosim's
+    wrapper's ``%`` as ``%%``).  The proxy keeps one logger for the process (the last one
+    given to it: an fmpy call with its own logger in between takes it until the next
+    instance): every instance's is :func:`_log`, which dispatches by ``componentEnvironment``.
+    Without the proxy the format arrives as is."""
+    try:
+        from fmpy.logging import addLoggerProxy
+    except Exception:  # noqa: BLE001 - fmpy without its logging library for this platform
+        return
+    addLoggerProxy(ctypes.byref(callbacks))
+
+
 class _FmuInstance:
     """One FMU instance through fmpy, with batched I/O (one call per type and direction)."""
 
@@ -135,16 +176,16 @@ class _FmuInstance:
                               modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
         # The callbacks must stay referenced for the instance's lifetime.
         self._callbacks = fmi2CallbackFunctions()
-        self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
+        self._callbacks.logger = _logger(fmi2CallbackLoggerTYPE)
+        self._callbacks.componentEnvironment = self._environment = next(_ENVIRONMENTS)
+        _LOGS[self._environment] = self.messages
         self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
         self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        _format_messages(self._callbacks)
         self._fmu.instantiate(callbacks=self._callbacks, loggingOn=True)
         self._component = ctypes.c_void_p(self._fmu.component)
         self._calls = _step_calls(self._fmu.dll)
         self._do_step = self._calls.fmi2DoStep
-
-    def _log(self, component, instance, status, category, message):
-        self.messages.append(message.decode(errors="replace") if isinstance(message, bytes) else str(message))
 
     def enter_initialization(self, parameters: dict, start_time: float) -> None:
         """Set up the experiment, enter initialisation mode and set ``parameters``."""
@@ -249,6 +290,7 @@ class _FmuInstance:
             self._fmu.terminate()
         finally:
             self._fmu.freeInstance()
+            _LOGS.pop(self._environment, None)
 
 
 class InProcessInstance:

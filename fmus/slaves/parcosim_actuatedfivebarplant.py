@@ -25,11 +25,10 @@ from fmus.slave import designs
 from fmus.slave.base import MIN_STEP, GuardedSlave
 from fmus.slave.sampling import declare_sample_phase
 from fmus.slave.refusals import PRESET_VALUE, TINY, refuse_absurd
-from fmus.slave.declarations import (PLANT_OUTPUTS, CurrentLoopSteps, build_drive, build_plant, correct_plant, declare_drive_options,
-                        declare_motor, declare_plant, publish_plant)
+from fmus.slave.declarations import (CurrentLoopSteps, build_drive, build_plant, correct_plant, declare_drive_options,
+                                     declare_motor, declare_plant, publish_plant)
 from plant.actuated import ActuatedPlant
 
-OUTPUTS = tuple(name for name, _ in PLANT_OUTPUTS) + ("tau1", "tau2", "v1", "v2", "i1", "i2")
 JOINTS = ("1", "2")
 
 

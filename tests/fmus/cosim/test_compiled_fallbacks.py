@@ -88,3 +88,26 @@ def test_init_s_is_the_loading_and_the_initialisation_and_no_more(monkeypatch, m
     assert 0.08 <= result.init_s and 0.0 < result.wall_s < 0.05 and compile_s >= 0.0
     assert result.init_s + compile_s + result.wall_s <= elapsed
     assert ("compile_s" in result.extra) == (mode == "compiled")
+
+
+def test_an_unstable_drive_inside_the_plant_falls_back_naming_it_and_is_refused_as_in_process():
+    """The drives inside the plant (``ActuatedFiveBarPlant``) with an armature time constant
+    RK4 cannot follow at the communication step: the compiled loop declines the component
+    naming it and the plant's reason, and the run in process is refused as a run in process is.
+    Catches the reason lost (seed 3601's survivor [278], a bare NotCompilable) or the
+    fallback's refusal not the in-process one."""
+    from scenarios.scenes import drives_in_plant
+
+    system = drives_in_plant(get_scene("bench_circle_TCMDx"), substeps=1).system
+    components = tuple(replace(c, parameters={**c.parameters, "L1": 2e-4}) if c.model == "ActuatedFiveBarPlant"
+                       else c for c in system.components)
+    system = replace(system, components=components, stop_time=0.01)
+    inproc = simulate(system, mode="inprocess")
+    with pytest.warns(UserWarning, match="running in process instead"):
+        fast = simulate(system, mode="compiled")
+    prefix, words = inproc.error.message.split(": ", 1)               # the master's, then the plant's words
+    assert prefix == "plant refused the step from t = 0 s"
+    words = words.removesuffix(" (step from t = 0 s)")
+    assert "drive on joint 1: RK4 steps of 0.001 s are unstable" in words
+    assert fast.mode == "inprocess" and fast.extra["fallback"] == f"component plant: {words}"
+    assert fast.error == inproc.error and fast.error.instance == "plant"

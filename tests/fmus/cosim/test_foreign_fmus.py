@@ -242,3 +242,21 @@ def test_build_leaves_a_foreign_fmu_alone_and_fmu_mode_refuses_it(c_fmus, tmp_pa
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert build_fmu("Trajectory", tmp_path) == tmp_path / "Trajectory.fmu"   # ours: built, no warning
+
+
+def test_a_foreign_fmus_refused_step_is_reported_in_its_own_words(c_fmus):
+    """A foreign FMU has no String outputs ``error`` and ``refusal``: its refusal is the message
+    it logged, with no record of a quantity.  Catches the back end looking for those outputs
+    in a way that fails on an FMU without them (seed 3601's survivor [211]: the run's error
+    then names a Python exception instead of the FMU's words)."""
+    scene = _c_drives(c_fmus)
+    components = tuple(dataclasses.replace(c, parameters={**c.parameters, "T": 0.0025}) if c.name == "drive1" else c
+                       for c in scene.system.components)
+    system = dataclasses.replace(scene.system, components=components, stop_time=0.01)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")          # the parameters the C drive does not have are skipped
+        result = simulate(system, mode="inprocess")
+    error = result.error
+    assert (error.kind.value, error.instance, error.time, error.variable) == ("refused", "drive1", 0.0, None)
+    assert "the step 0.001 s must divide T = 0.0025 s (t = 0 s)" in error.message
+    assert len(result.time) == 1

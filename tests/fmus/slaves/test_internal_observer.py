@@ -31,17 +31,24 @@ def _omega(t):
     return 12.0 * math.cos(25.0 * t)
 
 
+#: (observer kind, start state): the dynamic observer integrates over the step (its length
+#: matters), a start off zero is the estimate's and the drive's.
+KINDS = [("static", {}), ("dynamic", {}), ("dynamic", {"i0": 0.35, "omega0": -4.0})]
+
+
+@pytest.mark.parametrize("kind, start", KINDS, ids=["static", "dynamic", "dynamic-offset"])
 @pytest.mark.parametrize("substeps, phase", [(1, 0), (H_SUBSTEPS, 0), (H_SUBSTEPS, 2)])
 @pytest.mark.parametrize("preset", ["motor1", "motor2"])
-def test_the_internal_observer_is_the_two_instance_loop(preset, substeps, phase):
-    """Catches an internal observer that differs from the drive and observer FMUs wired together."""
+def test_the_internal_observer_is_the_two_instance_loop(preset, substeps, phase, kind, start):
+    """Catches an internal observer that differs from the drive and observer FMUs wired together
+    (its kind, the step length it integrates over, its start state)."""
     h = 1e-3 / substeps
-    common = {"preset": preset, "mode": "current", "torque_output": "mean", "sample_phase": phase}
+    common = {"preset": preset, "mode": "current", "torque_output": "mean", "sample_phase": phase, **start}
     inner = _instance("DCMotorDrive", "inner", ["i_ref", "omega"], ["tau", "v", "i"],
-                      {**common, "internal_observer": True})
+                      {**common, "internal_observer": True, "observer_kind": kind})
     drive = _instance("DCMotorDrive", "drive", ["i_ref", "omega", "i_hat"], ["tau", "v", "i"], common)
     observer = _instance("CurrentObserver", "obs", ["v", "omega"], ["i_hat"],
-                         {"preset": preset, "sample_phase": phase})
+                         {"preset": preset, "sample_phase": phase, "kind": kind, **start})
     try:
         t, voltages = 0.0, set()
         for _ in range(STEPS):
