@@ -53,9 +53,10 @@ def test_the_chain_at_another_sample_time_is_scipys_filtering(T):
 
 @pytest.mark.parametrize("T", SAMPLE_TIMES)
 def test_the_delays_at_another_sample_time_give_a_polynomials_derivatives(T):
-    """A parabola's velocity after the transient is dq/dt at t - velocity_delay and a cubic's
-    acceleration d2q/dt2 at t - acceleration_delay, the delays being T/2 + the velocity
-    filter's, and T + both filters' (difference, filters) at that T."""
+    """Catches delays computed with 1 ms instead of T (or half a sample off): a parabola's
+    velocity after the transient is dq/dt at t - velocity_delay and a cubic's acceleration
+    d2q/dt2 at t - acceleration_delay, the delays being T/2 + the velocity filter's, and T +
+    both filters' (difference, filters) at that T."""
     derivator = Derivator(100.0, 40.0, T)
     vel_filter = dc_group_delay(derivator.velocity_sos, T)
     assert derivator.velocity_delay == T / 2 + vel_filter

@@ -67,6 +67,7 @@ def test_every_buffer_of_every_call_is_checked_before_the_kernel_reads_it(name):
 
 
 def test_a_longer_buffer_is_read_only_up_to_its_size():
-    """The check is ``>=``: a state with spare words gives the energy of its first N_STATE."""
+    """Catches a check that wants the exact size (``==`` for ``>=``): a state with spare words is
+    accepted and gives the energy of its first N_STATE."""
     prm, y = pack(SEED), _state()
     assert K.energy(prm, np.concatenate([y, [np.nan, 1e300]])) == K.energy(prm, y)

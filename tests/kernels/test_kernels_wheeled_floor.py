@@ -35,8 +35,9 @@ def test_the_lowest_body_point_is_the_lowest_corner_at_every_tilt(changes):
 
 @pytest.mark.parametrize("D", [0.1, 0.2])
 def test_the_kernel_calls_it_a_fall_exactly_when_a_corner_reaches_the_floor(D):
-    """At tilts either side of where a bottom corner touches (R = D/2 |sin psi|), the condition
-    is OK above the floor and FALLEN_FLOOR (naming psi) on or below it."""
+    """Catches a floor check with a margin, on the wrong side, or naming another state: at tilts
+    either side of where a bottom corner touches (R = D/2 |sin psi|), the condition is OK above
+    the floor and FALLEN_FLOOR (naming psi) on or below it."""
     p = SEED.with_(D=D)
     prm, y = pack(p), np.zeros(K.N_STATE)
     touch = math.asin(p.R / (D / 2))
