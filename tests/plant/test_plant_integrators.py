@@ -88,3 +88,17 @@ def test_a_non_finite_derivative_is_refused_naming_where():
     derivative is NaN once y passes 1.2, from y = 1 over 0.5 s)."""
     with pytest.raises(IntegrationError, match=r"^non-finite state at t\+0 s within the step$"):
         dopri5(lambda y: y if y[0] < 1.2 else y * math.nan, np.array([1.0]), 0.5, rtol=1e-6, atol=1e-9)
+
+
+def test_the_rk4_stability_limit_is_where_one_step_of_a_decay_stops_shrinking():
+    """RK4 on y' = -y/tau over h multiplies y by R(-h/tau) = 1 - x + x^2/2 - x^3/6 + x^4/24
+    (x = h/tau); the plant's limit (simulator.RK4_REAL_STABILITY, used for the Baumgarte term
+    and the in-plant drives' armature circuits) is the x > 0 where R = 1 again, the real root
+    of x^3/24 - x^2/6 + x/2 - 1.  Catches a limit that is
+    not that root (a step refused that is stable, or one accepted that diverges)."""
+    from plant.simulator import RK4_REAL_STABILITY as limit
+    root = min(r.real for r in np.roots([1 / 24, -1 / 6, 1 / 2, -1.0]) if abs(r.imag) < 1e-12)
+    assert limit == pytest.approx(root, rel=1e-13)
+    for x, shrinks in ((limit * (1 - 1e-9), True), (limit * (1 + 1e-9), False)):
+        factor = rk4(lambda y: -y, np.array([1.0]), x)[0]
+        assert (abs(factor) < 1.0) == shrinks, (x, factor)
