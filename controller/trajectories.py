@@ -42,16 +42,6 @@ _SMOOTHSTEP_DERIVATIVES = tuple(
 SMOOTHSTEP_SLOPE_COEFFICIENTS = _SMOOTHSTEP_DERIVATIVES[0]
 
 
-def smoothstep(tau: float) -> tuple[float, float]:
-    """(s(tau), s'(tau)) of (7.27) for 0 <= tau <= 1, by Horner's rule."""
-    value = slope = 0.0
-    for coefficient in reversed(SMOOTHSTEP_COEFFICIENTS):
-        value = value * tau + coefficient
-    for coefficient in reversed(SMOOTHSTEP_SLOPE_COEFFICIENTS):
-        slope = slope * tau + coefficient
-    return value, slope
-
-
 class ReferenceSample(NamedTuple):
     """Reference position, velocity and acceleration of the end effector at one instant."""
 

@@ -146,17 +146,3 @@ def advance(f: np.ndarray, z0: float, omega: float, h: float) -> tuple:
     out = np.empty(3)
     kernel.lugre_advance(kernels.address(f), z0, omega, h, kernels.address(out))
     return float(out[0]), float(out[1]), float(out[2])
-
-
-def friction_peek(f: np.ndarray, omega: float, h: float) -> tuple:
-    """(status, z, F_end, F_mean): :func:`advance` from the array's deflection, nothing
-    changed (status :data:`motor.kernel.NONFINITE_INPUT` for a non-finite ω); keep z with
-    :func:`friction_commit` once the caller's step is accepted."""
-    if not math.isfinite(omega):
-        return kernel.NONFINITE_INPUT, 0.0, 0.0, 0.0
-    return (kernel.OK, *advance(f, float(f[F_Z]), omega, h))
-
-
-def friction_commit(f: np.ndarray, z: float) -> None:
-    """Keep the deflection z of an accepted step."""
-    f[F_Z] = z

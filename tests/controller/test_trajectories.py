@@ -6,8 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from controller.trajectories import (PRESET_CYCLES, TRAJECTORY_KINDS, ReferenceSample, from_parameters,
-                                    get_trajectory, smoothstep)
+from controller.trajectories import (PRESET_CYCLES, SMOOTHSTEP_COEFFICIENTS, SMOOTHSTEP_SLOPE_COEFFICIENTS,
+                                    TRAJECTORY_KINDS, ReferenceSample, from_parameters, get_trajectory)
 
 STEP = 1e-6
 """Finite-difference step, s."""
@@ -138,13 +138,16 @@ def test_factory_passes_parameters_and_names_unknown_kinds():
     assert all(kind in str(error.value) for kind in TRAJECTORY_KINDS)
 
 
-def test_smoothstep_is_the_polynomial_of_7_27_and_its_slope():
-    """smoothstep(τ) (Horner's rule, used by the balanced mechanisms' trajectory) against (7.27)
-    written out, s = 35τ⁴ − 84τ⁵ + 70τ⁶ − 20τ⁷, and its derivative term by term."""
+def test_the_smoothstep_coefficients_are_the_polynomial_of_7_27_and_its_slope():
+    """Catches a wrong coefficient of s(τ) or s'(τ) as the C kernels get them (the polygon's and
+    the balanced mechanisms' trajectories): ascending powers against (7.27) written out,
+    s = 35τ⁴ − 84τ⁵ + 70τ⁶ − 20τ⁷, and its derivative term by term."""
     for tau in (0.0, 0.1, 0.37, 0.5, 0.81, 1.0):
         s = 35 * tau ** 4 - 84 * tau ** 5 + 70 * tau ** 6 - 20 * tau ** 7
         ds = 140 * tau ** 3 - 420 * tau ** 4 + 420 * tau ** 5 - 140 * tau ** 6
-        assert smoothstep(tau) == pytest.approx((s, ds), rel=1e-12, abs=1e-15)
+        value = np.polynomial.polynomial.polyval(tau, SMOOTHSTEP_COEFFICIENTS)
+        slope = np.polynomial.polynomial.polyval(tau, SMOOTHSTEP_SLOPE_COEFFICIENTS)
+        assert (value, slope) == pytest.approx((s, ds), rel=1e-12, abs=1e-15)
 
 
 def test_a_circle_turning_backwards_or_not_at_all_is_refused():

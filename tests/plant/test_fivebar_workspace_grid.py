@@ -1,0 +1,36 @@
+"""plant.fivebar.workspace_map point by point: the grid spans the extent given, both ends
+included, and each point's margin and status are those of the closed-form kinematics there
+(plant.fivebar.singularity, inverse_kinematics) with the band given."""
+import math
+
+import numpy as np
+import pytest
+
+from plant import get_preset
+from plant.fivebar import KinematicsError, WorkspaceMap, singularity, workspace_map
+
+
+@pytest.mark.parametrize("preset, band", [("bench", 0.3), ("thesis_sim", 0.2)])
+def test_every_grid_point_is_the_closed_form_at_that_point(preset, band):
+    """Catches a grid that stops one step short of an end (x or y), a margin from another
+    point or measure, and a band that is not the one given."""
+    params = get_preset(preset)
+    extent, step = (-0.12, 0.12, 0.0, 0.3), 0.03
+    ws = workspace_map(params, step=step, band=band, extent=extent)
+    np.testing.assert_allclose(ws.x, np.linspace(-0.12, 0.12, 9), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(ws.y, np.linspace(0.0, 0.3, 11), rtol=0, atol=1e-12)
+    assert ws.margin.shape == ws.status.shape == (11, 9)
+    statuses = set()
+    for iy, y in enumerate(ws.y):
+        for ix, x in enumerate(ws.x):
+            try:
+                margin = singularity(params, x, y).margin
+            except KinematicsError:
+                assert math.isnan(ws.margin[iy, ix]) and ws.status[iy, ix] == WorkspaceMap.OUTSIDE
+                statuses.add(WorkspaceMap.OUTSIDE)
+                continue
+            assert ws.margin[iy, ix] == pytest.approx(margin, abs=1e-14), (x, y)
+            expected = WorkspaceMap.NEAR_SINGULAR if margin < band else WorkspaceMap.INSIDE
+            assert ws.status[iy, ix] == expected, (x, y)
+            statuses.add(expected)
+    assert statuses == {WorkspaceMap.OUTSIDE, WorkspaceMap.INSIDE, WorkspaceMap.NEAR_SINGULAR}
