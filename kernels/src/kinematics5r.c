@@ -45,6 +45,39 @@ double pc_5r_margin(const double angles[4])
     return fmin(fmin(serial1, serial2), parallel);
 }
 
+/* The smallest |sin| of an elbow pc_5r_clear judges (below, the distal link's direction, through
+ * 1 / r^2 with r^2 >= l1 l2 sin^2 beta, is too ill-conditioned to bound). */
+#define CLEAR_ELBOW 1e-3
+
+/* Chain (l1, l2) reaching (px, py) from its base with the elbow on `elbow_sign`'s side: sin beta
+ * and the distal link's direction (ux, uy), by pc_5r_chain_ik's law of cosines (the same reach
+ * test: 0 when out of reach) and cos phi1 = (a px + b py) / r^2, sin phi1 = (a py - b px) / r^2,
+ * (a, b) = (l1 + l2 cos beta, l2 sin beta) with a^2 + b^2 = r^2. */
+static int chain_directions(double l1, double l2, double px, double py, double elbow_sign, double *sb,
+                            double *ux, double *uy)
+{
+    const double r2 = px * px + py * py;
+    const double cos_b = (r2 - l1 * l1 - l2 * l2) / (2.0 * l1 * l2);
+    if (!(-1.0 <= cos_b && cos_b <= 1.0)) return 0;
+    *sb = elbow_sign * sqrt((1.0 - cos_b) * (1.0 + cos_b));
+    const double a = l1 + l2 * cos_b, b = l2 * *sb;
+    const double c1 = (a * px + b * py) / r2, s1 = (a * py - b * px) / r2;
+    *ux = (px - l1 * c1) / l2;
+    *uy = (py - l1 * s1) / l2;
+    return 1;
+}
+
+int pc_5r_clear(const pc_5r_geometry *g, double x, double y, double band)
+{
+    double sb1, ux1, uy1, sb2, ux2, uy2;
+    if (!chain_directions(g->l11, g->l12, x - g->l0, y, 1.0, &sb1, &ux1, &uy1)) return 0;
+    if (!chain_directions(g->l21, g->l22, x + g->l0, y, -1.0, &sb2, &ux2, &uy2)) return 0;
+    const double serial = fmin(fabs(sb1), fabs(sb2));
+    if (!(serial >= CLEAR_ELBOW)) return 0;
+    const double parallel = fabs(uy1 * ux2 - ux1 * uy2);   /* sin(phi12 - phi22) */
+    return fmin(serial, parallel) > band + PC_5R_CLEAR_SLACK;
+}
+
 /* cos and sin of the two actuated angles, computed once for the forward kinematics, the
  * Jacobians and the bias of one task state. */
 typedef struct {
