@@ -248,7 +248,14 @@ INLINE void chain_rows(const pc_fivebar_params *p, int k, const double *y, doubl
      * E J theta'' = x'' - E a_bias + 2 lam (A dq) + lam^2 res. */
     const double wx = -t->a_bias[0] + 2.0 * lambda * vrx + lambda * lambda * rx;
     const double wy = -t->a_bias[1] + 2.0 * lambda * vry + lambda * lambda * ry;
-    inverse2(t->J, cinv);
+    {
+        const pc_fivebar_chain *c = &p->chain[k];
+        const double id = chain_sign(k) / (c->l1 * c->l2 * g.sb);   /* det E J = s l1 l2 sin theta_k2 */
+        cinv[0] = t->J[3] * id;
+        cinv[1] = -t->J[1] * id;
+        cinv[2] = -t->J[2] * id;
+        cinv[3] = t->J[0] * id;
+    }
     e[0] = cinv[0] * wx + cinv[1] * wy;
     e[1] = cinv[2] * wx + cinv[3] * wy;
 }
@@ -278,8 +285,9 @@ static void derivative_of(const pc_fivebar_params *p, const double *y, double u1
         r1 += c[1] * f0 + c[3] * f1;
     }
     const double det = a00 * a11 - a01 * a01;
-    const double ddx = (a11 * r0 - a01 * r1) / det;
-    const double ddy = (a00 * r1 - a01 * r0) / det;
+    const double id = 1.0 / det;
+    const double ddx = (a11 * r0 - a01 * r1) * id;
+    const double ddy = (a00 * r1 - a01 * r0) * id;
     for (int i = 0; i < N_Q; ++i) dydt[i] = y[N_Q + i];
     dydt[7] = ddx;
     dydt[8] = ddy;
