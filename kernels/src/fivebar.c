@@ -17,6 +17,17 @@
 #define PI 3.14159265358979323846
 #define N_Y 14
 
+/* The RK4 evaluation's helpers inlined whole, so their chains of operations interleave. */
+#define INLINE static inline __attribute__((always_inline))
+
+/* Two doubles, chain 1 in lane 0 and chain 2 in lane 1 (or a chain's two angles): GCC's and
+ * clang's vector extension (one SSE2 register on x86-64), each lane's operation the scalar one, so
+ * the same bits as computing the lanes one by one; the two chains' terms cost one chain's. */
+#if !defined(__GNUC__)
+#error "fivebar.c computes the two chains in the lanes of GCC's or clang's vector extension"
+#endif
+typedef double lanes __attribute__((vector_size(16)));
+
 const pc_field pc_fivebar_params_fields[] = {
     PC_FIELD(pc_fivebar_params, l0), PC_FIELD(pc_fivebar_params, m0), PC_FIELD(pc_fivebar_params, gravity),
     /* chain[2], each pc_fivebar_chain_fields (PC_FIELD's count is for arrays of doubles) */
@@ -78,7 +89,7 @@ typedef struct {
     double s1, c1, s12, c12, sb, cb;
 } chain_trig;
 
-static void chain_trig_of(double a, double b, chain_trig *g)
+INLINE void chain_trig_of(double a, double b, chain_trig *g)
 {
     pc_sincos(a, &g->s1, &g->c1);
     pc_sincos(b, &g->sb, &g->cb);
@@ -86,15 +97,33 @@ static void chain_trig_of(double a, double b, chain_trig *g)
     g->c12 = g->c1 * g->cb - g->s1 * g->sb;
 }
 
-/* pc_fivebar_chain_terms from the chain's trigonometry g. */
-static void chain_terms_of(const pc_fivebar_params *p, int k, const chain_trig *g, double da, double db,
-                           pc_fivebar_terms *t)
+/* Both chains' sines and cosines (chain_trig's), chain k in lane k. */
+typedef struct {
+    lanes s1, c1, s12, c12, sb, cb;
+} trig_lanes;
+
+static trig_lanes both_trig(const chain_trig *g0, const chain_trig *g1)
 {
-    const pc_fivebar_chain *c = &p->chain[k];
-    const double s = chain_sign(k);
-    const double l1 = c->l1, l2 = c->l2, lg1 = c->lg1, lg2 = c->lg2, m1 = c->m1, m2 = c->m2;
-    const double c1 = g->c1, s1 = g->s1, c12 = g->c12, s12 = g->s12, cb = g->cb, sb = g->sb;
-    const double w1 = da, w12 = da + db;
+    return (trig_lanes){{g0->s1, g1->s1}, {g0->c1, g1->c1}, {g0->s12, g1->s12},
+                        {g0->c12, g1->c12}, {g0->sb, g1->sb}, {g0->cb, g1->cb}};
+}
+
+/* pc_fivebar_terms of both chains, chain k in lane k. */
+typedef struct {
+    lanes tip[2], J[4], a_bias[2], M[4], v[2], g[2];
+} terms_lanes;
+
+/* A field of both chains' parameters, chain 1 in lane 0. */
+#define BOTH(p, f) ((lanes){(p)->chain[0].f, (p)->chain[1].f})
+
+/* pc_fivebar_chain_terms of both chains from their trigonometry g and joint rates (da, db). */
+INLINE void chain_terms_of(const pc_fivebar_params *p, const trig_lanes *g, lanes da, lanes db, terms_lanes *t)
+{
+    const lanes s = {chain_sign(0), chain_sign(1)};
+    const lanes l1 = BOTH(p, l1), l2 = BOTH(p, l2), lg1 = BOTH(p, lg1), lg2 = BOTH(p, lg2);
+    const lanes m1 = BOTH(p, m1), m2 = BOTH(p, m2);
+    const lanes c1 = g->c1, s1 = g->s1, c12 = g->c12, s12 = g->s12, cb = g->cb, sb = g->sb;
+    const lanes w1 = da, w12 = da + db;
     /* Tip (4.4) and J_v (4.13) in the chain frame; only the x, y rows are non-zero. */
     t->tip[0] = s * (l1 * c1 + l2 * c12);
     t->tip[1] = l1 * s1 + l2 * s12;
@@ -106,9 +135,9 @@ static void chain_terms_of(const pc_fivebar_params *p, int k, const chain_trig *
     t->a_bias[0] = s * (-l1 * c1 * w1 * w1 - l2 * c12 * w12 * w12);
     t->a_bias[1] = -l1 * s1 * w1 * w1 - l2 * s12 * w12 * w12;
     /* (4.85) with the rotor of (4.139) on joint 1. */
-    const double h = m2 * l1 * lg2;
-    const double m22 = m2 * lg2 * lg2 + c->Jz2;
-    t->M[0] = m1 * lg1 * lg1 + c->Jz1 + m2 * l1 * l1 + m22 + 2.0 * h * cb + c->J_rotor;
+    const lanes h = m2 * l1 * lg2;
+    const lanes m22 = m2 * lg2 * lg2 + BOTH(p, Jz2);
+    t->M[0] = m1 * lg1 * lg1 + BOTH(p, Jz1) + m2 * l1 * l1 + m22 + 2.0 * h * cb + BOTH(p, J_rotor);
     t->M[1] = m22 + h * cb;
     t->M[2] = t->M[1];
     t->M[3] = m22;
@@ -116,14 +145,14 @@ static void chain_terms_of(const pc_fivebar_params *p, int k, const chain_trig *
     t->v[0] = -h * sb * (2.0 * da * db + db * db);
     t->v[1] = h * sb * da * da;
     /* (4.87) with gravity in the chain frame, E_k^T g; none without gravity. */
-    const double gx = s * p->gravity[0], gy = p->gravity[1];
-    if (gx == 0.0 && gy == 0.0) {
-        t->g[0] = t->g[1] = 0.0;
+    if (p->gravity[0] == 0.0 && p->gravity[1] == 0.0) {
+        t->g[0] = t->g[1] = (lanes){0.0, 0.0};
         return;
     }
-    const double gc1x = lg1 * -s1, gc1y = lg1 * c1;
-    const double g2ax = -l1 * s1 - lg2 * s12, g2ay = l1 * c1 + lg2 * c12;
-    const double g2bx = -lg2 * s12, g2by = lg2 * c12;
+    const lanes gx = s * p->gravity[0], gy = {p->gravity[1], p->gravity[1]};
+    const lanes gc1x = lg1 * -s1, gc1y = lg1 * c1;
+    const lanes g2ax = -l1 * s1 - lg2 * s12, g2ay = l1 * c1 + lg2 * c12;
+    const lanes g2bx = -lg2 * s12, g2by = lg2 * c12;
     t->g[0] = -(m1 * (gc1x * gx + gc1y * gy) + m2 * (g2ax * gx + g2ay * gy));
     t->g[1] = -(m2 * (g2bx * gx + g2by * gy));
 }
@@ -135,7 +164,19 @@ void pc_fivebar_chain_terms(const pc_fivebar_params *p, int k, double a, double 
 {
     chain_trig g;
     chain_trig_of(a, b, &g);
-    chain_terms_of(p, k, &g, da, db, t);
+    const trig_lanes gl = both_trig(&g, &g);   /* (a, b) in both lanes: lane k is chain k's */
+    terms_lanes tl;
+    chain_terms_of(p, &gl, (lanes){da, da}, (lanes){db, db}, &tl);
+    for (int i = 0; i < 2; ++i) {
+        t->tip[i] = tl.tip[i][k];
+        t->a_bias[i] = tl.a_bias[i][k];
+        t->v[i] = tl.v[i][k];
+        t->g[i] = tl.g[i][k];
+    }
+    for (int i = 0; i < 4; ++i) {
+        t->J[i] = tl.J[i][k];
+        t->M[i] = tl.M[i][k];
+    }
 }
 
 /* The trigonometry of a state's chains kept in a step's scratch (PC_FIVEBAR_TRIG_WORDS after
@@ -156,15 +197,15 @@ static int same_bits(double x, double k)
 /* Largest angle an RK4 stage's trigonometry is turned by from the step's start, rad (2^-5). */
 #define TURN_MAX 0x1p-5
 
-/* sin and cos of x + d from those of x (s, c) and |d| <= TURN_MAX: sin d and cos d by their
- * Taylor series (through d^7 and d^8, the first left out below 3e-18 of the kept at 2^-5), then the
- * angle sum. */
-static void turned(double s, double c, double d, double *sin_xd, double *cos_xd)
+/* sin and cos of x + d from those of x (s, c) and |d| <= TURN_MAX, two angles in the lanes: sin d
+ * and cos d by their Taylor series (through d^7 and d^8, the first left out below 3e-18 of the kept
+ * at 2^-5), then the angle sum. */
+INLINE void turned(lanes s, lanes c, lanes d, lanes *sin_xd, lanes *cos_xd)
 {
-    const double z = d * d;
-    const double sd = d + d * z * (-1.0 / 6.0 + z * (8.333333333333333e-03 + z * -1.984126984126984e-04));
-    const double cd = 1.0 - z * (0.5 - z * (0.041666666666666664 + z * (-0.001388888888888889 +
-                                                                       z * 2.48015873015873e-05)));
+    const lanes z = d * d;
+    const lanes sd = d + d * z * (-1.0 / 6.0 + z * (8.333333333333333e-03 + z * -1.984126984126984e-04));
+    const lanes cd = 1.0 - z * (0.5 - z * (0.041666666666666664 + z * (-0.001388888888888889 +
+                                                                      z * 2.48015873015873e-05)));
     *sin_xd = s * cd + c * sd;
     *cos_xd = c * cd - s * sd;
 }
@@ -172,7 +213,7 @@ static void turned(double s, double c, double d, double *sin_xd, double *cos_xd)
 /* Chain k's trigonometry at angles (a, b): from the cache when it holds them, turned from the
  * cache's when `turn` and both are within TURN_MAX of its (an RK4 stage from the step's start),
  * else computed. */
-static void trig_at(const double *cache, int k, double a, double b, int turn, chain_trig *g)
+INLINE void trig_at(const double *cache, int k, double a, double b, int turn, chain_trig *g)
 {
     if (cache && cache[0] == TRIG_MARK) {
         const double *v = cache + 5 + 6 * k;
@@ -182,14 +223,43 @@ static void trig_at(const double *cache, int k, double a, double b, int turn, ch
         }
         const double da = a - cache[1 + 2 * k], db = b - cache[2 + 2 * k];
         if (turn && fabs(da) <= TURN_MAX && fabs(db) <= TURN_MAX) {
-            turned(v[0], v[1], da, &g->s1, &g->c1);
-            turned(v[4], v[5], db, &g->sb, &g->cb);
+            lanes sn, cs;   /* theta_k1 in lane 0, theta_k2 in lane 1 */
+            turned((lanes){v[0], v[4]}, (lanes){v[1], v[5]}, (lanes){da, db}, &sn, &cs);
+            g->s1 = sn[0];
+            g->c1 = cs[0];
+            g->sb = sn[1];
+            g->cb = cs[1];
             g->s12 = g->s1 * g->cb + g->c1 * g->sb;
             g->c12 = g->c1 * g->cb - g->s1 * g->sb;
             return;
         }
     }
     chain_trig_of(a, b, g);
+}
+
+/* Both chains' trigonometry at y's angles, chain k in lane k: trig_at's, the turning done for
+ * both chains at once when both take it (an RK4 stage: neither chain at the cache's angles, each
+ * within TURN_MAX of them; theta_k1 and theta_k2 in turned's lanes otherwise). */
+INLINE void trig_lanes_at(const double *cache, const double *y, trig_lanes *g)
+{
+    int both = cache && cache[0] == TRIG_MARK;
+    for (int k = 0; k < 2 && both; ++k) {
+        const double a = y[3 + 2 * k], b = y[4 + 2 * k], a0 = cache[1 + 2 * k], b0 = cache[2 + 2 * k];
+        both = !(same_bits(a, a0) && same_bits(b, b0)) && fabs(a - a0) <= TURN_MAX && fabs(b - b0) <= TURN_MAX;
+    }
+    if (!both) {
+        chain_trig g0, g1;
+        trig_at(cache, 0, y[3], y[4], 1, &g0);
+        trig_at(cache, 1, y[5], y[6], 1, &g1);
+        *g = both_trig(&g0, &g1);
+        return;
+    }
+    const double *v = cache + 5, *w = cache + 11;
+    const lanes da = {y[3] - cache[1], y[5] - cache[3]}, db = {y[4] - cache[2], y[6] - cache[4]};
+    turned((lanes){v[0], w[0]}, (lanes){v[1], w[1]}, da, &g->s1, &g->c1);
+    turned((lanes){v[4], w[4]}, (lanes){v[5], w[5]}, db, &g->sb, &g->cb);
+    g->s12 = g->s1 * g->cb + g->c1 * g->sb;   /* chain_trig_of's angle sums */
+    g->c12 = g->c1 * g->cb - g->s1 * g->sb;
 }
 
 /* Keep chain k's trigonometry g at (a, b) in the cache (mark it once both chains are in). */
@@ -207,7 +277,7 @@ static void keep_trig(double *cache, int k, double a, double b, const chain_trig
 }
 
 /* The inverse of the 2x2 row-major m into inv. */
-static void inverse2(const double *m, double *inv)
+INLINE void inverse2(const double *m, double *inv)
 {
     const double det = m[0] * m[3] - m[1] * m[2];
     inv[0] = m[3] / det;
@@ -223,57 +293,54 @@ static void terms_at(const pc_fivebar_params *p, int k, const double *y, int wit
                            with_rates ? dq[4 + 2 * k] : 0.0, t);
 }
 
-/* pc_fivebar_derivative, the chains' trigonometry from `cache` when it holds y's angles (NULL: none). */
+/* pc_fivebar_derivative, the chains' trigonometry from `cache` when it holds y's angles (NULL: none);
+ * chain k's rows in lane k. */
 static void derivative_of(const pc_fivebar_params *p, const double *y, double u1, double u2, double lambda,
                           const double *cache, double *dydt)
 {
-    pc_fivebar_terms t[2];
-    double cinv[2][4], e[2][2];
-    const double x = y[0], yy = y[1], dx = y[7], dy = y[8];
-    for (int k = 0; k < 2; ++k) {
-        chain_trig g;
-        trig_at(cache, k, y[3 + 2 * k], y[4 + 2 * k], 1, &g);
-        chain_terms_of(p, k, &g, y[10 + 2 * k], y[11 + 2 * k], &t[k]);
-        const double rx = x - chain_base(p, k) - t[k].tip[0];   /* residual (5.18) */
-        const double ry = yy - t[k].tip[1];
-        const double dth1 = y[10 + 2 * k], dth2 = y[11 + 2 * k];
-        const double vrx = dx - (t[k].J[0] * dth1 + t[k].J[1] * dth2);   /* A dq */
-        const double vry = dy - (t[k].J[2] * dth1 + t[k].J[3] * dth2);
-        /* A q'' + b + 2 lam A dq + lam^2 res = 0, A = [1, -E J], b = -E a_bias:
-         * E J theta'' = x'' - E a_bias + 2 lam (A dq) + lam^2 res. */
-        const double wx = -t[k].a_bias[0] + 2.0 * lambda * vrx + lambda * lambda * rx;
-        const double wy = -t[k].a_bias[1] + 2.0 * lambda * vry + lambda * lambda * ry;
-        inverse2(t[k].J, cinv[k]);
-        e[k][0] = cinv[k][0] * wx + cinv[k][1] * wy;
-        e[k][1] = cinv[k][2] * wx + cinv[k][3] * wy;
-    }
-    /* Projected dynamics: (C^T M' C) x'' = C^T (u' - v' - g' - M' e). */
-    double a00 = p->m0, a01 = 0.0, a11 = p->m0;
-    double r0 = p->m0 * p->gravity[0], r1 = p->m0 * p->gravity[1];   /* -g' of the platform (5.9) */
-    for (int k = 0; k < 2; ++k) {
-        const double *M = t[k].M, *c = cinv[k];
-        const double u = k == 0 ? u1 : u2;
-        const double f0 = u - t[k].v[0] - t[k].g[0] - (M[0] * e[k][0] + M[1] * e[k][1]);
-        const double f1 = -t[k].v[1] - t[k].g[1] - (M[2] * e[k][0] + M[3] * e[k][1]);
-        const double mc00 = M[0] * c[0] + M[1] * c[2], mc01 = M[0] * c[1] + M[1] * c[3];
-        const double mc10 = M[2] * c[0] + M[3] * c[2], mc11 = M[2] * c[1] + M[3] * c[3];
-        a00 += c[0] * mc00 + c[2] * mc10;
-        a01 += c[0] * mc01 + c[2] * mc11;
-        a11 += c[1] * mc01 + c[3] * mc11;
-        r0 += c[0] * f0 + c[2] * f1;
-        r1 += c[1] * f0 + c[3] * f1;
-    }
+    trig_lanes g;
+    trig_lanes_at(cache, y, &g);
+    const lanes da = {y[10], y[12]}, db = {y[11], y[13]};
+    terms_lanes t;
+    chain_terms_of(p, &g, da, db, &t);
+    const lanes base = {chain_base(p, 0), chain_base(p, 1)};
+    const lanes rx = y[0] - base - t.tip[0], ry = y[1] - t.tip[1];   /* residual (5.18) */
+    const lanes vrx = y[7] - (t.J[0] * da + t.J[1] * db);             /* A dq */
+    const lanes vry = y[8] - (t.J[2] * da + t.J[3] * db);
+    /* A q'' + b + 2 lam A dq + lam^2 res = 0, A = [1, -E J], b = -E a_bias:
+     * E J theta'' = x'' - E a_bias + 2 lam (A dq) + lam^2 res. */
+    const lanes wx = -t.a_bias[0] + 2.0 * lambda * vrx + lambda * lambda * rx;
+    const lanes wy = -t.a_bias[1] + 2.0 * lambda * vry + lambda * lambda * ry;
+    /* Cinv_k = (E_k J_v,k)^-1 = adj / det, det E J = s l1 l2 sin theta_k2 (4.13). */
+    const lanes id = (lanes){chain_sign(0), chain_sign(1)} / (BOTH(p, l1) * BOTH(p, l2) * g.sb);
+    const lanes c0 = t.J[3] * id, c1 = -t.J[1] * id, c2 = -t.J[2] * id, c3 = t.J[0] * id;
+    const lanes e0 = c0 * wx + c1 * wy, e1 = c2 * wx + c3 * wy;   /* theta_k'' at x'' = 0 */
+    /* Projected dynamics: (C^T M' C) x'' = C^T (u' - v' - g' - M' e), the chains' terms summed
+     * chain 1 first. */
+    const lanes *M = t.M;
+    const lanes f0 = (lanes){u1, u2} - t.v[0] - t.g[0] - (M[0] * e0 + M[1] * e1);
+    const lanes f1 = -t.v[1] - t.g[1] - (M[2] * e0 + M[3] * e1);
+    const lanes mc00 = M[0] * c0 + M[1] * c2, mc01 = M[0] * c1 + M[1] * c3;
+    const lanes mc10 = M[2] * c0 + M[3] * c2, mc11 = M[2] * c1 + M[3] * c3;
+    const lanes A00 = c0 * mc00 + c2 * mc10, A01 = c0 * mc01 + c2 * mc11, A11 = c1 * mc01 + c3 * mc11;
+    const lanes R0 = c0 * f0 + c2 * f1, R1 = c1 * f0 + c3 * f1;
+    const double a00 = (p->m0 + A00[0]) + A00[1], a01 = (0.0 + A01[0]) + A01[1];
+    const double a11 = (p->m0 + A11[0]) + A11[1];
+    /* -g' of the platform (5.9) */
+    const double r0 = (p->m0 * p->gravity[0] + R0[0]) + R0[1], r1 = (p->m0 * p->gravity[1] + R1[0]) + R1[1];
     const double det = a00 * a11 - a01 * a01;
-    const double ddx = (a11 * r0 - a01 * r1) / det;
-    const double ddy = (a00 * r1 - a01 * r0) / det;
+    const double inv = 1.0 / det;
+    const double ddx = (a11 * r0 - a01 * r1) * inv;
+    const double ddy = (a00 * r1 - a01 * r0) * inv;
     for (int i = 0; i < N_Q; ++i) dydt[i] = y[N_Q + i];
     dydt[7] = ddx;
     dydt[8] = ddy;
     dydt[9] = -2.0 * lambda * y[9] - lambda * lambda * y[2];
-    for (int k = 0; k < 2; ++k) {
-        dydt[10 + 2 * k] = cinv[k][0] * ddx + cinv[k][1] * ddy + e[k][0];
-        dydt[11 + 2 * k] = cinv[k][2] * ddx + cinv[k][3] * ddy + e[k][1];
-    }
+    const lanes dd1 = c0 * ddx + c1 * ddy + e0, dd2 = c2 * ddx + c3 * ddy + e1;
+    dydt[10] = dd1[0];
+    dydt[11] = dd2[0];
+    dydt[12] = dd1[1];
+    dydt[13] = dd2[1];
 }
 
 /* dy/dt for y = [q, dq] with u* = (u1, u2) on theta11, theta21 (5.66). */

@@ -45,6 +45,38 @@ double pc_5r_margin(const double angles[4])
     return fmin(fmin(serial1, serial2), parallel);
 }
 
+/* The smallest |sin| of an elbow pc_5r_clear judges (below, the distal link's direction, through
+ * 1 / r^2 with r^2 >= l1 l2 sin^2 beta, is too ill-conditioned to bound). */
+#define CLEAR_ELBOW 1e-3
+
+/* Chain (l1, l2) reaching (px, py) from its base with the elbow on `elbow_sign`'s side: sin beta
+ * and l2 times the distal link's direction (vx, vy), by pc_5r_chain_ik's law of cosines (0 when
+ * out of reach) and cos phi1 = (a px + b py) / r^2, sin phi1 = (a py - b px) / r^2, (a, b) =
+ * (l1 + l2 cos beta, l2 sin beta) with a^2 + b^2 = r^2. */
+static int chain_directions(double l1, double l2, double px, double py, double elbow_sign, double *sb,
+                            double *vx, double *vy)
+{
+    const double r2 = px * px + py * py;
+    const double cos_b = (r2 - l1 * l1 - l2 * l2) / (2.0 * l1 * l2);
+    if (!(-1.0 <= cos_b && cos_b <= 1.0)) return 0;
+    *sb = elbow_sign * sqrt((1.0 - cos_b) * (1.0 + cos_b));
+    const double a = l1 + l2 * cos_b, b = l2 * *sb, k = l1 / r2;
+    *vx = px - k * (a * px + b * py);
+    *vy = py - k * (a * py - b * px);
+    return 1;
+}
+
+int pc_5r_clear(const pc_5r_geometry *g, double x, double y, double band)
+{
+    double sb1, vx1, vy1, sb2, vx2, vy2;
+    if (!chain_directions(g->l11, g->l12, x - g->l0, y, 1.0, &sb1, &vx1, &vy1)) return 0;
+    if (!chain_directions(g->l21, g->l22, x + g->l0, y, -1.0, &sb2, &vx2, &vy2)) return 0;
+    const double serial = fmin(fabs(sb1), fabs(sb2));
+    if (!(serial >= CLEAR_ELBOW)) return 0;
+    const double parallel = fabs(vy1 * vx2 - vx1 * vy2) / (g->l12 * g->l22);   /* sin(phi12 - phi22) */
+    return fmin(serial, parallel) > band + PC_5R_CLEAR_SLACK;
+}
+
 /* cos and sin of the two actuated angles, computed once for the forward kinematics, the
  * Jacobians and the bias of one task state. */
 typedef struct {
@@ -72,9 +104,10 @@ static int forward(const pc_5r_geometry *g, const actuated_trig *t, double *x, d
         if (distance) *distance = dist;
         return PC_5R_NO_ASSEMBLY;
     }
-    const double along = (dist2 + r2 * r2 - r1 * r1) / (2.0 * dist);   /* from A2 along A2->A1 to the chord */
+    const double inv = 1.0 / dist;
+    const double along = (dist2 + r2 * r2 - r1 * r1) * (0.5 * inv);   /* from A2 along A2->A1 to the chord */
     const double height = sqrt(fmax(r2 * r2 - along * along, 0.0));   /* half-chord */
-    const double ux = dx / dist, uy = dy / dist;
+    const double ux = dx * inv, uy = dy * inv;
     *x = a2x + along * ux - height * uy;                               /* left of A2 -> A1 */
     *y = a2y + along * uy + height * ux;
     return PC_5R_OK;
@@ -137,16 +170,17 @@ int pc_5r_task_state(const pc_5r_geometry *g, double q1, double q2, double dq1, 
     const double det = a * d - b * c;
     t->det = det;
     if (det == 0.0) return PC_5R_SINGULAR;
-    t->J[0] = -d * t->jt[0] / det;
-    t->J[1] = b * t->jt[1] / det;
-    t->J[2] = c * t->jt[0] / det;
-    t->J[3] = -a * t->jt[1] / det;
+    const double id = 1.0 / det;
+    t->J[0] = -d * t->jt[0] * id;
+    t->J[1] = b * t->jt[1] * id;
+    t->J[2] = c * t->jt[0] * id;
+    t->J[3] = -a * t->jt[1] * id;
     t->dx = t->J[0] * dq1 + t->J[1] * dq2;
     t->dy = t->J[2] * dq1 + t->J[3] * dq2;
     double r[2];
     bias_rhs(g, t->x, t->y, &trig, t->dx, t->dy, dq1, dq2, r);
-    t->beta[0] = -(d * r[0] - b * r[1]) / det;
-    t->beta[1] = -(-c * r[0] + a * r[1]) / det;
+    t->beta[0] = -(d * r[0] - b * r[1]) * id;
+    t->beta[1] = -(-c * r[0] + a * r[1]) * id;
     t->ddx = t->J[0] * ddq1 + t->J[1] * ddq2 + t->beta[0];
     t->ddy = t->J[2] * ddq1 + t->J[3] * ddq2 + t->beta[1];
     return PC_5R_OK;

@@ -55,6 +55,16 @@ int pc_5r_inverse(const pc_5r_geometry *g, double x, double y, double angles[4],
  * angle (plant.fivebar.singularity(...).margin). */
 double pc_5r_margin(const double angles[4]);
 
+/* 1 when both chains reach (x, y) and its singularity margin is above `band` by more than
+ * PC_5R_CLEAR_SLACK, from the sines and cosines of the law of cosines alone (no acos, atan2);
+ * 0 otherwise (out of reach, an elbow within 1e-3 of stretched or folded, or near the band),
+ * where the caller computes the angles and pc_5r_margin: a refusal's code and value are those. */
+int pc_5r_clear(const pc_5r_geometry *g, double x, double y, double band);
+/* What pc_5r_clear's margin may be off from pc_5r_margin's: both round by a few ulps of their
+ * O(1) operands, pc_5r_clear's by at most ~1e2 eps (l1 + l2) / (sqrt(l1 l2) 1e-3) beyond: 1e-11
+ * for links within 1:100. */
+#define PC_5R_CLEAR_SLACK 1e-9
+
 /* End effector (x, y) from the actuated angles (eq. 7-11), the assembly mode of the thesis'
  * figure (the tip left of the line from chain 2's elbow to chain 1's). */
 int pc_5r_forward(const pc_5r_geometry *g, double q1, double q2, double *x, double *y, double *distance);

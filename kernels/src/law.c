@@ -84,15 +84,18 @@ int pc_law_prepare(const pc_law_params *p, const pc_law_state *s, pc_law_scratch
             d[i] += ahead * d[2 + i] + 0.5 * ahead * ahead * d[4 + i];
             d[2 + i] += ahead * d[4 + i];
         }
-    /* The reference: inverse kinematics and the singularity margin. */
+    /* The reference: inverse kinematics and the singularity margin; in task space, whose law
+     * needs no angles, only when the reference is not clearly in reach and out of the band. */
     double distance = 0.0;
     double *a = w->angles;
-    if (pc_5r_chain_ik(g->l11, g->l12, d[0] - g->l0, d[1], 1.0, &a[0], &a[1], &distance) != PC_5R_OK)
-        return pc_refuse(r, PC_LAW_REF_OUT, 0, distance);
-    if (pc_5r_chain_ik(g->l21, g->l22, d[0] + g->l0, d[1], -1.0, &a[2], &a[3], &distance) != PC_5R_OK)
-        return pc_refuse(r, PC_LAW_REF_OUT, 1, distance);
-    const double margin = pc_5r_margin(a);
-    if (margin < p->band) return pc_refuse(r, PC_LAW_REF_BAND, 0, margin);
+    if (p->space != PC_LAW_SPACE_X || !pc_5r_clear(g, d[0], d[1], p->band)) {
+        if (pc_5r_chain_ik(g->l11, g->l12, d[0] - g->l0, d[1], 1.0, &a[0], &a[1], &distance) != PC_5R_OK)
+            return pc_refuse(r, PC_LAW_REF_OUT, 0, distance);
+        if (pc_5r_chain_ik(g->l21, g->l22, d[0] + g->l0, d[1], -1.0, &a[2], &a[3], &distance) != PC_5R_OK)
+            return pc_refuse(r, PC_LAW_REF_OUT, 1, distance);
+        const double margin = pc_5r_margin(a);
+        if (margin < p->band) return pc_refuse(r, PC_LAW_REF_BAND, 0, margin);
+    }
     /* The measured task state. */
     pc_5r_task *t = &w->task;
     rc = pc_5r_task_state(g, j[0], j[1], j[2], j[3], in->ddq1, in->ddq2, t);

@@ -133,7 +133,7 @@ typedef struct {
     pc_law_inputs in;
     pc_law_outputs out;
     pc_5r_task task;           /* the measured task state */
-    double angles[4];          /* the reference's world link angles */
+    double angles[4];          /* the reference's world link angles (task space: only if not pc_5r_clear) */
     double r[6];               /* r, dr, ddr (measured) */
     double rd[6];              /* r_d, dr_d, ddr_d */
     double m[PC_LAW_TERMS];    /* the interpolated table row */

@@ -32,6 +32,7 @@ BENCH = get_preset("bench")
 MECH = fivebar.build_mechanism(BENCH)
 TH11, TH21 = fivebar.TH11, fivebar.TH21
 H = 1e-3
+NEAR = fivebar.NEAR_SINGULAR_MARGIN
 
 
 def general_terms(x, y, dx, dy):
@@ -114,6 +115,38 @@ def test_chain_ik_takes_the_branch_of_the_difference_of_two_atan2():
             tip = (l1 * math.cos(phi1.value) + l2 * math.cos(phi2.value),
                    l1 * math.sin(phi1.value) + l2 * math.sin(phi2.value))
             assert np.allclose(tip, (px, py), rtol=0, atol=1e-15)
+
+
+def test_clear_passes_only_references_the_angles_would_pass():
+    """Catches pc_5r_clear (the task-space law's check of a reference without acos and atan2)
+    letting through a reference that the angles and pc_5r_margin would refuse, or a wrong
+    direction formula: at random points in and out of reach it is 0 out of reach, 0 with the band
+    at the exact margin or 1e-10 below it (its slack), 1 with the band 5e-9 below it when both
+    elbows are clear of 1e-3 (its margin within 4e-9 of the exact one), and 0 whenever the margin
+    is below the band."""
+    from plant import kinematics5r as k5r
+    g = k5r.geometry(BENCH)
+    clear = kernels.function("pc_5r_clear", ctypes.c_int, ctypes.POINTER(k5r.Geometry), ctypes.c_double,
+                             ctypes.c_double, ctypes.c_double)
+    rng = np.random.default_rng(38)
+    reach = g.l0 + max(g.l11 + g.l12, g.l21 + g.l22)
+    tested = 0
+    for x, y in rng.uniform(-reach, reach, (4000, 2)):
+        angles, distance = (ctypes.c_double * 4)(), ctypes.c_double()
+        if k5r.inverse(g, x, y, angles, distance) != k5r.OK:
+            assert clear(g, x, y, 0.0) == 0 and clear(g, x, y, -1.0) == 0
+            continue
+        m = k5r.margin(angles)
+        serial = min(abs(math.sin(angles[1] - angles[0])), abs(math.sin(angles[3] - angles[2])))
+        assert clear(g, x, y, m) == 0 and clear(g, x, y, m - 1e-10) == 0 and clear(g, x, y, m + 1e-3) == 0
+        if m < NEAR:
+            assert clear(g, x, y, NEAR) == 0
+        elif m > NEAR + 1e-8 and serial > 1.001e-3:
+            assert clear(g, x, y, NEAR) == 1
+        if serial > 1.001e-3:
+            assert clear(g, x, y, m - 5e-9) == 1, (x, y, m)
+            tested += 1
+    assert tested > 1000
 
 
 # --- the law, one sample at a time ----------------------------------------------------------
