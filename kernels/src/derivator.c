@@ -132,6 +132,27 @@ static inline pair sections(const double *section, long count, pair u, const pai
     return u;
 }
 
+/* Words j < n of channels ch and other from rows of m: words[j] = (rows[j m + ch], rows[j m + other]). */
+static void get(const double *rows, long n, long m, long ch, long other, pair *words)
+{
+    if (other == ch + 1)   /* side by side */
+        for (long j = 0; j < n; ++j) memcpy(&words[j], rows + j * m + ch, sizeof(pair));
+    else
+        for (long j = 0; j < n; ++j) words[j] = PAIR(rows[j * m + ch], rows[j * m + other]);
+}
+
+/* get's inverse: rows[j m + ch], rows[j m + other] = words[j]. */
+static void put(double *rows, long n, long m, long ch, long other, const pair *words)
+{
+    if (other == ch + 1)
+        for (long j = 0; j < n; ++j) memcpy(rows + j * m + ch, &words[j], sizeof(pair));
+    else
+        for (long j = 0; j < n; ++j) {
+            rows[j * m + ch] = LANE(words[j], 0);
+            rows[j * m + other] = LANE(words[j], 1);
+        }
+}
+
 int pc_derivator_step(const pc_derivator_context *c, const double *q, double limit, double *out, pc_refusal *r)
 {
     long n, m, velocity;
@@ -148,13 +169,10 @@ int pc_derivator_step(const pc_derivator_context *c, const double *q, double lim
     for (long ch = 0; ch < m; ch += 2) {   /* an odd last channel pairs with itself */
         const long other = ch + 1 < m ? ch + 1 : ch;
         const pair u = PAIR(q[ch], q[other]);
-        const int adjacent = other == ch + 1;   /* a pair's words side by side in each row */
-        if (!started)                      /* at rest at q */
+        if (started)
+            get(state, n, m, ch, other, x);
+        else                               /* at rest at q */
             for (long j = 0; j < n; ++j) x[j] = j == 0 ? u : PAIR(0.0, 0.0);
-        else if (adjacent)
-            for (long j = 0; j < n; ++j) memcpy(&x[j], state + j * m + ch, sizeof(pair));
-        else
-            for (long j = 0; j < n; ++j) x[j] = PAIR(state[j * m + ch], state[j * m + other]);
         const pair dq = sections(section, velocity, difference(rate, u, x, next), x + 1, next + 1);
         const pair ddq = sections(section + velocity * SECTION_WORDS, acceleration,
                                   difference(rate, dq, x + second, next + second), x + second + 1, next + second + 1);
@@ -162,17 +180,14 @@ int pc_derivator_step(const pc_derivator_context *c, const double *q, double lim
         out[other] = LANE(dq, 1);
         out[m + ch] = LANE(ddq, 0);
         out[m + other] = LANE(ddq, 1);
-        if (adjacent)
-            for (long j = 0; j < n; ++j) memcpy(c->scratch + j * m + ch, &next[j], sizeof(pair));
-        else
-            for (long j = 0; j < n; ++j) {
-                c->scratch[j * m + ch] = LANE(next[j], 0);
-                c->scratch[j * m + other] = LANE(next[j], 1);
-            }
+        if (m > 2) put(c->scratch, n, m, ch, other, next);   /* one pair: `next` waits in place */
     }
     for (long k = 0; k < 2 * m; ++k)
         if (!isfinite(out[k])) return pc_refuse(r, PC_DERIVATOR_NONFINITE_OUTPUT, (int)k, out[k]);
-    for (long k = 0; k < n * m; ++k) state[k] = c->scratch[k];
+    if (m > 2)
+        for (long k = 0; k < n * m; ++k) state[k] = c->scratch[k];
+    else
+        put(state, n, m, 0, m - 1, next);
     for (long ch = 0; ch < m; ++ch) state[n * m + ch] = q[ch];
     d->started = 1.0;
     return PC_OK;

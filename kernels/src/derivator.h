@@ -53,7 +53,7 @@ extern const pc_field pc_derivator_fields[];
 /* The buffers of one derivator, for its step and the compiled loop (pc_io_fn). */
 typedef struct {
     pc_derivator *derivator; /* the buffer */
-    double *scratch;         /* n m doubles: the next state before it replaces the state */
+    double *scratch;         /* n m doubles: the next state before it replaces the state (over two channels) */
     long words;              /* doubles in the buffer */
     long scratch_words;      /* doubles in scratch */
     double limit;            /* pc_derivator_io: largest |q| accepted [rad] */

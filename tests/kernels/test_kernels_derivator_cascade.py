@@ -108,3 +108,21 @@ def test_at_rest_a_constant_angle_gives_exactly_zero():
         for _ in range(50):
             dq, ddq = derivator.step([0.7, -2.3])
             assert dq.tolist() == [0.0, 0.0] and ddq.tolist() == [0.0, 0.0]
+
+
+@pytest.mark.parametrize("channels", [1, 2, 3])
+def test_a_non_finite_estimate_leaves_every_channels_state(channels):
+    """One channel's estimate overflows (a huge rate and a large jump on the last channel): the
+    estimates come out, and the state of every channel, the last angles and the start flag stay.
+    Catches a step that commits a pair's next state before every channel's estimates are
+    known to be finite (one pair kept in place, several through the scratch)."""
+    derivator = Derivator()
+    derivator.reset(np.zeros(channels))
+    derivator.step(np.full(channels, 0.01))
+    derivator.buf[fastderivator.V_RATE] = 1e300
+    saved = derivator.buf.copy()
+    q = np.full(channels, 0.01)
+    q[-1] = 1e10
+    dq, _ = derivator.step(q)
+    assert np.isinf(dq[-1])
+    np.testing.assert_array_equal(derivator.buf, saved)
