@@ -27,11 +27,12 @@ bilinear rather than zero-order-hold or matched poles:
   delay of the default filters by only 3.3 % (velocity) and 0.5 % (acceleration)
   with respect to analog Bessel filters of the same -3 dB frequency.
 
-The filters are stored as second-order sections; for stepping, the whole chain
-(difference, F_v, difference, F_a) is assembled once into one discrete state-space
-model built section by section (no high-order polynomial is ever formed), so that
-a step costs one small matrix product, the C kernel ``pc_derivator_step``
-(``kernels/src/derivator.c``).
+The filters are stored as second-order sections (no high-order polynomial is ever
+formed); a step runs the chain (difference, F_v's sections, difference, F_a's sections)
+as that cascade, each section in direct form II transposed: the C kernel
+``pc_derivator_step`` (``kernels/src/derivator.c``), whose state words are those of the
+chain's state-space model built section by section here (:func:`_differentiator_ss`, for
+linear analyses and as the tests' independent formulation).
 
 Exactness
 ---------
@@ -182,7 +183,8 @@ def _series(first, second):
 
 
 def _differentiator_ss(sos, T, upstream=None):
-    """Backward difference then the sections of ``sos``, after ``upstream`` if given."""
+    """Backward difference then the sections of ``sos``, after ``upstream`` if given: (A, B, C, D),
+    the states in the order of the C kernel's state words (``kernels/src/derivator.h``)."""
     system = _backward_difference_ss(T) if upstream is None else _series(upstream, _backward_difference_ss(T))
     for section in sos:
         system = _series(system, _section_ss(section))
@@ -225,14 +227,6 @@ class Derivator:
         self.velocity_delay = T / 2 + velocity_filter_delay
         self.acceleration_delay = T + velocity_filter_delay + dc_group_delay(self.acceleration_sos, T)
 
-        velocity_chain = _differentiator_ss(self.velocity_sos, T)
-        a, b, c_acc, d_acc = _differentiator_ss(self.acceleration_sos, T, upstream=velocity_chain)
-        c_vel = np.zeros_like(c_acc)
-        c_vel[:, : velocity_chain[0].shape[0]] = velocity_chain[2]
-        # One product per step: [dq; ddq; next state] = [[C, D], [A, B]] @ [state; q]
-        # (kernels/src/derivator.c, which holds it with the state in one array).
-        self._step_matrix = np.block([[c_vel, velocity_chain[3]], [c_acc, d_acc], [a, b]])
-        self._rest_state_per_unit_angle = np.linalg.solve(np.eye(a.shape[0]) - a, b)
         self.buf = None
 
     def reset(self, q0):
@@ -249,7 +243,7 @@ class Derivator:
 
     def start_at_first_sample(self, channels):
         """Start at rest at the angles of the first :meth:`step` (``channels`` of them)."""
-        self.buf = fastderivator.pack(self._step_matrix, self._rest_state_per_unit_angle, int(channels))
+        self.buf = fastderivator.pack(self.T, self.velocity_sos, self.acceleration_sos, int(channels))
 
     def _rest_at(self, q0):
         """At rest at q0 (``pc_derivator_reset``)."""
@@ -344,7 +338,7 @@ _STEP = kernels.function("pc_derivator_step", ctypes.c_int, _CONTEXT_P, ctypes.c
                          ctypes.c_void_p, _REFUSAL_P)
 _RESET = kernels.function("pc_derivator_reset", ctypes.c_int, _CONTEXT_P, ctypes.c_void_p, _REFUSAL_P)
 _SCRATCH_WORDS = kernels.function("pc_derivator_scratch_words", ctypes.c_long, ctypes.c_void_p, ctypes.c_long)
-_LAYOUT_WORDS = ("states", "channels", "length", "scratch length")
+_LAYOUT_WORDS = ("states", "channels", "length", "scratch length", "velocity sections")
 _REASONS = {
     fastderivator.BAD_INPUT: kernels.Reason("bad_input", ("q1", "q2"), "rad",
                                             "angles q = {angles!r} rad must be finite with |q| <= {limit:g}"),

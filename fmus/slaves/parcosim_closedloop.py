@@ -21,6 +21,9 @@ from fmus.systemfmu.slave_base import SystemSlave
 class ClosedLoop(SystemSlave):
     """A parcosim scene's whole closed loop as one co-simulation FMU."""
 
+    #: 2 since the derivator's buffer holds its sections (layout 1: its dense step matrix).
+    STATE_LAYOUT = 2
+
     description = "A parcosim scene (Coutinho 2019 5R robot): the whole closed loop stepped inside one FMU"
 
     def __init__(self, **kwargs):

@@ -25,6 +25,9 @@ from fmus.systemfmu.slave_base import SystemSlave
 class ControlChain(SystemSlave):
     """The sampled control chain of a parcosim scene, for a separate plant FMU."""
 
+    #: 2 since the derivator's buffer holds its sections (layout 1: its dense step matrix).
+    STATE_LAYOUT = 2
+
     takes_multiples = False
     description = ("The control chain of a parcosim scene (Coutinho 2019 5R robot) for a Jacobi master: "
                    "measurements in, the plant's commands one sample ahead out")

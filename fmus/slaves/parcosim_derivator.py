@@ -37,6 +37,9 @@ MIN_FC_T = 1e-6
 class Derivator(SampledSteps, GuardedSlave):
     """Numerical differentiator of the two actuated angles (7.2.3)."""
 
+    #: 2 since the derivator's buffer holds its sections (layout 1: its dense step matrix).
+    STATE_LAYOUT = 2
+
     author = "parcosim"
     description = "Derivator (Coutinho 2019, 7.2.3): angles in, Bessel-filtered velocity and acceleration out"
 

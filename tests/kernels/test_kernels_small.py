@@ -36,8 +36,8 @@ def stepped(derivator, q):
 
 @pytest.mark.parametrize("fc_vel, fc_acc", [(100.0, 40.0), (60.0, 30.0)])
 def test_derivator_is_the_designed_filter_chain(fc_vel, fc_acc):
-    """Random angles: the kernel's state-space step gives scipy's filtering of the designed
-    sections (an independent realisation: direct form, section by section)."""
+    """Random angles: the kernel's cascade gives scipy's filtering of the designed sections
+    (scipy's own direct form, section by section)."""
     rng = np.random.default_rng(27)
     q = np.cumsum(rng.normal(0.0, 0.01, (400, 2)), axis=0) + [0.3, -1.2]
     derivator = Derivator(fc_vel, fc_acc, T)
@@ -125,7 +125,9 @@ def test_the_io_function_is_the_step_on_two_channels():
 
 @pytest.mark.parametrize("word, value, index", [
     ("V_STATES", 1000.0, 0), ("V_STATES", 15.5, 0), ("V_STATES", math.nan, 0), ("V_STATES", -3.0, 0),
-    ("V_STATES", 13.0, 2), ("V_CHANNELS", 3.0, 2), ("V_CHANNELS", 1e300, 1), ("V_CHANNELS", 0.0, 1)])
+    ("V_STATES", 0.0, 0), ("V_STATES", 13.0, 0), ("V_STATES", 14.0, 2), ("V_CHANNELS", 3.0, 2),
+    ("V_CHANNELS", 1e300, 1), ("V_CHANNELS", 0.0, 1), ("V_VELOCITY_SECTIONS", 6.0, 4),
+    ("V_VELOCITY_SECTIONS", -1.0, 4), ("V_VELOCITY_SECTIONS", 0.5, 4), ("V_VELOCITY_SECTIONS", math.nan, 4)])
 def test_a_forged_derivator_buffer_is_refused_before_any_access(word, value, index):
     """Sizes that do not fit the buffer's length (a forged FMU state) are refused, naming the
     word, and nothing is read or written beyond the buffer (the sanitizer build checks the
@@ -143,8 +145,8 @@ def test_a_forged_derivator_buffer_is_refused_before_any_access(word, value, ind
 
 
 @pytest.mark.parametrize("word, change, message", [
-    ("V_STATES", 1.0, "length = 223.0"), ("V_STATES", 1e300, r"states = 1e\+300"),
-    ("V_CHANNELS", -2.0, "channels = 0.0")])
+    ("V_STATES", 2.0, "length = 56.0"), ("V_STATES", 1e300, r"states = 1e\+300"),
+    ("V_CHANNELS", -2.0, "channels = 0.0"), ("V_VELOCITY_SECTIONS", 9.0, "velocity sections = 10.0")])
 def test_a_damaged_derivator_buffer_is_a_refusal_record_naming_the_word(word, change, message):
     """Through the Derivator: refused by the kernel, naming the word (and no scratch of the
     forged size is allocated: 1e300 states would not fit in memory)."""
@@ -152,7 +154,7 @@ def test_a_damaged_derivator_buffer_is_a_refusal_record_naming_the_word(word, ch
     derivator.reset([0.0, 0.0])
     derivator.buf[getattr(fastderivator, word)] += change
     saved = derivator.buf.copy()
-    with pytest.raises(kernels.Refused, match=rf"buffer of 223 words is damaged: {message} does not fit") as caught:
+    with pytest.raises(kernels.Refused, match=rf"buffer of 56 words is damaged: {message} does not fit") as caught:
         derivator.step([0.0, 0.0])
     assert caught.value.reason == "bad_layout"
     np.testing.assert_array_equal(derivator.buf, saved)
@@ -168,11 +170,11 @@ def test_a_small_scratch_is_refused():
 
 
 def test_a_non_finite_estimate_does_not_advance_the_state():
-    """A step matrix giving inf (a huge coefficient times an angle): the estimates come out,
-    the state and the start flag stay."""
+    """A design giving inf (a huge coefficient times an angle): the estimates come out, the
+    state and the start flag stay."""
     derivator = Derivator()
-    derivator.start_at_first_sample(2)
-    derivator.buf[fastderivator.V_MATRIX] = 1e308
+    derivator.reset([0.0, 0.0])
+    derivator.buf[fastderivator.V_SECTIONS] = 1e308
     saved = derivator.buf.copy()
     dq, _ = derivator.step([1e10, 0.0])
     assert math.isinf(dq[0])

@@ -34,7 +34,7 @@ static pc_derivator_context context(pcn_instance *in)
 static void kernel_refusal(const pc_refusal *r, const double q[CHANNELS], double limit, pcn_text *why)
 {
     static const char *const ANGLES[CHANNELS] = {"q1", "q2"};
-    static const char *const LAYOUT[4] = {"states", "channels", "length", "scratch length"};
+    static const char *const LAYOUT[5] = {"states", "channels", "length", "scratch length", "velocity sections"};
     if (r->code == PC_DERIVATOR_BAD_INPUT) {
         pcn_quantify(why, r->code, "bad_input", ANGLES[r->index], r->value, "rad", NAN);
         pcn_addf(why, "angles q = [%r, %r] rad must be finite with |q| <= ", q[0], q[1]);
@@ -137,8 +137,8 @@ static int step(pcn_instance *in, double t, double h, pcn_text *why)
     return 0;
 }
 
-/* A restored buffer may change only the run words (started, the state): the sizes, step
- * matrix and rest state are the design (configuration), or all zero in a state taken before
+/* A restored buffer may change only the run words (started, the state): the sizes, 1/T and
+ * the sections are the design (configuration), or all zero in a state taken before
  * the model was built. */
 static int check_data(const pcn_instance *in, const double *data, pcn_text *why)
 {

@@ -128,6 +128,20 @@ def test_a_restored_derivator_steps_its_kernel_buffer():
             np.testing.assert_array_equal(before, kept)
 
 
+@pytest.mark.parametrize("model", ["Derivator", "ClosedLoop", "ControlChain"])
+def test_a_state_of_the_derivators_step_matrix_layout_is_refused(model):
+    """Layout 1 held the derivator's dense step matrix where layout 2 holds its sections: the
+    models that carry a derivator refuse a layout-1 state, naming both layouts, before reading
+    it.  Catches a layout change whose old states would be read as the new buffer."""
+    import importlib
+
+    cls = getattr(importlib.import_module(f"fmus.slaves.parcosim_{model.lower()}"), model)
+    assert cls.STATE_LAYOUT == 2
+    data = _reframed(_state_bytes("Derivator"), model=model, layout=1)
+    with pytest.raises(FmiError, match=rf"state layout 1; {model} reads layout 2; nothing was read"):
+        cls._fmu_state_from_bytes(data)
+
+
 def test_the_format_keeps_shared_arrays_shared():
     """The drive's controller buffer is one array reached from two places; after a read the
     two places must still be one array (a copy each would let the fast step and the design
@@ -252,13 +266,8 @@ def test_configuration_inside_the_state_cannot_be_forged():
     target.set_state(target.deserialize_state(_reframed(data, tree)))   # unforged: taken
 
 
-def _derivator_rest_word(kernel, buffer):
-    """The first word of the derivator's rest state per unit angle (outside its two views)."""
-    return kernel._offsets(int(buffer[kernel.V_STATES]), int(buffer[kernel.V_CHANNELS]))[0]
-
-
 @pytest.mark.parametrize("model, holder, field, layout, coefficient, run_state", [
-    ("Derivator", "derivator", "buf", "V_STATES", _derivator_rest_word, "V_STARTED"),
+    ("Derivator", "derivator", "buf", "V_STATES", "V_RATE", "V_STARTED"),
     ("BalanceController", "controller", "buf", "B_STATES", "B_GAIN", "B_X_HAT"),
     ("PositionController", "controller", "_buf", "BUF_MODEL", "BUF_KP", "BUF_INTEGRAL")])
 def test_the_configuration_words_of_a_kernel_buffer_cannot_be_forged(model, holder, field, layout, coefficient,
