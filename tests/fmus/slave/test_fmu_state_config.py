@@ -36,7 +36,7 @@ def test_another_guid_and_another_layout_are_named_with_both_values(running):
     assert _refused(inst, _reframed(data, guid="{other}")) == (
         "fmi2DeSerializeFMUstate: the state is of the FMU with GUID '{other}', this is '' (at t = 0.004 s); "
         "nothing was read")
-    layout = type(inst).STATE_LAYOUT         # 2 for the Derivator since its cascade (session 38)
+    layout = type(inst.slave).STATE_LAYOUT   # 2 for the Derivator since its cascade (session 38)
     assert layout != 7
     assert _refused(inst, _reframed(data, layout=7)) == (
         f"fmi2DeSerializeFMUstate: state layout 7; {MODEL} reads layout {layout}; nothing was read")
