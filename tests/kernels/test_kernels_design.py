@@ -140,11 +140,13 @@ def assert_within(names, got, exact, tolerance):
 
 
 def zoh_values(entries):
+    """n1, n0, d1, d0 of :func:`exact_model` (mpmath numbers)."""
     (n1, n0), (_, d1, d0) = exact_model(entries)
     return [n1, n0, d1, d0]
 
 
 def design_values(entries):
+    """alpha, beta, gamma, delta of appendix C for :func:`exact_model` (mpmath numbers)."""
     (n1, n0), (_, d1, d0) = exact_model(entries)
     return exact_placement((n1, n0), (1, d1, d0), exact=True)
 
@@ -156,6 +158,7 @@ def python_control_design(p, T):
 
 
 def drawn_motor(R, L, k, b, J):
+    """motor1 with the drawn values (kt = ke = k)."""
     return replace(MOTOR_PRESETS["motor1"], R=R, L=L, kt=k, ke=k, b=b, J_rotor=J)
 
 
