@@ -205,7 +205,7 @@ def test_zoh_model_is_python_controls_c2d(p, T):
 @given(motors, periods)
 def test_zoh_model_is_the_exact_one_within_one_rounding(p, T):
     """n1, n0, d1, d0 each within :func:`rounding_tolerance` of the model in 50 digits (about one
-    ulp: the condition numbers over the range stay below 1e4).  Catches, beside a wrong model, a
+    ulp: the condition numbers over the range stay below 1e5).  Catches, beside a wrong model, a
     model computed in double: scaling and squaring exp loses up to 5e5 eps times the condition
     number (:data:`STIFF`, each of which fails in double)."""
     num, den = c_zoh(p, T)
