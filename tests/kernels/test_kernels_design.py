@@ -146,9 +146,12 @@ def zoh_values(entries):
 
 
 def design_values(entries):
-    """alpha, beta, gamma, delta of appendix C for :func:`exact_model` (mpmath numbers)."""
+    """alpha, beta, gamma, delta of appendix C for :func:`exact_model` (mpmath numbers), the LU
+    solve in 50 digits more than the decades d0 = e^trace lies below 1 (LU holds a solution to
+    its digits of the largest: gamma and delta scale with d0 and n0, e^-700 at R T / L = 700)."""
     (n1, n0), (_, d1, d0) = exact_model(entries)
-    return exact_placement((n1, n0), (1, d1, d0), exact=True)
+    decades = int(mpmath.ceil(max(0, -(entries[0] + entries[4])) / mpmath.log(10)))
+    return exact_placement((n1, n0), (1, d1, d0), digits=50 + decades, exact=True)
 
 
 def python_control_design(p, T):
