@@ -1,16 +1,19 @@
 """The current controller's design in C (kernels/src/design.c: the native FMUs' drives design
 with it for motor values they carry no python-control design of) against independent oracles:
 python-control's ``c2d`` (scipy's Padé expm of another realisation) for the ZOH model, the
-design solved again in 50-digit arithmetic (mpmath: its own expm and the 4x4 Diophantine solve
-of appendix C) for the coefficients, python-control's design (motor.current_controller) within
-its own error, and the closed loop's poles through python-control."""
+model and the design solved again in 50-digit arithmetic (mpmath: its own expm and the 4x4
+Diophantine solve of appendix C), python-control's design (motor.current_controller) within
+its own error, and the closed loop's poles through python-control.
+
+design.c computes in double-double (106 bits) and rounds once, so each ZOH and design value is
+held to one rounding: :func:`rounding_tolerance`."""
 import ctypes
 from dataclasses import replace
 
 import mpmath
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import HealthCheck, assume, example, given, settings
 from hypothesis import strategies as st
 
 import kernels
@@ -40,18 +43,36 @@ def c_design(p, T, poles=cc.THESIS_POLES):
     return code, out, detail.value
 
 
-def exact_zoh(p, T, digits=50):
-    """(num, den) of the ZOH model in `digits` digits (mpmath's own expm of the augmented matrix)."""
+def augmented_entries(p, T):
+    """The augmented matrix's five entries (A T and B T, design.c's inputs to its expm) in 60 digits."""
+    with mpmath.workdps(60):
+        R, L, kt, ke, b, J, T = (mpmath.mpf(float(v)) for v in (*motor_row(p), T))
+        return [-R / L * T, -ke / L * T, T / L, kt / J * T, -b / J * T]
+
+
+def exact_model(entries, digits=50):
+    """(num, den) of the ZOH model of the augmented matrix [[m11, m12, m13], [m21, m22, 0], 0] in
+    `digits` digits: the input's column of mpmath's expm of it, Ad as e^sigma expm(M - sigma I)
+    (sigma half the trace: a decayed Ad, e^-171 at R T / L = 340, keeps its own 50 digits, where
+    expm(M) holds it only to 1e-50 of its norm) and det(Ad) = e^trace."""
     with mpmath.workdps(digits):
-        R, L, kt, ke, b, J, T = (mpmath.mpf(v) for v in (*motor_row(p), T))
-        E = mpmath.expm(mpmath.matrix([[-R / L * T, -ke / L * T, T / L], [kt / J * T, -b / J * T, 0], [0, 0, 0]]))
-        num = (E[0, 2], E[0, 1] * E[1, 2] - E[1, 1] * E[0, 2])
-        return num, (1, -(E[0, 0] + E[1, 1]), E[0, 0] * E[1, 1] - E[0, 1] * E[1, 0])
+        m11, m12, m13, m21, m22 = entries
+        F = mpmath.expm(mpmath.matrix([[m11, m12, m13], [m21, m22, 0], [0, 0, 0]]))
+        sigma = (m11 + m22) / 2
+        E = mpmath.exp(sigma) * mpmath.expm(mpmath.matrix([[m11 - sigma, m12], [m21, m22 - sigma]]))
+        num = (F[0, 2], E[0, 1] * F[1, 2] - E[1, 1] * F[0, 2])
+        return num, (1, -(E[0, 0] + E[1, 1]), mpmath.exp(m11 + m22))
 
 
-def exact_placement(num, den, poles=cc.THESIS_POLES, digits=50):
+def exact_zoh(p, T, digits=50):
+    """(num, den) of the motor's ZOH model in `digits` digits."""
+    return exact_model(augmented_entries(p, T), digits)
+
+
+def exact_placement(num, den, poles=cc.THESIS_POLES, digits=50, exact=False):
     """Appendix C's 4x4 system (C.12) for the model (num, den), solved by LU in `digits` digits
-    with np.poly's convolution of the four poles: no formula shared with design.c's."""
+    with np.poly's convolution of the four poles: no formula shared with design.c's.  Doubles,
+    or with `exact` mpmath's numbers."""
     with mpmath.workdps(digits):
         (n1, n0), (_, d1, d0) = [mpmath.mpf(v) for v in num], [mpmath.mpf(v) for v in den]
         want = [mpmath.mpf(1), 0, 0, 0, 0]
@@ -59,7 +80,8 @@ def exact_placement(num, den, poles=cc.THESIS_POLES, digits=50):
             want = [want[0]] + [want[j] - r * want[j - 1] for j in range(1, 5)]
         M = mpmath.matrix([[n1, 0, 0, -1], [n0, n1, 0, 1 - d1], [0, n0, n1, d1 - d0], [0, 0, n0, d0]])
         rhs = mpmath.matrix([want[1] - (d1 - 1), want[2] - (d0 - d1), want[3] + d0, want[4]])
-        return np.array([float(v) for v in mpmath.lu_solve(M, rhs)])
+        solution = list(mpmath.lu_solve(M, rhs))
+        return solution if exact else np.array([float(v) for v in solution])
 
 
 def exact_design(p, T):
@@ -68,17 +90,68 @@ def exact_design(p, T):
         return exact_placement(*exact_zoh(p, T))
 
 
-#: What scaling and squaring leaves of the ZOH model, relative: each squaring can double the
-#: rounding, and the stiffest motors drawn (R T / L up to 2e4, kt T / J up to 5e3) take up to 16
-#: of them (python-control's expm, Pade 13 of a norm up to 5.4, a few less): 2^16 eps is 1.5e-11.
+#: What python-control's scaling and squaring (scipy's expm in double) leaves of the ZOH model,
+#: relative: each squaring can double the rounding, and the stiffest motors drawn (R T / L up to
+#: 2e4, kt T / J up to 5e3) take up to 16 of them: 2^16 eps is 1.5e-11.
 ZOH_RELATIVE = 3e-11
 
 
 def zoh_tolerance(p, T, num):
-    """What rounding leaves of the ZOH numerator: :data:`ZOH_RELATIVE` of it, or 1e-15 of T / L
-    (the input's integral before the armature's decay: a strongly damped or oscillating motor
-    leaves a numerator far below it, and every double expm loses that much of it)."""
+    """What python-control's rounding leaves of the ZOH numerator: :data:`ZOH_RELATIVE` of it, or
+    1e-15 of T / L (the input's integral before the armature's decay: a strongly damped or
+    oscillating motor leaves a numerator far below it, and a double expm loses that much of it)."""
     return ZOH_RELATIVE * np.abs(num).max() + 1e-15 * T / p.L
+
+
+def condition_numbers(values, entries, h=mpmath.mpf(10) ** -25):
+    """Each of values(entries)'s relative condition number: sum over the five entries of
+    |m d(value)/dm| / |value| (central differences at 1e-25 in 60 digits), what a relative change
+    of each entry by one unit does to that value."""
+    with mpmath.workdps(60):
+        at = [mpmath.mpf(v) for v in values(entries)]
+        total = [mpmath.mpf(0)] * len(at)
+        for k in range(len(entries)):
+            up, down = list(entries), list(entries)
+            up[k], down[k] = up[k] * (1 + h), down[k] * (1 - h)
+            total = [t + abs((u - d) / (2 * h)) for t, u, d in zip(total, values(up), values(down))]
+        return np.array([float(t / abs(a)) if a != 0 else np.inf for t, a in zip(total, at)])
+
+
+EPS = np.finfo(float).eps
+
+
+def rounding_tolerance(exact, kappa):
+    """One rounding: design.c's double-double value rounded once to double (half an ulp, at most
+    eps / 2 of it), plus what its 106 bits leave: 2^-104 per operation, doubled at most 16 times
+    by its expm's squarings (the block's norm below 2^15 over the range) and amplified by the
+    value's condition number kappa, 2^-88 kappa = eps 2^-36 kappa per operation.  Taken as
+    eps |exact| (1 + 2^-30 kappa): twice the rounding, 64 operations' worth of the rest (kappa
+    stays below 1e5 over the range, so this is one ulp).  Values below the smallest normal double
+    are held to it absolutely (subnormals carry fewer digits)."""
+    return EPS * np.abs(exact) * (1.0 + 2.0 ** -30 * kappa) + np.finfo(float).tiny
+
+
+def assert_within(names, got, exact, tolerance):
+    """Each value within its own tolerance, the message naming the value, its error and bound."""
+    error = np.abs(np.asarray(got) - exact)
+    bad = [f"{n}: {g!r} vs {e!r} (error {d:.3g} > {t:.3g})"
+           for n, g, e, d, t in zip(names, got, exact, error, tolerance) if not d <= t]
+    assert not bad, "; ".join(bad)
+
+
+def zoh_values(entries):
+    """n1, n0, d1, d0 of :func:`exact_model` (mpmath numbers)."""
+    (n1, n0), (_, d1, d0) = exact_model(entries)
+    return [n1, n0, d1, d0]
+
+
+def design_values(entries):
+    """alpha, beta, gamma, delta of appendix C for :func:`exact_model` (mpmath numbers), the LU
+    solve in 50 digits more than the decades d0 = e^trace lies below 1 (LU holds a solution to
+    its digits of the largest: gamma and delta scale with d0 and n0, e^-700 at R T / L = 700)."""
+    (n1, n0), (_, d1, d0) = exact_model(entries)
+    decades = int(mpmath.ceil(max(0, -(entries[0] + entries[4])) / mpmath.log(10)))
+    return exact_placement((n1, n0), (1, d1, d0), digits=50 + decades, exact=True)
 
 
 def python_control_design(p, T):
@@ -87,29 +160,82 @@ def python_control_design(p, T):
     return d, np.array([d.alpha, d.beta, d.gamma, d.delta])
 
 
-motors = st.builds(
-    lambda R, L, k, b, J: replace(MOTOR_PRESETS["motor1"], R=R, L=L, kt=k, ke=k, b=b, J_rotor=J),
-    st.floats(0.1, 20.0), st.floats(1e-5, 2e-2), st.floats(5e-3, 0.5), st.floats(1e-7, 2e-3), st.floats(1e-6, 2e-3))
+def drawn_motor(R, L, k, b, J):
+    """motor1 with the drawn values (kt = ke = k)."""
+    return replace(MOTOR_PRESETS["motor1"], R=R, L=L, kt=k, ke=k, b=b, J_rotor=J)
+
+
+motors = st.builds(drawn_motor, st.floats(0.1, 20.0), st.floats(1e-5, 2e-2), st.floats(5e-3, 0.5),
+                   st.floats(1e-7, 2e-3), st.floats(1e-6, 2e-3))
 periods = st.sampled_from([1e-4, 2.5e-4, 5e-4, 1e-3, 2e-3, 1e-2])
 PRESETS = [(name, T) for name in sorted(MOTOR_PRESETS) if MOTOR_PRESETS[name].L > 0.0 for T in (2.5e-4, 1e-3, 1e-2)]
+
+#: Stiff and nearly undamped motors where design.c's double expm (scaling and squaring of exp
+#: itself, before s38) was furthest from the exact model, relative: the random draw of s37
+#: (numerator 2e-9 off, 5000 eps times its condition number; a slow mode e^-7 squared from
+#: e^(-7 / 2^12), its rounding doubled by each squaring) and the worst of 900 draws over the range
+#: (numerator 5e-10: R T / L = 680, b T / J = 4e-4; denominator 6e-12: R T / L = 2e4; delta 3e-11).
+STIFF = [(drawn_motor(11.412320631517575, 0.007794717009052486, 0.15352563211481132, 1e-7, 1e-6), 1e-2),
+         (drawn_motor(3.3873828575664024, 1e-5, 0.5, 2.0180165665577706e-07, 1e-6), 2e-3),
+         (drawn_motor(20.0, 1e-5, 0.05202751534851133, 0.00019906570495682773, 2e-3), 1e-2),
+         (drawn_motor(20.0, 1e-5, 0.5, 1e-7, 1e-6), 5e-4)]
+
+
+def stiff_examples(test):
+    for p, T in STIFF:
+        test = example(p, T)(test)
+    return test
 
 
 @settings(max_examples=60, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
 @given(motors, periods)
-def test_zoh_model_is_python_controls_c2d_and_the_exact_one(p, T):
+def test_zoh_model_is_python_controls_c2d(p, T):
     """Catches a wrong augmented matrix (B, the sign of ke or b), a truncated series or missing
     squarings, a numerator or denominator of the adjugate misread: python-control's c2d of the
-    transfer function (B.10), and the model in 50 digits, within rounding (:func:`zoh_tolerance`
-    for the numerator, :data:`ZOH_RELATIVE` for the monic denominator)."""
+    transfer function (B.10) within python-control's own rounding (:func:`zoh_tolerance` for the
+    numerator, :data:`ZOH_RELATIVE` for the monic denominator)."""
     import control
 
     num, den = c_zoh(p, T)
     ref_num, ref_den = cc._tf_coefficients(control.c2d(cc.current_transfer_function(p), T, "zoh"))
-    exact_num, exact_den = (np.array([float(v) for v in x]) for x in exact_zoh(p, T))
     assert den[0] == 1.0
-    for other_num, other_den in ((ref_num, ref_den), (exact_num, exact_den)):
-        np.testing.assert_allclose(num, other_num, rtol=0, atol=zoh_tolerance(p, T, other_num))
-        np.testing.assert_allclose(den, other_den, rtol=0, atol=ZOH_RELATIVE)
+    np.testing.assert_allclose(num, ref_num, rtol=0, atol=zoh_tolerance(p, T, ref_num))
+    np.testing.assert_allclose(den, ref_den, rtol=0, atol=ZOH_RELATIVE)
+
+
+@stiff_examples
+@settings(max_examples=40, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(motors, periods)
+def test_zoh_model_is_the_exact_one_within_one_rounding(p, T):
+    """n1, n0, d1, d0 each within :func:`rounding_tolerance` of the model in 50 digits (about one
+    ulp: the condition numbers over the range stay below 1e5).  Catches, beside a wrong model, a
+    model computed in double: scaling and squaring exp loses up to 5e5 eps times the condition
+    number (:data:`STIFF`, each of which fails in double)."""
+    num, den = c_zoh(p, T)
+    entries = augmented_entries(p, T)
+    exact = np.array([float(v) for v in zoh_values(entries)])
+    kappa = condition_numbers(zoh_values, entries)
+    assert den[0] == 1.0
+    assert_within(("n1", "n0", "d1", "d0"), [*num, *den[1:]], exact, rounding_tolerance(exact, kappa))
+
+
+@stiff_examples
+@settings(max_examples=30, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(motors, periods)
+def test_design_is_the_exact_design_within_one_rounding(p, T):
+    """alpha, beta, gamma, delta each within :func:`rounding_tolerance` of appendix C in 50
+    digits (the exact model, the 4x4 system solved by LU), where that system has one solution.
+    Catches a design made from a double model or in double (1e-9 off at :data:`STIFF`'s first),
+    beside a wrong design."""
+    code, c, _ = c_design(p, T)
+    entries = augmented_entries(p, T)
+    try:
+        exact = np.array([float(v) for v in design_values(entries)])
+        kappa = condition_numbers(design_values, entries)
+    except ZeroDivisionError:     # mpmath: the 4x4 system singular in 50 digits (no unique placement)
+        assume(False)
+    assert code == 0
+    assert_within(("alpha", "beta", "gamma", "delta"), c, exact, rounding_tolerance(exact, kappa))
 
 
 @settings(max_examples=40, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
