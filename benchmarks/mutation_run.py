@@ -138,19 +138,27 @@ _MAPS: dict = {}
 def _linemap(copy: Path, files: list, lock_of, commit: str) -> dict:
     """The merged map of ``files`` at ``commit`` (built where missing), kept for the next mutant."""
     if (commit, tuple(files)) not in _MAPS:
-        _MAPS.clear()
         _MAPS[(commit, tuple(files))] = mutation_map.for_files(copy, mutation_py.python_files(), files, lock_of, commit)
     return _MAPS[(commit, tuple(files))]
 
 
-def select(copy: Path, name: str, mutant, importers: list, budget: float, lock_of=None, commit: str = "HEAD") -> dict:
+class NeedsSlowMaps(Exception):
+    """No test outside the slow files would run for this mutant: its selection needs their maps."""
+
+
+def select(copy: Path, name: str, mutant, importers: list, budget: float, lock_of=None, commit: str = "HEAD",
+           slow_maps: bool = True) -> dict:
     """The tests a mutant runs.  Python: those tests, of every test file of ``copy``, that
     execute a line it changes (in process or in a process they start), the cheaper first
     within ``budget`` measured seconds; for a line run at import, the tests that execute its
     module, then those of ``importers`` (the test files that import the module);
     none when nothing executes it (:func:`benchmarks.mutation_map.select`; every file's map
-    built in ``copy`` the first time).  C (coverage does not see C lines): every test of the
-    kernels' and the oracles' files (and mutation_c's extra ones), the cheaper first."""
+    built in ``copy`` the first time).  The :data:`benchmarks.mutation_map.SLOW` files are
+    mapped only for a mutant that no test marked slow would run from the others (their tests
+    are all slow, and a slow test runs only when no other does: the selection is the same);
+    ``slow_maps=False``: raise :class:`NeedsSlowMaps` instead.  C (coverage does not see C
+    lines): every test of the kernels' and the oracles' files (and mutation_c's extra ones),
+    the cheaper first."""
     if name.endswith(".c"):
         files = sorted({str(p.relative_to(copy)) for pattern in C_TESTS for p in copy.glob(pattern)})
         files += mutation_c.EXTRA_TESTS.get(mutant.file, [])
@@ -160,11 +168,19 @@ def select(copy: Path, name: str, mutant, importers: list, budget: float, lock_o
                        key=lambda t: linemap["all_tests"][t]["seconds"])
         return {"tests": tests, "covering": len(tests), "cost": round(mutation_map.cost(linemap, tests), 2),
                 "selection": "C tests"}
-    linemap = _linemap(copy, mutation_map.all_test_files(copy), lock_of, commit)
+    every = mutation_map.all_test_files(copy)
+    quick = [f for f in every if not mutation_map.SLOW.search((copy / f).read_text())]
     text = (copy / name).read_text()
     body = mutation_map.function_lines(text)
     at_import = any(line not in body for line in range(mutant.line, mutant.end_line + 1))
-    chosen = mutation_map.select(linemap, name, mutant.line, mutant.end_line, budget, at_import, tuple(importers))
+    for files in (quick, every):
+        linemap = _linemap(copy, files, lock_of, commit)
+        chosen = mutation_map.select(linemap, name, mutant.line, mutant.end_line, budget, at_import, tuple(importers))
+        slow = dict(zip(linemap["tests"], linemap["slow"]))
+        if any(not slow[t] for t in chosen["tests"]):
+            break
+        if not slow_maps:
+            raise NeedsSlowMaps(name)
     kind = chosen.pop("kind")
     note = {"note": "no test executes the line"} if kind == "none" else {}
     return dict(chosen, selection=KINDS[kind], **note)
@@ -202,7 +218,8 @@ def _draw_of(header: dict, results: Path) -> list:
 def _run_all(chosen: list, pending: list, header: dict, results: Path, done: dict, workers: int,
              base: float, factor: float, budget: float) -> None:
     """Run the mutants ``pending`` (indices into ``chosen``), ``workers`` at once, each in a
-    copy of ``header["commit"]``; each outcome is appended to ``results`` as it comes."""
+    copy of ``header["commit"]``; each outcome is appended to ``results`` as it comes.  Those
+    whose selection needs the slow files' maps (:class:`NeedsSlowMaps`) run last."""
     copies = [make_copy(Path(tempfile.gettempdir()) / f"parcosim_mutpy_{os.getpid()}_{w}", header["commit"])
               for w in range(workers)]
     importers = mutation_py.importers(copies[0])   # the tests of the draw's commit: tests written since are not run
@@ -214,15 +231,20 @@ def _run_all(chosen: list, pending: list, header: dict, results: Path, done: dic
 
     free = list(copies)
 
-    def one(k):
+    deferred = []
+
+    def one(k, slow_maps=False):
         name, mutant = chosen[k]
         with lock:
             copy = free.pop()
         try:
             tests = select(copy, name, mutant, importers.get(mutation_py.module_name(name), []), budget, lock_of,
-                           header["commit"])
+                           header["commit"], slow_maps)
             run = run_c if name.endswith(".c") else run_python
             result = run(copy, mutant, tests, base, factor)
+        except NeedsSlowMaps:
+            deferred.append(k)       # after the others: the slow files are mapped once, for all of these
+            return
         finally:
             with lock:
                 free.append(copy)
@@ -239,6 +261,7 @@ def _run_all(chosen: list, pending: list, header: dict, results: Path, done: dic
     try:
         with ThreadPoolExecutor(workers) as pool_:
             list(pool_.map(one, pending))
+            list(pool_.map(lambda k: one(k, slow_maps=True), sorted(deferred)))
     finally:
         for copy in copies:
             shutil.rmtree(copy, ignore_errors=True)

@@ -218,3 +218,29 @@ def test_a_rerun_of_another_draw_is_refused(tmp_path, monkeypatch):
     monkeypatch.setattr(mr, "_run_all", lambda *a: pytest.fail("ran a mutant of another draw"))
     with pytest.raises(ValueError, match="this tree draws"):
         mr.rerun(source, tmp_path / "new.jsonl")
+
+
+def test_the_slow_files_are_mapped_only_for_a_mutant_no_other_test_would_run(tmp_path, monkeypatch):
+    """Catches slow files mapped (minutes each) for a mutant that quicker tests cover, or a mutant whose
+    only covering tests are in slow files left with no test."""
+    (tmp_path / "plant").mkdir()
+    (tmp_path / "plant" / "x.py").write_text("\n".join(f"def f{k}():\n    return {k}" for k in range(30)) + "\n")
+    for f, text in ((FAR, "x = 1\n"), (NEAR, "x = 1\n"), (SLOW, "pytestmark = pytest.mark.slow\n")):
+        (tmp_path / f).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / f).write_text(text)
+    asked = []
+
+    def for_files(copy, products, files, *rest):
+        asked.append(sorted(files))
+        return mm.merge([mm.split(dict(_record(), commit="c", returncode=0), f) for f in files])
+
+    monkeypatch.setattr(mm, "for_files", for_files)
+    monkeypatch.setattr(mr, "_MAPS", {})
+    mutant = mp.PyMutant("plant/x.py", 10, 4, 10, 10, "constant", "1", "2")
+    chosen = mr.select(tmp_path, "plant/x.py", mutant, [], 1000.0, slow_maps=False)
+    assert chosen["tests"][0] == f"{FAR}::test_cheap" and asked == [sorted([FAR, NEAR])]
+    alone = mp.PyMutant("plant/x.py", 40, 4, 40, 10, "constant", "1", "2")
+    with pytest.raises(mr.NeedsSlowMaps):
+        mr.select(tmp_path, "plant/x.py", alone, [], 1000.0, slow_maps=False)
+    assert mr.select(tmp_path, "plant/x.py", alone, [], 1000.0)["tests"] == [f"{SLOW}::test_long"]
+    assert asked[-1] == sorted([FAR, NEAR, SLOW])
