@@ -322,8 +322,9 @@ def rerun(source: Path, results: Path, workers: int = 1, base: float = 30.0, fac
             raise ValueError(f"{results} is not a re-run of {source} (it holds {header.get('rerun_of')!r}, "
                              f"seed {header['seed']})")
     else:
-        header = dict(old_header, rerun_of=str(source), selection="global", map=mutation_map.key(commit=old_header["commit"]),
-                      base_seconds=base, factor=factor, budget_seconds=budget)
+        header = {**{k: v for k, v in old_header.items() if k != "near_files"}, "rerun_of": str(source),
+                  "selection": "global", "map": mutation_map.key(commit=old_header["commit"]),
+                  "base_seconds": base, "factor": factor, "budget_seconds": budget}
         done = {k: dict(m, carried=True) for k, m in before.items() if m["outcome"] not in RERUN}
         results.parent.mkdir(parents=True, exist_ok=True)
         results.write_text("\n".join(json.dumps(line) for line in [{"header": header}, *done.values()]) + "\n")
