@@ -2,18 +2,22 @@
 
 Each test file runs once per state of the product and the tests, the first time a mutant
 asks for it, under coverage with pytest-cov's per-test contexts (``--cov-context=test``) and
-:mod:`benchmarks.mutation_timing` (what each test costs, which fail anyway), in a copy of the
-committed tree.  Files are measured wherever they
-run from under the temporary directory (the copy, and the FMUs' bundles unzipped by an
-importer: a bundled ``.../plant/drive.py`` counts as ``plant/drive.py``); a test's
-subprocesses are measured too (``coverage.process_startup``), without a test's name.  The
-map of a test file is a gzipped JSON file named by a key of the product's files, that test
-file's and the tests' helpers (:func:`key`), so a commit that changes none of them keeps it.
+:mod:`benchmarks.mutation_timing` (what each test costs, which fail anyway, which are marked
+slow), in a copy of the committed tree.  Files are measured wherever they run from under the
+temporary directory (the copy, and the FMUs' bundles unzipped by an importer: a bundled
+``.../plant/drive.py`` counts as ``plant/drive.py``).  A test's subprocesses are measured too
+(``coverage.process_startup``) and count as that test's: the timing plugin puts the running
+test's node id in ``$PARCOSIM_TEST_CONTEXT`` and the configuration takes it as a process's
+static context.  The map of a test file is a gzipped JSON file named by a key of the
+product's files, that test file's, the tests' helpers and :data:`FORMAT` (:func:`key`), so a
+commit that changes none of them keeps it.  Every test file is mapped (:func:`all_test_files`),
+a few at a time (:func:`chunks`: a stopped build resumes at the files not yet mapped).
 
-A mutant then runs only the tests that execute a line it changes (:func:`select`); a line
-executed only outside any test (at import, during collection, in a subprocess) falls back
-to the tests that import the module; a line nothing executes is reported as such (the
-mutant survives without a run).
+A mutant then runs the tests, anywhere in the suite, that execute a line it changes
+(:func:`select`), the cheaper first within a budget; a line run at import (outside any test,
+or outside any function body) runs the tests that execute any line of its module, then those
+of the test files that import it; a line nothing executes is reported as such (the mutant
+survives without a run).
 """
 from __future__ import annotations
 
@@ -22,10 +26,12 @@ import gzip
 import hashlib
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -34,8 +40,14 @@ KEYED = ("plant", "motor", "controller", "fmus", "scenarios", "parcosim", "kerne
 #: Test files no mutant runs (the mutation tools' own, the sanitizer build of pristine C): not
 #: in the map, and not in its key.
 NOT_RUN = ("tests/benchmarks/test_mutation", "tests/kernels/test_sanitizers.py")
-#: Not a test: coverage's context of lines run outside one (import, collection, subprocess).
+#: Not a test: coverage's context of lines run outside one (import, collection).
 OUTSIDE = ""
+#: The map's format, in its key: 2 = a test's subprocesses count as the test's (1: as no test's).
+FORMAT = 2
+#: A file of long runs (``pytest -m slow``): its tests run for a mutant only when no other covers it.
+SLOW = re.compile(r"^pytestmark = .*pytest\.mark\.slow", re.M)
+#: How many test files of a directory one map run takes (a stopped build loses at most one run).
+CHUNK = 12
 
 
 def key(root: Path = ROOT, commit: str = "HEAD", test_file: str | None = None) -> str:
@@ -45,7 +57,7 @@ def key(root: Path = ROOT, commit: str = "HEAD", test_file: str | None = None) -
     listing = subprocess.run(["git", "ls-tree", "-r", commit, "--", *KEYED], cwd=root, check=True,
                              capture_output=True, text=True).stdout.splitlines()
     kept = [line for line in listing if _keyed(line.split("\t", 1)[1], test_file)]
-    return hashlib.sha1("\n".join(kept).encode()).hexdigest()[:12]
+    return hashlib.sha1("\n".join([f"format {FORMAT}", *kept]).encode()).hexdigest()[:12]
 
 
 def _keyed(path: str, test_file: str | None) -> bool:
@@ -74,14 +86,17 @@ def build(copy: Path, products: list, tests: list, out: Path, log=sys.stdout) ->
     work = Path(tempfile.mkdtemp(prefix="parcosim_linemap_"))
     rc = work / "coveragerc"
     data = work / ".coverage"
-    rc.write_text(f"[run]\nparallel = True\nsource = {tempfile.gettempdir()}\ndata_file = {data}\n")
+    # include, not source: coverage would walk a source folder (all of /tmp) for files not run
+    rc.write_text(f"[run]\nparallel = True\ninclude = {tempfile.gettempdir()}/*\ndata_file = {data}\n"
+                  "context = ${PARCOSIM_TEST_CONTEXT-}\n")      # a subprocess's lines: the test that started it
     (work / "sitecustomize.py").write_text("import coverage\ncoverage.process_startup()\n")
+    shutil.copy2(Path(__file__).with_name("mutation_timing.py"), work / "parcosim_mutation_timing.py")  # this tool's
     times = work / "times.json"
     env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1", COVERAGE_PROCESS_START=str(rc), COVERAGE_FILE=str(data),
                PARCOSIM_MUTATION_TIMES=str(times),
                PARCOSIM_CACHE=tempfile.mkdtemp(prefix="parcosim_mapcache_"),
                PYTHONPATH=os.pathsep.join([str(copy), str(work), *_other_paths()]))
-    command = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "benchmarks.mutation_timing",
+    command = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "parcosim_mutation_timing",
                "--cov", f"--cov-config={rc}", "--cov-context=test", "--cov-report=", *tests]
     done = subprocess.run(command, cwd=copy, env=env, stdout=log, stderr=subprocess.STDOUT)
     covered = coverage.CoverageData(basename=str(data))
@@ -108,6 +123,7 @@ def build(copy: Path, products: list, tests: list, out: Path, log=sys.stdout) ->
                                        text=True).stdout.strip(),
               "returncode": done.returncode, "tests": names,
               "cost": [timing["tests"].get(name, {}).get("seconds", 0.0) for name in names],
+              "slow": [timing["tests"].get(name, {}).get("slow", False) for name in names],
               "shared_of": [timing["tests"].get(name, {}).get("shared", []) for name in names],
               "shared": timing["shared"], "all_tests": timing["tests"], "failed": timing["failed"],
               "lines": {f: {line: sorted(ids) for line, ids in by.items()} for f, by in lines.items()},
@@ -123,12 +139,13 @@ def merge(records: list) -> dict:
     """One map of the maps of disjoint sets of test files; a shared fixture costs the most any
     of them measured."""
     merged = {"returncode": max([r["returncode"] for r in records], default=0), "tests": [], "cost": [],
-              "shared_of": [], "shared": {}, "all_tests": {}, "lines": {}, "outside": {}, "failed": []}
+              "slow": [], "shared_of": [], "shared": {}, "all_tests": {}, "lines": {}, "outside": {}, "failed": []}
     for r in records:
         merged["failed"] += r.get("failed", [])
         offset = len(merged["tests"])
         for name in ("tests", "cost", "shared_of"):
             merged[name] += r[name]
+        merged["slow"] += r.get("slow", [False] * len(r["tests"]))
         merged["all_tests"].update(r["all_tests"])
         for fixture, seconds in r["shared"].items():
             merged["shared"][fixture] = max(seconds, merged["shared"].get(fixture, 0.0))
@@ -162,31 +179,55 @@ def split(record: dict, test_file: str) -> dict:
     own = {name: t for name, t in record["all_tests"].items() if name.split("::")[0] == test_file}
     return {"commit": record["commit"], "returncode": record["returncode"],
             "tests": [record["tests"][i] for i in keep], "cost": [record["cost"][i] for i in keep],
+            "slow": [record.get("slow", [False] * len(record["tests"]))[i] for i in keep],
             "shared_of": [record["shared_of"][i] for i in keep], "shared": record["shared"], "all_tests": own,
             "failed": [t for t in record["failed"] if t.split("::")[0] == test_file], "lines": lines,
             "outside": record["outside"]}
 
 
+def all_test_files(copy: Path) -> list:
+    """Every test file of ``copy`` a mutant may run (relative to it; not :data:`NOT_RUN`)."""
+    return sorted(str(p.relative_to(copy)) for p in (copy / "tests").rglob("test_*.py")
+                  if not str(p.relative_to(copy)).startswith(NOT_RUN))
+
+
+def chunks(copy: Path, test_files: list) -> list:
+    """``test_files`` in the runs that map them: the files of one directory together, at most
+    :data:`CHUNK` a run, the :data:`SLOW` files last, one a run."""
+    slow = [f for f in test_files if SLOW.search((copy / f).read_text())]
+    by_folder = {}
+    for f in test_files:
+        if f not in slow:
+            by_folder.setdefault(str(Path(f).parent), []).append(f)
+    runs = [files[k:k + CHUNK] for _, files in sorted(by_folder.items()) for k in range(0, len(files), CHUNK)]
+    return runs + [[f] for f in sorted(slow)]
+
+
 def for_files(copy: Path, products: list, test_files: list, lock_of=None, commit: str = "HEAD",
               log=subprocess.DEVNULL) -> dict:
-    """The map of ``test_files``; those not yet mapped are mapped in one run (in ``copy``,
-    unmutated: a session's fixtures, such as the built FMUs, are made once) and each file's
-    part is kept (:func:`shard_path` at ``commit``, the copy's).  ``lock_of(test_file)``: a lock held while that file's
-    map is looked for and built (workers side by side build different files)."""
+    """The map of ``test_files``; those not yet mapped are mapped (in ``copy``, unmutated, in
+    the runs of :func:`chunks`: a run's session fixtures, such as the built FMUs, are made
+    once) and each file's part is kept as soon as its run ends (:func:`shard_path` at
+    ``commit``, the copy's).  ``lock_of(test_file)``: a lock held while that file's map is
+    looked for and built (workers side by side build different files)."""
     locks = [lock_of(f) for f in sorted(set(test_files))] if lock_of else []
     for held in locks:
         held.acquire()
     try:
         missing = [f for f in test_files if not shard_path(f, commit=commit).exists()]
-        if missing:
+        runs = chunks(copy, missing)
+        for n, run in enumerate(runs):
+            start = time.monotonic()
             work = Path(tempfile.mkdtemp(prefix="parcosim_linemaps_"))
-            record = build(copy, products, missing, work / "all.json.gz", log)
-            for test_file in missing:
+            record = build(copy, products, run, work / "all.json.gz", log)
+            for test_file in run:
                 path = shard_path(test_file, commit=commit)
                 path.parent.mkdir(parents=True, exist_ok=True)
                 with gzip.open(path, "wt") as stream:
                     json.dump(split(record, test_file), stream)
             shutil.rmtree(work, ignore_errors=True)
+            print(f"map {n + 1}/{len(runs)}: {len(run)} files from {run[0]} ({len(record['tests'])} tests, "
+                  f"{time.monotonic() - start:.0f} s)", flush=True)
         return merge([load(shard_path(f, commit=commit)) for f in test_files])
     finally:
         for held in locks:
@@ -212,32 +253,73 @@ def cost(record: dict, tests: list) -> float:
     return sum(own.get(t, {}).get("seconds", 0.0) for t in tests) + sum(record["shared"].get(s, 0.0) for s in shared)
 
 
-def select(record: dict, file: str, first: int, last: int, near_files: list, budget: float) -> dict:
+def function_lines(text: str) -> set:
+    """The lines of a Python file's function bodies: run when the function is called, not at
+    import (a ``def``'s decorators, default values and the module's other lines are)."""
+    import ast
+
+    lines = set()
+    for node in ast.walk(ast.parse(text)):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            lines.update(range(node.body[0].lineno, node.end_lineno + 1))
+    return lines
+
+
+def _within(record: dict, ids: list, budget: float) -> tuple:
+    """The tests of ``ids`` (in that order) whose measured seconds, with the shared fixtures
+    they add, fit in ``budget``; the first test not marked slow is taken whatever it costs."""
+    own, chosen, shared, total = record["all_tests"], [], set(), 0.0
+    slow = record.get("slow") or [False] * len(record["tests"])
+    for i in ids:
+        name = record["tests"][i]
+        new = set(own.get(name, {}).get("shared", [])) - shared
+        extra = own.get(name, {}).get("seconds", 0.0) + sum(record["shared"].get(s, 0.0) for s in new)
+        if (chosen or slow[i]) and total + extra > budget:
+            continue
+        chosen.append(name)
+        shared |= new
+        total += extra
+    return chosen, round(total, 2)
+
+
+def _order(record: dict, tiers: list) -> list:
+    """The tests of ``tiers`` (sets of indices, the first tier first), each once: in each tier
+    the cheaper first; the tests marked slow only when no tier has another, then the cheaper."""
+    slow = record.get("slow") or [False] * len(record["tests"])
+    seen, quick, slow_ones = set(), [], []
+    for tier in tiers:
+        for i in sorted(tier - seen, key=lambda i: (record["cost"][i], record["tests"][i])):
+            (slow_ones if slow[i] else quick).append(i)
+        seen |= tier
+    return quick or sorted(slow_ones, key=lambda i: record["cost"][i])
+
+
+def select(record: dict, file: str, first: int, last: int, budget: float, at_import: bool = False,
+           importers: tuple = ()) -> dict:
     """The tests to run for a change of ``file``'s lines ``first``..``last``.
 
-    ``{"tests": node ids, or None when import-time or subprocess runs execute the lines (a
-    module-level line, run once at import, is seen by every test after it),
-    "covering": how many tests execute them, "cost": the selection's measured seconds}``;
-    the tests of ``near_files`` (the module's importers) first, then the cheaper; no more than
-    ``budget`` seconds of them (the first always).  ``tests == []``: nothing executes them.
+    ``{"tests": node ids, "covering": how many tests execute the lines, "cost": the
+    selection's measured seconds, "kind": "coverage", "import" or "none"}``.  A line some test
+    executes (itself or in a process it started): those tests.  A line run at import
+    (``at_import``, or run outside any test; a module-level line is seen by every test after
+    the import): the tests that execute it, then those that execute any line of ``file``, then
+    those of ``importers`` (the test files that import its module).  In each group the cheaper
+    first, within ``budget`` seconds (:func:`_within`); tests that fail unmutated never; tests
+    marked slow only when no other would run.  ``tests == []``: nothing executes the lines.
     """
     by_line = record["lines"].get(file, {})
     failing = set(record.get("failed", ()))
-    ids = sorted({i for line in range(first, last + 1) for i in by_line.get(str(line), ())
-                  if record["tests"][i] not in failing})
+    usable = {i for i, name in enumerate(record["tests"]) if name not in failing}
+    ids = {i for line in range(first, last + 1) for i in by_line.get(str(line), ())} & usable
     outside = set(record["outside"].get(file, ()))
-    if any(line in outside for line in range(first, last + 1)):
-        return {"tests": None, "covering": len(ids), "cost": 0.0}      # run at import: every test may see it
-    if not ids:
-        return {"tests": [], "covering": 0, "cost": 0.0}
-    near = set(near_files)
-    ids.sort(key=lambda i: (record["tests"][i].split("::")[0] not in near, record["cost"][i]))
-    chosen, total = [], 0.0
-    for i in ids:
-        name = record["tests"][i]
-        extra = cost(record, chosen + [name]) - total
-        if chosen and total + extra > budget:
-            continue
-        chosen.append(name)
-        total += extra
-    return {"tests": chosen, "covering": len(ids), "cost": round(total, 2)}
+    if at_import or any(line in outside for line in range(first, last + 1)):
+        users = {i for line_ids in by_line.values() for i in line_ids} & usable
+        importing = {i for i in usable if record["tests"][i].split("::")[0] in set(importers)}
+        tiers, kind = [ids, users, importing], "import"
+    else:
+        tiers, kind = [ids], "coverage"
+    order = _order(record, tiers)
+    if not order:
+        return {"tests": [], "covering": 0, "cost": 0.0, "kind": "none"}
+    chosen, total = _within(record, order, budget)
+    return {"tests": chosen, "covering": len(ids), "cost": total, "kind": kind}

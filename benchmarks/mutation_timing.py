@@ -4,12 +4,17 @@ Loaded with ``-p benchmarks.mutation_timing`` when the line -> tests map is buil
 the JSON file named by ``$PARCOSIM_MUTATION_TIMES`` at the session's end:
 
 ``tests``     node id -> {"seconds": its setup, call and teardown less the shared fixtures it
-              set up, "shared": the shared fixtures it uses}
+              set up, "shared": the shared fixtures it uses, "slow": whether it is marked slow}
 ``shared``    key of a fixture of wider scope than a function (``scope:argname``, with the
               module for a module-scoped one) -> the seconds its setup took
 
 ``failed``    node ids of the tests that failed or errored (the map's run is on the unmutated
               tree: a mutant does not run them)
+
+While a test runs, ``$PARCOSIM_TEST_CONTEXT`` holds its node id: a process it starts inherits
+it, and the map's coverage configuration takes it as the static context of that process
+(``[run] context = ${PARCOSIM_TEST_CONTEXT-}``), so the lines a test's subprocesses execute
+count as that test's.
 
 A subset of the tests then costs the sum of its tests' own seconds and of the shared fixtures
 they use (each once), whatever test of the subset sets a shared fixture up first.
@@ -26,6 +31,8 @@ _TESTS: dict = {}
 _SHARED: dict = {}
 _FAILED: set = set()
 _DURING: list = []       # the shared fixtures' seconds spent inside the current test's phases
+#: The environment variable a test's subprocesses read their coverage context from.
+CONTEXT = "PARCOSIM_TEST_CONTEXT"
 
 
 def _key(fixturedef, request) -> str:
@@ -58,10 +65,15 @@ def _shared_of(item) -> list:
 @pytest.hookimpl(hookwrapper=True)
 def pytest_runtest_protocol(item, nextitem):
     _DURING.clear()
+    os.environ[CONTEXT] = item.nodeid
     start = time.perf_counter()
-    yield
+    try:
+        yield
+    finally:
+        os.environ.pop(CONTEXT, None)
     own = time.perf_counter() - start - sum(_DURING)
-    _TESTS[item.nodeid] = {"seconds": round(max(own, 0.0), 3), "shared": _shared_of(item)}
+    _TESTS[item.nodeid] = {"seconds": round(max(own, 0.0), 3), "shared": _shared_of(item),
+                           "slow": item.get_closest_marker("slow") is not None}
 
 
 def pytest_runtest_logreport(report):
