@@ -182,7 +182,12 @@ def select(copy: Path, name: str, mutant, importers: list, budget: float, lock_o
         if not slow_maps:
             raise NeedsSlowMaps(name)
     kind = chosen.pop("kind")
-    note = {"note": "no test executes the line"} if kind == "none" else {}
+    if kind == "none":
+        note = {"note": "no test executes the line"}
+    elif not chosen["tests"]:      # covered only by tests marked slow, each over the budget
+        note = {"note": f"only tests marked slow execute the line, each over the {budget:g} s budget"}
+    else:
+        note = {}
     return dict(chosen, selection=KINDS[kind], **note)
 
 

@@ -221,8 +221,9 @@ def test_a_rerun_of_another_draw_is_refused(tmp_path, monkeypatch):
 
 
 def test_the_slow_files_are_mapped_only_for_a_mutant_no_other_test_would_run(tmp_path, monkeypatch):
-    """Catches slow files mapped (minutes each) for a mutant that quicker tests cover, or a mutant whose
-    only covering tests are in slow files left with no test."""
+    """Catches slow files mapped (minutes each) for a mutant that quicker tests cover, a mutant whose
+    only covering tests are in slow files left with no test, or one whose slow tests are all over the
+    budget stopping the campaign (seed 3601's re-run: a KeyError for its missing note)."""
     (tmp_path / "plant").mkdir()
     (tmp_path / "plant" / "x.py").write_text("\n".join(f"def f{k}():\n    return {k}" for k in range(30)) + "\n")
     for f, text in ((FAR, "x = 1\n"), (NEAR, "x = 1\n"), (SLOW, "pytestmark = pytest.mark.slow\n")):
@@ -244,3 +245,11 @@ def test_the_slow_files_are_mapped_only_for_a_mutant_no_other_test_would_run(tmp
         mr.select(tmp_path, "plant/x.py", alone, [], 1000.0, slow_maps=False)
     assert mr.select(tmp_path, "plant/x.py", alone, [], 1000.0)["tests"] == [f"{SLOW}::test_long"]
     assert asked[-1] == sorted([FAR, NEAR, SLOW])
+    over = mr.select(tmp_path, "plant/x.py", alone, [], 100.0)     # its one slow test costs more
+    assert over["tests"] == [] and "marked slow" in over["note"]
+    path = tmp_path / "plant" / "x.py"
+    before = path.read_text()
+    real = mp.PyMutant("plant/x.py", 40, 11, 40, 13, "constant", "19", "20")   # line 40: "    return 19"
+    assert mr.run_python(tmp_path, real, over, 1.0, 1.0) == {"outcome": "survived", "seconds": 0.0,
+                                                             "note": over["note"]}
+    assert path.read_text() == before       # nothing was written: no test to run
