@@ -32,6 +32,12 @@ calls (about 1 % and 100 % of the steps), also given for the best round and in C
 thread (``time.thread_time``: not counting the time other jobs on a shared machine hold the
 CPU, so steadier there; cache effects of their load remain).
 
+The machine's speed: :mod:`machine_probe` times a fixed C workload before and after every
+round (``probe_s`` in the JSON).  This machine's cores run the same code at two speeds that
+alternate every few seconds (1.5-1.8x apart, invisible to the load average and to CPU time), so
+a second table gives each case's median over the rounds whose two probes are both within
+:data:`machine_probe.TOLERANCE` of the run's fastest: the machine at full speed.
+
 Where the time goes: each round also runs every case but the in-process one with kernel segments
 (which has one C call a step, nothing per instance to time) and the compiled loop once more with
 timers (not in the table above): every instance's inputs set, step and outputs read as the master's
@@ -72,6 +78,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from fmus.cosim.master import simulate  # noqa: E402
 import passthrough  # noqa: E402
+from machine_probe import TOLERANCE, Probe, quiet_rounds, spread  # noqa: E402
 
 GOAL_RTF = {"fmu": 10.0, "inprocess": 50.0, "compiled": 200.0}
 QUICK_STOP_TIME = 2.0
@@ -310,6 +317,7 @@ def report(scene_name, system, runs, breakdowns, info_before, info_after, overhe
         load = statistics.median(r["load"] for r in runs[key])
         out.append(f"| {label} | {m['wall_s']:.2f} | {m['rtf']:.1f}x | {m['us_per_step']:.0f} | {best:.0f} | "
                    f"{m['cpu_us_per_step']:.0f} | {m['setup_s']:.2f} | {load:.1f} | {goal} |")
+    out += full_speed(runs)
     us = {k: med[k]["us_per_step"] for k in med}
     best = {k: min(r["us_per_step"] for r in rs) for k, rs in runs.items()}
     rows = (("our compute through FMUs (FMUs - FMU floor)", "fmu", "floor_fmu"),
@@ -368,6 +376,33 @@ def report(scene_name, system, runs, breakdowns, info_before, info_after, overhe
     return "\n".join(out)
 
 
+def full_speed(runs) -> list:
+    """The table of the rounds run with the machine at full speed (:mod:`machine_probe`: the
+    probes before and after the round within its tolerance of the run's fastest), as lines."""
+    probes = [r["probe_s"] for rs in runs.values() for r in rs if "probe_s" in r]
+    if not probes:
+        return []
+    s = spread(probes)
+    fastest = s["fastest_s"]
+    out = ["", f"The machine's speed (benchmarks/machine_probe.py, a fixed C workload before and after each round): "
+           f"fastest {1e3 * fastest:.2f} ms, median {1e3 * s['median_s']:.2f}, slowest {1e3 * s['slowest_s']:.2f} "
+           f"(slowest / fastest {s['ratio']:.2f}). Rounds at full speed: both probes within "
+           f"{TOLERANCE:g}x of the fastest.", "",
+           "| case | rounds at full speed | real-time factor, their median | µs/step, their median | goal |",
+           "|---|---:|---:|---:|---|"]
+    for key, label, mode, floor in (c for c in CASES if c[0] in runs):
+        rs = runs[key]
+        fastest_rounds = [rs[i] for i in quiet_rounds([r["probe_s"] for r in rs], fastest_s=fastest)]
+        if not fastest_rounds:
+            out.append(f"| {label} | 0 of {len(rs)} | | | |")
+            continue
+        rtf = statistics.median(r["rtf"] for r in fastest_rounds)
+        goal = "" if floor else f">= {GOAL_RTF[mode]:g}x: {'met' if rtf >= GOAL_RTF[mode] else 'not met'}"
+        out.append(f"| {label} | {len(fastest_rounds)} of {len(rs)} | {rtf:.1f}x | "
+                   f"{statistics.median(r['us_per_step'] for r in fastest_rounds):.0f} | {goal} |")
+    return out
+
+
 def measure(system, repeats: int, fmu_dir=None, with_breakdown: bool = True, keys=None):
     """Every case of :data:`CASES` (or those of ``keys``) on ``system``: a warm-up, then
     ``repeats`` interleaved rounds.
@@ -408,11 +443,14 @@ def measure(system, repeats: int, fmu_dir=None, with_breakdown: bool = True, key
         overhead = timer_overhead()
 
         info_before = machine()
+        probe = Probe()
         runs = {key: [] for key, *_ in cases}
         timed = {key: [] for key, *_ in cases}
         for r in range(repeats):
             for key, *_ in cases:
+                before = probe()
                 runs[key].append(case(key))
+                runs[key][-1]["probe_s"] = (before, probe())
             if with_breakdown:
                 for key in TIMED_CASES:
                     if key in timed:
