@@ -186,9 +186,10 @@ def test_the_drive_comparison_measures_the_seed_models_gaps_from_the_exact_one(m
 
 
 def test_the_figures_draw_the_sweeps_and_the_two_models_paths_and_gap(monkeypatch, tmp_path):
-    """Reads the drawn lines back.  Catches a sweep's x or y of another column, a fallen run
-    drawn (instead of marked), the band's line elsewhere, the reference or a model's path
-    not drawn, and the gap of one coordinate or not in mm."""
+    """Reads the drawn lines and axes back.  Catches a sweep's x or y of another column, a fallen
+    run drawn (instead of marked), the band's line elsewhere, the reference or a model's path
+    not drawn, the gap of one coordinate or not in mm, and a panel's labels, scale, equal
+    aspect or the path's y range lost."""
     _drive_runs(monkeypatch)
     comparison = pendulum_trade.drive_comparison()
     kept = []
@@ -203,6 +204,15 @@ def test_the_figures_draw_the_sweeps_and_the_two_models_paths_and_gap(monkeypatc
     assert files == [tmp_path / "pendulum_sweeps.png", tmp_path / "pendulum_drive.png"]
     assert all(f.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" for f in files)
     sweeps, drive = kept
+    assert [(ax.get_xlabel(), ax.get_ylabel(), ax.get_title(), ax.get_yscale()) for ax in sweeps.axes] == [
+        ("sample time T [ms]", "deg", "pendulum_balance (red: fell)", "log"),
+        ("battery voltage [V]", "deg", "pendulum_balance (red: fell)", "log")]
+    assert [(ax.get_xlabel(), ax.get_ylabel(), ax.get_title()) for ax in drive.axes] == [
+        ("x [m]", "y [m]", "pendulum_drive: axle path"), ("t [s]", "psi [deg]", "pitch"),
+        ("t [s]", "mm", "exact vs seed model")]
+    assert drive.axes[0].get_aspect() == 1.0 and drive.axes[0].get_ylim() == (-0.3, 0.3)
+    for ax in (*sweeps.axes, *drive.axes):
+        assert ax.get_legend() is not None
     for ax, rows, key in zip(sweeps.axes, (samples, battery), ("T_ms", "v_battery")):
         data, *marks = ax.get_lines()
         assert list(data.get_xdata()) == [r[key] for r in rows]
