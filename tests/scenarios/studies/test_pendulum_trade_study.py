@@ -150,9 +150,11 @@ def _drive_runs(monkeypatch):
         seed = _plant(scene)["model"] == "seed"
         x, y = 0.1 * t, 0.01 * t ** 2
         psi = np.radians(0.2 * np.sin(t))
-        if seed:       # axle 5 mm off at t = 3 s (the largest), pitch off 0.3 deg at 7 s (turning), 0.7 at 2 s
+        if seed:       # axle 5 mm off at t = 3 s (the largest); pitch off 0.3 deg at 7 s (the largest while
+            # turning, 6-8 s), 0.25 at 6 and 8 s, 0.5 at 5.5 s and 0.7 at 8.5 s (outside), 0.6 at 2 s
             x, y = x + 3e-3 * (t == 3.0), y - 4e-3 * (t == 3.0)
-            psi = psi + np.radians(0.3) * (t == 7.0) - np.radians(0.7) * (t == 2.0)
+            psi = psi + np.radians(0.3) * (t == 7.0) + np.radians(0.25) * ((t == 6.0) | (t == 8.0))
+            psi = psi - np.radians(0.5) * (t == 5.5) + np.radians(0.7) * (t == 8.5) - np.radians(0.6) * (t == 2.0)
         columns = {"t": t, "x": x, "y": y, "psi": psi, "x_d": 0.1 * t, "y_d": np.zeros_like(t)}
         return SimpleNamespace(columns=columns, metrics={"final_position_error_mm": 1.5 if seed else 0.25})
 

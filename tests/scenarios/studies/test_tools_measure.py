@@ -134,3 +134,16 @@ def test_a_new_tool_runs_alone_with_the_stored_trial_and_master_run(fakes, tmp_p
     assert [(c[1], c[5]) for c in fakes["compare"]] == [(["ecos"], 4)] and fakes["trial"] == []
     assert [r[0] for r in rows[("per-component", "bench_circle_PDq")]] == list(TOOLS)
     assert fakes["run_scene"] == [("bench_circle_PDq", "inprocess")]
+
+
+def test_the_c_drive_is_built_once_for_all_scenes_and_the_1ms_kind_has_no_trial(fakes, tmp_path):
+    """Catches the C drive built again for each scene, and a trial run (or its n passed) for the
+    kind that keeps the 1 ms period."""
+    scenes = ["bench_circle_PDq", "bench_triangle_TCx"]
+    tools.measure(scenes, TOOLS, ["per-component+c-drive", "internal-observer-1ms"], tmp_path / "t.json",
+                  progress=lambda _: None)
+    assert len(fakes["c_drive"]) == 1
+    assert fakes["trial"] == [(name, False) for name in scenes]
+    assert [(c[0], c[2], c[5]) for c in fakes["compare"]] == [
+        ("bench_circle_PDq", "per-component+c-drive", 4), ("bench_triangle_TCx", "per-component+c-drive", 4),
+        ("bench_circle_PDq", "internal-observer-1ms", None), ("bench_triangle_TCx", "internal-observer-1ms", None)]
