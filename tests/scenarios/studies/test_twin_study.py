@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
+
 import pytest
 
 from scenarios.studies import twin_fit
@@ -122,3 +124,30 @@ def test_the_command_fits_reports_or_both_with_its_options(command, capsys):
     assert twin_fit.main(["report", "--docs", "--out", "x/y"]) == 0 and command == [("report", str(ROOT / "docs"))]
     command.clear()
     assert twin_fit.main([]) == 0 and command == [("fit", 64, 4, 120, 2), ("report", "out/twin")]
+
+
+def test_the_descents_first_simplex_steps_each_parameter_inwards_by_a_tenth_of_its_range(monkeypatch):
+    """The first evaluations of a descent are its start and the start moved by
+    :data:`SIMPLEX_STEP` of one parameter's range, up, or down where up would leave the box
+    (a parameter at 0.95 or 1 of its range).  Catches a step outwards (clipped to the bound: a
+    degenerate simplex), the step of another size or on another parameter."""
+    seen = []
+
+    def evaluate(u, seeds):
+        seen.append(np.array(u, dtype=float))
+        return float(np.sum((np.asarray(u) - 0.3) ** 2)), twin_fit._from_unit(u)
+
+    monkeypatch.setattr(twin_fit, "evaluate", evaluate)
+    n = len(twin_fit.PARAMETERS)
+    u0 = np.linspace(0.2, 1.0, n)
+    u0[0] = 0.95
+    start = twin_fit._from_unit(u0)
+    twin_fit.descend(start, maxfev=n + 1, log=lambda line: None)
+    first = twin_fit._to_unit(start)
+    np.testing.assert_allclose(seen[0], first, atol=1e-12)
+    for i in range(n):
+        step = twin_fit.SIMPLEX_STEP if first[i] < 1 - twin_fit.SIMPLEX_STEP else -twin_fit.SIMPLEX_STEP
+        expected = first.copy()
+        expected[i] += step
+        np.testing.assert_allclose(seen[i + 1], expected, atol=1e-12)
+    assert sum(first >= 1 - twin_fit.SIMPLEX_STEP) >= 2
