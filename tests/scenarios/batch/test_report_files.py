@@ -46,12 +46,13 @@ def test_the_bars_are_ours_and_the_thesis_for_each_strategy_and_trajectory(tmp_p
 def test_write_report_writes_the_metrics_the_figure_and_the_rendered_report(tmp_path, monkeypatch):
     """A stopped run among the 16: metrics.json holds each value read back exactly and null for
     its NaN; report.md is ``render`` of those metrics with the figure linked.  Catches a
-    metric lost or changed on the way to the file, and the mode not passed on."""
+    metric lost or changed on the way to the file, and the mode, progress, scheduler or
+    workers not passed on (or passed as another)."""
     metrics = _made_up(stopped=("bench_triangle_PDx",))
     asked = []
     monkeypatch.setattr(report, "run_bench", lambda out, **kw: asked.append((out, kw)) or metrics)
-    path = report.write_report(tmp_path / "r", mode="compiled")
-    assert asked[0][0] == tmp_path / "r" and asked[0][1]["mode"] == "compiled"
+    path = report.write_report(tmp_path / "r", mode="compiled", progress=print, scheduler="tcp://s:1", workers=3)
+    assert asked == [(tmp_path / "r", {"mode": "compiled", "progress": print, "scheduler": "tcp://s:1", "workers": 3})]
     back = json.loads((tmp_path / "r" / "metrics.json").read_text())
     assert list(back) == bench_scene_names()
     for name, values in metrics.items():

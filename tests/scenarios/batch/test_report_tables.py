@@ -53,3 +53,17 @@ def test_the_sides_of_larger_error_are_compared_with_the_thesis():
     assert "| PDMDq | 0.50 | 0.30 | 0.20 | I | I and III | no |" in lines
     assert "| PDx | 0.10 | — | 0.20 | III | II | no |" in lines
     assert "The bench's sides of larger error hold here for 5 of 8 strategies." in lines
+
+
+def test_metrics_without_the_per_side_errors_give_three_empty_sides_and_no_claim_held():
+    """A metrics file from before ``e_contour_sides_mm`` (or a run that stopped before the
+    triangle): each strategy's row has the triangle's three sides empty, no side of larger
+    error, no claim held.  Catches another number of sides filled in, and a missing side
+    counted as agreeing."""
+    metrics = _metrics()
+    for name in metrics:
+        del metrics[name]["e_contour_sides_mm"]
+    lines = render(metrics, "inprocess").splitlines()
+    for s, claimed in (("PDq", "I and III"), ("TCx", "I"), ("PDMDx", "II")):
+        assert f"| {s} | — | — | — | — | {claimed} | no |" in lines
+    assert "The bench's sides of larger error hold here for 0 of 8 strategies." in lines

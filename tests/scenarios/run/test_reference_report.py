@@ -32,8 +32,9 @@ def test_the_variants_decompose_the_deviation_of_a_lugre_scene(capsys):
     """``--variants`` on the twin's LuGre scene, 0.02 s: every variant runs (mu = 0 turns the LuGre
     drives to tanh friction, which LuGre without mu refuses); the reference with the master's
     coupling deviates from the reference as the master does (they agree to 1e-12 m here, the
-    deviations are 1e-6 m); the master deviates from that reference by < 1e-9 m.  Catches a line
-    comparing a run with itself (0) and a variant the LuGre drives refuse."""
+    deviations are 1e-6 m); the master deviates from that reference by < 1e-9 m; every other line
+    compares two different runs.  Catches a line comparing a run with itself (0), a line left
+    out, and a variant the LuGre drives refuse."""
     assert reference.main(["bench_real_circle_TCMDx", "--stop-time", "0.02", "--variants"]) == 0
     out = capsys.readouterr().out
     assert "STOPPED" not in out
@@ -45,6 +46,14 @@ def test_the_variants_decompose_the_deviation_of_a_lugre_scene(capsys):
     labels = ("mu = 0 and encoder 2^30: master - reference", "encoder 2^30 counts: master - reference",
               "reference(mean torque) - reference", "  ref(held_speed) - reference: speed held")
     assert all(_rms(out, label) > 0.0 for label in labels)
+    compared = [line.split(" | ")[0].rstrip() for line in out.splitlines() if "all: rms" in line]
+    assert compared == ["master - reference", "reference(cosim coupling) - reference",
+                        "  master - reference(cosim): plant RK4", "  ref(cosim) - ref(held_speed): torque held",
+                        "  ref(held_speed) - reference: speed held", "reference(mean torque) - reference",
+                        "master, plant RK4 substeps=4 - reference", "master, plant Component substeps=4 - ref.",
+                        "encoder 2^30 counts: master - reference", "mu = 0: master - reference",
+                        "mu = 0 and encoder 2^30: master - reference"]
+    assert all(_rms(out, label) > 0.0 for label in compared if label != "  master - reference(cosim): plant RK4")
 
 
 def test_the_reference_refuses_what_it_cannot_integrate_naming_what_and_why():

@@ -83,19 +83,21 @@ def test_an_unknown_fidelity_is_refused_naming_it(bad, message):
 
 def _columns(n=2501, settle_at=1201):
     """5 s at 2 ms: the pitch decays from 3 degrees and stays within 0.1 degree from sample
-    ``settle_at`` on; drives that draw power; the axle 3 mm and 4 mm off its reference."""
+    ``settle_at`` on; drives that draw power; the reference moving, the axle off it by an error
+    growing to 3 mm and 4 mm at the last sample, the heading turning to 90 degrees there."""
     t = np.arange(n) * H
     psi_deg = np.where(np.arange(n) < settle_at, 3.0 * np.cos(5 * t), 0.05 * np.sin(40 * t))
     psi_deg[settle_at - 1] = 0.2                            # the last sample outside
-    return {"t": t, "psi": np.radians(psi_deg), "phi": np.full(n, math.radians(90.0)),
-            "x": np.full(n, 1.003), "y": np.full(n, -0.004), "x_d": np.ones(n), "y_d": np.zeros(n),
+    x_d, y_d, growing = 1.0 + 0.1 * t, -0.05 * t, t / t[-1]
+    return {"t": t, "psi": np.radians(psi_deg), "phi": np.radians(90.0) * growing,
+            "x": x_d + 0.003 * growing, "y": y_d - 0.004 * growing, "x_d": x_d, "y_d": y_d,
             "v_l": 2.0 + np.sin(t), "i_l": 0.3 + 0.1 * np.cos(t), "v_r": np.full(n, -1.5), "i_r": np.full(n, -0.2)}
 
 
 def test_pendulum_metrics_at_2ms_are_their_definitions():
     """Catches the energy's sum not weighted by the 2 ms step (or a side's v i left out), the
     settling time taken at the last sample outside instead of the next, the last second's
-    window, the position error's axes, degrees and radians mixed."""
+    window, the position error's axes or a sample other than the last, degrees and radians mixed."""
     c = _columns()
     m = pendulum_metrics(c, H)
     psi = [math.degrees(p) for p in c["psi"]]

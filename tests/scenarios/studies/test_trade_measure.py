@@ -4,11 +4,13 @@ energy survived): a run at 2 ms against a reference at 1 ms, its energy error, c
 and deviation against the numbers computed here."""
 from __future__ import annotations
 
+import importlib
+
 import numpy as np
 import pytest
 
 from scenarios.scenes import get_scene
-from scenarios.studies.trade.measure import measure
+from scenarios.studies.trade.measure import _energy, measure
 
 
 class _Run:
@@ -34,3 +36,48 @@ def test_the_energy_error_is_relative_to_the_references_energy():
     assert row["energy_err"] == pytest.approx(0.1, rel=1e-12)
     assert row["current_err_A"] == 0.0
     assert row["rms_err_m"] == pytest.approx(5e-3, rel=1e-12) and row["max_err_m"] == pytest.approx(5e-3, rel=1e-12)
+
+
+def test_the_energy_is_the_integral_of_both_drives_power_with_the_voltage_held_over_each_interval():
+    """Drive 1: 2 V on a current ramp 0.5 + 3 t A over 0.2 s (trapezoids are exact on a ramp):
+    2 (0.5 * 0.2 + 3 * 0.2² / 2) = 0.32 J.  Drive 2: 1 A with the voltage recorded 1 V, then
+    4 V from the second row on: the voltage of an interval is the one recorded at its end, so
+    every interval draws 4 W, 0.8 J.  On an uneven time grid.  Catches the half of the
+    trapezoid lost (a factor 2 the energy error's ratio hides), a drive left out, the voltage
+    of the interval's start, and the current of one end only."""
+    t = np.array([0.0, 0.01, 0.05, 0.06, 0.13, 0.2])
+    ramp = {"i1": 0.5 + 3.0 * t, "v1": np.full(6, 2.0), "i2": np.zeros(6), "v2": np.zeros(6)}
+    assert _energy(ramp, t) == pytest.approx(0.32, rel=1e-12)
+    held = {"i1": np.zeros(6), "v1": np.zeros(6), "i2": np.ones(6), "v2": np.array([1.0, 4, 4, 4, 4, 4])}
+    assert _energy(held, t) == pytest.approx(0.8, rel=1e-12)
+    both = {**{k: v for k, v in ramp.items() if k.endswith("1")}, **{k: v for k, v in held.items() if k.endswith("2")}}
+    assert _energy(both, t) == pytest.approx(1.12, rel=1e-12)
+
+
+def test_the_no_quantisation_study_sweeps_the_coupling_settings_against_a_2_30_count_reference(monkeypatch):
+    """``_noquant`` (the full sweep's second table), the sweep and the reference replaced by
+    recorders: the reference and every setting on the scene with the plant's encoders at
+    FINE_ENCODER counts, the defaults then groups 4-64 then drives in plant at 2, 4, 8
+    substeps, the rounds passed on, the encoder columns blanked (not a diagnostic at 2^30);
+    a scene without drives or without a five-bar plant has no such table.  Catches another
+    encoder count, a setting left out, the rounds ignored, and encoder columns kept."""
+    module = importlib.import_module("scenarios.studies.trade.measure")   # the package's `measure` is a function
+    seen = {}
+    monkeypatch.setattr(module, "reference_run", lambda scene: seen.setdefault("reference_of", scene) and "ref")
+    monkeypatch.setattr(module, "_sweep", lambda scene, chosen, reference, rounds, say: seen.update(
+        scene=scene, chosen=chosen, reference=reference, rounds=rounds) or (
+        [{"setting": s.name, "kind": "accuracy", "error": "", "wall_s": 1.0, "rms_err_m": 1e-6, "enc_diff": 4,
+          "enc_first_s": 0.5} for s in chosen], []))
+    said = []
+    base = get_scene("bench_circle_TCMDx")
+    rows = module._noquant(base, 3, said.append)
+    for scene in (seen["reference_of"], seen["scene"]):
+        assert scene.system.component("plant").parameters["encoder_counts"] == module.FINE_ENCODER == 2 ** 30
+    assert seen["reference_of"] is seen["scene"] and seen["reference"] == "ref" and seen["rounds"] == 3
+    assert [s.name for s in seen["chosen"]] == ["defaults", "group 4", "group 16", "group 32", "group 64",
+                                                "drives in plant, substeps=2", "drives in plant, substeps=4",
+                                                "drives in plant, substeps=8"]
+    assert all(r["enc_diff"] == "" and np.isnan(r["enc_first_s"]) for r in rows) and len(rows) == 8
+    assert rows[0]["pareto"] is True and rows[0]["gain"] == 1.0
+    assert said == [f"no-quantisation study: reference of bench_circle_TCMDx with {2 ** 30} encoder counts ..."]
+    assert module._noquant(get_scene("thesis_sim_circle"), 3, said.append) == []

@@ -54,3 +54,23 @@ def test_the_figure_draws_the_controllers_table_and_each_checked_circle_where_th
     xs, ys = np.asarray(line.get_xdata()), np.asarray(line.get_ydata())
     assert len(xs) == 1001 and np.allclose(np.hypot(xs - cx, ys - cy), r, rtol=1e-12)
     assert (xs[250], ys[250]) == pytest.approx((cx + r, cy), abs=1e-12)
+
+
+def test_the_printed_summary_names_each_trajectorys_margin_and_refusals_from_their_first_time():
+    """``parcosim workspace``'s lines, from made-up checks at a 2 ms sample time: the figure's
+    path, then per trajectory its smallest margin beside the band and "accepted", or the time
+    of its first refused sample (the earliest over the reasons, index times the sample time)
+    and each reason's count.  Catches the first refusal of one reason only, the count of
+    another reason, the time in samples, and an accepted trajectory called refused."""
+    from scenarios.studies.workspace.figure import BAND, OUTSIDE, TrajectoryCheck, WorkspaceReport
+
+    xy = np.zeros(3)
+    refused = TrajectoryCheck("circle (7.23)", xy, xy, {OUTSIDE: np.array([40, 41, 42]), BAND: np.array([17]),
+                                                        "unused": np.array([], dtype=int)}, 0.0125, 2e-3)
+    fine = TrajectoryCheck("triangle (7.24-7.27)", xy, xy, {OUTSIDE: np.array([], dtype=int)}, 0.25, 2e-3)
+    report = WorkspaceReport("bench", "out/w/workspace.png", 0.02, [refused, fine])
+    assert report.summary().splitlines() == [
+        "bench: out/w/workspace.png",
+        f"  circle (7.23): min singularity margin 0.013 (band 0.02); REFUSED from t = 0.034 s: "
+        f"3 samples {OUTSIDE}, 1 samples {BAND}",
+        "  triangle (7.24-7.27): min singularity margin 0.250 (band 0.02); accepted"]

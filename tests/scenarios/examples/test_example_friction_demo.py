@@ -1,0 +1,86 @@
+"""scenarios/examples/friction_demo.py's figure (docs/friction_lugre.png) read back: each panel's
+force law and units, the break-away forces its legend states against docs/friction.md's table
+(1.492 / 1.461 / 1.307 N), the spring runs' pull speeds, and ``--docs``/``--out`` (issue 31:
+a figure's values against the cited text; options taking effect).  The runs themselves are
+held against scipy in tests/motor/test_friction.py."""
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+import pytest
+
+from scenarios.examples import friction_demo
+from tests.support.paths import ROOT
+
+DOC = (ROOT / "docs" / "friction.md").read_text()
+
+
+@pytest.fixture(scope="module")
+def figure(tmp_path_factory):
+    import matplotlib.pyplot as plt
+
+    kept, close = [], plt.close
+    plt.close = lambda fig=None: kept.append(fig) or close(fig)
+    try:
+        out = friction_demo.plot(tmp_path_factory.mktemp("f") / "sub" / "lugre.png")
+    finally:
+        plt.close = close
+    return out, kept[0]
+
+
+def test_the_figure_is_written_where_asked(figure):
+    out, _ = figure
+    assert out.name == "lugre.png" and out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_the_presliding_panel_is_the_displacement_in_micrometres_under_the_sine_force(figure):
+    """Catches the force of another amplitude or frequency, the displacement in metres, and a
+    mass that slides (0.9 N < Fc: the bristles' deflection, of the order of F/σ0 = 9 µm; at
+    0.5 N docs/friction.md measures [1, 1.3] F/σ0, nearer Fc the bristles yield more)."""
+    _, fig = figure
+    (line,) = fig.axes[0].get_lines()
+    t = np.arange(1, 200001) * 1e-5
+    np.testing.assert_allclose(line.get_ydata(), 0.9 * np.sin(math.pi * t), rtol=0, atol=1e-12)
+    peak = np.max(np.abs(line.get_xdata()))
+    elastic = 1e6 * 0.9 / friction_demo.PAPER["sigma0"]
+    assert elastic <= peak <= 2.0 * elastic
+
+
+def test_the_break_away_forces_are_the_documents(figure):
+    """Catches the break-away taken at another speed than vs, or the ramp of another rate."""
+    _, fig = figure
+    found = re.search(r"break-away, ramps 0\.1 / 1 / 10 N/s \(first v > vs\) \| ([0-9.]+) / ([0-9.]+) / ([0-9.]+) N",
+                      DOC)
+    assert found, "docs/friction.md no longer states the break-away forces"
+    labels = [t.get_text() for t in fig.axes[1].get_legend().get_texts()]
+    assert labels == [f"{rate:g} N/s: breaks away at {force} N" for rate, force in zip((0.1, 1.0, 10.0), found.groups())]
+    ramps = [line for line in fig.axes[1].get_lines() if line.get_label().startswith(("0.1 ", "1 ", "10 "))]
+    for line, rate in zip(ramps, (0.1, 1.0, 10.0)):
+        t = np.arange(1, len(line.get_ydata()) + 1) * 1e-5
+        np.testing.assert_allclose(line.get_ydata(), rate * t, rtol=1e-12)
+        assert len(t) == round(2.0 / rate / 1e-5)
+    assert any(list(line.get_ydata()) == [friction_demo.PAPER["Fs"]] * 2 for line in fig.axes[1].get_lines())
+
+
+def test_the_spring_panel_pulls_at_0_1_and_0_5_m_s_for_20_s(figure):
+    """Catches another pull speed or duration, and the speed's samples not every 1 ms."""
+    _, fig = figure
+    lines = fig.axes[2].get_lines()
+    assert [line.get_label() for line in lines] == ["spring end at 0.1 m/s", "spring end at 0.5 m/s"]
+    for line in lines:
+        np.testing.assert_allclose(line.get_xdata(), (np.arange(0, 2000000, 100) + 1) * 1e-5, rtol=1e-12)
+    slow = lines[0].get_ydata()
+    assert np.min(slow[200:]) < 1e-3 < 0.1 < np.max(slow)      # sticks and slips
+    assert abs(np.mean(lines[1].get_ydata()[-2000:]) - 0.5) < 0.05  # slides at the pull
+
+
+def test_docs_writes_the_documents_figure_and_out_another_path(monkeypatch, capsys, tmp_path):
+    asked = []
+    monkeypatch.setattr(friction_demo, "plot", lambda out: asked.append(out) or out)
+    friction_demo.main(["--docs"])
+    friction_demo.main(["--out", str(tmp_path / "x.png")])
+    friction_demo.main([])
+    assert asked == [ROOT / "docs" / "friction_lugre.png", tmp_path / "x.png", friction_demo.Path("out/friction_lugre.png")]
+    assert "friction_lugre.png" in DOC and capsys.readouterr().out.splitlines()[0] == str(asked[0])
