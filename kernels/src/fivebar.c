@@ -286,11 +286,10 @@ INLINE void inverse2(const double *m, double *inv)
     inv[3] = m[0] / det;
 }
 
-static void terms_at(const pc_fivebar_params *p, int k, const double *y, int with_rates, pc_fivebar_terms *t)
+/* Chain k's terms at y's angles with its joints at rest (the projection reads the tip and J only). */
+static void terms_at(const pc_fivebar_params *p, int k, const double *y, pc_fivebar_terms *t)
 {
-    const double *q = y, *dq = y + N_Q;
-    pc_fivebar_chain_terms(p, k, q[3 + 2 * k], q[4 + 2 * k], with_rates ? dq[3 + 2 * k] : 0.0,
-                           with_rates ? dq[4 + 2 * k] : 0.0, t);
+    pc_fivebar_chain_terms(p, k, y[3 + 2 * k], y[4 + 2 * k], 0.0, 0.0, t);
 }
 
 /* pc_fivebar_derivative, the chains' trigonometry from `cache` when it holds y's angles (NULL: none);
@@ -535,13 +534,13 @@ void pc_fivebar_project(const pc_fivebar_params *p, double *y, int iterations)
     for (int k = 0; k < 2; ++k) {
         const double base = chain_base(p, k);
         for (int it = 0; it < iterations; ++it) {
-            terms_at(p, k, y, 0, &t);
+            terms_at(p, k, y, &t);
             const double rx = y[0] - base - t.tip[0], ry = y[1] - t.tip[1];
             inverse2(t.J, inv);
             y[3 + 2 * k] += inv[0] * rx + inv[1] * ry;
             y[4 + 2 * k] += inv[2] * rx + inv[3] * ry;
         }
-        terms_at(p, k, y, 0, &t);
+        terms_at(p, k, y, &t);
         inverse2(t.J, inv);
         y[10 + 2 * k] = inv[0] * y[7] + inv[1] * y[8];
         y[11 + 2 * k] = inv[2] * y[7] + inv[3] * y[8];

@@ -181,3 +181,22 @@ def test_tabulation_error_checks_h_in_directions_all_around(monkeypatch):
     assert len(v) == 40 and np.allclose(np.hypot(v[:, 0], v[:, 1]), 1.0, rtol=1e-12)
     quadrants = {(bool(dx > 0), bool(dy > 0)) for dx, dy in v}
     assert len(quadrants) == 4
+
+
+def test_the_complete_cells_are_those_the_kernel_interpolates(tmp_path, monkeypatch):
+    """``cell_ok`` (the cells tabulation_error samples) against the law kernel's own hole check:
+    a cell is complete exactly when a point inside it interpolates, for every cell of a table
+    with holes.  Catches a shifted or mirrored corner in ``cell_ok`` (an index -1 for 1)."""
+    monkeypatch.setenv("PARCOSIM_CACHE", str(tmp_path))
+    tab = TabulatedModel(BENCH, 0.01, (-0.02, 0.03, 0.0, 0.06))
+    assert tab.cell_ok.shape == (tab.ys.size - 1, tab.xs.size - 1)
+    assert tab.cell_ok.any() and not tab.cell_ok.all()
+    for iy, ix in np.ndindex(tab.cell_ok.shape):
+        for fx, fy in ((0.25, 0.5), (0.75, 0.25)):
+            x, y = tab.xs[ix] + fx * tab.step, tab.ys[iy] + fy * tab.step
+            try:
+                tab.interpolate(x, y)
+                interpolates = True
+            except ModelRangeError:
+                interpolates = False
+            assert interpolates == tab.cell_ok[iy, ix], (iy, ix, x, y)

@@ -241,6 +241,23 @@ def test_a_forged_polygon_is_refused_naming_its_word(word, value):
     assert not out.any()
 
 
+
+@pytest.mark.parametrize("word, value", [("T_VERTICES", 2.5), ("T_CYCLES", math.nan), ("T_KIND", 7.0)])
+def test_a_forged_trajectory_is_refused_in_python_with_the_whole_record(word, value):
+    """Catches the damaged-buffer refusal's record read back wrong through the Python call: its
+    reason, its (empty) variable and unit, the value, the time, and the message word for word
+    with the word's index."""
+    trajectory = triangle()
+    trajectory.buf[getattr(fasttrajectory, word)] = value
+    with pytest.raises(kernels.Refused) as caught:
+        trajectory(0.75)
+    record = caught.value.record()
+    assert (record["reason"], record["variable"], record["unit"], caught.value.time) == ("bad_layout", "", "", 0.75)
+    assert record["value"] == value or math.isnan(value) and math.isnan(record["value"])
+    assert str(caught.value) == (f"the trajectory's buffer is damaged: word {getattr(fasttrajectory, word)} = "
+                                 f"{value!r} does not fit it")
+
+
 triangle_ = triangle()
 
 

@@ -119,16 +119,20 @@ def test_the_io_step_refuses_forged_settings(substeps, count):
 
 def test_the_io_step_is_the_step_with_the_push_then_the_sensors():
     """pc_wheeled_step_io adds the push over the steps that start in its window and reads
-    the sensors of the new state."""
+    the sensors of the new state: it reads its 3 inputs only (the output words hold NaN before
+    the call), writes every output and nothing past them (a sentinel after the array).  Catches a
+    push window or torque misapplied, an input loop one word too long, an output left unwritten."""
     settings = np.zeros(K.SETTINGS_SIZE)
     settings[K.S_SUBSTEPS], settings[K.S_COUNT], settings[K.S_LIMIT] = 2, 2 * math.pi / 4096, 1e6
     settings[K.S_PUSH_TORQUE], settings[K.S_PUSH_START], settings[K.S_PUSH_DURATION] = 0.3, 0.002, 0.002
     io_sim, sim = WheeledPendulum(initial=dict(psi=0.05)), WheeledPendulum(initial=dict(psi=0.05))
     for k in range(5):
         t = k * 1e-3
-        x = np.zeros(3 + len(K.OUTPUT_NAMES))
-        x[:3] = 0.01, -0.02, 0.001
+        x = np.full(3 + len(K.OUTPUT_NAMES) + 1, np.nan)
+        x[:3], x[-1] = (0.01, -0.02, 0.001), -123456.75
         assert K.step_io(io_sim.prm, io_sim.y, settings, x, t, 1e-3, kernels.Refusal()) == K.OK
+        assert x[-1] == -123456.75
+        x = x[:-1]
         sim.step(0.01, -0.02, 1e-3, 0.001 + (0.3 if 0.002 - 1e-9 <= t < 0.004 - 1e-9 else 0.0))
         np.testing.assert_array_equal(io_sim.y, sim.y)
         assert dict(zip(K.OUTPUT_NAMES, x[3:].tolist())) == sim.outputs()

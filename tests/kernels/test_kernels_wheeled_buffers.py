@@ -71,3 +71,24 @@ def test_a_longer_buffer_is_read_only_up_to_its_size():
     accepted and gives the energy of its first N_STATE."""
     prm, y = pack(SEED), _state()
     assert K.energy(prm, np.concatenate([y, [np.nan, 1e300]])) == K.energy(prm, y)
+
+
+def test_settings_are_built_by_name_each_at_its_word_and_a_missing_or_unknown_name_is_refused():
+    """Catches a settings buffer that puts a value at another field's word, or accepts a call
+    that leaves a field out (its word uninitialised) or names one the kernel has not, when
+    the other mistake is absent."""
+    names = list(K.SETTINGS)
+    values = {name: 0.5 + k for k, name in enumerate(names)}
+    settings = K.new_settings(**values)
+    assert settings.size == K.SETTINGS_SIZE
+    for name, value in values.items():
+        assert np.all(settings[K.SETTINGS[name]] == value), name
+    listed = ", ".join(names)
+    short = dict(values)
+    del short[names[1]]
+    with pytest.raises(ValueError) as caught:
+        K.new_settings(**short)
+    assert str(caught.value) == f"the pendulum's settings are {listed}: missing {[names[1]]}, unknown []"
+    with pytest.raises(ValueError) as caught:
+        K.new_settings(**values, gain=2.0)
+    assert str(caught.value) == f"the pendulum's settings are {listed}: missing [], unknown ['gain']"

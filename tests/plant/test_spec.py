@@ -2,6 +2,7 @@
 against the closed forms of seed 001 (54), (57)-(63) and the balanced RR (64)-(71),
 derived here from (62)-(63) where the seed has typos (docs/spec.md)."""
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -151,9 +152,27 @@ def test_a_bad_value_is_named_with_its_line_key_and_value(old, new, line, key, v
 
 
 def test_a_syntax_error_keeps_the_line():
-    """Catches a spec loader that loses the TOML syntax error's line."""
-    with pytest.raises(plant_spec.SpecError, match=r"t.toml, line 10: TOML syntax"):
+    """Catches a spec loader that loses the TOML syntax error's line, or fills the error's
+    fields (key, value) with its text."""
+    with pytest.raises(plant_spec.SpecError, match=r"^t.toml, line 10: TOML syntax") as info:
         plant_spec.loads(GOOD.replace("a = 0.1\nmass = 0.1", "a = 0.1 0.2\nmass = 0.1"), source="t.toml")
+    assert (info.value.source, info.value.line, info.value.key, info.value.value) == ("t.toml", 10, "", None)
+
+
+def test_a_spec_is_found_by_name_or_path_and_an_unknown_name_is_refused_listing_the_shipped(tmp_path):
+    """Catches a lookup that takes a path for a name (or the other way round), or a refusal
+    that does not name what was asked for and what is shipped."""
+    shipped = sorted(p.name.removesuffix(".toml") for p in plant_spec.SPEC_DIR.iterdir() if p.suffix == ".toml")
+    assert plant_spec.shipped_specs() == shipped and "bench_5r" in shipped
+    assert plant_spec.spec_path("bench_5r") == plant_spec.SPEC_DIR / "bench_5r.toml"
+    own = tmp_path / "bench_5r"          # an existing file of that name is a path, not the shipped spec
+    own.write_text(GOOD)
+    assert plant_spec.spec_path(own) == own and plant_spec.load(own).chains[0].chain.dof == 2
+    assert plant_spec.spec_path("elsewhere/new.toml") == Path("elsewhere/new.toml")
+    with pytest.raises(FileNotFoundError) as info:
+        plant_spec.load("bench_6r")
+    assert str(info.value) == ("no spec file 'bench_6r' and no shipped spec of that name "
+                               f"(shipped: {', '.join(shipped)})")
 
 
 def test_a_parallel_spec_needs_as_many_actuators_as_dof():

@@ -1,0 +1,99 @@
+"""Every array-level call of the 5R's C kernel (plant/fast5r.py: derivative, actuated
+derivative, residual, report, projection, inverse terms) writes exactly its documented words
+and reads exactly its documented inputs: each output is followed by sentinel words that must
+keep their bits and must itself be written in full, each input by words (NaN, then 0.75) that must not change
+an output.  A loop bound one too far (``k <= 2`` over the two chains, ``i <= N_Y``) writes or
+reads past a buffer silently in the optimised build; these catch it without the sanitizer."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from plant import IntegratorSettings, PlantSimulator, fast5r, get_preset
+
+#: Words past each buffer's end.
+GUARD = 5
+SENTINEL = -123456.75
+
+
+def moving_state():
+    """A closed, moving 5R state (q, dq: 14 words) of the bench preset, and its packed parameters."""
+    sim = PlantSimulator(get_preset("bench"), 0.02, 0.16, IntegratorSettings())
+    y = fast5r.project(sim._fast.p, np.concatenate([sim.y[:7], [0.05, -0.04, 0.0, 0.0, 0.0, 0.0, 0.0]]), 3)
+    return sim._fast.p, y
+
+
+def guarded_output(size):
+    return np.full(size + GUARD, SENTINEL)
+
+
+def guarded_input(values, fill):
+    return np.concatenate([np.asarray(values, dtype=float), np.full(GUARD, fill)])
+
+
+def check_written_exactly(out, size, label):
+    assert np.all(out[size:] == SENTINEL), f"{label}: words past its {size} were written: {out[size:]}"
+    assert not np.any(out[:size] == SENTINEL), f"{label}: a word of its {size} was not written: {out[:size]}"
+
+
+#: Two motors (joint, R, L, kt, ke, b, mu, omega_eps), as tests/kernels/test_oracles_kernels.py's.
+MOTORS = np.array([[0.0, 1.1, 6.7e-4, 0.056, 0.051, 1.2e-4, 0.04, 0.5],
+                   [1.0, 2.3, 1.9e-3, 0.081, 0.077, 3.1e-4, 0.02, 0.2]])
+
+
+def _derivative(p, y, fill):
+    out = guarded_output(14)
+    fast5r.derivative(p, guarded_input(y, fill), 0.02, -0.03, 50.0, out)
+    return out, 14
+
+
+def _actuated_derivative(p, y, fill):
+    z = np.concatenate([y, [0.6, -0.9]])
+    out = guarded_output(16)
+    voltages = guarded_input([3.0, -5.0], fill)
+    fast5r.actuated_derivative(p, MOTORS, guarded_input(z, fill), voltages, 0.02, -0.03, 50.0, out)
+    return out, 16
+
+
+def _residual(p, y, fill):
+    out = guarded_output(6)
+    fast5r.residual(p, guarded_input(y, fill), out)
+    return out, 6
+
+
+def _report(p, y, fill):
+    out = guarded_output(fast5r.REPORT_SIZE)
+    fast5r.report(p, guarded_input(y, fill), 1e-4, 2e-3, -3e-3, out)
+    return out, fast5r.REPORT_SIZE
+
+
+def _inverse_terms(p, y, fill):
+    out = guarded_output(fast5r.INVERSE_SIZE)
+    fast5r.inverse_terms(p, guarded_input(y[:7], fill), guarded_input(y[7:], fill), out)
+    return out, fast5r.INVERSE_SIZE
+
+
+CALLS = {"derivative": _derivative, "actuated_derivative": _actuated_derivative, "residual": _residual,
+         "report": _report, "inverse_terms": _inverse_terms}
+
+
+@pytest.mark.parametrize("name", sorted(CALLS))
+def test_each_call_writes_all_its_words_and_no_other_and_reads_only_its_inputs(name):
+    """Catches a kernel loop that runs one chain, one state word or one motor too far (a write
+    past the caller's buffer, a read of the word after an input) or stops one short (a word of
+    the output left unwritten)."""
+    p, y = moving_state()
+    out, size = CALLS[name](p, y, np.nan)
+    check_written_exactly(out, size, name)
+    again, _ = CALLS[name](p, y, 0.75)
+    assert np.array_equal(again, out), f"{name}: an input word past its end changed an output"
+
+
+def test_the_projection_changes_only_the_14_state_words():
+    """Catches ``pc_fivebar_project`` writing past the state (its chain loop or its rate rows)."""
+    p, y = moving_state()
+    y[3] += 1e-3                                    # off the manifold: Newton has work to do
+    z = np.concatenate([y, np.full(GUARD, SENTINEL)])
+    fast5r._project(fast5r._address(p), fast5r._address(z), 3)
+    assert np.all(z[14:] == SENTINEL)
+    assert np.all(np.isfinite(z[:14])) and not np.array_equal(z[:14], y)
