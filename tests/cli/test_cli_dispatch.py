@@ -6,6 +6,7 @@ wrong, passed every test that only ran the commands with their defaults)."""
 from __future__ import annotations
 
 import importlib
+import io
 import zipfile
 from pathlib import Path
 from types import SimpleNamespace
@@ -251,3 +252,32 @@ def test_trade_workspace_and_demo_pass_their_options(tmp_path, monkeypatch, reco
     assert capsys.readouterr().out.splitlines() == [
         f"{SCENE} 0-1 s: defaults 1.50 s wall, RMS deviation 0.0002 m; front: defaults -> t/trade.md",
         "pendulum_balance: a 0.50 s, b 0.25 s -> pt/trade.md", "ws"]
+
+
+class _Terminal(io.StringIO):
+    """A stderr that says it is a terminal."""
+
+    def isatty(self):
+        return True
+
+
+def test_on_a_terminal_a_run_shows_its_progress_and_a_long_command_its_status_line(tmp_path, monkeypatch, record,
+                                                                                  capsys):
+    """On a terminal ``run`` passes a progress bar to ``run_scene`` (30 marks, the percentage)
+    after saying it is loading; ``build`` says what it does on one status line, cleared
+    before its output, which goes to stdout as without a terminal.  Catches the progress or
+    the status line lost, or the command's output swallowed by the status line."""
+    monkeypatch.chdir(tmp_path)
+    calls = record("scenarios.run.runner", "run_scene", lambda *args, **kwargs: kwargs["progress"](0.5) or _outcome())
+    record("fmus.export.build", "build_all", ["A.fmu"])
+    err = _Terminal()
+    monkeypatch.setattr("sys.stderr", err)
+    assert main(["run", SCENE, "--out", "o"]) == 0
+    assert callable(calls[0][1]["progress"])
+    assert err.getvalue() == (f"{SCENE}: loading and initialising (inprocess)...\r{SCENE} [{'#' * 15}{'.' * 15}]  "
+                              "50.0 %")
+    err.seek(0)
+    err.truncate()
+    assert main(["build", "--out", "b"]) == 0
+    assert err.getvalue() == "parcosim build: building the FMUs ...\r\033[K"
+    assert capsys.readouterr().out.endswith("-> o\nA.fmu\n")
