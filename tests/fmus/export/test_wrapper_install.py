@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import stat
+import warnings
 import xml.etree.ElementTree as ET
 import zipfile
 
@@ -89,3 +90,62 @@ def test_without_a_compiler_only_the_identity_goes_in(tmp_path, monkeypatch):
         z.writestr(f"binaries/{PLATFORM}/Ident.so", b"\x7fELF pythonfmu's binary")
         z.writestr(f"binaries/{PLATFORM}/Drive.so", VERSION_SYMBOL.encode())     # the file's name: not looked at
     assert not has_wrapper(fmu)
+
+
+@pytest.fixture
+def cache(tmp_path, monkeypatch):
+    """A cache folder of its own (``$PARCOSIM_CACHE``), and a C compiler or a skip."""
+    if wrapper.compiler() is None:
+        pytest.skip("no C compiler")
+    monkeypatch.setenv("PARCOSIM_CACHE", str(tmp_path / "cache"))
+    return tmp_path / "cache" / "fmi2-wrapper"
+
+
+def test_the_wrapper_is_compiled_once_per_source_and_kept_under_its_key(cache, tmp_path, monkeypatch):
+    """The wrapper is compiled into the cache as ``parcosim_fmi2-<key>.so`` (the key: a hash
+    of the source, the flags, the compiler and Python), taken from there the next time
+    without compiling, and compiled anew, beside the old one, when the source changes.
+    Catches the cache's file not named by its key (a stale wrapper kept after its source
+    changed), the cache not used, and a compiled file that is not the wrapper."""
+    first = wrapper.compiled_wrapper()
+    assert first == cache / f"parcosim_fmi2-{wrapper._key(wrapper.compiler())}.so" and first.is_file()
+    assert VERSION_SYMBOL.encode() in first.read_bytes()
+    monkeypatch.setattr(wrapper.subprocess, "run", lambda *a, **k: pytest.fail("compiled again"))
+    assert wrapper.compiled_wrapper() == first
+    monkeypatch.undo()
+    monkeypatch.setenv("PARCOSIM_CACHE", str(tmp_path / "cache"))
+    changed = tmp_path / "parcosim_fmi2.c"
+    changed.write_bytes(wrapper.SOURCE.read_bytes() + b"\n/* changed */\n")
+    monkeypatch.setattr(wrapper, "SOURCE", changed)
+    second = wrapper.compiled_wrapper()
+    assert second != first and second.parent == cache and first.is_file() and second.is_file()
+    assert sorted(p.name for p in cache.iterdir()) == sorted([first.name, second.name])
+
+
+def test_a_source_the_compiler_refuses_is_an_error_naming_the_command_and_leaves_nothing(cache, tmp_path,
+                                                                                      monkeypatch):
+    """Catches a failed compilation taken as no compiler (None) or leaving a file in the cache."""
+    broken = tmp_path / "broken.c"
+    broken.write_text("this is not C\n")
+    monkeypatch.setattr(wrapper, "SOURCE", broken)
+    with pytest.raises(wrapper.WrapperBuildError) as failed:
+        wrapper.compiled_wrapper()
+    assert str(failed.value).startswith("compiling the FMI wrapper failed (") and str(broken) in str(failed.value)
+    assert list(cache.iterdir()) == []
+
+
+def test_without_python_headers_there_is_no_wrapper_and_one_warning_saying_why(cache, tmp_path, monkeypatch):
+    """Catches the headers' check inverted, the reason not named, the warning repeated or
+    given with ``quiet``."""
+    monkeypatch.setattr(wrapper, "_include_dir", lambda: str(tmp_path))
+    monkeypatch.setattr(wrapper, "_warned", False)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert wrapper.compiled_wrapper(quiet=True) is None
+        assert caught == []
+        assert wrapper.compiled_wrapper() is None and wrapper.compiled_wrapper() is None
+    assert [str(w.message) for w in caught] == [
+        f"parcosim's FMI wrapper not compiled: no Python.h in {tmp_path} (install the Python development headers); "
+        "the FMUs keep pythonfmu 0.7's wrapper, which crashes the importer on some inputs (docs/extremes.md, "
+        "'The FMI wrapper')"]
+    assert caught[0].category is RuntimeWarning and not cache.exists()
