@@ -90,9 +90,10 @@ def remove_if_empty(folder: Path | None) -> None:
     """Remove ``folder`` (made by a refused command) if it holds no file, its empty sub-folders too."""
     if folder is None or not folder.is_dir():
         return
-    for root, dirs, files in os.walk(folder, topdown=False):
-        if files:
-            return
+    tree = list(os.walk(folder, topdown=False))
+    if any(files for _, _, files in tree):
+        return          # a file anywhere: nothing goes (not even the empty folders walked before it)
+    for root, dirs, _ in tree:
         for d in dirs:
             try:
                 os.rmdir(os.path.join(root, d))

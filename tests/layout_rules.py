@@ -78,6 +78,7 @@ RULES = [
     ("test_oracles_export.py", "fmus/export"),
     ("test_model_description*.py", "fmus/export"),
     ("test_cold_start*.py", "fmus/export"),
+    ("test_precompute*.py", "fmus/export"),
     # fmus/native, fmus/cosim, fmus/systemfmu, fmus/ssp, fmus/hostile
     ("test_native_*.py", "fmus/native"),
     ("test_master*.py", "fmus/cosim"),

@@ -82,3 +82,59 @@ def test_loop_without_native_is_a_usage_error(made_up, tmp_path):
     with pytest.raises(SystemExit) as info:
         campaign.main(["--loop", "x.fmu", "--out", str(tmp_path)])
     assert info.value.code == 2
+
+
+def test_native_passes_its_options_on_and_says_how_the_fmus_were_built(made_up, tmp_path, monkeypatch, capsys):
+    """``--native``: the FMU folder, the models, the work folder, the sanitizers (unless
+    ``--no-sanitize``) and the loop reach ``prepared_native_fmus``; the sanitizers' reports
+    go to OUT/sanitizer; every FMU is driven as native (every kind); the summary names the
+    binaries and the command with ``--native`` and ``--loop``.  Catches an option dropped
+    or swapped, the sanitizers' environment not passed to the runs, and the wording of the
+    binaries or of the command wrong."""
+    asked, state = made_up
+    prepared, environments = [], []
+
+    def prepared_native_fmus(fmu_dir, models, work, sanitize, loop_fmu):
+        prepared.append((fmu_dir, models, work, sanitize, loop_fmu))
+        return {"ClosedLoop": "/u/loop", "Drive": "/u/drive"}
+
+    def sanitizer_env(folder):
+        environments.append(folder)
+        return {"ASAN_OPTIONS": "x"}
+
+    monkeypatch.setattr(hostile, "prepared_native_fmus", prepared_native_fmus)
+    monkeypatch.setattr(hostile, "sanitizer_env", sanitizer_env)
+    monkeypatch.setattr(hostile, "is_native", lambda path: True)
+    out = tmp_path / "out"
+    assert campaign.main(["--native", "--cases", "2", "--fmu-dir", "fd", "--models", "ClosedLoop,Drive",
+                          "--loop", "l.fmu", "--out", str(out)]) == 0
+    assert prepared == [("fd", "ClosedLoop,Drive", tmp_path / "work", True, "l.fmu")]
+    assert environments == [out / "sanitizer"] and state["env"] == {"ASAN_OPTIONS": "x"} and state["batch"] == 30
+    assert [a[3:] for a in asked] == [(True, hostile.KINDS)] * 2
+    first = (out / "summary.md").read_text().split("\n\n", 1)[0]
+    assert first.endswith("s wall (native FMUs, rebuilt with -fsanitize=address,undefined); "
+                          "`python -m fmus.hostile.campaign --native --loop l.fmu --cases 2 --seed 0`")
+    assert campaign.main(["--native", "--no-sanitize", "--cases", "2", "--out", str(out)]) == 0
+    assert prepared[1] == (None, None, tmp_path / "work", False, None)
+    assert len(environments) == 1 and state["env"] is None
+    first = (out / "summary.md").read_text().split("\n\n", 1)[0]
+    assert first.endswith("s wall (native FMUs); `python -m fmus.hostile.campaign --native --cases 2 --seed 0`")
+
+
+def test_the_defaults_are_3000_cases_from_seed_0_in_batches_of_30_into_out_hostile(made_up, tmp_path, monkeypatch):
+    """Catches a default changed or an option's default not taking effect."""
+    asked, state = made_up
+    monkeypatch.chdir(tmp_path)
+    assert campaign.main([]) == 0
+    assert [(a[0], a[2][0], len(a[2])) for a in asked] == [("Plant", 0, 1500), ("Drive", 0, 1500)]
+    assert state["batch"] == 30
+    assert "--cases 3000 --seed 0`" in (tmp_path / "out" / "hostile" / "summary.md").read_text().split("\n")[0]
+
+
+def test_help_says_what_the_campaign_is(capsys):
+    """Catches the description (the module docstring's first line) left out of ``--help``."""
+    with pytest.raises(SystemExit) as info:
+        campaign.main(["--help"])
+    assert info.value.code == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert "The long hostile-use campaign (issue 13): thousands of cases through fmpy, a summary table." in text

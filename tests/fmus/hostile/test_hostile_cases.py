@@ -12,18 +12,22 @@ import pytest
 from fmpy import read_model_description
 
 from fmus.cosim.backends import InProcessInstance
-from fmus.hostile.cases import (HOSTILE_REALS, KINDS, OUTCOMES, START_TIMES, STATE_VARIANTS, STEP_SIZES,
-                                WRAPPER_KINDS, CaseResult, make_case, markdown_summary, summary, variable_table)
+from fmus.hostile.cases import (HOSTILE_REALS, KINDS, OUTCOMES, SANE_INPUTS, START_TIMES, STATE_VARIANTS,
+                                STEP_SIZES, WRAPPER_KINDS, CaseResult, make_case, markdown_summary, summary, variable_table)
 
 MODEL = "DCMotorDrive"
 
 
-@pytest.fixture(scope="module")
-def table(tmp_path_factory):
-    slave = InProcessInstance(MODEL, "d").slave
-    path = tmp_path_factory.mktemp("md") / "modelDescription.xml"
+def _table(model, folder):
+    slave = InProcessInstance(model, "d").slave
+    path = folder / "modelDescription.xml"
     path.write_bytes(ET.tostring(slave.to_xml(), encoding="UTF-8", xml_declaration=True))
     return slave, variable_table(read_model_description(str(path)))
+
+
+@pytest.fixture(scope="module")
+def table(tmp_path_factory):
+    return _table(MODEL, tmp_path_factory.mktemp("md"))
 
 
 def test_the_variable_table_is_each_variables_name_type_causality_variability_and_start(table):
@@ -115,3 +119,32 @@ def test_the_summary_counts_each_outcome_per_fmu_and_kind_and_in_all():
     assert lines[2:] == ["| A | **all** | 3 | 1 | 2 | 0 | 0 | 0 | 0 |", "| A | state | 1 | 0 | 1 | 0 | 0 | 0 | 0 |",
                          "| A | steps | 2 | 1 | 1 | 0 | 0 | 0 | 0 |", "| B | **all** | 1 | 0 | 0 | 0 | 0 | 1 | 0 |",
                          "| B | steps | 1 | 0 | 0 | 0 | 0 | 1 | 0 |"]
+
+
+def test_every_case_sets_each_real_input_near_its_sane_value_before_its_first_step(table, tmp_path):
+    """In every case each Real input is set once before the first step, in the order of the
+    variables, within 2 % (and 2e-4 absolute) of its sane value (:data:`SANE_INPUTS`, else
+    its start); an "inputs" case sets them all again before every step (with hostile values),
+    the others never again.  Catches the inputs set only in "inputs" cases (a case then
+    steps an FMU with unset inputs), set before every step in every case, an input left out,
+    and values drawn away from the sane pose."""
+    cases = {MODEL: table[1], "PositionController": _table("PositionController", tmp_path)[1]}
+    for model, rows in cases.items():
+        inputs = {row[0]: row[4] for row in rows if row[2] == "input" and row[1] == "Real"}
+        sane = {**inputs, **SANE_INPUTS.get(model, {})}
+        for seed in range(90):
+            case = make_case(model, rows, seed, kind=KINDS[seed % len(KINDS)], wrapper=True, models=(model,))
+            intervals = [[]]       # the inputs set before each step, and after the last
+            for op in case["ops"]:
+                if op[0] == "step":
+                    intervals.append([])
+                elif op[0] == "set" and op[1] in inputs:
+                    intervals[-1].append(op)
+            assert intervals[-1] == [] and [op[1] for op in intervals[0]] == list(inputs), (model, seed)
+            if case["kind"] == "inputs":
+                assert all([op[1] for op in before] == list(inputs) for before in intervals[1:-1]), (model, seed)
+                continue
+            assert all(before == [] for before in intervals[1:-1]), (model, seed)
+            for _, name, value in intervals[0]:
+                base = sane[name]
+                assert abs(value - base) <= 0.02 * abs(base) + 2e-4 * (abs(base) or 1.0) + 1e-15, (model, name, value)

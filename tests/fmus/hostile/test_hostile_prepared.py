@@ -12,7 +12,8 @@ import zipfile
 import fmpy
 import pytest
 
-from fmus.hostile.cases import extract_fmus, is_native, prepared_fmus, wrapper_is_ours
+from fmus.hostile import cases
+from fmus.hostile.cases import extract_fmus, is_native, prepared_fmus, prepared_native_fmus, wrapper_is_ours
 from fmus.slave.base import WRAPPER_SYMBOL
 from fmus.slave.identity import IDENTITY_FILE
 from tests.fmus.export.test_oracles_export import fake_fmu
@@ -76,3 +77,38 @@ def test_models_are_picked_by_name_extracted_once_and_an_unknown_one_is_named(fm
     assert kept.read_text() == "first extraction"
     with pytest.raises(ValueError, match=r"no FMU \['Nope'\]; available: Ours, SpecPlant_delta3, Theirs"):
         prepared_fmus(fmu_dir, "Ours,Nope", tmp_path)
+
+
+def test_the_native_fmus_are_those_of_the_folder_or_built_plus_the_loop_picked_and_sanitized(fmu_dir, tmp_path,
+                                                                                             monkeypatch):
+    """``prepared_native_fmus``: every FMU of ``fmu_dir`` (else ``build_native_all`` into
+    ``work/native``), with ``loop_fmu`` as ``ClosedLoop``, ``models`` picking by name, each
+    rebuilt by ``sanitized_from_sources`` into ``work/sanitized`` with ``sanitize`` (and
+    taken as it is without), extracted under ``work/fmus``.  Catches the loop dropped or
+    put under another name, the models' pick ignored, the sanitizer's rebuild skipped or
+    done without asking, and the built FMUs taken from another folder."""
+    import fmus.native.build
+
+    sanitized, built = [], []
+
+    def sanitize(path, out_dir):
+        sanitized.append((path, out_dir))
+        return path
+
+    def build(out_dir):
+        built.append(out_dir)
+        return [fmu_dir / "Ours.fmu", fmu_dir / "Theirs.fmu"]
+
+    monkeypatch.setattr(cases, "sanitized_from_sources", sanitize)
+    monkeypatch.setattr(fmus.native.build, "build_native_all", build)
+    loop = fmu_dir / "SpecPlant_delta3.fmu"
+    unzipped = prepared_native_fmus(fmu_dir, "ClosedLoop,Theirs", tmp_path / "a", sanitize=True, loop_fmu=str(loop))
+    assert unzipped == {"ClosedLoop": tmp_path / "a" / "fmus" / "ClosedLoop", "Theirs": tmp_path / "a" / "fmus" / "Theirs"}
+    assert sanitized == [(loop, tmp_path / "a" / "sanitized"), (fmu_dir / "Theirs.fmu", tmp_path / "a" / "sanitized")]
+    assert (unzipped["ClosedLoop"] / "binaries" / fmpy.platform / "SpecPlant.so").is_file()
+    assert built == []
+    unzipped = prepared_native_fmus(None, None, tmp_path / "b", sanitize=False)
+    assert built == [tmp_path / "b" / "native"] and len(sanitized) == 2
+    assert unzipped == {m: tmp_path / "b" / "fmus" / m for m in ("Ours", "Theirs")}
+    with pytest.raises(ValueError, match=r"no FMU \['ClosedLoop'\]; available: Ours, SpecPlant_delta3, Theirs"):
+        prepared_native_fmus(fmu_dir, "Ours,ClosedLoop", tmp_path / "c", sanitize=False)

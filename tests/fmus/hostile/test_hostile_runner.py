@@ -145,3 +145,47 @@ def test_a_refused_step_must_leave_its_message_and_its_record_with_the_records_s
     assert problems == [f"the refused {label} left refusal = b'', not the record of error = {message!r}"]
     assert _run(monkeypatch, ops, fmu=_refusing(message, good, FmiStatus.ERROR)).problems == [
         f"the refused {label} returned Error, not the Discard of a refused refusal"]
+
+
+class RecordingFMU(MadeUpFMU):
+    """A :class:`MadeUpFMU` that records every other call it receives, by name, with its
+    arguments, in order."""
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.calls = []
+
+    def __getattr__(self, name):
+        if name.startswith("_"):
+            raise AttributeError(name)
+        return lambda *args, **kwargs: self.calls.append((name, args, kwargs))
+
+
+def test_every_op_of_a_case_is_the_fmi_call_it_names_with_its_own_arguments(monkeypatch):
+    """A case of each op that sets a value (a variable by name, a value reference of each FMI
+    type), a step before initialisation, a parameter, a call out of order and terminate: the
+    FMU receives exactly those calls, in order, each with the op's own reference and value
+    converted to the type's Python type, each recorded under its label.  Catches an op's
+    field read from another position, a setter of another type, a value not converted, a
+    parameter or an op dropped, and a label naming another call."""
+    ops = [["step_before_init", 0.0, 2e-3], ["set", "k", 2.5], ["set_vr", "Integer", 7, 3.0],
+           ["set_vr", "Boolean", 8, 0], ["set_vr", "String", 9, 12], ["set_vr", "Real", 0, "1.25"],
+           ["step", None, 1e-3], ["enter_init_again"], ["terminate"]]
+    runner = _run(monkeypatch, ops, start_time=0.5, fmu=RecordingFMU, parameters=[["k", 3.0]])
+    calls = runner.fmu.calls
+    assert calls == [("instantiate", (), {"loggingOn": False}), ("setupExperiment", (), {"startTime": 0.5}),
+                     ("enterInitializationMode", (), {}), ("setReal", ([1], [3.0]), {}),
+                     ("exitInitializationMode", (), {}), ("setReal", ([1], [2.5]), {}),
+                     ("setInteger", ([7], [3]), {}), ("setBoolean", ([8], [False]), {}),
+                     ("setString", ([9], ["12"]), {}), ("setReal", ([0], [1.25]), {}),
+                     ("enterInitializationMode", (), {}), ("terminate", (), {}), ("freeInstance", (), {})]
+    assert [type(args[1][0]) for name, args, _ in calls if name.startswith("set") and args] == \
+        [float, float, int, bool, str, float]
+    assert runner.fmu.steps == [(0.0, 2e-3), (0.5, 1e-3)]
+    assert [label for label, _ in runner.statuses] == [
+        "instantiate", "setupExperiment", "enterInitializationMode", "doStep before initialisation", "set k",
+        "exitInitializationMode", "set k", "set_vr Integer 7", "set_vr Boolean 8", "set_vr String 9",
+        "set_vr Real 0", "doStep(0.5, 0.001)", "get outputs", "out of order: enterInitializationMode",
+        "terminate", "freeInstance"]
+    assert runner.problems == ["doStep before initialisation returned fmi2OK",
+                               "enterInitializationMode in Step Mode returned OK, not fmi2Error"]

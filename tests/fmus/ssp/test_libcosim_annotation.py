@@ -105,3 +105,25 @@ def test_a_log_level_is_one_of_libcosims_and_warn_is_warning():
         set_libcosim_log_level("verbose")
     set_libcosim_log_level("WARN")
     set_libcosim_log_level("warning")
+
+
+def test_the_experiment_takes_parcosims_step_first_and_libcosims_without_it(tmp_path, package):
+    """A package whose only step is libcosim's annotation (as another tool writes it) gives
+    that step; with both, parcosim's own wins whatever libcosim's says; without a stop time
+    the stop is None.  Catches the OSP annotation not read, read first, or the times
+    swapped."""
+    from fmus.export.archive import rewrite
+    from fmus.ssp.export import STEP_ANNOTATION
+
+    start, stop, step = read_ssp_experiment(package)
+    assert step == STEP and stop is not None and start is not None
+    other = with_libcosim_annotation(package, tmp_path / "other.ssp", 5e-4, None)
+    assert read_ssp_experiment(other) == (start, stop, STEP)
+    ssd = ET.fromstring(_members(other)["SystemStructure.ssd"])
+    experiment = ssd.find("ssd:DefaultExperiment", NS)
+    for annotation in experiment.iterfind("ssd:Annotations/ssc:Annotation", NS):
+        if annotation.get("type") == STEP_ANNOTATION:
+            experiment.find("ssd:Annotations", NS).remove(annotation)
+    del experiment.attrib["stopTime"]
+    osp_only = rewrite(other, tmp_path / "osp.ssp", {"SystemStructure.ssd": ET.tostring(ssd)})
+    assert read_ssp_experiment(osp_only) == (start, None, 5e-4)

@@ -20,10 +20,56 @@ def test_a_step_of_whole_nanoseconds_is_taken_as_their_count(experiment):
     assert experiment(2.0, 2e-3) == (2.0, 2e-3, 2_000_000)
     assert experiment(None, None) == (1.0, 1e-3, 1_000_000)          # the package's own experiment
     assert experiment(1.0, 3e-9) == (1.0, 3e-9, 3)
+    noisy = 0.1 * 3e-3                                                 # 3.0000000000000003e-04
+    assert noisy != 3e-4 and experiment(1.0, noisy) == (1.0, noisy, 300_000)
 
 
-@pytest.mark.parametrize("step", [1.5e-9, 2.5e-9, 0.4e-9])
+@pytest.mark.parametrize("step", [1.5e-9, 2.5e-9, 0.4e-9, 300000.4e-9])
 def test_a_step_that_is_no_whole_number_of_nanoseconds_is_refused_naming_it(experiment, step):
+    """Catches a fraction of a nanosecond rounded away: 0.4 ns off 300 us is 1.3e-6 of the step,
+    over the 1e-6 the float rounding of a whole number stays far below (the test beside it)."""
     with pytest.raises(ValueError) as refused:
         experiment(1.0, step)
     assert str(refused.value) == f"step_size = {step!r} s is no whole number of nanoseconds (libcosim's time unit)"
+
+
+def _ssd(step=None):
+    """A SystemStructure.ssd element, with libcosim's annotation of ``step`` if given."""
+    from fmus.ssp.libcosim import NS, _set_annotation
+    import xml.etree.ElementTree as ET
+
+    ssd = ET.Element(f"{{{NS['ssd']}}}SystemStructureDescription")
+    if step is not None:
+        _set_annotation(ssd, step, None)
+    return ssd
+
+
+@pytest.mark.parametrize("package, ssd_step, given, expected", [
+    ((0.0, 2.0, None), 5e-4, (None, None), (2.0, 5e-4, 500_000)),       # the step of libcosim's annotation
+    ((0.0, 2.0, 1e-3), 5e-4, (None, None), (2.0, 1e-3, 1_000_000)),     # the package's own step first
+    ((0.0, None, None), 5e-4, (3.0, None), (3.0, 5e-4, 500_000)),       # a stop time given, none in the package
+    ((None, None, None), None, (0.5, 2e-3), (0.5, 2e-3, 2_000_000)),    # both given
+])
+def test_what_is_not_given_is_the_packages_own_then_libcosims_annotation(monkeypatch, package, ssd_step, given,
+                                                                        expected):
+    """Catches the order of the fallbacks reversed (the annotation before the package's own
+    step, the package's before what is given) or one of them dropped."""
+    monkeypatch.setattr(libcosim_runner, "read_ssp_experiment", lambda path: package)
+    assert libcosim_runner._experiment("package.ssp", _ssd(ssd_step), *given) == expected
+
+
+@pytest.mark.parametrize("package, ssd_step, given, message", [
+    ((0.0, None, 1e-3), None, (None, None), "package.ssp: give stop_time and step_size (the package does not)"),
+    ((0.0, 1.0, None), None, (None, None), "package.ssp: give stop_time and step_size (the package does not)"),
+    ((0.0, 1.0, 1e-3), None, (None, 0.0), "step_size = 0.0 must be > 0"),
+    ((0.0, 1.0, 1e-3), None, (None, -1e-3), "step_size = -0.001 must be > 0"),
+    ((0.0, 1.0, 1e-3), None, (None, float("nan")), "step_size = nan must be > 0"),
+])
+def test_a_missing_stop_or_step_and_a_step_not_above_zero_are_refused_naming_them(monkeypatch, package, ssd_step,
+                                                                                 given, message):
+    """Catches a package without its stop time or step run anyway, a step <= 0 (or NaN)
+    taken, and the messages not naming the package or the value."""
+    monkeypatch.setattr(libcosim_runner, "read_ssp_experiment", lambda path: package)
+    with pytest.raises(ValueError) as refused:
+        libcosim_runner._experiment("package.ssp", _ssd(ssd_step), *given)
+    assert str(refused.value) == message

@@ -51,3 +51,31 @@ def test_an_integer_parameter_outside_32_bits_is_refused_naming_it(tmp_path):
                         (Connection("first.y", "second.u"),), ("second.y",), stop_time=0.5, step=2e-3)
         with pytest.raises(ValueError, match=rf"parameter first.count = {value} does not fit a 32-bit FMI Integer"):
             export_ssp(system, tmp_path / "sys.ssp", fmus=fmus)
+
+
+def test_every_connector_carries_the_fmi_type_of_its_variable(tmp_path):
+    """A parameter of each FMI type, an input and an output: each connector's one child is
+    the ``ssc`` element of its variable's type (Real, Integer, Boolean, String), read back
+    from the SSD beside its kind.  Catches a connector typed by its kind or by another
+    variable, a type left out, or two children."""
+    from tests.fmus.export.test_oracles_export import TYPES
+
+    fmus = {model: fake_fmu(tmp_path / f"{model}.fmu", model) for model in ("Alpha", "Beta")}
+    values = {"gain": 1.5, "count": 3, "flag": True, "label": "x"}
+    system = System((Component("first", "Alpha", values), Component("second", "Beta")),
+                    (Connection("first.y", "second.u"),), ("second.y",), stop_time=0.5, step=2e-3)
+    path = export_ssp(system, tmp_path / "sys.ssp", fmus=fmus)
+    with zipfile.ZipFile(path) as z:
+        root = ET.fromstring(z.read("SystemStructure.ssd"))
+    typed = {}
+    for component in root.iter():
+        if component.tag.endswith("}Component"):
+            for connector in component.iter():
+                if connector.tag.endswith("}Connector"):
+                    children = [child.tag.split("}")[1] for child in connector]
+                    typed[component.get("name"), connector.get("name")] = (connector.get("kind"), children)
+    expected = {("first", name): ("parameter", [TYPES[name]]) for name in values}
+    expected.update({("first", "y"): ("output", ["Real"]), ("second", "u"): ("input", ["Real"]),
+                     ("second", "y"): ("output", ["Real"])})
+    assert typed == expected
+    assert read_ssp_parameters(path) == {f"first.{name}": value for name, value in values.items()}

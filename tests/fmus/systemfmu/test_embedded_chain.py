@@ -109,3 +109,26 @@ def test_a_loop_takes_whole_multiples_up_to_the_work_limit_and_names_the_most(mo
     assert f"step size h = {4 * h!r} s at t = {3 * h!r} s" in slave.error
     assert f"4 of its steps h = {h!r} s, {count} component steps each; take steps of at most {3 * h:.6g} s " \
            "(3 of its steps)" in slave.error
+
+
+def test_the_chain_counts_its_corrected_steps_from_zero_and_its_state_keeps_the_count(chain_system):
+    """No correction at initialisation nor at the first step (whatever is measured there);
+    each later step whose measurement is 10 mrad off the model's angle counts one; a state
+    taken and restored brings the count back.  Catches the count started at another value,
+    the first step corrected, a correction not counted, and the count not in the state."""
+    chain = ChainCore(chain_system, "plant")
+    assert chain.corrections == 0
+    chain.initialize()
+    h = chain_system.step
+    chain.step(0.0, h, {"q1": 0.3, "q2": 2.0, "dq1": 1.0, "dq2": -1.0})
+    assert chain.corrections == 0
+    slave = chain.model.slave
+    for k in range(1, 4):
+        off = {"q1": slave.q1 + 0.01, "q2": slave.q2, "dq1": slave.dq1, "dq2": slave.dq2}
+        chain.step(k * h, h, off)
+        assert chain.corrections == k
+    state = chain.state()
+    chain.step(4 * h, h, {"q1": slave.q1 + 0.01, "q2": slave.q2, "dq1": slave.dq1, "dq2": slave.dq2})
+    assert chain.corrections == 4
+    chain.restore(state)
+    assert chain.corrections == 3
