@@ -272,3 +272,45 @@ def test_the_frame_is_refused_by_version_length_and_size(monkeypatch):
         sf.decode(good)
     monkeypatch.setattr(sf, "MAX_BYTES", len(good))
     assert sf.decode(good) == (HEADER, None)
+
+
+_ARRAY = _bytes_of(np.array([1.0, 2.0]))
+_SCALAR = _bytes_of(np.float32(1.0))
+#: (a whole value, how many of its bytes are left, what the reader names, bytes it wanted).  A str's
+#: or bytes' payload is refused by its length's check first (test_a_count_is_checked_...).
+_CUT = [(_bytes_of(5), 4, "int", 8), (_bytes_of(0.5), 1, "float", 8), (_bytes_of(1j), 9, "complex", 16),
+        (_bytes_of("ab"), 3, "str length", 4),
+        (_bytes_of([1]), 2, "tuple/list count", 4), (_bytes_of({1: 2}), 4, "dict count", 4),
+        (_bytes_of(sf.ObjectRecord("m", {})), 2, "class tag", 2), (_bytes_of(sf.Ref(0)), 1, "reference", 4),
+        (_bytes_of(sf.Opaque("xy")), 2, "opaque tag", 2),
+        (_ARRAY, 1, "array dtype", 2), (_ARRAY, 6, "array ndim", 1), (_ARRAY, 9, "array shape", 8),
+        (_ARRAY, 17, "array size", 8), (_ARRAY, 26, "array data", 16),
+        (_SCALAR, 1, "scalar dtype", 1), (_SCALAR, 5, "scalar size", 1), (_SCALAR, 7, "scalar", 4)]
+
+
+@pytest.mark.parametrize("whole, kept, what, wanted", _CUT, ids=[c[2] for c in _CUT])
+def test_a_value_cut_short_is_refused_naming_the_field_it_was_reading(whole, kept, what, wanted):
+    """A value whose bytes end early (inside a whole, checksummed frame) is refused with the
+    field's name, the bytes wanted and left, and the offset.  Catches a field read under
+    another field's name (or a struct format's), and a read past the end."""
+    cut = whole[:kept]
+    list_of_it = b"l" + struct.pack("<I", 1) + cut
+    wanted_at = _value_offset() + len(list_of_it) - (kept - _field_start(whole, what))
+    left = len(list_of_it) + _value_offset() - wanted_at
+    with pytest.raises(sf.StateFormatError,
+                       match=f"^{what}: {wanted} bytes wanted, {left} left at offset {wanted_at}$"):
+        sf.decode(_framed(list_of_it))
+
+
+def _field_start(whole: bytes, what: str) -> int:
+    """Where, in a value's bytes, the field named ``what`` starts (the table's layout)."""
+    tag = whole[:1]
+    if tag in (b"i", b"f", b"c", b"r") or what in ("str length", "tuple/list count", "dict count", "class tag",
+                                                   "opaque tag", "array dtype", "scalar dtype"):
+        return 1
+    if tag == b"a":
+        dtype_end = 1 + 2 + whole[1]
+        return {"array ndim": dtype_end, "array shape": dtype_end + 1, "array size": dtype_end + 1 + 8,
+                "array data": dtype_end + 1 + 8 + 8}[what]
+    dtype_end = 1 + 1 + whole[1]
+    return {"scalar size": dtype_end, "scalar": dtype_end + 1}[what]
