@@ -69,7 +69,7 @@ def _motor_slave(**values) -> SimpleNamespace:
 @pytest.mark.parametrize("field", sorted(NAMES))
 def test_a_motor_parameter_is_taken_in_its_field_or_refused_by_name(field):
     """Catches an override read from another variable or put in another field, a negative
-    value taken, a positive field's value under TINY taken, and a refusal naming the
+    value taken, a positive field's value under TINY taken (or TINY itself refused), and a refusal naming the
     dataclass's field rather than the FMU's variable."""
     var = NAMES[field]
     assert with_overrides(MOTOR, _motor_slave(), NAMES, POSITIVE_FIELDS) == MOTOR
@@ -82,6 +82,7 @@ def test_a_motor_parameter_is_taken_in_its_field_or_refused_by_name(field):
     if field in POSITIVE_FIELDS:
         with pytest.raises(ValueError, match=f"^parameter {var} = {TINY / 4!r} is absurdly small: it must be >= "):
             with_overrides(MOTOR, _motor_slave(**{var: TINY / 4}), NAMES, POSITIVE_FIELDS)
+        assert with_overrides(MOTOR, _motor_slave(**{var: TINY}), NAMES, POSITIVE_FIELDS) == MOTOR.with_(**{field: TINY})
         with pytest.raises(BadValue, match=f"^parameter {var} "):      # 0: the dataclass's refusal, renamed
             with_overrides(MOTOR, _motor_slave(**{var: 0.0}), NAMES, POSITIVE_FIELDS)
     else:
