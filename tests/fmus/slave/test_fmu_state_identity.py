@@ -3,7 +3,8 @@ resources at build) and what it decides about states (fmus/slave/state_calls.py)
 carries its FMU's GUID, and an instance of another FMU refuses it by both GUIDs.
 
 In process, with a resources folder made here (the build's file, read back exactly): fast;
-tests/fmus/slave/test_fmu_state_data.py does the same through built FMUs.
+tests/fmus/slave/test_fmu_state_data.py does the same through built FMUs.  Also the fields
+a state takes of an object (fmus/slave/state.py ``object_fields``): its dict and its slots.
 """
 from __future__ import annotations
 
@@ -58,3 +59,31 @@ def test_a_state_carries_its_fmus_guid_and_only_that_fmu_reads_it(tmp_path):
         with pytest.raises(FmiError, match=rf"^fmi2DeSerializeFMUstate: the state is of the FMU with GUID '\{{A-1\}}', "
                                            rf"this is {guid!r} \(.*\); nothing was read$"):
             target.deserialize_fmu_state(data)
+
+
+class _Base:
+    __slots__ = ("a", "unset")
+
+
+class _Slotted(_Base):
+    __slots__ = ("b", "__weakref__")
+
+
+class _Both(_Slotted):
+    pass      # no __slots__: a __dict__ as well
+
+
+def test_an_objects_fields_are_its_dict_and_every_set_slot_of_its_classes():
+    """Catches slots of a base class missed, an unset slot read (AttributeError), the
+    bookkeeping slots taken as fields, or an object with neither dict nor slots not None.
+    No model's state has a slotted object today: this is the only test of those lines."""
+    from fmus.slave.state import object_fields
+
+    slotted = _Slotted()
+    slotted.a, slotted.b = 1.5, [2]
+    assert object_fields(slotted) == {"a": 1.5, "b": [2]}
+    both = _Both()
+    both.a, both.c = "x", 3
+    assert object_fields(both) == {"c": 3, "a": "x"}
+    assert object_fields(object()) is None
+    assert object_fields(_Base()) == {}
