@@ -1,4 +1,4 @@
-"""The drive data a native FMU carries (fmus/native/models.py ``drive_design``,
+"""What a native FMU is made of (fmus/native/models.py ``NATIVE``): each model's C parts, and the drive data a native FMU carries (fmus/native/models.py ``drive_design``,
 ``drive_presets``), row by row against the motors it is said to carry.
 
 The native FMU looks a design up by its motor's row and designs in C only when none matches
@@ -18,6 +18,7 @@ from fmus.slave.declarations import MOTOR_PARAMETERS
 from motor.current_controller import THESIS_POLES, design_current_controller
 from motor.presets import MOTOR_PRESETS
 from tests.fmus.slave.test_extremes import make_slave
+from tests.support.paths import ROOT
 
 ROW = ("R", "L", "kt", "ke", "b", "J_rotor")
 
@@ -92,3 +93,22 @@ def test_the_motor_presets_are_carried_by_sorted_name_one_row_of_every_motor_par
     fields = [f for f, _, _ in MOTOR_PARAMETERS]
     assert data["preset_motor"].tolist() == [[getattr(MOTOR_PRESETS[n], f) for f in fields] for n in names]
     assert data["current_poles"].tolist() == list(THESIS_POLES)
+
+
+def test_every_native_model_names_its_own_adapter_and_kernel_sources_that_exist():
+    """Each NATIVE entry: the adapter pcn_<model>.c in fmus/native/adapters, kernels as C files
+    of kernels/src, parts in fmus/native/adapters, data a function (NativeModel's docstring).
+    Catches an entry's fields swapped or misnamed, which only the minutes-long builds of
+    that one model would otherwise meet."""
+    from fmus.native.models import NATIVE
+
+    root = ROOT
+    for model, native in NATIVE.items():
+        assert native.adapter == f"pcn_{model.lower()}.c", model
+        assert (root / "fmus" / "native" / "adapters" / native.adapter).is_file(), model
+        assert isinstance(native.kernels, tuple) and native.kernels, model
+        for name in native.kernels:
+            assert name.endswith(".c") and (root / "kernels" / "src" / name).is_file(), (model, name)
+        for name in native.parts:
+            assert (root / "fmus" / "native" / "adapters" / name).is_file(), (model, name)
+        assert callable(native.data), model
