@@ -1,5 +1,6 @@
-"""What a native FMU is made of (fmus/native/models.py ``NATIVE``): each model's C parts, and the drive data a native FMU carries (fmus/native/models.py ``drive_design``,
-``drive_presets``), row by row against the motors it is said to carry.
+"""What a native FMU is made of (fmus/native/models.py ``NATIVE``): each model's C parts, and
+the drive data it carries (``drive_design``, ``drive_presets``), row by row against the
+motors it is said to carry.
 
 The native FMU looks a design up by its motor's row and designs in C only when none matches
 (tests/fmus/native/test_native_design.py compares the results): a row missing, doubled,
