@@ -131,6 +131,7 @@ RULES = [
     ("test_mujoco_model*.py", "benchmarks"),
     ("test_profile_members*.py", "benchmarks"),
     ("test_machine_probe*.py", "benchmarks"),
+    ("test_side_by_side*.py", "benchmarks"),
     # the repository as a whole: the product's layers, the docs' names, this layout
     ("test_layout.py", "repo"),
     ("test_docs_*.py", "repo"),
