@@ -13,16 +13,19 @@ from fmus.ssp.export import export_ssp, read_ssp_parameters
 from tests.fmus.export.test_oracles_export import fake_fmu
 
 
-def _connectors(path):
+def _connector_elements(path):
+    """(component name, connector element) of every connector in the package's SSD."""
     with zipfile.ZipFile(path) as z:
         root = ET.fromstring(z.read("SystemStructure.ssd"))
-    found = {}
     for element in root.iter():
         if element.tag.endswith("}Component"):
             for connector in element.iter():
                 if connector.tag.endswith("}Connector"):
-                    found[element.get("name"), connector.get("name")] = connector.get("kind")
-    return found
+                    yield element.get("name"), connector
+
+
+def _connectors(path):
+    return {(name, c.get("name")): c.get("kind") for name, c in _connector_elements(path)}
 
 
 def test_a_connected_input_given_a_value_stays_an_input_connector_and_keeps_its_value(tmp_path):
@@ -65,15 +68,8 @@ def test_every_connector_carries_the_fmi_type_of_its_variable(tmp_path):
     system = System((Component("first", "Alpha", values), Component("second", "Beta")),
                     (Connection("first.y", "second.u"),), ("second.y",), stop_time=0.5, step=2e-3)
     path = export_ssp(system, tmp_path / "sys.ssp", fmus=fmus)
-    with zipfile.ZipFile(path) as z:
-        root = ET.fromstring(z.read("SystemStructure.ssd"))
-    typed = {}
-    for component in root.iter():
-        if component.tag.endswith("}Component"):
-            for connector in component.iter():
-                if connector.tag.endswith("}Connector"):
-                    children = [child.tag.split("}")[1] for child in connector]
-                    typed[component.get("name"), connector.get("name")] = (connector.get("kind"), children)
+    typed = {(name, c.get("name")): (c.get("kind"), [child.tag.split("}")[1] for child in c])
+             for name, c in _connector_elements(path)}
     expected = {("first", name): ("parameter", [TYPES[name]]) for name in values}
     expected.update({("first", "y"): ("output", ["Real"]), ("second", "u"): ("input", ["Real"]),
                      ("second", "y"): ("output", ["Real"])})
