@@ -44,7 +44,8 @@ def test_the_verdict_counts_the_strategies_within_30_and_50_percent_and_the_pair
 def test_the_figure_shows_the_seed_mean_with_min_max_bars_beside_the_bench(tmp_path, monkeypatch):
     """Each panel: the twin's bars at x - 0.2, 0.4 wide, as high as the seeds' mean, with error bars
     from the seeds' minimum to their maximum; the bench's bars at x + 0.2 as high as SYSTEM.md's
-    table (e_ef, τ_ef, e_ss).  Catches the bar's height and width swapped, the spread read from
+    table (e_ef, τ_ef, e_ss), also 0.4 wide so the pair abuts.  Catches the bar's height and width
+    swapped, the bench's width dropped (0.8 wide, hiding the twin's bar), the spread read from
     the wrong axis of the statistics, or another table column."""
     import matplotlib.pyplot as plt
     from matplotlib.container import BarContainer
@@ -72,6 +73,9 @@ def test_the_figure_shows_the_seed_mean_with_min_max_bars_beside_the_bench(tmp_p
             assert [p.get_height() for p in bench.patches] == pytest.approx(
                 [THESIS_BENCH[kind][s][index] for s in twin_fit.ORDER], rel=1e-12)
             assert [p.get_x() + p.get_width() / 2 for p in bench.patches] == pytest.approx(x + 0.2)
+            # The pair abuts: the bench's bar starts where the twin's ends, neither hides the other.
+            assert [p.get_x() for p in bench.patches] == pytest.approx([p.get_x() + p.get_width() for p in twin.patches])
+            assert [p.get_width() for p in bench.patches] == pytest.approx([0.4] * 8)
 
 
 def test_the_calibration_spread_lists_each_descent_end_by_loss_and_each_strategys_ratio_range():
