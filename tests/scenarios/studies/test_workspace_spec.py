@@ -82,7 +82,8 @@ def test_the_slice_is_one_region_grown_from_the_start(sliced):
 def test_the_figure_and_json_of_a_spec_and_a_serial_spec_refused(tmp_path, monkeypatch):
     """plot_spec_slice's JSON read back: the mechanism, band, grid step, points inside and each
     thesis trajectory's verdict as its own summary.  Catches a count of another status, the
-    step of another axis, a trajectory left out; a serial spec refused naming its file."""
+    step of another axis, a trajectory left out or sampled over part of its duration or at
+    another step; a serial spec refused naming its file."""
     monkeypatch.setattr(ws_spec, "SPEC_GRID", 11)
     report = ws_spec.plot_spec_slice("bench_5r", tmp_path, BAND)
     data = json.loads((tmp_path / "workspace.json").read_text())
@@ -95,5 +96,12 @@ def test_the_figure_and_json_of_a_spec_and_a_serial_spec_refused(tmp_path, monke
     assert data["trajectories"] == [json.loads(json.dumps(c.summary())) for c in report.trajectories]
     expected = {**thesis_trajectories("thesis_sim"), **thesis_trajectories("bench")}
     assert [t["name"] for t in data["trajectories"]] == list(expected) and len(expected) >= 2
+    for check in report.trajectories:    # each reference sampled every 1 ms over its whole duration
+        ref = expected[check.name]
+        ts = np.arange(int(round(ref.duration / check.sample_time)) + 1) * check.sample_time
+        assert ts[-1] == pytest.approx(ref.duration) and check.sample_time == 1e-3
+        path = np.array([tuple(ref(t))[:2] for t in ts])
+        np.testing.assert_array_equal(check.x, path[:, 0])
+        np.testing.assert_array_equal(check.y, path[:, 1])
     with pytest.raises(ValueError, match=r"rr\.toml: a serial chain \(no \[platform\]\) has no parallel workspace"):
         ws_spec.plot_spec_slice("rr", tmp_path, BAND)
