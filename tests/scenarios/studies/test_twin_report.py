@@ -3,6 +3,8 @@ runs made up here: each predicted triangle e_ef is a chosen multiple of the thes
 (SYSTEM.md's table), so the counts and the bars are known without running a scene."""
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -132,3 +134,30 @@ def test_the_report_tables_give_each_strategys_mean_spread_ratio_and_each_pairs_
             assert row in section, row
     assert any(line.startswith("| TCq → TCMDq |") and line.endswith("| no |") for line in lines[circle:triangle])
     assert "Fit: loss 0.2500 (start 1.5000), 7 evaluations of 8 circle runs × seeds [1]" in text
+
+
+def test_the_report_command_writes_the_runs_the_tables_and_the_figure(tmp_path, monkeypatch):
+    """``twin_fit report --out DIR`` on made-up runs (the scenes' runs replaced): twin_runs.json
+    reads back as every run's kept metrics keyed by seed (other keys dropped), twin.md is the
+    rendered tables, the figure's link and the method's link, twin.png is written; the fit is not
+    run.  Catches the runs' file written elsewhere or not at all, a kept metric dropped, another
+    key kept, the report or the figure missing from ``--out``."""
+    runs = _runs()
+    for kind in runs:
+        for s in twin_fit.ORDER:
+            for m in runs[kind][s].values():
+                m.update(settled=True, completed=True, e_contour_sides_mm=[0.1, 0.2, 0.3], internal_state=[1, 2])
+    asked = []
+    monkeypatch.setattr(twin_fit, "predict", lambda twin, seeds: asked.append(seeds) or runs)
+    monkeypatch.setattr(twin_fit, "sensitivity", lambda twin: {})
+    monkeypatch.setattr(twin_fit, "calibration_spread", lambda fit_info: [])
+    monkeypatch.setattr(twin_fit, "fit", lambda *a, **k: pytest.fail("'report' must not fit"))
+    assert twin_fit.main(["report", "--out", str(tmp_path)]) == 0
+    assert asked == [twin_fit.SPREAD_SEEDS]
+    stored = json.loads((tmp_path / "twin_runs.json").read_text())
+    assert stored == {kind: {s: {str(seed): {k: v for k, v in m.items() if k != "internal_state"}
+                                 for seed, m in runs[kind][s].items()} for s in twin_fit.ORDER} for kind in runs}
+    text = (tmp_path / "twin.md").read_text()
+    assert text == (twin_fit.render(runs, twin_fit.load_twin(), twin_fit.read_fit(), {}, [])
+                    + "![twin beside the bench](twin.png)\n\n" + twin_fit.METHOD_LINK)
+    assert (tmp_path / "twin.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
