@@ -236,3 +236,42 @@ def test_the_figures_draw_the_sweeps_and_the_two_models_paths_and_gap(monkeypatc
     (line,) = gap.get_lines()
     assert float(np.max(line.get_ydata())) == pytest.approx(5.0, rel=1e-12)
     np.testing.assert_allclose(line.get_ydata(), 1e3 * np.hypot(c["x"] - s["x"], c["y"] - s["y"]), rtol=0, atol=0)
+
+
+def test_the_command_line_runs_the_study_and_with_docs_draws_its_sweeps(monkeypatch, tmp_path, capsys):
+    """``main``: ``--quick`` and ``--out`` reach the study; each part's table is printed; the full
+    study adds the drive comparison, and ``--docs`` draws the figures into docs/ from the study's
+    own sweeps (the sample-time panel from the sample-time rows, the battery panel from the
+    battery rows).  Catches an option not taking effect, the sweeps given to the figure swapped,
+    the figures drawn without ``--docs`` or the comparison run in a quick study."""
+    _drive_runs(monkeypatch)
+    samples = [{"T_ms": 1.0, "completed": True, "last_second_pitch_deg": 0.01},
+               {"T_ms": 8.0, "completed": False, "last_second_pitch_deg": 3.0}]
+    battery = [{"v_battery": 8.0, "completed": True, "last_second_pitch_deg": 0.05},
+               {"v_battery": 4.0, "completed": True, "last_second_pitch_deg": 0.5}]
+    calls = []
+
+    def study(quick, out_dir, progress):
+        calls.append((quick, out_dir))
+        report = {"fidelity": [{"setting": "x", "rms": 1.0}]}
+        return report if quick else {**report, "sample_time": samples, "battery": battery}
+
+    monkeypatch.setattr(pendulum_trade, "run_pendulum_trade", study)
+    monkeypatch.setattr(pendulum_trade, "DOCS", tmp_path)
+    kept = []
+    close = plt.close
+    monkeypatch.setattr(plt, "close", lambda fig=None: kept.append(fig) or close(fig))
+    pendulum_trade.main(["--quick", "--out", str(tmp_path / "q"), "--docs"])
+    assert calls == [(True, str(tmp_path / "q"))] and not kept and not list(tmp_path.glob("*.png"))
+    assert f"\nfidelity\n{pendulum_trade.markdown([{'setting': 'x', 'rms': 1.0}])}\n" in capsys.readouterr().out
+    pendulum_trade.main(["--out", str(tmp_path / "full")])
+    assert calls[-1] == (False, str(tmp_path / "full")) and not kept
+    assert "'max_axle_gap_mm': 5.0" in capsys.readouterr().out
+    pendulum_trade.main(["--docs"])
+    assert calls[-1] == (False, "out/pendulum_trade")
+    assert {p.name for p in tmp_path.glob("*.png")} == {"pendulum_sweeps.png", "pendulum_drive.png"}
+    sweeps = kept[0]
+    for ax, rows, key in zip(sweeps.axes, (samples, battery), ("T_ms", "v_battery")):
+        assert list(ax.get_lines()[0].get_xdata()) == [r[key] for r in rows]
+    out = capsys.readouterr().out
+    assert f"\nbattery\n{pendulum_trade.markdown(battery)}\n" in out and str(tmp_path / "pendulum_drive.png") in out
