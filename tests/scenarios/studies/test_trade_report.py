@@ -29,7 +29,7 @@ def _row(setting, kind, wall, speedup, rms, gain, pareto, error="", **more):
 
 def _rows():
     return [_row("defaults", "accuracy", 2.0, 1.0, 1e-4, 1.0, True),
-            _row("fast", "accuracy", 0.5, 4.0, 5e-4, 0.2, True, energy_err=0.031),
+            _row("fast", "accuracy", 0.5, 4.0, 5e-4, 0.2, True, energy_err=0.031, enc_first_s=0.0123456),
             _row("precise", "accuracy", 4.0, 0.5, 5e-7, 200.0, True),
             _row("no friction|b", "fidelity", 1.0, 2.0, 2e-3, 0.05, False, energy_err=NAN, what="friction | none"),
             _row("broken", "accuracy", 0.25, 8.0, NAN, NAN, False, error="plant: refused at t = 0.1 s")]
@@ -62,12 +62,14 @@ def test_the_csv_reads_back_each_value_to_its_printed_digits(tmp_path):
 
 def test_the_markdown_table_rounds_each_cell_by_its_rule_and_lists_the_stopped_runs():
     """Catches a cell of another column, the energy deviation's sign dropped, the '|' of a
-    description not escaped, a NaN shown as 'nan', and a stopped run not listed under it."""
+    description not escaped, a NaN shown as 'nan', the first encoder difference not to the
+    millisecond, and a stopped run not listed under it."""
     lines = report.markdown_table(_rows()).splitlines()
     assert lines[0].startswith("| setting | kind | wall [s] | CPU [s] | speed-up | RMS dev. [m] |")
     assert lines[2] == ("| defaults | accuracy | 2.00 | 1.90 | 1.00× | 0.0001 | 0.0003 | 1× | 2.5e-06 | 0.012 "
                         "| -0.0042 | 3 | 0.125 | 0.457 | **front** |")
     assert lines[3].startswith("| fast | accuracy | 0.50 | 0.47 | 4.00× | 0.0005 | 0.0015 | 0.2× | 2.5e-06 | 0.012 | +0.031 |")
+    assert lines[3].endswith("| +0.031 | 3 | 0.012 | 0.457 | **front** |")     # the first encoder difference, to the ms
     assert lines[5] == ("| no friction\\|b | fidelity | 1.00 | 0.95 | 2.00× | 0.002 | 0.006 | 0.05× | 2.5e-06 | 0.012 "
                         "| – | 3 | 0.125 | 0.457 |  |")
     assert lines[6] == ("| broken | accuracy | 0.25 | 0.24 | 8.00× | – | – | – | 2.5e-06 | 0.012 | -0.0042 | 3 | 0.125 "
@@ -114,8 +116,9 @@ def test_without_defaults_or_with_nothing_fast_the_sentences_say_so():
 def test_the_figure_plots_each_finite_row_where_its_wall_time_and_deviation_are(tmp_path, monkeypatch):
     """Accuracy rows as dots, fidelity rows as crosses, the front as a step through its rows by
     wall time, the defaults starred; a stopped run left out; a second panel for the rows
-    without quantisation.  Catches a row on the wrong axis or in the wrong set, the front not
-    sorted, and a stopped run's NaN plotted."""
+    without quantisation, each panel 7.5 x 6 in.  Catches a row on the wrong axis or in the wrong
+    set, the front not sorted, a stopped run's NaN plotted, and the figure's width not growing
+    with its panels."""
     import matplotlib.pyplot as plt
 
     kept = []
@@ -134,3 +137,7 @@ def test_the_figure_plots_each_finite_row_where_its_wall_time_and_deviation_are(
     assert main.get_xscale() == main.get_yscale() == "log"
     assert {t.get_text() for t in main.texts} <= {"defaults", "fast", "precise", "no friction|b"}
     assert "defaults" in {t.get_text() for t in main.texts}
+    # Each panel is the 7.5 x 6 in the labels' overlap rule assumes, one and two panels wide.
+    assert list(kept[0].get_size_inches()) == [15.0, 6.0]
+    report.plot(Trade("bench_x", 1.5, _rows(), 12.3), tmp_path / "one.png")
+    assert len(kept[1].axes) == 1 and list(kept[1].get_size_inches()) == [7.5, 6.0]
