@@ -4,6 +4,7 @@ the encoder columns when only one side recorded the encoders."""
 from __future__ import annotations
 
 import importlib
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -93,3 +94,23 @@ def test_a_slow_setting_runs_once_and_a_fast_one_every_round_its_best_time_count
     assert (rows[1]["wall_s"], rows[1]["cpu_s"]) == (0.2, 0.1)
     assert rows[2]["error"] == "RuntimeError: no" and np.isnan(rows[2]["wall_s"])
     assert len(said) == 3 and "RuntimeError: no" in said[2]
+
+
+def test_the_encoders_are_those_of_the_plant_the_reference_names():
+    """A plant instance named ``arm`` (not ``plant``): the reference run (a ReferenceResult, which
+    names its plant) and the run both record ``arm.*``; the encoders still compare, 1 sample
+    apart at t = 2 ms, and the deviation is the axle's 3-4-5 offset.  Catches the plant's name
+    read from the run (a master Result, which names none: ``plant.q1_enc`` looked up)."""
+    from scenarios.reference import ReferenceResult
+
+    t = np.arange(4) * 1e-3
+    signals = {"arm.x": np.zeros(4), "arm.y": np.zeros(4), "arm.q1_enc": np.zeros(4), "arm.q2_enc": np.zeros(4)}
+    reference = ReferenceResult(t, signals, {"t": t}, ("arm",), "exact", "RK45", 1e-9, 1e-9, 1.0,
+                                extra={"plant": "arm"})
+    run = _Run(t, {**signals, "arm.x": np.full(4, 3e-3), "arm.y": np.full(4, 4e-3),
+                   "arm.q2_enc": np.array([0.0, 0.0, 1e-4, 0.0])})
+    scene = SimpleNamespace(system=SimpleNamespace(components=(SimpleNamespace(name="arm", model="FiveBarPlant"),)),
+                            columns={})
+    row = trade.measure(run, reference, scene)
+    assert (row["enc_diff"], row["enc_first_s"]) == (1, 2e-3)
+    assert row["rms_err_m"] == pytest.approx(5e-3, rel=1e-12)
