@@ -87,3 +87,16 @@ def test_docs_runs_nothing_and_writes_the_stored_tables_into_the_docs_and_the_su
         f"# title\n\nbefore\n{tools.TABLE_START}\n{text}{tools.TABLE_END}\nafter ü\n"
     assert (tmp_path / "README.md").read_text() == \
         f"# title\n\nbefore\n{tools.TABLE_START}\n{tools.summary(rows)}{tools.TABLE_END}\nafter ü\n"
+
+
+def test_the_help_says_how_to_give_the_tools_and_kinds_and_lists_the_valid_ones(measured, capsys, monkeypatch):
+    """``--help`` (the command's only reference for the lists' syntax): ``--tools`` and ``--kinds``
+    are comma-separated, each from every valid value; it runs nothing.  Catches the syntax or a
+    list of valid values left out of an option's help."""
+    monkeypatch.setenv("COLUMNS", "400")     # no wrapping (argparse breaks lines at hyphens)
+    with pytest.raises(SystemExit) as stop:
+        tools.main(["--help"])
+    assert stop.value.code == 0 and measured == []
+    text = " ".join(capsys.readouterr().out.split())
+    for option, valid in (("--tools", tools.TOOLS), ("--kinds", tools.KINDS)):
+        assert f"{option} {option[2:].upper()} comma-separated, from {', '.join(valid)}" in text, option
