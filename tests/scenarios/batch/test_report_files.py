@@ -67,7 +67,8 @@ def test_write_report_writes_the_metrics_the_figure_and_the_rendered_report(tmp_
 
 def test_run_bench_runs_each_scene_as_a_task_into_its_own_folder(tmp_path, monkeypatch):
     """Catches a scene's folder shared, the stop time or mode not given to the tasks, plots
-    off, and the results not in the scenes' order."""
+    off, the results not in the scenes' order, and the cluster options (client, scheduler,
+    workers, processes, progress) not reaching the engine as given."""
     from scenarios.batch import engine
 
     seen = {}
@@ -78,9 +79,12 @@ def test_run_bench_runs_each_scene_as_a_task_into_its_own_folder(tmp_path, monke
 
     monkeypatch.setattr(engine, "run_tasks", run_tasks)
     names = ["bench_circle_TCx", "bench_triangle_PDq"]
-    out = report.run_bench(tmp_path, mode="compiled", scenes=names, stop_time=0.5, workers=3, processes=False)
+    client, progress = object(), object()
+    out = report.run_bench(tmp_path, mode="compiled", scenes=names, stop_time=0.5, workers=3, processes=False,
+                           client=client, scheduler="tcp://host:8786", progress=progress)
     assert list(out) == names and out == {n: {"scene": n} for n in names}
     tasks = seen["tasks"]
     assert [t.key for t in tasks] == names and [t.out_dir for t in tasks] == [str(tmp_path / n) for n in names]
     assert all(t.mode == "compiled" and t.plots is True and t.scene.system.stop_time == 0.5 for t in tasks)
-    assert seen["kwargs"]["workers"] == 3 and seen["kwargs"]["processes"] is False
+    assert seen["kwargs"] == {"client": client, "scheduler": "tcp://host:8786", "workers": 3,
+                              "progress": progress, "processes": False}

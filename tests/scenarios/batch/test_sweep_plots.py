@@ -95,3 +95,22 @@ def test_one_sweep_is_three_panels_of_its_rows_titled_with_its_settings(kept, tm
         data = scale * np.array(values) + shift
         assert ax.get_ylabel() == label and [t.get_text() for t in ax.get_xticklabels()] == ["bench_x"]
         assert _levels(ax, 0) == _wanted(data), metric
+
+
+def test_each_row_of_panels_keeps_its_height_and_order_as_rows_are_added(kept, tmp_path):
+    """Catches a figure of fixed height (its rows squashed as panels are added) and rows drawn
+    out of the panels' order: the panels of a three-row figure are as tall, in inches, as those
+    of a one-row figure, and top to bottom in the order given."""
+    groups = {"A": _rows([1.0, 2.0, 3.0]), "B": _rows([2.0, 4.0])}
+
+    def heights(fig):
+        return [ax.get_position().height * fig.get_size_inches()[1] for ax in fig.axes]
+
+    sweep_plots.plot_groups({"one": groups}, tmp_path / "one.png")
+    sweep_plots.plot_groups({"first": groups, "second": groups, "third": groups}, tmp_path / "three.png")
+    one, three = kept
+    assert len(three.axes) == 6
+    assert heights(three) == pytest.approx([heights(one)[0]] * 6, rel=0.15)
+    rows = [ax for ax in three.axes if ax.get_title().endswith("e_ef [mm]")]
+    assert [ax.get_title().split(":")[0] for ax in rows] == ["first", "second", "third"]
+    assert [ax.get_position().y0 for ax in rows] == sorted((ax.get_position().y0 for ax in rows), reverse=True)

@@ -64,6 +64,23 @@ def test_the_break_away_forces_are_the_documents(figure):
     assert any(list(line.get_ydata()) == [friction_demo.PAPER["Fs"]] * 2 for line in fig.axes[1].get_lines())
 
 
+def test_each_break_away_dot_sits_on_its_ramp_at_the_force_its_legend_states(figure):
+    """Catches a break-away dot drawn off its ramp's curve (another displacement or unit than
+    the curve's, another sample than the legend's force): each black dot is one of its ramp's
+    points, at the force the legend states to the millinewton."""
+    _, fig = figure
+    lines = fig.axes[1].get_lines()
+    ramps = [line for line in lines if line.get_label().startswith(("0.1 ", "1 ", "10 "))]
+    dots = [line for line in lines if line.get_marker() == "." and line.get_color() == "k"]
+    assert len(ramps) == len(dots) == 3
+    for ramp, dot in zip(ramps, dots):
+        (x,), (force,) = dot.get_xdata(), dot.get_ydata()
+        stated = float(re.search(r"breaks away at ([0-9.]+) N", ramp.get_label()).group(1))
+        assert force == pytest.approx(stated, abs=5e-4)
+        k = int(np.argmin(np.abs(np.asarray(ramp.get_ydata()) - force)))
+        assert ramp.get_ydata()[k] == force and ramp.get_xdata()[k] == x
+        assert 0.0 < x < 200.0      # µm, inside the panel's x range
+
 def test_the_spring_panel_pulls_at_0_1_and_0_5_m_s_for_20_s(figure):
     """Catches another pull speed or duration, and the speed's samples not every 1 ms."""
     _, fig = figure

@@ -231,3 +231,21 @@ def test_reproducibility_sees_a_sensitive_scene_and_not_a_contracting_one():
     assert sensitive > 1e-3, sensitive
     assert contracting < 1e-4, contracting
     assert reproducibility(short(get_scene("bench_triangle_PDx"), 3.0), shift=0.0) == 0.0
+
+
+@pytest.mark.parametrize("step", [1e-3, 1e-5])
+def test_a_sampled_component_off_the_scenes_period_is_refused_by_name(step):
+    """Catches the period check's tolerance not relative to the step (e.g. 1e-12 / step: a
+    period 1e-10 off at a 1 ms step passes and the package samples it at the wrong rate), and
+    a period equal up to rounding refused."""
+    system = dataclasses.replace(_chain_system(), step=step)
+
+    def with_T(T):
+        return dataclasses.replace(system, components=tuple(
+            dataclasses.replace(c, parameters={"T": T}) if c.name == "b" else c for c in system.components))
+
+    for T in (step * (1 + 1e-10), step * (1 - 1e-10), 2 * step):
+        with pytest.raises(ValueError, match=r"b\.T = .* the per-component package samples every component"):
+            component_timing(with_T(T), _chain_variables())
+    rounded = sum([step / 10] * 10)     # the step up to rounding
+    assert component_timing(with_T(rounded), _chain_variables()).phases == component_timing(system, _chain_variables()).phases
