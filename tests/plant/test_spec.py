@@ -131,6 +131,7 @@ mass = 0.2
      "[1.0, 2.0]"),
     ('name = "c"', 'name = "c"\nrotation = [[1, 0, 0], [0, 1, 0], [0, 0, 2]]', 6, "chains[0].rotation", "2"),
     ('name = "q2"', 'name = "q1"', 14, "chains[0].links[1].name", "q1"),
+    ('name = "q2"', 'name = "2x"', 14, "chains[0].links[1].name", "2x"),
     ('joint', 'joint', None, "", ""),   # unchanged: loads
     ('gravity = [0.0, -9.81, 0.0]', 'gravity = [0.0, "down", 0.0]', 2, "gravity", "down"),
     ('actuated = true', 'actuated = "yes"', 9, "chains[0].links[0].actuated", "yes"),
