@@ -219,3 +219,23 @@ def test_sample_values_are_the_reference_sample_in_field_order(kind):
         assert sample_values(trajectory, t, *buffers) == list(trajectory(t))
     with pytest.raises(ValueError, match="trajectory time must be >= 0 s"):
         sample_values(trajectory, -1.0, *buffers)
+
+
+def test_a_sampled_trajectory_is_freed_when_dropped_and_its_samples_stay_its_own():
+    """Catches a sampler cache (``_sampler``) that keeps the trajectory itself alive (a leak: an
+    FMU instance's trajectory would never be freed, and its id could not be reused safely) or
+    that gives one trajectory's samples for another's."""
+    import gc
+    import weakref
+
+    from controller.trajectories import sample_buffers, sample_values
+
+    buffers = sample_buffers()
+    circle, triangle = from_parameters("circle", PRESET_CYCLES), from_parameters("triangle", PRESET_CYCLES)
+    for t in (0.3, 0.6):
+        assert sample_values(circle, t, *buffers) == list(circle(t))
+        assert sample_values(triangle, t, *buffers) == list(triangle(t))
+    alive = weakref.ref(circle)
+    del circle
+    gc.collect()
+    assert alive() is None

@@ -148,6 +148,25 @@ def test_the_rk4_stages_turned_sines_are_the_fresh_ones_within_rounding(dt, step
     assert moved > (0.05 if dt > 1e-2 else 0.003)
 
 
+@pytest.mark.parametrize("start, rate", [(0.5, -48.0), (-0.5, 48.0), (0.3, -29.0)])
+def test_stages_far_from_the_start_near_stretched_elbows_are_computed_afresh(start, rate):
+    """Both elbow angles (theta_12, theta_22) start at ``start`` and sweep through about 0 within
+    one 20 ms RK4 step: the later stages are 0.3-0.5 rad from the step's start, far beyond the
+    2^-5 rad the turning series holds for.  Catches a turn-or-fresh choice that looks at a
+    stage's angle instead of its distance from the start (it would turn these stages by the
+    series and lose 1e-8): the trial equals RK4 of fresh derivatives to 1e-14."""
+    sim = PlantSimulator(get_preset("bench"), 0.0, 0.15)
+    kernel = sim._fast
+    baumgarte, substeps = kernel.s[0], int(kernel.s[1])
+    z = sim.y.copy()
+    z[[4, 6]], z[[11, 13]] = start, rate
+    dt = 2e-2
+    trial = kernel.advance(z, 0.0, 0.0, baumgarte, dt, substeps)
+    fresh = _rk4_fresh(kernel, z, (0.0, 0.0), baumgarte, dt, substeps)
+    assert np.all(np.abs(trial - fresh) <= 1e-14 * np.maximum(np.abs(fresh), 1.0))
+    assert np.abs(trial[[4, 6]] - z[[4, 6]]).min() > 0.25      # the stages did move that far
+
+
 @pytest.mark.parametrize("index", [0, 1])
 @pytest.mark.parametrize("value", [math.nan, math.inf, -math.inf])
 def test_a_non_finite_input_is_refused_with_its_code_and_changes_nothing(index, value):

@@ -82,12 +82,16 @@ def test_kinematics_close_the_general_algorithms_chains():
 
 
 def test_kinematics_refuse_what_the_mechanism_cannot_take():
-    """Catches C kinematics returning NaN or a wrong pose where the chain cannot reach or assemble."""
+    """Catches C kinematics returning NaN or a wrong pose where the chain cannot reach or assemble,
+    and task_state refusing a pose without assembly with another text (or error) than forward's."""
     kin = Kinematics(BENCH)
     with pytest.raises(fivebar.KinematicsError, match=r"out of reach of a chain \(distance 0\.45 m\)"):
         kin.inverse(0.5, 0.0)                                   # 0.45 m from chain 1's base at (l0, 0)
-    with pytest.raises(fivebar.KinematicsError, match=r"no assembly for q1=0, q2=3\.14159 rad \(elbow distance 0\.34"):
+    with pytest.raises(fivebar.KinematicsError, match=r"no assembly for q1=0, q2=3\.14159 rad \(elbow distance 0\.34") as forward:
         kin.forward(0.0, math.pi)
+    with pytest.raises(fivebar.KinematicsError) as task:      # the same pose, the same text
+        kin.task_state(0.0, math.pi, 0.1, -0.2, 0.3, 0.4)
+    assert str(task.value) == str(forward.value)
 
 
 def test_chain_ik_takes_the_branch_of_the_difference_of_two_atan2():

@@ -49,3 +49,24 @@ def test_bad_observer_input_named(name):
         CurrentObserver(motor2, "dynamic").estimate(**args)
     with pytest.raises(ValueError, match="kind must be one of 'static', 'dynamic'; got 'kalman'"):
         CurrentObserver(motor2, "kalman")
+
+
+@pytest.mark.parametrize("params", [motor1, motor2])
+def test_a_new_or_reset_observer_starts_from_zero_current(params):
+    """Catches an observer whose default estimate (constructor, ``reset()``) is not 0 A: a fresh
+    dynamic observer must reproduce a fresh drive's current (from rest, 0 A) from the first
+    step, and ``reset()`` after use must give back exactly the fresh observer's estimates."""
+    rng = np.random.default_rng(7)
+    inputs = [(rng.uniform(-30, 30), rng.normal(0.0, 3.0)) for _ in range(20)]
+    drive, fresh = Drive(params, mode="voltage"), CurrentObserver(params, "dynamic")
+    used = CurrentObserver(params, "dynamic")
+    assert fresh.i_hat == 0.0
+    for v_ref, _ in inputs:
+        used.estimate(v_ref, 5.0, T)
+    used.reset()
+    assert used.i_hat == 0.0
+    for v_ref, _ in inputs:
+        _, v, i = drive.step(0.0, v_ref, 0.0, 0.0, T)       # at standstill: the estimate is the current
+        estimate = fresh.estimate(v, 0.0, T)
+        assert estimate == pytest.approx(i, rel=1e-12, abs=1e-12)
+        assert used.estimate(v, 0.0, T) == estimate

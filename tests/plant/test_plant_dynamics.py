@@ -214,6 +214,21 @@ def test_bad_input_is_refused_with_name_value_and_time():
         PlantSimulator(replace(get_preset("thesis_sim"), l0=0.3), 0.0, 0.17)
 
 
+@pytest.mark.parametrize("settings", [IntegratorSettings(kernel="general"), IntegratorSettings(project=True),
+                                      IntegratorSettings(kernel="general", project=True)])
+def test_a_diverged_step_outside_the_one_call_path_names_the_held_torques(settings):
+    """Catches the step of the general kernel or with projection (PlantSimulator.step's Python
+    path) that refuses a diverged step without the torques it held (or with another error than
+    PlantError), as the one-call C step does, or that moves the state or the time."""
+    sim = PlantSimulator(get_preset("bench"), -0.002, 0.108, settings=settings)
+    state = sim.y.copy()
+    with pytest.raises(PlantError, match=r"^integration diverged in the step from t = 0 s \(tau1 = 10000\.0, "
+                                         r"tau2 = -10000\.0 N m held\): loop-closure residual "):
+        sim.step(1e4, -1e4, 1e-3)
+    np.testing.assert_array_equal(sim.y, state)
+    assert sim.time == 0.0
+
+
 def test_running_into_a_singularity_stops_with_time_and_place():
     """Catches a plant that integrates through a singular pose, or stops without time and place."""
     sim = PlantSimulator(get_preset("thesis_sim"), 0.07, 0.17)

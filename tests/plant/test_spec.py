@@ -131,6 +131,9 @@ mass = 0.2
      "[1.0, 2.0]"),
     ('name = "c"', 'name = "c"\nrotation = [[1, 0, 0], [0, 1, 0], [0, 0, 2]]', 6, "chains[0].rotation", "2"),
     ('name = "q2"', 'name = "q1"', 14, "chains[0].links[1].name", "q1"),
+    ('name = "q2"', 'name = "2x"', 14, "chains[0].links[1].name", "2x"),
+    ("mass = 0.2", "mass = 0.2\n\n[[chains.links.point_masses]]\nat = [0.0, 0.0, 0.1]", 18,
+     "chains[0].links[1].point_masses[0].mass", "= None: missing (required)"),    # no value: None, not 0
     ('joint', 'joint', None, "", ""),   # unchanged: loads
     ('gravity = [0.0, -9.81, 0.0]', 'gravity = [0.0, "down", 0.0]', 2, "gravity", "down"),
     ('actuated = true', 'actuated = "yes"', 9, "chains[0].links[0].actuated", "yes"),
@@ -138,7 +141,7 @@ mass = 0.2
 ])
 def test_a_bad_value_is_named_with_its_line_key_and_value(old, new, line, key, value):
     """Catches a spec error that names another line or key than the offending one, or omits its value (a
-    negative mass, a misspelled key, a wrong type)."""
+    negative mass, a misspelled key, a wrong type, a required key missing)."""
     text = GOOD.replace(old, new)
     if line is None:
         assert plant_spec.loads(text).chains[0].chain.dof == 2
