@@ -15,13 +15,16 @@ def experiment(monkeypatch):
 
 
 def test_a_step_of_whole_nanoseconds_is_taken_as_their_count(experiment):
-    """Catches a step size converted to nanoseconds by truncation (3e-9 s as 2 ns) or the package's own
+    """Catches a step size converted to nanoseconds by truncation (3e-9 s as 2 ns), the float rounding of a
+    whole number refused (a tolerance not relative to the step), or the package's own
     experiment ignored."""
     assert experiment(2.0, 2e-3) == (2.0, 2e-3, 2_000_000)
     assert experiment(None, None) == (1.0, 1e-3, 1_000_000)          # the package's own experiment
     assert experiment(1.0, 3e-9) == (1.0, 3e-9, 3)
     noisy = 0.1 * 3e-3                                                 # 3.0000000000000003e-04
     assert noisy != 3e-4 and experiment(1.0, noisy) == (1.0, noisy, 300_000)
+    off = 0.1 + 0.2                           # 0.30000000000000004 s: 300000000.00000006 ns, 6e-8 ns off
+    assert off * 1e9 != 300_000_000 and experiment(1.0, off) == (1.0, off, 300_000_000)
 
 
 @pytest.mark.parametrize("step", [1.5e-9, 2.5e-9, 0.4e-9, 300000.4e-9])
