@@ -281,3 +281,19 @@ def test_on_a_terminal_a_run_shows_its_progress_and_a_long_command_its_status_li
     assert main(["build", "--out", "b"]) == 0
     assert err.getvalue() == "parcosim build: building the FMUs ...\r\033[K"
     assert capsys.readouterr().out.endswith("-> o\nA.fmu\n")
+
+
+def test_identify_motor_is_parcosims_command_with_its_own_options(capsys):
+    """Catches ``parcosim identify-motor ...`` not handed to motor.cli's identify_main with the
+    arguments after the command word (then the run parser refuses it, or the word is passed on):
+    its JSON is identify_main's, and its errors are identify-motor's own."""
+    from motor.cli import identify_main
+
+    data = str(Path(__file__).resolve().parents[2] / "motor" / "data" / "motor2.csv")
+    argv = ["--data", data, "--settling-time", "0.198"]
+    assert identify_main(argv) == 0
+    direct = capsys.readouterr().out
+    assert main(["identify-motor", *argv]) == 0
+    assert capsys.readouterr().out == direct and direct.startswith("{")
+    assert main(["identify-motor", "--data", "does-not-exist.csv"]) == 2
+    assert capsys.readouterr().err.startswith("parcosim identify-motor: error: ")
