@@ -297,3 +297,19 @@ def test_identify_motor_is_parcosims_command_with_its_own_options(capsys):
     assert capsys.readouterr().out == direct and direct.startswith("{")
     assert main(["identify-motor", "--data", "does-not-exist.csv"]) == 2
     assert capsys.readouterr().err.startswith("parcosim identify-motor: error: ")
+
+
+@pytest.mark.parametrize("options, folder", [([], SCENE), (["--replace", "ctrl=FMU"], f"{SCENE}_replaced")])
+def test_a_run_without_out_whose_folder_is_a_file_is_refused_before_it_runs(options, folder, tmp_path,
+                                                                           monkeypatch, record, fmu_file, capsys):
+    """Catches the check before a run given another path than the folder it writes (out/, or
+    a folder without the suffixes of its options): a file at ``out/FOLDER`` must refuse the
+    run, naming that path, before anything is simulated."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / folder).write_text("not a folder")
+    calls = record("scenarios.run.runner", "run_scene", _outcome(settled=True, t_settle_s=0.125))
+    assert main(["run", SCENE, *[o.replace("=FMU", f"={fmu_file}") for o in options]]) == 2
+    assert calls == []
+    path = Path("out") / folder
+    assert f"{path} is not writable: {path} is a file, not a folder" in capsys.readouterr().err
