@@ -76,3 +76,26 @@ def test_a_missing_stop_or_step_and_a_step_not_above_zero_are_refused_naming_the
     with pytest.raises(ValueError) as refused:
         libcosim_runner._experiment("package.ssp", _ssd(ssd_step), *given)
     assert str(refused.value) == message
+
+
+def test_an_isolated_run_hands_every_option_to_the_child_and_back(monkeypatch, tmp_path):
+    """Catches an option of ``simulate_ssp_libcosim`` (the log level, the worker threads, the
+    stop time or step) dropped on the way to the child process of ``isolated=True``, or the
+    child's result not the run the options ask for."""
+    import pickle
+    import sys
+    from fmus.ssp import libcosim
+
+    options = dict(stop_time=0.5, step_size=2e-3, log_level="error", worker_threads=3)
+    handed = []
+    monkeypatch.setattr(libcosim, "_isolated", lambda path, signals, **kwargs: handed.append((path, signals, kwargs)))
+    libcosim.simulate_ssp_libcosim("p.ssp", ["a.y"], isolated=True, **options)
+    assert handed == [("p.ssp", ["a.y"], options)]
+    # the child: what the parent pickled, run in process (here recorded), its outcome written back
+    ran = []
+    monkeypatch.setattr(libcosim, "simulate_ssp_libcosim", lambda path, signals, **kwargs: ran.append(kwargs) or "run")
+    args, result = tmp_path / "args.pickle", tmp_path / "result.pickle"
+    args.write_bytes(pickle.dumps(("p.ssp", ["a.y"], options)))
+    monkeypatch.setattr(sys, "argv", ["-c", str(args), str(result)])
+    libcosim._child()
+    assert ran == [options] and pickle.loads(result.read_bytes()) == "run"
