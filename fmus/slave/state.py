@@ -327,12 +327,12 @@ class _Applier:
     def reference(self, template, data: Ref, path):
         target = self.rebuilt[data.index]
         if template is not None and not _is_leaf(template) and type(template) is not type(target):
-            raise StateMismatch(f"{path}: the state shares a {type(target).__name__} here, this instance has "
+            raise StateMismatch(f"{path}: the state shares a {type(target).__name__} here, this instance "
                                 f"{_describe(template)}")
         if template is None or _is_leaf(template):
             if not isinstance(target, (list, dict, np.ndarray)) or _holds_objects(target):
                 raise StateMismatch(f"{path}: the state shares a {type(target).__name__} where this instance "
-                                    f"has {_describe(template)}")
+                                    f"{_describe(template)}")
         return target
 
     def array(self, template, data, path):
@@ -341,16 +341,16 @@ class _Applier:
         fits = isinstance(template, np.ndarray) and not template.dtype.hasobject
         if isinstance(data, ArrayBytes):
             if not (fits and dtype_key(template.dtype) == data.dtype_key):
-                raise StateMismatch(f"{path}: an array of dtype {data.dtype_key} in the state, this instance has "
+                raise StateMismatch(f"{path}: an array of dtype {data.dtype_key} in the state, this instance "
                                     f"{_describe(template)}")
             if math.prod(data.shape) * template.dtype.itemsize != len(data.data):
                 raise StateMismatch(f"{path}: {len(data.data)} bytes for an array of shape {data.shape}")
             data = np.frombuffer(data.data, dtype=template.dtype).reshape(data.shape).copy()
         elif template is not None and not _is_leaf(template) and not (fits and template.dtype == data.dtype):
-            raise StateMismatch(f"{path}: an array of dtype {data.dtype} in the state, this instance has "
+            raise StateMismatch(f"{path}: an array of dtype {data.dtype} in the state, this instance "
                                 f"{_describe(template)}")
         if fits and template.shape != data.shape:
-            raise StateMismatch(f"{path}: an array of shape {data.shape} in the state, this instance has "
+            raise StateMismatch(f"{path}: an array of shape {data.shape} in the state, this instance "
                                 f"{_describe(template)}")
         _check_array_finite(data, template if fits else None, path)
         if fits and template.flags.writeable:

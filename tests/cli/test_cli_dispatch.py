@@ -281,3 +281,35 @@ def test_on_a_terminal_a_run_shows_its_progress_and_a_long_command_its_status_li
     assert main(["build", "--out", "b"]) == 0
     assert err.getvalue() == "parcosim build: building the FMUs ...\r\033[K"
     assert capsys.readouterr().out.endswith("-> o\nA.fmu\n")
+
+
+def test_identify_motor_is_parcosims_command_with_its_own_options(capsys):
+    """Catches ``parcosim identify-motor ...`` not handed to motor.cli's identify_main with the
+    arguments after the command word (then the run parser refuses it, or the word is passed on):
+    its JSON is identify_main's, and its errors are identify-motor's own."""
+    from motor.cli import identify_main
+
+    data = str(Path(__file__).resolve().parents[2] / "motor" / "data" / "motor2.csv")
+    argv = ["--data", data, "--settling-time", "0.198"]
+    assert identify_main(argv) == 0
+    direct = capsys.readouterr().out
+    assert main(["identify-motor", *argv]) == 0
+    assert capsys.readouterr().out == direct and direct.startswith("{")
+    assert main(["identify-motor", "--data", "does-not-exist.csv"]) == 2
+    assert capsys.readouterr().err.startswith("parcosim identify-motor: error: ")
+
+
+@pytest.mark.parametrize("options, folder", [([], SCENE), (["--replace", "ctrl=FMU"], f"{SCENE}_replaced")])
+def test_a_run_without_out_whose_folder_is_a_file_is_refused_before_it_runs(options, folder, tmp_path,
+                                                                           monkeypatch, record, fmu_file, capsys):
+    """Catches the check before a run given another path than the folder it writes (out/, or
+    a folder without the suffixes of its options): a file at ``out/FOLDER`` must refuse the
+    run, naming that path, before anything is simulated."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / folder).write_text("not a folder")
+    calls = record("scenarios.run.runner", "run_scene", _outcome(settled=True, t_settle_s=0.125))
+    assert main(["run", SCENE, *[o.replace("=FMU", f"={fmu_file}") for o in options]]) == 2
+    assert calls == []
+    path = Path("out") / folder
+    assert f"{path} is not writable: {path} is a file, not a folder" in capsys.readouterr().err

@@ -113,3 +113,28 @@ def test_an_unstable_drive_inside_the_plant_falls_back_naming_it_and_is_refused_
     assert "drive on joint 1: RK4 steps of 0.001 s are unstable" in words
     assert fast.mode == "inprocess" and fast.extra["fallback"] == f"component plant: {words}"
     assert fast.error == inproc.error and fast.error.instance == "plant"
+
+
+@pytest.mark.parametrize("model", ["FiveBarPlant", "ActuatedFiveBarPlant"])
+def test_a_plant_adapter_takes_the_python_state_back_whole(model):
+    """After a Python step (a declined kernel step, segments handing over) the adapter's state
+    must be the slave's whole state: the plant's 14 states and, with drives inside, each drive's
+    current after them, as :meth:`plant.actuated.ActuatedPlant.state` lays out z.  Catches a
+    current written to another slot (over a plant state) or left stale."""
+    import fmus.cosim.compiled_adapters  # noqa: F401 - registers the adapters
+    from fmus.cosim.adapter import ADAPTERS
+    from fmus.cosim.backends import InProcessInstance
+
+    instance = InProcessInstance(model, "plant")
+    instance.enter_initialization({}, 0.0)
+    instance.exit_initialization()
+    adapter = ADAPTERS[model]("plant", instance.slave, 1e-3)
+    actuated = getattr(instance.slave, "actuated", None)
+    sim = adapter._sim()
+    sim.y = sim.y + np.arange(1.0, 15.0) * 1e-3
+    if actuated is not None:
+        for n, (_, drive) in enumerate(actuated.drives):
+            drive.i = 0.5 + n                 # in the drive's buffer, which the kernel steps
+    expected = actuated.state() if actuated is not None else sim.y
+    adapter.from_python()
+    np.testing.assert_array_equal(adapter.state[:len(expected)], expected)

@@ -65,3 +65,16 @@ def test_an_interruption_names_the_last_row_and_the_component_that_stopped():
     got = run_error_of(inside, False, 0.25)
     assert got.kind is RunStatus.INTERRUPTED and got.message == "interrupted at t = 0.25 s (loop: SIGINT)"
     assert (got.instance, got.time) == ("loop.plant", 0.3)
+
+
+@pytest.mark.parametrize("name", ["missing.fmu", "Folder.FMU"])
+def test_a_component_given_as_an_fmu_file_that_is_not_there_is_refused_naming_it(tmp_path, name):
+    """Catches a component whose FMU file is missing (or is a folder) run, failing later in
+    fmpy, or refused without naming the component and the path."""
+    (tmp_path / "Folder.FMU").mkdir()
+    system = get_scene("bench_circle_PDq").system
+    path = str(tmp_path / name)
+    components = tuple(replace(c, model=path) if c.name == "drive1" else c for c in system.components)
+    with pytest.raises(ValueError) as refused:
+        simulate(replace(system, components=components, stop_time=0.01))
+    assert str(refused.value) == f"component drive1: no FMU file {path}"

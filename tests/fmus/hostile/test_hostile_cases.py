@@ -148,3 +148,31 @@ def test_every_case_sets_each_real_input_near_its_sane_value_before_its_first_st
             for _, name, value in intervals[0]:
                 base = sane[name]
                 assert abs(value - base) <= 0.02 * abs(base) + 2e-4 * (abs(base) or 1.0) + 1e-15, (model, name, value)
+
+
+def _sets_made(rows, seeds=200):
+    """Counter of what the "sets" cases of ``seeds`` seeds write: "output", "parameter", "set_vr"."""
+    causality = {row[0]: row[2] for row in rows}
+    made = Counter()
+    for seed in range(seeds):
+        for op in make_case(MODEL, rows, seed, kind="sets")["ops"]:
+            if op[0] == "set_vr":
+                made["set_vr"] += 1
+            elif op[0] == "set" and causality[op[1]] != "input":
+                made[causality[op[1]]] += 1
+    return made
+
+
+def test_a_sets_case_writes_outputs_parameters_and_unknown_references_as_drawn(table):
+    """Each of a "sets" case's 1-3 extra writes is an output (35 %), else a parameter (35 %),
+    else a raw value reference (30 %); a model without outputs or parameters gets the others.
+    Catches a kind of write never drawn (parameters written in place of the raw references),
+    the shares off, or a model without parameters failing to make its case."""
+    _, rows = table
+    made = _sets_made(rows)
+    total = sum(made.values())
+    assert set(made) == {"output", "parameter", "set_vr"} and 200 <= total <= 600
+    for what, share in (("output", 0.35), ("parameter", 0.35), ("set_vr", 0.30)):
+        assert abs(made[what] / total - share) < 0.08, (what, made)
+    bare = [row for row in rows if row[2] not in ("parameter", "output")]
+    assert set(_sets_made(bare, 60)) == {"set_vr"}

@@ -44,3 +44,23 @@ def test_every_model_named_native_has_a_model_the_registry_knows():
 
     with pytest.raises(ValueError, match="no native FMU of 'Nothing'; native: "):
         build_native_fmu("Nothing")
+
+
+@pytest.mark.parametrize("content", [b"not an fmu", None])
+def test_a_file_not_built_by_parcosim_at_the_target_is_refused_naming_it_and_left_alone(tmp_path, content):
+    """Catches a native build that overwrites a file parcosim did not make (a supplier's FMU,
+    any file) at its target, or refuses without naming the path."""
+    import shutil
+    from fmus.native.build import NativeBuildError, build_native_fmu
+
+    target = tmp_path / "Derivator.fmu"
+    if content is None:                       # a zip that is no parcosim FMU
+        shutil.make_archive(str(tmp_path / "Derivator"), "zip", root_dir=tmp_path, base_dir=".")
+        (tmp_path / "Derivator.zip").rename(target)
+    else:
+        target.write_bytes(content)
+    before = target.read_bytes()
+    with pytest.raises(NativeBuildError) as refused:
+        build_native_fmu("Derivator", tmp_path)
+    assert str(refused.value) == f"{target} was not built by parcosim: left alone"
+    assert target.read_bytes() == before and [p.name for p in tmp_path.iterdir()] == ["Derivator.fmu"]

@@ -403,3 +403,20 @@ def test_the_loop_images_pointers_and_fixed_words_stay_in_the_data_arena(loop_an
     for (a, n), (b, _) in zip(runs, runs[1:]):
         assert n > 0 and a + n < b                  # sorted, disjoint, not adjacent (maximal)
     assert runs[-1][0] + runs[-1][1] <= image.values_word
+
+
+def test_kernel_functions_names_every_exported_kernel_function_at_its_address():
+    """Catches kernel_functions missing or inventing a function of the kernels' library, or
+    mapping a name to another function's address (the loop image would then call the wrong
+    step): its names are the non-static functions declared in kernels/src, each at the address
+    a separate load of the library gives."""
+    import kernels
+    declared = set()
+    for source in sorted(loopimage.KERNELS.glob("*.[ch]")):
+        text = re.sub(r"/\*.*?\*/", "", source.read_text(), flags=re.S)
+        declared |= set(re.findall(r"^(?!static)[A-Za-z_][\w \*]*?\b(pc_\w+)\s*\(", text, flags=re.M))
+    functions = loopimage.kernel_functions()
+    assert sorted(functions.values()) == sorted(declared)
+    again = ctypes.CDLL(kernels.library()._name)
+    for address, name in functions.items():
+        assert address and ctypes.cast(getattr(again, name), ctypes.c_void_p).value == address, name

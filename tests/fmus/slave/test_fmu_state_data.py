@@ -563,3 +563,22 @@ def test_the_fmu_refuses_foreign_states_and_states_of_other_instances(built_fmus
     other.free_state(foreign)
     for inst in (plant, other, drive):
         inst.close()
+
+
+@pytest.mark.parametrize("shared, refused", [
+    ([2.0, [3.0]], False),
+    ([[np.array([None], dtype=object)]], True),
+    ([{"k": (np.array([None], dtype=object),)}], True),
+])
+def test_a_reference_where_a_leaf_stands_shares_plain_data_only(shared, refused):
+    """Catches a state that makes a number's place share a container holding objects (at any
+    depth, in lists, tuples or dicts) being accepted, a plain-data one being refused, or the
+    refusal not naming the place, the shared type and what the instance holds."""
+    template, tree = {"a": [None], "b": 3.0}, {"a": shared, "b": stateformat.Ref(1)}
+    if refused:
+        with pytest.raises(fmustate.StateMismatch,
+                           match=r"^b: the state shares a list where this instance holds a builtins\.float$"):
+            fmustate.apply(template, tree)
+    else:
+        got = fmustate.apply(template, tree)
+        assert got["b"] is got["a"] and got["a"] == [2.0, [3.0]]

@@ -15,13 +15,16 @@ def experiment(monkeypatch):
 
 
 def test_a_step_of_whole_nanoseconds_is_taken_as_their_count(experiment):
-    """Catches a step size converted to nanoseconds by truncation (3e-9 s as 2 ns) or the package's own
+    """Catches a step size converted to nanoseconds by truncation (3e-9 s as 2 ns), the float rounding of a
+    whole number refused (a tolerance not relative to the step), or the package's own
     experiment ignored."""
     assert experiment(2.0, 2e-3) == (2.0, 2e-3, 2_000_000)
     assert experiment(None, None) == (1.0, 1e-3, 1_000_000)          # the package's own experiment
     assert experiment(1.0, 3e-9) == (1.0, 3e-9, 3)
     noisy = 0.1 * 3e-3                                                 # 3.0000000000000003e-04
     assert noisy != 3e-4 and experiment(1.0, noisy) == (1.0, noisy, 300_000)
+    off = 0.1 + 0.2                           # 0.30000000000000004 s: 300000000.00000006 ns, 6e-8 ns off
+    assert off * 1e9 != 300_000_000 and experiment(1.0, off) == (1.0, off, 300_000_000)
 
 
 @pytest.mark.parametrize("step", [1.5e-9, 2.5e-9, 0.4e-9, 300000.4e-9])
@@ -73,3 +76,26 @@ def test_a_missing_stop_or_step_and_a_step_not_above_zero_are_refused_naming_the
     with pytest.raises(ValueError) as refused:
         libcosim_runner._experiment("package.ssp", _ssd(ssd_step), *given)
     assert str(refused.value) == message
+
+
+def test_an_isolated_run_hands_every_option_to_the_child_and_back(monkeypatch, tmp_path):
+    """Catches an option of ``simulate_ssp_libcosim`` (the log level, the worker threads, the
+    stop time or step) dropped on the way to the child process of ``isolated=True``, or the
+    child's result not the run the options ask for."""
+    import pickle
+    import sys
+    from fmus.ssp import libcosim
+
+    options = dict(stop_time=0.5, step_size=2e-3, log_level="error", worker_threads=3)
+    handed = []
+    monkeypatch.setattr(libcosim, "_isolated", lambda path, signals, **kwargs: handed.append((path, signals, kwargs)))
+    libcosim.simulate_ssp_libcosim("p.ssp", ["a.y"], isolated=True, **options)
+    assert handed == [("p.ssp", ["a.y"], options)]
+    # the child: what the parent pickled, run in process (here recorded), its outcome written back
+    ran = []
+    monkeypatch.setattr(libcosim, "simulate_ssp_libcosim", lambda path, signals, **kwargs: ran.append(kwargs) or "run")
+    args, result = tmp_path / "args.pickle", tmp_path / "result.pickle"
+    args.write_bytes(pickle.dumps(("p.ssp", ["a.y"], options)))
+    monkeypatch.setattr(sys, "argv", ["-c", str(args), str(result)])
+    libcosim._child()
+    assert ran == [options] and pickle.loads(result.read_bytes()) == "run"

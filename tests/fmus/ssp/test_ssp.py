@@ -94,6 +94,20 @@ def test_ssd_is_well_formed(exported):
     assert read_ssp_experiment(path) == (0.0, STOP, system.step)
 
 
+def test_xml_members_are_utf8_text_files(exported):
+    """Catches an SSD or SSV written without its UTF-8 XML declaration or without the final
+    newline of a text file (the package's XML must diff and concatenate cleanly)."""
+    _, path, _ = exported
+    with zipfile.ZipFile(path) as zf:
+        members = [n for n in zf.namelist() if n.endswith((".ssd", ".ssv"))]
+        assert "SystemStructure.ssd" in members and len(members) >= 2
+        for name in members:
+            data = zf.read(name)
+            assert data.startswith(b"<?xml version='1.0' encoding='UTF-8'?>\n"), name
+            assert data.endswith(b">\n") and not data.endswith(b"\n\n"), name
+            data.decode("utf-8")
+
+
 def test_package_validates_against_the_ssp_schema(exported):
     """Catches an SSD or parameter file that breaks the SSP 1.0 schema (element order, a missing
     attribute), which strict tools refuse to load."""

@@ -11,6 +11,7 @@ import pytest
 from fmus.cosim.system import Component, Connection, System
 from fmus.ssp.export import export_ssp
 from fmus.ssp.run import PARAMETER_SET, _fmpy_string, fmpy_parameter_set
+from fmus.status import RunStatus
 from tests.fmus.export.test_oracles_export import fake_fmu
 
 
@@ -60,3 +61,53 @@ def test_a_components_string_output_is_read_or_empty_when_it_cannot_be(component
     variable of another type, causality or name read, and a failed read raised instead of
     leaving the tool's own message."""
     assert _fmpy_string(component, "refusal") == expected
+
+
+class _Freed:
+    def __init__(self):
+        self.calls = []
+
+    def terminate(self):
+        self.calls.append("terminate")
+
+    def freeInstance(self):
+        self.calls.append("freeInstance")
+
+
+@pytest.mark.parametrize("fails, expected", [
+    ("instantiate", (RunStatus.INITIALISATION, "foreign", 0.0)),
+    ("step", (RunStatus.REFUSED, "foreign", 0.25)),
+])
+def test_fmpy_watch_records_the_call_a_foreign_fmu_failed_and_frees_every_fmu(monkeypatch, fails, expected):
+    """Catches the watch giving a foreign FMU's failure (no ``refusal`` output) the wrong kind,
+    instance or time (initialisation not at t = 0, a step not at its start), an FMU left
+    instantiated, or fmpy's functions not called through and restored."""
+    import fmpy.ssp.simulation as sim
+    from fmus.ssp.run import fmpy_watch
+
+    seen = []
+
+    def instantiate(component, *args, **kwargs):
+        seen.append(("instantiate", component.name, args))
+        if fails == "instantiate" and component.name == "foreign":
+            raise RuntimeError("fmi2Instantiate failed")
+
+    def step(component, time, step_size):
+        seen.append(("step", component.name, time, step_size))
+        raise RuntimeError("fmi2DoStep returned fmi2Error")
+
+    monkeypatch.setattr(sim, "instantiate_fmu", instantiate)
+    monkeypatch.setattr(sim, "do_step", step)
+    ours, foreign = (SimpleNamespace(name=n, variables={}, fmu=_Freed()) for n in ("ours", "foreign"))
+    with fmpy_watch() as watch:
+        try:
+            sim.instantiate_fmu(ours, 0.0)
+            sim.instantiate_fmu(foreign, 0.0)
+            sim.do_step(foreign, 0.25, 0.05)
+        except RuntimeError as exc:
+            error = watch.refusal(exc)
+    assert (sim.instantiate_fmu, sim.do_step) == (instantiate, step)
+    assert (error.kind, error.instance, error.time) == expected and str(error) == error.message
+    assert error.message == ("fmi2Instantiate failed" if fails == "instantiate" else "fmi2DoStep returned fmi2Error")
+    assert seen[:2] == [("instantiate", "ours", (0.0,)), ("instantiate", "foreign", (0.0,))]
+    assert ours.fmu.calls == foreign.fmu.calls == ["terminate", "freeInstance"]
