@@ -31,15 +31,16 @@ TOLERANCE = 1.15
 
 
 class Probe:
-    """``machine_probe.c`` built into a temporary folder; calling it times one workload."""
+    """``machine_probe.c`` built into a temporary folder (removed once loaded); calling it times
+    one workload."""
 
     def __init__(self, sweeps: int = SWEEPS):
         self.sweeps = sweeps
-        folder = Path(tempfile.mkdtemp(prefix="parcosim_probe_"))
-        out = folder / "machine_probe.so"
-        subprocess.run([build.compiler(), "-std=c11", "-O2", "-fPIC", "-shared",
-                        str(Path(__file__).with_name("machine_probe.c")), "-o", str(out), "-lm"], check=True)
-        self._lib = ctypes.CDLL(str(out))
+        with tempfile.TemporaryDirectory(prefix="parcosim_probe_") as folder:   # loaded, the file may go
+            out = Path(folder) / "machine_probe.so"
+            subprocess.run([build.compiler(), "-std=c11", "-O2", "-fPIC", "-shared",
+                            str(Path(__file__).with_name("machine_probe.c")), "-o", str(out), "-lm"], check=True)
+            self._lib = ctypes.CDLL(str(out))
         self._lib.machine_probe.restype = ctypes.c_double
         self._lib.machine_probe.argtypes = [ctypes.c_int]
         self()   # the first call pages the code in

@@ -48,12 +48,13 @@ def report(out: Path) -> str:
     pairs = sorted(int(p.stem.split("_")[1]) for p in out.glob("this_*.json") if (out / f"base_{p.stem[5:]}.json").exists())
     if not pairs:
         raise SystemExit(f"side_by_side: no pairs (base_K.json and this_K.json) in {out}")
+    read = {k: (medians(out / f"base_{k}.json"), medians(out / f"this_{k}.json")) for k in pairs}
     lines = ["| case | " + " | ".join(f"pair {k}: base -> this" for k in pairs) + " | median ratio |",
              "|---|" + "---:|" * (len(pairs) + 1)]
     for case in CASES:
         cells, ratios = [], []
         for k in pairs:
-            b, t = medians(out / f"base_{k}.json").get(case), medians(out / f"this_{k}.json").get(case)
+            b, t = read[k][0].get(case), read[k][1].get(case)
             if b is None or t is None:
                 cells.append("")
                 continue
