@@ -94,7 +94,7 @@ def build(copy: Path, products: list, tests: list, out: Path, log=sys.stdout) ->
     times = work / "times.json"
     env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1", COVERAGE_PROCESS_START=str(rc), COVERAGE_FILE=str(data),
                PARCOSIM_MUTATION_TIMES=str(times),
-               PARCOSIM_CACHE=tempfile.mkdtemp(prefix="parcosim_mapcache_"),
+               PARCOSIM_CACHE=str(work / "cache"),
                PYTHONPATH=os.pathsep.join([str(copy), str(work), *_other_paths()]))
     command = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "parcosim_mutation_timing",
                "--cov", f"--cov-config={rc}", "--cov-context=test", "--cov-report=", *tests]

@@ -128,11 +128,13 @@ def code_version() -> str:
 
 def _fresh_copy(path: Path) -> Path:
     """A copy of ``path`` under a name no process has loaded (the rebuilt library, when the
-    stale one is already mapped)."""
+    stale one is already mapped), in a folder removed when the process exits."""
+    import atexit
     import shutil
     import tempfile
 
     folder = Path(tempfile.mkdtemp(prefix="parcosim_kernels_"))
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
     copy = folder / path.name
     shutil.copy2(path, copy)
     return copy

@@ -6,7 +6,29 @@ an FMU fixture, ``tools`` on files that drive a third-party tool (Ecos, libcosim
 cosmic-ray, a sanitizer build); ``-m "not slow and not fmu and not tools and not sweep"`` is the quick subset.
 The test files sit in folders by the layer they test (tests/layout_rules.py).
 """
+import os
+import shutil
+import tempfile
+
 import pytest
+
+
+@pytest.fixture(scope="session", autouse=True)
+def session_temp_folder(tmp_path_factory):
+    """Every temporary file or folder made through :mod:`tempfile` during the session, by a test,
+    the code it runs or a process it starts (``TMPDIR``), goes in one folder, removed at the end:
+    a test or a library that forgets to clean up (an FMU unzipped by fmpy and never removed)
+    cannot fill the machine's temp folder, run after run."""
+    folder = tmp_path_factory.mktemp("tempfile")
+    before = tempfile.tempdir, os.environ.get("TMPDIR")
+    tempfile.tempdir, os.environ["TMPDIR"] = str(folder), str(folder)
+    yield folder
+    tempfile.tempdir = before[0]
+    if before[1] is None:
+        os.environ.pop("TMPDIR", None)
+    else:
+        os.environ["TMPDIR"] = before[1]
+    shutil.rmtree(folder, ignore_errors=True)
 
 
 @pytest.fixture(scope="session")

@@ -9,6 +9,7 @@ parcosim slave object directly, as pythonfmu would; :class:`FmuInstance` calls a
 """
 from __future__ import annotations
 
+import atexit
 import ctypes
 import functools
 import importlib
@@ -149,25 +150,47 @@ def _format_messages(callbacks) -> None:
     addLoggerProxy(ctypes.byref(callbacks))
 
 
+#: (FMU path, mtime) -> (model description, unzipped folder): an FMU is unzipped once per process;
+#: the folders go when the process exits (:func:`_remove_unzipped`).
+_UNZIPPED: dict = {}
+
+
+def _remove_unzipped() -> None:
+    """Remove every folder :func:`_unzipped` made (at exit: the libraries in them stay loaded
+    until then).  Without it each FMU a process ran left its unzipped copy in the temp folder."""
+    import shutil
+
+    for _, folder in _UNZIPPED.values():
+        shutil.rmtree(folder, ignore_errors=True)
+    _UNZIPPED.clear()
+
+
+def _unzipped(path: Path, name: str):
+    """(model description, unzipped folder) of the FMI 2.0 co-simulation FMU ``path``."""
+    from fmpy import extract, read_model_description
+
+    key = (str(path), path.stat().st_mtime_ns)
+    if key not in _UNZIPPED:
+        md = read_model_description(str(path))
+        if md.fmiVersion != "2.0" or md.coSimulation is None:
+            raise ValueError(f"component {name}: {path} is not an FMI 2.0 co-simulation FMU "
+                             f"(fmiVersion {md.fmiVersion})")
+        if not _UNZIPPED:
+            atexit.register(_remove_unzipped)
+        _UNZIPPED[key] = (md, extract(str(path)))
+    return _UNZIPPED[key]
+
+
 class _FmuInstance:
     """One FMU instance through fmpy, with batched I/O (one call per type and direction)."""
 
-    _extracted: dict = {}
-
     def __init__(self, path: Path, name: str):
-        from fmpy import calloc, extract, free, read_model_description
+        from fmpy import calloc, free
         from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
                                fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
 
         path = Path(path)
-        key = (str(path), path.stat().st_mtime_ns)
-        if key not in self._extracted:
-            md = read_model_description(str(path))
-            if md.fmiVersion != "2.0" or md.coSimulation is None:
-                raise ValueError(f"component {name}: {path} is not an FMI 2.0 co-simulation FMU "
-                                 f"(fmiVersion {md.fmiVersion})")
-            self._extracted[key] = (md, extract(str(path)))
-        md, directory = self._extracted[key]
+        md, directory = _unzipped(path, name)
         self.name, self.path = name, path
         self.variables = _variables_from_model_description(md)
         self.messages = []

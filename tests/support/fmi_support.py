@@ -1,6 +1,8 @@
 """A minimal fmpy driver for tests: one FMU instance, values by name."""
 from __future__ import annotations
 
+import shutil
+
 from fmpy import calloc, extract, free, read_model_description
 from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
                        fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
@@ -75,3 +77,4 @@ class FmuInstance:
     def close(self):
         self.fmu.terminate()
         self.fmu.freeInstance()
+        shutil.rmtree(self.dir, ignore_errors=True)

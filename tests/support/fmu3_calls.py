@@ -9,6 +9,7 @@ names, so an FMI 3.0 FMU's messages can be compared with its FMI 2.0 twin's.
 from __future__ import annotations
 
 import re
+import shutil
 
 from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
@@ -40,6 +41,7 @@ class Driver3(Values):
         self.md = read_model_description(str(path))
         self.variables = {v.name: v for v in self.md.modelVariables}
         self.dir = unzipped or extract(str(path))
+        self._unzipped_here = unzipped is None
         self.log = []
         self.fmu = FMU3Slave(guid=self.md.guid, unzipDirectory=self.dir,
                              modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=instance)
@@ -84,3 +86,5 @@ class Driver3(Values):
 
     def close(self):
         self.fmu.freeInstance()
+        if self._unzipped_here:
+            shutil.rmtree(self.dir, ignore_errors=True)

@@ -7,6 +7,7 @@ values read, and every message the FMU logged (as the logger received it).
 from __future__ import annotations
 
 import ctypes
+import shutil
 from dataclasses import dataclass, field
 
 from fmpy import extract, read_model_description
@@ -60,6 +61,7 @@ class Driver(Values):
         self.md = read_model_description(str(path))
         self.variables = {v.name: v for v in self.md.modelVariables}
         self.dir = unzipped or extract(str(path))
+        self._unzipped_here = unzipped is None
         self.log = []
         self._logger = fmi2CallbackLoggerTYPE(self._keep)
         self._callbacks = fmi2CallbackFunctions()
@@ -106,3 +108,5 @@ class Driver(Values):
 
     def close(self):
         self.fmu.freeInstance()
+        if self._unzipped_here:
+            shutil.rmtree(self.dir, ignore_errors=True)

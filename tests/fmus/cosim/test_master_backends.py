@@ -113,3 +113,24 @@ def test_a_state_taken_and_serialised_steps_on_alike(wheeled_fmu):
     assert _same(fmu.get_outputs(), inproc.get_outputs())
     fmu.close()
     inproc.close()
+
+
+def test_a_process_leaves_no_unzipped_fmu_behind(wheeled_fmu, tmp_path):
+    """Catches the FMU back end leaving its unzipped copy of every FMU in the temp folder when the
+    process exits (2 MB per FMU and process: a sweep or a test suite filled the disk), or
+    unzipping one FMU again for each instance: a fresh process with its own temp folder makes
+    two instances of one FMU, finds one unzipped folder while they live, and none after exit."""
+    import os
+    import subprocess
+    import sys
+
+    scratch = tmp_path / "tmp"
+    scratch.mkdir()
+    code = ("import os, sys; from fmus.cosim.backends import _FmuInstance; "
+            "a, b = _FmuInstance(sys.argv[1], 'a'), _FmuInstance(sys.argv[1], 'b'); "
+            "print(len(os.listdir(sys.argv[2])))")
+    done = subprocess.run([sys.executable, "-c", code, str(wheeled_fmu), str(scratch)],
+                          env={**os.environ, "TMPDIR": str(scratch)}, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["1"]
+    assert os.listdir(scratch) == []

@@ -20,7 +20,7 @@ import sys
 import zipfile
 
 import pytest
-from fmpy import read_model_description, simulate_fmu
+from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi3 import FMU3Slave, fmi3Boolean, fmi3Float64, fmi3ValueReference
 from fmpy.validation import validate_fmu
@@ -179,11 +179,11 @@ def test_state_has_the_fmi2_layout_and_is_refused_across_versions(native_fmus, n
     assert "this FMU's GUID is" in three.call("deserialize", "other").messages[0][2]
 
 
-def test_fmi3_calls_of_its_own(native3_fmus):
+def test_fmi3_calls_of_its_own(native3_fmus, tmp_path):
     """fmi3DoStep's outputs (where the step ended, no event, no early return), the independent
     variable, nValues, types without variables, Event Mode and instantiation refused by name."""
     model = "Derivator"
-    d = Driver3(native3_fmus[model])
+    d = Driver3(native3_fmus[model], unzipped=extract(str(native3_fmus[model]), str(tmp_path)))
     f, c = d.fmu, d.fmu.component
     time_vr = next(v.valueReference for v in d.md.modelVariables if v.causality == "independent")
     f.enterInitializationMode(startTime=0.25)
