@@ -83,6 +83,33 @@ def test_another_sweeps_file_is_refused_and_an_empty_or_header_only_one_has_no_r
         sweep.read_rows(path, sweep.columns(["drive2.R", "plant.l0"]))
 
 
+def test_a_file_in_the_documented_form_reads_back_each_column_as_its_type(tmp_path):
+    """sweep.csv as docs/index.md states it, written by hand (the error's fields empty when
+    none): each column read back as its kind, an empty error time or value as NaN, an empty
+    error code as None, the text columns as text; an empty metric is refused.  Catches the
+    reader's column kinds swapped or widened (an empty error time refused, or an empty metric
+    taken as NaN: a torn or hand-edited value passing as "not settled")."""
+    path = tmp_path / "sweep.csv"
+    done = "0,1.25,0.05,0.5,0.02,nan,0.3,1.5,true,completed,,,,,,,,,3.0"
+    failed = "1,1.5,0.049,nan,nan,nan,nan,nan,false,refused,plant,0.25,q1,-7.5,rad,3,absurd,plant refused,4.0"
+    path.write_text(",".join(HEADER) + "\n" + done + "\n" + failed + "\n")
+    first, second = sweep.read_rows(path, HEADER)
+    assert first["sample"] == 0 and first["completed"] is True and first["outcome"] == "completed"
+    assert (first["drive1.R"], first["plant.l0"], first["e_ef_mm"], first["wall_s"]) == (1.25, 0.05, 0.5, 3.0)
+    assert math.isnan(first["error_time"]) and math.isnan(first["error_value"]) and math.isnan(first["e_ss_mm"])
+    assert first["error_code"] is None
+    assert [first[k] for k in ("error_instance", "error_variable", "error_unit", "error_reason", "error")] == [""] * 5
+    assert second["completed"] is False and second["error_code"] == 3
+    assert (second["error_time"], second["error_value"]) == (0.25, -7.5)
+    assert [second[k] for k in ("outcome", "error_instance", "error_variable", "error_unit", "error_reason",
+                                "error")] == ["refused", "plant", "q1", "rad", "absurd", "plant refused"]
+    assert [type(second[k]) for k in HEADER] == [int, float, float, float, float, float, float, float, bool, str,
+                                                 str, float, str, float, str, int, str, str, float]
+    path.write_text(",".join(HEADER) + "\n" + done.replace(",0.5,", ",,") + "\n")
+    with pytest.raises(ValueError, match="could not convert string to float: ''"):
+        sweep.read_rows(path, HEADER)
+
+
 def test_the_statistics_are_numpys_over_the_completed_finite_values():
     """n, mean, sample std (ddof 1), min, the 5/50/95 % percentiles, max of each metric over
     the completed rows whose value is finite; a metric with no value has n = 0; one value has

@@ -79,6 +79,23 @@ def test_the_slice_is_one_region_grown_from_the_start(sliced):
     assert len(seen) == np.count_nonzero(inside)
 
 
+@pytest.mark.parametrize("name, preset", [("bench_5r", "bench"), ("thesis_sim_5r", "thesis_sim")])
+def test_the_default_extent_is_the_longest_reach_around_the_start(monkeypatch, name, preset):
+    """Without an extent the slice spans the start ± the longest chain's reach from the origin
+    (its links l1 + l2 plus its base, l0 from the middle, of the 5R's own parameters), on
+    SPEC_GRID points per axis, and still assembles the start.  Catches the extent's centre or
+    half-width of another term (the base subtracted, the start left out) and an axis swapped."""
+    monkeypatch.setattr(ws_spec, "SPEC_GRID", 11)
+    spec, p = plant_spec.load(name), get_preset(preset)
+    reach = max(c.l1 + c.l2 for c in (p.chain1, p.chain2)) + p.l0
+    ws, _, _ = ws_spec.slice_map(spec, BAND)
+    x0, y0 = spec.start[0], spec.start[1]
+    np.testing.assert_allclose(ws.x, np.linspace(x0 - reach, x0 + reach, 11), rtol=0, atol=1e-15)
+    np.testing.assert_allclose(ws.y, np.linspace(y0 - reach, y0 + reach, 11), rtol=0, atol=1e-15)
+    start = (int(np.argmin(np.abs(ws.y - y0))), int(np.argmin(np.abs(ws.x - x0))))
+    assert ws.status[start] != ws.OUTSIDE
+
+
 def test_the_figure_and_json_of_a_spec_and_a_serial_spec_refused(tmp_path, monkeypatch):
     """plot_spec_slice's JSON read back: the mechanism, band, grid step, points inside and each
     thesis trajectory's verdict as its own summary.  Catches a count of another status, the
