@@ -1,5 +1,5 @@
-"""The monolithic reference (scenarios/reference.py): its model pieces, its convergence, its
-sample-by-sample semantics, and the co-simulation measured against it.
+"""The monolithic reference (scenarios/reference.py) on long runs: its convergence, its
+sample-by-sample semantics (its model pieces and short runs: test_reference_samples.py), and the co-simulation measured against it.
 
 Numbers are printed (``pytest -s``); asserted are only properties that hold by construction:
 convergence of the reference itself, the ``cosim`` coupling reproducing the master up to the
@@ -10,14 +10,10 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from scipy.integrate import quad, solve_ivp
 
 from fmus.cosim.master import simulate
-from fmus.cosim.system import Component, System
-from motor import (CurrentController, advance_current, armature_current_rate, electrical_step_coefficients,
-                   get_motor_preset, shaft_torque)
-from scenarios.reference import (ReferenceError, _mean_torque, deviation, reference_run,
-                                 with_parameters)
+from motor import CurrentController, get_motor_preset, shaft_torque
+from scenarios.reference import ReferenceError, deviation, reference_run, with_parameters
 from scenarios.scenes.catalogue import get_scene
 
 pytestmark = [pytest.mark.slow]
@@ -43,45 +39,6 @@ def bench_runs():
         "master": simulate(system),
         "master_rk4x4": simulate(with_parameters(system, "plant", substeps=4)),
     }
-
-
-# --- the model pieces the reference adds ----------------------------------------------------
-
-@pytest.mark.parametrize("preset", ["motor1", "motor2"])
-def test_current_rate_integrates_to_the_drives_exact_step(preset):
-    """L di/dt = v - R i - ke w, integrated with v, w held, is the drive's own exact step."""
-    p = get_motor_preset(preset)
-    h, i0, v, w = 1e-3, 0.7, 9.0, -12.0
-    sol = solve_ivp(lambda t, i: [armature_current_rate(i[0], v, w, p)], (0.0, h), [i0], method="DOP853",
-                    rtol=1e-13, atol=1e-15)
-    exact = advance_current(i0, v, w, p.ke, electrical_step_coefficients(p.R, p.L, h, "exact"))
-    assert sol.y[0, -1] == pytest.approx(exact, abs=1e-11)
-
-
-@pytest.mark.parametrize("preset", ["motor1", "motor2"])
-def test_mean_torque_is_the_step_average(preset):
-    """Catches a reference's mean drive torque that is not the step average of the drive's torque."""
-    class _Slave:  # what _mean_torque reads of a drive slave
-        class drive:
-            params = get_motor_preset(preset)
-
-    p = _Slave.drive.params
-    h, i0, v, w = 1e-3, -2.0, 15.0, 3.0
-
-    def current(s):
-        return advance_current(i0, v, w, p.ke, electrical_step_coefficients(p.R, p.L, s, "exact")) if s > 0 else i0
-
-    mean = quad(lambda s: shaft_torque(current(s), w, p), 0.0, h, epsabs=1e-15)[0] / h
-    assert _mean_torque(_Slave, i0, v, w, h) == pytest.approx(mean, abs=1e-12)
-
-
-def test_refuses_what_it_cannot_integrate():
-    """Catches a reference run on a system without exactly one plant, or with another coupling."""
-    system = System((Component("traj", "Trajectory", {}),), (), ("traj.x_d",), stop_time=0.01)
-    with pytest.raises(ReferenceError, match="exactly one FiveBarPlant"):
-        reference_run(system)
-    with pytest.raises(ValueError, match="coupling"):
-        reference_run(BENCH, stop_time=0.01, coupling="jacobi")
 
 
 # --- convergence ------------------------------------------------------------------------------

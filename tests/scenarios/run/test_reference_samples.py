@@ -1,7 +1,8 @@
 """The monolithic reference's discrete parts on short runs (scenarios/reference.py), each
 recorded sample against its definition computed here from the recorded inputs it was taken
 from, for both drives (the long runs are of the slow kind, tests/scenarios/run/
-test_reference_monolithic.py; issue 31: results against an independent formulation, every
+test_reference_monolithic.py), and the model pieces it adds (moved here from there: they
+are quick; issue 31: results against an independent formulation, every
 instance of a repeated part)."""
 from __future__ import annotations
 
@@ -9,9 +10,12 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from scipy.integrate import quad, solve_ivp
 
-from motor import CurrentController, design_current_controller, get_motor_preset, shaft_torque
-from scenarios.reference import reference_run
+from fmus.cosim.system import Component, System
+from motor import (CurrentController, advance_current, armature_current_rate, design_current_controller,
+                   electrical_step_coefficients, get_motor_preset, shaft_torque)
+from scenarios.reference import ReferenceError, _mean_torque, reference_run
 from scenarios.scenes.catalogue import get_scene
 
 STOP = 0.05
@@ -87,3 +91,44 @@ def test_the_twins_drives_sample_their_own_pwm_voltage_from_their_own_inputs():
         assert np.abs(steps).max() > 10, drive.name
         i_ref = ref[_source(system, f"{drive.name}.i_ref")]
         assert np.corrcoef(v[1:], i_ref[1:])[0, 1] > 0.5, drive.name
+
+
+# --- the model pieces the reference adds ----------------------------------------------------
+
+@pytest.mark.parametrize("preset", ["motor1", "motor2"])
+def test_current_rate_integrates_to_the_drives_exact_step(preset):
+    """L di/dt = v - R i - ke w, integrated with v, w held, is the drive's own exact step.
+    Catches the reference's current rate with a term of another sign or another motor's
+    constant."""
+    p = get_motor_preset(preset)
+    h, i0, v, w = 1e-3, 0.7, 9.0, -12.0
+    sol = solve_ivp(lambda t, i: [armature_current_rate(i[0], v, w, p)], (0.0, h), [i0], method="DOP853",
+                    rtol=1e-13, atol=1e-15)
+    exact = advance_current(i0, v, w, p.ke, electrical_step_coefficients(p.R, p.L, h, "exact"))
+    assert sol.y[0, -1] == pytest.approx(exact, abs=1e-11)
+
+
+@pytest.mark.parametrize("preset", ["motor1", "motor2"])
+def test_mean_torque_is_the_step_average(preset):
+    """Catches a reference's mean drive torque that is not the step average of the drive's torque."""
+    class _Slave:  # what _mean_torque reads of a drive slave
+        class drive:
+            params = get_motor_preset(preset)
+
+    p = _Slave.drive.params
+    h, i0, v, w = 1e-3, -2.0, 15.0, 3.0
+
+    def current(s):
+        return advance_current(i0, v, w, p.ke, electrical_step_coefficients(p.R, p.L, s, "exact")) if s > 0 else i0
+
+    mean = quad(lambda s: shaft_torque(current(s), w, p), 0.0, h, epsabs=1e-15)[0] / h
+    assert _mean_torque(_Slave, i0, v, w, h) == pytest.approx(mean, abs=1e-12)
+
+
+def test_refuses_what_it_cannot_integrate():
+    """Catches a reference run on a system without exactly one plant, or with another coupling."""
+    system = System((Component("traj", "Trajectory", {}),), (), ("traj.x_d",), stop_time=0.01)
+    with pytest.raises(ReferenceError, match="exactly one FiveBarPlant"):
+        reference_run(system)
+    with pytest.raises(ValueError, match="coupling"):
+        reference_run("bench_circle_TCMDx", stop_time=0.01, coupling="jacobi")
