@@ -81,3 +81,71 @@ def test_the_no_quantisation_study_sweeps_the_coupling_settings_against_a_2_30_c
     assert rows[0]["pareto"] is True and rows[0]["gain"] == 1.0
     assert said == [f"no-quantisation study: reference of bench_circle_TCMDx with {2 ** 30} encoder counts ..."]
     assert module._noquant(get_scene("thesis_sim_circle"), 3, said.append) == []
+
+
+def _encoder_runs(scene):
+    """A run at 2 ms and a reference at 1 ms over 0.1 s, both with the plant's residual,
+    encoders and the drives' columns: the run's q1 count differs from the reference's at 0.04 s,
+    its q2 count at 0.08 s and 0.09 s; at 0.051 s (a reference row the run does not have) the
+    reference's q1 differs from its neighbours; the run's residual peaks at -3e-9 m; its i1 is
+    0.5 A above the reference's."""
+    t_ref, t_run = np.arange(101) * 1e-3, np.arange(51) * 2e-3
+    q1, q2 = np.arange(101.0), 2.0 * np.arange(101.0)
+    q1[51] = 1e6
+    reference = _Run(t_ref, {"plant.x": np.zeros(101), "plant.y": np.zeros(101), "plant.q1_enc": q1,
+                             "plant.q2_enc": q2},
+                     columns={"i1": np.ones(101), "i2": np.ones(101), "v1": np.full(101, 2.0), "v2": np.full(101, 2.0)})
+    run_q1, run_q2 = q1[::2].copy(), q2[::2].copy()
+    run_q1[20] += 1.0
+    run_q2[40] -= 1.0
+    run_q2[45] += 3.0
+    residual = np.full(51, 1e-12)
+    residual[33] = -3e-9
+    signals = {"plant.x": np.zeros(51), "plant.y": np.zeros(51), "plant.q1_enc": run_q1, "plant.q2_enc": run_q2,
+               "plant.residual": residual}
+    for name, value in (("i1", 1.5), ("i2", 1.0), ("v1", 2.0), ("v2", 2.0)):
+        signals[scene.columns[name]] = np.full(51, value)
+    return _Run(t_run, signals), reference
+
+
+def test_the_residual_encoder_and_current_columns_are_read_from_both_runs():
+    """The residual is the run's largest |residual|; the encoder columns count the common rows
+    where either count differs (3: 0.04, 0.08, 0.09 s; not the reference's own row 0.051 s) and
+    the first one's time; the current error is the RMS over both drives of the common rows' gap
+    (0.5 A on drive 1).  Catches the encoders compared only when the reference lacks them, one
+    encoder left out, rows the run does not have compared, the residual's sign kept."""
+    scene = get_scene("bench_circle_TCMDx")
+    result, reference = _encoder_runs(scene)
+    row = measure(result, reference, scene)
+    assert row["residual_m"] == 3e-9
+    assert (row["enc_diff"], row["enc_first_s"]) == (3, pytest.approx(0.04, abs=1e-15))
+    assert row["current_err_A"] == pytest.approx(0.5, rel=1e-12)
+    assert row["rms_err_m"] == 0.0 and row["max_err_m"] == 0.0
+
+
+@pytest.mark.parametrize("missing", ["reference encoder", "run encoder", "residual", "reference voltage",
+                                     "no energy"])
+def test_a_column_either_run_lacks_is_left_empty(missing):
+    """Without an encoder signal in either run the encoder columns stay empty ("" and NaN);
+    without the run's residual, NaN; without one of the reference's drive columns, the current
+    and energy errors are NaN; a reference that draws no energy gives no relative energy error.
+    Catches an encoder column filled from one run's signals, a missing column read as zeros,
+    a division by a zero energy."""
+    scene = get_scene("bench_circle_TCMDx")
+    result, reference = _encoder_runs(scene)
+    if missing == "reference encoder":
+        del reference.signals["plant.q2_enc"]
+    elif missing == "run encoder":
+        del result.signals["plant.q1_enc"]
+    elif missing == "residual":
+        del result.signals["plant.residual"]
+    elif missing == "reference voltage":
+        del reference.columns["v2"]
+    else:
+        reference.columns["v1"][:] = reference.columns["v2"][:] = 0.0
+    row = measure(result, reference, scene)
+    encoders = missing in ("reference encoder", "run encoder")
+    assert (row["enc_diff"] == "" and np.isnan(row["enc_first_s"])) if encoders else row["enc_diff"] == 3
+    assert np.isnan(row["residual_m"]) == (missing == "residual")
+    assert np.isnan(row["current_err_A"]) == (missing == "reference voltage")
+    assert np.isnan(row["energy_err"]) == (missing in ("reference voltage", "no energy"))
