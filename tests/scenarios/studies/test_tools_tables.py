@@ -105,3 +105,37 @@ def test_the_summary_gives_each_tools_ranges_over_the_scenes():
     libcosim = next(line for line in lines if line.startswith("| default | libcosim |"))
     assert libcosim == "| default | libcosim | – | – | 0/1 | – | – | – |"
     assert math.isnan(tools._ratio(1.0, 0.0)) and math.isnan(tools._ratio(None, 1.0))
+
+
+def test_the_stored_runs_come_back_by_kind_then_scene_each_with_its_tools_in_the_order_asked():
+    """stored_rows on runs stored in a scrambled order: the (kind, scene) groups in the order of
+    KINDS, then TABLE_SCENES (a kind or scene outside them last); each group's rows in the order
+    of the tools asked, each with its own metrics and our master's on that scene; our runs, the
+    trials, a tool not asked and a scene without our run left out.  Catches the order of the
+    kinds or scenes reversed or ignored, a row given another scene's master run, a tool not
+    asked shown."""
+    def run(value):
+        return {"metrics": {"e_ef_mm": value}, "error": None}
+
+    scenes = ("bench_triangle_TCMDx", "thesis_sim_circle", "bench_circle_PDq")
+    stored = {tools._key("ours", s, "parcosim"): {"e_ef_mm": float(i)} for i, s in enumerate(scenes)}
+    stored[tools._key("ours", "my_scene", "parcosim")] = {"e_ef_mm": 9.0}
+    stored[tools._key("trial", "bench_circle_PDq", "per-component")] = {"substeps": 4}
+    for i, (kind, scene, tool) in enumerate((
+            ("per-component", "bench_triangle_TCMDx", "libcosim"), ("my_kind", "thesis_sim_circle", "fmpy"),
+            ("default", "my_scene", "fmpy"), ("per-component", "bench_triangle_TCMDx", "fmpy"),
+            ("default", "bench_circle_PDq", "ecos"), ("default", "thesis_sim_circle", "fmpy"),
+            ("default", "bench_circle_PDq", "fmpy"), ("internal-observer", "no_master_run", "fmpy"),
+            ("per-component", "thesis_sim_circle", "libcosim"))):
+        stored[tools._key(kind, scene, tool)] = run(10.0 + i)
+    found = tools.stored_rows(stored, ["fmpy", "ecos"])
+    assert list(found) == [("default", "thesis_sim_circle"), ("default", "bench_circle_PDq"), ("default", "my_scene"),
+                           ("per-component", "bench_triangle_TCMDx"), ("my_kind", "thesis_sim_circle")]
+    assert [(t, m["e_ef_mm"], o["e_ef_mm"], e) for t, m, o, e in found[("default", "bench_circle_PDq")]] == [
+        ("fmpy", 16.0, 2.0, None), ("ecos", 14.0, 2.0, None)]
+    assert [(t, m["e_ef_mm"], o["e_ef_mm"]) for t, m, o, _ in found[("per-component", "bench_triangle_TCMDx")]] == [
+        ("fmpy", 13.0, 0.0)]
+    assert [(t, o["e_ef_mm"]) for t, _, o, _ in found[("default", "my_scene")]] == [("fmpy", 9.0)]
+    everything = tools.stored_rows(stored)
+    assert [t for t, *_ in everything[("per-component", "bench_triangle_TCMDx")]] == ["fmpy", "libcosim"]
+    assert ("per-component", "thesis_sim_circle") in everything and ("internal-observer", "no_master_run") not in everything
