@@ -106,3 +106,24 @@ def test_e_ss_1s_needs_the_run_to_reach_one_second_after_the_stop():
     ex, ey = (c["x_d"] - c["x"])[last], (c["y_d"] - c["y"])[last]
     assert m["e_ss_mm"] == pytest.approx(1e3 * _rms(zip(ex, ey)), rel=1e-12)
     assert m["e_ss_x_mm"] == pytest.approx(1e3 * sum(ex) / len(ex), rel=1e-12)
+
+
+@pytest.mark.parametrize("name, sides", [("bench_circle_TCMDx", None), ("bench_triangle_TCMDx", 3)])
+def test_a_run_without_a_single_row_has_no_metric_and_no_simulated_time(name, sides):
+    """A run stopped before its first row (a refusal at initialisation): every error and the
+    steady state NaN (a triangle's three sides too), nothing settled, 0 s simulated, a real-time
+    factor of 0 over a wall time and NaN over none, the given times and the scene's own names
+    and window kept.  Catches a default other than 0 s for the simulated time (a run that never
+    started counted as having run), an empty mean taken as 0, a division by a zero wall time."""
+    scene = get_scene(name)
+    empty = {k: np.empty(0) for k in ("t", "x", "y", "x_d", "y_d", "tau1", "tau2")}
+    m = scene_metrics(scene, empty, wall_s=0.5, completed=False, init_s=0.125)
+    for key in ("e_ef_mm", "tau_ef_Nm", "e_ss_mm", "e_ss_x_mm", "e_ss_y_mm", "t_settle_s", "e_ss_1s_mm", "e_max_mm"):
+        assert math.isnan(m[key]), key
+    assert (m["simulated_s"], m["wall_s"], m["init_s"], m["realtime_factor"]) == (0.0, 0.5, 0.125, 0.0)
+    assert m["settled"] is False and m["completed"] is False
+    assert (m["scene"], m["strategy"], m["window_s"]) == (name, scene.strategy, list(scene.window))
+    assert ("e_contour_sides_mm" in m) == (sides is not None)
+    if sides:
+        assert len(m["e_contour_sides_mm"]) == sides and all(math.isnan(e) for e in m["e_contour_sides_mm"])
+    assert math.isnan(scene_metrics(scene, empty, wall_s=0.0, completed=False)["realtime_factor"])
