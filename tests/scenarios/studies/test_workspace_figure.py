@@ -56,6 +56,49 @@ def test_the_figure_draws_the_controllers_table_and_each_checked_circle_where_th
     assert (xs[250], ys[250]) == pytest.approx((cx + r, cy), abs=1e-12)
 
 
+def test_each_legend_entry_looks_like_what_it_labels(tmp_path, monkeypatch):
+    """plot_workspace("bench") with a small circle and one far beyond the controller's table:
+    each trajectory's line has the colour, width and style of its legend entry (one entry per
+    trajectory, in their order), the table's rectangle those of its entry, and each kind of
+    refusal that occurs is marked on the trajectory's refused samples with its entry's marker
+    in red.  Catches a line drawn other than its legend says (colour, width, style), a
+    trajectory or refusal missing from the legend, a refusal marked with another kind's
+    marker or at other samples."""
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import to_rgba
+    from matplotlib.patches import Rectangle
+
+    kept = []
+    close = plt.close
+    monkeypatch.setattr(plt, "close", lambda fig=None: kept.append(fig) or close(fig))
+    report = plot.plot_workspace("bench", tmp_path, step=0.01, circles=[(0.0, 0.2, 0.03), (0.0, 0.05, 0.2)])
+    ax = kept[0].axes[0]
+    legend = ax.get_legend()
+    entries = {t.get_text(): h for h, t in zip(legend.legend_handles, legend.get_texts())}
+    names = [c.name for c in report.trajectories]
+    assert [label for label in entries if label in names] == names
+    for check in report.trajectories:
+        line = next(li for li in ax.lines if np.array_equal(li.get_xdata(), check.x)
+                    and np.array_equal(li.get_ydata(), check.y) and li.get_linestyle() != "None")
+        entry = entries[check.name]
+        assert to_rgba(line.get_color()) == to_rgba(entry.get_color()), check.name
+        assert (line.get_linewidth(), line.get_linestyle()) == (entry.get_linewidth(), entry.get_linestyle())
+    box = next(p for p in ax.patches if isinstance(p, Rectangle) and not p.get_fill())
+    table = entries["controller table (outside the band)"]
+    assert to_rgba(box.get_edgecolor()) == to_rgba(table.get_color())
+    assert (box.get_linewidth(), box.get_linestyle()) == (table.get_linewidth(), table.get_linestyle())
+    refused = [(check, reason, idx) for check in report.trajectories for reason, idx in check.refused.items()
+               if len(idx)]
+    assert refused and {f"refused: {reason}" for _, reason, _ in refused} == {
+        label for label in entries if label.startswith("refused: ")}
+    for check, reason, idx in refused:
+        entry = entries[f"refused: {reason}"]
+        marks = next(li for li in ax.lines if li.get_linestyle() == "None"
+                     and np.array_equal(li.get_xdata(), check.x[idx]) and np.array_equal(li.get_ydata(), check.y[idx]))
+        assert marks.get_marker() == entry.get_marker() and to_rgba(marks.get_color()) == to_rgba("#e74c3c")
+        assert to_rgba(entry.get_color()) == to_rgba("#e74c3c")
+
+
 def test_the_printed_summary_names_each_trajectorys_margin_and_refusals_from_their_first_time():
     """``parcosim workspace``'s lines, from made-up checks at a 2 ms sample time: the figure's
     path, then per trajectory its smallest margin beside the band and "accepted", or the time
