@@ -92,6 +92,25 @@ def test_the_comparison_table_gives_each_tools_ratios_step_and_cpu():
     assert lines[4] == "| default | bench_circle_TCMDx | libcosim | – | – (0.5) | – | – | no: RuntimeError: no | – |"
 
 
+def test_a_run_shorter_than_a_millisecond_is_charged_its_cpu_over_one_millisecond():
+    """CPU per simulated ms for runs that stopped early: 3 ms of CPU over 0.5 ms simulated (or
+    none) count over one ms (3000 µs), not over the fraction (6000 µs, or a division by zero);
+    over 4 ms, 750 µs; a run without a CPU figure, "–"; no step stored: 1 ms; a tool's run
+    without a key (a plain scene name) is of the default kind.  Catches the floor of one ms
+    changed or dropped, the CPU time taken in ms, a stored step ignored."""
+    ours = {"e_ef_mm": 0.5, "tau_ef_Nm": 0.02}
+    base = {"e_ef_mm": 1.0, "tau_ef_Nm": 0.04, "completed": False}
+    rows = [("fmpy", {**base, "cpu_s": 3e-3, "simulated_s": 5e-4}, ours, "stopped"),
+            ("ecos", {**base, "cpu_s": 3e-3, "simulated_s": 0.0}, ours, "stopped"),
+            ("libcosim", {**base, "cpu_s": 3e-3, "simulated_s": 4e-3, "step": 2.5e-4}, ours, "stopped"),
+            ("fmpy", {**base, "simulated_s": 4e-3}, ours, "stopped")]
+    lines = tools.table({"bench_circle_TCMDx": rows}).splitlines()[2:]
+    assert lines == ["| default | bench_circle_TCMDx | fmpy | 1 | 1 (0.5) | 2.0000 | 2.0000 | no: stopped | 3000 |",
+                     "| default | bench_circle_TCMDx | ecos | 1 | 1 (0.5) | 2.0000 | 2.0000 | no: stopped | 3000 |",
+                     "| default | bench_circle_TCMDx | libcosim | 0.25 | 1 (0.5) | 2.0000 | 2.0000 | no: stopped | 750 |",
+                     "| default | bench_circle_TCMDx | fmpy | 1 | 1 (0.5) | 2.0000 | 2.0000 | no: stopped | – |"]
+
+
 def test_the_summary_gives_each_tools_ranges_over_the_scenes():
     """Catches the summary's ranges, completion counts or CPU figures computed over the wrong rows, or a
     tool that never ran given numbers."""
