@@ -107,6 +107,7 @@ RULES = [
     ("test_reference_*.py", "scenarios/run"),
     ("test_sweep*.py", "scenarios/batch"),
     ("test_engine*.py", "scenarios/batch"),
+    ("test_worker_path*.py", "scenarios/batch"),
     ("test_regression*.py", "scenarios/batch"),
     ("test_report*.py", "scenarios/batch"),
     ("test_package*.py", "scenarios/packaging"),
