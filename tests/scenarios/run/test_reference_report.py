@@ -38,6 +38,7 @@ def test_the_variants_decompose_the_deviation_of_a_lugre_scene(capsys):
     assert reference.main(["bench_real_circle_TCMDx", "--stop-time", "0.02", "--variants"]) == 0
     out = capsys.readouterr().out
     assert "STOPPED" not in out
+    assert out.startswith("bench_real_circle_TCMDx, 0-0.02 s: reference DOP853 rtol 1e-10 atol 1e-13, ")  # defaults
     master = _rms(out, "master - reference")
     assert master > 1e-7
     assert _rms(out, "reference(cosim coupling) - reference") == pytest.approx(master, rel=0.02)
@@ -86,3 +87,59 @@ def test_the_reference_refuses_what_it_cannot_integrate_naming_what_and_why():
         "drive drive2: controller period T = 0.002 s differs from the step 0.001 s"
     message = refusal(reference.ReferenceError, reference.with_parameters(scene.system, "drive2", L=0.0))
     assert message.startswith("drive2: initialisation refused: ") and "needs L > 0, got L=0.0 (t = 0 s)" in message
+
+
+def test_the_report_at_given_tolerances_prints_each_comparison_over_each_window(capsys):
+    """``python -m scenarios.reference SCENE --stop-time 0.12 --rtol 1e-8 --atol 1e-11
+    --convergence``: the header names the scene, the stop, the method and the tolerances given;
+    the convergence lines compare runs at rtol, atol / 2 and / 10 with the reference, and the
+    master's line the master, each over the whole run and the windows [0, 0.1] and [0.1, 0.12],
+    every figure that of ``deviation`` of runs made here with those tolerances; without
+    --variants nothing more.  Catches the tolerances not reaching the runs, a factor applied to
+    one of them only, a window's edge moved, a line comparing other runs."""
+    from dataclasses import replace
+
+    from fmus.cosim.master import simulate
+    from scenarios.scenes.catalogue import get_scene
+
+    assert reference.main(["bench_circle_TCMDx", "--stop-time", "0.12", "--rtol", "1e-8", "--atol", "1e-11",
+                           "--convergence"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    system = replace(get_scene("bench_circle_TCMDx").system, stop_time=0.12)
+    ref = reference.reference_run(system, rtol=1e-8, atol=1e-11)
+    assert lines[0].startswith("bench_circle_TCMDx, 0-0.12 s: reference DOP853 rtol 1e-08 atol 1e-11, ")
+    assert lines[0].endswith(f"{ref.nfev} evaluations, {ref.extra['mean_steps_per_interval']:.2f} steps per interval")
+
+    def line(label, result):
+        parts = [f"{label:<44s}"]
+        d = reference.deviation(result, ref)
+        parts.append(f"all: rms {d['rms']:.2e} max {d['max']:.2e} (t {d['t_max']:.3f})")
+        for a, b in ((0.0, 0.1), (0.1, 0.12)):
+            d = reference.deviation(result, ref, a, b)
+            parts.append(f"[{a:g},{b:g}]: rms {d['rms']:.2e} max {d['max']:.2e}")
+        return " | ".join(parts)
+
+    half = reference.reference_run(system, rtol=5e-9, atol=5e-12)
+    tenth = reference.reference_run(system, rtol=1e-9, atol=1e-12)
+    assert lines[1] == line("reference at rtol, atol / 2", half)
+    assert lines[2] == line("reference at rtol, atol / 10", tenth)
+    assert lines[3].startswith("master (in-process, defaults): ") and "STOPPED" not in lines[3]
+    assert lines[4] == line("master - reference", simulate(system)) and len(lines) == 5
+    assert reference.deviation(half, ref)["max"] > 0.0
+
+
+def test_the_windows_split_at_a_tenth_of_a_second_and_where_the_reference_stops():
+    """Catches the first window's end not clipped to a short run, the reference's end added
+    when it lies beyond the run (or for a bare System, which has none), an empty window."""
+    from dataclasses import replace
+
+    from scenarios.scenes.catalogue import get_scene
+
+    scene = get_scene("bench_circle_TCMDx")
+    assert reference._windows(0.05, scene) == [(0.0, 0.05)]
+    assert reference._windows(0.1, scene) == [(0.0, 0.1)]
+    assert reference._windows(0.3, scene) == [(0.0, 0.1), (0.1, 0.3)]
+    ends = replace(scene, reference_end=0.2)
+    assert reference._windows(0.3, ends) == [(0.0, 0.1), (0.1, 0.2), (0.2, 0.3)]
+    assert reference._windows(0.2, ends) == [(0.0, 0.1), (0.1, 0.2)]
+    assert reference._windows(0.3, ends.system) == [(0.0, 0.1), (0.1, 0.3)]
