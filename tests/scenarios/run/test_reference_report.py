@@ -61,8 +61,10 @@ def test_the_reference_refuses_what_it_cannot_integrate_naming_what_and_why():
     """Each refusal names the culprit: a non-scene (its type), no FiveBarPlant (and, for the scene
     with its drives in the plant, why), an unknown coupling (the valid ones), an unknown
     parameter (component, model, name), a drive whose period differs from the step (both values),
-    and a drive the initialisation refuses (its message and time).  Catches a refusal that
-    names another component or value, or a check skipped."""
+    a drive the initialisation refuses (its message and time), a voltage-mode drive without
+    inductance given through ``system_changes``, an unknown model, a drive fed another joint's
+    speed.  Catches a refusal that names another component or value, a check skipped, the
+    system changes not applied."""
     from scenarios.scenes.catalogue import get_scene
     from scenarios.scenes.transforms import drives_in_plant
 
@@ -87,6 +89,18 @@ def test_the_reference_refuses_what_it_cannot_integrate_naming_what_and_why():
         "drive drive2: controller period T = 0.002 s differs from the step 0.001 s"
     message = refusal(reference.ReferenceError, reference.with_parameters(scene.system, "drive2", L=0.0))
     assert message.startswith("drive2: initialisation refused: ") and "needs L > 0, got L=0.0 (t = 0 s)" in message
+    assert refusal(reference.ReferenceError, scene, system_changes=lambda s: reference.with_parameters(
+        s, "drive2", L=0.0, mode="voltage")) == "drive drive2: L = 0 has no electrical state to integrate"
+    from dataclasses import replace
+
+    from fmus.cosim.system import Connection
+
+    unknown = replace(scene.system, components=tuple(replace(c, model="NoSuchModel") if c.name == "obs1" else c
+                                                     for c in scene.system.components))
+    assert refusal(reference.ReferenceError, unknown).startswith("component obs1: unknown model 'NoSuchModel'; valid: ")
+    crossed = replace(scene.system, connections=tuple(Connection("plant.dq2", c.target) if c.target == "drive1.omega"
+                                                      else c for c in scene.system.connections))
+    assert refusal(reference.ReferenceError, crossed) == "drive drive1: omega must be plant.dq1 (got plant.dq2)"
 
 
 def test_the_report_at_given_tolerances_prints_each_comparison_over_each_window(capsys):

@@ -132,3 +132,35 @@ def test_refuses_what_it_cannot_integrate():
         reference_run(system)
     with pytest.raises(ValueError, match="coupling"):
         reference_run("bench_circle_TCMDx", stop_time=0.01, coupling="jacobi")
+
+
+@pytest.mark.parametrize("name", ["bench_circle_TCMDx", "bench_real_circle_TCMDq"])
+def test_the_mean_torque_what_if_is_the_cosim_coupling_when_each_drive_outputs_its_mean(name):
+    """With ``torque_output = "mean"`` a drive already hands the plant its torque averaged over
+    the step, so the ``"mean"`` what-if (the plant held at the mean torque: B.2 of the exact
+    current's mean for the ideal drives, the drive's own mean for LuGre ones) gives the rows of
+    the co-simulation's coupling, every signal to 1e-12, while the monolithic reference differs
+    by the coupling error (> 1e-7 m).  Catches the mean torque of another current, speed or
+    step, the plant given the torque at the sample instead, a LuGre drive's mean not its own."""
+    system = replace(get_scene(name).system, stop_time=STOP)
+    assert all(c.parameters["torque_output"] == "mean" for c in _drives(system))
+    mean = reference_run(system, coupling="mean")
+    cosim = reference_run(system, coupling="cosim")
+    assert mean.completed and cosim.completed and mean.signals.keys() == cosim.signals.keys()
+    assert max(np.max(np.abs(mean[s] - cosim[s])) for s in mean.signals) < 1e-12
+    monolithic = reference_run(system)
+    assert np.max(np.hypot(monolithic["plant.x"] - cosim["plant.x"], monolithic["plant.y"] - cosim["plant.y"])) > 1e-7
+
+
+def test_the_mean_what_if_of_a_lugre_drive_with_the_torque_at_the_end_stops_naming_it():
+    """A LuGre drive whose torque output is the step's end: the what-if cannot take its mean, the
+    run stops at its first step with the drive's refusal, the initial row kept.  Catches the
+    what-if run with the end torque as if it were the mean."""
+    from scenarios.reference import with_parameters
+
+    system = with_parameters(replace(get_scene("bench_real_circle_TCMDq").system, stop_time=STOP), "drive1",
+                             torque_output="end")
+    run = reference_run(system, coupling="mean")
+    assert not run.completed and len(run.time) == 1
+    assert run.error == ("drive1 refused the step from t = 0 s: drive drive1: the 'mean' what-if of a LuGre drive "
+                         "needs torque_output = 'mean' (its own mean torque)")
