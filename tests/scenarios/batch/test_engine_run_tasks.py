@@ -50,3 +50,62 @@ def test_no_task_is_done_at_once_and_repeated_keys_are_refused(client):
     assert run_tasks([], client=client, progress=fractions.append) == {} and fractions == [1.0]
     with pytest.raises(ValueError, match="task keys must be unique"):
         run_tasks([Task("a", _short()), Task("a", _short())], client=client)
+
+
+def _raising(task):
+    raise MemoryError(f"worker of {task.key} ran out of memory")
+
+
+def test_a_task_whose_worker_raises_is_a_failed_row_naming_the_exception(client, monkeypatch):
+    """A worker failure (the task's function itself raising, as a KilledWorker does): that task's
+    row has no metric, the scene's name, outcome ``failed`` and the exception's type and message
+    as its error; the other tasks are unaffected.  Catches a raising task ending the whole call
+    or giving another task's row."""
+    from scenarios.batch import engine
+
+    def run_task(task):
+        return _raising(task) if task.key == "b" else {"scene": task.scene.name, "e_ef_mm": 0.5, "key": task.key}
+
+    monkeypatch.setattr(engine, "run_task", run_task)
+    results = run_tasks([Task(k, _short()) for k in ("a", "b", "c")], client=client)
+    assert results["a"] == {"scene": "bench_circle_PDq", "e_ef_mm": 0.5, "key": "a"} and results["c"]["key"] == "c"
+    failed = results["b"]
+    assert {k: failed[k] for k in ("scene", "outcome", "completed", "settled")} == {
+        "scene": "bench_circle_PDq", "outcome": "failed", "completed": False, "settled": False}
+    assert failed["error"]["message"] == "MemoryError: worker of b ran out of memory"
+    assert failed["error"]["kind"] == "failed"
+    for name in ("e_ef_mm", "tau_ef_Nm", "e_ss_mm", "e_ss_1s_mm", "t_settle_s", "wall_s"):
+        assert failed[name] != failed[name], name      # NaN
+
+
+def test_without_a_client_it_opens_one_with_the_options_and_builds_fmus_once(client, monkeypatch):
+    """No client: one is opened with the scheduler, workers and processes given, and used; tasks
+    in ``fmu`` mode have their FMUs built once beforehand, every model named once, sorted
+    (an FMU file given by path is not built).  Catches the options not reaching the cluster,
+    a second cluster, models built per task or not at all."""
+    import contextlib
+
+    from fmus.export import build
+    from scenarios.batch import engine
+
+    opened, built = [], []
+
+    @contextlib.contextmanager
+    def open_client_(scheduler=None, workers=None, processes=True):
+        opened.append((scheduler, workers, processes))
+        yield client
+
+    monkeypatch.setattr(engine, "open_client", open_client_)
+    monkeypatch.setattr(build, "ensure_built", built.append)
+    monkeypatch.setattr(engine, "run_task", lambda task: {"key": task.key})
+    scene = _short()
+    by_file = replace(scene, system=replace(scene.system, components=tuple(
+        replace(c, model="/nowhere/Derivator.fmu") if c.name == "deriv" else c for c in scene.system.components)))
+    tasks = [Task("a", scene, mode="fmu"), Task("b", by_file, mode="fmu"), Task("c", scene)]
+    results = run_tasks(tasks, scheduler="tcp://example:8786", workers=3, processes=False)
+    assert results == {k: {"key": k} for k in "abc"}
+    assert opened == [("tcp://example:8786", 3, False)]
+    models = sorted({c.model for c in scene.system.components})
+    assert built == [models]
+    run_tasks([Task("d", scene)], client=client)
+    assert len(built) == 1
