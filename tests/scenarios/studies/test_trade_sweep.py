@@ -114,3 +114,72 @@ def test_the_encoders_are_those_of_the_plant_the_reference_names():
     row = trade.measure(run, reference, scene)
     assert (row["enc_diff"], row["enc_first_s"]) == (1, 2e-3)
     assert row["rms_err_m"] == pytest.approx(5e-3, rel=1e-12)
+
+
+def test_a_setting_runs_its_mode_and_coupling_and_a_run_that_cannot_start_is_its_message(monkeypatch):
+    """``_run_setting``: the scene's system run in the setting's mode and coupling, its call and
+    CPU times stored on the result; a run that raises gives no result and the exception's type
+    and message.  Catches the setting's mode or coupling not passed on, the exception ending
+    the sweep."""
+    scene = get_scene("thesis_sim_circle")
+    asked = []
+
+    def simulate(system, mode, coupling):
+        asked.append((system, mode, coupling))
+        if coupling == "jacobi":
+            raise OSError("the FMU did not build")
+        return _Run(np.arange(3) * 1e-3, {})
+
+    monkeypatch.setattr(trade, "simulate", simulate)
+    setting = Setting("s", "accuracy", "s", lambda s: s, mode="fmu", coupling="gauss-seidel")
+    result, failure = trade._run_setting(setting, scene)
+    assert failure is None and asked == [(scene.system, "fmu", "gauss-seidel")]
+    assert result.extra["call_s"] >= 0.0 and result.extra["cpu_s"] >= 0.0
+    broken = Setting("b", "accuracy", "b", lambda s: s, coupling="jacobi")
+    assert trade._run_setting(broken, scene) == (None, "OSError: the FMU did not build")
+
+
+def test_a_setting_that_does_not_apply_is_skipped_and_a_run_that_stopped_keeps_its_error(monkeypatch):
+    """A setting whose scene is None (it does not apply) is neither run nor a row, but listed as
+    skipped; a run that stopped with an error is measured and its row carries the error; every
+    setting runs a warm-up first, cut at WARM_UP_S.  Catches a skipped setting run or lost, the
+    run's error dropped from its row, the warm-up run whole."""
+    scene = get_scene("thesis_sim_circle")
+    stops = []
+
+    class Stopped(_Run):
+        def __init__(self):
+            super().__init__(np.arange(3) * 1e-3, {sig: np.zeros(3) for sig in scene.system.record},
+                             extra={"call_s": 0.5, "cpu_s": 0.25})
+            self.error = "plant refused the step from t = 0.002 s"
+
+    def fake_run(setting, s):
+        stops.append((setting.name, s.system.stop_time))
+        return Stopped(), None
+
+    monkeypatch.setattr(trade, "_run_setting", fake_run)
+    monkeypatch.setattr(trade, "measure", lambda result, reference, s: {"rms_err_m": 1e-6})
+    monkeypatch.setattr(trade, "scene_metrics", lambda *args: {"e_ef_mm": 0.5})
+    chosen = [Setting("no", "fidelity", "no", lambda s: None), Setting("yes", "accuracy", "yes", lambda s: s)]
+    rows, skipped = trade._sweep(scene, chosen, None, 1, lambda text: None)
+    assert skipped == ["no"] and [r["setting"] for r in rows] == ["yes"]
+    assert stops == [("yes", min(scene.system.stop_time, trade.WARM_UP_S)), ("yes", scene.system.stop_time)]
+    assert rows[0]["error"] == "plant refused the step from t = 0.002 s"
+    assert (rows[0]["wall_s"], rows[0]["cpu_s"], rows[0]["rms_err_m"], rows[0]["e_ef_mm"]) == (0.5, 0.25, 1e-6, 0.5)
+
+
+def test_two_runs_of_one_setting_that_differ_stop_the_sweep_naming_it(monkeypatch):
+    """The study times the best of several identical runs: a setting whose second run moves the
+    plant differently is refused by name.  Catches the check comparing a run with itself or
+    with the warm-up."""
+    scene = get_scene("thesis_sim_circle")
+    runs = iter([0.0, 0.0, 1e-9])       # the warm-up, the first round, the second round
+
+    def fake_run(setting, s):
+        x = next(runs)
+        return _Run(np.arange(3) * 1e-3, {**{sig: np.zeros(3) for sig in s.system.record}, "plant.x": np.full(3, x)},
+                    extra={"call_s": 0.1, "cpu_s": 0.1}), None
+
+    monkeypatch.setattr(trade, "_run_setting", fake_run)
+    with pytest.raises(RuntimeError, match=r"^fast: two runs of the same setting differ$"):
+        trade._sweep(scene, [Setting("fast", "accuracy", "fast", lambda s: s)], None, 2, lambda text: None)
