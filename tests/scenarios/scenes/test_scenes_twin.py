@@ -43,3 +43,28 @@ def test_the_twin_file_is_utf8_under_an_ascii_locale(tmp_path):
     text = path.read_bytes().decode("utf-8")
     assert "μ" in text and "ω" in text and 'note = "ω μ"' in text
     assert load_twin(path) == twin
+
+
+def test_the_fits_record_of_every_kind_reads_back_and_a_missing_or_broken_file_is_refused(tmp_path):
+    """write_twin's ``[fit]`` with booleans, nested lists, a text with a backslash and quotes and
+    an integer reads back equal (read_fit); a missing file and one that is not TOML are refused
+    naming the file and the reason.  Catches a boolean written as Python's True (not TOML), a
+    list's items unquoted, the escapes in the wrong order, an unreadable file passing as empty."""
+    from controller.strategies import STRATEGY_NAMES
+    from scenarios.scenes.twin import read_fit, write_twin
+
+    fit = {"ok": True, "off": False, "ends": [[1.0, 2.5], [3.0, "x"]], "text": 'back\\slash "q"', "n": 7}
+    path = write_twin(Twin(friction_scale=1.5), fit, tmp_path / "twin.toml")
+    assert read_fit(path) == fit and load_twin(path) == Twin(friction_scale=1.5)
+    missing = tmp_path / "none.toml"
+    with pytest.raises(ValueError, match=rf"^twin file {missing}: \[Errno 2\] No such file or directory"):
+        load_twin(missing)
+    path.write_text("[parameters\nfriction_scale = 1.0\n", encoding="utf-8")
+    with pytest.raises(ValueError, match=rf"^twin file {path}: Expected ']'"):
+        load_twin(path)
+    with pytest.raises(ValueError) as refusal:
+        bench_real("XYZ")
+    assert str(refusal.value) == f"strategy = 'XYZ'; the twin has the thesis' eight: {', '.join(STRATEGY_NAMES)}"
+    with pytest.raises(ValueError) as refusal:
+        bench_real(STRATEGY_NAMES[0], kind="square")
+    assert str(refusal.value) == f"kind = 'square'; valid: {', '.join(KINDS)}"
