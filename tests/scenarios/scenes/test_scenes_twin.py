@@ -53,7 +53,8 @@ def test_the_fits_record_of_every_kind_reads_back_and_a_missing_or_broken_file_i
     from controller.strategies import STRATEGY_NAMES
     from scenarios.scenes.twin import read_fit, write_twin
 
-    fit = {"ok": True, "off": False, "ends": [[1.0, 2.5], [3.0, "x"]], "text": 'back\\slash "q"', "n": 7}
+    fit = {"ok": True, "off": False, "ends": [[1.0, 2.5], [3.0, "x"]], "flags": [True, False],
+           "text": 'back\\slash "q"', "n": 7}
     path = write_twin(Twin(friction_scale=1.5), fit, tmp_path / "twin.toml")
     assert read_fit(path) == fit and load_twin(path) == Twin(friction_scale=1.5)
     missing = tmp_path / "none.toml"
