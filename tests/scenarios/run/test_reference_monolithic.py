@@ -1,5 +1,6 @@
 """The monolithic reference (scenarios/reference.py) on long runs: its convergence, its
-sample-by-sample semantics (its model pieces and short runs: test_reference_samples.py), and the co-simulation measured against it.
+sample-by-sample semantics (its model pieces and short runs: test_reference_samples.py), and the
+co-simulation measured against it.
 
 Numbers are printed (``pytest -s``); asserted are only properties that hold by construction:
 convergence of the reference itself, the ``cosim`` coupling reproducing the master up to the

@@ -72,7 +72,8 @@ def test_each_tool_runs_the_exported_package_and_gets_its_own_row(recorded, tmp_
     assert recorded["runs"] == [("isolated", t, "pkg.ssp", signals, 0.02, 5e-4, t == "fmpy")
                                 for t in ("fmpy", "libcosim", "ecos")]
     assert [(t, e) for t, _, _, e in rows] == [
-        ("fmpy", None), ("libcosim", RunError(RunStatus.FAILED, "OSError: libcosimc.so: cannot open shared object file")),
+        ("fmpy", None),
+        ("libcosim", RunError(RunStatus.FAILED, "OSError: libcosimc.so: cannot open shared object file")),
         ("ecos", RunError(RunStatus.REFUSED, "ecos: plant refused", instance="plant", time=0.01))]
     (_, fmpy, ours, _), (_, failed, _, _), (_, ecos, _, _) = rows
     assert ours == {"e_ef_mm": 0.75, "tau_ef_Nm": 0.5} and failed is None
