@@ -19,7 +19,8 @@ Files in DIR:
   ``e_ss_1s_mm``, ``t_settle_s`` (:mod:`scenarios.run.metrics`), ``completed``, ``outcome``
   (:class:`fmus.status.RunStatus`), the fields of the error's record (:class:`fmus.status.RunError`)
   ``error_instance``, ``error_time``, ``error_variable``, ``error_value``, ``error_unit``,
-  ``error_code``, ``error_reason`` (empty when the sample completed or the field is unknown),
+  ``error_code``, ``error_reason`` (empty when the sample completed or the field is unknown;
+  ``nan`` for ``error_time`` and ``error_value``; an empty one is read back as NaN too),
   ``error`` (its message), ``wall_s``.
   While the sweep runs, each row is appended and flushed to disk as its run finishes, in one
   write: a sweep killed at any point leaves every finished row whole (a torn last line, if
