@@ -136,3 +136,48 @@ def test_with_fmu_files_swaps_the_named_instances_and_says_so(tmp_path):
         "PositionController", "DCMotorDrive", str(fmu.resolve()), "CurrentObserver", "FiveBarPlant"]
     assert scene.system.component("dB").parameters == base.system.component("dB").parameters
     assert scene.system.connections == base.system.connections
+
+
+def test_drives_in_plant_refuses_a_scene_without_one_plant_or_with_a_miswired_drive_naming_the_scene():
+    """A scene without a FiveBarPlant (the wheeled pendulum's) and the crosswise scene with a
+    drive fed the other joint's speed: each refused with the scene's name and the reason.
+    Catches the plant count's check skipped and the wiring's reason not naming the scene."""
+    with pytest.raises(ValueError) as refusal:
+        drives_in_plant(get_scene("pendulum_balance"))
+    assert str(refusal.value) == "scene pendulum_balance: drives_in_plant needs one FiveBarPlant, found 0"
+    scene = _crosswise()
+    crossed = tuple(Connection("plant.dq1", c.target) if c.target == "dA.omega" else c
+                    for c in scene.system.connections)
+    with pytest.raises(ValueError) as refusal:
+        drives_in_plant(replace(scene, system=replace(scene.system, connections=crossed)))
+    assert str(refusal.value) == "scene crosswise: drive dA: omega must be plant.dq2 (got plant.dq1)"
+
+
+@pytest.mark.parametrize("changes, message", [
+    ({"electrics": "magic"}, "electrics = 'magic'; valid: full, euler, quasi_static, ideal"),
+    ({"friction": "glue"}, "friction = 'glue'; valid: "),
+    ({"friction": "lugre", "coulomb": False},
+     "friction = 'lugre' models the dry friction that coulomb = False removes"),
+    ({"electrics": "ideal", "pwm_counts": 960},
+     "electrics = 'ideal' has no drives for friction, pwm_counts, current_offset, current_noise, noise_seed or "
+     "drive_parameters"),
+    ({"electrics": "ideal", "drive_parameters": (("R", 1.0),)}, "electrics = 'ideal' has no drives for ")])
+def test_a_fidelity_that_contradicts_itself_is_refused_word_for_word(changes, message):
+    """Catches each of the bench fidelity's checks skipped or naming another value."""
+    from scenarios.scenes.thesis import Fidelity
+
+    with pytest.raises(ValueError) as refusal:
+        Fidelity(**changes)
+    assert str(refusal.value).startswith(message)
+    assert Fidelity(electrics="ideal").drive_options() == {} and Fidelity(friction="lugre").drive_options() == {
+        "friction": "lugre"}
+
+
+def test_a_bench_of_an_unknown_strategy_is_refused_listing_the_valid_ones():
+    """Catches a bench scene built for a strategy no controller knows (refused later, or not)."""
+    from controller.strategies import ALL_STRATEGY_NAMES
+    from scenarios.scenes.thesis import bench
+
+    with pytest.raises(ValueError) as refusal:
+        bench("PIDx")
+    assert str(refusal.value) == f"strategy = 'PIDx'; valid: {', '.join(ALL_STRATEGY_NAMES)}"
