@@ -109,3 +109,35 @@ def test_without_a_client_it_opens_one_with_the_options_and_builds_fmus_once(cli
     assert built == [models]
     run_tasks([Task("d", scene)], client=client)
     assert len(built) == 1
+
+
+def _slow(task):
+    import time
+
+    if task.key != "a":
+        time.sleep(1.0)
+    return {"key": task.key}
+
+
+def test_an_interrupted_call_cancels_the_tasks_still_pending(client, monkeypatch):
+    """``on_result`` raising at the first result (as a Ctrl-C in the caller does): the exception
+    reaches the caller and the two tasks not done are cancelled on the cluster, the finished one
+    not (the first to finish is "a", which does not sleep, on the one-thread worker).
+    Catches the cancel skipped or given every future."""
+    from scenarios.batch import engine
+
+    cancelled = []
+    cancel = client.cancel
+    monkeypatch.setattr(client, "cancel", lambda futures: cancelled.append(sorted(f.key.split("-")[0]
+                                                                                  for f in futures)) or cancel(futures))
+    monkeypatch.setattr(engine, "run_task", _slow)
+
+    first = []
+
+    def stop(task, metrics):
+        first.append(task.key)
+        raise RuntimeError(f"stopped after {task.key}")
+
+    with pytest.raises(RuntimeError, match="^stopped after [abc]$"):
+        run_tasks([Task(k, _short()) for k in ("a", "b", "c")], client=client, on_result=stop)
+    assert len(first) == 1 and cancelled == [sorted({"a", "b", "c"} - set(first))]
