@@ -105,3 +105,13 @@ def test_a_multi_rate_system_is_refused_and_an_open_loop_has_no_feedback_delay()
     assert feedback_delays(open_rates, "ctrl") == (0, 0)      # the angles' path closes, the rates' does not
     alone = replace(BENCH, components=BENCH.components + (Component("spare", "Derivator", {}),))
     assert feedback_delays(alone, "spare") == (0, 0)
+
+
+def test_a_scene_without_a_start_position_has_no_floor_and_runs_nothing(monkeypatch):
+    """reproducibility of the wheeled pendulum's scene (no component with ``x0`` to shift): 0.0,
+    without a run.  Catches the floor measured by shifting a parameter the scene lacks."""
+    from fmus.cosim import master
+    from scenarios.packaging.per_component import reproducibility
+
+    monkeypatch.setattr(master, "simulate", lambda *args, **kwargs: pytest.fail("nothing is run"))
+    assert reproducibility(get_scene("pendulum_balance")) == 0.0
