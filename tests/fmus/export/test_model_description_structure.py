@@ -91,3 +91,28 @@ def test_the_mark_says_which_model_parcosim_built_and_nothing_else_passes(tmp_pa
     (tmp_path / "text.fmu").write_text("not a zip")
     for path in (foreign, broken, tmp_path / "text.fmu", tmp_path / "missing.fmu"):
         assert built_by_parcosim(path, "Drive") is False, path.name
+
+
+@pytest.mark.parametrize("model", ["FiveBarPlant", "DCMotorDrive", "CurrentObserver", "Trajectory", "Derivator",
+                                   "PositionController", "ActuatedFiveBarPlant", "WheeledPendulum",
+                                   "BalanceController"])
+def test_every_slaves_description_takes_the_builds_model_options(model):
+    """Each slave's modelDescription (its own ``to_xml``: the plain, sampled and drive ones) writes the
+    options the build gives (the state capabilities, the variable step size) on its CoSimulation
+    element, and pythonfmu's defaults without them.  Catches options dropped on the way to pythonfmu
+    (an FMU that can serialise its state but does not say so to the importer)."""
+    import importlib
+
+    from fmus.slave.registry import SLAVES
+
+    cls = getattr(importlib.import_module(f"fmus.slaves.{SLAVES[model]}"), model)
+    from pythonfmu.fmi2slave import FMI2_MODEL_OPTIONS
+
+    names = ("canGetAndSetFMUstate", "canSerializeFMUstate", "canHandleVariableCommunicationStepSize")
+    default = {o.name: str(o.value).lower() for o in FMI2_MODEL_OPTIONS if o.name in names}
+    given = {name: "false" if value == "true" else "true" for name, value in default.items()}   # each flipped
+    assert len(given) == 3
+    cs = cls(instance_name="m").to_xml(given).find("CoSimulation")
+    assert {name: cs.get(name) for name in given} == given, model
+    plain = cls(instance_name="m").to_xml().find("CoSimulation")
+    assert {name: plain.get(name) for name in given} == default, model
