@@ -8,10 +8,13 @@ a state takes of an object (fmus/slave/state.py ``object_fields``): its dict and
 """
 from __future__ import annotations
 
+import hashlib
 import json
+import struct
 
 import pytest
 
+from fmus.cosim.backends import InProcessInstance
 from fmus.slave.base import FmiError
 from fmus.slave.identity import IDENTITY_FILE, read_identity
 from fmus.slaves.parcosim_trajectory import Trajectory
@@ -102,11 +105,6 @@ def test_a_serialised_state_has_the_documented_header_word_for_word(model):
     layout word 1, or 2 for the models whose derivator buffer changed, then the value and a SHA-256 of all
     before it).  Catches a layout version, length or checksum written off the documented table (a state
     of another build then read as this one's)."""
-    import hashlib
-    import struct
-
-    from fmus.cosim.backends import InProcessInstance
-
     instance = InProcessInstance(model, "m")
     instance.enter_initialization({}, 0.0)
     instance.exit_initialization()
