@@ -79,6 +79,7 @@ RULES = [
     ("test_model_description*.py", "fmus/export"),
     ("test_cold_start*.py", "fmus/export"),
     ("test_precompute*.py", "fmus/export"),
+    ("test_initial_outputs*.py", "fmus/export"),
     # fmus/native, fmus/cosim, fmus/systemfmu, fmus/ssp, fmus/hostile
     ("test_native_*.py", "fmus/native"),
     ("test_master*.py", "fmus/cosim"),

@@ -138,3 +138,22 @@ def test_a_plant_adapter_takes_the_python_state_back_whole(model):
     expected = actuated.state() if actuated is not None else sim.y
     adapter.from_python()
     np.testing.assert_array_equal(adapter.state[:len(expected)], expected)
+
+
+def test_a_step_size_a_component_refuses_falls_back_with_the_words_of_its_refusal_at_t_0():
+    """A controller whose sample time T = 1.5 ms the 1 ms step does not divide: the compiled loop
+    declines it with the slave's own step-size refusal at the run's start (t = 0.0 s), word for word
+    as the in-process run's refusal of its first step.  Catches the check made at another time (the
+    reason then names a time the run never reached) or its words replaced."""
+    system = get_scene("bench_circle_PDq").system
+    components = tuple(replace(c, parameters={**c.parameters, "T": 1.5e-3}) if c.name == "ctrl" else c
+                       for c in system.components)
+    system = replace(system, components=components, stop_time=0.01)
+    inproc = simulate(system, mode="inprocess")
+    with pytest.warns(UserWarning, match="running in process instead"):
+        fast = simulate(system, mode="compiled")
+    prefix, words = inproc.error.message.split(": ", 1)
+    assert prefix == "ctrl refused the step from t = 0 s"
+    assert words.startswith("step size h = 0.001 s at t = 0.0 s does not divide the sample time T = 0.0015 s; ")
+    assert fast.mode == "inprocess" and fast.extra["fallback"] == f"component ctrl: {words}"
+    assert fast.error == inproc.error and fast.error.instance == "ctrl"

@@ -5,15 +5,18 @@ archive's other members byte for byte; the build's mark read back and recognised
 own model (issue 31: every exported value read back exactly)."""
 from __future__ import annotations
 
+import importlib
 import json
 import zipfile
 from xml.etree import ElementTree as ET
 
 import pytest
+from pythonfmu.fmi2slave import FMI2_MODEL_OPTIONS
 
 from fmus.export.mark import MARK, built_by_parcosim, mark_file
 from fmus.export.modeldescription import fix_model_structure, model_structure
 from fmus.slave.identity import IDENTITY_FILE
+from fmus.slave.registry import SLAVES
 
 #: (name, causality) of the made-up model's variables, in order: indices 1 to 7.
 VARIABLES = [("k", "parameter"), ("u1", "input"), ("y1", "output"), ("u2", "input"), ("y2", "output"),
@@ -91,3 +94,22 @@ def test_the_mark_says_which_model_parcosim_built_and_nothing_else_passes(tmp_pa
     (tmp_path / "text.fmu").write_text("not a zip")
     for path in (foreign, broken, tmp_path / "text.fmu", tmp_path / "missing.fmu"):
         assert built_by_parcosim(path, "Drive") is False, path.name
+
+
+@pytest.mark.parametrize("model", ["FiveBarPlant", "DCMotorDrive", "CurrentObserver", "Trajectory", "Derivator",
+                                   "PositionController", "ActuatedFiveBarPlant", "WheeledPendulum",
+                                   "BalanceController"])
+def test_every_slaves_description_takes_the_builds_model_options(model):
+    """Each slave's modelDescription (its own ``to_xml``: the plain, sampled and drive ones) writes the
+    options the build gives (the state capabilities, the variable step size) on its CoSimulation
+    element, and pythonfmu's defaults without them.  Catches options dropped on the way to pythonfmu
+    (an FMU that can serialise its state but does not say so to the importer)."""
+    cls = getattr(importlib.import_module(f"fmus.slaves.{SLAVES[model]}"), model)
+    names = ("canGetAndSetFMUstate", "canSerializeFMUstate", "canHandleVariableCommunicationStepSize")
+    default = {o.name: str(o.value).lower() for o in FMI2_MODEL_OPTIONS if o.name in names}
+    given = {name: "false" if value == "true" else "true" for name, value in default.items()}   # each flipped
+    assert len(given) == 3
+    cs = cls(instance_name="m").to_xml(given).find("CoSimulation")
+    assert {name: cs.get(name) for name in given} == given, model
+    plain = cls(instance_name="m").to_xml().find("CoSimulation")
+    assert {name: plain.get(name) for name in given} == default, model

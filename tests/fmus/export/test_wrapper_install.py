@@ -124,13 +124,17 @@ def test_the_wrapper_is_compiled_once_per_source_and_kept_under_its_key(cache, t
 
 def test_a_source_the_compiler_refuses_is_an_error_naming_the_command_and_leaves_nothing(cache, tmp_path,
                                                                                       monkeypatch):
-    """Catches a failed compilation taken as no compiler (None) or leaving a file in the cache."""
+    """Catches a failed compilation taken as no compiler (None), leaving a file in the cache, or its
+    message without the compiler's own diagnostic (its output not captured: the line after the command
+    names the broken file's line 1)."""
     broken = tmp_path / "broken.c"
     broken.write_text("this is not C\n")
     monkeypatch.setattr(wrapper, "SOURCE", broken)
     with pytest.raises(wrapper.WrapperBuildError) as failed:
         wrapper.compiled_wrapper()
     assert str(failed.value).startswith("compiling the FMI wrapper failed (") and str(broken) in str(failed.value)
+    command, diagnostic = str(failed.value).split("):\n", 1)
+    assert str(broken) in command and f"{broken}:1:" in diagnostic, diagnostic
     assert list(cache.iterdir()) == []
 
 

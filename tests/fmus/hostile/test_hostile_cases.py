@@ -176,3 +176,58 @@ def test_a_sets_case_writes_outputs_parameters_and_unknown_references_as_drawn(t
         assert abs(made[what] / total - share) < 0.08, (what, made)
     bare = [row for row in rows if row[2] not in ("parameter", "output")]
     assert set(_sets_made(bare, 60)) == {"set_vr"}
+
+
+def test_only_a_strings_case_names_its_instance_otherwise_and_it_draws_every_hostile_name(table):
+    """A case's instance is named "instance" unless its kind is "strings", whose names are drawn from
+    the five of :func:`make_case` (each drawn in 100 seeds).  Catches the hostile names given to the
+    other kinds (an instance-name refusal then hides what the case is about) or never drawn."""
+    _, rows = table
+    names = ("instance", "%s%s%s%s%n", "é#%41", "a" * 300, "")
+    for kind in KINDS:
+        drawn = Counter(make_case(MODEL, rows, seed, kind=kind, wrapper=True)["instance_name"] for seed in range(100))
+        assert set(drawn) == (set(names) if kind == "strings" else {"instance"}), (kind, drawn)
+
+
+def test_an_order_case_steps_at_the_listed_wrong_points_after_the_time_it_reached(table):
+    """Each communication point an "order" case names is one of 0, -1, t + 0.5, t - 1e-3, NaN, 1e300 with
+    t the sum of the steps before it (every one drawn in 200 seeds, in about 40 % of the steps); the
+    other kinds name none.  Catches a point computed from another time (t - 0.5 for t + 0.5), a wrong
+    point never drawn, or the share off."""
+    _, rows = table
+    seen, named, steps = Counter(), 0, 0
+    for seed in range(200):
+        t = 0.0
+        for op in make_case(MODEL, rows, seed, kind="order")["ops"]:
+            if op[0] != "step":
+                continue
+            steps += 1
+            if op[1] is not None:
+                named += 1
+                labels = {0.0: "0", -1.0: "-1", t + 0.5: "t+0.5", t - 1e-3: "t-1e-3", 1e300: "1e300"}
+                label = "nan" if math.isnan(op[1]) else labels.get(op[1])
+                assert label is not None, (seed, t, op)
+                seen[label] += 1
+            t += op[2]
+    assert set(seen) == {"0", "-1", "t+0.5", "t-1e-3", "nan", "1e300"}, seen
+    assert 0.3 < named / steps < 0.5, (named, steps)
+
+
+def test_a_parameters_case_draws_hostile_values_or_values_near_the_start(table):
+    """A "parameters" case's Real values are hostile (:data:`HOSTILE_REALS`) in about 60 % of the draws and
+    otherwise within 50 % (plus 0.5 % absolute) of the parameter's start.  Catches the spread widened or
+    the draw shifted away from the start (a mistyped bound), or the hostile share off."""
+    _, rows = table
+    start = {row[0]: row[4] for row in rows if row[2] == "parameter" and row[1] == "Real"}
+    hostile = near = 0
+    for seed in range(300):
+        for name, value in make_case(MODEL, rows, seed, kind="parameters")["parameters"]:
+            if name not in start:
+                continue
+            if any(value == h or (math.isnan(value) and math.isnan(h)) for h in HOSTILE_REALS):
+                hostile += 1
+                continue
+            near += 1
+            base = start[name]
+            assert abs(value - base) <= 0.5 * abs(base) + 0.005 * (abs(base) or 1.0) + 1e-15, (name, value, base)
+    assert 0.5 < hostile / (hostile + near) < 0.7, (hostile, near)

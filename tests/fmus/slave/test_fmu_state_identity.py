@@ -8,10 +8,13 @@ a state takes of an object (fmus/slave/state.py ``object_fields``): its dict and
 """
 from __future__ import annotations
 
+import hashlib
 import json
+import struct
 
 import pytest
 
+from fmus.cosim.backends import InProcessInstance
 from fmus.slave.base import FmiError
 from fmus.slave.identity import IDENTITY_FILE, read_identity
 from fmus.slaves.parcosim_trajectory import Trajectory
@@ -87,3 +90,35 @@ def test_an_objects_fields_are_its_dict_and_every_set_slot_of_its_classes():
     assert object_fields(both) == {"c": 3, "a": "x"}
     assert object_fields(object()) is None
     assert object_fields(_Base()) == {}
+
+
+#: docs/state.md's header: the layout word is 1, and 2 for these models (their derivator buffer changed).
+LAYOUT_2 = ("Derivator", "ClosedLoop", "ControlChain")
+IN_PROCESS = ("ActuatedFiveBarPlant", "BalanceController", "CurrentObserver", "DCMotorDrive", "Derivator",
+              "FiveBarPlant", "PositionController", "Trajectory", "WheeledPendulum")
+
+
+@pytest.mark.parametrize("model", IN_PROCESS)
+def test_a_serialised_state_has_the_documented_header_word_for_word(model):
+    """The bytes of an initialised instance's state, read by docs/state.md's table here (magic, version 1,
+    the length of the whole buffer, the model, the GUID ("" in process), 32 bytes of configuration, the
+    layout word 1, or 2 for the models whose derivator buffer changed, then the value and a SHA-256 of all
+    before it).  Catches a layout version, length or checksum written off the documented table (a state
+    of another build then read as this one's)."""
+    instance = InProcessInstance(model, "m")
+    instance.enter_initialization({}, 0.0)
+    instance.exit_initialization()
+    slave = instance.slave
+    data = type(slave)._fmu_state_to_bytes(slave._get_fmu_state())
+    assert data[:8] == b"PCSTATE\0"
+    version, length = struct.unpack_from("<IQ", data, 8)
+    at = 20
+    texts = []
+    for _ in range(2):
+        (n,) = struct.unpack_from("<H", data, at)
+        texts.append(data[at + 2:at + 2 + n].decode())
+        at += 2 + n
+    (layout,) = struct.unpack_from("<I", data, at + 32)
+    assert (version, length, texts) == (1, len(data), [model, ""])
+    assert layout == (2 if model in LAYOUT_2 else 1)
+    assert data[-32:] == hashlib.sha256(data[:-32]).digest()
