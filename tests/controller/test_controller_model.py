@@ -200,3 +200,22 @@ def test_the_complete_cells_are_those_the_kernel_interpolates(tmp_path, monkeypa
             except ModelRangeError:
                 interpolates = False
             assert interpolates == tab.cell_ok[iy, ix], (iy, ix, x, y)
+
+
+def test_the_default_table_is_the_documented_grid(tmp_path, monkeypatch):
+    """docs/controller.md: default step 5 mm, region x in [-0.12, 0.12], y in [0.06, 0.29] m
+    (written here, not read from the module).  The table built without arguments, and the one
+    a default PositionController holds, span it to rounding with 49 x 47 points.  Catches a
+    default extent or step that is not the documented one (a sign lost, an end moved): the
+    controller would then fall back to the exact model, or refuse, on part of the thesis' region."""
+    from controller.position import PositionController
+    from controller.strategies import get_strategy
+
+    monkeypatch.setenv("PARCOSIM_CACHE", str(tmp_path))
+    for tab in (TabulatedModel(BENCH), PositionController(BENCH, get_strategy("TCx")).model):
+        assert isinstance(tab, TabulatedModel)
+        np.testing.assert_allclose([tab.xs[0], tab.xs[-1], tab.ys[0], tab.ys[-1]], [-0.12, 0.12, 0.06, 0.29],
+                                   rtol=0, atol=1e-12)
+        assert (len(tab.xs), len(tab.ys)) == (49, 47)
+        np.testing.assert_allclose(np.diff(tab.xs), 0.005, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(np.diff(tab.ys), 0.005, rtol=0, atol=1e-12)

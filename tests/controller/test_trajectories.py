@@ -6,6 +6,7 @@ import math
 import numpy as np
 import pytest
 
+import kernels
 from controller.trajectories import (PRESET_CYCLES, SMOOTHSTEP_COEFFICIENTS, SMOOTHSTEP_SLOPE_COEFFICIENTS,
                                     TRAJECTORY_KINDS, ReferenceSample, from_parameters, get_trajectory)
 
@@ -239,3 +240,21 @@ def test_a_sampled_trajectory_is_freed_when_dropped_and_its_samples_stay_its_own
     del circle
     gc.collect()
     assert alive() is None
+
+
+@pytest.mark.parametrize("kind", ["circle", "triangle", "hold"])
+def test_a_negative_time_is_refused_with_the_whole_record(kind):
+    """Both call paths (``trajectory(t)`` and the FMU's ``sample_values``) refuse t < 0 with
+    the record read back field by field: reason bad_time, variable t, unit s, the value and
+    the time, and the message word for word.  Catches the reason's variable and unit swapped
+    or wrong (the message alone would not show it)."""
+    from controller.trajectories import sample_buffers, sample_values
+
+    trajectory = from_parameters(kind, PRESET_CYCLES)
+    for call in (trajectory, lambda t: sample_values(trajectory, t, *sample_buffers())):
+        with pytest.raises(kernels.Refused) as caught:
+            call(-0.25)
+        record = caught.value.record()
+        assert (record["reason"], record["variable"], record["unit"], record["value"], caught.value.time) == \
+            ("bad_time", "t", "s", -0.25, -0.25)
+        assert str(caught.value) == "trajectory time must be >= 0 s, got -0.25"

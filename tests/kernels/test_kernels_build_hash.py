@@ -61,3 +61,17 @@ def test_the_command_line_builds_the_plain_library_where_asked(tmp_path, capsys)
     loaded = ctypes.CDLL(str(library))
     loaded.pc_sources_hash.restype = ctypes.c_char_p
     assert loaded.pc_sources_hash().decode() == build.sources_hash()
+
+
+def test_sources_count_as_present_only_with_a_c_file_in_src(tmp_path, monkeypatch):
+    """An installed package may carry an empty or header-only ``src`` folder: only a ``.c``
+    file there makes the library rebuild from sources (a build of no sources would fail or
+    load nothing).  Catches the test's ``and`` loosened to ``or`` and the ``*.c`` pattern widened."""
+    monkeypatch.setattr(kernels, "HERE", tmp_path)
+    assert not kernels._sources_present()                  # no src folder
+    (tmp_path / "src").mkdir()
+    assert not kernels._sources_present()                  # an empty one
+    (tmp_path / "src" / "pc_kernels.h").write_text("/* a header alone */\n")
+    assert not kernels._sources_present()
+    (tmp_path / "src" / "law.c").write_text("/* a source */\n")
+    assert kernels._sources_present()

@@ -259,6 +259,30 @@ def test_interpolation_is_scipys_bilinear_on_random_points(tmp_path, monkeypatch
             model.interpolate(x, y)
 
 
+
+def test_the_far_edges_and_corners_belong_to_the_table(tmp_path, monkeypatch):
+    """A grid of binary-exact numbers (step 2^-7 m, corners at +-2^-6 and 0.140625 / 0.171875
+    m) puts the far edges at exactly nx and ny cells: the grid points on every edge and corner
+    interpolate to their own table row (scipy's linear interpolation there), the near edges
+    as the far ones; a step of 1e-9 m beyond either far edge, or before a near one, is refused
+    naming the region.  Catches the range check written without the far edge (fx < nx for
+    fx < nx + 1, a point on the last grid line refused) or with the near one moved."""
+    monkeypatch.setenv("PARCOSIM_CACHE", str(tmp_path))
+    step = 2.0 ** -7
+    model = TabulatedModel(BENCH, step=step, extent=(-2.0 ** -6, 2.0 ** -6, 0.140625, 0.171875))
+    assert model.cell_ok.all() and (len(model.xs), len(model.ys)) == (5, 5)
+    assert (model.xs[-1] - model.xs[0]) / step == 4.0 and (model.ys[-1] - model.ys[0]) / step == 4.0
+    oracle = RegularGridInterpolator((model.ys, model.xs), model.table, method="linear")
+    for iy in range(5):
+        for ix in (0, 4) if iy not in (0, 4) else range(5):
+            x, y = float(model.xs[ix]), float(model.ys[iy])
+            np.testing.assert_allclose(model.interpolate(x, y), model.table[iy, ix], rtol=1e-13, atol=1e-15)
+            np.testing.assert_allclose(model.interpolate(x, y), oracle((y, x)), rtol=1e-13, atol=1e-15)
+    x0, x1, y0, y1 = model.xs[0], model.xs[-1], model.ys[0], model.ys[-1]
+    for x, y in ((x1 + 1e-9, 0.15), (x0 - 1e-9, 0.15), (0.0, y1 + 1e-9), (0.0, y0 - 1e-9)):
+        with pytest.raises(ModelRangeError, match="outside the tabulated region"):
+            model.interpolate(x, y)
+
 # --- the compiled loop's I/O -----------------------------------------------------------------
 _TERMS_FN = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.POINTER(ctypes.c_double),
                              ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_double))

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from controller import law
+from controller.kinematics import Kinematics
 from controller.position import PositionController
 from controller.strategies import get_strategy
 from plant import get_preset
@@ -45,7 +46,6 @@ def test_prediction_is_the_double_integrators_state_at_the_commands_time(a, b):
 
 def _run(delay_compensation, steps=40):
     """PDx, TCMDq samples on a pose moving off the circle: the outputs and the law's state."""
-    from controller.kinematics import Kinematics
     from controller.trajectories import get_trajectory
 
     bench, circle = get_preset("bench"), get_trajectory("circle")
@@ -75,3 +75,65 @@ def test_compensation_out_of_range_is_refused_by_name(value):
     """Catches a compensation beyond the kept commands (which would read past the state)."""
     with pytest.raises(ValueError, match="delay_compensation"):
         PositionController(get_preset("bench"), get_strategy("PDq"), delay_compensation=value)
+
+
+@pytest.mark.parametrize("name", ["PDx", "PDq", "PDMDx", "PDMDq"])
+def test_the_kept_acceleration_and_offset_are_the_commands_in_joint_space(name):
+    """After a sample of a PD model (H = m* 1, h = 0: the command a' = tau / m* in joint space,
+    J^-T tau / m* in task space) the law keeps q'' = J^-1 (a' - beta) (joint space: a' itself)
+    as its newest command, and as the offset the low-passed feedback plus the integral I in
+    joints, alpha J^-1 (a' - r''_d - I) + J^-1 I (alpha = h lam / (1 + h lam); joint space:
+    J = 1, r''_d the law's joint reference), each computed here from the outputs, the integral
+    and J, beta of the task state at the pose the law acted on.  The joints move (beta != 0),
+    the reference accelerates (r''_d != 0) and the MD strategies integrate (I != 0), so a
+    dropped or sign-flipped beta, r''_d, I or J^-1 changes a kept value.  Catches the
+    prediction's inputs (kernels/src/law.c ``remember``) computed wrongly, which the
+    predictions of later samples only read."""
+    bench = get_preset("bench")
+    kin = Kinematics(bench)
+    c = PositionController(bench, get_strategy(name), model="exact", delay_compensation=(1, 1))
+    angles = kin.inverse(0.01, 0.12)
+    ddr_d = np.array([0.7, -0.4])
+    out = c.step_with_errors(0.0, angles[0], angles[2], 1.3, -0.9, 0.0, 0.0, 0.012, 0.118, 0.05, -0.02, *ddr_d)
+    tau, integral = np.array(out[:2]), np.array(c.integral)
+    buf = c._buf
+    m_star, lam = buf[law.BUF["m_star"]][0], buf[law.BUF["lam"]][0]
+    q1, q2, dq1, dq2 = c._scratch[law.JOINT]
+    *_, J, beta = kin.task_state(q1, q2, dq1, dq2, 0.0, 0.0)
+    J, beta = np.array(J).reshape(2, 2), np.array(beta)
+    assert np.max(np.abs(beta)) > 0.1 and abs(dq1) > 1.0
+    assert (np.max(np.abs(integral)) > 1e-3) == ("MD" in name)
+    if name.endswith("x"):
+        command = np.linalg.solve(J.T, tau) / m_star
+        kept = np.linalg.solve(J, command - beta)
+        offset = np.linalg.solve(J, (H * lam * (command - ddr_d - integral)) / (1.0 + H * lam) + integral)
+    else:   # the reference in joint space as the law converted it (its own checks are elsewhere)
+        command = tau / m_star
+        kept = command
+        offset = H * lam * (command - c._scratch[law.SCRATCH["rd"]][4:6] - integral) / (1.0 + H * lam) + integral
+    past = buf[law.STATE["past"]]
+    np.testing.assert_allclose(past[:2], kept, rtol=1e-10, atol=1e-9)
+    np.testing.assert_array_equal(past[2:], 0.0)
+    np.testing.assert_allclose(buf[law.STATE["offset"]], offset, rtol=1e-10, atol=1e-9)
+    assert np.max(np.abs(kept)) > 1.0 and np.max(np.abs(offset)) > 1e-3
+
+
+@pytest.mark.parametrize("a, b", [(2, 3), (3, 1)])
+def test_the_kept_commands_shift_one_row_a_sample_newest_first(a, b):
+    """With max(a, b) = 3 rows kept, after each of four PDq samples (a' = tau / m*, joint space)
+    the rows are the last three commands newest first, the rows beyond them zero until filled
+    and the oldest dropped after the third.  Catches the history's shift (the memmove in
+    kernels/src/law.c ``remember``) moving fewer or more bytes than the rows kept, or none."""
+    bench = get_preset("bench")
+    c = PositionController(bench, get_strategy("PDq"), model="exact", delay_compensation=(a, b))
+    m_star, rows = c._buf[law.BUF["m_star"]][0], 3
+    angles, commands = Kinematics(bench).inverse(0.01, 0.12), []
+    for k in range(4):
+        out = c.step_with_errors(k * H, angles[0] + 1e-3 * k, angles[2] - 2e-3 * k, 1.3, -0.9, 0.0, 0.0,
+                                 0.012, 0.118, 0.05, -0.02, 0.7, -0.4)
+        commands.insert(0, np.array(out[:2]) / m_star)
+        past = c._buf[law.STATE["past"]].reshape(-1, 2)
+        expected = np.zeros_like(past)
+        expected[:min(len(commands), rows)] = commands[:rows]
+        np.testing.assert_allclose(past, expected, rtol=1e-12, atol=1e-12)
+    assert len({tuple(np.round(x, 6)) for x in commands}) == 4       # four different commands

@@ -5,6 +5,7 @@ import math
 import pytest
 
 from motor import identify
+from motor.identification import inertia_from_pole, pole_from_settling_time
 
 GOOD = dict(u=[1.0, 2.0, 3.5], i=[0.5, 0.6, 0.8], omega=[10.0, 30.0, 55.0])
 
@@ -29,3 +30,33 @@ def test_each_bad_input_is_refused_naming_its_column_entry_and_value(change, mes
     assert str(caught.value) == message
     identify(**GOOD)                      # the same call without the change goes through
 
+
+
+@pytest.mark.parametrize("p, R, L, kt, ke, b", [(-4 / 0.207, 1.10098, 0.667e-3, 0.055984, 0.0513822, 0.000122595),
+                                                (-3.0, 2.0, 0.01, 0.3, 0.2, 0.0),
+                                                (-50.0, 6.69, 0.0, 0.4, 0.4, 0.0022)])
+def test_the_inertia_puts_the_pole_on_the_characteristic_equation(p, R, L, kt, ke, b):
+    """J from (D.16) makes (L p + R)(J p + b) + kt ke vanish at p (the equation written here),
+    with and without L and b; pole_from_settling_time is -4 / t.  Catches a term dropped or a
+    sign flipped in J."""
+    J = inertia_from_pole(p, R, L, kt, ke, b)
+    assert J > 0.0
+    assert (L * p + R) * (J * p + b) + kt * ke == pytest.approx(0.0, abs=1e-15 * (abs(kt * ke) + 1.0))
+    assert pole_from_settling_time(0.25) == -16.0
+
+
+@pytest.mark.parametrize("p, R, L, kt, ke, b, message", [
+    (-4.0, 2.0, 0.25, 0.0, 0.3, 0.0, "settling time gives a non-positive inertia J=0.0 (pole p=-4.0)"),
+    (-4.0, 2.0, 0.25, 0.3, 0.0, 0.0, "settling time gives a non-positive inertia J=0.0 (pole p=-4.0)"),
+    (-4.0, 1.0, 0.5, 0.5, 0.5, 0.0, "settling time gives a non-positive inertia J=-0.0625 (pole p=-4.0)"),
+    (-4.0, 2.0, 0.5, 0.3, 0.3, 0.0, "L p + R = 0 for p=-4.0: J undetermined"),
+    (-4.0, 2.0, 0.25, math.nan, 0.3, 0.0, "settling time gives a non-positive inertia J=nan (pole p=-4.0)"),
+])
+def test_an_inertia_that_is_not_positive_is_refused_word_for_word(p, R, L, kt, ke, b, message):
+    """J = 0 exactly (no torque constant: kt = 0 or ke = 0, b = 0), J < 0 (a pole beyond the
+    electrical one, L p + R < 0), L p + R = 0 and a NaN J are refused with J and the pole.
+    Catches ``J > 0`` loosened to ``J >= 0``, the L p + R check dropped, and a message without
+    the values."""
+    with pytest.raises(ValueError) as info:
+        inertia_from_pole(p, R, L, kt, ke, b)
+    assert str(info.value) == message

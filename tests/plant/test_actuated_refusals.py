@@ -47,3 +47,27 @@ def test_each_kernel_status_is_the_plants_refusal_naming_its_word(status, index,
     assert words in str(exc), str(exc)
     assert ("V held" in str(exc)) == (status != fast5r.SINGULAR), str(exc)      # the voltages a step held
     assert np.array_equal(a.state(), state)
+
+
+@pytest.mark.parametrize("kernel", ["fast", "general"])
+@pytest.mark.parametrize("name, joint", [("i_ref", 1), ("i_ref", 2), ("i_hat", 1), ("i_hat", 2),
+                                         ("v_ref", 1), ("v_ref", 2)])
+def test_each_non_finite_input_is_refused_by_its_name_on_both_paths(kernel, name, joint):
+    """A NaN in any one of the six inputs (the other five finite and non-zero, i_hat not equal to
+    i_ref) is refused word for word by its name and joint, through the one C call (the default)
+    and the Python composition (the general kernel), the state and the drives kept.  Catches the
+    compiled step's refusal checking one input in place of another (i_ref passed for i_hat),
+    the joints mixed up, and a path that names nothing."""
+    from plant import IntegratorSettings
+
+    sim = PlantSimulator(get_preset("bench"), *START, IntegratorSettings(kernel=kernel))
+    a = ActuatedPlant(sim, [(j, Drive(get_motor_preset(f"motor{j}"))) for j in (1, 2)])
+    assert a._one_call == (kernel == "fast")
+    inputs = {"i_ref": [0.5, -0.4], "i_hat": [0.1, 0.2], "v_ref": [1.0, -2.0]}
+    a.step(inputs["i_ref"], inputs["i_hat"], inputs["v_ref"], DT)
+    inputs[name][joint - 1] = math.nan
+    state, currents = a.state(), a.currents
+    with pytest.raises(ValueError) as caught:
+        a.step(inputs["i_ref"], inputs["i_hat"], inputs["v_ref"], DT)
+    assert str(caught.value) == f"input {name}{joint} = nan is not finite"
+    assert np.array_equal(a.state(), state) and a.currents == currents

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from plant import get_preset
-from plant.fivebar import (KinematicsError, build_mechanism, direct_kinematics, inverse_kinematics,
+from plant.fivebar import (KinematicsError, build_mechanism, direct_kinematics, elbows, inverse_kinematics,
                            jacobians, joint_rates, singularity, thesis_coordinates, workspace_map,
                            NEAR_SINGULAR_MARGIN)
 from plant.parallel import mechanism_state
@@ -49,6 +49,25 @@ def test_ik_fk_round_trip(preset):
         elbow1 = np.array([p.l0, 0]) + p.chain1.l1 * np.array([math.cos(q[0]), math.sin(q[0])])
         tip1 = elbow1 + p.chain1.l2 * np.array([math.cos(q[1]), math.sin(q[1])])
         np.testing.assert_allclose(tip1, [x, y], atol=1e-14)
+
+
+@pytest.mark.parametrize("preset", PRESETS)
+def test_elbows_are_one_proximal_link_from_their_bases_and_one_distal_link_from_the_tip(preset):
+    """Each elbow A_k = B_k + l_k1 (cos q_k, sin q_k), B_1 = (l0, 0), B_2 = (-l0, 0) (the
+    contract's bases, written here), and the tip is one distal link l_k2 from it along the
+    inverse kinematics' phi_k2.  Catches an elbow without its base (the offset of +-l0 dropped),
+    the chains' links or angles swapped, and sin/cos exchanged."""
+    p = get_preset(preset)
+    for x, y in workspace_points(p, n=10):
+        phi11, phi12, phi21, phi22 = inverse_kinematics(p, x, y)
+        a = elbows(p, phi11, phi21)
+        assert a.shape == (2, 2)
+        for k, (chain, base, q, phi2) in enumerate(((p.chain1, (p.l0, 0.0), phi11, phi12),
+                                                     (p.chain2, (-p.l0, 0.0), phi21, phi22))):
+            expected = (base[0] + chain.l1 * math.cos(q), base[1] + chain.l1 * math.sin(q))
+            np.testing.assert_allclose(a[k], expected, rtol=0, atol=1e-15)
+            tip = a[k] + chain.l2 * np.array([math.cos(phi2), math.sin(phi2)])
+            np.testing.assert_allclose(tip, (x, y), rtol=0, atol=1e-12)
 
 
 @pytest.mark.parametrize("preset", PRESETS)

@@ -84,3 +84,32 @@ def test_an_end_effector_mass_with_counter_masses_is_refused_naming_both():
     with pytest.raises(ValueError, match=r"^m0 = 0\.05 kg with counter-masses"):
         one.validate()
     replace(BENCH, m0=0.05).validate()
+
+
+@pytest.mark.parametrize("k", [1, 2])
+@pytest.mark.parametrize("j", [1, 2])
+def test_a_counter_mass_is_refused_only_beyond_ten_chain_lengths_word_for_word(k, j):
+    """The lightest counter-mass of each link of each chain: the mass that puts it 0.99 of 10
+    chain lengths (l1 + l2) behind its joint is accepted, the one for 1.01 of it refused word
+    for word with the distance and the limit (the offsets of counter_offsets' docstring,
+    L2 = -m2 lg2 / M2, L1 = -(m1 lg1 + m2 l1) / M1 with M2 = 0, solved for the mass here).
+    Catches the reach without l2 (or l1), the comparison reversed, another chain's length, and
+    a message naming another mass or chain."""
+    params = get_preset("bench")
+    chain = getattr(params, f"chain{k}")
+    reach = 10.0 * (chain.l1 + chain.l2)
+    moment = chain.m2 * chain.lg2 if j == 2 else chain.m1 * chain.lg1 + chain.m2 * chain.l1
+    assert params.m0 == 0.0 and chain.l2 > 0.2 * chain.l1 and moment > 0.0
+
+    def with_mass(distance):
+        mass = moment / distance
+        return mass, replace(params, **{f"chain{k}": replace(chain, **{f"counter_mass{j}": mass})})
+
+    _, near = with_mass(0.99 * reach)
+    assert near.validate() is near and abs(getattr(near, f"chain{k}").counter_offsets()[j - 1]) > 10.0 * chain.l1
+    far_mass, far = with_mass(1.01 * reach)
+    with pytest.raises(ValueError) as caught:
+        far.validate()
+    assert str(caught.value) == (f"chain{k}.counter_mass{j} = {far_mass!r} kg is too light to balance chain {k}: "
+                                 f"it would sit {1.01 * reach:.3g} m behind its joint, more than 10 times the "
+                                 f"chain's length ({reach:.3g} m)")
