@@ -165,6 +165,9 @@ def _remove_unzipped() -> None:
     _UNZIPPED.clear()
 
 
+atexit.register(_remove_unzipped)
+
+
 def _unzipped(path: Path, name: str):
     """(model description, unzipped folder) of the FMI 2.0 co-simulation FMU ``path``."""
     from fmpy import extract, read_model_description
@@ -175,8 +178,6 @@ def _unzipped(path: Path, name: str):
         if md.fmiVersion != "2.0" or md.coSimulation is None:
             raise ValueError(f"component {name}: {path} is not an FMI 2.0 co-simulation FMU "
                              f"(fmiVersion {md.fmiVersion})")
-        if not _UNZIPPED:
-            atexit.register(_remove_unzipped)
         _UNZIPPED[key] = (md, extract(str(path)))
     return _UNZIPPED[key]
 
