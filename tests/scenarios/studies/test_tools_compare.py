@@ -4,7 +4,10 @@ child that cannot run its tool: every option reaching what it chooses, each tool
 tool's failure as a row (issue 31: options taking effect, error messages word for word)."""
 from __future__ import annotations
 
+import subprocess
+import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -108,3 +111,30 @@ def test_a_child_that_cannot_run_its_tool_is_a_runtime_error_with_its_last_words
     message = str(refusal.value)
     assert message.startswith(f"openmodelica run of {package} ended with status 1: ")
     assert message.endswith(f"ValueError: tool = 'openmodelica'; valid: {', '.join(tools.TOOLS)}")
+
+
+def test_an_isolated_run_hands_its_arguments_to_the_child_exactly_and_counts_user_plus_system_cpu(
+        tmp_path, monkeypatch):
+    """The child (here run in process, its ``--child`` command line as given to the process)
+    gets the tool, the package, stop time and step that read back to the same floats, the
+    bindings flag and the signals in order; its run comes back with ``cpu_s`` the children's
+    user time plus system time between the two readings.  Catches a float rounded on the
+    command line, the flag inverted, a signal dropped, system time subtracted or left out."""
+    given = []
+    monkeypatch.setattr(tools, "run_tool", lambda tool, path, signals, stop, step, bindings: given.append(
+        (tool, path, signals, stop, step, bindings)) or SspRun(np.zeros(1), {}, tool, 0.5))
+
+    def run(argv, **kw):
+        assert argv[:3] == [sys.executable, "-m", "scenarios.studies.tools"]
+        assert tools.main(argv[3:]) == 0
+        return subprocess.CompletedProcess(argv, 0, "", "")
+
+    monkeypatch.setattr(tools.subprocess, "run", run)
+    monkeypatch.setattr(tools.resource, "getrusage", lambda who: next(readings))
+    stop, step = 0.1 + 0.2, 1 / 3 * 1e-3
+    for bindings in (True, False):
+        readings = iter([SimpleNamespace(ru_utime=10.0, ru_stime=4.0), SimpleNamespace(ru_utime=12.5, ru_stime=4.75)])
+        out = tools.run_tool_isolated("ecos", tmp_path / "p.ssp", ["plant.x", "drive1.i", "ctrl.tau1"], stop, step,
+                                      bindings=bindings)
+        assert out.extra["cpu_s"] == 3.25 and out.tool == "ecos"
+        assert given[-1] == ("ecos", str(tmp_path / "p.ssp"), ["plant.x", "drive1.i", "ctrl.tau1"], stop, step, bindings)
