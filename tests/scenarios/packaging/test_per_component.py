@@ -222,7 +222,8 @@ def test_without_phases_the_jacobi_master_leaves_the_circle(short_bench, ours):
 
 def test_the_trial_scales_n_to_the_deviation_above_the_floor():
     """Catches the export's trial scaling the sub-steps by the whole deviation instead of the part above
-    the scene's own floor, taking a NaN deviation, or going beyond its largest choice."""
+    the scene's own floor, taking a NaN deviation, refusing a deviation exactly at the goal plus the
+    floor, or going beyond its largest choice."""
     from scenarios.per_component import SUBSTEP_CHOICES, next_substeps
 
     assert next_substeps(4, 0.009, 0.01) is None                  # within the goal: taken
@@ -233,6 +234,9 @@ def test_the_trial_scales_n_to_the_deviation_above_the_floor():
     # the part above the floor is what shrinks with h: 2.6 % - 0.6 % = twice the goal
     assert next_substeps(4, 0.026, 0.01, floor=0.006) == 8
     assert next_substeps(4, float("nan"), 0.01) == 5              # a NaN is never taken
+    # at the bounds: a deviation of exactly goal + floor is taken; n = wanted exactly is chosen
+    assert next_substeps(4, 0.5, 0.5) is None and next_substeps(4, 0.75, 0.5, floor=0.25) is None
+    assert next_substeps(4, 0.75 + 2 ** -20, 0.5, floor=0.25) == 5
     with pytest.raises(ValueError, match="deviation 0.5"):
         next_substeps(SUBSTEP_CHOICES[-1], 0.5, 0.01)
 
