@@ -1,5 +1,5 @@
-"""Every ``python -m scenarios....`` command's ``--help``: it exits 0 and describes the command
-with the first line of its module's docstring and, when it names itself, as ``python -m
+"""Every ``python -m`` command of scenarios/ whose parser describes it by its docstring: its ``--help``
+exits 0 and describes the command
 <module>`` (issue 31: what a command prints read back)."""
 from __future__ import annotations
 
