@@ -1,6 +1,6 @@
 """Every ``python -m`` command of scenarios/ whose parser describes it by its docstring: its ``--help``
-exits 0 and describes the command
-<module>`` (issue 31: what a command prints read back)."""
+exits 0 and gives the first line of its module's docstring and, when it names itself, ``python -m
+<module>`` as its program (issue 31: what a command prints read back)."""
 from __future__ import annotations
 
 import importlib
