@@ -197,7 +197,8 @@ def test_summary_md_reads_back_line_for_line_with_at_most_20_failed_samples():
         table.append(f"| {metric} | {len(v)} | " + " | ".join(f"{x:.4g}" for x in stats) + " |")
     expected = ["# Sweep of bench_circle_PDx", "",
                 "U = 0.5 (uniform), seed 3, mode compiled; 26 samples, 3 completed, 23 failed; 1 perturbed parameters.",
-                "", "| metric | n | mean | std | min | 5 % | median | 95 % | max |", "|---|---|---|---|---|---|---|---|---|",
+                "", "| metric | n | mean | std | min | 5 % | median | 95 % | max |",
+                "|---|---|---|---|---|---|---|---|---|",
                 *table, "", "Failed samples:", "", *(f"* {3 + k}: drive1: refused at t = {k} s" for k in range(20))]
     assert text == "\n".join(expected) + "\n"
     assert "| t_settle_s | 0 | | | | | | | |" in expected

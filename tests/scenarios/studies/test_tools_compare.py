@@ -137,4 +137,54 @@ def test_an_isolated_run_hands_its_arguments_to_the_child_exactly_and_counts_use
         out = tools.run_tool_isolated("ecos", tmp_path / "p.ssp", ["plant.x", "drive1.i", "ctrl.tau1"], stop, step,
                                       bindings=bindings)
         assert out.extra["cpu_s"] == 3.25 and out.tool == "ecos"
-        assert given[-1] == ("ecos", str(tmp_path / "p.ssp"), ["plant.x", "drive1.i", "ctrl.tau1"], stop, step, bindings)
+        assert given[-1] == ("ecos", str(tmp_path / "p.ssp"), ["plant.x", "drive1.i", "ctrl.tau1"], stop, step,
+                             bindings)
+
+
+def test_run_tool_hands_each_tool_its_arguments_and_keeps_fmpys_rows_up_to_the_stop(tmp_path, monkeypatch):
+    """run_tool with the tools' own runners replaced by recorders: plain fmpy's rows relabelled
+    to the end of their step (t + step) and cut after the stop time (fmpy may take a step more),
+    only the signals asked for; fmpy with bindings run by simulate_ssp_fmpy without initial
+    outputs, its refusal returned as it is; Ecos and libcosim given the package, the signals,
+    stop time and step.  Catches the relabelling dropped or reversed, the last row kept or an
+    in-time row cut, a signal of another name, an argument of one tool given to another."""
+    import fmpy.ssp.simulation
+    import fmus.ssp.libcosim
+    import fmus.ssp.run
+
+    step, stop = 1e-3, 3e-3
+    table = np.zeros(4, dtype=[("time", float), ("plant.x", float), ("plant.y", float)])
+    table["time"] = np.arange(4) * step                   # fmpy's times: the start of each step
+    table["plant.x"], table["plant.y"] = [1.0, 2.0, 3.0, 4.0], [5.0, 6.0, 7.0, 8.0]
+    seen = []
+    monkeypatch.setattr(fmpy.ssp.simulation, "simulate_ssp",
+                        lambda path, stop_time, step_size: seen.append((path, stop_time, step_size)) or table)
+    run = tools.run_tool("fmpy", tmp_path / "p.ssp", ["plant.y"], stop, step)
+    assert seen == [(str(tmp_path / "p.ssp"), stop, step)]
+    assert run.tool == "fmpy" and run.error is None and list(run.signals) == ["plant.y"]
+    assert run.time.tolist() == pytest.approx([1e-3, 2e-3, 3e-3], abs=1e-15)
+    assert run.signals["plant.y"].tolist() == [5.0, 6.0, 7.0]
+
+    bound = SspRun(np.array([0.0, 1e-3, 2e-3, 3e-3, 4e-3]), {"plant.x": np.arange(5.0), "plant.y": -np.arange(5.0)},
+                   "fmpy", 0.25)
+    refused = SspRun(np.zeros(0), {}, "fmpy", 0.5,
+                     error=RunError(RunStatus.REFUSED, "plant: q1 absurd", instance="plant"))
+    calls = []
+    for given in (bound, refused):
+        monkeypatch.setattr(fmus.ssp.run, "simulate_ssp_fmpy", lambda path, stop_time, step_size, initial_outputs:
+                            calls.append((path, stop_time, step_size, initial_outputs)) or given)
+        run = tools.run_tool("fmpy", tmp_path / "b.ssp", ["plant.x"], stop, step, bindings=True)
+        if given is refused:
+            assert run is refused
+        else:
+            assert run.time.tolist() == [0.0, 1e-3, 2e-3, 3e-3] and run.signals["plant.x"].tolist() == [0, 1, 2, 3]
+            assert list(run.signals) == ["plant.x"]
+    assert calls == [(tmp_path / "b.ssp", stop, step, False)] * 2
+
+    for tool, module, name in (("ecos", fmus.ssp.run, "simulate_ssp_ecos"),
+                               ("libcosim", fmus.ssp.libcosim, "simulate_ssp_libcosim")):
+        got = []
+        monkeypatch.setattr(module, name, lambda path, signals, stop_time, step_size: got.append(
+            (path, signals, stop_time, step_size)) or bound)
+        assert tools.run_tool(tool, tmp_path / "e.ssp", ("plant.x", "plant.y"), stop, step) is bound
+        assert got == [(tmp_path / "e.ssp", ["plant.x", "plant.y"], stop, step)], tool
