@@ -123,6 +123,7 @@ RULES = [
     ("test_balancing*.py", "scenarios/studies"),
     ("test_pendulum_trade*.py", "scenarios/studies"),
     ("test_robustness*.py", "scenarios/studies"),
+    ("test_module_help*.py", "scenarios/studies"),
     ("test_example_*.py", "scenarios/examples"),
     # the command line
     ("test_cli_*.py", "cli"),

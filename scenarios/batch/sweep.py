@@ -237,7 +237,9 @@ def summarize(rows: list) -> dict:
 
 
 def summary_markdown(sweep: Sweep) -> str:
-    """summary.md: the settings and a table of the statistics."""
+    """summary.md: the settings, a table of the statistics (4 significant digits; a metric with
+    no finite value has n = 0 and empty cells) and, when samples failed, the first 20 of them
+    (``* <sample>: <error>``) in sample order."""
     s, st = sweep.summary, sweep.settings
     lines = [f"# Sweep of {sweep.scene}", "",
              f"U = {st['uncertainty']:g} ({st['distribution']}), seed {st['seed']}, mode {st['mode']}; "

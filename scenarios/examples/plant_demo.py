@@ -20,7 +20,7 @@ DT = 1e-3
 
 
 def torques(t: float) -> tuple[float, float]:
-    """A smooth open-loop torque profile [N m]."""
+    """A smooth open-loop torque profile [N m]: τ1 = 0.03 sin(2π 2 t), τ2 = -0.03 sin(2π 3 t)."""
     return 0.03 * math.sin(2 * math.pi * 2 * t), -0.03 * math.sin(2 * math.pi * 3 * t)
 
 

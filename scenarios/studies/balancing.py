@@ -79,8 +79,9 @@ def sweep(strategies=DEFAULT_STRATEGIES, frequencies=DEFAULT_FREQUENCIES, progre
 
 
 def break_even(rows, strategy: str, key: str = "tau_ef_Nm"):
-    """The frequency [Hz] where balanced and plain ``key`` cross (linear between the sweep's
-    points), or None when one is below the other at every speed."""
+    """The first frequency [Hz] where balanced ``key`` goes from at most plain's to above it or
+    back (linear between the sweep's points: a point where they are equal is the crossing when
+    the gap is positive on its other side), or None when it never does."""
     plain = sorted((r["frequency_Hz"], r[key]) for r in rows if r["strategy"] == strategy and not r["balanced"])
     heavy = dict((r["frequency_Hz"], r[key]) for r in rows if r["strategy"] == strategy and r["balanced"])
     gaps = [(f, heavy[f] - value) for f, value in plain]

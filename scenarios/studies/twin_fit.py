@@ -88,7 +88,8 @@ def _log_ratio(ours, bench, floor=0.0):
 
 def loss(means: dict, kind: str = "circle") -> float:
     """Mean squared log-ratio of ``means`` (strategy -> metric -> value) to the thesis'
-    ``kind`` tables (module docstring); inf for a run that stopped early."""
+    ``kind`` tables (module docstring); inf for a run that stopped early (a metric that is
+    not finite and positive)."""
     terms = []
     for s, (e_ef, tau_ef, _ex, _ey, e_ss) in THESIS_BENCH[kind].items():
         m = means[s]

@@ -67,7 +67,8 @@ def test_a_run_is_stored_with_none_for_a_nan_and_a_stopped_run_is_refused_naming
 
 
 def test_write_stores_each_scenes_measured_metrics_and_the_commit(monkeypatch, tmp_path, made_up):
-    """Catches a scene missing, a metric of another scene, and the commit not the tree's."""
+    """Catches a scene missing, a metric of another scene, the commit not the tree's, and the file
+    not in its form (indented JSON ending with a newline, as git and the docs' tools expect)."""
     path = tmp_path / "data" / "scene_metrics.json"
     monkeypatch.setattr(regression, "STORED", path)
     monkeypatch.setattr(regression, "measure", lambda name: {**STORED[name], "e_ef_mm": len(name) + 0.5})
@@ -76,6 +77,7 @@ def test_write_stores_each_scenes_measured_metrics_and_the_commit(monkeypatch, t
     head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=regression.ROOT, capture_output=True,
                           text=True).stdout.strip()
     assert back == data and back["commit"] == head and len(head) >= 7
+    assert path.read_text() == json.dumps(data, indent=1) + "\n"         # one line per value, a final newline
     assert back["scenes"] == {name: {**values, "e_ef_mm": len(name) + 0.5} for name, values in STORED.items()}
 
 

@@ -171,3 +171,37 @@ def test_a_scene_cut_short_ends_there_and_no_later_than_its_own_end():
     for bad in (0.0, -1.0, 11.5, math.nan, "2"):
         with pytest.raises(ValueError, match=r"stop_time = .* s must be in \(0, 11\] \(the scene's own end\)"):
             sweep.with_stop_time(scene, bad)
+
+
+def test_summary_md_reads_back_line_for_line_with_at_most_20_failed_samples():
+    """The whole text against one written here from its docstring: the heading, the settings line,
+    the table's header and one row per metric (n = 0 with empty cells when no value is finite),
+    then a blank line, "Failed samples:", a blank line and the first 20 failed samples of 23 in
+    sample order; no such section when none failed.  Catches the section's heading or blank lines
+    dropped, more or fewer than 20 listed, the list out of order, a metric row missing or moved."""
+    good = [_row(k, 0.1 * k) for k in range(3)]
+    for r in good:
+        r["t_settle_s"] = math.nan                             # no run settled: n = 0
+    failed = [_row(3 + k, 0.5, completed=False, error=f"drive1: refused at t = {k} s") for k in range(23)]
+    rows = good + failed
+    settings = {"uncertainty": 0.5, "distribution": "uniform", "seed": 3, "mode": "compiled"}
+    text = sweep.summary_markdown(sweep.Sweep("bench_circle_PDx", ["drive1.R"], rows, sweep.summarize(rows),
+                                              [], settings))
+    table = []
+    for metric in sweep.METRICS:
+        v = np.array([r[metric] for r in good if math.isfinite(r[metric])])
+        if not len(v):
+            table.append(f"| {metric} | 0 | | | | | | | |")
+            continue
+        stats = (v.mean(), v.std(ddof=1), v.min(), np.percentile(v, 5), np.median(v), np.percentile(v, 95), v.max())
+        table.append(f"| {metric} | {len(v)} | " + " | ".join(f"{x:.4g}" for x in stats) + " |")
+    expected = ["# Sweep of bench_circle_PDx", "",
+                "U = 0.5 (uniform), seed 3, mode compiled; 26 samples, 3 completed, 23 failed; 1 perturbed parameters.",
+                "", "| metric | n | mean | std | min | 5 % | median | 95 % | max |",
+                "|---|---|---|---|---|---|---|---|---|",
+                *table, "", "Failed samples:", "", *(f"* {3 + k}: drive1: refused at t = {k} s" for k in range(20))]
+    assert text == "\n".join(expected) + "\n"
+    assert "| t_settle_s | 0 | | | | | | | |" in expected
+    clean = sweep.summary_markdown(sweep.Sweep("bench_circle_PDx", ["drive1.R"], good, sweep.summarize(good), [],
+                                               settings))
+    assert clean.splitlines()[-1] == table[-1] and "Failed" not in clean

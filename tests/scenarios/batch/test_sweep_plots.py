@@ -114,3 +114,17 @@ def test_each_row_of_panels_keeps_its_height_and_order_as_rows_are_added(kept, t
     rows = [ax for ax in three.axes if ax.get_title().endswith("e_ef [mm]")]
     assert [ax.get_title().split(":")[0] for ax in rows] == ["first", "second", "third"]
     assert [ax.get_position().y0 for ax in rows] == sorted((ax.get_position().y0 for ax in rows), reverse=True)
+
+
+@pytest.mark.parametrize("n, rotation", [(1, 0.0), (4, 0.0), (5, 30.0), (8, 30.0)])
+def test_the_tick_labels_are_the_groups_slanted_past_four(n, rotation, kept, tmp_path):
+    """Every panel's tick labels are the group names in order, upright up to four groups and
+    slanted by 30° from five (the docstring).  Catches the threshold moved by one, the angle
+    changed, labels out of order."""
+    names = [f"G{k}" for k in range(n)]
+    sweep_plots.plot_groups({"p": {name: _rows([1.0 + k, 2.0 + k]) for k, name in enumerate(names)}},
+                            tmp_path / "g.png")
+    for ax in kept[0].axes:
+        labels = ax.get_xticklabels()
+        assert [t.get_text() for t in labels] == names
+        assert {t.get_rotation() for t in labels} == {rotation}

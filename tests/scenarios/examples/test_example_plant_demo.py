@@ -55,3 +55,22 @@ def test_the_demo_prints_every_50_ms_and_writes_its_figure(tmp_path, capsys):
         assert (x, y) == pytest.approx((rows[k, 1], rows[k, 2]), abs=6e-6)
         assert (q1, q2) == pytest.approx((math.degrees(rows[k, 3]), math.degrees(rows[k, 4])), abs=6e-4)
         assert abs(res - rows[k, 5]) <= 1e-2 * abs(rows[k, 5]) + 1e-300
+
+
+def test_the_demo_steps_the_plant_with_its_documented_torques_from_the_start_of_each_step():
+    """torques(t) is the docstring's τ1 = 0.03 sin(2π 2 t), τ2 = -0.03 sin(2π 3 t) N m, and
+    simulate's rows are those of a PlantSimulator stepped here with that profile at each step's
+    start time.  Catches a torque's sign, amplitude or frequency changed, the torques swapped or
+    taken at the end of the step, another preset or start point."""
+    from plant import PlantSimulator, get_preset
+
+    for t in (0.0, 0.05, 0.1, 0.125, 0.3, 0.49):
+        assert plant_demo.torques(t) == pytest.approx(
+            (0.03 * math.sin(4 * math.pi * t), -0.03 * math.sin(6 * math.pi * t)), rel=1e-12, abs=1e-15)
+    rows = plant_demo.simulate(t_end=0.06)
+    sim = PlantSimulator(get_preset("thesis_sim"), 0.07, 0.17)
+    for k in range(60):
+        t = k * 1e-3
+        sim.step(0.03 * math.sin(4 * math.pi * t), -0.03 * math.sin(6 * math.pi * t), 1e-3)
+    out = sim.outputs()
+    assert rows[-1, 1:5] == pytest.approx([out["x"], out["y"], out["q1"], out["q2"]], rel=1e-12, abs=1e-15)

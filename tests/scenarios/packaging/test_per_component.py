@@ -20,7 +20,7 @@ from fmus.ssp.export import read_ssp_experiment, read_ssp_parameters
 from fmus.cosim.system import Component, Connection, System
 from scenarios.run.metrics import scene_metrics
 from scenarios.packaging.per_component import (PHASE, choose_substeps, component_timing, export_per_component,
-                                     per_component_system, stages, with_internal_observers)
+                                     jacobi_ratios, per_component_system, stages, with_internal_observers)
 from scenarios.scenes.catalogue import get_scene
 
 STOP = 0.5
@@ -161,11 +161,11 @@ def test_bindings_and_baked_start_values_carry_the_phases_and_presets(bench_pack
     assert int(start[PHASE]) == n - 1
 
 
-def _e_ef(scene, result, every=1):
+def _e_ef(scene, result, every=1, metric="e_ef_mm"):
     cols = {name: result[signal][::every] for name, signal in scene.columns.items()
             if name in ("x", "y", "x_d", "y_d", "tau1", "tau2")}
     cols["t"] = result.time[::every]
-    return scene_metrics(scene, cols, 1.0, True)["e_ef_mm"]
+    return scene_metrics(scene, cols, 1.0, True)[metric]
 
 
 @pytest.fixture(scope="module")
@@ -193,6 +193,24 @@ def test_in_a_jacobi_master_the_package_tracks_as_our_master(short_bench, ours, 
     assert _e_ef(short_bench, result, timing.substeps) == pytest.approx(ours, rel=0.05)
 
 
+def test_jacobi_ratios_are_both_metrics_of_the_package_over_ours(short_bench, ours, bench_variables):
+    """The short bench's package at its n: e_ef and τ_ef each within 5 % of our master's (ours
+    measured by jacobi_ratios), its e_ef ratio the one of the run computed here, and ours given
+    as (2 e_ef, 4 τ_ef) halves the first ratio and quarters the second exactly.  Catches a ratio
+    not divided by ours (τ_ef in N m, the trial then escalating to its largest n: a timeout
+    instead of a failure), ours' entries swapped, the package's run at another n."""
+    system = short_bench.system
+    n = component_timing(system, bench_variables).substeps
+    e, tau = jacobi_ratios(short_bench, system, bench_variables, n)
+    assert abs(e - 1.0) < 0.05 and abs(tau - 1.0) < 0.05, (e, tau)
+    stepped, _ = per_component_system(system, bench_variables, n)
+    assert e == pytest.approx(_e_ef(short_bench, simulate(stepped, mode="inprocess", coupling="jacobi"), n) / ours,
+                              rel=1e-12)
+    tau_ours = _e_ef(short_bench, simulate(system, mode="inprocess"), metric="tau_ef_Nm")
+    assert jacobi_ratios(short_bench, system, bench_variables, n, (2 * ours, 4 * tau_ours)) == pytest.approx(
+        (e / 2, tau / 4), rel=1e-12)
+
+
 def test_without_phases_the_jacobi_master_leaves_the_circle(short_bench, ours):
     """The property the phases buy: the same components at 1 ms, every sample at the period
     start, are far off in a Jacobi master (the issue's 40 mm against 0.45 mm over 9 s)."""
@@ -204,7 +222,8 @@ def test_without_phases_the_jacobi_master_leaves_the_circle(short_bench, ours):
 
 def test_the_trial_scales_n_to_the_deviation_above_the_floor():
     """Catches the export's trial scaling the sub-steps by the whole deviation instead of the part above
-    the scene's own floor, taking a NaN deviation, or going beyond its largest choice."""
+    the scene's own floor, taking a NaN deviation, refusing a deviation exactly at the goal plus the
+    floor, or going beyond its largest choice."""
     from scenarios.per_component import SUBSTEP_CHOICES, next_substeps
 
     assert next_substeps(4, 0.009, 0.01) is None                  # within the goal: taken
@@ -215,6 +234,9 @@ def test_the_trial_scales_n_to_the_deviation_above_the_floor():
     # the part above the floor is what shrinks with h: 2.6 % - 0.6 % = twice the goal
     assert next_substeps(4, 0.026, 0.01, floor=0.006) == 8
     assert next_substeps(4, float("nan"), 0.01) == 5              # a NaN is never taken
+    # at the bounds: a deviation of exactly goal + floor is taken; n = wanted exactly is chosen
+    assert next_substeps(4, 0.5, 0.5) is None and next_substeps(4, 0.75, 0.5, floor=0.25) is None
+    assert next_substeps(4, 0.75 + 2 ** -20, 0.5, floor=0.25) == 5
     with pytest.raises(ValueError, match="deviation 0.5"):
         next_substeps(SUBSTEP_CHOICES[-1], 0.5, 0.01)
 

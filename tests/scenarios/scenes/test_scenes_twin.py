@@ -69,3 +69,28 @@ def test_the_fits_record_of_every_kind_reads_back_and_a_missing_or_broken_file_i
     with pytest.raises(ValueError) as refusal:
         bench_real(STRATEGY_NAMES[0], kind="square")
     assert str(refusal.value) == f"kind = 'square'; valid: {', '.join(KINDS)}"
+
+
+def test_a_twin_file_with_one_name_too_many_or_one_missing_is_refused_word_for_word(tmp_path):
+    """[parameters] with an extra name only, a missing one only, both, or an empty section: each
+    refused naming the file, the six names, the unknown and the missing ones (sorted; "none" for neither);
+    the file as written reads back.  Catches a file refused only when names are both unknown and
+    missing (an extra name or a missing one let through, the missing one then a KeyError), or
+    the lists swapped."""
+    from scenarios.scenes.twin import PARAMETERS, write_twin
+
+    path = write_twin(Twin(stiction_ratio=2.0), {}, tmp_path / "twin.toml")
+    good = path.read_text(encoding="utf-8")
+    assert load_twin(path) == Twin(stiction_ratio=2.0)
+    names = ", ".join(PARAMETERS)
+    cases = {"extra": (good.replace("[parameters]\n", "[parameters]\nbacklash = 0.5\n"), "backlash", "none"),
+             "missing": ("\n".join(line for line in good.splitlines() if not line.startswith("current_noise")),
+                         "none", "current_noise"),
+             "both": (good.replace("inertia_error", "mass_error"), "mass_error", "inertia_error"),
+             "empty": ("[parameters]\n", "none", ", ".join(sorted(PARAMETERS)))}     # sorted by name
+    for text, unknown, missing in cases.values():
+        path.write_text(text, encoding="utf-8")
+        with pytest.raises(ValueError) as refusal:
+            load_twin(path)
+        assert str(refusal.value) == (f"twin file {path}: [parameters] must name exactly {names} "
+                                      f"(unknown: {unknown}; missing: {missing})")

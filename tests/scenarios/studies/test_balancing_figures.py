@@ -62,8 +62,8 @@ def _xy(line):
 
 def test_the_circle_figure_plots_each_run_in_mm_and_its_signals_against_time(made_up, tmp_path):
     """Catches the path or the reference in metres (3501's [18]), x and y swapped, the
-    reference taken from the other run, a torque or current of the other drive or run, and a
-    run left out."""
+    reference taken from the other run, a torque or current of the other drive or run, a run
+    left out, and a panel's time axis, quantity or range not labelled as it is."""
     calls, figures = made_up
     balancing.plot_circle("TCx", tmp_path / "circle.png")
     assert calls == [("TCx", 1.0, False), ("TCx", 1.0, True)] and (tmp_path / "circle.png").stat().st_size > 0
@@ -82,6 +82,9 @@ def test_the_circle_figure_plots_each_run_in_mm_and_its_signals_against_time(mad
         for line, (t, v, label) in zip(axes.lines, wanted):
             assert np.array_equal(_xy(line)[0], t) and np.array_equal(_xy(line)[1], v), label
     assert path.get_xlabel() == "x [mm]" and path.get_ylabel() == "y [mm]"
+    assert (signals.get_xlabel(), signals.get_ylabel(), signals.get_ylim()) == ("t [s]", "torque command [N m]", (-1, 1))
+    assert (currents.get_xlabel(), currents.get_ylabel(), currents.get_ylim()) == ("t [s]", "drive current [A]",
+                                                                                   (-15, 15))
 
 
 def test_the_sweep_figure_draws_each_strategy_and_balance_from_its_own_rows(made_up, tmp_path):

@@ -82,3 +82,23 @@ def test_the_csv_has_the_columns_in_order_and_six_significant_digits(tmp_path):
         back = list(csv.DictReader(handle))
     assert list(back[0]) == list(balancing.COLUMNS)
     assert back[0]["e_ef_mm"] == "1.23457" and back[0]["frequency_Hz"] == "0.25" and back[0]["balanced"] == "False"
+
+
+def test_break_even_at_a_point_where_balanced_and_plain_are_equal_is_that_point():
+    """Gaps (balanced - plain) exactly zero at a sweep point: a zero is on the "at most plain" side,
+    so the crossing is that point when the gap is positive on its other side (rising from the
+    first point, falling into the last, through a middle one) and there is none where the gap
+    only touches zero from below.  Catches a zero gap taken as either side's strict sign (the
+    next pair's crossing, or None, instead)."""
+    freqs = (0.5, 1.0, 1.5, 2.0)
+
+    def rows(gaps):
+        return [r for f, g in zip(freqs, gaps) for r in (
+            {"strategy": "PDq", "frequency_Hz": f, "balanced": False, "tau_ef_Nm": 0.5},
+            {"strategy": "PDq", "frequency_Hz": f, "balanced": True, "tau_ef_Nm": 0.5 + g})]
+
+    for gaps, crossing in (((0.0, 0.25, 0.5, 0.75), 0.5), ((0.0, -0.25, -0.5, -0.75), None),
+                           ((-0.25, 0.0, 0.25, 0.5), 1.0), ((0.25, 0.0, -0.25, -0.5), 1.0),
+                           ((0.5, 0.25, 0.125, 0.0), 2.0), ((-0.5, -0.25, -0.125, 0.0), None),
+                           ((-0.25, 0.0, -0.25, 0.25), 1.75), ((0.25, 0.125, -0.125, 0.0), 1.25)):
+        assert balancing.break_even(rows(gaps), "PDq") == crossing, gaps

@@ -4,7 +4,10 @@ child that cannot run its tool: every option reaching what it chooses, each tool
 tool's failure as a row (issue 31: options taking effect, error messages word for word)."""
 from __future__ import annotations
 
+import subprocess
+import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -108,3 +111,80 @@ def test_a_child_that_cannot_run_its_tool_is_a_runtime_error_with_its_last_words
     message = str(refusal.value)
     assert message.startswith(f"openmodelica run of {package} ended with status 1: ")
     assert message.endswith(f"ValueError: tool = 'openmodelica'; valid: {', '.join(tools.TOOLS)}")
+
+
+def test_an_isolated_run_hands_its_arguments_to_the_child_exactly_and_counts_user_plus_system_cpu(
+        tmp_path, monkeypatch):
+    """The child (here run in process, its ``--child`` command line as given to the process)
+    gets the tool, the package, stop time and step that read back to the same floats, the
+    bindings flag and the signals in order; its run comes back with ``cpu_s`` the children's
+    user time plus system time between the two readings.  Catches a float rounded on the
+    command line, the flag inverted, a signal dropped, system time subtracted or left out."""
+    given = []
+    monkeypatch.setattr(tools, "run_tool", lambda tool, path, signals, stop, step, bindings: given.append(
+        (tool, path, signals, stop, step, bindings)) or SspRun(np.zeros(1), {}, tool, 0.5))
+
+    def run(argv, **kw):
+        assert argv[:3] == [sys.executable, "-m", "scenarios.studies.tools"]
+        assert tools.main(argv[3:]) == 0
+        return subprocess.CompletedProcess(argv, 0, "", "")
+
+    monkeypatch.setattr(tools.subprocess, "run", run)
+    monkeypatch.setattr(tools.resource, "getrusage", lambda who: next(readings))
+    stop, step = 0.1 + 0.2, 1 / 3 * 1e-3
+    for bindings in (True, False):
+        readings = iter([SimpleNamespace(ru_utime=10.0, ru_stime=4.0), SimpleNamespace(ru_utime=12.5, ru_stime=4.75)])
+        out = tools.run_tool_isolated("ecos", tmp_path / "p.ssp", ["plant.x", "drive1.i", "ctrl.tau1"], stop, step,
+                                      bindings=bindings)
+        assert out.extra["cpu_s"] == 3.25 and out.tool == "ecos"
+        assert given[-1] == ("ecos", str(tmp_path / "p.ssp"), ["plant.x", "drive1.i", "ctrl.tau1"], stop, step,
+                             bindings)
+
+
+def test_run_tool_hands_each_tool_its_arguments_and_keeps_fmpys_rows_up_to_the_stop(tmp_path, monkeypatch):
+    """run_tool with the tools' own runners replaced by recorders: plain fmpy's rows relabelled
+    to the end of their step (t + step) and cut after the stop time (fmpy may take a step more),
+    only the signals asked for; fmpy with bindings run by simulate_ssp_fmpy without initial
+    outputs, its refusal returned as it is; Ecos and libcosim given the package, the signals,
+    stop time and step.  Catches the relabelling dropped or reversed, the last row kept or an
+    in-time row cut, a signal of another name, an argument of one tool given to another."""
+    import fmpy.ssp.simulation
+    import fmus.ssp.libcosim
+    import fmus.ssp.run
+
+    step, stop = 1e-3, 3e-3
+    table = np.zeros(4, dtype=[("time", float), ("plant.x", float), ("plant.y", float)])
+    table["time"] = np.arange(4) * step                   # fmpy's times: the start of each step
+    table["plant.x"], table["plant.y"] = [1.0, 2.0, 3.0, 4.0], [5.0, 6.0, 7.0, 8.0]
+    seen = []
+    monkeypatch.setattr(fmpy.ssp.simulation, "simulate_ssp",
+                        lambda path, stop_time, step_size: seen.append((path, stop_time, step_size)) or table)
+    run = tools.run_tool("fmpy", tmp_path / "p.ssp", ["plant.y"], stop, step)
+    assert seen == [(str(tmp_path / "p.ssp"), stop, step)]
+    assert run.tool == "fmpy" and run.error is None and list(run.signals) == ["plant.y"]
+    assert run.time.tolist() == pytest.approx([1e-3, 2e-3, 3e-3], abs=1e-15)
+    assert run.signals["plant.y"].tolist() == [5.0, 6.0, 7.0]
+
+    bound = SspRun(np.array([0.0, 1e-3, 2e-3, 3e-3, 4e-3]), {"plant.x": np.arange(5.0), "plant.y": -np.arange(5.0)},
+                   "fmpy", 0.25)
+    refused = SspRun(np.zeros(0), {}, "fmpy", 0.5,
+                     error=RunError(RunStatus.REFUSED, "plant: q1 absurd", instance="plant"))
+    calls = []
+    for given in (bound, refused):
+        monkeypatch.setattr(fmus.ssp.run, "simulate_ssp_fmpy", lambda path, stop_time, step_size, initial_outputs:
+                            calls.append((path, stop_time, step_size, initial_outputs)) or given)
+        run = tools.run_tool("fmpy", tmp_path / "b.ssp", ["plant.x"], stop, step, bindings=True)
+        if given is refused:
+            assert run is refused
+        else:
+            assert run.time.tolist() == [0.0, 1e-3, 2e-3, 3e-3] and run.signals["plant.x"].tolist() == [0, 1, 2, 3]
+            assert list(run.signals) == ["plant.x"]
+    assert calls == [(tmp_path / "b.ssp", stop, step, False)] * 2
+
+    for tool, module, name in (("ecos", fmus.ssp.run, "simulate_ssp_ecos"),
+                               ("libcosim", fmus.ssp.libcosim, "simulate_ssp_libcosim")):
+        got = []
+        monkeypatch.setattr(module, name, lambda path, signals, stop_time, step_size: got.append(
+            (path, signals, stop_time, step_size)) or bound)
+        assert tools.run_tool(tool, tmp_path / "e.ssp", ("plant.x", "plant.y"), stop, step) is bound
+        assert got == [(tmp_path / "e.ssp", ["plant.x", "plant.y"], stop, step)], tool

@@ -144,6 +144,19 @@ def test_loss_is_the_mean_squared_log_ratio():
     assert twin_fit.loss(broken) == math.inf
 
 
+@pytest.mark.parametrize("value", [0.0, -0.5, math.inf, -math.inf, math.nan])
+@pytest.mark.parametrize("metric", twin_fit.METRICS)
+def test_a_metric_not_finite_and_positive_makes_the_loss_infinite(metric, value):
+    """Every metric of every strategy that is zero, negative, infinite or NaN (a run that stopped
+    early) makes the loss inf, not an error or a finite number.  Catches the check weakened to
+    finite *or* positive (a zero or negative metric then raises in the log, an infinite one goes
+    through), or a metric left out of it."""
+    for s in twin_fit.THESIS_BENCH["circle"]:
+        means = _thesis_means("circle")
+        means[s][metric] = value
+        assert twin_fit.loss(means) == math.inf, (s, metric, value)
+
+
 def test_the_fit_reads_only_the_circle_and_finds_the_global_minimum(monkeypatch, tmp_path):
     """The fit with the triangle's tables gone: it still runs (it never reads them) and runs
     only circle scenes.  The fake loss has a local dip at the start (friction_scale 1, 20 %

@@ -80,3 +80,32 @@ def test_the_command_passes_its_options_to_margin_and_prints_the_table(monkeypat
     asked.clear()
     twin_margin.main([])
     assert asked == [(("circle", twin_margin.THESIS_LAMBDA_STEP, [twin_margin.DELAY_STEPS]), {"fc_vel": None})]
+
+
+def test_the_twin_given_is_the_one_run_and_none_runs_the_shipped_one(monkeypatch):
+    """Each run's drives carry the twin asked for (μ = friction_scale x the preset's, μs =
+    stiction_ratio x μ, ωs = stribeck_speed) and its plant bench_real's for that twin; with no
+    twin, the shipped calibration's (load_twin).  Catches the twin argument ignored or the
+    shipped file read in its place."""
+    from motor import get_motor_preset
+    from scenarios.scenes.twin import bench_real, load_twin
+
+    scenes = []
+    monkeypatch.setattr(twin_margin, "run_scene", lambda scene, mode, plots: scenes.append(scene) or SimpleNamespace(
+        result=SimpleNamespace(signals={"drive1.v": np.zeros(2), "drive2.v": np.zeros(2)}), metrics={}))
+    shipped = load_twin()
+    twin = Twin(friction_scale=2.5, stiction_ratio=1.75, stribeck_speed=0.0625, current_offset=-0.125,
+                current_noise=0.03125, inertia_error=0.25)
+    assert twin != shipped
+    for given, used in ((twin, twin), (None, shipped)):
+        scenes.clear()
+        twin_margin.margin("circle", twin=given, strategies=("PDx",))
+        assert len(scenes) == 2
+        plant = bench_real("PDx", "circle", used).system.component("plant").parameters
+        for scene in scenes:
+            assert scene.system.component("plant").parameters == plant
+            for j in (1, 2):
+                drive = scene.system.component(f"drive{j}").parameters
+                mu = used.friction_scale * get_motor_preset(drive["preset"]).mu
+                assert (drive["mu"], drive["mu_s"], drive["omega_s"]) == pytest.approx(
+                    (mu, used.stiction_ratio * mu, used.stribeck_speed), rel=1e-15)

@@ -117,3 +117,37 @@ def test_the_printed_summary_names_each_trajectorys_margin_and_refusals_from_the
         f"  circle (7.23): min singularity margin 0.013 (band 0.02); REFUSED from t = 0.034 s: "
         f"3 samples {OUTSIDE}, 1 samples {BAND}",
         "  triangle (7.24-7.27): min singularity margin 0.250 (band 0.02); accepted"]
+
+
+def test_each_sample_is_refused_for_the_first_reason_that_holds_the_tables_edges_included():
+    """Samples on each edge of a table (closed), just past each edge, one out of reach and one in
+    the near-singular band: each refused for exactly the first of the controller's reasons that
+    holds, computed here from fivebar.singularity, and the smallest margin over the reachable
+    samples.  Catches an edge of the table taken as outside (a strict comparison), a reason
+    tested out of order, a sample in two lists, the margin of an unreachable point counted."""
+    from plant import get_preset
+    from plant import fivebar
+
+    params = get_preset("thesis_sim")
+    extent = (-0.03, 0.05, 0.12, 0.2)
+    pts = [(0.01, 0.16), (extent[0], 0.16), (extent[1], 0.16), (0.01, extent[2]), (0.01, extent[3]),
+           (extent[0] - 1e-4, 0.16), (extent[1] + 1e-4, 0.16), (0.01, extent[2] - 1e-4), (0.01, extent[3] + 1e-4),
+           (1.0, 1.0), (0.0, 0.08), (0.02, 0.15)]   # out of reach; in the band and off the table
+    check = figure.check_trajectory(params, "edges", lambda t: pts[round(t / 1e-3)], (len(pts) - 1) * 1e-3,
+                                    band=0.2, extent=extent)
+    wanted = {figure.OUTSIDE: [], figure.BAND: [], figure.TABLE: []}
+    margins = []
+    for i, (x, y) in enumerate(pts):
+        try:
+            margin = fivebar.singularity(params, x, y).margin
+        except fivebar.KinematicsError:
+            wanted[figure.OUTSIDE].append(i)
+            continue
+        margins.append(margin)
+        if margin < 0.2:
+            wanted[figure.BAND].append(i)
+        elif not (extent[0] <= x <= extent[1] and extent[2] <= y <= extent[3]):
+            wanted[figure.TABLE].append(i)
+    assert wanted[figure.TABLE] == [5, 6, 7, 8] and wanted[figure.OUTSIDE] == [9] and wanted[figure.BAND] == [10]
+    assert {r: i.tolist() for r, i in check.refused.items()} == wanted
+    assert check.min_margin == min(margins)
