@@ -141,8 +141,10 @@ def _fresh_copy(path: Path) -> Path:
 
 
 def function(name: str, restype, *argtypes):
-    """The library's function ``name`` with its ctypes signature."""
-    f = getattr(library(), name)
+    """The library's function ``name`` with its ctypes signature: a function object of its own
+    (item access, not the library's cached attribute), so that no other declaration of the same
+    symbol (a test's, another binding's) changes this one's argument types."""
+    f = library()[name]
     f.restype, f.argtypes = restype, list(argtypes)
     return f
 

@@ -195,7 +195,7 @@ class PlantSimulator:
     # --- stepping ----------------------------------------------------------------
     def step(self, tau1: float, tau2: float, dt: float, max_evaluations: int | None = None) -> int:
         """Advance by dt with the world torques held; the state is kept on error.  Returns the
-        right-hand-side evaluations it took (:meth:`evaluations_per_step` with RK4).
+        right-hand-side evaluations it took (4 per RK4 substep; dopri5's own count).
 
         Refused (:class:`PlantError`, naming the cause): a non-finite torque or step, a
         Baumgarte lambda above :data:`BAUMGARTE_RK4_LIMIT` / h for the RK4 step h, an integration
@@ -257,11 +257,6 @@ class PlantSimulator:
             return f"tau1 = {tau1!r}, tau2 = {tau2!r} N m held"
 
         return self._refusal(status, refusal.index, refusal.value, trial, dt, held)
-
-    def evaluations_per_step(self) -> int | None:
-        """Right-hand-side evaluations of one step when known before it: 4 per RK4 substep;
-        None for dopri5 (adaptive)."""
-        return 4 * self.settings.substeps if self.settings.method == "rk4" else None
 
     def integrate(self, z, dt: float, u1: float, u2: float, held, derivative,
                   motors=fast5r.NO_MOTORS, voltages=fast5r.NO_VOLTAGES, max_evaluations: int | None = None):

@@ -38,3 +38,53 @@ def test_kinematics_match_the_plant(preset, x, y):
     ref = kin.joint_reference(x, y, *dxy, *ddx)
     back = kin.task_state(*ref)
     assert np.allclose(back[:6], (x, y, *dxy, *ddx), atol=1e-12)
+
+
+def _quarters():
+    """The bench with every length 1/4 m: q1 = q2 = 0 puts the elbows at (1/2, 0) and (0, 0)
+    and the tip at (1/4, 0) with both distal links on the x axis (det J_X = 0 exactly), where
+    chain 1 is folded (its tip on its base) and chain 2 stretched."""
+    from dataclasses import replace
+
+    bench = get_preset("bench")
+    return Kinematics(replace(bench, l0=0.25, chain1=replace(bench.chain1, l1=0.25, l2=0.25),
+                              chain2=replace(bench.chain2, l1=0.25, l2=0.25)))
+
+
+def test_each_refusal_names_its_pose_word_for_word():
+    """Every refusal of the controller's kinematics, read back whole with values that show the
+    six significant digits: out of reach (inverse), no assembly (forward, task_state), a
+    parallel singularity (task_state at the flat pose) and a stretched or folded chain
+    (joint_reference), each a KinematicsError (a ValueError); a pose off the singularity
+    is accepted.  Catches a refusal raised without its text, naming the other
+    angle or another quantity, or the singularity taken for a missing assembly."""
+    kin = _quarters()
+    assert kin.forward(0.0, 0.0) == (0.25, 0.0)
+    cases = [
+        (lambda: kin.task_state(0.0, 0.0, 0.125, -0.5, 2.0, 3.0),
+         "q1=0, q2=0 rad is a parallel singularity (det J_X = 0)"),
+        (lambda: kin.task_state(0.123456789, 3.0, 0.0, 0.0, 0.0, 0.0),
+         f"no assembly for q1=0.123457, q2=3 rad (elbow distance {_elbow_distance(kin, 0.123456789, 3.0):.6g} m)"),
+        (lambda: kin.forward(0.123456789, 3.0),
+         f"no assembly for q1=0.123457, q2=3 rad (elbow distance {_elbow_distance(kin, 0.123456789, 3.0):.6g} m)"),
+        (lambda: kin.inverse(2.0, 0.1), "point out of reach of a chain (distance 1.75285 m)"),
+        (lambda: kin.joint_reference(0.25, 0.0, 0.1, 0.0, 0.0, 0.0),
+         "(x, y) = (0.25, 0) m: a chain is stretched or folded (J_Theta singular)"),
+    ]
+    for call, words in cases:
+        with pytest.raises(fivebar.KinematicsError) as caught:
+            call()
+        assert str(caught.value) == words
+        assert isinstance(caught.value, ValueError)
+    x, y, *_ = kin.task_state(0.5, 0.0, 0.125, -0.5, 2.0, 3.0)           # chain 1 turned off the flat pose
+    assert (x, y) == pytest.approx(kin.forward(0.5, 0.0), abs=1e-15) and y > 0.0
+
+
+def _elbow_distance(kin, q1, q2):
+    """The elbows' distance at (q1, q2), from the geometry written here: the bases at (+-l0, 0),
+    elbow 1 at (l0 + l11 cos q1, l11 sin q1), elbow 2 at (-l0 + l21 cos q2, l21 sin q2)."""
+    import math
+
+    e1 = (kin.l0 + kin.l11 * math.cos(q1), kin.l11 * math.sin(q1))
+    e2 = (-kin.l0 + kin.l21 * math.cos(q2), kin.l21 * math.sin(q2))
+    return math.hypot(e1[0] - e2[0], e1[1] - e2[1])

@@ -258,3 +258,42 @@ def test_a_negative_time_is_refused_with_the_whole_record(kind):
         assert (record["reason"], record["variable"], record["unit"], record["value"], caught.value.time) == \
             ("bad_time", "t", "s", -0.25, -0.25)
         assert str(caught.value) == "trajectory time must be >= 0 s, got -0.25"
+
+
+def test_the_sampler_cache_keeps_one_binding_per_live_trajectory_and_drops_it_with_the_trajectory():
+    """``_sampler``'s cache (controller/trajectories.py): a trajectory sampled again with the same
+    buffers reuses its binding, new buffers rebind it (and sample into them), and the entry
+    leaves the cache when the trajectory is collected, while another trajectory's stays.
+    Catches a finalizer tied to the buffer (which the cache itself keeps alive, so it never
+    runs) or registered only when the trajectory is already cached (never for one sampled once),
+    or a cache that never hits."""
+    import gc
+
+    from controller import trajectories as tr
+
+    circle, triangle = from_parameters("circle", PRESET_CYCLES), from_parameters("triangle", PRESET_CYCLES)
+    expected = {(name, t): list(trajectory(t)) for name, trajectory in (("circle", circle), ("triangle", triangle))
+                for t in (0.3, 0.6)}                  # each call here binds buffers of its own: before the checks
+    first, second = tr.sample_buffers(), tr.sample_buffers()
+    assert tr.sample_values(circle, 0.3, *first) == expected["circle", 0.3]
+    assert tr.sample_values(triangle, 0.3, *first) == expected["triangle", 0.3]
+    bound = tr._SAMPLERS[id(circle)][3]
+    assert all(a is b for a, b in zip(tr._SAMPLERS[id(circle)][:3], (circle.buf, *first)))
+    assert tr._sampler(circle, circle.buf, *first) is bound                 # the same buffers: a hit
+    assert tr.sample_values(circle, 0.6, *second) == expected["circle", 0.6]   # new buffers: rebound
+    assert tr._SAMPLERS[id(circle)][1] is second[0] and tr._SAMPLERS[id(circle)][3] is not bound
+    assert list(second[0]) == expected["circle", 0.6] and list(first[0]) == expected["triangle", 0.3]
+    key, kept = id(circle), id(triangle)
+    del circle, bound
+    gc.collect()
+    assert key not in tr._SAMPLERS and kept in tr._SAMPLERS
+    del triangle
+    gc.collect()
+    assert kept not in tr._SAMPLERS
+    once = from_parameters("hold", PRESET_CYCLES)            # sampled once, never again: its one binding
+    tr.sample_values(once, 0.1, *first)
+    key = id(once)
+    assert key in tr._SAMPLERS
+    del once
+    gc.collect()
+    assert key not in tr._SAMPLERS

@@ -190,3 +190,20 @@ def test_parameters_cannot_change_after_validation():
     model = fr.LuGre(**PAPER)
     with pytest.raises(dataclasses.FrozenInstanceError):
         model.Fs = 0.5
+
+
+def test_the_stribeck_curve_is_3_read_from_the_friction_array():
+    """``stribeck(f, ω)`` is G(ω) = Fc + (Fs − Fc) exp(−(ω/ωs)²) of (3), written here again, with
+    six distinct parameters and a bristle state in the array that G must not read: Fs at rest,
+    even in ω, Fc + (Fs − Fc)/e at ±ωs, Fc far beyond.  Catches a Stribeck binding that drops
+    the speed or passes another argument, and a kernel that swaps Fc and Fs or ωs for another
+    parameter."""
+    model = fr.LuGre(Fc=0.05, Fs=0.08, omega_s=0.125, sigma0=120.0, sigma1=0.3, sigma2=2e-4)
+    f = fr.new_lugre(model, z0=7e-4)
+    for omega in (0.0, 0.125, -0.125, 0.03, -0.4, 2.0, 50.0):
+        g = model.Fc + (model.Fs - model.Fc) * math.exp(-(omega / model.omega_s) ** 2)
+        assert fr.stribeck(f, omega) == pytest.approx(g, rel=1e-14), omega
+    assert fr.stribeck(f, 0.0) == model.Fs and fr.stribeck(f, 50.0) == model.Fc
+    assert fr.stribeck(f, 0.125) == pytest.approx(model.Fc + (model.Fs - model.Fc) / math.e, rel=1e-14)
+    assert fr.stribeck(f, -0.4) == fr.stribeck(f, 0.4)
+    assert f[fr.F_Z] == 7e-4                                   # G reads the array, never writes it

@@ -60,3 +60,38 @@ def test_the_help_writes_each_option_with_its_metavar_and_default_as_the_referen
             assert actions[option].default is None
         else:
             assert actions[option].default == pytest.approx(float(stated), rel=1e-5), option
+
+
+def test_help_exits_0_with_the_usage_on_stdout_and_nothing_on_stderr(capsys):
+    """``--help`` (alone or after other options) returns 0, prints the parser's help (no JSON,
+    nothing identified) and no error.  Catches a help exit turned into a failure status or
+    None, or one that goes on to read the data."""
+    for argv in (["--help"], ["--data", str(DATA / "motor1.csv"), "-h"]):
+        assert identify_main(argv) == 0
+        out, err = capsys.readouterr()
+        assert out == _parser().format_help() and err == ""
+
+
+@pytest.mark.parametrize("argv, words", [
+    ([], "the following arguments are required: --data"),
+    (["--data", str(DATA / "motor1.csv"), "--kt-over-ke", "x"], "argument --kt-over-ke: invalid float value: 'x'"),
+    (["--data", str(DATA / "motor1.csv"), "--bogus"], "unrecognized arguments: --bogus"),
+    (["--data", str(DATA / "motor1.csv"), "--kt-over-ke", "-1"], "kt_over_ke must be > 0, got -1.0"),
+    (["--data", str(DATA / "motor1.csv"), "--settling-time", "0"], "settling_time must be > 0, got 0.0"),
+])
+def test_a_bad_argument_or_value_exits_2_with_one_error_line(capsys, argv, words):
+    """The docstring's contract: 2 and exactly one line ``parcosim identify-motor: error: ...``
+    on stderr, nothing on stdout.  Catches argparse's multi-line usage error (or its exit)
+    leaking through, a status other than 2, or a result printed after an error."""
+    assert identify_main(argv) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err == f"parcosim identify-motor: error: {words}\n"
+
+
+def test_a_missing_file_exits_2_naming_it(capsys, tmp_path):
+    """Catches a missing data file that raises (an OSError traceback) instead of the one line."""
+    missing = tmp_path / "none.csv"
+    assert identify_main(["--data", str(missing)]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.startswith(f"parcosim identify-motor: error: cannot read {missing}: ")
+    assert err.count("\n") == 1

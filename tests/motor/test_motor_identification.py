@@ -137,3 +137,32 @@ def test_cli_errors_one_line_exit_2(argv, capsys, tmp_path):
     assert identify_main(argv) == 2
     err = capsys.readouterr().err
     assert err.startswith("parcosim identify-motor: error: ") and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("name", ["motor1", "motor2"])
+def test_every_returned_value_is_its_documented_quantity(name):
+    """Each key identify() returns, against its appendix-D quantity computed here independently
+    (numpy's least squares, the residuals of D.1 and D.10 written out, D.15, D.16 solved for J),
+    with a ratio, settling time and inductance other than the defaults; no key missing, none
+    extra.  Catches a residual with a term dropped (rms_torque without b omega, b without
+    omega), a key filled with another quantity, and an input echoed as another."""
+    u, i, omega = thesis_data(name)
+    ratio, t98, L = 1.1, 0.18, 8e-4
+    r = identify(u, i, omega, kt_over_ke=ratio, settling_time=t98, L=L)
+    ke, R = np.linalg.lstsq(np.column_stack([omega, i]), u, rcond=None)[0]
+    kt = ratio * ke
+    mu, b = np.linalg.lstsq(np.column_stack([np.ones(len(u)), omega]), kt * i, rcond=None)[0]
+    residual_u = [uk - R * ik - ke * wk for uk, ik, wk in zip(u, i, omega)]
+    residual_torque = [kt * ik - (mu + b * wk) for ik, wk in zip(i, omega)]
+    pole = -4.0 / t98
+    J = -(b + kt * ke / (L * pole + R)) / pole
+    assert (L * pole + R) * (J * pole + b) + kt * ke == pytest.approx(0.0, abs=1e-12)       # D.16
+    expected = {"R": R, "ke": ke, "kt": kt, "mu": mu, "b": b,
+                "rms_u": math.sqrt(sum(e * e for e in residual_u) / len(u)),
+                "rms_torque": math.sqrt(sum(e * e for e in residual_torque) / len(u)),
+                "n": len(u), "kt_over_ke": ratio, "L": L, "settling_time": t98, "pole": pole, "J": J}
+    assert set(r) == set(expected)
+    for key, value in expected.items():
+        assert r[key] == pytest.approx(value, rel=1e-9), key
+    assert r["rms_torque"] > 0.0 and r["rms_u"] > 0.0        # the thesis points are not on one line
+    assert set(identify(u, i, omega)) == set(expected) - {"L", "settling_time", "pole", "J"}

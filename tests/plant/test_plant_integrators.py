@@ -102,3 +102,30 @@ def test_the_rk4_stability_limit_is_where_one_step_of_a_decay_stops_shrinking():
     for x, shrinks in ((limit * (1 - 1e-9), True), (limit * (1 + 1e-9), False)):
         factor = rk4(lambda y: -y, np.array([1.0]), x)[0]
         assert (abs(factor) < 1.0) == shrinks, (x, factor)
+
+
+def test_a_step_whose_error_is_exactly_the_tolerance_is_accepted_and_shrinks_the_next_by_0_9():
+    """Hairer's criterion (Solving ODE I, II.4): an attempt is accepted when its error norm is
+    <= 1, and the next step is h * min(5, 0.9 err^-1/5).  On y' = -3 y over one attempt, with
+    rtol = 0 and atol set to the attempt's error estimate |h (b5 - b4) . k| (the stages recorded,
+    the Dormand-Prince weights of table 5.2 written here), the norm is exactly 1: accepted in
+    7 evaluations with the next step 0.9 h; one ulp less tolerance is a rejection.  Catches an
+    acceptance test with ``<`` for ``<=`` and a step-size factor or safety other than Hairer's."""
+    b5 = np.array([35 / 384, 0.0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0.0])
+    b4 = np.array([5179 / 57600, 0.0, 7571 / 16695, 393 / 640, -92097 / 339200, 187 / 2100, 1 / 40])
+    stages = []
+
+    def decay(y):
+        stages.append(-3.0 * y)
+        return stages[-1]
+
+    h, y0 = 0.25, np.array([1.0])
+    dopri5(decay, y0, h, 0.0, 1.0)                    # a loose tolerance: one attempt, its 7 stages
+    assert len(stages) == 7
+    tolerance = abs(float(h * ((b5 - b4) @ np.array(stages))[0]))
+    assert tolerance > 0.0
+    y, h_next, steps, evaluations = dopri5(decay, y0, h, 0.0, tolerance)
+    assert (steps, evaluations, h_next) == (1, 7, 0.9 * h)
+    assert y[0] == pytest.approx(math.exp(-3.0 * h), rel=10 * tolerance)
+    _, _, steps, evaluations = dopri5(decay, y0, h, 0.0, math.nextafter(tolerance, 0.0))
+    assert steps > 1 and evaluations > 7
