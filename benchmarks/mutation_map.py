@@ -18,6 +18,11 @@ A mutant then runs the tests, anywhere in the suite, that execute a line it chan
 or outside any function body) runs the tests that execute any line of its module, then those
 of the test files that import it; a line nothing executes is reported as such (the mutant
 survives without a run).
+
+The C kernels' lines have maps of their own (``out/linemaps/c/``, :data:`C_FORMAT` in their
+key), built by :mod:`benchmarks.mutation_cmap` in runs without coverage.py (gcov per test), the
+first time a C mutant asks; ``for_files(..., language="c")``.  A C mutant's selection is the
+same as a Python function body's.
 """
 from __future__ import annotations
 

@@ -14,7 +14,8 @@ with this module's selection, into a new file (``--language c``: its C mutants o
 A run that fails loudly rather than by a failing test (:data:`LOUD`: the selected test files no
 longer collect, pytest's exit status 4; a crash, a signal; pytest's internal error, status 3)
 fails a CI run all the same: it counts as killed, with ``killed_by`` naming the kind, when the
-same selection passes on the unmutated tree (run once more for it); otherwise its outcome is
+same selection passes on the unmutated tree (run once more for it; a collection failure: collected
+once more); otherwise its outcome is
 ``baseline failure``, counted neither way (as :func:`confirm`'s).  A run that fails by a test
 has ``killed_by`` "test".
 """
@@ -77,9 +78,10 @@ def _cpu_limit(seconds: float):
     return limit
 
 
-def _pytest(copy: Path, tests: list, timeout: float, env: dict) -> dict:
+def _pytest(copy: Path, tests: list, timeout: float, env: dict, collect_only: bool = False) -> dict:
     """``pytest -x`` of ``tests`` (files or node ids, in that order) in ``copy``, at most
-    ``timeout`` CPU seconds (and :data:`WALL_FACTOR` times as many on the wall clock)."""
+    ``timeout`` CPU seconds (and :data:`WALL_FACTOR` times as many on the wall clock);
+    ``collect_only``: their collection only."""
     cache = tempfile.mkdtemp(prefix="parcosim_mutcache_")
     env = dict(env, PYTHONDONTWRITEBYTECODE="1", PARCOSIM_CACHE=cache,
                PYTHONPATH=os.pathsep.join([str(copy), *mutation_map._other_paths()]))
@@ -88,7 +90,7 @@ def _pytest(copy: Path, tests: list, timeout: float, env: dict) -> dict:
     start = time.monotonic()
     try:
         done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-x", "-p", "no:cacheprovider", "-rf",
-                               f"@{listed}"], cwd=copy, env=env, timeout=WALL_FACTOR * timeout,
+                               *(["--collect-only"] if collect_only else []), f"@{listed}"], cwd=copy, env=env, timeout=WALL_FACTOR * timeout,
                               capture_output=True, text=True, preexec_fn=_cpu_limit(timeout))
     except subprocess.TimeoutExpired:
         return {"outcome": "timeout", "seconds": WALL_FACTOR * timeout, "cpu_limit": timeout}
@@ -113,12 +115,13 @@ def loud(returncode: int) -> str | None:
 
 
 def decide_loud(result: dict, pristine) -> dict:
-    """``result`` of :func:`_pytest`, a loud one decided: killed when ``pristine()`` (the same
-    selection on the unmutated tree, a :func:`_pytest` answer) passes, else ``baseline failure``
-    with that run's exit status."""
+    """``result`` of :func:`_pytest`, a loud one decided: killed when ``pristine(collect_only)``
+    (the same selection on the unmutated tree, a :func:`_pytest` answer; for a collection
+    failure its collection only, seconds where the run may take minutes) passes, else
+    ``baseline failure`` with that run's exit status."""
     if result["outcome"] != "loud":
         return result
-    baseline = pristine()
+    baseline = pristine(result["killed_by"] == "collection")
     if baseline["outcome"] == "survived":
         return dict(result, outcome="killed")
     return dict(result, outcome="baseline failure", baseline_returncode=baseline.get("returncode"))
@@ -146,7 +149,7 @@ def run_python(copy: Path, mutant: mutation_py.PyMutant, chosen: dict, base: flo
         result = _pytest(copy, chosen["tests"], limit, dict(os.environ))
     finally:
         path.write_text(original)
-    return decide_loud(result, lambda: _pytest(copy, chosen["tests"], limit, dict(os.environ)))
+    return decide_loud(result, lambda collect: _pytest(copy, chosen["tests"], limit, dict(os.environ), collect))
 
 
 
@@ -168,7 +171,7 @@ def run_c(copy: Path, mutant, chosen: dict, base: float, factor: float) -> dict:
     finally:
         shutil.rmtree(work, ignore_errors=True)
     pristine = {k: v for k, v in os.environ.items() if k != "PARCOSIM_KERNELS_LIB"}     # the copy's own library
-    return decide_loud(result, lambda: _pytest(copy, chosen["tests"], limit, pristine))
+    return decide_loud(result, lambda collect: _pytest(copy, chosen["tests"], limit, pristine, collect))
 
 
 _MAPS: dict = {}
@@ -345,10 +348,10 @@ def rerun(source: Path, results: Path, workers: int = 1, base: float = 30.0, fac
           budget: float = 300.0, language: str | None = None, outcomes: tuple = RERUN) -> Path:
     """Run again, with this module's selection, the mutants of ``source`` (an earlier
     campaign's file) whose outcome is one of ``outcomes`` (default :data:`RERUN`; of
-    ``language``, "c" or "python", only when given), into ``results`` (a new file, resumed when it exists); the others are
-    copied as they were (``"carried": true``).
-    Refused when this tree draws other mutants than ``source`` recorded, or when ``results``
-    is the re-run of another file."""
+    ``language``, "c" or "python", only when given), into ``results`` (a new file, resumed when
+    it exists); the others are copied as they were (``"carried": true``).  Refused when this
+    tree draws other mutants than ``source`` recorded, or when ``results`` is the re-run of
+    another file."""
     if results.resolve() == source.resolve():
         raise ValueError(f"--results {results} is the file re-run: write the re-run to a new file")
     old_header, before = read_results(source)
@@ -367,7 +370,8 @@ def rerun(source: Path, results: Path, workers: int = 1, base: float = 30.0, fac
     else:
         header = {**{k: v for k, v in old_header.items() if k != "near_files"}, "rerun_of": str(source),
                   "selection": "global", "map": mutation_map.key(commit=old_header["commit"]),
-                  "base_seconds": base, "factor": factor, "budget_seconds": budget, "language": language, "outcomes": list(outcomes),
+                  "base_seconds": base, "factor": factor, "budget_seconds": budget, "language": language,
+                  "outcomes": list(outcomes),
                   "c_test_files": list(C_TESTS)}
         done = {k: dict(m, carried=True) for k, m in before.items() if not _rerun(m, language, outcomes)}
         results.parent.mkdir(parents=True, exist_ok=True)

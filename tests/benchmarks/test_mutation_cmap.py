@@ -61,7 +61,8 @@ def test_a_c_line_maps_to_the_tests_that_execute_it_in_process_or_in_a_child(c_p
     execute the line or none for a line some test executes."""
     _, record = c_project
     assert record["returncode"] == 0 and record["failed"] == []
-    named = {line: sorted(record["tests"][i] for i in ids) for line, ids in record["lines"]["kernels/src/tiny.c"].items()}
+    by_line = record["lines"]["kernels/src/tiny.c"]
+    named = {line: sorted(record["tests"][i] for i in ids) for line, ids in by_line.items()}
     assert named["6"] == [POSITIVE] and named["8"] == [CHILD]
     assert named["5"] == sorted([POSITIVE, CHILD])
     assert NEITHER not in record["tests"] and NEITHER in record["all_tests"]   # its cost is known all the same
@@ -95,11 +96,19 @@ def test_pytest_s_exit_statuses_map_to_outcomes_and_loud_kinds():
     assert [mr.loud(code) for code in (0, 1, 2, 5)] == [None] * 4
     assert (mr.loud(3), mr.loud(4), mr.loud(-11), mr.loud(-6)) == ("internal error", "collection", "crash", "crash")
     loud = {"outcome": "loud", "killed_by": "crash", "returncode": -11}
-    assert mr.decide_loud(loud, lambda: {"outcome": "survived"}) == dict(loud, outcome="killed")
-    assert mr.decide_loud(loud, lambda: {"outcome": "loud", "returncode": -11}) == \
-        dict(loud, outcome="baseline failure", baseline_returncode=-11)
+    asked = []
+
+    def pristine(outcome, returncode=None):
+        return lambda collect_only: asked.append(collect_only) or {"outcome": outcome, "returncode": returncode}
+
+    assert mr.decide_loud(loud, pristine("survived")) == dict(loud, outcome="killed")
+    assert mr.decide_loud(loud, pristine("loud", -11)) == dict(loud, outcome="baseline failure",
+                                                               baseline_returncode=-11)
+    uncollected = {"outcome": "loud", "killed_by": "collection", "returncode": 4}
+    assert mr.decide_loud(uncollected, pristine("survived", 0)) == dict(uncollected, outcome="killed")
+    assert asked == [False, False, True]          # a crash runs the tests again, a collection failure collects them
     plain = {"outcome": "survived"}
-    assert mr.decide_loud(plain, lambda: pytest.fail("a quiet run was run again")) is plain
+    assert mr.decide_loud(plain, lambda collect_only: pytest.fail("a quiet run was run again")) is plain
 
 
 @pytest.fixture
