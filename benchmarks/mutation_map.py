@@ -18,6 +18,11 @@ A mutant then runs the tests, anywhere in the suite, that execute a line it chan
 or outside any function body) runs the tests that execute any line of its module, then those
 of the test files that import it; a line nothing executes is reported as such (the mutant
 survives without a run).
+
+The C kernels' lines have maps of their own (``out/linemaps/c/``, :data:`C_FORMAT` in their
+key), built by :mod:`benchmarks.mutation_cmap` in runs without coverage.py (gcov per test), the
+first time a C mutant asks; ``for_files(..., language="c")``.  A C mutant's selection is the
+same as a Python function body's.
 """
 from __future__ import annotations
 
@@ -44,20 +49,29 @@ NOT_RUN = ("tests/benchmarks/test_mutation", "tests/kernels/test_sanitizers.py")
 OUTSIDE = ""
 #: The map's format, in its key: 2 = a test's subprocesses count as the test's (1: as no test's).
 FORMAT = 2
+#: The C maps' format (:mod:`benchmarks.mutation_cmap`), in their key: 1 = gcov per test, subprocesses included.
+C_FORMAT = 1
 #: A file of long runs (``pytest -m slow``): its tests run for a mutant only when no other covers it.
 SLOW = re.compile(r"^pytestmark = .*pytest\.mark\.slow", re.M)
 #: How many test files of a directory one map run takes (a stopped build loses at most one run).
 CHUNK = 12
 
 
-def key(root: Path = ROOT, commit: str = "HEAD", test_file: str | None = None) -> str:
+def key(root: Path = ROOT, commit: str = "HEAD", test_file: str | None = None, language: str = "python") -> str:
     """A hash of the committed files of :data:`KEYED` at ``commit`` (12 hex digits), of the
-    tests' only ``test_file`` and the helpers (``tests/`` files not named ``test_*``): what a
-    test file's map depends on."""
+    tests' only ``test_file`` and the helpers (``tests/`` files not named ``test_*``), and of
+    the map's format (:data:`FORMAT`, or :data:`C_FORMAT` for ``language`` "c"): what a test
+    file's map depends on."""
     listing = subprocess.run(["git", "ls-tree", "-r", commit, "--", *KEYED], cwd=root, check=True,
                              capture_output=True, text=True).stdout.splitlines()
     kept = [line for line in listing if _keyed(line.split("\t", 1)[1], test_file)]
-    return hashlib.sha1("\n".join([f"format {FORMAT}", *kept]).encode()).hexdigest()[:12]
+    form = f"format {FORMAT}" if language == "python" else f"c format {C_FORMAT}"
+    return hashlib.sha1("\n".join([form, *kept]).encode()).hexdigest()[:12]
+
+
+def head() -> str:
+    """The tool's worktree's commit (a map records it)."""
+    return subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True).stdout.strip()
 
 
 def _keyed(path: str, test_file: str | None) -> bool:
@@ -119,8 +133,7 @@ def build(copy: Path, products: list, tests: list, out: Path, log=sys.stdout) ->
                     names.append(test)
                 lines.setdefault(product, {}).setdefault(str(line), set()).add(index[test])
     timing = json.loads(times.read_text()) if times.exists() else {"tests": {}, "shared": {}, "failed": []}
-    record = {"commit": subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True,
-                                       text=True).stdout.strip(),
+    record = {"commit": head(),
               "returncode": done.returncode, "tests": names,
               "cost": [timing["tests"].get(name, {}).get("seconds", 0.0) for name in names],
               "slow": [timing["tests"].get(name, {}).get("slow", False) for name in names],
@@ -158,10 +171,11 @@ def merge(records: list) -> dict:
     return merged
 
 
-def shard_path(test_file: str, root: Path = ROOT, commit: str = "HEAD") -> Path:
+def shard_path(test_file: str, root: Path = ROOT, commit: str = "HEAD", language: str = "python") -> Path:
     """Where the map of one test file is kept: ``out/linemaps/<file>_<key>.json.gz``
-    (:func:`key` of that file)."""
-    return root / "out" / "linemaps" / f"{test_file.replace('/', '__')}_{key(root, commit, test_file)}.json.gz"
+    (:func:`key` of that file), its C map in ``out/linemaps/c/``."""
+    folder = root / "out" / "linemaps" / ("c" if language == "c" else "")
+    return folder / f"{test_file.replace('/', '__')}_{key(root, commit, test_file, language)}.json.gz"
 
 
 def split(record: dict, test_file: str) -> dict:
@@ -204,31 +218,38 @@ def chunks(copy: Path, test_files: list) -> list:
 
 
 def for_files(copy: Path, products: list, test_files: list, lock_of=None, commit: str = "HEAD",
-              log=subprocess.DEVNULL) -> dict:
+              log=subprocess.DEVNULL, language: str = "python") -> dict:
     """The map of ``test_files``; those not yet mapped are mapped (in ``copy``, unmutated, in
     the runs of :func:`chunks`: a run's session fixtures, such as the built FMUs, are made
     once) and each file's part is kept as soon as its run ends (:func:`shard_path` at
     ``commit``, the copy's).  ``lock_of(test_file)``: a lock held while that file's map is
-    looked for and built (workers side by side build different files)."""
+    looked for and built (workers side by side build different files).  ``language`` "c":
+    the map of the C kernels' lines (:func:`benchmarks.mutation_cmap.build`, a run of its own:
+    the Python maps stay valid)."""
+    from benchmarks import mutation_cmap
+
     locks = [lock_of(f) for f in sorted(set(test_files))] if lock_of else []
     for held in locks:
         held.acquire()
     try:
-        missing = [f for f in test_files if not shard_path(f, commit=commit).exists()]
+        missing = [f for f in test_files if not shard_path(f, commit=commit, language=language).exists()]
         runs = chunks(copy, missing)
         for n, run in enumerate(runs):
             start = time.monotonic()
             work = Path(tempfile.mkdtemp(prefix="parcosim_linemaps_"))
-            record = build(copy, products, run, work / "all.json.gz", log)
+            if language == "c":
+                record = mutation_cmap.build(copy, run, work / "all.json.gz", log)
+            else:
+                record = build(copy, products, run, work / "all.json.gz", log)
             for test_file in run:
-                path = shard_path(test_file, commit=commit)
+                path = shard_path(test_file, commit=commit, language=language)
                 path.parent.mkdir(parents=True, exist_ok=True)
                 with gzip.open(path, "wt") as stream:
                     json.dump(split(record, test_file), stream)
             shutil.rmtree(work, ignore_errors=True)
-            print(f"map {n + 1}/{len(runs)}: {len(run)} files from {run[0]} ({len(record['tests'])} tests, "
-                  f"{time.monotonic() - start:.0f} s)", flush=True)
-        return merge([load(shard_path(f, commit=commit)) for f in test_files])
+            print(f"{language} map {n + 1}/{len(runs)}: {len(run)} files from {run[0]} ({len(record['tests'])} "
+                  f"tests, {time.monotonic() - start:.0f} s)", flush=True)
+        return merge([load(shard_path(f, commit=commit, language=language)) for f in test_files])
     finally:
         for held in locks:
             held.release()

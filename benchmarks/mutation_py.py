@@ -13,16 +13,21 @@ a line run at import: the tests that execute its module, then the test files tha
 directly or through one other module, computed from the import statements and the module
 names in strings of the tests and the product), the cheaper first within a budget, with
 ``pytest -x`` and a CPU-time limit (:mod:`benchmarks.mutation_run`).  A C mutant is built
-into its own library (mutation_c) and runs the kernel tests and the oracle tests.
+into its own library (mutation_c) and runs, the same way, the tests that execute its line in
+process or in a process they start (:mod:`benchmarks.mutation_cmap`'s gcov map).
 
     python -m benchmarks.mutation_py --seed 3101 --sample 300 --workers 2   # run (resumes)
     python -m benchmarks.mutation_py --report                               # the table again
     python -m benchmarks.mutation_py --pool                                 # every mutant
-    python -m benchmarks.mutation_py --seed 3601 --rerun-survivors OLD.jsonl --results NEW.jsonl
+    python -m benchmarks.mutation_py --seed 3601 --rerun-survivors OLD.jsonl --results NEW.jsonl \
+        [--language c] [--outcomes error] [--c-test-files 'tests/kernels/*' ...]
 
-Outcomes: ``killed`` (a test failed or errored), ``survived`` (every selected test passed,
-or no test executes the line), ``not viable`` (the mutant does not compile), ``timeout``
-(a time limit ended the run: not decided, listed apart).  A killed mutant's first failing
+Outcomes: ``killed`` (a test failed or errored, or the run failed loudly: the test files no
+longer collect, a crash, pytest's internal error, while the same selection passes on the
+unmutated tree; ``killed_by`` says which), ``survived`` (every selected test passed, or no
+test executes the line), ``not viable`` (the mutant does not compile), ``timeout`` (a time
+limit ended the run: not decided, listed apart), ``baseline failure`` (a loud failure the
+unmutated tree fails too: not decided).  A killed mutant's first failing
 test is recorded; ``--confirm`` re-runs those tests on the unmutated tree, so a test that
 fails anyway cannot count as a kill.
 
@@ -402,6 +407,7 @@ def importers(root: Path = ROOT) -> dict:
 
 def main(argv=None) -> int:
     from benchmarks.mutation_report import table
+    from benchmarks import mutation_run
     from benchmarks.mutation_run import campaign, confirm, read_results, rerun, results_path
 
     parser = argparse.ArgumentParser(prog="python -m benchmarks.mutation_py", description=__doc__.splitlines()[0])
@@ -421,7 +427,14 @@ def main(argv=None) -> int:
     parser.add_argument("--rerun-survivors", type=Path, metavar="FROM",
                         help="run FROM's survived and timed-out mutants again with today's selection into "
                              "--results (a new file; the killed ones copied as they are; resumes)")
+    parser.add_argument("--language", choices=("c", "python"),
+                        help="with --rerun-survivors: re-run this language's mutants only (the others carried)")
+    parser.add_argument("--outcomes", nargs="+", choices=mutation_run.RERUN, default=mutation_run.RERUN,
+                        help="with --rerun-survivors: re-run the mutants of these outcomes only")
+    parser.add_argument("--c-test-files", nargs="+", metavar="GLOB",
+                        help="the test files a C mutant's selection draws from (default: every test file)")
     args = parser.parse_args(argv)
+    mutation_run.C_TESTS = tuple(args.c_test_files or ())
     results = args.results or results_path(args.seed)
     if args.pool:
         for name, mutants in pool_by_file().items():
@@ -431,7 +444,8 @@ def main(argv=None) -> int:
     if args.rerun_survivors:
         if not args.results:
             parser.error("--rerun-survivors needs --results NEW.jsonl (the file re-run is kept as it is)")
-        rerun(args.rerun_survivors, results, args.workers, args.base, args.factor, args.budget)
+        rerun(args.rerun_survivors, results, args.workers, args.base, args.factor, args.budget, args.language,
+              tuple(args.outcomes))
     elif args.confirm:
         print(confirm(results, 90.0))
     elif not args.report:

@@ -1,5 +1,7 @@
 """The tables of a :mod:`benchmarks.mutation_py` campaign: per area, per operator, the
 survivors.  Score = killed / (killed + survived); ``timeout`` is undecided and counted apart.
+The kills are counted by kind (``killed_by``: a failing test, or a loud failure of the run:
+collection, crash, internal error; none recorded: a campaign before session 41).
 """
 from __future__ import annotations
 
@@ -59,6 +61,11 @@ def table(header: dict, done: dict) -> str:
     rows.append("selection: " + ", ".join(f"{k} {v}" for k, v in sorted(selections.items())))
     seconds = sum(m.get("seconds", 0.0) for m in ran)
     rows.append(f"wall seconds of the runs: {seconds:.0f} ({seconds / max(1, len(ran)):.1f} a mutant)")
+    kinds = {}
+    for m in ran:
+        if m["outcome"] == "killed":
+            kinds[m.get("killed_by", "not recorded")] = kinds.get(m.get("killed_by", "not recorded"), 0) + 1
+    rows.append("kills by kind: " + ", ".join(f"{k} {v}" for k, v in sorted(kinds.items())))
     other = [m for m in ran if m["outcome"] in ("error", "baseline failure")]
     if other:
         rows.append(f"\nerror / baseline failure: {len(other)}")

@@ -1,5 +1,6 @@
 """Running a :mod:`benchmarks.mutation_py` campaign: each mutant in a copy of the draw's tree,
-against the tests, anywhere in the suite, that execute its lines (:mod:`benchmarks.mutation_map`).
+against the tests, anywhere in the suite, that execute its lines (:mod:`benchmarks.mutation_map`;
+a C mutant's: :mod:`benchmarks.mutation_cmap`).
 
     python -m benchmarks.mutation_py --seed 3101 --sample 300 --workers 2     # run (resumes)
     python -m benchmarks.mutation_py --seed 3601 --rerun-survivors FROM.jsonl --results NEW.jsonl
@@ -8,7 +9,15 @@ A run is ``pytest -x`` of the selected tests with a CPU-time limit (the wall clo
 :data:`WALL_FACTOR` times longer: on shared cores a run mostly waits for one).  A re-run
 (:func:`rerun`) takes an earlier campaign's file of the same draw, keeps its killed and not
 viable mutants as they are (a wider selection only adds tests) and runs the others again
-with this module's selection, into a new file.
+with this module's selection, into a new file (``--language c``: its C mutants only).
+
+A run that fails loudly rather than by a failing test (:data:`LOUD`: the selected test files no
+longer collect, pytest's exit status 4; a crash, a signal; pytest's internal error, status 3)
+fails a CI run all the same: it counts as killed, with ``killed_by`` naming the kind, when the
+same selection passes on the unmutated tree (run once more for it; a collection failure: collected
+once more); otherwise its outcome is
+``baseline failure``, counted neither way (as :func:`confirm`'s).  A run that fails by a test
+has ``killed_by`` "test".
 """
 from __future__ import annotations
 
@@ -30,12 +39,16 @@ from pathlib import Path
 from benchmarks import mutation_c, mutation_map, mutation_py
 
 ROOT = mutation_py.ROOT
-#: The tests a C mutant runs (besides mutation_c's extra ones): the kernels' and the oracles'.
-C_TESTS = ("tests/kernels/test_kernels_*.py", "tests/**/test_oracles_*.py")
+#: The test files a C mutant's selection draws from (``--c-test-files``): every test file by
+#: default; a narrower set of patterns maps fewer files (a measurement of limited time).
+C_TESTS: tuple = ()
+#: pytest's exit statuses that fail loudly, by what ``killed_by`` calls them (a signal: "crash").
+LOUD = {3: "internal error", 4: "collection"}
 #: A test run's wall-clock limit, in multiples of its CPU-time limit (``--timeout``).
 WALL_FACTOR = 8
-#: The outcomes a re-run decides again (killed, not viable and a crash, ``error``, stay as they were).
-RERUN = ("survived", "timeout")
+#: The outcomes a re-run decides again (killed and not viable stay as they were; ``error``, a loud
+#: failure of a campaign before :data:`LOUD` counted, is decided again).
+RERUN = ("survived", "timeout", "error")
 #: How a selection is named in the results (:func:`select`).
 KINDS = {"coverage": "coverage", "import": "import (a line run at import: the module's tests, then its importers')",
          "none": "none"}
@@ -65,9 +78,10 @@ def _cpu_limit(seconds: float):
     return limit
 
 
-def _pytest(copy: Path, tests: list, timeout: float, env: dict) -> dict:
+def _pytest(copy: Path, tests: list, timeout: float, env: dict, collect_only: bool = False) -> dict:
     """``pytest -x`` of ``tests`` (files or node ids, in that order) in ``copy``, at most
-    ``timeout`` CPU seconds (and :data:`WALL_FACTOR` times as many on the wall clock)."""
+    ``timeout`` CPU seconds (and :data:`WALL_FACTOR` times as many on the wall clock);
+    ``collect_only``: their collection only."""
     cache = tempfile.mkdtemp(prefix="parcosim_mutcache_")
     env = dict(env, PYTHONDONTWRITEBYTECODE="1", PARCOSIM_CACHE=cache,
                PYTHONPATH=os.pathsep.join([str(copy), *mutation_map._other_paths()]))
@@ -76,7 +90,7 @@ def _pytest(copy: Path, tests: list, timeout: float, env: dict) -> dict:
     start = time.monotonic()
     try:
         done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-x", "-p", "no:cacheprovider", "-rf",
-                               f"@{listed}"], cwd=copy, env=env, timeout=WALL_FACTOR * timeout,
+                               *(["--collect-only"] if collect_only else []), f"@{listed}"], cwd=copy, env=env, timeout=WALL_FACTOR * timeout,
                               capture_output=True, text=True, preexec_fn=_cpu_limit(timeout))
     except subprocess.TimeoutExpired:
         return {"outcome": "timeout", "seconds": WALL_FACTOR * timeout, "cpu_limit": timeout}
@@ -87,8 +101,30 @@ def _pytest(copy: Path, tests: list, timeout: float, env: dict) -> dict:
         return {"outcome": "timeout", "seconds": seconds, "cpu_limit": timeout}
     failed = re.findall(r"^(?:FAILED|ERROR) (\S+)", done.stdout, re.M)
     outcome = {0: "survived", 1: "killed", 2: "killed", 5: "survived"}.get(done.returncode, "error")
-    return {"outcome": outcome, "seconds": seconds, "returncode": done.returncode, "failed": failed[:1],
-            "cpu_limit": timeout}
+    kind = loud(done.returncode)
+    return {"outcome": "loud" if kind else outcome, "seconds": seconds, "returncode": done.returncode,
+            "failed": failed[:1], "cpu_limit": timeout, **({"killed_by": kind or "test"} if kind or
+                                                          outcome == "killed" else {})}
+
+
+def loud(returncode: int) -> str | None:
+    """What a run's exit status that fails loudly (not by a test) is called, or None."""
+    if returncode < 0:
+        return "crash"
+    return LOUD.get(returncode)
+
+
+def decide_loud(result: dict, pristine) -> dict:
+    """``result`` of :func:`_pytest`, a loud one decided: killed when ``pristine(collect_only)``
+    (the same selection on the unmutated tree, a :func:`_pytest` answer; for a collection
+    failure its collection only, seconds where the run may take minutes) passes, else
+    ``baseline failure`` with that run's exit status."""
+    if result["outcome"] != "loud":
+        return result
+    baseline = pristine(result["killed_by"] == "collection")
+    if baseline["outcome"] == "survived":
+        return dict(result, outcome="killed")
+    return dict(result, outcome="baseline failure", baseline_returncode=baseline.get("returncode"))
 
 
 def _limit(cost: float, base: float, factor: float) -> float:
@@ -107,11 +143,13 @@ def run_python(copy: Path, mutant: mutation_py.PyMutant, chosen: dict, base: flo
         return {"outcome": "not viable", "seconds": 0.0}
     if not chosen["tests"]:
         return {"outcome": "survived", "seconds": 0.0, "note": chosen["note"]}
+    limit = _limit(chosen["cost"], base, factor)
     try:
         path.write_text(mutated)
-        return _pytest(copy, chosen["tests"], _limit(chosen["cost"], base, factor), dict(os.environ))
+        result = _pytest(copy, chosen["tests"], limit, dict(os.environ))
     finally:
         path.write_text(original)
+    return decide_loud(result, lambda collect: _pytest(copy, chosen["tests"], limit, dict(os.environ), collect))
 
 
 
@@ -126,20 +164,25 @@ def run_c(copy: Path, mutant, chosen: dict, base: float, factor: float) -> dict:
             library = mutation_c.build_from(sources, work / "libparcosim_kernels.so")
         except subprocess.CalledProcessError:
             return {"outcome": "not viable", "seconds": 0.0}
-        return _pytest(copy, chosen["tests"], _limit(chosen["cost"], base, factor),
-                       dict(os.environ, PARCOSIM_KERNELS_LIB=str(library)))
+        if not chosen["tests"]:
+            return {"outcome": "survived", "seconds": 0.0, "note": chosen["note"]}
+        limit = _limit(chosen["cost"], base, factor)
+        result = _pytest(copy, chosen["tests"], limit, dict(os.environ, PARCOSIM_KERNELS_LIB=str(library)))
     finally:
         shutil.rmtree(work, ignore_errors=True)
+    pristine = {k: v for k, v in os.environ.items() if k != "PARCOSIM_KERNELS_LIB"}     # the copy's own library
+    return decide_loud(result, lambda collect: _pytest(copy, chosen["tests"], limit, pristine, collect))
 
 
 _MAPS: dict = {}
 
 
-def _linemap(copy: Path, files: list, lock_of, commit: str) -> dict:
+def _linemap(copy: Path, files: list, lock_of, commit: str, language: str = "python") -> dict:
     """The merged map of ``files`` at ``commit`` (built where missing), kept for the next mutant."""
-    if (commit, tuple(files)) not in _MAPS:
-        _MAPS[(commit, tuple(files))] = mutation_map.for_files(copy, mutation_py.python_files(), files, lock_of, commit)
-    return _MAPS[(commit, tuple(files))]
+    if (commit, tuple(files), language) not in _MAPS:
+        _MAPS[(commit, tuple(files), language)] = mutation_map.for_files(
+            copy, mutation_py.python_files(), files, lock_of, commit, language=language)
+    return _MAPS[(commit, tuple(files), language)]
 
 
 class NeedsSlowMaps(Exception):
@@ -156,26 +199,23 @@ def select(copy: Path, name: str, mutant, importers: list, budget: float, lock_o
     built in ``copy`` the first time).  The :data:`benchmarks.mutation_map.SLOW` files are
     mapped only for a mutant that no test marked slow would run from the others (their tests
     are all slow, and a slow test runs only when no other does: the selection is the same);
-    ``slow_maps=False``: raise :class:`NeedsSlowMaps` instead.  C (coverage does not see C
-    lines): every test of the kernels' and the oracles' files (and mutation_c's extra ones),
-    the cheaper first."""
-    if name.endswith(".c"):
-        files = sorted({str(p.relative_to(copy)) for pattern in C_TESTS for p in copy.glob(pattern)})
-        files += mutation_c.EXTRA_TESTS.get(mutant.file, [])
-        linemap = mutation_map.for_files(copy, mutation_py.python_files(), files, lock_of, commit)
-        failing = set(linemap["failed"])
-        tests = sorted((t for t in linemap["all_tests"] if t not in failing),
-                       key=lambda t: linemap["all_tests"][t]["seconds"])
-        return {"tests": tests, "covering": len(tests), "cost": round(mutation_map.cost(linemap, tests), 2),
-                "selection": "C tests"}
+    ``slow_maps=False``: raise :class:`NeedsSlowMaps` instead.  C: the same, from the C maps
+    (:mod:`benchmarks.mutation_cmap`) of the test files :data:`C_TESTS` matches (every one
+    by default); a C line has no import time."""
     every = mutation_map.all_test_files(copy)
+    language = "c" if name.endswith(".c") else "python"
+    if language == "c":
+        if C_TESTS:
+            every = [f for f in every if any(Path(f).match(pattern) for pattern in C_TESTS)]
+        at_import = False
+    else:
+        body = mutation_map.function_lines((copy / name).read_text())
+        at_import = any(line not in body for line in range(mutant.line, mutant.end_line + 1))
     quick = [f for f in every if not mutation_map.SLOW.search((copy / f).read_text())]
-    text = (copy / name).read_text()
-    body = mutation_map.function_lines(text)
-    at_import = any(line not in body for line in range(mutant.line, mutant.end_line + 1))
     for files in (quick, every):
-        linemap = _linemap(copy, files, lock_of, commit)
-        chosen = mutation_map.select(linemap, name, mutant.line, mutant.end_line, budget, at_import, tuple(importers))
+        linemap = _linemap(copy, files, lock_of, commit, language)
+        chosen = mutation_map.select(linemap, name, mutant.line, getattr(mutant, "end_line", mutant.line), budget,
+                                     at_import, tuple(importers))
         slow = dict(zip(linemap["tests"], linemap["slow"]))
         if any(not slow[t] for t in chosen["tests"]):
             break
@@ -305,12 +345,13 @@ def campaign(seed: int, sample: int, workers: int, results: Path | None = None, 
 
 
 def rerun(source: Path, results: Path, workers: int = 1, base: float = 30.0, factor: float = 3.0,
-          budget: float = 300.0) -> Path:
+          budget: float = 300.0, language: str | None = None, outcomes: tuple = RERUN) -> Path:
     """Run again, with this module's selection, the mutants of ``source`` (an earlier
-    campaign's file) whose outcome is one of :data:`RERUN`, into ``results`` (a new file,
-    resumed when it exists); the others are copied as they were (``"carried": true``).
-    Refused when this tree draws other mutants than ``source`` recorded, or when ``results``
-    is the re-run of another file."""
+    campaign's file) whose outcome is one of ``outcomes`` (default :data:`RERUN`; of
+    ``language``, "c" or "python", only when given), into ``results`` (a new file, resumed when
+    it exists); the others are copied as they were (``"carried": true``).  Refused when this
+    tree draws other mutants than ``source`` recorded, or when ``results`` is the re-run of
+    another file."""
     if results.resolve() == source.resolve():
         raise ValueError(f"--results {results} is the file re-run: write the re-run to a new file")
     old_header, before = read_results(source)
@@ -329,13 +370,20 @@ def rerun(source: Path, results: Path, workers: int = 1, base: float = 30.0, fac
     else:
         header = {**{k: v for k, v in old_header.items() if k != "near_files"}, "rerun_of": str(source),
                   "selection": "global", "map": mutation_map.key(commit=old_header["commit"]),
-                  "base_seconds": base, "factor": factor, "budget_seconds": budget}
-        done = {k: dict(m, carried=True) for k, m in before.items() if m["outcome"] not in RERUN}
+                  "base_seconds": base, "factor": factor, "budget_seconds": budget, "language": language,
+                  "outcomes": list(outcomes),
+                  "c_test_files": list(C_TESTS)}
+        done = {k: dict(m, carried=True) for k, m in before.items() if not _rerun(m, language, outcomes)}
         results.parent.mkdir(parents=True, exist_ok=True)
         results.write_text("\n".join(json.dumps(line) for line in [{"header": header}, *done.values()]) + "\n")
-    pending = [k for k in sorted(before) if before[k]["outcome"] in RERUN and k not in done]
+    pending = [k for k in sorted(before) if _rerun(before[k], language, outcomes) and k not in done]
     _run_all(chosen, pending, header, results, done, workers, base, factor, budget)
     return results
+
+
+def _rerun(entry: dict, language: str | None, outcomes: tuple) -> bool:
+    """Whether a re-run of ``outcomes`` (of ``language``'s mutants only, when given) runs ``entry`` again."""
+    return entry["outcome"] in outcomes and language in (None, entry.get("language"))
 
 
 def confirm(results: Path, timeout: float) -> dict:

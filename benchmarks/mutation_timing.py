@@ -11,6 +11,10 @@ the JSON file named by ``$PARCOSIM_MUTATION_TIMES`` at the session's end:
 ``failed``    node ids of the tests that failed or errored (the map's run is on the unmutated
               tree: a mutant does not run them)
 
+``gcov``      (with ``$PARCOSIM_MUTATION_GCOV``, a C map's run: :mod:`benchmarks.mutation_cmap`)
+              n -> the node id of the n-th test run: the folder ``$PARCOSIM_MUTATION_GCOV/n``
+              holds the C line counts of that test and of the processes it started
+
 While a test runs, ``$PARCOSIM_TEST_CONTEXT`` holds its node id: a process it starts inherits
 it, and the map's coverage configuration takes it as the static context of that process
 (``[run] context = ${PARCOSIM_TEST_CONTEXT-}``), so the lines a test's subprocesses execute
@@ -21,6 +25,7 @@ they use (each once), whatever test of the subset sets a shared fixture up first
 """
 from __future__ import annotations
 
+import ctypes
 import json
 import os
 import time
@@ -33,6 +38,12 @@ _FAILED: set = set()
 _DURING: list = []       # the shared fixtures' seconds spent inside the current test's phases
 #: The environment variable a test's subprocesses read their coverage context from.
 CONTEXT = "PARCOSIM_TEST_CONTEXT"
+#: A C map's run: the folder of the per-test gcov folders, and the test number of each.
+GCOV = os.environ.get("PARCOSIM_MUTATION_GCOV")
+_GCOV_TESTS: dict = {}
+_HOOKS = ctypes.CDLL(os.environ["PARCOSIM_KERNELS_LIB"]) if GCOV else None
+if GCOV:
+    os.environ["GCOV_PREFIX"] = os.path.join(GCOV, "outside")       # collection: no test's
 
 
 def _key(fixturedef, request) -> str:
@@ -66,11 +77,19 @@ def _shared_of(item) -> list:
 def pytest_runtest_protocol(item, nextitem):
     _DURING.clear()
     os.environ[CONTEXT] = item.nodeid
+    if GCOV:
+        number = str(len(_GCOV_TESTS))
+        _GCOV_TESTS[number] = item.nodeid
+        os.environ["GCOV_PREFIX"] = os.path.join(GCOV, number)    # this process's dump, its children's exits
+        _HOOKS.pc_coverage_reset()
     start = time.perf_counter()
     try:
         yield
     finally:
         os.environ.pop(CONTEXT, None)
+        if GCOV:
+            _HOOKS.pc_coverage_dump()
+            os.environ["GCOV_PREFIX"] = os.path.join(GCOV, "outside")
     own = time.perf_counter() - start - sum(_DURING)
     _TESTS[item.nodeid] = {"seconds": round(max(own, 0.0), 3), "shared": _shared_of(item),
                            "slow": item.get_closest_marker("slow") is not None}
@@ -85,4 +104,4 @@ def pytest_sessionfinish(session):
     path = os.environ.get("PARCOSIM_MUTATION_TIMES")
     if path:
         with open(path, "w") as out:
-            json.dump({"tests": _TESTS, "shared": _SHARED, "failed": sorted(_FAILED)}, out)
+            json.dump({"tests": _TESTS, "shared": _SHARED, "failed": sorted(_FAILED), "gcov": _GCOV_TESTS}, out)

@@ -179,9 +179,10 @@ def _campaign_file(tmp_path, monkeypatch):
     return source, drawn
 
 
-def test_a_rerun_runs_the_survivors_and_timeouts_again_keeps_the_kills_and_resumes(tmp_path, monkeypatch):
+def test_a_rerun_runs_the_survivors_timeouts_and_errors_again_keeps_the_kills_and_resumes(tmp_path, monkeypatch):
     """Catches a re-run that runs killed mutants again, drops them from the new file (the score would
-    lose them), writes over the file it re-runs, or runs a mutant twice when resumed."""
+    lose them), leaves an old loud failure (``error``) undecided, writes over the file it re-runs, or
+    runs a mutant twice when resumed."""
     source, drawn = _campaign_file(tmp_path, monkeypatch)
     ran = []
 
@@ -197,13 +198,13 @@ def test_a_rerun_runs_the_survivors_and_timeouts_again_keeps_the_kills_and_resum
         mr.rerun(source, source)
     new = tmp_path / "new.jsonl"
     mr.rerun(source, new, budget=60.0)
-    assert ran == [[1, 2, 5]]
+    assert ran == [[1, 2, 4, 5]]
     header, done = mr.read_results(new)
     assert header["rerun_of"] == str(source) and header["budget_seconds"] == 60.0 and header["drawn"]
-    assert {k: m["outcome"] for k, m in done.items()} == {0: "killed", 1: "killed", 3: "not viable", 4: "error"}
-    assert all(done[k]["carried"] for k in (0, 3, 4))
+    assert {k: m["outcome"] for k, m in done.items()} == {0: "killed", 1: "killed", 3: "not viable"}
+    assert all(done[k]["carried"] for k in (0, 3))
     mr.rerun(source, new)
-    assert ran[-1] == [2, 5]
+    assert ran[-1] == [2, 4, 5]
     assert source.read_text().count("\n") == 7                         # the file re-run is untouched
 
 
@@ -231,7 +232,7 @@ def test_the_slow_files_are_mapped_only_for_a_mutant_no_other_test_would_run(tmp
         (tmp_path / f).write_text(text)
     asked = []
 
-    def for_files(copy, products, files, *rest):
+    def for_files(copy, products, files, *rest, **options):
         asked.append(sorted(files))
         return mm.merge([mm.split(dict(_record(), commit="c", returncode=0), f) for f in files])
 
