@@ -433,8 +433,12 @@ def main(argv=None) -> int:
                         help="with --rerun-survivors: re-run the mutants of these outcomes only")
     parser.add_argument("--c-test-files", nargs="+", metavar="GLOB",
                         help="the test files a C mutant's selection draws from (default: every test file)")
+    parser.add_argument("--wall-factor", type=float, default=mutation_run.WALL_FACTOR,
+                        help="a run's wall-clock limit in multiples of its CPU-time limit (a test that "
+                             "waits on a hung child uses no CPU; lower it on cores nobody else uses)")
     args = parser.parse_args(argv)
     mutation_run.C_TESTS = tuple(args.c_test_files or ())
+    mutation_run.WALL_FACTOR = args.wall_factor
     results = args.results or results_path(args.seed)
     if args.pool:
         for name, mutants in pool_by_file().items():
