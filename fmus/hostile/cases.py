@@ -126,6 +126,12 @@ def make_case(model: str, variables: list, seed: int, kind: str | None = None, w
     out-of-order calls of :data:`LIFECYCLE_CALLS`; ``guid`` "wrong" instantiates with
     another GUID.
     ``models`` (all FMUs of the run) gives "foreign" states their source.
+
+    A drawn value is hostile (:data:`HOSTILE_REALS` ...) with probability 0.6 in a "parameters"
+    case, 0.3 for a "strings" case's parameters, 0.2 for an "inputs" case's inputs (set before
+    every step; the other kinds set them once, sane, within 2 % of :data:`SANE_INPUTS` or the
+    start), 0.5 for a "sets" case's outputs and 0.3 for its parameters; a sane Real is within
+    50 % of its start.
     """
     rng = random.Random(f"{model}:{seed}")
     kinds = [k for k in KINDS if wrapper or k not in WRAPPER_KINDS]

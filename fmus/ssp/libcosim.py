@@ -210,7 +210,8 @@ def simulate_ssp_libcosim(path, signals, stop_time=None, step_size=None, log_lev
     isolated : bool
         Run libcosim in a child Python process (same interpreter) and return its result:
         a crash of the process (e.g. ``worker_threads=None`` and an FMU error while
-        initialising) becomes a RuntimeError here.
+        initialising) becomes a RuntimeError here, naming the exit status and the last five
+        lines the process wrote (stderr, else stdout).
 
     libcosim loads the package with ``CosimExecution.from_ssp_file`` (no ``step_size``):
     as it is when its OSP annotation already gives this step and ``worker_threads``

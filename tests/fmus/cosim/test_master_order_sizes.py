@@ -108,3 +108,53 @@ def test_the_exhaustive_order_is_the_cheapest_with_soft_connections(seed):
             assert _violations(candidate, soft) >= best, (candidate, order)
             if _violations(candidate, soft) == best:
                 assert perm >= tuple(int(name[1:]) for name in order)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_exhaustive_order_counts_every_connection_of_a_pair(seed):
+    """Several continuous connections between one pair of components: each one read late counts
+    (docs: "the fewest connections read ... advanced to t + h"), so a pair joined three times
+    weighs three single ones.  Held against every valid order, counted connection by connection.
+    Catches a pair's count that starts at 1 (or counts each pair once), which weighs a
+    crowded pair like a single connection and picks another order."""
+    rng = random.Random(100 + seed)
+    n = 6
+    edges = _random_dag(rng, n, 0.15)
+    pairs = [(a, b) for a in range(n) for b in range(n) if a != b and (a, b) not in edges and (b, a) not in edges
+             and rng.random() < 0.3]
+    soft = [(a, b, k) for a, b in pairs for k in range(rng.choice((1, 1, 2, 3)))]
+    names = [f"c{i}" for i in range(n)]
+    connections = [Connection(f"c{a}.d{b}", f"c{b}.in_d{a}") for a, b in edges]
+    connections += [Connection(f"c{a}.s{b}_{k}", f"c{b}.in_s{a}_{k}") for a, b, k in soft]
+    variables = {name: {} for name in names}
+    for a, b in edges:
+        variables[f"c{a}"][f"d{b}"] = Variable(f"d{b}", 0, "Real", "output", "discrete")
+    for a, b, k in soft:
+        variables[f"c{a}"][f"s{b}_{k}"] = Variable(f"s{b}_{k}", 0, "Real", "output", "continuous")
+    system = System(tuple(Component(name, "Trajectory") for name in names), tuple(connections), (), 0.0)
+    order = master.stepping_order(system, variables)
+    late = [(a, b) for a, b, _ in soft]          # one entry per connection
+    best = min(_violations(tuple(f"c{i}" for i in perm), late) for perm in itertools.permutations(range(n))
+               if all(perm.index(a) < perm.index(b) for a, b in edges))
+    assert _violations(order, late) == best
+    first = min(perm for perm in itertools.permutations(range(n))
+                if all(perm.index(a) < perm.index(b) for a, b in edges)
+                and _violations(tuple(f"c{i}" for i in perm), late) == best)
+    assert order == tuple(f"c{i}" for i in first)
+
+
+def test_a_pair_joined_three_times_outweighs_two_single_connections():
+    """c1 reads c0 three times; c0 reads c1 and c2, c2 reads c1, once each (continuous outputs).
+    c0 first reads c0's three late (3); c1, c0, c2 reads two single ones late (2) and is the
+    order.  Catches a pair weighed one more than its connections (then 4 against 4: c0, c2, c1
+    wins the tie) or once whatever its count."""
+    soft = [(0, 1), (0, 1), (0, 1), (1, 0), (1, 2), (2, 0)]
+    names = ["c0", "c1", "c2"]
+    connections = [Connection(f"c{a}.s{b}_{k}", f"c{b}.in_s{a}_{k}") for k, (a, b) in enumerate(soft)]
+    variables = {name: {} for name in names}
+    for k, (a, b) in enumerate(soft):
+        variables[f"c{a}"][f"s{b}_{k}"] = Variable(f"s{b}_{k}", 0, "Real", "output", "continuous")
+    system = System(tuple(Component(name, "Trajectory") for name in names), tuple(connections), (), 0.0)
+    order = master.stepping_order(system, variables)
+    assert _violations(order, soft) == 2
+    assert order == ("c1", "c0", "c2")

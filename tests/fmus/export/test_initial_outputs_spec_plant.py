@@ -1,6 +1,7 @@
 """The SpecPlant FMU of ``parcosim build-plant`` (fmus/export/specfmu.py) read in Initialization Mode
 through fmpy: FMI 2.0 (4.2.4) has its outputs (initial="calculated") calculated from what was set so far,
-not placeholders (session 39 left it open: x was to read 0.0 rather than the spec's start 0.02)."""
+not placeholders (session 39 left it open: x was to read 0.0 rather than the spec's start 0.02); and
+what the built FMU declares and carries (its model options, the spec as checked)."""
 from __future__ import annotations
 
 import shutil
@@ -58,3 +59,19 @@ def test_outputs_read_in_initialization_mode_are_the_assembled_start_and_stay_af
         slave.freeInstance()
     finally:
         shutil.rmtree(tmp_path / "unzipped", ignore_errors=True)
+
+
+def test_the_fmu_declares_variable_steps_and_states_and_carries_the_checked_spec(spec_fmu):
+    """SpecPlant has no sample period, so it takes any step (as ``build_fmu`` gives the other plants:
+    "true" without a sample period), and its state can be got, set and serialised (STATE_OPTIONS);
+    the spec travels as ``plant_spec.toml``, the text ``load`` checked.  Catches a model option
+    dropped from the build (fmpy's default "false" then written) and another text carried."""
+    import zipfile
+
+    from fmus.slave.designs import SPEC_RESOURCE
+
+    cs = read_model_description(str(spec_fmu)).coSimulation
+    assert (cs.canHandleVariableCommunicationStepSize, cs.canGetAndSetFMUstate, cs.canSerializeFMUstate) == \
+        (True, True, True)
+    with zipfile.ZipFile(spec_fmu) as z:
+        assert z.read(f"resources/{SPEC_RESOURCE}").decode("utf-8") == load(spec_path(SPEC)).text

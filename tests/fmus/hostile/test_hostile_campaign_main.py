@@ -138,3 +138,26 @@ def test_help_says_what_the_campaign_is(capsys):
     assert info.value.code == 0
     text = " ".join(capsys.readouterr().out.split())
     assert "The long hostile-use campaign (issue 13): thousands of cases through fmpy, a summary table." in text
+
+
+def test_the_wall_time_and_the_progress_lines_count_from_the_cases_start(made_up, tmp_path, monkeypatch, capsys):
+    """A clock that reads 1000 s when the cases start and advances 0.5 s a case: the progress
+    lines (every 100 cases) say 50 and 100 s, the summary "200 cases, 100 s wall".  Catches the
+    elapsed time taken from another start (the clock's reading itself, or the first case's)."""
+    _, state = made_up
+    now = [1000.0]
+    monkeypatch.setattr(campaign, "time", type("Clock", (), {"perf_counter": staticmethod(lambda: now[0])}))
+
+    def run_cases(cases, unzipped, batch, progress, env):
+        results = []
+        for c in cases:
+            now[0] += 0.5
+            results.append(CaseResult(c, "ok", [], [], 0.5))
+            progress(results[-1])
+        return results
+
+    monkeypatch.setattr(hostile, "run_cases", run_cases)
+    out = tmp_path / "out"
+    assert campaign.main(["--cases", "200", "--out", str(out)]) == 0
+    assert capsys.readouterr().err.splitlines() == ["100/200 50 s", "200/200 100 s"]
+    assert (out / "summary.md").read_text().startswith("200 cases, 100 s wall (")

@@ -231,3 +231,43 @@ def test_a_parameters_case_draws_hostile_values_or_values_near_the_start(table):
             base = start[name]
             assert abs(value - base) <= 0.5 * abs(base) + 0.005 * (abs(base) or 1.0) + 1e-15, (name, value, base)
     assert 0.5 < hostile / (hostile + near) < 0.7, (hostile, near)
+
+
+def _is_hostile(value) -> bool:
+    return any(value == h or (math.isnan(value) and math.isnan(h)) for h in HOSTILE_REALS)
+
+
+def test_an_inputs_case_draws_hostile_inputs_in_a_fifth_of_its_sets_and_sane_ones_otherwise(table):
+    """An "inputs" case sets every Real input before every step: a hostile value
+    (:data:`HOSTILE_REALS`) with probability 0.2 (make_case's docstring), otherwise within 2 %
+    (and 2e-4 absolute) of its sane value.  Catches the hostile share off (0.4, or none), the
+    other values drawn wider than 2 %, or away from the sane value."""
+    _, rows = table
+    start = {row[0]: row[4] for row in rows if row[2] == "input" and row[1] == "Real"}
+    hostile = sane = 0
+    for seed in range(300):
+        for op in make_case(MODEL, rows, seed, kind="inputs")["ops"]:
+            if op[0] != "set" or op[1] not in start:
+                continue
+            if _is_hostile(op[2]):
+                hostile += 1
+                continue
+            sane += 1
+            base = start[op[1]]
+            assert abs(op[2] - base) <= 0.02 * abs(base) + 2e-4 * (abs(base) or 1.0) + 1e-15, op
+    assert 0.16 < hostile / (hostile + sane) < 0.24, (hostile, sane)
+
+
+def test_a_sets_case_writes_hostile_outputs_half_the_time_and_hostile_parameters_three_times_in_ten(table):
+    """A "sets" case's extra writes of a Real output are hostile with probability 0.5, of a Real
+    parameter 0.3 (make_case's docstring).  Catches either share off or the two swapped."""
+    _, rows = table
+    kind = {row[0]: (row[1], row[2]) for row in rows}
+    counts = {"output": [0, 0], "parameter": [0, 0]}
+    for seed in range(600):
+        for op in make_case(MODEL, rows, seed, kind="sets")["ops"]:
+            if op[0] == "set" and kind[op[1]] in (("Real", "output"), ("Real", "parameter")):
+                counts[kind[op[1]][1]][_is_hostile(op[2])] += 1
+    for causality, share in (("output", 0.5), ("parameter", 0.3)):
+        sane, hostile = counts[causality]
+        assert abs(hostile / (hostile + sane) - share) < 0.08, (causality, counts)

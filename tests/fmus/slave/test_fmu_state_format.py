@@ -314,3 +314,24 @@ def _field_start(whole: bytes, what: str) -> int:
                 "array data": dtype_end + 1 + 8 + 8}[what]
     dtype_end = 1 + 1 + whole[1]
     return {"scalar size": dtype_end, "scalar": dtype_end + 1}[what]
+
+
+def test_a_decoded_tree_is_written_back_to_the_same_bytes():
+    """A record array (its dtype not plain: read as :class:`ArrayBytes`, its key the field
+    description) and references, as read, written again: the same bytes, every field of the
+    array's row at its documented place.  Catches the writer of a tree as read (an ArrayBytes,
+    a Ref) off the table: the size word's width or place, the dtype's key, the shape."""
+    record = np.array([(1.5, -2), (3.0, 7)], dtype=[("a", "<f8"), ("b", "<i4")])
+    shared = [np.int16(4)]
+    tree = {"r": record, "l": shared, "again": sf.SharedRef(shared), "rr": sf.SharedRef(record)}
+    data = sf.encode(HEADER, tree)
+    header, read = sf.decode(data)
+    key = repr(record.dtype.descr)
+    assert read["r"] == sf.ArrayBytes(key, (2,), record.tobytes())
+    assert (read["again"], read["rr"]) == (sf.Ref(2), sf.Ref(1))       # dict 0, array 1, list 2
+    assert sf.encode(header, read) == data
+    raw = record.tobytes()
+    array = (b"a" + _s(key, "<H") + struct.pack("<B", 1) + struct.pack("<Q", 2) + struct.pack("<Q", len(raw)) + raw)
+    expected = (b"d" + struct.pack("<I", 4) + _bytes_of("r") + array + _bytes_of("l") + _bytes_of(read["l"])
+                + _bytes_of("again") + _bytes_of(sf.Ref(2)) + _bytes_of("rr") + _bytes_of(sf.Ref(1)))
+    assert data == _framed(expected)

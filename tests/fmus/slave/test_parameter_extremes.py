@@ -23,9 +23,11 @@ fmi2Error, never fmi2Fatal.
 """
 from __future__ import annotations
 
+import atexit
 import json
 import math
 import re
+import shutil
 import sys
 import tempfile
 from functools import lru_cache
@@ -207,6 +209,7 @@ def _spec_resources() -> str:
     from plant.spec import load, spec_path
 
     folder = tempfile.mkdtemp(prefix="parcosim_spec_resources_")
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)      # nothing left in the temp folder
     with open(f"{folder}/{SPEC_RESOURCE}", "w", encoding="utf-8") as f:
         f.write(load(spec_path(SPEC)).text)
     return folder
@@ -275,6 +278,7 @@ def _system(model: str):
     else:
         role, system, cls = "chain", package_scene(scene).chain, ControlChain
     folder = tempfile.mkdtemp(prefix=f"parcosim_{role}_resources_")
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
     with open(f"{folder}/{SYSTEM_FILE}", "w", encoding="utf-8") as f:
         json.dump({"role": role, "plant": PLANT, "system": system_to_dict(system)}, f)
     plant = InProcessInstance(system.component(PLANT).model, PLANT)

@@ -11,7 +11,6 @@ import os
 import subprocess
 import sys
 import textwrap
-import xml.etree.ElementTree as ET
 import zipfile
 
 import numpy as np
@@ -20,7 +19,7 @@ import pytest
 from fmus.ssp.libcosim import (libcosim_available,
                                   read_libcosim_step, simulate_ssp_libcosim, with_libcosim_annotation)
 from fmus.cosim.master import simulate
-from fmus.ssp.export import NS, OSP_ANNOTATION, OSP_NS, export_ssp, libcosim_annotation_xml
+from fmus.ssp.export import NS, OSP_NS, export_ssp
 from fmus.ssp.run import ecos_available, simulate_ssp_ecos
 from fmus.cosim.system import Component, System
 from fmus.status import RunStatus
@@ -57,22 +56,6 @@ def libcosim_run(thesis):
         pytest.skip(f"libcosimpy cannot be loaded ({REASON}): pip install libcosimpy")
     _, path, _ = thesis
     return simulate_ssp_libcosim(path, list(SIGNALS), isolated=True)
-
-
-# --- the step-size annotation (no libcosim needed) ------------------------------------------
-
-def test_annotation_text_is_what_libcosim_reads():
-    """Catches an OSP annotation libcosim does not read (another type, namespace or attribute name: it
-    would then crash without an algorithm) or a zero step written."""
-    text = libcosim_annotation_xml(1e-3)
-    root = ET.fromstring(f'<r xmlns:ssc="{NS["ssc"]}" xmlns:osp="{OSP_NS}">{text}</r>')
-    annotation = root.find("ssc:Annotation", NS)
-    assert annotation.get("type") == OSP_ANNOTATION == "com.opensimulationplatform"
-    algorithm = annotation.find(f"{{{OSP_NS}}}Algorithm/{{{OSP_NS}}}FixedStepAlgorithm")
-    assert algorithm.attrib == {"baseStepSize": "0.001"}
-    assert 'numWorkerThreads="0"' in libcosim_annotation_xml(1e-3, worker_threads=0)
-    with pytest.raises(ValueError):
-        libcosim_annotation_xml(0.0)
 
 
 def test_annotated_package_keeps_the_literal_prefixes_and_the_schema(thesis, tmp_path):
