@@ -104,12 +104,15 @@ def test_every_layouts_calls_values_and_rows_are_the_contracts(layout):
     _run(layout)
 
 
+@pytest.mark.parametrize("first", [True, False])
 @pytest.mark.parametrize("layout", LAYOUTS)
-def test_a_member_declining_stops_at_its_step_sub_step_and_start_time(layout):
-    """The last member declines its fourth call: the stop names its step, member, sub-step and
-    the step's start time, with its refusal, and nothing after it is stepped or recorded.
-    Catches the stop filled wrongly on either path, or the loop going on."""
+def test_a_member_declining_stops_at_its_step_sub_step_and_start_time(layout, first):
+    """The first or the last member declines its fourth call: the stop names its step, member,
+    sub-step and the step's start time, with its refusal, and nothing after it is stepped or
+    recorded.  Catches the stop filled wrongly on either path, member 0's refusal taken for
+    none, or the loop going on."""
     n = sum(count for _, count in layout)
-    stop, log = _run(layout, refuse=(n - 1, 4))
-    assert stop.member == n - 1 and stop.step < K1 - 1
-    assert (stop.refusal.code, stop.refusal.index, stop.refusal.value) == (9, n - 1, log[-1][1])
+    who = 0 if first else n - 1
+    stop, log = _run(layout, refuse=(who, 4))
+    assert stop.member == who and stop.step < K1 - 1
+    assert (stop.refusal.code, stop.refusal.index, stop.refusal.value) == (9, who, log[-1][1])
