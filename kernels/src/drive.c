@@ -336,15 +336,6 @@ int pc_drive_step(pc_drive *d, pc_controller *c, pc_lugre *f, double i_ref, doub
     return code;
 }
 
-int pc_drive_step_friction(pc_drive *d, pc_controller *c, double i_ref, double v_ref, double omega, double i_hat,
-                           double h, double friction_end, double friction_mean, double out[3], pc_refusal *r)
-{
-    int code = check_step(d, i_ref, v_ref, omega, i_hat, h, r);
-    if (code != PC_OK) return code;
-    const double friction[2] = {friction_end, friction_mean};
-    return step(d, c, i_ref, v_ref, omega, i_hat, friction, out, r);
-}
-
 /* The Python layer's calls (motor.kernel.Calls): x = [i_ref, v_ref, omega, i_hat, h | tau, v, i],
  * the outputs written also on a refusal DIVERGED (the values refused, for the message). */
 int pc_drive_step_x(void *context, double *x, pc_refusal *r)

@@ -119,11 +119,9 @@ int pc_drive_sample_voltage(pc_drive *d, pc_controller *c, double i_ref, double 
 double pc_drive_torque(const pc_drive *d, const pc_lugre *f, double omega);
 
 /* One step with inputs held: out = {tau, v, i}.  f: the LuGre friction (advanced with the step)
- * or NULL (B.2's tanh).  pc_drive_step_friction: the friction torque given (at the end, mean). */
+ * or NULL (B.2's tanh). */
 int pc_drive_step(pc_drive *d, pc_controller *c, pc_lugre *f, double i_ref, double v_ref, double omega,
                   double i_hat, double h, double out[3], pc_refusal *r);
-int pc_drive_step_friction(pc_drive *d, pc_controller *c, double i_ref, double v_ref, double omega, double i_hat,
-                           double h, double friction_end, double friction_mean, double out[3], pc_refusal *r);
 
 /* DCMotorDrive: x = [i_ref, v_ref, omega, i_hat | tau, v, i], the outputs written only on PC_OK. */
 int pc_drive_io(void *context, double *x, double t, double h, pc_refusal *r);

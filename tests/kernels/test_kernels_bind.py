@@ -4,9 +4,11 @@ general one), the same bits as the function called with all its arguments; a wro
 refused naming the function."""
 from __future__ import annotations
 
+import gc
 import itertools
 import re
 
+import numpy as np
 import pytest
 
 import kernels
@@ -38,3 +40,28 @@ def test_a_wrong_number_of_arguments_is_refused_naming_the_function():
         message = f"pc_drive_armature_rate takes 6 arguments, {len(arguments)} bound"
         with pytest.raises(TypeError, match=re.escape(message)):
             kernels.bind(motor_kernel.armature_rate, *arguments)
+
+
+def test_owned_calls_are_made_once_per_buffers_and_dropped_with_their_owner():
+    """kernels.owned makes an owner's calls once, again only when its buffers are other
+    arrays (by identity, not value), and forgets them when the owner is collected.  Catches a
+    cache that never hits, answers for other buffers, or keeps a dead owner's entry (whose
+    id a new object may take)."""
+    class Owner:
+        pass
+
+    owner, a, b = Owner(), np.zeros(2), np.zeros(3)
+    made = []
+
+    def make(*buffers):
+        made.append(buffers)
+        return len(made)
+
+    assert kernels.owned(owner, (a, b), make) == 1 and kernels.owned(owner, (a, b), make) == 1
+    assert kernels.owned(owner, (a, np.zeros(3)), make) == 2 and made[1][0] is a
+    assert kernels.owned(owner, (a, b), make) == 3 and len(made) == 3
+    key = id(owner)
+    assert key in kernels._OWNED
+    del owner
+    gc.collect()
+    assert key not in kernels._OWNED

@@ -241,3 +241,30 @@ def test_an_observer_estimate_that_overflows_is_refused_and_not_kept():
     assert caught.value.variable == "i_hat" and caught.value.code == kernel.DIVERGED and caught.value.time == 0.25
     assert str(caught.value).startswith("the estimate i_hat = inf A at t = 0.25 s is not finite (inputs v = 1e+308 V")
     assert observer.i_hat == kept
+
+
+@pytest.mark.parametrize("counts", [0, 7, 255])
+def test_the_current_loop_is_its_difference_equation_and_the_pwm_rounds_only_the_applied(counts):
+    """Sampled every step, the applied voltage is the controller's difference equation (K(z):
+    u_k = (1 + delta) u_k-1 - delta u_k-2 + alpha e_k + beta e_k-1 + gamma e_k-2, saturated at
+    v_max) computed here from its coefficients, rounded to the nearest multiple of v_max /
+    counts (ties away from zero), while the recursion remembers its own unrounded u.  Catches
+    the controller remembering the rounded voltage (or rounding without PWM), a dropped or
+    shifted term of the recursion, and a wrong rounding."""
+    drive = Drive(motor1, torque_output="mean", pwm_counts=counts)
+    drive.prepare_step(H)
+    c, buf = kernel.CONTROLLER, drive._controller_buf
+    delta, alpha, beta, gamma, v_max = (float(buf[c[n]][0]) for n in ("delta", "alpha", "beta", "gamma", "v_max"))
+    quantum = v_max / counts if counts else 0.0
+    u1 = u2 = e1 = e2 = 0.0
+    rounded = 0
+    for k in range(60):
+        i_ref, i_hat = 0.3 * math.sin(0.2 * k), 0.05 * math.cos(0.3 * k)
+        _, v, _ = drive.step(i_ref, 0.0, 1.0, i_hat, H)
+        e = i_ref - i_hat
+        u = min(v_max, max(-v_max, (1.0 + delta) * u1 - delta * u2 + alpha * e + beta * e1 + gamma * e2))
+        want = math.copysign(math.floor(abs(u) / quantum + 0.5) * quantum, u) if quantum else u
+        assert v == want, k
+        rounded += v != u
+        u2, u1, e2, e1 = u1, u, e1, e
+    assert (rounded > 30) == bool(counts)

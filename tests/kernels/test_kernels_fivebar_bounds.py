@@ -97,3 +97,23 @@ def test_the_projection_changes_only_the_14_state_words():
     fast5r._project(fast5r._address(p), fast5r._address(z), 3)
     assert np.all(z[14:] == SENTINEL)
     assert np.all(np.isfinite(z[:14])) and not np.array_equal(z[:14], y)
+
+
+def test_each_newton_iteration_of_the_projection_counts():
+    """pc_fivebar_project from a state whose four joint angles are 2e-3 rad off closure, x and y
+    kept: 0 iterations leave the angles, each iteration then cuts the loop-closure residual
+    (5.18) of both chains quadratically (below 1e-5 m after one, 1e-10 m after two).  Catches an iteration loop that starts at 1 or stops one
+    short (the residual of one iteration fewer), or one chain left out of it."""
+    p, y = moving_state()
+    off = y.copy()
+    off[[3, 4, 5, 6]] += [2e-3, -2e-3, 1.5e-3, 2e-3]
+    res = np.empty(6)
+    norms = []
+    for iterations in range(4):
+        projected = fast5r.project(p, off.copy(), iterations)
+        fast5r.residual(p, projected, res)
+        norms.append(float(np.linalg.norm(res)))
+        assert projected[:2].tolist() == off[:2].tolist()
+        if iterations == 0:
+            assert projected[3:7].tolist() == off[3:7].tolist()
+    assert norms[0] > 1e-4 and norms[1] < 1e-5 and norms[2] < 1e-10 and norms[3] <= norms[2]

@@ -327,6 +327,23 @@ def test_delay_queue_applies_the_commands_n_samples_late():
     assert delayed.tolist() == [[3.0, 30.0, -3.0, 1.5], [4.0, 40.0, -4.0, 2.0]]
 
 
+@pytest.mark.parametrize("n", [1, 3, 4, 7])
+def test_delay_queue_of_any_length_is_a_first_in_first_out_queue(n):
+    """pc_law_delay with n rows against a Python deque of n rows started from non-zero rows:
+    each call applies the oldest row and queues the command as the newest, every row and
+    column of the queue read back after every call.  Catches a shift that moves the wrong
+    row into another (the index of a row other than the first two, n >= 3), skips a column
+    or drops the oldest at the wrong length."""
+    rng = np.random.default_rng(n)
+    start = rng.normal(size=(n, 4))
+    delayed, queue = start.copy(), [tuple(row) for row in start]
+    for _ in range(2 * n + 3):
+        command = tuple(rng.normal(size=4))
+        queue.append(command)
+        assert law.delay(delayed, command) == queue.pop(0)
+        assert delayed.tolist() == [list(row) for row in queue]
+
+
 def inverse_terms_into(p, q, dq, out):
     """:func:`plant.fast5r.inverse_terms` on the kernel's pointers (q, dq of 7, out of INVERSE_SIZE)."""
     as_array = np.ctypeslib.as_array

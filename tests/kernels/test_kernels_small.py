@@ -292,3 +292,13 @@ def test_the_trajectory_io_function_gives_the_reference_at_the_steps_end():
     x = np.zeros(6)
     assert io(ctypes.addressof(context), kernels.address(x), 1.2, 1e-3, kernels.Refusal()) == 0
     assert x.tolist() == list(trajectory(1.2 + 1e-3))
+
+
+@pytest.mark.parametrize("words", [1, 2, fasttrajectory.T_VERTICES])
+def test_a_polygon_buffer_shorter_than_its_header_is_refused_with_its_length(words):
+    """A polygon's buffer cut inside its header (kind, times, count): BAD_LAYOUT naming no word
+    (index -1) and the length given, nothing written.  Catches the header check's record
+    filled like a forged word's, or the header read past the length."""
+    code, refusal, out = _sample(triangle().buf.copy(), 0.5, words)
+    assert (code, refusal.index, refusal.value) == (fasttrajectory.BAD_LAYOUT, -1, float(words))
+    assert not out.any()
