@@ -5,6 +5,8 @@ collection, crash, internal error; none recorded: a campaign before session 41).
 """
 from __future__ import annotations
 
+from collections import Counter
+
 #: fmus/ modules of the FMI layer's export, SSP, state and refusal code (issue 31 item 2).
 FMI_EXPORT = ("archive", "build", "bundle", "designs", "export", "fmustate", "foreign", "guarded", "identity",
               "modeldescription", "refusals", "slavestate", "ssp", "ssp_run", "stateformat")
@@ -61,10 +63,7 @@ def table(header: dict, done: dict) -> str:
     rows.append("selection: " + ", ".join(f"{k} {v}" for k, v in sorted(selections.items())))
     seconds = sum(m.get("seconds", 0.0) for m in ran)
     rows.append(f"wall seconds of the runs: {seconds:.0f} ({seconds / max(1, len(ran)):.1f} a mutant)")
-    kinds = {}
-    for m in ran:
-        if m["outcome"] == "killed":
-            kinds[m.get("killed_by", "not recorded")] = kinds.get(m.get("killed_by", "not recorded"), 0) + 1
+    kinds = Counter(m.get("killed_by", "not recorded") for m in ran if m["outcome"] == "killed")
     rows.append("kills by kind: " + ", ".join(f"{k} {v}" for k, v in sorted(kinds.items())))
     other = [m for m in ran if m["outcome"] in ("error", "baseline failure")]
     if other:
