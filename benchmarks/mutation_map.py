@@ -110,7 +110,7 @@ def build(copy: Path, products: list, tests: list, out: Path, log=sys.stdout) ->
                PARCOSIM_MUTATION_TIMES=str(times),
                PARCOSIM_CACHE=str(work / "cache"),
                PYTHONPATH=os.pathsep.join([str(copy), str(work), *_other_paths()]))
-    command = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "parcosim_mutation_timing",
+    command = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "--rootdir", str(copy), "-p", "parcosim_mutation_timing",
                "--cov", f"--cov-config={rc}", "--cov-context=test", "--cov-report=", *tests]
     done = subprocess.run(command, cwd=copy, env=env, stdout=log, stderr=subprocess.STDOUT)
     covered = coverage.CoverageData(basename=str(data))

@@ -89,7 +89,7 @@ def _pytest(copy: Path, tests: list, timeout: float, env: dict, collect_only: bo
     listed.write_text("\n".join(tests) + "\n")
     start = time.monotonic()
     try:
-        done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-x", "-p", "no:cacheprovider", "-rf",
+        done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-x", "-p", "no:cacheprovider", "--rootdir", str(copy), "-rf",
                                *(["--collect-only"] if collect_only else []), f"@{listed}"], cwd=copy, env=env, timeout=WALL_FACTOR * timeout,
                               capture_output=True, text=True, preexec_fn=_cpu_limit(timeout))
     except subprocess.TimeoutExpired:
@@ -407,6 +407,6 @@ def confirm(results: Path, timeout: float) -> dict:
 def _pytest_all(copy: Path, tests: list, timeout: float):
     env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1",
                PYTHONPATH=os.pathsep.join([str(copy), *mutation_map._other_paths()]))
-    return subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-rf", *tests],
+    return subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "--rootdir", str(copy), "-rf", *tests],
                           cwd=copy, env=env, timeout=WALL_FACTOR * timeout, capture_output=True, text=True)
 

@@ -23,6 +23,12 @@ POSITIVE, CHILD, NEITHER = (f"tests/test_t.py::{name}" for name in ("test_positi
                                                                    "test_no_kernel"))
 
 
+def _own_config(project):
+    """A made-up project's own pytest configuration: without it, pytest takes the first one above it (this
+    repository's, when the temporary folder is inside a checkout) and imports the checkout's packages."""
+    (project / "pytest.ini").write_text("[pytest]\n")
+
+
 @pytest.fixture(scope="module")
 def c_project(tmp_path_factory):
     """A made-up project: kernels/src/tiny.c and three tests that load it by ``$PARCOSIM_KERNELS_LIB``:
@@ -32,6 +38,7 @@ def c_project(tmp_path_factory):
     tmp_path = tmp_path_factory.mktemp("c_project")
     (tmp_path / "kernels" / "src").mkdir(parents=True)
     (tmp_path / "kernels" / "src" / "tiny.c").write_text(TINY)
+    _own_config(tmp_path)
     (tmp_path / "tests").mkdir()
     (tmp_path / "tests" / "test_t.py").write_text(textwrap.dedent(f'''\
         import ctypes, os, subprocess
@@ -115,6 +122,7 @@ def test_pytest_s_exit_statuses_map_to_outcomes_and_loud_kinds():
 def py_project(tmp_path):
     """A made-up project: plant/x.py (``VALUE = 2`` at import) and its tests, one of which crashes."""
     (tmp_path / "plant").mkdir()
+    _own_config(tmp_path)
     (tmp_path / "plant" / "__init__.py").write_text("")
     (tmp_path / "plant" / "x.py").write_text("VALUE = 2\n\n\ndef f():\n    return VALUE\n")
     (tmp_path / "tests").mkdir()
