@@ -100,8 +100,10 @@ def build(copy: Path, products: list, tests: list, out: Path, log=sys.stdout) ->
     work = Path(tempfile.mkdtemp(prefix="parcosim_linemap_"))
     rc = work / "coveragerc"
     data = work / ".coverage"
-    # include, not source: coverage would walk a source folder (all of /tmp) for files not run
-    rc.write_text(f"[run]\nparallel = True\ninclude = {tempfile.gettempdir()}/*\ndata_file = {data}\n"
+    # include, not source: coverage would walk a source folder (all of /tmp) for files not run; the copy
+    # itself too, wherever it is (a copy outside the temporary folder was not measured at all)
+    rc.write_text(f"[run]\nparallel = True\ninclude =\n    {tempfile.gettempdir()}/*\n    {copy.resolve()}/*\n"
+                  f"data_file = {data}\n"
                   "context = ${PARCOSIM_TEST_CONTEXT-}\n")      # a subprocess's lines: the test that started it
     (work / "sitecustomize.py").write_text("import coverage\ncoverage.process_startup()\n")
     shutil.copy2(Path(__file__).with_name("mutation_timing.py"), work / "parcosim_mutation_timing.py")  # this tool's
