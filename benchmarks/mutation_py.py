@@ -223,8 +223,14 @@ def replace_var(node, scope):
                 yield ast.Name(id=other, ctx=ast.Load())
 
 
+#: Calls whose first argument names a process: a mutant of it (``0`` -> ``1``, another local) would act on
+#: another process of the machine (the campaigns run as root: PID 1 pinned to one core, a kill).
+PROCESS_CALLS = {"os.kill", "os.killpg", "os.sched_setaffinity", "os.setpgid", "os.setpriority", "os.waitpid"}
+
+
 def _skipped(tree) -> set:
-    """ids of nodes never mutated: docstrings, annotations, f-strings and what they hold."""
+    """ids of nodes never mutated: docstrings, annotations, f-strings and what they hold, and the
+    process argument of :data:`PROCESS_CALLS`."""
     skip = set()
 
     def mark(node):
@@ -244,6 +250,8 @@ def _skipped(tree) -> set:
             mark(node.annotation)
         elif isinstance(node, ast.JoinedStr):
             mark(node)
+        elif isinstance(node, ast.Call) and node.args and ast.unparse(node.func) in PROCESS_CALLS:
+            mark(node.args[0])
     return skip
 
 

@@ -54,6 +54,19 @@ def test_docstrings_annotations_and_f_strings_are_not_mutated():
         assert m.line not in (1, 5, 6, 10) or "float" not in m.before and "{" not in m.before, m
 
 
+def test_a_process_argument_is_never_mutated():
+    """Catches a mutant that would pin, signal or wait on another process of the machine (the campaigns
+    run as root: ``os.sched_setaffinity(0, ...)`` -> ``(1, ...)`` pins PID 1), while the rest of the call
+    and the same constants elsewhere still are."""
+    text = ("import os\n\n\ndef f(pid, other):\n    os.sched_setaffinity(0, {1})\n    os.kill(pid, 9)\n"
+            "    return 0 + other\n")
+    found = mp.mutants_of_python("p.py", text)
+    on_line = {line: [(m.operator, m.before, m.after) for m in found if m.line == line] for line in (5, 6, 7)}
+    assert not any(before in ("0", "pid") for _, before, _ in on_line[5] + on_line[6]), on_line
+    assert ("constant", "1", "(2)") in on_line[5] and ("constant", "9", "(18)") in on_line[6]
+    assert ("constant", "0", "(1)") in on_line[7]
+
+
 def test_the_new_operators_make_their_changes():
     """Catches drop_term, swap_args, drop_arg, swap_index or constant producing another change than the one
     each promises."""
