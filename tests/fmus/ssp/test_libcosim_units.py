@@ -61,3 +61,49 @@ def test_without_a_refusal_text_libcosims_message_is_the_record(empty, monkeypat
     error = refusal(monkeypatch, {0: empty, 1: empty}, message=" the slave failed \n")
     assert error.instance is None
     assert str(error) == "libcosim stopped at the step from t = 0.25 s: the slave failed"
+
+
+def minimal_package(path):
+    """A package of one SystemStructure.ssd (no default experiment) and one other file."""
+    import zipfile
+
+    from fmus.ssp.export import NS
+
+    ssd = (f'<?xml version="1.0" encoding="UTF-8"?>\n<ssd:SystemStructureDescription xmlns:ssd="{NS["ssd"]}" '
+           f'xmlns:ssc="{NS["ssc"]}" version="1.0" name="s"><ssd:System name="root"/>'
+           '</ssd:SystemStructureDescription>\n')
+    with zipfile.ZipFile(path, "w") as zf:
+        zf.writestr("SystemStructure.ssd", ssd)
+        zf.writestr("resources/a.fmu", b"not really an FMU")
+    return path
+
+
+@pytest.mark.parametrize("name", ["copy.ssp", "copy.SSP", "unpacked"])
+def test_the_annotated_copy_is_written_at_out_and_the_package_is_left_as_it_was(name, tmp_path):
+    """``out`` (a package for .ssp in any case, else a directory) holds the annotation with the
+    given step and threads and every file of the package; the package itself is unchanged."""
+    import zipfile
+
+    source = minimal_package(tmp_path / "source.ssp")
+    before = source.read_bytes()
+    out = libcosim.with_libcosim_annotation(source, tmp_path / name, step=2e-3, worker_threads=3)
+    assert out == tmp_path / name and source.read_bytes() == before
+    assert libcosim.read_libcosim_step(source) == (None, None)
+    if out.is_dir():
+        assert (out / "resources" / "a.fmu").read_bytes() == b"not really an FMU"
+        with zipfile.ZipFile(tmp_path / "check.ssp", "w") as zf:     # read it back as read_libcosim_step reads
+            zf.writestr("SystemStructure.ssd", (out / "SystemStructure.ssd").read_bytes())
+        assert libcosim.read_libcosim_step(tmp_path / "check.ssp") == (2e-3, 3)
+    else:
+        assert zipfile.is_zipfile(out)
+        with zipfile.ZipFile(out) as zf:
+            assert sorted(zf.namelist()) == ["SystemStructure.ssd", "resources/a.fmu"]
+        assert libcosim.read_libcosim_step(out) == (2e-3, 3)
+
+
+def test_an_annotated_copy_without_a_step_is_refused_when_the_package_gives_none(tmp_path):
+    """No step passed and none in the package's default experiment: ValueError naming the package."""
+    source = minimal_package(tmp_path / "source.ssp")
+    with pytest.raises(ValueError, match="gives no communication step; pass step"):
+        libcosim.with_libcosim_annotation(source, tmp_path / "out.ssp")
+    assert not (tmp_path / "out.ssp").exists()
