@@ -1,5 +1,6 @@
-"""The record fmus/ssp/libcosim.py makes of a step libcosim refused (``_refusal``), and the
-annotated copy's destination (``with_libcosim_annotation``): units without running libcosim.
+"""Units of fmus/ssp/libcosim.py without running libcosim: the record of a step libcosim refused
+(``_refusal``), the annotated copy's destination (``with_libcosim_annotation``) and the split of a
+run's time (``simulate_ssp_libcosim``'s ``extra``) with libcosimpy's objects and the clock stood in.
 
 ``_refusal`` reads each component's String output ``refusal`` through a last-value observer;
 the observer here is a stand-in (libcosimpy's hands ``c_char_p`` values: bytes or None; a
@@ -107,3 +108,57 @@ def test_an_annotated_copy_without_a_step_is_refused_when_the_package_gives_none
     with pytest.raises(ValueError, match="gives no communication step; pass step"):
         libcosim.with_libcosim_annotation(source, tmp_path / "out.ssp")
     assert not (tmp_path / "out.ssp").exists()
+
+
+class Clock:
+    """A stand-in for time.perf_counter that moves only when libcosim works: 10 s to load the
+    package, 1 s a step, so each reading says how much work came before it."""
+
+    def __init__(self):
+        self.now = 0.0
+
+    def perf_counter(self):
+        return self.now
+
+
+class Execution:
+    """A stand-in CosimExecution of no FMU whose steps all succeed (and advance ``clock``)."""
+
+    def __init__(self, clock):
+        self.clock, self.steps = clock, 0
+
+    def slave_infos(self):
+        return []
+
+    def add_observer(self, observer):
+        return True
+
+    def step(self):
+        self.steps += 1
+        self.clock.now += 1.0
+        return True
+
+
+@pytest.mark.parametrize("steps", [1, 3])
+def test_init_s_is_the_first_step_and_steps_s_the_others(steps, monkeypatch, tmp_path):
+    """libcosim initialises the FMUs in the first ``step()``: ``init_s`` is that step, ``steps_s``
+    the other steps - 1 (none for a run of one step), ``load_s`` the loading; every step is taken."""
+    from libcosimpy import CosimExecution as execution_module, CosimObserver as observer_module
+
+    clock = Clock()
+    runs = []
+
+    def load(path):
+        clock.now += 10.0
+        runs.append(Execution(clock))
+        return runs[-1]
+
+    monkeypatch.setattr(libcosim, "_time", clock)
+    monkeypatch.setattr(execution_module.CosimExecution, "from_ssp_file", staticmethod(load))
+    monkeypatch.setattr(observer_module.CosimObserver, "create_time_series", staticmethod(lambda **kw: object()))
+    monkeypatch.setattr(observer_module.CosimObserver, "create_last_value", staticmethod(lambda: object()))
+    source = minimal_package(tmp_path / "source.ssp")
+    run = libcosim.simulate_ssp_libcosim(source, [], stop_time=steps * 1e-3, step_size=1e-3, isolated=False)
+    assert runs[0].steps == steps and run.error is None
+    assert (run.extra["load_s"], run.extra["init_s"], run.extra["steps_s"]) == (10.0, 1.0, steps - 1.0)
+    assert run.wall_s == 10.0 + steps
