@@ -121,6 +121,15 @@ def test_the_summary_counts_each_outcome_per_fmu_and_kind_and_in_all():
                          "| B | steps | 1 | 0 | 0 | 0 | 0 | 1 | 0 |"]
 
 
+def test_the_summary_table_is_markdown_a_delimiter_cell_under_each_header_cell():
+    """A markdown (GFM) table needs a delimiter row of as many cells as its header: catches the
+    outcomes' columns left out of it (the table then renders as text)."""
+    lines = markdown_summary([CaseResult({"model": "A", "kind": "steps"}, "ok")]).splitlines()
+    header, delimiter = (line.strip("|").split("|") for line in lines[:2])
+    assert len(header) == 3 + len(OUTCOMES) and len(delimiter) == len(header)
+    assert all(cell.strip() == "---" for cell in delimiter)
+
+
 def test_every_case_sets_each_real_input_near_its_sane_value_before_its_first_step(table, tmp_path):
     """In every case each Real input is set once before the first step, in the order of the
     variables, within 2 % (and 2e-4 absolute) of its sane value (:data:`SANE_INPUTS`, else
