@@ -89,3 +89,36 @@ def test_a_package_ecos_cannot_initialise_is_a_failed_run_naming_ecos_error(stan
     assert result.error.kind is RunStatus.INITIALISATION and result.error.instance is None
     assert str(result.error) == f"Ecos could not initialise {path}: the FMU said no"
     assert stand_ins["steps"] == 0 and stand_ins["freed"] == 1 and result.wall_s == 10.0
+
+
+def test_the_signals_are_the_values_ecos_gives_in_the_order_asked(monkeypatch, tmp_path):
+    """With the stepping loop itself (``_ecos_steps``) and the stand-in simulation of
+    test_ssp_ecos_steps.py: each signal's column holds that variable's values after
+    initialisation and after each step, in the order the signals were asked for, at Ecos' times."""
+    from tests.fmus.ssp.test_ssp_ecos_steps import H, Simulation as Stepping
+
+    class Lib:
+        set_log_level = staticmethod(lambda level: None)
+        get_last_error = staticmethod(lambda: "")
+
+    class Simulation(Stepping):
+        def __init__(self, step_size, ssp_path):
+            super().__init__()
+
+        def init(self, t, parameter_set):
+            return True
+
+        def terminate(self):
+            pass
+
+        def free(self):
+            pass
+
+    monkeypatch.setattr(ecospy, "EcosLib", Lib)
+    monkeypatch.setattr(ecospy, "EcosSimulation", Simulation)
+    result = ssp_run.simulate_ssp_ecos(package(tmp_path / "p.ssp"), ["plant.y", "plant.x"], stop_time=3 * H,
+                                       step_size=H, serial=False)
+    assert result.error is None and list(result.time) == [k * H for k in range(4)]
+    assert list(result.signals) == ["plant.y", "plant.x"]
+    assert list(result.signals["plant.y"]) == [-2.0 * (1 + k) for k in range(4)]
+    assert list(result.signals["plant.x"]) == [1.0 * (1 + k) for k in range(4)]
