@@ -162,3 +162,21 @@ def test_init_s_is_the_first_step_and_steps_s_the_others(steps, monkeypatch, tmp
     assert runs[0].steps == steps and run.error is None
     assert (run.extra["load_s"], run.extra["init_s"], run.extra["steps_s"]) == (10.0, 1.0, steps - 1.0)
     assert run.wall_s == 10.0 + steps
+
+
+def test_each_log_level_is_libcosims_own_warn_and_any_case_included_others_refused(monkeypatch):
+    """trace ... fatal set libcosim's level of that name ("warn" is "warning", any letter case);
+    another name is refused naming the six."""
+    from libcosimpy import CosimLogging
+
+    set_to = []
+    monkeypatch.setattr(CosimLogging, "log_output_level", set_to.append)
+    for level in libcosim.LOG_LEVELS:
+        libcosim.set_libcosim_log_level(level)
+    libcosim.set_libcosim_log_level("WARN")
+    libcosim.set_libcosim_log_level("Error")
+    assert [v.name for v in set_to] == ["TRACE", "DEBUG", "INFO", "WARNING", "ERROR", "FATAL", "WARNING", "ERROR"]
+    with pytest.raises(ValueError) as refused:
+        libcosim.set_libcosim_log_level("verbose")
+    assert str(refused.value) == "log level 'verbose': one of trace, debug, info, warning, error, fatal"
+    assert len(set_to) == 8
