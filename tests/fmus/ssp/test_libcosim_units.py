@@ -1,6 +1,7 @@
 """Units of fmus/ssp/libcosim.py without running libcosim: the record of a step libcosim refused
 (``_refusal``), the annotated copy's destination (``with_libcosim_annotation``) and the split of a
-run's time (``simulate_ssp_libcosim``'s ``extra``) with libcosimpy's objects and the clock stood in.
+run's time (``simulate_ssp_libcosim``'s ``extra``), its signals' checks and which package it loads, and the
+log levels, with libcosimpy's objects and the clock stood in.
 
 ``_refusal`` reads each component's String output ``refusal`` through a last-value observer;
 the observer here is a stand-in (libcosimpy's hands ``c_char_p`` values: bytes or None; a
@@ -11,6 +12,7 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
+import numpy as np
 import pytest
 
 pytest.importorskip("libcosimpy")
@@ -180,3 +182,60 @@ def test_each_log_level_is_libcosims_own_warn_and_any_case_included_others_refus
         libcosim.set_libcosim_log_level("verbose")
     assert str(refused.value) == "log level 'verbose': one of trace, debug, info, warning, error, fatal"
     assert len(set_to) == 8
+
+
+class Variable:
+    def __init__(self, name, kind, reference):
+        self.name, self.type, self.reference = name.encode(), kind.value, reference
+
+
+def _stood_in(monkeypatch, loaded):
+    """libcosimpy stood in: one slave ``plant`` (index 4) with a Real ``x`` and a String ``refusal``;
+    ``loaded`` gets the path each execution is made from."""
+    from libcosimpy import CosimExecution as execution_module, CosimObserver as observer_module
+
+    class Plant(Execution):
+        def slave_infos(self):
+            return [SimpleNamespace(name=b"plant", index=4)]
+
+        def slave_variables(self, index):
+            assert index == 4
+            return [Variable("x", CosimVariableType.REAL, 11), Variable("refusal", CosimVariableType.STRING, 12)]
+
+    def load(path):
+        loaded.append(path)
+        return Plant(Clock())
+
+    monkeypatch.setattr(execution_module.CosimExecution, "from_ssp_file", staticmethod(load))
+    monkeypatch.setattr(observer_module.CosimObserver, "create_time_series", staticmethod(lambda **kw: SimpleNamespace(
+        start_time_series=lambda slave, reference, kind: None)))
+    monkeypatch.setattr(observer_module.CosimObserver, "create_last_value", staticmethod(lambda: object()))
+    monkeypatch.setattr(libcosim, "_real_samples", lambda series, slave, reference, count: (
+        np.arange(count, dtype=float) * reference, np.arange(count, dtype=np.int64) * 1_000_000))
+
+
+def test_signals_must_be_real_variables_of_the_packages_slaves(monkeypatch, tmp_path):
+    """A signal of no slave or no variable, or one that is not a Real, is refused naming it; a Real
+    is recorded from its slave's index and reference."""
+    _stood_in(monkeypatch, [])
+    source = minimal_package(tmp_path / "source.ssp")
+    for signal, says in (("plant.v", "plant.v: no such variable in "), ("motor.x", "motor.x: no such variable in "),
+                         ("plant.refusal", "plant.refusal is STRING, not a Real")):
+        with pytest.raises(ValueError, match=says):
+            libcosim.simulate_ssp_libcosim(source, [signal], stop_time=2e-3, step_size=1e-3, isolated=False)
+    run = libcosim.simulate_ssp_libcosim(source, ["plant.x"], stop_time=2e-3, step_size=1e-3, isolated=False)
+    assert list(run.signals["plant.x"]) == [0.0, 11.0, 22.0] and list(run.time) == [0.0, 1e-3, 2e-3]
+
+
+def test_a_package_annotated_with_the_runs_step_and_threads_is_loaded_as_it_is(monkeypatch, tmp_path):
+    """libcosim loads the package itself when its OSP annotation gives this step and these
+    worker threads, else an annotated copy (another step, other threads, no annotation)."""
+    loaded = []
+    _stood_in(monkeypatch, loaded)
+    bare = minimal_package(tmp_path / "bare.ssp")
+    annotated = libcosim.with_libcosim_annotation(bare, tmp_path / "annotated.ssp", step=1e-3, worker_threads=0)
+    for path, step, threads in ((annotated, 1e-3, 0), (annotated, 2e-3, 0), (annotated, 1e-3, None), (bare, 1e-3, 0)):
+        libcosim.simulate_ssp_libcosim(path, [], stop_time=4e-3, step_size=step, worker_threads=threads,
+                                       isolated=False)
+    assert loaded[0] == str(annotated)
+    assert all(p != str(annotated) and p != str(bare) and p.endswith("package") for p in loaded[1:]), loaded
