@@ -29,11 +29,11 @@ RECORD = RunError(RunStatus.REFUSED, "input q1 = nan is not finite", instance="c
 class Observer:
     """A last-value observer whose String values are ``values`` (slave index -> value)."""
 
-    def __init__(self, values):
-        self.values = values
+    def __init__(self, values, reference=7):
+        self.values, self.reference = values, reference
 
     def last_string_values(self, index, references):
-        assert references == [7]
+        assert references == [self.reference]
         return [self.values[index]]
 
 
@@ -239,3 +239,47 @@ def test_a_package_annotated_with_the_runs_step_and_threads_is_loaded_as_it_is(m
                                        isolated=False)
     assert loaded[0] == str(annotated)
     assert all(p != str(annotated) and p != str(bare) and p.endswith("package") for p in loaded[1:]), loaded
+
+
+@pytest.mark.parametrize("fails_at, observed, refusal, expected", [
+    (0, False, None, (RunStatus.INITIALISATION, None, 0.0, 0)),   # nothing observed: initialisation failed
+    (0, True, None, (RunStatus.REFUSED, None, 0.0, 1)),           # the state after initialisation observed
+    (2, True, None, (RunStatus.REFUSED, None, 2e-3, 3)),          # the step from t = 2 ms
+    (2, False, None, (RunStatus.REFUSED, None, 2e-3, 0)),         # steps were taken: not initialisation
+    (0, False, RECORD.to_json().encode(), (RunStatus.REFUSED, "plant", 0.25, 0)),  # a component said why (its time)
+])
+def test_a_failed_step_is_the_components_record_or_libcosims_and_initialisation_when_nothing_was_seen(
+        fails_at, observed, refusal, expected, monkeypatch, tmp_path):
+    """libcosim's step k fails: the run stops there with the rows so far, the error at t = k h; its
+    kind is "initialisation" only when libcosim's own message is all there is and not even the
+    state after initialisation was observed."""
+    from libcosimpy import CosimExecution as execution_module, CosimObserver as observer_module, _internal
+
+    _stood_in(monkeypatch, [])
+    real_load = execution_module.CosimExecution.from_ssp_file
+
+    def load(path):
+        execution = real_load(path)
+        execution.step = lambda: execution.steps != fails_at and not execution.__dict__.update(
+            steps=execution.steps + 1)
+        return execution
+
+    def samples(series, slave, reference, count):
+        n = fails_at + 1 if observed else 0
+        if n == 0:
+            raise RuntimeError("no samples")
+        return np.full(n, 1.5), np.arange(n, dtype=np.int64) * 1_000_000
+
+    monkeypatch.setattr(execution_module.CosimExecution, "from_ssp_file", staticmethod(load))
+    monkeypatch.setattr(libcosim, "_real_samples", samples)
+    monkeypatch.setattr(_internal, "get_last_error_message", lambda: " model error \n")
+    monkeypatch.setattr(observer_module.CosimObserver, "create_last_value",
+                        staticmethod(lambda: Observer({4: refusal}, reference=12)))
+    run = libcosim.simulate_ssp_libcosim(minimal_package(tmp_path / "p.ssp"), ["plant.x"], stop_time=5e-3,
+                                         step_size=1e-3, isolated=False)
+    kind, instance, t, rows = expected
+    assert (run.error.kind, run.error.instance, run.error.time, len(run.time)) == (kind, instance, t, rows)
+    if kind is RunStatus.INITIALISATION:
+        assert str(run.error) == "libcosim could not initialise the FMUs: model error"
+    elif instance is None:
+        assert str(run.error) == f"libcosim stopped at the step from t = {t:.6g} s: model error"
