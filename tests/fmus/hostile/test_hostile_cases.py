@@ -121,6 +121,15 @@ def test_the_summary_counts_each_outcome_per_fmu_and_kind_and_in_all():
                          "| B | steps | 1 | 0 | 0 | 0 | 0 | 1 | 0 |"]
 
 
+def test_the_summary_table_is_markdown_a_delimiter_cell_under_each_header_cell():
+    """A markdown (GFM) table needs a delimiter row of as many cells as its header: catches the
+    outcomes' columns left out of it (the table then renders as text)."""
+    lines = markdown_summary([CaseResult({"model": "A", "kind": "steps"}, "ok")]).splitlines()
+    header, delimiter = (line.strip("|").split("|") for line in lines[:2])
+    assert len(header) == 3 + len(OUTCOMES) and len(delimiter) == len(header)
+    assert all(cell.strip() == "---" for cell in delimiter)
+
+
 def test_every_case_sets_each_real_input_near_its_sane_value_before_its_first_step(table, tmp_path):
     """In every case each Real input is set once before the first step, in the order of the
     variables, within 2 % (and 2e-4 absolute) of its sane value (:data:`SANE_INPUTS`, else
@@ -271,3 +280,29 @@ def test_a_sets_case_writes_hostile_outputs_half_the_time_and_hostile_parameters
     for causality, share in (("output", 0.5), ("parameter", 0.3)):
         sane, hostile = counts[causality]
         assert abs(hostile / (hostile + sane) - share) < 0.08, (causality, counts)
+
+
+def test_a_case_takes_one_to_five_steps_and_only_order_cases_call_out_of_order(table):
+    """Every kind steps 1 to 5 times (each count drawn in 300 seeds); only an "order" case adds a
+    doStep before initialisation (in some cases, not all) and a terminate, get_state or set_state
+    after a step; only a "lifecycle" case may instantiate with a wrong GUID (some, not all);
+    logging is on in some cases and off in others.  Catches a step count off by one, the
+    out-of-order calls leaking into other kinds or never drawn, and a share fixed at 0 or 1."""
+    _, rows = table
+    for kind in KINDS:
+        counts, before_init, extra, guids, logging = Counter(), 0, Counter(), Counter(), Counter()
+        for seed in range(300):
+            case = make_case(MODEL, rows, seed, kind=kind, wrapper=True, models=(MODEL,))
+            ops = case["ops"]
+            counts[sum(op[0] == "step" for op in ops)] += 1
+            before_init += ops[0][0] == "step_before_init"
+            extra.update(op[0] for op in ops if op[0] in ("terminate", "get_state", "set_state"))
+            guids[case["guid"]] += 1
+            logging[case["logging"]] += 1
+        assert set(counts) == {1, 2, 3, 4, 5}, (kind, counts)
+        assert set(logging) == {True, False}, kind
+        if kind == "order":
+            assert 0 < before_init < 300 and set(extra) == {"terminate", "get_state", "set_state"}, (before_init, extra)
+        else:
+            assert before_init == 0 and (not extra or kind == "lifecycle"), (kind, extra)
+        assert set(guids) == ({"own", "wrong"} if kind == "lifecycle" else {"own"}), (kind, guids)

@@ -35,3 +35,42 @@ def test_a_worker_silent_past_the_case_timeout_is_a_hang_and_is_killed():
     assert time.monotonic() - start < 5.0
     assert (result.outcome, result.problems) == ("hang", ["no result within 0.001 s"])
     assert result.seconds < 5.0
+
+
+#: A stand-in worker (run in place of ``python -m fmus.hostile.worker``): it answers its cases in
+#: the order given, several results in one write and one result split over two writes, as a pipe
+#: may deliver them; a case whose seed is 9 is "fatal" and the worker stops there.
+FAKE_WORKER = r'''
+import json, os, sys, time
+cases = json.loads(sys.stdin.read())["cases"]
+fd = int(os.environ["HOSTILE_RESULT_FD"])
+lines = [json.dumps({"outcome": "fatal" if c["seed"] == 9 else ["ok", "refused"][c["seed"] % 2],
+                     "statuses": [c["seed"], 0], "problems": [f"p{c['seed']}"], "seconds": 0.5 + c["seed"]})
+         + "\n" for c in cases]
+text = "".join(lines).encode()
+half = len(lines[0]) + len(lines[1]) // 2 if len(lines) > 1 else len(text)
+os.write(fd, text[:half]); time.sleep(0.2); os.write(fd, text[half:])
+time.sleep(0.2)
+'''
+
+
+def _with_fake_worker(monkeypatch):
+    import subprocess
+    import sys
+
+    real = subprocess.Popen
+    monkeypatch.setattr(subprocess, "Popen", lambda args, **kw: real([sys.executable, "-c", FAKE_WORKER], **kw))
+
+
+def test_results_are_read_line_by_line_whatever_the_pipe_delivers_and_a_fatal_one_ends_the_worker(monkeypatch):
+    """Three results, two in the first read and the second cut in half: each case gets its own
+    outcome, statuses, problems and seconds in order; with a "fatal" second case the third
+    is not taken from that worker.  Catches a result line split wrongly, a buffer not carried
+    over to the next read, or a fatal case read past."""
+    _with_fake_worker(monkeypatch)
+    cases = [{**CASE, "seed": k} for k in (0, 1, 2)]
+    results = _run_worker(cases, NOWHERE, 30.0)
+    assert [(r.case["seed"], r.outcome, r.statuses, r.problems, r.seconds) for r in results] == [
+        (0, "ok", [0, 0], ["p0"], 0.5), (1, "refused", [1, 0], ["p1"], 1.5), (2, "ok", [2, 0], ["p2"], 2.5)]
+    results = _run_worker([{**CASE, "seed": k} for k in (0, 9, 2)], NOWHERE, 30.0)
+    assert [(r.case["seed"], r.outcome) for r in results] == [(0, "ok"), (9, "fatal")]
