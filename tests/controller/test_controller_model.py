@@ -1,6 +1,7 @@
 """The tabulated model (7.2.5) against the exact one; model error scaling."""
 import math
 import time
+import warnings
 
 import numpy as np
 import pytest
@@ -219,3 +220,17 @@ def test_the_default_table_is_the_documented_grid(tmp_path, monkeypatch):
         assert (len(tab.xs), len(tab.ys)) == (49, 47)
         np.testing.assert_allclose(np.diff(tab.xs), 0.005, rtol=0, atol=1e-12)
         np.testing.assert_allclose(np.diff(tab.ys), 0.005, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("region", [(-0.005, 0.005, 0.14, 0.18), (-0.02, 0.02, 0.155, 0.165),
+                                    (-0.005, 0.005, 0.155, 0.165)], ids=["2 xs", "2 ys", "2 by 2"])
+def test_a_cached_table_of_two_points_a_side_is_read_back_without_a_warning(region, tmp_path, monkeypatch):
+    """Two grid points a side make one cell, the smallest table there is: it is a table, read
+    back from the cache as it was written (not refused as unreadable and built again)."""
+    monkeypatch.setenv("PARCOSIM_CACHE", str(tmp_path))
+    built = TabulatedModel(BENCH, 0.01, region)
+    assert 2 in built.table.shape[:2]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        loaded = TabulatedModel(BENCH, 0.01, region)
+    assert loaded.build_seconds == 0.0 and np.array_equal(loaded.table, built.table, equal_nan=True)
