@@ -183,3 +183,11 @@ def test_a_non_finite_current_blames_eulers_divergence_only_when_h_exceeds_2_l_o
                                               r"1 - hR/L = -2.3 every step\); use 'exact'"):
         for _ in range(3000):
             unstable.step(0.0, 1.0, 0.0, 0.0, 2e-3)
+
+
+@pytest.mark.parametrize("v_ref", [3.5, -30.0, 30.0])
+def test_a_voltage_mode_drive_samples_its_reference_clipped_to_v_max(v_ref):
+    """Voltage mode applies v_ref itself, saturated at +-v_max (24 V), at any step h."""
+    drive = Drive(motor1, mode="voltage")
+    for h in (1e-4, 1e-3):
+        assert drive.sample_voltage(0.0, v_ref, 0.0, h) == max(-24.0, min(24.0, v_ref))
