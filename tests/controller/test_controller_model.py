@@ -1,5 +1,6 @@
 """The tabulated model (7.2.5) against the exact one; model error scaling."""
 import math
+import re
 import time
 import warnings
 
@@ -234,3 +235,13 @@ def test_a_cached_table_of_two_points_a_side_is_read_back_without_a_warning(regi
         warnings.simplefilter("error")
         loaded = TabulatedModel(BENCH, 0.01, region)
     assert loaded.build_seconds == 0.0 and np.array_equal(loaded.table, built.table, equal_nan=True)
+
+
+@pytest.mark.parametrize("extent", [(0.01, 0.01, 0.14, 0.18), (0.02, -0.02, 0.14, 0.18),
+                                    (-0.02, 0.02, 0.16, 0.16), (-0.02, 0.02, 0.18, 0.14)],
+                         ids=["x flat", "x reversed", "y flat", "y reversed"])
+def test_an_extent_empty_along_either_axis_alone_is_refused_naming_it(extent, tmp_path, monkeypatch):
+    monkeypatch.setenv("PARCOSIM_CACHE", str(tmp_path))
+    with pytest.raises(ValueError, match=rf"^extent = {re.escape(repr(extent))} is empty$"):
+        TabulatedModel(BENCH, 0.01, extent)
+    assert not list(tmp_path.iterdir())

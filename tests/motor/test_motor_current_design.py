@@ -71,3 +71,18 @@ def test_tf_coefficients_divide_numerator_and_denominator_by_the_leading_denomin
 
     num, den = _tf_coefficients(control.tf([0.0, 2.0, 4.0], [2.0, 6.0, 8.0], 1e-3))
     assert num.tolist() == [1.0, 2.0] and den.tolist() == [1.0, 3.0, 4.0]
+
+
+@pytest.mark.parametrize("poles", [(0.2, 0.5), (0.2, 0.5, 0.6, 0.7), (0.2, 0.5, 1.0), (0.2, -1.0, 0.5),
+                                   (1.5, 0.2, 0.5)])
+def test_poles_are_refused_unless_three_inside_the_unit_circle(poles):
+    """Each clause alone: a count other than three (all inside), or one pole on or outside
+    |z| = 1 (the count right): a closed loop with such a pole does not settle."""
+    with pytest.raises(ValueError) as info:
+        design_current_controller(motor1, T=1e-3, poles=poles)
+    assert str(info.value) == f"poles must be three values with |z| < 1, got {[float(p) for p in poles]!r}"
+
+
+def test_poles_just_inside_the_unit_circle_are_placed():
+    d = design_current_controller(motor1, T=1e-3, poles=(-0.999, 0.0, 0.999))
+    assert sorted(np.real(d.desired_poles[:3])) == pytest.approx([-0.999, 0.0, 0.999])
