@@ -1,6 +1,8 @@
 """The tabulated model (7.2.5) against the exact one; model error scaling."""
 import math
+import re
 import time
+import warnings
 
 import numpy as np
 import pytest
@@ -219,3 +221,64 @@ def test_the_default_table_is_the_documented_grid(tmp_path, monkeypatch):
         assert (len(tab.xs), len(tab.ys)) == (49, 47)
         np.testing.assert_allclose(np.diff(tab.xs), 0.005, rtol=0, atol=1e-12)
         np.testing.assert_allclose(np.diff(tab.ys), 0.005, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("region", [(-0.005, 0.005, 0.14, 0.18), (-0.02, 0.02, 0.155, 0.165),
+                                    (-0.005, 0.005, 0.155, 0.165)], ids=["2 xs", "2 ys", "2 by 2"])
+def test_a_cached_table_of_two_points_a_side_is_read_back_without_a_warning(region, tmp_path, monkeypatch):
+    """Two grid points a side make one cell, the smallest table there is: it is a table, read
+    back from the cache as it was written (not refused as unreadable and built again)."""
+    monkeypatch.setenv("PARCOSIM_CACHE", str(tmp_path))
+    built = TabulatedModel(BENCH, 0.01, region)
+    assert 2 in built.table.shape[:2]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        loaded = TabulatedModel(BENCH, 0.01, region)
+    assert loaded.build_seconds == 0.0 and np.array_equal(loaded.table, built.table, equal_nan=True)
+
+
+@pytest.mark.parametrize("extent", [(0.01, 0.01, 0.14, 0.18), (0.02, -0.02, 0.14, 0.18),
+                                    (-0.02, 0.02, 0.16, 0.16), (-0.02, 0.02, 0.18, 0.14)],
+                         ids=["x flat", "x reversed", "y flat", "y reversed"])
+def test_an_extent_empty_along_either_axis_alone_is_refused_naming_it(extent, tmp_path, monkeypatch):
+    monkeypatch.setenv("PARCOSIM_CACHE", str(tmp_path))
+    with pytest.raises(ValueError, match=rf"^extent = {re.escape(repr(extent))} is empty$"):
+        TabulatedModel(BENCH, 0.01, extent)
+    assert not list(tmp_path.iterdir())
+
+
+def _bad_caches(xs, ys, table):
+    """Cache files that are not a table of the model, each for one clause of the check."""
+    return {
+        "not an npz": None,
+        "xs 2-d": dict(xs=xs[None, :], ys=ys, table=table),
+        "ys 2-d": dict(xs=xs, ys=ys[None, :], table=table),
+        "table transposed": dict(xs=xs, ys=ys, table=table.transpose(1, 0, 2)),
+        "one x": dict(xs=xs[:1], ys=ys, table=table[:, :1]),
+        "one y": dict(xs=xs, ys=ys[:1], table=table[:1]),
+        "no table": dict(xs=xs, ys=ys),
+    }
+
+
+@pytest.mark.parametrize("case", list(_bad_caches(np.zeros(3), np.zeros(3), np.zeros((3, 3, 11)))))
+def test_a_cache_file_that_is_not_a_table_is_rebuilt_with_a_warning_naming_it(case, tmp_path, monkeypatch):
+    """Each way a cache file can fail to be a table (unreadable, a wrong rank, shapes that do
+    not fit, fewer than two points a side, an array missing) is warned about, naming the file,
+    and the table is built again: the same as the first build."""
+    monkeypatch.setenv("PARCOSIM_CACHE", str(tmp_path))
+    region = (-0.02, 0.02, 0.15, 0.18)     # 4 ys, 5 xs: a transposed table does not fit
+    built = TabulatedModel(BENCH, 0.01, region)
+    assert built.table.shape[:2] == (4, 5)
+    (path,) = tmp_path.iterdir()
+    xs = np.asarray(region[0] + 0.01 * np.arange(built.table.shape[1]))
+    ys = np.asarray(region[2] + 0.01 * np.arange(built.table.shape[0]))
+    arrays = _bad_caches(xs, ys, built.table)[case]
+    if arrays is None:
+        path.write_bytes(b"not a table")
+    else:
+        with open(path, "wb") as f:
+            np.savez(f, **arrays)
+    with pytest.warns(UserWarning, match=rf"controller table cache {re.escape(str(path))} is unreadable .*"
+                                         "rebuilding the table"):
+        again = TabulatedModel(BENCH, 0.01, region)
+    assert again.build_seconds > 0.0 and np.array_equal(again.table, built.table, equal_nan=True)

@@ -56,3 +56,16 @@ def test_the_balance_run_state_is_exactly_what_its_samples_change():
     live = {fastbalance.B_STARTED, fastbalance.B_U, fastbalance.B_U + 1} | \
         set(range(fastbalance.B_X_HAT, fastbalance.B_X_HAT + n))
     assert _changed(kept, buf) == live and live <= words
+
+
+def test_the_balance_run_state_is_the_state_struct_and_no_configuration_word():
+    """``pc_balance_state`` (kernels/src/balance.h): started, x_hat, u, all of them and no
+    word of ``pc_balance_params`` (sizes, gains, matrices), which a restored FMU state may
+    not change."""
+    layout = fastbalance.BUFFER
+    state = {k for name in ("started", "x_hat", "u") for k in range(layout[name].start, layout[name].stop)}
+    configuration = {k for name in ("n", "ny", "yaw", "K", "Lo", "C", "Ad", "Bd")
+                     for k in range(layout[name].start, layout[name].stop)}
+    words = fastbalance.run_state_words(np.zeros(fastbalance.BUF_SIZE))
+    assert set(words) == state and len(words) == len(state)
+    assert not set(words) & configuration

@@ -6,6 +6,7 @@ import pytest
 from scipy import signal
 
 from motor import Drive, design_current_controller, motor1, motor2
+from motor.current_controller import _tf_coefficients
 from tests.motor.test_motor_current_control import assert_same_poles, prony_poles
 
 POLES = (0.2, 0.5, 0.8)
@@ -60,3 +61,28 @@ def test_the_drive_at_another_sample_time_has_the_designed_locked_rotor_poles(T)
     v = np.array([drive.step(0.2, 0.0, 0.0, drive.i, T)[1] for _ in range(40)])
     assert np.max(np.abs(v)) < p.v_max                      # linear: never saturated
     assert_same_poles(prony_poles(v, order=3, k0=4), np.roots(closed), atol=1e-6)
+
+
+def test_tf_coefficients_divide_numerator_and_denominator_by_the_leading_denominator():
+    """A transfer function given with a non-monic denominator, 2 (z + 2) / (2 z^2 + 6 z + 8)
+    = (z + 2) / (z^2 + 3 z + 4): the same ratio, the denominator monic (what the design's
+    coefficient matching assumes), the numerator's leading zeros dropped."""
+    import control   # here: python-control takes 1-2 s to import
+
+    num, den = _tf_coefficients(control.tf([0.0, 2.0, 4.0], [2.0, 6.0, 8.0], 1e-3))
+    assert num.tolist() == [1.0, 2.0] and den.tolist() == [1.0, 3.0, 4.0]
+
+
+@pytest.mark.parametrize("poles", [(0.2, 0.5), (0.2, 0.5, 0.6, 0.7), (0.2, 0.5, 1.0), (0.2, -1.0, 0.5),
+                                   (1.5, 0.2, 0.5)])
+def test_poles_are_refused_unless_three_inside_the_unit_circle(poles):
+    """Each clause alone: a count other than three (all inside), or one pole on or outside
+    |z| = 1 (the count right): a closed loop with such a pole does not settle."""
+    with pytest.raises(ValueError) as info:
+        design_current_controller(motor1, T=1e-3, poles=poles)
+    assert str(info.value) == f"poles must be three values with |z| < 1, got {[float(p) for p in poles]!r}"
+
+
+def test_poles_just_inside_the_unit_circle_are_placed():
+    d = design_current_controller(motor1, T=1e-3, poles=(-0.999, 0.0, 0.999))
+    assert sorted(np.real(d.desired_poles[:3])) == pytest.approx([-0.999, 0.0, 0.999])

@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+import kernels
 from motor import Drive, armature_current_rate, coulomb_friction, electrical_step_coefficients, motor1, motor2
 
 H = 1e-3
@@ -165,3 +166,28 @@ def test_armature_current_rate_gives_the_rl_circuit_exponential(params):
         k4 = rate(i + h * k3)
         i += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
     assert i == pytest.approx(i_ss + (i0 - i_ss) * math.exp(-3.0), rel=1e-7)
+
+
+def test_a_non_finite_current_blames_eulers_divergence_only_when_h_exceeds_2_l_over_r():
+    """Euler's current is multiplied by 1 - h R / L each step: beyond h = 2 L / R it grows
+    without bound, and the refusal says so.  A current made infinite otherwise (a back-EMF
+    ke omega of 1e310 V) at a stable h is refused without that explanation."""
+    stable = Drive(motor1.with_(ke=1e300), mode="voltage", method="euler")
+    assert 1e-4 < 2 * motor1.L / motor1.R
+    with pytest.raises(kernels.Refused, match=r"armature current i = -inf A.* are not finite$") as info:
+        stable.step(0.0, 1.0, 1e10, 0.0, 1e-4)
+    assert "diverges" not in str(info.value)
+    unstable = Drive(motor1, mode="voltage", method="euler")
+    with pytest.raises(kernels.Refused, match=r"not finite: method 'euler' diverges for h = 0.002 s > 2 L/R = 0.00121 s "
+                                              r"\(L = 0.000667 H, R = 1.101 ohm; the current is multiplied by "
+                                              r"1 - hR/L = -2.3 every step\); use 'exact'"):
+        for _ in range(3000):
+            unstable.step(0.0, 1.0, 0.0, 0.0, 2e-3)
+
+
+@pytest.mark.parametrize("v_ref", [3.5, -30.0, 30.0])
+def test_a_voltage_mode_drive_samples_its_reference_clipped_to_v_max(v_ref):
+    """Voltage mode applies v_ref itself, saturated at +-v_max (24 V), at any step h."""
+    drive = Drive(motor1, mode="voltage")
+    for h in (1e-4, 1e-3):
+        assert drive.sample_voltage(0.0, v_ref, 0.0, h) == max(-24.0, min(24.0, v_ref))

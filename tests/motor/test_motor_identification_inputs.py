@@ -2,10 +2,11 @@
 the column, the entry and its value, and what is required."""
 import math
 
+import numpy as np
 import pytest
 
 from motor import identify
-from motor.identification import inertia_from_pole, pole_from_settling_time
+from motor.identification import inertia_from_pole, normal_equations_friction, pole_from_settling_time
 
 GOOD = dict(u=[1.0, 2.0, 3.5], i=[0.5, 0.6, 0.8], omega=[10.0, 30.0, 55.0])
 
@@ -60,3 +61,28 @@ def test_an_inertia_that_is_not_positive_is_refused_word_for_word(p, R, L, kt, k
     with pytest.raises(ValueError) as info:
         inertia_from_pole(p, R, L, kt, ke, b)
     assert str(info.value) == message
+
+
+def _friction_condition(delta):
+    """cond of (D.11)'s G for the two speeds 1 and 1 + delta rad/s."""
+    G, _ = normal_equations_friction(np.array([1.0, 0.5]), np.array([1.0, 1.0 + delta]), 0.05)
+    return np.linalg.cond(G)
+
+
+@pytest.mark.parametrize("target, refused", [(1.5e12, True), (0.5e12, False)])
+def test_normal_equations_past_a_condition_of_1e12_are_refused_as_singular_and_below_solved(target, refused):
+    """Two speeds delta apart: G of (D.11) has det delta^2, so its condition grows as
+    1/delta^2; delta is chosen here to put it at ``target``, either side of the 1e12 the
+    identification takes for singular (the electrical equations stay well conditioned)."""
+    delta = 6.0 / math.sqrt(target)     # cond ~ trace^2 / det = 36 / delta^2
+    for _ in range(60):                 # refine on the computed condition (it is monotone in delta)
+        delta *= math.sqrt(_friction_condition(delta) / target)
+    cond = _friction_condition(delta)
+    assert (cond > 1e12) == refused and (cond < 2e12 if refused else cond > 0.25e12)
+    data = dict(u=[1.0, 2.0], i=[1.0, 0.5], omega=[1.0, 1.0 + delta])
+    if refused:
+        with pytest.raises(ValueError, match=r"data do not determine mu and b: the normal equations are singular"):
+            identify(**data)
+    else:
+        r = identify(**data)
+        assert math.isfinite(r["mu"]) and math.isfinite(r["b"])

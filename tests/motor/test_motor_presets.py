@@ -1,10 +1,13 @@
 """Motor presets (Tables 16, 18) and parameter validation."""
 
 import math
+import re
+from pathlib import Path
 
 import pytest
 
 from motor import MOTOR_PRESETS, MotorParams, get_motor_preset, motor1, motor2
+from motor.presets import STICTION_RATIO
 
 
 def test_presets_match_system_md():
@@ -50,3 +53,30 @@ def test_with_replaces_and_rejects_unknown_names():
         motor1.with_(Rx=1.0)
     with pytest.raises(ValueError, match="R must be > 0"):
         MotorParams(R=-1, L=1e-3, kt=0.05, ke=0.05, b=0, mu=0, J_rotor=1e-4)
+
+
+def _friction_table():
+    """{parameter: (motor1 value, motor2 value)} of docs/friction.md's table of the presets'
+    LuGre parameters (the numbers before the units)."""
+    text = (Path(__file__).resolve().parents[2] / "docs" / "friction.md").read_text()
+    rows = re.findall(r"^\| `(\w+)` \([^)]*\) \| ([0-9.e-]+) [^|]*\| ([0-9.e-]+) [^|]*\|", text, flags=re.M)
+    return {name: (float(a), float(b)) for name, a, b in rows}
+
+
+def test_the_presets_lugre_parameters_are_docs_friction_mds():
+    """Break-away 1.25 mu (``STICTION_RATIO``) of each motor's own mu, the Stribeck speed, the
+    bristles' stiffness and damping as docs/friction.md's table gives them (its mu_s to the
+    4 figures printed)."""
+    table = _friction_table()
+    assert set(table) == {"mu_s", "omega_s", "sigma0", "sigma1"}
+    assert STICTION_RATIO == 1.25
+    for k, m in enumerate((motor1, motor2)):
+        assert m.mu_s == pytest.approx(1.25 * m.mu, rel=1e-15)
+        assert m.mu_s == pytest.approx(table["mu_s"][k], abs=0.5e-5)
+        assert (m.omega_s, m.sigma0, m.sigma1) == (table["omega_s"][k], table["sigma0"][k], table["sigma1"][k])
+
+
+def test_seed000_has_no_friction_but_its_viscous_term_and_a_token_rotor():
+    """Seed 000's motor: no Coulomb nor break-away torque, J_rotor the token 1e-9 kg m^2."""
+    p = get_motor_preset("seed000")
+    assert (p.mu, p.mu_s, p.J_rotor) == (0.0, 0.0, 1e-9)

@@ -11,7 +11,7 @@ import pytest
 
 import kernels
 from motor import Drive, get_motor_preset
-from plant import PlantError, PlantSimulator, fast5r, get_preset
+from plant import IntegratorSettings, PlantError, PlantSimulator, fast5r, get_preset
 from plant.actuated import ActuatedPlant
 
 START = (-0.002, 0.108)
@@ -71,3 +71,37 @@ def test_each_non_finite_input_is_refused_by_its_name_on_both_paths(kernel, name
         a.step(inputs["i_ref"], inputs["i_hat"], inputs["v_ref"], DT)
     assert str(caught.value) == f"input {name}{joint} = nan is not finite"
     assert np.array_equal(a.state(), state) and a.currents == currents
+
+
+def _at_the_stability_limit(h, R):
+    """The inductance L that makes R h / L exactly RK4_REAL_STABILITY in doubles (the
+    plant's own x), and the next one down (x one step past it)."""
+    from plant.simulator import RK4_REAL_STABILITY as limit
+    L = R * h / limit
+    for _ in range(8):      # a few ulps either way
+        x = R * h / L
+        if x == limit:
+            break
+        L = np.nextafter(L, math.inf if x > limit else 0.0)
+    assert R * h / L == limit
+    smaller = np.nextafter(L, 0.0)
+    while R * h / smaller == limit:
+        smaller = np.nextafter(smaller, 0.0)
+    return float(L), float(smaller)
+
+
+def test_an_rk4_step_exactly_at_the_armature_stability_limit_is_taken_and_one_past_it_refused():
+    """R h / L = 2.785... is the x where |R(-x)| = 1 (test_plant_integrators.py): marginally
+    stable, so the plant takes the step; the next representable x beyond it is refused."""
+    R, h = get_motor_preset("motor1").R, DT
+    L, smaller = _at_the_stability_limit(h, R)
+    settings = IntegratorSettings(kernel="fast", substeps=1)
+    for L_drive, refused in ((L, False), (smaller, True)):
+        sim = PlantSimulator(get_preset("bench"), *START, settings)
+        a = ActuatedPlant(sim, [(1, Drive(get_motor_preset("motor1").with_(L=L_drive), mode="voltage"))])
+        if refused:
+            with pytest.raises(PlantError, match=r"drive on joint 1: RK4 steps of 0.001 s are unstable"):
+                a.step((0.0,), (0.0,), (0.0,), DT)
+        else:
+            a.step((0.0,), (0.0,), (0.0,), DT)
+            assert sim.time == DT
