@@ -166,3 +166,24 @@ def test_a_drive_step_or_sample_of_another_length_is_refused_with_that_length(fr
     assert calls.sample_voltage(0.2, 0.0, 0.0, 5e-4) == motor_kernel.UNPREPARED_STEP
     assert (calls.refusal.code, calls.refusal.index, calls.refusal.value) == (motor_kernel.UNPREPARED_STEP, 0, 5e-4)
     assert all(np.array_equal(b, a) for b, a in zip(before, buffers))
+
+
+def test_a_diverged_drive_step_names_the_current_its_value_and_keeps_the_state():
+    """Euler with h > 2 L/R multiplies the current by 1 - hR/L < -1 each step until it is not
+    finite: pc_drive_step refuses that step with DIVERGED, index 0 (the current, not the
+    torque) and the current's value, which x carries too (the message's), the buffers kept."""
+    from motor import Drive
+
+    drive = Drive(motor1.with_(L=motor1.R * DT / 100), mode="voltage", method="euler")
+    drive.prepare_step(DT)
+    calls = motor_kernel.Calls.drive(drive.buf, drive._controller_buf, None)
+    for _ in range(1000):
+        before = drive.buf.copy()
+        code = calls.drive_step(0.0, 1.0, 0.0, 0.0, DT)
+        if code != motor_kernel.OK:
+            break
+    r = calls.refusal
+    assert (code, r.code, r.index) == (motor_kernel.DIVERGED, motor_kernel.DIVERGED, 0)
+    assert not math.isfinite(r.value) and np.array_equal([calls.x[7]], [r.value], equal_nan=True)
+    assert math.isfinite(before[motor_kernel.index(motor_kernel.DRIVE, "i")])
+    assert np.array_equal(drive.buf, before)
