@@ -112,3 +112,19 @@ def test_a_refused_commands_folders_go_only_while_they_hold_no_file(tmp_path):
     file.write_text("kept")
     remove_if_empty(file)
     assert file.read_text() == "kept" and os.path.isdir(made)
+
+
+def test_an_output_in_a_folder_one_may_not_write_in_or_enter_is_refused(tmp_path, monkeypatch):
+    """The nearest existing folder must be writable AND searchable (a file is made in it by
+    name): either permission missing refuses the output naming that folder.  The permissions are
+    faked (os.access), as the tests may run as root, who has both everywhere.  Catches one of
+    the two bits not asked (a constant of the same kind as seed 3901's [71])."""
+    path = tmp_path / "new" / "out"
+    for denied in (os.W_OK, os.X_OK):
+        monkeypatch.setattr(os, "access", lambda p, mode, denied=denied: not mode & denied)
+        with pytest.raises(CommandError) as refused:
+            check_output(path, is_file=False)
+        assert str(refused.value) == f"{path} is not writable: no permission to write in folder {tmp_path}"
+    monkeypatch.setattr(os, "access", lambda p, mode: True)
+    check_output(path, is_file=False)
+    assert list(tmp_path.iterdir()) == []

@@ -65,3 +65,20 @@ def test_owned_calls_are_made_once_per_buffers_and_dropped_with_their_owner():
     del owner
     gc.collect()
     assert key not in kernels._OWNED
+
+
+def test_an_owner_whose_buffers_never_change_is_forgotten_when_collected():
+    """The usual life of an owner: its calls made once, on the same buffers ever after, then the
+    owner collected; its entry goes with it (seed 3901's [95]: the finalizer registered only
+    when the buffers change passed the test above, whose buffers do change).  An entry kept
+    would hold the buffers alive and answer a new object that takes the dead owner's id."""
+    class Owner:
+        pass
+
+    owner, a = Owner(), np.zeros(2)
+    assert kernels.owned(owner, (a,), lambda *b: "calls") == "calls"
+    assert kernels.owned(owner, (a,), lambda *b: "again") == "calls"
+    key = id(owner)
+    del owner
+    gc.collect()
+    assert key not in kernels._OWNED

@@ -7,6 +7,7 @@ from __future__ import annotations
 import hashlib
 import os
 import shutil
+import stat
 
 import pytest
 
@@ -52,12 +53,16 @@ def test_the_compiler_is_cc_from_the_environment_else_one_on_the_path(monkeypatc
 def test_the_command_line_builds_the_plain_library_where_asked(tmp_path, capsys):
     """``python -m kernels.build --out DIR`` (seed 3501's survivor [71]: its ``build(out,
     sanitize)`` with the arguments swapped passed, no test ran the command): the library in DIR,
-    its path printed, carrying the plain build's hash."""
+    its path printed, mode 0o755, alone in DIR, carrying the plain build's hash."""
     import ctypes
 
     assert build.main(["--out", str(tmp_path)]) == 0
     library = tmp_path / build.LIBRARY.name
     assert capsys.readouterr().out.strip() == str(library)
+    # rwxr-xr-x exactly, whatever the umask (seed 3901's [71]: another mode passed), and the
+    # temporary file it was written to renamed, none left beside it
+    assert stat.S_IMODE(library.stat().st_mode) == 0o755 and not library.is_symlink()
+    assert sorted(p.name for p in tmp_path.iterdir()) == [library.name]
     loaded = ctypes.CDLL(str(library))
     loaded.pc_sources_hash.restype = ctypes.c_char_p
     assert loaded.pc_sources_hash().decode() == build.sources_hash()
@@ -75,3 +80,24 @@ def test_sources_count_as_present_only_with_a_c_file_in_src(tmp_path, monkeypatc
     assert not kernels._sources_present()
     (tmp_path / "src" / "law.c").write_text("/* a source */\n")
     assert kernels._sources_present()
+
+
+def test_a_refused_or_impossible_build_says_so_returns_1_and_leaves_nothing(tmp_path, monkeypatch, capsys):
+    """Sources the compiler refuses: ``main`` returns 1 saying so, raising nothing, and the
+    temporary file is removed (no half-written library, nothing in DIR); no compiler: 1 and
+    :class:`build.NoCompiler`'s message.  Catches a return code of 0, a temporary file left."""
+    sources, out = tmp_path / "src", tmp_path / "out"
+    sources.mkdir()
+    out.mkdir()
+    (sources / "broken.c").write_text("int broken(void) { return }\n")
+    monkeypatch.setattr(build, "SOURCES", sources)
+    assert build.main(["--out", str(out)]) == 1
+    assert "error: the C compiler refused parcosim's kernels" in capsys.readouterr().err
+    assert list(out.iterdir()) == []
+
+    def no_compiler():
+        raise build.NoCompiler("no compiler here")
+
+    monkeypatch.setattr(build, "compiler", no_compiler)
+    assert build.main(["--out", str(out)]) == 1
+    assert capsys.readouterr().err == "error: no compiler here\n" and list(out.iterdir()) == []

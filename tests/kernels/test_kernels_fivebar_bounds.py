@@ -117,3 +117,41 @@ def test_each_newton_iteration_of_the_projection_counts():
         if iterations == 0:
             assert projected[3:7].tolist() == off[3:7].tolist()
     assert norms[0] > 1e-4 and norms[1] < 1e-5 and norms[2] < 1e-10 and norms[3] <= norms[2]
+
+
+def test_a_step_is_refused_as_singular_only_below_the_margin_not_at_it():
+    """plant/simulator.py: below SINGULAR_STOP the step is refused (``abs(value) < SINGULAR_STOP``):
+    pc_fivebar_step with the stop set to a measure of its own trial state exactly accepts the
+    step; the next double above refuses it with SINGULAR, that measure's index and value
+    (training seed 4251 [4]: ``<=`` passed; the 14 states of the bench preset give the three
+    measures away from 0)."""
+    p, y = moving_state()
+    kernel = fast5r.FastKernel(get_preset("bench"), fast5r.pack_settings(0.0, 1, 1.0, np.inf, 0.0))
+    assert np.array_equal(kernel.p, p)
+    assert kernel.step(y, 0.01, -0.02, 1e-3) == fast5r.OK
+    measures = kernel.report[fast5r.REPORT_MEASURES:fast5r.REPORT_MEASURES + 3].copy()
+    smallest = int(np.argmin(np.abs(measures)))
+    stop = abs(measures[smallest])
+    kernel.s[fast5r.S_SINGULAR_STOP] = stop
+    assert kernel.step(y, 0.01, -0.02, 1e-3) == fast5r.OK
+    kernel.s[fast5r.S_SINGULAR_STOP] = np.nextafter(stop, np.inf)
+    assert kernel.step(y, 0.01, -0.02, 1e-3) == fast5r.SINGULAR
+    r = kernel.refusal
+    assert (r.code, r.index, r.value) == (fast5r.SINGULAR, smallest, measures[smallest])
+
+
+def test_a_step_is_refused_as_diverged_only_above_the_residual_stop_not_at_it():
+    """plant/simulator.py: a step whose residual is above RESIDUAL_STOP is refused; at it exactly
+    the step is taken, one double below it refuses it with DIVERGED, index 0 and the residual
+    (the sibling of the singular margin's boundary above)."""
+    p, y = moving_state()
+    kernel = fast5r.FastKernel(get_preset("bench"), fast5r.pack_settings(0.0, 1, 1.0, np.inf, 0.0))
+    assert kernel.step(y, 0.01, -0.02, 1e-3) == fast5r.OK
+    residual = kernel.report[fast5r.REPORT_RESIDUAL]
+    assert 0.0 < residual < 1e-6
+    kernel.s[fast5r.S_RESIDUAL_STOP] = residual
+    assert kernel.step(y, 0.01, -0.02, 1e-3) == fast5r.OK
+    kernel.s[fast5r.S_RESIDUAL_STOP] = np.nextafter(residual, -np.inf)
+    assert kernel.step(y, 0.01, -0.02, 1e-3) == fast5r.DIVERGED
+    r = kernel.refusal
+    assert (r.code, r.index, r.value) == (fast5r.DIVERGED, 0, residual)

@@ -260,3 +260,22 @@ def test_every_refusal_code_has_its_message():
     refusal = kernels.Refusal(code=K.INPUT_LIMIT, index=2, value=2e6)
     assert str(refusal_error(refusal, 0.001, 0.0, limit=1e6)) == \
         "input tau_d = 2000000.0 at t = 0.001 s is absurd: |tau_d| must be <= 1e+06"
+
+
+@pytest.mark.parametrize("index", [0, 1, 2])
+def test_the_balance_sample_takes_an_input_at_the_limit_and_refuses_one_double_beyond(index):
+    """controller/balance.py's refusal reads "|input| must be <= limit": an input of magnitude
+    equal to the limit is taken (either sign), the next double beyond it is refused with
+    INPUT_LIMIT, its index and value, the buffer unchanged (a boundary never met exactly:
+    the sibling of training seed 4251's [4])."""
+    limit = 0.75
+    for sign in (1.0, -1.0):
+        buf, x, refusal = _buffer(), np.zeros(fastbalance.IO_SIZE), kernels.Refusal()
+        x[index] = sign * limit
+        assert fastbalance.sample(buf, x, 0.0, limit, refusal) == fastbalance.OK
+        x[:] = 0.0
+        x[index] = sign * np.nextafter(limit, np.inf)
+        before = buf.copy()
+        assert fastbalance.sample(buf, x, 0.001, limit, refusal) == fastbalance.INPUT_LIMIT
+        assert (refusal.code, refusal.index, refusal.value) == (fastbalance.INPUT_LIMIT, index, x[index])
+        assert np.array_equal(buf, before)

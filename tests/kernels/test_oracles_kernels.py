@@ -137,3 +137,53 @@ def test_projection_restores_every_joint_rate_of_a_consistent_state():
     y[3:7] += 1e-4                                   # Newton brings the angles back too
     y = sim._fast.project(y)
     assert np.allclose(y, consistent, rtol=1e-9, atol=1e-10)
+
+
+@pytest.mark.parametrize("friction", ["tanh", "lugre"])
+def test_a_drive_step_or_sample_of_another_length_is_refused_with_that_length(friction):
+    """pc_drive_step (through pc_drive_io and pc_drive_step_x) and pc_drive_sample_voltage with h
+    unlike the prepared one: UNPREPARED_STEP, index 0, the length h exactly (seed 3901's [191]:
+    index and value swapped passed); the drive's buffers and the outputs unchanged.  Drive.step
+    prepares a new length on this refusal, so its code, not its index or value, is all it reads."""
+    from motor import Drive
+
+    drive = Drive(motor1, friction=friction)
+    drive.prepare_step(DT)
+    drive.step(0.2, 0.0, 0.5, 0.0, DT)
+    buffers = (drive.buf, drive._controller_buf) + (() if drive.lugre is None else (drive.lugre,))
+    before = [b.copy() for b in buffers]
+    context = motor_kernel.DriveContext(*(None if b is None else kernels.address(b)
+                                          for b in (drive.buf, drive._controller_buf, drive.lugre)))
+    other = 2.5e-3
+    refusal = kernels.Refusal()
+    x = np.array([0.2, 0.0, 0.5, 0.0, 7.0, 8.0, 9.0])
+    code = motor_kernel.drive_io(ctypes.addressof(context), kernels.address(x), 0.0, other, ctypes.byref(refusal))
+    assert (code, refusal.code, refusal.index, refusal.value) == (motor_kernel.UNPREPARED_STEP,) * 2 + (0, other)
+    assert list(x[4:]) == [7.0, 8.0, 9.0]
+    calls = motor_kernel.Calls.drive(*(drive.buf, drive._controller_buf, drive.lugre))
+    assert calls.drive_step(0.2, 0.0, 0.5, 0.0, 4e-3) == motor_kernel.UNPREPARED_STEP
+    assert (calls.refusal.code, calls.refusal.index, calls.refusal.value) == (motor_kernel.UNPREPARED_STEP, 0, 4e-3)
+    assert calls.sample_voltage(0.2, 0.0, 0.0, 5e-4) == motor_kernel.UNPREPARED_STEP
+    assert (calls.refusal.code, calls.refusal.index, calls.refusal.value) == (motor_kernel.UNPREPARED_STEP, 0, 5e-4)
+    assert all(np.array_equal(b, a) for b, a in zip(before, buffers))
+
+
+def test_a_diverged_drive_step_names_the_current_its_value_and_keeps_the_state():
+    """Euler with h > 2 L/R multiplies the current by 1 - hR/L < -1 each step until it is not
+    finite: pc_drive_step refuses that step with DIVERGED, index 0 (the current, not the
+    torque) and the current's value, which x carries too (the message's), the buffers kept."""
+    from motor import Drive
+
+    drive = Drive(motor1.with_(L=motor1.R * DT / 100), mode="voltage", method="euler")
+    drive.prepare_step(DT)
+    calls = motor_kernel.Calls.drive(drive.buf, drive._controller_buf, None)
+    for _ in range(1000):
+        before = drive.buf.copy()
+        code = calls.drive_step(0.0, 1.0, 0.0, 0.0, DT)
+        if code != motor_kernel.OK:
+            break
+    r = calls.refusal
+    assert (code, r.code, r.index) == (motor_kernel.DIVERGED, motor_kernel.DIVERGED, 0)
+    assert not math.isfinite(r.value) and np.array_equal([calls.x[7]], [r.value], equal_nan=True)
+    assert math.isfinite(before[motor_kernel.index(motor_kernel.DRIVE, "i")])
+    assert np.array_equal(drive.buf, before)

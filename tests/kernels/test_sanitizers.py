@@ -66,7 +66,10 @@ def test_the_harness_catches_an_out_of_bounds_write(tmp_path):
 def test_the_kernels_tests_pass_under_asan_and_ubsan(tmp_path):
     """Catches out-of-bounds accesses, leaks and undefined behaviour in the C kernels."""
     library = build.build(tmp_path / "libparcosim_kernels.so", sanitize=True)
-    tests = sorted(str(p.relative_to(ROOT)) for p in (ROOT / "tests" / "kernels").glob("test_kernels_*.py"))
+    # Not the memcheck test: valgrind cannot run a process with the ASan runtime preloaded (ASan
+    # exits 99 at start), and with -x its failure stopped the run before the files after it.
+    tests = sorted(str(p.relative_to(ROOT)) for p in (ROOT / "tests" / "kernels").glob("test_kernels_*.py")
+                   if p.name != "test_kernels_memcheck.py")
     assert len(tests) > 5, tests            # none would run the whole suite under the sanitizers
     run = subprocess.run([sys.executable, "-m", "pytest", "-q", "-x", "-s", "-p", "no:cacheprovider", *tests],
                          cwd=ROOT, env=_sanitized_env(library), capture_output=True, text=True)
