@@ -39,3 +39,17 @@ def test_each_given_gain_replaces_the_presets_and_the_others_stay():
     built, preset = _strategy(lam=7.5, k2=0.125)
     assert built.lam == 7.5 and tuple(built.k) == (preset.k[0], 0.125)
     assert (built.m_star, built.phi) == (preset.m_star, preset.phi)
+
+
+@pytest.mark.parametrize("name, value, refused", [
+    ("gamma1", -1.0, True), ("gamma2", -1e-3, True), ("kt1", -0.5, True), ("kt2", -2.0, True),
+    ("kt1", -1.0, False), ("kt2", -1.0, False), ("gamma2", 0.0, False),
+])
+def test_a_negative_rate_or_torque_constant_is_refused_but_the_presets_minus_one_of_kt(name, value, refused):
+    """-1 means "the motor preset's" for kt1, kt2 only; an adaptation rate has no preset
+    value, so -1 there is refused like any negative one."""
+    if refused:
+        with pytest.raises(ValueError, match=rf"^parameter {name} = {value!r} must be >= 0$"):
+            _strategy(**{name: value})
+    else:
+        _strategy(**{name: value})
