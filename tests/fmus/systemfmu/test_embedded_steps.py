@@ -32,3 +32,13 @@ def test_a_communication_point_must_follow_the_last_one():
     assert _steps_in(0.25, 0.25 + 1e-7 * H, H, H, multiples=False) == 1       # within 1e-6 h
     with pytest.raises(ValueError, match=r"communication point t = 0.2520000000000001 s does not follow the last one \(0.25 s\)"):
         _steps_in(0.25, 0.25 + H + 1e-16, H, H, multiples=False)
+
+
+@pytest.mark.parametrize("time", [0.0, 0.25, 100.0])
+def test_a_communication_point_is_matched_within_a_millionth_of_h_at_any_time(time):
+    """The tolerance is 1e-6 h whatever the time: at t = 0 a point off by 1e-7 h follows; at
+    any t one off by 1e-5 h does not (a tolerance relative to t would accept it late in a run,
+    and refuse anything but an exact match at t = 0)."""
+    assert _steps_in(time, time + 1e-7 * H, H, H, multiples=False) == 1
+    with pytest.raises(ValueError, match="does not follow the last one"):
+        _steps_in(time, time + 1e-5 * H, H, H, multiples=False)

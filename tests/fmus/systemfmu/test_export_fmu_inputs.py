@@ -99,3 +99,26 @@ def test_a_copy_with_start_values_reads_back_each_value_with_its_type(tmp_path):
     with pytest.raises(ValueError, match=r"Alpha.fmu has no variables \['nope'\]"):
         export.with_start_values(fmu, {"gain": 1.0, "nope": 2.0}, tmp_path / "never.fmu")
     assert not (tmp_path / "never.fmu").exists()
+
+
+@pytest.mark.parametrize("carried", ["designs", "slavemodule"])
+def test_a_copy_of_an_fmu_with_only_one_of_the_designs_markers_keeps_its_members(tmp_path, carried):
+    """Designs are computed for a copy only when the FMU carries both a designs file and the
+    name of its slave's module (one of ours whose initialisation computes designs); with
+    either alone it is not, and the copy keeps every member as it was (none computed, none
+    refused for lacking the other)."""
+    from fmus.export.bundle import bundle_name
+    from fmus.slave.designs import DESIGNS_FILE
+    from fmus.slave.identity import IDENTITY_FILE
+
+    carried = f"resources/{DESIGNS_FILE}" if carried == "designs" else "resources/slavemodule.txt"
+    fmu = fake_fmu(tmp_path / "Alpha.fmu", "Alpha")
+    members = {carried: b"fmus.slaves.parcosim_dcmotordrive" if carried.endswith(".txt") else b"its own designs",
+               f"resources/{IDENTITY_FILE}": json.dumps({"package": bundle_name(), "model": "DCMotorDrive"})}
+    with zipfile.ZipFile(fmu, "a") as z:
+        for name, data in members.items():
+            z.writestr(name, data)
+    copy = export.with_start_values(fmu, {"gain": 2.0}, tmp_path / "copy.fmu")
+    with zipfile.ZipFile(copy) as z, zipfile.ZipFile(fmu) as original:
+        assert set(z.namelist()) == set(original.namelist()) | {f"resources/{START_VALUES_FILE}"}
+        assert all(z.read(name) == original.read(name) for name in members)
