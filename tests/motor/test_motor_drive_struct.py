@@ -10,8 +10,10 @@ import math
 import pytest
 
 from motor import Drive, kernel, motor1, motor2
+from motor.current_controller import CurrentController, design_current_controller
 
 FIELDS = kernel.indices(kernel.DRIVE)
+CONTROLLER = kernel.CONTROLLER
 
 
 @pytest.mark.parametrize("mode", ["current", "voltage"])
@@ -43,3 +45,22 @@ def test_the_drives_constants_are_its_parameters_and_options_word_for_word():
     ideal = Drive(p).buf
     for name in ("pwm_quantum", "i_offset", "i_noise", "noise_seed", "noise_instance", "sample_phase"):
         assert ideal[FIELDS[name]] == 0.0, name
+
+
+def test_the_controllers_struct_holds_its_design_and_restarts_saturated_with_zero_error():
+    """``pc_controller`` (drive.h): alpha..delta the design's, v_max the saturation; a reset to
+    v0 holds v0 clipped to +-v_max as both past outputs and zero as both past errors (the
+    bumpless start); the voltage-mode drive's idle controller has zero coefficients."""
+    design = design_current_controller(motor1)
+    c = CurrentController(design, 12.0)
+    for name in ("alpha", "beta", "gamma", "delta"):
+        assert c.buf[CONTROLLER[name]] == getattr(design, name), name
+    assert c.buf[CONTROLLER["v_max"]] == 12.0
+    for v0, held in ((5.0, 5.0), (30.0, 12.0), (-30.0, -12.0)):
+        c.buf[CONTROLLER["e1"]] = c.buf[CONTROLLER["e2"]] = 1.0
+        c.reset(v0)
+        assert (c.buf[CONTROLLER["u1"]], c.buf[CONTROLLER["u2"]]) == (held, held)
+        assert (c.buf[CONTROLLER["e1"]], c.buf[CONTROLLER["e2"]]) == (0.0, 0.0)
+    idle = CurrentController.idle_buffer(7.5)
+    assert idle[CONTROLLER["v_max"]] == 7.5
+    assert all(idle[CONTROLLER[name]] == 0.0 for name in ("alpha", "beta", "gamma", "delta", "u1", "u2", "e1", "e2"))
