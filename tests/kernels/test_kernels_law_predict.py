@@ -137,3 +137,31 @@ def test_the_kept_commands_shift_one_row_a_sample_newest_first(a, b):
         expected[:min(len(commands), rows)] = commands[:rows]
         np.testing.assert_allclose(past, expected, rtol=1e-12, atol=1e-12)
     assert len({tuple(np.round(x, 6)) for x in commands}) == 4       # four different commands
+
+
+@pytest.mark.parametrize("a, b", [(3, 2), (2, 3), (4, 0), (1, 1)])
+def test_predict_refuses_a_past_shorter_than_max_a_b_rows_and_takes_exactly_that_many(a, b):
+    """``pc_law_predict`` takes no length: it reads max(a, b) rows of 2 commands, so the
+    Python binding is the only guard.  One row short (or one value short) is refused, naming
+    the rows needed; exactly max(a, b) rows is the double integrator's state (the test
+    above).  Catches the length bound computed wrongly (2 / max instead of 2 * max), which
+    lets the kernel read past the array."""
+    rows = max(a, b)
+    commands = np.full((rows + 1, 2), 5.0)
+    measured, d = (0.1, -0.2, 0.3, 0.4), (0.0, 0.0)
+    for short in (commands[:rows - 1], commands.reshape(-1)[:2 * rows - 1]):
+        with pytest.raises(ValueError, match=rf"past of {len(short.reshape(-1)) // 2} rows for "
+                                             rf"a = {a}, b = {b}: need 4, 2 and max\(a, b\) rows"):
+            law.predict(measured, short, d, a, b, H)
+    q, v = double_integrator(commands[:rows], measured[:2], measured[2:])
+    joint = law.predict(measured, commands[:rows], d, rows, rows, H)
+    np.testing.assert_allclose(joint, (*q[rows], *v[rows]), rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("measured, bias", [((0.0,) * 3, (0.0, 0.0)), ((0.0,) * 5, (0.0, 0.0)),
+                                            ((0.0,) * 4, (0.0,)), ((0.0,) * 4, (0.0,) * 3)])
+def test_predict_refuses_a_measurement_not_of_4_or_a_bias_not_of_2(measured, bias):
+    """The measured state is (q1, q2, dq1, dq2) and the bias one acceleration per joint: any
+    other length is refused before the kernel reads it."""
+    with pytest.raises(ValueError, match=r"predict: measured \(\d\,\), bias \(\d\,\)"):
+        law.predict(measured, np.zeros((2, 2)), bias, 1, 1, H)
