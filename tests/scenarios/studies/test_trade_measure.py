@@ -78,6 +78,18 @@ def test_the_no_quantisation_study_sweeps_the_coupling_settings_against_a_2_30_c
                                                 "drives in plant, substeps=2", "drives in plant, substeps=4",
                                                 "drives in plant, substeps=8"]
     assert all(r["enc_diff"] == "" and np.isnan(r["enc_first_s"]) for r in rows) and len(rows) == 8
+    # the defaults are the fine-encoder scene itself, described by its encoder; every setting is
+    # described in words and built by a function of the scene (seed 3901 [85]: the two swapped)
+    defaults = seen["chosen"][0]
+    assert defaults.what == f"encoder 2^{module.FINE_ENCODER.bit_length() - 1} counts"
+    assert defaults.build(seen["scene"]) is seen["scene"]
+    assert all(isinstance(s.what, str) and callable(s.build) and s.kind == "accuracy" for s in seen["chosen"])
+    for setting, n in zip(seen["chosen"][1:5], (4, 16, 32, 64)):     # "drives + plant at 1/n ms"
+        steps = {c.name: c.substeps for c in setting.build(seen["scene"]).system.components}
+        assert steps["drive1"] == steps["drive2"] == steps["plant"] == n and steps["ctrl"] == 1, setting.name
+    for setting, n in zip(seen["chosen"][5:], (2, 4, 8)):             # "RK4 n steps per 1 ms" in the plant
+        plant = setting.build(seen["scene"]).system.component("plant")
+        assert plant.model == "ActuatedFiveBarPlant" and plant.parameters["substeps"] == n, setting.name
     assert rows[0]["pareto"] is True and rows[0]["gain"] == 1.0
     assert said == [f"no-quantisation study: reference of bench_circle_TCMDx with {2 ** 30} encoder counts ..."]
     assert module._noquant(get_scene("thesis_sim_circle"), 3, said.append) == []
