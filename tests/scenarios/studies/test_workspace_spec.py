@@ -103,7 +103,9 @@ def test_the_figure_and_json_of_a_spec_and_a_serial_spec_refused(tmp_path, monke
     another step; a serial spec refused naming its file."""
     monkeypatch.setattr(ws_spec, "SPEC_GRID", 11)
     report = ws_spec.plot_spec_slice("bench_5r", tmp_path, BAND)
-    data = json.loads((tmp_path / "workspace.json").read_text())
+    text = (tmp_path / "workspace.json").read_text()
+    data = json.loads(text)
+    assert text == json.dumps(data, indent=2) + "\n"          # the results' JSON form: indented, a final newline
     assert (tmp_path / "workspace.png").stat().st_size > 0 and report.png == tmp_path / "workspace.png"
     spec = plant_spec.load("bench_5r")
     ws, _, _ = ws_spec.slice_map(spec, BAND)
