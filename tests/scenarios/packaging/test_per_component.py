@@ -292,3 +292,27 @@ def test_a_sampled_component_off_the_scenes_period_is_refused_by_name(step):
             component_timing(with_T(T), _chain_variables())
     rounded = sum([step / 10] * 10)     # the step up to rounding
     assert component_timing(with_T(rounded), _chain_variables()).phases == component_timing(system, _chain_variables()).phases
+
+
+def test_the_trial_takes_the_first_n_whose_ratios_are_both_within_the_goal(monkeypatch):
+    """``choose_substeps_by_trial`` with the runs replaced by ratios made up here: at n = 2 e_ef is
+    on our master's and τ_ef 3 % under it (a deviation |r - 1| of 0.03, three times the 1 %
+    goal), so the scene's own floor is measured (0 here) and n scaled to 8 (next_substeps'
+    rule); at 8 both are within 0.4 %: n = 8 is taken, both tries returned.  Catches a deviation
+    not measured from 1 (seed 4241 [33]: the trial escalates to its largest n, a campaign's
+    timeout), one ratio of the two ignored, the floor measured when the first n is good."""
+    from scenarios.packaging import per_component as pc
+
+    ratios = {2: (1.0, 0.97), 8: (1.004, 0.997)}
+    floors = []
+    monkeypatch.setattr(pc, "_tracking", lambda scene, result, every: (1.0, 1.0))
+    monkeypatch.setattr("fmus.cosim.master.simulate", lambda *a, **kw: None)
+    monkeypatch.setattr(pc, "component_timing", lambda system, variables: types.SimpleNamespace(substeps=2))
+    monkeypatch.setattr(pc, "jacobi_ratios", lambda scene, system, variables, n, ours: ratios[n])
+    monkeypatch.setattr(pc, "reproducibility", lambda scene: floors.append(scene) or 0.0)
+    scene = types.SimpleNamespace(name="made_up", system=None)
+    assert pc.choose_substeps_by_trial(scene, None, {}, goal=0.01) == (8, ratios, 0.0)
+    assert floors == [scene]
+    ratios[2] = (0.995, 1.002)
+    floors.clear()
+    assert pc.choose_substeps_by_trial(scene, None, {}, goal=0.01) == (2, {2: ratios[2]}, 0.0) and floors == []
