@@ -62,6 +62,11 @@ def test_write_report_writes_the_metrics_the_figure_and_the_rendered_report(tmp_
             else:
                 assert back[name][key] == (list(value) if isinstance(value, tuple) else value), (name, key)
     assert path.read_text() == report.render(metrics, "compiled") + "\n![e_ef and τ_ef, ours and the thesis'](report.png)\n"
+    # laid out as `parcosim run`'s metrics.json (indented, NaN as null, a final newline): one form for both
+    from scenarios.run.runner import write_json
+
+    same = write_json(tmp_path / "run_metrics.json", metrics)
+    assert (tmp_path / "r" / "metrics.json").read_text() == same.read_text()
     assert (tmp_path / "r" / "report.png").stat().st_size > 0
 
 

@@ -67,3 +67,26 @@ def test_metrics_without_the_per_side_errors_give_three_empty_sides_and_no_claim
     for s, claimed in (("PDq", "I and III"), ("TCx", "I"), ("PDMDx", "II")):
         assert f"| {s} | — | — | — | — | {claimed} | no |" in lines
     assert "The bench's sides of larger error hold here for 0 of 8 strategies." in lines
+
+
+def test_every_heading_and_table_of_the_report_stands_apart_by_blank_lines():
+    """Markdown blocks: each heading has a blank line before (but the first) and after it, each table
+    a blank line before its header row and after its last row (or ends the text); the text ends in
+    one newline.  A table row run into a heading or a paragraph is drawn as one more row by some
+    renderers.  Catches a section's separating blank line dropped (seed 3901 [137]: the triangle's
+    per-side section run into the steady-state table)."""
+    stopped = _metrics()
+    stopped["bench_circle_TCq"].update(completed=False, error="ctrl refused the step from t = 1 s: test")
+    for metrics in (_metrics(), stopped):                # the second with its "Runs stopped early" paragraph
+        text = render(metrics, "inprocess")
+        assert text.endswith("\n") and not text.endswith("\n\n")
+        lines = text.splitlines()
+        for i, line in enumerate(lines):
+            if line.startswith(("#", "**")):
+                assert (i == 0 or lines[i - 1] == "") and lines[i + 1] == "", (i, line)
+            if line.startswith("|") and not lines[i - 1].startswith("|"):
+                assert lines[i - 1] == "" and lines[i + 1].startswith("|---"), (i, line)
+            if line.startswith("|") and i + 1 < len(lines) and not lines[i + 1].startswith("|"):
+                assert lines[i + 1] == "", (i, line)
+        assert sum(line.startswith("### Where the triangle's error lies") for line in lines) == 1
+    assert sum(line.startswith("**Runs stopped early:**") for line in lines) == 1

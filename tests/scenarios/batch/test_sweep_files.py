@@ -205,3 +205,25 @@ def test_summary_md_reads_back_line_for_line_with_at_most_20_failed_samples():
     clean = sweep.summary_markdown(sweep.Sweep("bench_circle_PDx", ["drive1.R"], good, sweep.summarize(good), [],
                                                settings))
     assert clean.splitlines()[-1] == table[-1] and "Failed" not in clean
+
+
+@pytest.mark.parametrize("umask", [0o022, 0o077], ids=["umask-022", "umask-077"])
+def test_a_new_sweep_csv_is_readable_by_all_but_written_by_its_owner_only_under_the_umask(tmp_path, umask):
+    """sweep.csv is created rw-r--r-- (0o644: a results file others may read, only the sweep
+    appends), less what the umask takes away; an existing file keeps its mode.  Catches
+    another creation mode (execute or sticky bits, a group-writable file) and a mode forced
+    on a file the user made (seed 3901 [131])."""
+    import os
+    import stat
+
+    path = tmp_path / "sweep.csv"
+    old = os.umask(umask)
+    try:
+        _write(path, [_row(0, 0.25)])
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE(path.stat().st_mode) == 0o644 & ~umask
+    path.chmod(0o600 if umask == 0o022 else 0o664)
+    kept = stat.S_IMODE(path.stat().st_mode)
+    _write(path, [_row(1, 0.5)])
+    assert stat.S_IMODE(path.stat().st_mode) == kept and len(sweep.read_rows(path, HEADER)) == 2

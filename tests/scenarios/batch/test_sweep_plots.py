@@ -128,3 +128,32 @@ def test_the_tick_labels_are_the_groups_slanted_past_four(n, rotation, kept, tmp
         labels = ax.get_xticklabels()
         assert [t.get_text() for t in labels] == names
         assert {t.get_rotation() for t in labels} == {rotation}
+
+
+def test_the_panels_have_horizontal_grid_lines_only_as_faint_as_the_run_figures(kept, tmp_path):
+    """The metric's levels are read off horizontal grid lines (no vertical ones between the
+    groups), drawn as faint as those of ``parcosim run``'s figures (scenarios/run/runner.py,
+    rendered here): one grid style across the scenarios' figures.  Catches the vertical grid
+    drawn, the grid dropped, or a heavier grid than the other figures' (seed 3901 [261])."""
+    from dataclasses import replace
+
+    from scenarios.run import runner
+    from scenarios.scenes import get_scene
+
+    t = np.arange(5) * 0.01
+    runner.plot_run(replace(get_scene("bench_circle_PDq"), window=(0.01, 0.03)),
+                    {"t": t, "x": t, "y": t, "x_d": t, "y_d": t, "tau1": t, "tau2": t}, tmp_path)
+    run_alphas = {line.get_alpha() for fig in kept for ax in fig.axes for line in ax.yaxis.get_gridlines()
+                  if line.get_visible()}                     # the time series' panels (the path has none)
+    (run_alpha,) = run_alphas
+    assert run_alpha is not None and run_alpha < 1.0
+    before = len(kept)
+    sweep = SimpleNamespace(scene="bench_x", rows=_rows([0.5, 1.0, 2.0]),
+                            settings={"uncertainty": 0.05, "distribution": "uniform", "seed": 7})
+    sweep_plots.plot_sweep(sweep, tmp_path / "sweep.png")
+    sweep_plots.plot_groups({"strategies": {"A": _rows([1.0, 2.0]), "B": _rows([3.0])}}, tmp_path / "groups.png")
+    axes = [ax for fig in kept[before:] for ax in fig.axes]
+    assert len(axes) == 5
+    for ax in axes:
+        assert all(line.get_visible() and line.get_alpha() == run_alpha for line in ax.yaxis.get_gridlines())
+        assert not any(line.get_visible() for line in ax.xaxis.get_gridlines()), ax.get_title()

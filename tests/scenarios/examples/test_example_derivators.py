@@ -54,3 +54,33 @@ def test_the_bode_plot_shows_each_estimate_over_the_ideal_derivative_on_rising_a
         assert (tmp_path / "bode.png").stat().st_size > 0
     finally:
         plt.close(figure)
+
+
+def test_the_bode_plot_spans_the_published_decades_and_marks_5_and_11_hz(tmp_path):
+    """docs/derivators.md's figure (docs/derivators_bode.png, written by this function with
+    ``--docs``) runs from 0.1 Hz to just below the Nyquist frequency 0.5 / T (where the velocity
+    estimate's magnitude is zero, -inf dB), every plotted value finite, both panels on the same
+    frequencies; "the dotted lines mark 5 Hz and 11 Hz" on both panels, its title states T.
+    Catches the plot started another decade down (seed 3901 [290]), Nyquist itself plotted, a
+    marker moved or dropped, and the phase on other frequencies."""
+    import matplotlib.pyplot as plt
+
+    before = set(plt.get_fignums())
+    derivator = Derivator(50.0, 20.0)
+    figures.plot_bode(derivator, tmp_path / "bode.png")
+    (number,) = set(plt.get_fignums()) - before
+    figure = plt.figure(number)
+    try:
+        magnitude, phase = figure.axes
+        curves = magnitude.lines[:2] + phase.lines[:2]
+        f = np.asarray(curves[0].get_xdata())
+        assert f[0] == pytest.approx(0.1, rel=1e-12) and f[-1] < (1 - 1e-6) * 0.5 / derivator.T     # Nyquist left out
+        assert f[-1] > 0.98 * 0.5 / derivator.T and np.all(np.diff(f) > 0)
+        for line in curves:
+            assert np.array_equal(line.get_xdata(), f) and np.all(np.isfinite(line.get_ydata()))
+        for axes in (magnitude, phase):
+            dotted = sorted(line.get_xdata()[0] for line in axes.lines[2:] if line.get_linestyle() == ":")
+            assert dotted == [5.0, 11.0]
+        assert magnitude.get_title().startswith(f"Derivators at T = {derivator.T * 1e3:g} ms")
+    finally:
+        plt.close(figure)

@@ -101,3 +101,32 @@ def test_docs_writes_the_documents_figure_and_out_another_path(monkeypatch, caps
     friction_demo.main([])
     assert asked == [ROOT / "docs" / "friction_lugre.png", tmp_path / "x.png", friction_demo.Path("out/friction_lugre.png")]
     assert "friction_lugre.png" in DOC and capsys.readouterr().out.splitlines()[0] == str(asked[0])
+
+
+def test_the_break_away_is_the_first_sample_strictly_above_vs(monkeypatch, tmp_path):
+    """docs/friction.md's break-away is the "first v > vs": runs made up here (``push`` replaced,
+    1 ms rows) whose speed is exactly vs on row 10 and above it from row 11 break away at row 11,
+    the legend's force rate * t[11], the dot at that row's displacement.  Catches a speed equal
+    to vs taken as sliding (seed 3901 [47]: no sample of the real runs is exactly vs, so only
+    made-up runs tell)."""
+    import matplotlib.pyplot as plt
+
+    vs = friction_demo.PAPER["omega_s"]
+
+    def push(kind, a, b, t_end, **_):
+        t = (np.arange(100) + 1) * 1e-3
+        rows = np.zeros((100, 3))
+        rows[:, 0] = 1e-6 * np.arange(100)
+        rows[10, 1], rows[11:, 1] = vs, 2 * vs
+        return rows, t
+
+    monkeypatch.setattr(friction_demo, "push", push)
+    kept, close = [], plt.close
+    monkeypatch.setattr(plt, "close", lambda fig=None: kept.append(fig) or close(fig))
+    friction_demo.plot(tmp_path / "lugre.png")
+    lines = kept[0].axes[1].get_lines()
+    labels = [t.get_text() for t in kept[0].axes[1].get_legend().get_texts()]
+    assert labels == [f"{rate:g} N/s: breaks away at {rate * 12e-3:.3f} N" for rate in (0.1, 1.0, 10.0)]
+    dots = [line for line in lines if line.get_marker() == "." and line.get_color() == "k"]
+    assert [(float(d.get_xdata()[0]), float(d.get_ydata()[0])) for d in dots] == [
+        (pytest.approx(11.0), pytest.approx(rate * 12e-3)) for rate in (0.1, 1.0, 10.0)]

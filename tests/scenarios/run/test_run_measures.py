@@ -75,8 +75,9 @@ def test_the_run_figures_draw_the_path_errors_and_torques_in_their_units(tmp_pat
 
 def test_a_results_csv_reads_back_every_double_exactly_and_json_writes_non_finite_as_null(tmp_path):
     """result.csv holds each value to all 17 digits (read back bit for bit) under the columns'
-    names; metrics.json writes NaN and inf as null, in nested lists and dicts too.  Catches a
-    rounded format, a missing header and a non-finite value written as NaN (not JSON)."""
+    names; metrics.json writes NaN and inf as null, in nested lists and dicts too, indented, each file
+    ending in a newline.  Catches a rounded format, a missing header, a non-finite value written as
+    NaN (not JSON) and a last line without its newline."""
     import json
 
     import numpy as np
@@ -90,6 +91,11 @@ def test_a_results_csv_reads_back_every_double_exactly_and_json_writes_non_finit
     assert np.array_equal(back, np.column_stack(list(values.values())))
     runner.write_json(tmp_path / "m.json", {"a": float("nan"), "b": [1.5, float("inf")], "c": {"d": -float("inf")}})
     assert json.loads((tmp_path / "m.json").read_text()) == {"a": None, "b": [1.5, None], "c": {"d": None}}
+    # indented by two and ended by a newline (a POSIX text file: `cat`, `diff` and `wc -l` count its
+    # last line): the exact text, not only what json reads back (seed 3901 [121])
+    assert (tmp_path / "m.json").read_text() == json.dumps({"a": None, "b": [1.5, None], "c": {"d": None}},
+                                                           indent=2) + "\n"
+    assert (tmp_path / "result.csv").read_text().endswith("\n") and len(lines) == 4
 
 
 def test_a_failed_write_keeps_the_old_file_leaves_no_temporary_and_names_the_file(tmp_path):
@@ -122,3 +128,25 @@ def test_a_failed_write_keeps_the_old_file_leaves_no_temporary_and_names_the_fil
         runner.check_writable(path / "out")           # under a file: cannot be created
     assert failure.value.strerror.startswith(f"output directory {path / 'out'} is not writable: ")
     assert runner.check_writable(tmp_path / "a" / "b") == tmp_path / "a" / "b" and (tmp_path / "a" / "b").is_dir()
+
+
+@pytest.mark.parametrize("umask", [0o022, 0o027], ids=["umask-022", "umask-027"])
+def test_a_file_written_atomically_has_the_mode_open_would_give_it(tmp_path, umask):
+    """atomic_write's temporary file (mkstemp's 0600) is renamed into place with the mode a
+    plain ``open(path, "w")`` gives under the same umask (written here beside it), whether the
+    file is new or replaced.  Catches results only their owner can read, or the umask
+    ignored."""
+    import os
+    import stat
+
+    old = os.umask(umask)
+    try:
+        with open(tmp_path / "plain.txt", "w") as f:
+            f.write("x\n")
+        written = runner.write_json(tmp_path / "m.json", {"a": 1})
+        again = runner.write_json(tmp_path / "m.json", {"a": 2})
+    finally:
+        os.umask(old)
+    want = stat.S_IMODE((tmp_path / "plain.txt").stat().st_mode)
+    assert want == 0o666 & ~umask
+    assert written == again and stat.S_IMODE(again.stat().st_mode) == want

@@ -46,3 +46,20 @@ def test_the_fronts_tolerance_is_the_documents_and_the_default():
     assert front(2.0 * (1 + tolerance) + 2e-3, 5e-5) == ["a", "b"]
     assert front(2.0 * (1 + tolerance) - 2e-3, 1e-4) == ["a"]
     assert front(1.5, 1e-4) == ["b"]
+
+
+def test_the_full_sweeps_settings_are_the_documents_table_in_its_order():
+    """docs/trade.md's first table (the full sweep of bench_circle_TCMDx, every setting applying to
+    it) has one row per setting: names, kinds and order as ``settings()`` gives them, and the
+    quick sweep's are among them.  Catches a setting added, dropped or changed (another group
+    size, sub-step count or table step: seed 4241 [15]) without the document's table."""
+    from scenarios.scenes import get_scene
+    from scenarios.studies.trade.settings import settings
+
+    table = DOC[DOC.index("| setting | kind | wall [s]"):]
+    rows = [line.split(" | ")[:2] for line in table.split("\n\n")[0].splitlines()[2:]]
+    documented = [(name.lstrip("| "), kind) for name, kind in rows]
+    scene = get_scene("bench_circle_TCMDx")
+    assert [(s.name, s.kind) for s in settings()] == documented
+    assert all(s.build(scene) is not None for s in settings())
+    assert {s.name for s in settings(quick=True)} <= {name for name, _ in documented}

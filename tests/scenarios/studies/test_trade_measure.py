@@ -38,6 +38,23 @@ def test_the_energy_error_is_relative_to_the_references_energy():
     assert row["rms_err_m"] == pytest.approx(5e-3, rel=1e-12) and row["max_err_m"] == pytest.approx(5e-3, rel=1e-12)
 
 
+def test_a_run_that_stopped_early_is_compared_in_energy_over_the_time_both_ran():
+    """A run (2 ms) that stopped at 0.05 s against a reference to 0.1 s, 1 A in every drive: the
+    reference's 2 V per drive give 0.2 J up to 0.05 s; the run's drive 1 holds 2 V to 0.02 s then
+    3 V (0.04 + 0.09 J), drive 2 2 V (0.1 J): 0.23 J, energy_err = +0.15 over the common 0.05 s.
+    Catches the energy taken over another span than the shorter run's (its first interval, or
+    the reference's whole 0.1 s: seed 4241 [24])."""
+    scene = get_scene("bench_circle_TCMDx")
+    t_ref, t_run = np.arange(101) * 1e-3, np.arange(26) * 2e-3
+    reference = _Run(t_ref, {"plant.x": np.zeros(101), "plant.y": np.zeros(101)},
+                     columns={"i1": np.ones(101), "i2": np.ones(101), "v1": np.full(101, 2.0), "v2": np.full(101, 2.0)})
+    signals = {"plant.x": np.zeros(26), "plant.y": np.zeros(26)}
+    for name, value in (("i1", np.ones(26)), ("i2", np.ones(26)), ("v1", np.where(t_run <= 0.02 + 1e-12, 2.0, 3.0)),
+                        ("v2", np.full(26, 2.0))):
+        signals[scene.columns[name]] = value
+    assert measure(_Run(t_run, signals), reference, scene)["energy_err"] == pytest.approx(0.15, rel=1e-12)
+
+
 def test_the_energy_is_the_integral_of_both_drives_power_with_the_voltage_held_over_each_interval():
     """Drive 1: 2 V on a current ramp 0.5 + 3 t A over 0.2 s (trapezoids are exact on a ramp):
     2 (0.5 * 0.2 + 3 * 0.2² / 2) = 0.32 J.  Drive 2: 1 A with the voltage recorded 1 V, then
@@ -78,6 +95,18 @@ def test_the_no_quantisation_study_sweeps_the_coupling_settings_against_a_2_30_c
                                                 "drives in plant, substeps=2", "drives in plant, substeps=4",
                                                 "drives in plant, substeps=8"]
     assert all(r["enc_diff"] == "" and np.isnan(r["enc_first_s"]) for r in rows) and len(rows) == 8
+    # the defaults are the fine-encoder scene itself, described by its encoder; every setting is
+    # described in words and built by a function of the scene (seed 3901 [85]: the two swapped)
+    defaults = seen["chosen"][0]
+    assert defaults.what == f"encoder 2^{module.FINE_ENCODER.bit_length() - 1} counts"
+    assert defaults.build(seen["scene"]) is seen["scene"]
+    assert all(isinstance(s.what, str) and callable(s.build) and s.kind == "accuracy" for s in seen["chosen"])
+    for setting, n in zip(seen["chosen"][1:5], (4, 16, 32, 64)):     # "drives + plant at 1/n ms"
+        steps = {c.name: c.substeps for c in setting.build(seen["scene"]).system.components}
+        assert steps["drive1"] == steps["drive2"] == steps["plant"] == n and steps["ctrl"] == 1, setting.name
+    for setting, n in zip(seen["chosen"][5:], (2, 4, 8)):             # "RK4 n steps per 1 ms" in the plant
+        plant = setting.build(seen["scene"]).system.component("plant")
+        assert plant.model == "ActuatedFiveBarPlant" and plant.parameters["substeps"] == n, setting.name
     assert rows[0]["pareto"] is True and rows[0]["gain"] == 1.0
     assert said == [f"no-quantisation study: reference of bench_circle_TCMDx with {2 ** 30} encoder counts ..."]
     assert module._noquant(get_scene("thesis_sim_circle"), 3, said.append) == []

@@ -68,7 +68,7 @@ def test_the_table_gives_each_rows_base_and_raised_metrics_to_their_digits():
 
 def test_the_command_passes_its_options_to_margin_and_prints_the_table(monkeypatch, capsys):
     """Catches --kind, --extra, --delays or --fc-vel not reaching ``margin`` or reaching another
-    parameter, and the table rendered with another step."""
+    parameter, the table rendered with another step, and its last line without a newline."""
     asked = []
     rows = [{"delay": 1, "strategy": "PDq", "lam": 35.0,
              "base": {"e_ef_mm": 1.0, "tau_ef_Nm": 0.1, "e_max_mm": 2.0, "v_peak": 3.0},
@@ -76,7 +76,10 @@ def test_the_command_passes_its_options_to_margin_and_prints_the_table(monkeypat
     monkeypatch.setattr(twin_margin, "margin", lambda *a, **kw: asked.append((a, kw)) or rows)
     assert twin_margin.main(["--kind", "triangle", "--extra", "2.5", "--delays", "1", "6", "--fc-vel", "40"]) == 0
     assert asked == [(("triangle", 2.5, [1, 6]), {"fc_vel": 40.0})]
-    assert capsys.readouterr().out == twin_margin.render(rows, 2.5)
+    out = capsys.readouterr().out
+    assert out == twin_margin.render(rows, 2.5)
+    # printed with end="": the table itself ends its last row, so the shell's prompt starts a line
+    assert out.endswith(" |\n") and out.count("\n") == 3
     asked.clear()
     twin_margin.main([])
     assert asked == [(("circle", twin_margin.THESIS_LAMBDA_STEP, [twin_margin.DELAY_STEPS]), {"fc_vel": None})]

@@ -103,7 +103,9 @@ def test_the_figure_and_json_of_a_spec_and_a_serial_spec_refused(tmp_path, monke
     another step; a serial spec refused naming its file."""
     monkeypatch.setattr(ws_spec, "SPEC_GRID", 11)
     report = ws_spec.plot_spec_slice("bench_5r", tmp_path, BAND)
-    data = json.loads((tmp_path / "workspace.json").read_text())
+    text = (tmp_path / "workspace.json").read_text()
+    data = json.loads(text)
+    assert text == json.dumps(data, indent=2) + "\n"          # the results' JSON form: indented, a final newline
     assert (tmp_path / "workspace.png").stat().st_size > 0 and report.png == tmp_path / "workspace.png"
     spec = plant_spec.load("bench_5r")
     ws, _, _ = ws_spec.slice_map(spec, BAND)
@@ -122,3 +124,30 @@ def test_the_figure_and_json_of_a_spec_and_a_serial_spec_refused(tmp_path, monke
         np.testing.assert_array_equal(check.y, path[:, 1])
     with pytest.raises(ValueError, match=r"rr\.toml: a serial chain \(no \[platform\]\) has no parallel workspace"):
         ws_spec.plot_spec_slice("rr", tmp_path, BAND)
+
+
+def test_each_trajectory_point_takes_the_status_and_margin_of_its_nearest_grid_point_edges_included():
+    """``_check_on_grid`` on a 4 x 3 map made up here, every node's status and margin its own: a
+    path sampled at 1 ms through the map's four corners and beyond each edge takes the nearest
+    node's (found here by argmin of the distances; a point beyond an edge takes the edge's node).
+    The edge rows and columns differ from their neighbours.  Catches the last row or column
+    never looked up (an index clipped one short, seed 3901 [198]), the axes swapped, and a
+    wrong nearest node."""
+    xs, ys = np.array([0.0, 0.01, 0.02, 0.03]), np.array([0.1, 0.11, 0.12])
+    O, I, B = fivebar.WorkspaceMap.OUTSIDE, fivebar.WorkspaceMap.INSIDE, fivebar.WorkspaceMap.NEAR_SINGULAR
+    status = np.array([[B, I, I, O],
+                       [I, I, I, B],
+                       [O, B, I, B]])
+    margin = np.where(status == O, np.nan, 0.1 * np.arange(1, 13).reshape(3, 4))
+    ws = fivebar.WorkspaceMap(xs, ys, margin, status)
+    path = [(-0.005, 0.095), (0.0, 0.12), (0.031, 0.1249), (0.04, 0.099), (0.0149, 0.1149), (0.026, 0.2),
+            (0.019, 0.09)]
+    check = ws_spec._check_on_grid(ws, "made up", lambda t: path[int(round(t / 1e-3))] + (0.0,), 6e-3)
+    near = [(int(np.argmin(np.abs(ys - min(max(y, ys[0]), ys[-1])))),
+             int(np.argmin(np.abs(xs - min(max(x, xs[0]), xs[-1]))))) for x, y in path]
+    assert np.array_equal(check.x, [x for x, _ in path]) and np.array_equal(check.y, [y for _, y in path])
+    expected = {kind: [k for k, (iy, ix) in enumerate(near) if status[iy, ix] == code]
+                for kind, code in ((ws_spec.OUTSIDE, O), (ws_spec.BAND, B))}
+    assert {k: v.tolist() for k, v in check.refused.items()} == expected
+    assert expected[ws_spec.OUTSIDE] == [1, 3] and expected[ws_spec.BAND] == [0, 2, 5]      # by hand: the corners
+    assert check.min_margin == min(margin[iy, ix] for iy, ix in near if not np.isnan(margin[iy, ix]))
