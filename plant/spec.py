@@ -347,7 +347,9 @@ class _Reader:
                 self.fail(ppath, point, "must be a table")
             self.known(point, _POINT_KEYS, ppath)
             link = with_point_mass(link, self.number(point, "mass", ppath, minimum=0.0), self.vector(point, "at", ppath))
-        name = table.get("name", f"{_dotted(path)}")
+        if "name" not in table:     # the joint's outputs are named by it: no name can stand in
+            self.fail(path + ("name",), None, "missing (required): the joint's output name")
+        name = table["name"]
         if not (isinstance(name, str) and re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name)):
             self.fail(path + ("name",), name, "must be an identifier (letters, digits, _)")
         actuated = table.get("actuated", False)

@@ -132,6 +132,7 @@ mass = 0.2
     ('name = "c"', 'name = "c"\nrotation = [[1, 0, 0], [0, 1, 0], [0, 0, 2]]', 6, "chains[0].rotation", "2"),
     ('name = "q2"', 'name = "q1"', 14, "chains[0].links[1].name", "q1"),
     ('name = "q2"', 'name = "2x"', 14, "chains[0].links[1].name", "2x"),
+    ('name = "q2"\n', '', 13, "chains[0].links[1].name", "= None: missing (required)"),   # was refused as a path
     ("mass = 0.2", "mass = 0.2\n\n[[chains.links.point_masses]]\nat = [0.0, 0.0, 0.1]", 18,
      "chains[0].links[1].point_masses[0].mass", "= None: missing (required)"),    # no value: None, not 0
     ('joint', 'joint', None, "", ""),   # unchanged: loads
