@@ -31,7 +31,8 @@ class TrajectoryCheck:
 
     def summary(self) -> dict:
         first = min((int(i[0]) for i in self.refused.values() if len(i)), default=None)
-        return {"name": self.name, "min_margin": self.min_margin,
+        margin = float(self.min_margin)     # inf (or nan) when no sample lies inside: JSON has no such number
+        return {"name": self.name, "min_margin": margin if math.isfinite(margin) else None,
                 "refused_samples": {r: int(len(i)) for r, i in self.refused.items() if len(i)},
                 "first_refusal_s": None if first is None else first * self.sample_time}
 
@@ -52,7 +53,8 @@ class WorkspaceReport:
             verdict = ("accepted" if not s["refused_samples"] else
                        "REFUSED from t = {:.3f} s: {}".format(s["first_refusal_s"], ", ".join(
                            f"{n} samples {r}" for r, n in s["refused_samples"].items())))
-            lines.append(f"  {t.name}: min singularity margin {s['min_margin']:.3f} (band {self.band:g}); {verdict}")
+            margin = "none (no sample inside)" if s["min_margin"] is None else f"{s['min_margin']:.3f}"
+            lines.append(f"  {t.name}: min singularity margin {margin} (band {self.band:g}); {verdict}")
         return "\n".join(lines)
 
 

@@ -151,3 +151,20 @@ def test_each_sample_is_refused_for_the_first_reason_that_holds_the_tables_edges
     assert wanted[figure.TABLE] == [5, 6, 7, 8] and wanted[figure.OUTSIDE] == [9] and wanted[figure.BAND] == [10]
     assert {r: i.tolist() for r, i in check.refused.items()} == wanted
     assert check.min_margin == min(margins)
+
+
+def test_a_trajectory_wholly_outside_the_workspace_is_written_as_strict_json_with_no_margin(tmp_path):
+    """A circle far beyond the 5R's reach has no sample with a singularity margin: workspace.json
+    says null (strict JSON: no Infinity or NaN, which other parsers refuse) and the printed summary
+    says none, while a circle inside keeps its finite margin.  Catches the margin's default (inf)
+    written as it is."""
+    report = plot.plot_workspace("bench", tmp_path, step=0.01, circles=[(1.0, 1.0, 0.01), (0.0, 0.2, 0.03)])
+
+    def refuse(constant):
+        raise ValueError(f"not JSON: {constant}")
+
+    written = json.loads((tmp_path / "workspace.json").read_text(), parse_constant=refuse)
+    margins = {t["name"]: t["min_margin"] for t in written["trajectories"]}
+    assert margins["circle (1, 1) r 0.01"] is None
+    assert margins["circle (0, 0.2) r 0.03"] > 0.0
+    assert "circle (1, 1) r 0.01: min singularity margin none (no sample inside)" in report.summary()
