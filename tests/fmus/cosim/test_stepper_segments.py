@@ -169,3 +169,34 @@ def test_a_slave_of_another_class_steps_in_python_between_segments():
         python.step()
         assert stepper.row() == python.row()
     assert len(steps) == 20 and len(stepper._kernels.segments) == 2
+
+
+def _python_class(stepper, name):
+    """``name``'s slave made an instance of a subclass of its model: not parcosim's own class,
+    so it keeps its Python step and ends the segment before it."""
+    slave = stepper.instances[name].slave
+    slave.__class__ = type(f"User{type(slave).__name__}", (type(slave),), {})
+
+
+def test_a_decline_by_the_first_member_of_a_segment_is_taken_in_python():
+    # The controller's table covers only x <= 0.02 m: elsewhere its kernel declines the sample.
+    # The derivator, stepped before it, is made a user's class: the segment starts at the
+    # controller, so its declines come from member 0 of the segment.
+    """Catches a decline by the segment's first member (index 0) taken for "nothing declined":
+    the controller's sample and the rest of the step skipped (training seed 4213 [19])."""
+    system = replace(get_scene("bench_circle_TCx").system, stop_time=1.2)
+    system = replace(system, components=tuple(
+        replace(c, parameters={**c.parameters, "x_max": 0.02}) if c.name == "ctrl" else c for c in system.components))
+    fast, slow = _stepper(system, kernels=True), _stepper(system, kernels=False)
+    assert fast.order[:2] == ("deriv", "ctrl")
+    _python_class(fast, "deriv")
+    _python_class(slow, "deriv")
+    declined = 0
+    for k in range(system.steps):
+        fast.step()
+        slow.step()
+        assert fast.row() == slow.row(), f"step {k + 1}"
+        segment = fast._kernels.segments[0]
+        declined += segment._call.stop.member == 0
+    assert segment.positions[0] == (fast.order.index("ctrl"), 0)
+    assert declined > 10   # the first member did decline, many times
