@@ -157,3 +157,23 @@ def test_a_step_size_a_component_refuses_falls_back_with_the_words_of_its_refusa
     assert words.startswith("step size h = 0.001 s at t = 0.0 s does not divide the sample time T = 0.0015 s; ")
     assert fast.mode == "inprocess" and fast.extra["fallback"] == f"component ctrl: {words}"
     assert fast.error == inproc.error and fast.error.instance == "ctrl"
+
+
+def test_compiled_mode_refuses_a_last_communication_point_beyond_the_slaves_latest_time():
+    """Catches the compiled check reading the stop time alone, or the step alone (seed 4001's
+    survivor [95], ``stop_time + step`` cut to ``step``): the last communication point is
+    stop_time + step, and a slave refuses any t + h beyond MAX_TIME, so the loop may start
+    only when that point fits (fmus.slave.base.MAX_TIME)."""
+    from fmus.cosim import compiled
+    from fmus.slave.base import MAX_TIME
+
+    system = _system()
+    h = system.step
+    # stop time within MAX_TIME but its last point beyond it: refused, naming the stop time
+    for stop in (MAX_TIME, MAX_TIME - h / 2):
+        with pytest.raises(compiled.NotCompilable, match=rf"stop time {stop!r} s is beyond 1e\+09 s"):
+            compiled.check_compilable(replace(system, stop_time=stop), "gauss-seidel", None)
+    # the last point on MAX_TIME itself, and any earlier one, compile
+    for stop in (MAX_TIME - 4 * h, 0.02):
+        assert stop + h <= MAX_TIME
+        compiled.check_compilable(replace(system, stop_time=stop), "gauss-seidel", None)

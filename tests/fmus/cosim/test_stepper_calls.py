@@ -98,3 +98,22 @@ def test_a_step_that_returns_false_raises_the_instances_own_refusal():
     with pytest.raises(CoSimulationError) as caught:
         _run(calls, [0.0], 0.3)
     assert caught.value.run_error == RunError(RunStatus.REFUSED, "own", "drive", 0.3)
+
+
+def test_a_step_refused_in_a_later_sub_step_is_reported_at_that_sub_steps_time():
+    """Four sub-steps of 0.1 s from t = 1.0: the second (from 1.1) refused names 1.1, as the
+    exception's report does, and the sub-steps after it are not taken.  Catches the refusal's
+    time taken at the step's start or with the offset subtracted (seed 4001's survivor [7],
+    ``t - offset``: 0.9)."""
+    inst = _Plain("drive", [1.0])
+    steps = []
+
+    def refusing(t, h):
+        steps.append((t, h))
+        return False if len(steps) == 2 else None
+
+    calls = [call._replace(step=refusing) for call in _program([(inst, (), (0,))], substeps=4, h=0.4)]
+    with pytest.raises(CoSimulationError) as caught:
+        _run(calls, [0.0], 1.0)
+    assert steps == [(1.0, 0.1), (1.1, 0.1)]
+    assert caught.value.time == 1.1 and caught.value.run_error == RunError(RunStatus.REFUSED, "own", "drive", 1.1)

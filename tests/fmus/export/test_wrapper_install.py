@@ -76,6 +76,29 @@ def test_the_wrapper_goes_in_as_the_executable_binary_of_the_identifier_with_the
     assert has_wrapper(fmu)
 
 
+
+def test_the_wrapper_entry_is_dated_at_a_fixed_midnight_whenever_it_is_installed(tmp_path, monkeypatch):
+    """The binary's zip entry does not carry the install time: installed at two different
+    clock times, the two entries are the same to the byte in date and content, dated
+    2020-01-01 00:00:00 (exactly: the zip's 2-second resolution keeps a midnight as it is).
+    Catches the date taken from the clock, or any field of the fixed date changed (seed 4001's
+    survivor [29], the hour 0 made 1)."""
+    import time
+
+    stand_in = tmp_path / "wrapper.so"
+    stand_in.write_bytes(b"\x7fELF..." + VERSION_SYMBOL.encode())
+    monkeypatch.setattr(wrapper, "compiled_wrapper", lambda quiet=False: stand_in)
+    entries = []
+    for k, now in enumerate((1.0e9, 1.7e9 + 3601.0)):
+        monkeypatch.setattr(time, "time", lambda now=now: now)
+        fmu = fake_fmu(tmp_path / f"Drive{k}.fmu", "Ident")
+        install_wrapper(fmu)
+        with zipfile.ZipFile(fmu) as z:
+            info = z.getinfo(f"binaries/{PLATFORM}/Ident.so")
+            entries.append((info.date_time, info.external_attr, z.read(info)))
+    assert entries[0] == entries[1]
+    assert entries[0][0] == (2020, 1, 1, 0, 0, 0)
+
 def test_without_a_compiler_only_the_identity_goes_in(tmp_path, monkeypatch):
     """Catches a binary written (or an error) when there is no wrapper to install, the
     identity then left out, and the answer (False) wrong; a binary that is not the wrapper

@@ -189,3 +189,58 @@ def test_every_op_of_a_case_is_the_fmi_call_it_names_with_its_own_arguments(monk
         "terminate", "freeInstance"]
     assert runner.problems == ["doStep before initialisation returned fmi2OK",
                                "enterInitializationMode in Step Mode returned OK, not fmi2Error"]
+
+
+class GuidCheckingFMU(MadeUpFMU):
+    """A made-up FMU that, as fmi2Instantiate must, refuses (fmpy raises) a GUID that is not
+    its model description's ``{g}``; it records the GUID it was given."""
+
+    given = []
+
+    def __init__(self, guid=None, **kwargs):
+        super().__init__(**kwargs)
+        self.guid = guid
+        GuidCheckingFMU.given.append(guid)
+
+    def instantiate(self, **kwargs):
+        if self.guid != "{g}":
+            raise Exception("Failed to instantiate model")      # fmpy's words for a NULL instance
+
+
+@pytest.mark.parametrize("guid", [None, "own", "wrong"])
+def test_a_case_instantiates_with_the_fmus_own_guid_unless_it_asks_for_another(monkeypatch, guid):
+    """A case without a "guid" (the cases of before the lifecycle kind) or with "own" gets the
+    model description's GUID and runs; "wrong" gets one that is not the FMU's, whose refusal is
+    the expected answer.  Catches the default read from the wrong key (seed 4001's survivor
+    [137], ``case.get("own", "guid")``: every case then instantiated with a foreign GUID)."""
+    monkeypatch.setattr(worker, "FMU2Slave", GuidCheckingFMU)
+    monkeypatch.setattr(GuidCheckingFMU, "given", [])
+    md = SimpleNamespace(guid="{g}", coSimulation=SimpleNamespace(modelIdentifier="M"), modelVariables=VARIABLES)
+    case = {"model": "M", "instance_name": "inst", "logging": False, "start_time": 0.25, "ops": [["step", None, 1e-3]],
+            "parameters": []}
+    if guid is not None:
+        case["guid"] = guid
+    runner = worker.Runner(case, "unused", md)
+    runner.run()
+    assert runner.problems == []
+    if guid == "wrong":
+        assert GuidCheckingFMU.given != ["{g}"] and len(GuidCheckingFMU.given) == 1
+        assert runner.refused and runner.statuses == [["instantiate (another GUID)", "Error"]]
+    else:
+        assert GuidCheckingFMU.given == ["{g}"] and not runner.refused
+        assert runner.statuses[0][0] == "instantiate" and runner.fmu.steps == [(0.25, 1e-3)]
+
+
+def test_a_refusal_message_names_something_by_a_variable_an_assignment_or_a_time(monkeypatch):
+    """A refused step's message that names none of the FMU's variables is enough when it
+    assigns a value (" = ") or names the time ("t = "); one that does neither names nothing.
+    Catches the assignment's test inverted (seed 4001's survivor [269]: every tested message
+    named a variable, so the other two ways were never tried)."""
+    ops = [["step", None, 1e-3], ["step", None, 1e-3]]
+    label = "doStep(0.251, 0.001)"
+    for message, named in (("speed = 3 rad/s is too high", True), ("it failed badly", False),
+                           ("refused at t = 0.251 s", True)):
+        assert not any(name in message for name in ("x", "k", "error", "refusal")), message
+        record = RunError(RunStatus.REFUSED, message, instance="inst", time=0.251).to_json()
+        problems = _run(monkeypatch, ops, fmu=_refusing(message, record)).problems
+        assert problems == ([] if named else [f"the refused {label} left error = {message!r}, naming nothing"]), message

@@ -128,3 +128,28 @@ def test_fmu_runs_in_a_process_without_parcosim(built_fmus, tmp_path):
                           timeout=300)
     assert done.returncode == 0, done.stderr[-2000:]
     assert 0.069 < float(done.stdout.split()[-1]) < 0.071
+
+
+@pytest.mark.parametrize("inside_a_system", [False, True], ids=["alone", "in_a_budget"])
+@pytest.mark.parametrize("idle", [1, 2])
+def test_idle_steps_hold_zero_torques_for_that_many_steps_then_the_inputs_again(idle, inside_a_system):
+    """A model of the plant inside a controller (ChainCore's zero start) is made idle for
+    ``idle`` steps: those steps are a twin's steps at zero torques, bit for bit, whatever its
+    inputs say, then the count is spent and the inputs act again.  Catches the count not
+    counting down (seed 4001's survivor [166], ``idle_steps += 1``: idle for ever), and the
+    budgeted path (inside a system FMU) ignoring idleness."""
+    import contextlib
+
+    from fmus.slave import budget
+    from tests.fmus.slave.test_extremes import make_slave
+
+    model, twin = make_slave("FiveBarPlant"), make_slave("FiveBarPlant")
+    h = 1e-3
+    model.idle_steps = idle
+    with budget.call_budget() if inside_a_system else contextlib.nullcontext():
+        for k in range(idle + 2):
+            model.tau1, model.tau2 = torques(k * h)
+            twin.tau1, twin.tau2 = (0.0, 0.0) if k < idle else torques(k * h)
+            assert model.do_step(k * h, h) is not False and twin.do_step(k * h, h) is not False
+            assert model.idle_steps == max(idle - k - 1, 0)
+            assert np.array_equal(model.sim.y, twin.sim.y), k

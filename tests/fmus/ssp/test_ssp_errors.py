@@ -163,3 +163,13 @@ def test_a_system_fmus_inner_component_follows_the_tools_instance_name():
     assert tool_refusal("chain", 0.0, atomic.to_json(), "").instance == "chain"
     foreign = tool_refusal(None, 0.003, "", "  Step not complete ")
     assert (foreign.instance, foreign.time, foreign.message, foreign.code) == (None, 0.003, "Step not complete", None)
+
+
+def test_only_a_dot_after_the_tools_instance_name_starts_an_inner_component():
+    """A record of an instance whose name merely begins with the FMU's ("chain2" under "chain",
+    "chain.fmux" under the path "chain.fmu") is no inner component of it: the error is the
+    package's component alone.  Catches the separator dropped from the prefix test (seed 4001's
+    survivor [267], ``named + "."`` -> ``named``: "chain" + "2")."""
+    for named, recorded in (("chain", "chain2"), ("/tmp/u/resources/chain.fmu", "/tmp/u/resources/chain.fmux")):
+        record = RunError(RunStatus.REFUSED, "x0 = 5.0 out of reach", instance=recorded, time=0.0)
+        assert tool_refusal("chain", 0.0, record.to_json(), "", named=named).instance == "chain"
