@@ -224,6 +224,8 @@ class Drive:
     def restore_controller_state(self, state) -> None:
         """Go back to ``state`` of :meth:`controller_state` (in place: the controller shares its array)."""
         self.buf[:], self._controller_buf[:] = state
+        if not self.buf[_D["h"]] == self._h:    # a state of another step length, or of none (NaN):
+            self._h = None                      # the next prepare_step computes its coefficients again
 
     def prepare_step(self, h):
         """Check the step length h and compute its coefficients (kept until h changes).

@@ -52,3 +52,17 @@ def test_longer_buffers_are_read_only_up_to_their_sizes(controller):
     assert fastbalance.sample(long_buf, long_x, T, 1e6, kernels.Refusal()) == code == fastbalance.OK
     assert np.array_equal(long_x[:fastbalance.IO_SIZE], x) and np.array_equal(long_buf[:fastbalance.BUF_SIZE], buf)
     assert np.isnan(long_x[-2]) and long_x[-1] == -1e300 and np.isnan(long_buf[-2]) and long_buf[-1] == 1e300
+
+
+def test_only_the_inputs_are_checked_and_read_the_output_slots_are_written_whatever_they_held(controller):
+    """The I/O array holds the inputs, then the outputs: what the output slots hold before a
+    sample (NaN, beyond the input limit: an FMU's starts, the last sample's values) is neither
+    checked nor read, and each is overwritten with what the sample of zeroed slots writes.
+    Catches an input check that runs one word past the inputs."""
+    buf, x = _buffers(controller)
+    assert fastbalance.sample(buf, x, T, 1.0, kernels.Refusal()) == fastbalance.OK
+    for held in (np.nan, 2.0, -np.inf):
+        other_buf, other_x = _buffers(controller)
+        other_x[len(fastbalance.INPUTS):] = held
+        assert fastbalance.sample(other_buf, other_x, T, 1.0, kernels.Refusal()) == fastbalance.OK, held
+        assert np.array_equal(other_x, x, equal_nan=True) and np.array_equal(other_buf, buf, equal_nan=True)

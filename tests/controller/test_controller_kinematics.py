@@ -88,3 +88,31 @@ def _elbow_distance(kin, q1, q2):
     e1 = (kin.l0 + kin.l11 * math.cos(q1), kin.l11 * math.sin(q1))
     e2 = (-kin.l0 + kin.l21 * math.cos(q2), kin.l21 * math.sin(q2))
     return math.hypot(e1[0] - e2[0], e1[1] - e2[1])
+
+
+def _one_chain_folded(chain: int):
+    """The bench with l0 = 1/4 m, the chain ``chain`` (1 or 2) of two 1/4 m links and the other of
+    two 0.3 m links: the tip at that chain's base, (l0, 0) for chain 1 or (-l0, 0) for chain 2,
+    folds it (its J_Theta entry (x -+ l0) sin q - y cos q is 0 exactly) while the other chain,
+    its base 0.5 m away, is bent (sin q != 0)."""
+    from dataclasses import replace
+
+    bench = get_preset("bench")
+    folded, bent = replace(bench.chain1, l1=0.25, l2=0.25), replace(bench.chain1, l1=0.3, l2=0.3)
+    chains = (folded, bent) if chain == 1 else (bent, folded)
+    return Kinematics(replace(bench, l0=0.25, chain1=chains[0], chain2=chains[1]))
+
+
+@pytest.mark.parametrize("chain, x", [(1, 0.25), (2, -0.25)])
+def test_joint_reference_refuses_a_pose_where_one_chain_alone_is_folded(chain, x):
+    """One chain folded (J_Theta's entry of that chain 0, the other's not) is as singular as both:
+    dq of that joint would be a division by zero.  Catches a singularity check of the one
+    entry that misses its zero (the bend test of the other chain alone refusing)."""
+    kin = _one_chain_folded(chain)
+    angles = kin.inverse(x, 0.0)
+    *_, t1, t2 = kin.jacobians(x, 0.0, angles[0], angles[2])
+    assert (t1, t2)[chain - 1] == 0.0 and (t1, t2)[2 - chain] != 0.0
+    with pytest.raises(fivebar.KinematicsError, match="a chain is stretched or folded"):
+        kin.joint_reference(x, 0.0, 0.1, 0.05, 0.0, 0.0)
+    # off the fold, a finite reference
+    assert np.isfinite(kin.joint_reference(x, 0.01, 0.1, 0.05, 0.0, 0.0)).all()

@@ -73,3 +73,17 @@ def test_the_delays_at_another_sample_time_give_a_polynomials_derivatives(T):
         else:
             np.testing.assert_allclose(a[late], 2 * c2 + 6 * c3 * (t[late] - derivator.acceleration_delay),
                                        rtol=0, atol=1e-6)
+
+
+@pytest.mark.parametrize("fc_vel, fc_acc, T", [(30.0, 7.0, 1e-3), (70.0, 40.0, 2e-3)])
+def test_a_derivators_filters_are_the_designs_of_its_own_cutoffs_and_sample_time(fc_vel, fc_acc, T):
+    """The velocity filter is the order-2 Bessel design at (fc_vel, T), the acceleration filter
+    the order-8 one at (fc_acc, T), bit for bit, and the delays follow from them (the
+    buffer's sections read back the same).  At 100 Hz and 1 ms the design is symmetric in
+    fc and T to the last bit, so cut-offs and times off the defaults.  Catches the cut-off
+    and the sample time passed in each other's place, or one filter's cut-off in the other's."""
+    d = Derivator(fc_vel=fc_vel, fc_acc=fc_acc, T=T)
+    velocity, acceleration = bessel_lowpass_sos(2, fc_vel, T), bessel_lowpass_sos(8, fc_acc, T)
+    assert np.array_equal(d.velocity_sos, velocity) and np.array_equal(d.acceleration_sos, acceleration)
+    assert d.velocity_delay == T / 2 + dc_group_delay(velocity, T)
+    assert d.acceleration_delay == T + dc_group_delay(velocity, T) + dc_group_delay(acceleration, T)

@@ -5,6 +5,7 @@ chain's angles equal or opposite); a little past it, it is refused with the dist
 from __future__ import annotations
 
 import ctypes
+import math
 
 import pytest
 
@@ -57,3 +58,15 @@ def test_a_chain_reaches_a_point_exactly_stretched_or_folded(px, stretched):
     assert chain_ik(0.25, 0.125, beyond, 0.0, 1.0, ctypes.byref(phi1), ctypes.byref(phi2),
                         ctypes.byref(distance)) == k5r.OUT_OF_REACH
     assert distance.value == beyond
+
+
+def test_elbows_at_one_point_are_no_assembly_with_distance_zero():
+    """Both bases at the origin (l0 = 0), equal proximal links at one angle: the elbows coincide,
+    and with equal distal links every point of one circle is a tip; refused (NO_ASSEMBLY, the
+    elbows' distance 0), not a tip computed through 1 / 0.  Catches the coincidence test
+    dropped (the reach tests alone pass a distance of 0 between equal circles)."""
+    code, x, y, distance = _forward(k5r.Geometry(0.0, 0.25, 0.25, 0.25, 0.25), 0.3, 0.3)
+    assert (code, distance) == (k5r.NO_ASSEMBLY, 0.0)
+    code, x, y, distance = _forward(k5r.Geometry(0.0, 0.25, 0.25, 0.25, 0.25), 0.3, 0.3 + NUDGE)
+    # the elbows 2^-32 m apart: two circles that cross, a finite tip 1/4 m from the first elbow
+    assert code == k5r.OK and math.hypot(x - 0.25 * math.cos(0.3), y - 0.25 * math.sin(0.3)) == pytest.approx(0.25)

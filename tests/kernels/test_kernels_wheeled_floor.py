@@ -49,3 +49,24 @@ def test_the_kernel_calls_it_a_fall_exactly_when_a_corner_reaches_the_floor(D):
             assert code == K.OK, psi
         else:
             assert (code, refusal.value) == (K.FALLEN_FLOOR, psi)
+
+
+def test_a_fall_to_the_floor_is_refused_word_for_word_with_its_unit():
+    """The kernel's FALLEN_FLOOR at a tilt below the touching one, through plant.wheeled's
+    refusal_error: a FallenError naming psi in rad, the reason fallen_floor, and the message
+    written here (the fall, the time, the pitch in degrees at the last good state).  Catches
+    the reason's unit and text exchanged, or another fall's words."""
+    from plant.wheeled import FallenError, refusal_error
+
+    p = SEED.with_(D=0.2)
+    prm, y = pack(p), np.zeros(K.N_STATE)
+    y[K.PSI] = math.asin(p.R / (p.D / 2)) + 1e-6
+    refusal = kernels.Refusal()
+    assert K.condition(prm, y, refusal) == K.FALLEN_FLOOR
+    error = refusal_error(refusal, 0.125, 0.5)
+    assert isinstance(error, FallenError)
+    record = error.record()
+    assert (record["variable"], record["unit"], record["reason"], record["time"]) == ("psi", "rad", "fallen_floor",
+                                                                                        0.125)
+    assert str(error) == ("the robot fell over (body touching the floor) at t = 0.125 s: psi = "
+                          f"{math.degrees(0.5):.4g} deg at the last good state")

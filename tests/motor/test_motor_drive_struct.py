@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from motor import Drive, kernel, motor1, motor2
@@ -64,3 +65,20 @@ def test_the_controllers_struct_holds_its_design_and_restarts_saturated_with_zer
     idle = CurrentController.idle_buffer(7.5)
     assert idle[CONTROLLER["v_max"]] == 7.5
     assert all(idle[CONTROLLER[name]] == 0.0 for name in ("alpha", "beta", "gamma", "delta", "u1", "u2", "e1", "e2"))
+
+
+@pytest.mark.parametrize("mode", ["current", "voltage"])
+def test_a_sample_undone_by_restoring_the_state_is_taken_again_the_same(mode):
+    """A plant that samples the voltages and then refuses its step puts the drives back
+    (``restore_controller_state``) and retries.  Undone on a drive's first step (no step length
+    prepared in the state restored) and on a step that changed h, the same sample again gives
+    the same voltage and buffers as the first time.  Catches a drive whose kept step length
+    says "prepared" while its restored buffer is not (the sample then refused, for ever)."""
+    drive, twin = Drive(motor1, mode=mode), Drive(motor1, mode=mode)
+    for h in (1e-3, 5e-4):          # the first step, then one that changes h (at a period start: T = 1 ms)
+        kept = drive.controller_state()
+        first = drive.sample_voltage(0.5, 1.0, 0.1, h)
+        drive.restore_controller_state(kept)
+        assert drive.sample_voltage(0.5, 1.0, 0.1, h) == first == twin.sample_voltage(0.5, 1.0, 0.1, h)
+        assert np.array_equal(drive.buf, twin.buf, equal_nan=True)
+        assert np.array_equal(drive._controller_buf, twin._controller_buf, equal_nan=True)

@@ -8,6 +8,7 @@ times the ODE's right-hand side was actually called, counted here around
 """
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from motor import Drive, get_motor_preset
@@ -69,3 +70,31 @@ def test_the_compiled_steps_return_what_the_python_rk4_calls(substeps):
         a = _actuated(settings)
         assert a.plant._fast is not None, "the bench preset runs the C kernel by default"
         assert _steps(a) == [per_step] * STEPS, settings
+
+
+def test_a_dopri5_step_stopped_at_its_work_limit_leaves_plant_and_controllers_as_they_were():
+    """dopri5 stopped by ``max_evaluations`` (7: one step's six stages and the first of the
+    next, with a tolerance that needs many) raises WorkLimitError after the drives sampled
+    their voltages: the plant's state and time and each drive's buffers (current,
+    voltage, controller) read back exactly as before, and the full step from there is the
+    step of a twin never stopped.  Catches the controllers not put back (or the snapshots
+    not taken when a limit is set)."""
+    from plant.integrators import WorkLimitError
+
+    settings = IntegratorSettings(method="dopri5", rtol=1e-12, atol=1e-15)
+    a, twin = _actuated(settings), _actuated(settings)
+    inputs = ((2.0, -1.5), [d.i for _, d in a.drives], (0.0, 0.0), 1e-3)
+    y, t = a.plant.y.copy(), a.plant.time
+    kept = [d.controller_state() for _, d in a.drives]
+    with pytest.raises(WorkLimitError):
+        a.step(*inputs, max_evaluations=7)
+    assert a.plant.y.tolist() == y.tolist() and a.plant.time == t
+    for (_, d), (buf, controller) in zip(a.drives, kept):
+        # (a buffer holds NaN where a value is not yet known: equal as NaN)
+        assert np.array_equal(d.buf, buf, equal_nan=True)
+        assert np.array_equal(d._controller_buf, controller, equal_nan=True)
+    a.step(*inputs)
+    twin.step(*inputs)
+    assert a.plant.y.tolist() == twin.plant.y.tolist()
+    for (_, d), (_, e) in zip(a.drives, twin.drives):
+        assert np.array_equal(d.buf, e.buf, equal_nan=True)

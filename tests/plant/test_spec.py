@@ -228,3 +228,28 @@ def test_repeated_independent_axes_are_refused_naming_the_entry():
     assert 'independent = ["x", "y"]' in text
     with pytest.raises(ValueError, match=r"platform\.independent.*distinct"):
         plant_spec.loads(text.replace('independent = ["x", "y"]', 'independent = ["x", "x"]'), source="b.toml")
+
+
+@pytest.mark.parametrize("new, why", [
+    ("mass = 0.0", None),                           # the bound itself: a massless link loads
+    ("mass = 0", None),                             # a TOML integer is a number
+    ("mass = -1e-300", "must be >= 0"),
+    ("mass = inf", "must be a finite number"),
+    ("mass = nan", "must be a finite number"),
+    ("mass = true", "must be a finite number"),     # a bool is not a number here
+    ("mass = 0.2\nrotor_inertia = -1e-9", "must be >= 0"),
+    ("mass = 0.2\nrotor_inertia = 0.0", None),
+    ("mass = 0.2\ngear_ratio = -2.0", None),        # a reversing gear: no bound
+])
+def test_a_number_is_refused_only_below_its_bound_or_when_not_finite(new, why):
+    """The bounds of the format's numbers at their edges: >= 0 admits 0 itself and refuses
+    the least negative value; inf, nan and a bool are not finite numbers; an unbounded key
+    (gear_ratio) takes a negative value.  Catches a bound shifted by the least step or
+    turned strict, a finiteness check that lets inf or nan through."""
+    text = GOOD.replace("mass = 0.2", new)
+    if why is None:
+        assert plant_spec.loads(text).chains[0].chain.dof == 2
+        return
+    with pytest.raises(plant_spec.SpecError, match=why) as info:
+        plant_spec.loads(text, source="t.toml")
+    assert info.value.key.startswith("chains[0].links[1].")
