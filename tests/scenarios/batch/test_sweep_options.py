@@ -113,3 +113,16 @@ def test_with_out_dir_the_summary_and_figure_are_written_and_listed(cluster, tmp
     quiet = run_sweep(SCENE, 2, 0.1, out_dir=tmp_path / "b", plots=False)
     assert quiet.files[-1] == tmp_path / "b" / "summary.md" and drawn == [out / "sweep.png"]
     assert not math.isnan(quiet.summary["e_ef_mm"]["mean"])
+
+
+def test_a_perturb_file_path_is_read_as_its_spec(cluster, tmp_path):
+    """``perturb`` given as a TOML file's path (what ``--perturb FILE`` passes): its uncertainty and
+    distribution are those of the file.  Catches the path not the one read (seed 4001 [258]:
+    ``load_perturb_file(on_row)``)."""
+    parameters = perturbable(get_scene(SCENE))
+    name = next(p.name for p in parameters if not p.follows)
+    path = tmp_path / "perturb.toml"
+    path.write_text(f'distribution = "normal"\n[uncertainty]\n"{name}" = 0.375\n', encoding="utf-8")
+    sweep = run_sweep(SCENE, 2, 0.1, seed=3, perturb=path)
+    assert sweep.settings["perturb"] == {name: 0.375} and sweep.settings["distribution"] == "normal"
+    assert _values(sweep, "normal", {name: 0.375}, seed=3)

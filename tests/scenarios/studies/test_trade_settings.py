@@ -49,6 +49,14 @@ def test_the_names_are_unique_and_the_quick_sweep_is_part_of_the_full_one():
     ("viscous b=1e-7", {"drive1": ({"b": 1e-7}, 1), "drive2": ({"b": 1e-7}, 1)}),
     ("no viscous friction", {"drive1": ({"b": 0.0, "b_design": 0.0001226}, 1),      # the controller keeps
                              "drive2": ({"b": 0.0, "b_design": 0.0002039}, 1)}),    # the motors' b (Table 16, 18)
+    # each value as the setting's name or text states it (siblings of seed 4001 [154])
+    ("plant dopri5 rtol=1e-6", {"plant": ({"method": "dopri5", "rtol": 1e-6, "atol": 1e-9}, 1)}),
+    ("plant baumgarte=0", {"plant": ({"baumgarte": 0.0}, 1)}),
+    ("plant project", {"plant": ({"project": True}, 1)}),
+    ("m0 = 0.05 kg", {"plant": ({"m0": 0.05}, 1)}),
+    ("vertical plane", {"plant": ({"gravity_y": -9.81}, 1)}),        # gravity (0, -9.81, 0) m/s²
+    ("model error 20 %", {"ctrl": ({"model_error": 0.20}, 1)}),
+    ("table 10 mm", {"ctrl": ({"grid_step": 0.010}, 1)}),
 ])
 def test_a_setting_changes_what_it_says_and_nothing_else(name, expected):
     """Catches a setting applied to the wrong component, its sub-steps given to the others,
@@ -81,3 +89,27 @@ def test_settings_that_do_not_apply_give_none():
         assert BY_NAME[name].build(thesis) is None, name
     assert BY_NAME["plant rk4 substeps=4"].build(thesis) is not None
     assert BY_NAME["jacobi"].coupling == "jacobi" and BY_NAME["fmu"].mode == "fmu"
+
+
+def test_the_quick_sweep_is_the_nine_settings_docs_trade_md_names_fidelity_switches_included():
+    """docs/trade.md, 'The quick variant': defaults, plant RK4 x4, drive Euler, group 4, torque
+    end, drives in plant x8, Jacobi, ideal actuators and no observer.  Catches the quick sweep
+    losing its fidelity settings (or gaining the full sweep's), seed 4001 [154]."""
+    quick = settings(quick=True)
+    assert [s.name for s in quick] == ["defaults", "plant rk4 substeps=4", "drive euler", "group 4", "torque end",
+                                       "drives in plant, substeps=8", "jacobi", "ideal actuators", "no observer"]
+    assert [s.kind for s in quick] == ["accuracy"] * 7 + ["fidelity"] * 2
+    # each quick setting is the full sweep's setting of that name: same kind, text and options
+    for s in quick:
+        full = BY_NAME[s.name]
+        assert (s.kind, s.what, s.mode, s.coupling) == (full.kind, full.what, full.mode, full.coupling), s.name
+        assert _differences(full.build(SCENE), s.build(SCENE)) == {}, s.name
+
+
+def test_the_fmu_variant_of_the_drives_in_plant_is_that_setting_through_fmus():
+    """'drives in plant, substeps=8, fmu' builds the scene 'drives in plant, substeps=8' builds and
+    runs it through the FMUs."""
+    fmu, plain = BY_NAME["drives in plant, substeps=8, fmu"], BY_NAME["drives in plant, substeps=8"]
+    assert (fmu.mode, plain.mode) == ("fmu", "inprocess") and fmu.coupling == plain.coupling
+    assert _differences(plain.build(SCENE), fmu.build(SCENE)) == {}
+    assert fmu.build(SCENE).system.component("plant").parameters["substeps"] == 8

@@ -1,6 +1,7 @@
 """The bench twin (scenarios.scenes.twin, scenarios.studies.twin_fit): its one parameter file, its scenes'
 effects, the same rows in every mode, stateless noise, and a fit that reads only the circle."""
 import math
+import time
 from dataclasses import replace
 
 import numpy as np
@@ -161,13 +162,16 @@ def test_the_fit_reads_only_the_circle_and_finds_the_global_minimum(monkeypatch,
     """The fit with the triangle's tables gone: it still runs (it never reads them) and runs
     only circle scenes.  The fake loss has a local dip at the start (friction_scale 1, 20 %
     off) and the true minimum at friction_scale 3.5: a descent from the start alone stays in
-    the dip, the screened starts find the minimum; the best point is written."""
+    the dip, the screened starts find the minimum; the best point is written.  Every run of the
+    screen and the descents is on the seeds given to the fit (training 4244 [3]: the point passed
+    as the seeds)."""
     monkeypatch.setattr(twin_fit, "THESIS_BENCH", {"circle": THESIS_BENCH["circle"]})
     monkeypatch.setattr(twin_fit, "THESIS_MD_CHANGE", {"circle": THESIS_MD_CHANGE["circle"]})
-    kinds = []
+    kinds, seeds_run = [], set()
 
     def fake_run(twin, kind, seeds, strategies=twin_fit.ORDER):
         kinds.append(kind)
+        seeds_run.add(tuple(seeds))
         scale = min(1.2 + abs(twin.friction_scale - 1.0), 1.0 + abs(twin.friction_scale - 3.5))
         return {s: {seed: {**m, "completed": True} for seed in seeds}
                 for s, m in _thesis_means("circle", scale).items()}
@@ -176,12 +180,19 @@ def test_the_fit_reads_only_the_circle_and_finds_the_global_minimum(monkeypatch,
     local = twin_fit.descend(twin_fit.START, maxfev=40, log=lambda line: None)[1]
     assert local.friction_scale == pytest.approx(1.0, abs=0.05)
     kinds.clear()
-    best = twin_fit.fit(points=16, starts=2, maxfev=40, workers=1, path=tmp_path / "fit.toml", log=lambda line: None)
-    assert set(kinds) == {"circle"}
+    seeds_run.clear()
+    began = time.perf_counter()
+    best = twin_fit.fit(points=16, starts=2, maxfev=40, seeds=(7, 8), workers=1, path=tmp_path / "fit.toml",
+                        log=lambda line: None)
+    took = time.perf_counter() - began
+    assert set(kinds) == {"circle"} and seeds_run == {(7, 8)}
     assert best.friction_scale == pytest.approx(3.5, abs=0.05)
     ends = twin_fit.descent_ends(read_fit(tmp_path / "fit.toml"))    # what the report's spread reruns
     assert len(ends) == 2 and min(ends, key=lambda end: end[0])[1] == best
     assert load_twin(tmp_path / "fit.toml") == best and read_fit(tmp_path / "fit.toml")["evaluations"] == len(kinds)
+    # the record: the seeds given, and the fit's wall time within the call's (rounded to 0.1 s; seed 4001 [277])
+    info = read_fit(tmp_path / "fit.toml")
+    assert info["seeds"] == [7, 8] and 0.0 <= info["wall_s"] <= took + 0.05
 
 
 def test_the_shipped_calibration_gives_the_reported_circle():

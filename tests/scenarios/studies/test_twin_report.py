@@ -43,6 +43,25 @@ def test_the_verdict_counts_the_strategies_within_30_and_50_percent_and_the_pair
     assert lines[3] == "- The sliding-mode term lowers the predicted triangle e_ef (seed mean) in 3 of 4 pairs."
 
 
+def test_the_verdicts_bands_are_closed_a_half_is_within_50_percent_and_a_tie_is_no_improvement():
+    """One seed, triangle e_ef exactly 0.5 (a power of two: the ratio is exactly 0.5) or 1.0 or
+    2.0 times the bench: |0.5 - 1| = 0.50 is within ±50 % (the band is closed), 2.0 is not; a
+    pair whose MD run ties its pure run does not lower e_ef.  (The ±30 % edge cannot be met by a
+    double: r - 1 is exact for r in [0.5, 2] and a multiple of 2^-53, the double 0.30 is not, so
+    its '<=' and '<' agree; seed 4001 [62].)"""
+    factor = {"PDq": 0.5, "PDMDq": 0.5, "TCq": 1.0, "TCMDq": 1.0, "PDx": 2.0, "PDMDx": 0.5, "TCx": 1.0, "TCMDx": 0.5}
+    runs = {kind: {s: {1: {"e_ef_mm": (factor[s] if kind == "triangle" else 1.0) * THESIS_BENCH[kind][s][0]}}
+                   for s in twin_fit.ORDER} for kind in ("circle", "triangle")}
+    assert all(runs["triangle"][s][1]["e_ef_mm"] / THESIS_BENCH["triangle"][s][0] == factor[s] for s in factor)
+    runs["triangle"]["PDMDq"] = runs["triangle"]["PDq"]     # a tie: 0.5 x 5.39 / 5.16 = 0.52, within ±50 %
+    lines = twin_fit._verdict(runs)
+    assert lines[2].startswith("- Predicted triangle e_ef within ±30 % of the bench: 3 of 8 (TCq, TCMDq, TCx); "
+                               "within ±50 %: 7 of 8; ratios PDq 0.50, PDMDq 0.52, TCq 1.00, TCMDq 1.00, PDx 2.00")
+    # MD lowers e_ef: not PDq -> PDMDq (tie); TCq -> TCMDq (the bench's 1.63 < 1.85), PDx -> PDMDx
+    # (0.5 x 1.79 < 2 x 1.98), TCx -> TCMDx (0.5 x 1.36 < 1.83)
+    assert lines[3] == "- The sliding-mode term lowers the predicted triangle e_ef (seed mean) in 3 of 4 pairs."
+
+
 def test_the_figure_shows_the_seed_mean_with_min_max_bars_beside_the_bench(tmp_path, monkeypatch):
     """Each panel: the twin's bars at x - 0.2, 0.4 wide, as high as the seeds' mean, with error bars
     from the seeds' minimum to their maximum; the bench's bars at x + 0.2 as high as SYSTEM.md's
