@@ -1,6 +1,7 @@
 """Mechanism specs (plant/spec.py): the format's errors, and the shipped serial specs
 against the closed forms of seed 001 (54), (57)-(63) and the balanced RR (64)-(71),
 derived here from (62)-(63) where the seed has typos (docs/spec.md)."""
+import json
 import math
 from pathlib import Path
 
@@ -209,6 +210,18 @@ def test_build_plant_cli_names_the_bad_line(tmp_path):
     serial = subprocess.run([sys.executable, "-m", "parcosim", "build-plant", "rr", str(tmp_path / "x.fmu")],
                             capture_output=True, text=True, timeout=300)
     assert serial.returncode == 2 and "serial chain" in serial.stderr
+
+
+@pytest.mark.parametrize("rotation", ["[[1, 0, 0], [0, 1, 0]]", "[[1, 0, 0], [0, 1, 0], [0, 0]]", "[1, 0, 0]"])
+def test_a_rotation_not_3_by_3_is_refused_with_its_value_as_written(rotation):
+    """docs/spec.md: ``rotation`` is a 3x3 list of lists.  Catches a wrong shape accepted (numpy would
+    broadcast or fail later, far from the line) or refused with the reason and the value swapped."""
+    text = GOOD.replace('name = "c"', f'name = "c"\nrotation = {rotation}')
+    with pytest.raises(plant_spec.SpecError) as info:
+        plant_spec.loads(text, source="t.toml")
+    err = info.value
+    assert (err.line, err.key, err.value) == (6, "chains[0].rotation", json.loads(rotation))
+    assert str(err).endswith(": must be a 3x3 list of lists")
 
 
 def test_gravity_and_chain_names_default_as_the_format_says():
