@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import importlib.util
 import json
 import math
 import os
@@ -95,13 +96,12 @@ class Exported:
 
 
 def build_c_drive(out_dir) -> Path:
-    """The C drive FMU of the foreign-FMU tests, compiled into ``out_dir``."""
-    sys.path.insert(0, str(C_DRIVE_DIR))
-    try:
-        from build import build_c_fmu
-    finally:
-        sys.path.remove(str(C_DRIVE_DIR))
-    return build_c_fmu("DCDrive", out_dir)
+    """The C drive FMU of the foreign-FMU tests, compiled into ``out_dir``.  Its build script is loaded by
+    its path: a module named ``build`` imported before (PyPA's build, a user's) is not taken for it."""
+    spec = importlib.util.spec_from_file_location("parcosim_cfmu_build", C_DRIVE_DIR / "build.py")
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    return script.build_c_fmu("DCDrive", out_dir)
 
 
 def swap_fmus(package, replacements: dict, out) -> Path:

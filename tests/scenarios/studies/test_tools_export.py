@@ -79,3 +79,19 @@ def test_a_swap_of_an_instance_the_package_lacks_is_refused_naming_it(exported, 
     with pytest.raises(ValueError) as refusal:
         tools.swap_fmus(package, {"obs1": c_drive, "plant": c_drive, "obs2": c_drive}, tmp_path / "x.ssp")
     assert str(refusal.value) == f"{package} has no resources/obs1.fmu, resources/obs2.fmu"
+
+
+def test_the_c_drive_is_built_by_its_own_script_even_when_a_module_named_build_was_imported(tmp_path, monkeypatch):
+    """A user's process may hold another top-level ``build`` module (PyPA's build, a project's build.py):
+    the C drive FMU of the foreign-FMU studies still comes from tests/support/cfmu/build.py, loaded by its
+    path.  Catches the script imported by name (the other module taken for it: an ImportError)."""
+    import shutil
+    import sys
+    import types
+
+    if not (shutil.which("cc") or shutil.which("gcc")):
+        pytest.skip("no C compiler")
+    monkeypatch.setitem(sys.modules, "build", types.ModuleType("build"))
+    fmu = tools.build_c_drive(tmp_path)
+    with zipfile.ZipFile(fmu) as z:
+        assert "modelDescription.xml" in z.namelist() and any(n.endswith(".so") for n in z.namelist())
