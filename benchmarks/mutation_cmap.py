@@ -108,8 +108,7 @@ def build(copy: Path, tests: list, out: Path, log=sys.stdout) -> dict:
                    PARCOSIM_CACHE=str(work / "cache"), PARCOSIM_KERNELS_LIB=str(library),
                    GCOV_PREFIX_STRIP=str(len(objects.resolve().parts) - 1), **{GCOV_DIR: str(folders)},
                    PYTHONPATH=os.pathsep.join([str(copy), str(work), *mutation_map._other_paths()]))
-        command = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "--rootdir", str(copy), "-p", "parcosim_mutation_timing",
-                   *tests]
+        command = mutation_map.pytest_command(copy, "-p", "parcosim_mutation_timing", *tests)
         done = subprocess.run(command, cwd=copy, env=env, stdout=log, stderr=subprocess.STDOUT)
         timing = json.loads(times.read_text()) if times.exists() else {"tests": {}, "shared": {}, "failed": [],
                                                                        "gcov": {}}

@@ -57,6 +57,12 @@ SLOW = re.compile(r"^pytestmark = .*pytest\.mark\.slow", re.M)
 CHUNK = 12
 
 
+def pytest_command(copy: Path, *arguments) -> list:
+    """``python -m pytest -q`` for a run in ``copy``: no cache written into it, and its root pinned to it (a copy
+    inside another checkout would otherwise take that checkout's configuration and packages)."""
+    return [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "--rootdir", str(copy), *arguments]
+
+
 def key(root: Path = ROOT, commit: str = "HEAD", test_file: str | None = None, language: str = "python") -> str:
     """A hash of the committed files of :data:`KEYED` at ``commit`` (12 hex digits), of the
     tests' only ``test_file`` and the helpers (``tests/`` files not named ``test_*``), and of
@@ -112,8 +118,8 @@ def build(copy: Path, products: list, tests: list, out: Path, log=sys.stdout) ->
                PARCOSIM_MUTATION_TIMES=str(times),
                PARCOSIM_CACHE=str(work / "cache"),
                PYTHONPATH=os.pathsep.join([str(copy), str(work), *_other_paths()]))
-    command = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "--rootdir", str(copy), "-p", "parcosim_mutation_timing",
-               "--cov", f"--cov-config={rc}", "--cov-context=test", "--cov-report=", *tests]
+    command = pytest_command(copy, "-p", "parcosim_mutation_timing", "--cov", f"--cov-config={rc}",
+                             "--cov-context=test", "--cov-report=", *tests)
     done = subprocess.run(command, cwd=copy, env=env, stdout=log, stderr=subprocess.STDOUT)
     covered = coverage.CoverageData(basename=str(data))
     covered.read()

@@ -89,8 +89,9 @@ def _pytest(copy: Path, tests: list, timeout: float, env: dict, collect_only: bo
     listed.write_text("\n".join(tests) + "\n")
     start = time.monotonic()
     try:
-        done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-x", "-p", "no:cacheprovider", "--rootdir", str(copy), "-rf",
-                               *(["--collect-only"] if collect_only else []), f"@{listed}"], cwd=copy, env=env, timeout=WALL_FACTOR * timeout,
+        command = mutation_map.pytest_command(copy, "-x", "-rf", *(["--collect-only"] if collect_only else []),
+                                              f"@{listed}")
+        done = subprocess.run(command, cwd=copy, env=env, timeout=WALL_FACTOR * timeout,
                               capture_output=True, text=True, preexec_fn=_cpu_limit(timeout))
     except subprocess.TimeoutExpired:
         return {"outcome": "timeout", "seconds": WALL_FACTOR * timeout, "cpu_limit": timeout}
@@ -407,6 +408,6 @@ def confirm(results: Path, timeout: float) -> dict:
 def _pytest_all(copy: Path, tests: list, timeout: float):
     env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1",
                PYTHONPATH=os.pathsep.join([str(copy), *mutation_map._other_paths()]))
-    return subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "--rootdir", str(copy), "-rf", *tests],
+    return subprocess.run(mutation_map.pytest_command(copy, "-rf", *tests),
                           cwd=copy, env=env, timeout=WALL_FACTOR * timeout, capture_output=True, text=True)
 
