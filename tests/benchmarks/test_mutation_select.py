@@ -39,11 +39,12 @@ def _record(slow=(False, False, False, False, True), failed=()):
 
 def test_a_line_runs_the_tests_that_execute_it_from_any_test_file_cheapest_first_within_the_budget():
     """Catches a selection cut to the module's near test files (the far file's tests execute the
-    line), one that ignores the budget, counts a shared fixture twice, or orders tests otherwise."""
+    line), one that ignores the budget, counts a shared fixture twice, or orders tests otherwise
+    (by their own seconds alone: test_fmu's 2 s need its fixture's 100 s, so test_dear's 50 s go first)."""
     record = _record()
     assert mm.cost(record, record["tests"][2:3]) == 102.0                 # a shared fixture once, with its test
     every = mm.select(record, "plant/x.py", 10, 10, budget=1000.0)
-    assert every["tests"] == [f"{FAR}::test_cheap", f"{FAR}::test_fmu", f"{NEAR}::test_dear"]
+    assert every["tests"] == [f"{FAR}::test_cheap", f"{NEAR}::test_dear", f"{FAR}::test_fmu"]
     assert every["covering"] == 3 and every["cost"] == 153.0 and every["kind"] == "coverage"
     cut = mm.select(record, "plant/x.py", 10, 10, budget=60.0)            # the fixture's 100 s do not fit
     assert cut["tests"] == [f"{FAR}::test_cheap", f"{NEAR}::test_dear"] and cut["cost"] == 51.0
