@@ -79,3 +79,22 @@ def test_construction_refusals_name_the_variable_and_the_value(kwargs, text):
 def test_one_encoder_count_per_turn_is_the_smallest_accepted():
     """encoder_counts > 0: 1 is the boundary (a full turn per count)."""
     assert WheeledPendulum(encoder_counts=1).count == pytest.approx(2.0 * math.pi, rel=1e-15)
+
+
+def test_a_yaw_rate_with_the_yaw_locked_is_refused_naming_it_and_its_value():
+    """yaw = False locks phi' = 0: a start with dphi != 0 contradicts it (BadValue: name, value)."""
+    with pytest.raises(ValueError) as caught:
+        WheeledPendulum(yaw=False, initial=dict(dphi=0.25))
+    assert (caught.value.name, caught.value.value) == ("dphi", 0.25)
+    assert str(caught.value) == "initial dphi = 0.25 with the yaw locked (yaw = false) must be 0"
+    assert WheeledPendulum(yaw=False, initial=dict(dtheta=0.25)).y[3:].any()   # other rates are free
+
+
+def test_a_start_with_the_body_on_the_floor_is_refused_as_fallen_floor():
+    """A body 0.2 m deep touches the floor at psi = asin(R / (D/2)) = asin(0.4), 0.41 rad,
+    before 90 degrees: a start at 0.5 rad is no standing robot, and the reason says why."""
+    with pytest.raises(ValueError) as caught:
+        WheeledPendulum(SEED.with_(D=0.2), initial=dict(psi=-0.5))
+    assert (caught.value.name, caught.value.value) == ("psi", -0.5)
+    assert str(caught.value) == "initial psi = -0.5 rad is no standing robot (fallen_floor)"
+    WheeledPendulum(SEED.with_(D=0.2), initial=dict(psi=-0.4))
