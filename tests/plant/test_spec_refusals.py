@@ -88,3 +88,21 @@ def test_two_chains_without_a_platform_are_refused_naming_the_count():
     with pytest.raises(plant_spec.SpecError) as info:
         plant_spec.loads(text, source="t.toml")
     assert str(info.value) == "t.toml: platform = None: 2 chains need a [platform] to couple them"
+
+
+@pytest.mark.parametrize("links, shown", [("[]", []), ('"q1"', "q1")])
+def test_links_that_are_empty_or_not_a_list_are_refused_as_no_links(links, shown):
+    """links must be a non-empty list of tables: an empty list, or a truthy non-list, is
+    refused at its own line (6, under the chain's name) with the value as written."""
+    text = GOOD[:GOOD.index("[[chains.links]]")].replace('name = "c"', f'name = "c"\nlinks = {links}')
+    with pytest.raises(plant_spec.SpecError) as info:
+        plant_spec.loads(text, source="t.toml")
+    assert str(info.value) == (f"t.toml, line 6: chains[0].links = {shown!r}: "
+                               "need at least one [[chains.links]] table")
+
+
+@pytest.mark.parametrize("chains, shown", [("[]", []), ("7", 7)])
+def test_chains_that_are_empty_or_not_a_list_are_refused_as_no_chains(chains, shown):
+    with pytest.raises(plant_spec.SpecError) as info:
+        plant_spec.loads(f'name = "t"\nchains = {chains}\n', source="t.toml")
+    assert str(info.value) == f"t.toml, line 2: chains = {shown!r}: need at least one [[chains]] table"
