@@ -30,3 +30,14 @@ def test_a_rotor_adds_its_inertia_through_its_spin_per_joint_rate(J):
 
 def test_a_rotor_of_zero_inertia_adds_nothing_whatever_its_gear():
     np.testing.assert_array_equal(_M((0.0, 0.0), (5.0, -7.0)), _M((0.0, 0.0), (1.0, 1.0)))
+
+
+def test_a_chain_s_tuples_of_other_lengths_are_refused_naming_the_counts():
+    """One link, one rotor and one gear per joint; the empty defaults mean none and 1."""
+    with pytest.raises(ValueError, match=r"^2 joints but 1 links$"):
+        SerialChain(RR.joints, RR.links[:1])
+    for rotor, gear in [((0.0,), ()), ((), (1.0, 1.0, 1.0))]:
+        with pytest.raises(ValueError, match=r"^rotor_inertia and gear_ratio need one entry per joint$"):
+            SerialChain(RR.joints, RR.links, rotor_inertia=rotor, gear_ratio=gear)
+    chain = SerialChain(RR.joints, RR.links)
+    assert (chain.rotor_inertia, chain.gear_ratio, chain.dof) == ((0.0, 0.0), (1.0, 1.0), 2)
