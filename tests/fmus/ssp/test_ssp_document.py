@@ -134,3 +134,20 @@ def test_the_archive_holds_exactly_its_members_fmus_stored_and_documents_compres
     os.umask(mask)
     assert stat.S_IMODE(os.stat(path).st_mode) == 0o666 & ~mask
     assert sorted(p.name for p in path.parent.iterdir()) == ["Loop.ssp"]
+
+
+def test_an_output_connected_twice_and_recorded_is_one_output_connector(tmp_path):
+    """One output feeding two inputs and recorded is declared three times, the same way each
+    time: one connector, no refusal.  Catches a repeated declaration compared with something
+    else than its kind and type (taken for a clash, "would be both ...") or written twice."""
+    fmus = {model: fake_fmu(tmp_path / f"{model}.fmu", model) for model in ("Alpha", "Beta")}
+    system = System((Component("first", "Alpha"), Component("second", "Beta"), Component("third", "Beta")),
+                    (Connection("first.y", "second.u"), Connection("first.y", "third.u")),
+                    ("first.y", "third.u"), stop_time=STOP, step=STEP)
+    path = export_ssp(system, tmp_path / "Fan.ssp", fmus=fmus, bake=False)
+    with zipfile.ZipFile(path) as z:
+        elements = ET.fromstring(z.read("SystemStructure.ssd")).find(f"{SSD}System/{SSD}Elements")
+    connectors = {c.get("name"): [(k.get("name"), k.get("kind"), [t.tag for t in k])
+                                  for k in c.iter(f"{SSD}Connector")] for c in elements}
+    assert connectors == {"first": [("y", "output", [f"{SSC}Real"])], "second": [("u", "input", [f"{SSC}Real"])],
+                          "third": [("u", "input", [f"{SSC}Real"])]}
