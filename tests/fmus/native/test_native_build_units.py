@@ -38,3 +38,22 @@ def test_the_native_compile_flags_keep_the_kernels_floating_point_rules():
     assert command[-4:] == ["-o", str(build.HERE / "x.so"), "-Wl,--no-undefined", "-lm"]
     assert "-shared" in command and f"-I{build.fmi_headers()}" in command
     assert [c for c in command if c.endswith(".c")] == sorted(str(p) for p in build.HERE.glob("*.c"))
+
+
+def test_two_sources_of_one_name_are_refused_naming_them_before_anything_is_written(tmp_path):
+    """sources/ is flat: an adapter part named as a generic file (or as a generated one) would
+    overwrite it.  Catches the check counting names otherwise (the FMI layer or the generated
+    files left out of it) and a refusal that does not name the files."""
+    first, second = tmp_path / "a" / "pcn_core.c", tmp_path / "b" / "pcn_core.c"
+    for path in (first, second):
+        path.parent.mkdir()
+        path.write_text("/* */\n")
+    target = tmp_path / "out" / "M.fmu"
+    with pytest.raises(build.NativeBuildError) as refused:
+        build.package("M", None, [], {}, {}, [first, second], {}, target)
+    assert str(refused.value).startswith("M: two source files share a name: ")
+    assert str(refused.value).count("pcn_core.c") == 2
+    for generated in ({"fmi2_native.c": "x"}, {"pcn_core.c": "x"}):   # the FMI layer's, a given file's
+        with pytest.raises(build.NativeBuildError, match=r"^M: two source files share a name: "):
+            build.package("M", None, [], {}, {}, [first], generated, target)
+    assert not target.parent.exists()

@@ -113,3 +113,39 @@ def test_every_native_model_names_its_own_adapter_and_kernel_sources_that_exist(
         for name in native.parts:
             assert (root / "fmus" / "native" / "adapters" / name).is_file(), (model, name)
         assert callable(native.data), model
+
+
+def test_a_native_model_is_sampled_exactly_when_its_slave_has_a_sample_period():
+    """``sampled`` puts pcn_sampling.c and the kernels' counting rule into the FMU; the slave's
+    ``has_sample_period`` (fmus/slave/sampling.py) says whether the model keeps a sample time.
+    Catches an entry's flag flipped or left at its default, which only that model's build and
+    twin comparison would meet."""
+    import importlib
+
+    from fmus.native.models import NATIVE
+    from fmus.slave.registry import SLAVES
+
+    flags = {}
+    for model, native in NATIVE.items():
+        slave = getattr(importlib.import_module(f"fmus.slaves.{SLAVES[model]}"), model)
+        flags[model] = (native.sampled, bool(getattr(slave, "has_sample_period", False)))
+    assert {m: s for m, (s, _) in flags.items()} == {m: p for m, (_, p) in flags.items()}
+    assert any(s for s, _ in flags.values()) and not all(s for s, _ in flags.values())
+
+
+def test_the_derivator_carries_the_buffer_designed_for_its_own_cutoffs_and_sample_time():
+    """The slave's fc_vel, fc_acc and T (three different values), given to the design by name
+    here: the carried buffer (two channels) and the scalars are theirs.  Catches two of them
+    passed in each other's place, which only a native Derivator's build and run would meet."""
+    from types import SimpleNamespace
+
+    from controller.derivators import Derivator
+    from fmus.native.models import NATIVE
+
+    slave = SimpleNamespace(derivator=Derivator(), fc_vel=40.0, fc_acc=15.0, T=1e-3)
+    scalars, arrays = NATIVE["Derivator"].data(slave)
+    expected = Derivator(fc_vel=40.0, fc_acc=15.0, T=1e-3)
+    expected.start_at_first_sample(2)
+    np.testing.assert_array_equal(arrays["design_buffer"], expected.buf)
+    assert scalars == {"derivator_states": int(expected.buf[0]), "design_fc_vel": 40.0, "design_fc_acc": 15.0,
+                       "design_t": 1e-3}

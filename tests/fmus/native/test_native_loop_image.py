@@ -270,6 +270,24 @@ def test_a_block_is_the_largest_buffer_holding_the_address():
         arenas.block_of(999, "t")
 
 
+def test_buffers_that_only_touch_are_two_blocks_and_one_byte_of_overlap_is_refused():
+    """Blocks are half-open [address, address + size): a buffer starting where another ends
+    does not overlap it, and an address at a block's end belongs to the next one.  Catches
+    ``<`` made ``<=`` on either side of the overlap test or in the look-up of a block."""
+    arenas = _Arenas({1000: (16, "a"), 1016: (16, "b"), 1031: (8, "c")})
+    first, offset = arenas.block_of(1000, "p")
+    assert (first.address, first.size, offset) == (1000, 16, 0)
+    second, offset = arenas.block_of(1016, "q")                    # the first's end: the next buffer
+    assert second is not first and (second.address, second.size, offset) == (1016, 16, 0)
+    assert arenas.block_of(1015, "r") == (first, 15)
+    with pytest.raises(NotCompilable, match=r"^s: buffers at 0x407 and 0x3f8 overlap$"):
+        arenas.block_of(1035, "s")                                 # [1031, 1039) takes 1031 of [1016, 1032)
+    touching = _Arenas({1016: (16, "b"), 1000: (16, "a")})
+    assert touching.block_of(1020, "t")[0].address == 1016
+    assert touching.block_of(1004, "u")[0].address == 1000           # ends where the first begins
+    assert len(touching.blocks) == 2
+
+
 def test_a_refusal_code_is_named_as_its_header_names_it():
     """Catches a kernel's refusal named from another kernel's header or by another code."""
     header = (loopimage.KERNELS / "law.h").read_text()
