@@ -294,6 +294,25 @@ def function_lines(text: str) -> set:
     return lines
 
 
+def c_function_lines(text: str, line: int) -> range:
+    """The lines of the top-level brace block (a C function's body) that holds ``line``; empty
+    outside any.  Braces in comments, strings and character literals are not counted."""
+    code = re.sub(r"/\*.*?\*/|//[^\n]*|\"(?:\\.|[^\"\\\n])*\"|'(?:\\.|[^'\\\n])*'",
+                  lambda m: re.sub(r"[^\n]", " ", m.group()), text, flags=re.S)
+    depth, start = 0, None
+    for number, row in enumerate(code.split("\n"), start=1):
+        for char in row:
+            if char == "{":
+                depth += 1
+                if depth == 1:
+                    start = number
+            elif char == "}" and depth:
+                depth -= 1
+                if depth == 0 and start <= line <= number:
+                    return range(start, number + 1)
+    return range(0)
+
+
 def _within(record: dict, ids: list, budget: float) -> tuple:
     """The tests of ``ids`` (in that order) whose measured seconds, with the shared fixtures
     they add, fit in ``budget``; the first test not marked slow is taken whatever it costs."""
@@ -332,7 +351,7 @@ def _order(record: dict, tiers: list) -> list:
 
 
 def select(record: dict, file: str, first: int, last: int, budget: float, at_import: bool = False,
-           importers: tuple = ()) -> dict:
+           importers: tuple = (), enclosing: range = range(0)) -> dict:
     """The tests to run for a change of ``file``'s lines ``first``..``last``.
 
     ``{"tests": node ids, "covering": how many tests execute the lines, "cost": the
@@ -343,6 +362,8 @@ def select(record: dict, file: str, first: int, last: int, budget: float, at_imp
     those of ``importers`` (the test files that import its module).  In each group the cheaper
     first, within ``budget`` seconds (:func:`_within`); tests that fail unmutated never; tests
     marked slow only when no other would run.  ``tests == []``: nothing executes the lines.
+    A C line no test executes (``kind`` "enclosing"): the tests that execute a line of
+    ``enclosing``, its function (gcov gives a call of an always-inlined function no line of its own).
     """
     by_line = record["lines"].get(file, {})
     failing = set(record.get("failed", ()))
@@ -353,6 +374,8 @@ def select(record: dict, file: str, first: int, last: int, budget: float, at_imp
         users = {i for line_ids in by_line.values() for i in line_ids} & usable
         importing = {i for i in usable if record["tests"][i].split("::")[0] in set(importers)}
         tiers, kind = [ids, users, importing], "import"
+    elif not ids and enclosing:
+        tiers, kind = [{i for line in enclosing for i in by_line.get(str(line), ())} & usable], "enclosing"
     else:
         tiers, kind = [ids], "coverage"
     order = _order(record, tiers)

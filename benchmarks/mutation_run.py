@@ -51,7 +51,7 @@ WALL_FACTOR = 8
 RERUN = ("survived", "timeout", "error")
 #: How a selection is named in the results (:func:`select`).
 KINDS = {"coverage": "coverage", "import": "import (a line run at import: the module's tests, then its importers')",
-         "none": "none"}
+         "none": "none", "enclosing": "enclosing (a C line gcov counts for no test: the tests of its function)"}
 
 
 def results_path(seed: int) -> Path:
@@ -209,14 +209,16 @@ def select(copy: Path, name: str, mutant, importers: list, budget: float, lock_o
         if C_TESTS:
             every = [f for f in every if any(Path(f).match(pattern) for pattern in C_TESTS)]
         at_import = False
+        enclosing = mutation_map.c_function_lines((copy / name).read_text(), mutant.line)
     else:
         body = mutation_map.function_lines((copy / name).read_text())
         at_import = any(line not in body for line in range(mutant.line, mutant.end_line + 1))
+        enclosing = range(0)
     quick = [f for f in every if not mutation_map.SLOW.search((copy / f).read_text())]
     for files in (quick, every):
         linemap = _linemap(copy, files, lock_of, commit, language)
         chosen = mutation_map.select(linemap, name, mutant.line, getattr(mutant, "end_line", mutant.line), budget,
-                                     at_import, tuple(importers))
+                                     at_import, tuple(importers), enclosing)
         slow = dict(zip(linemap["tests"], linemap["slow"]))
         if any(not slow[t] for t in chosen["tests"]):
             break

@@ -255,3 +255,50 @@ def test_the_slow_files_are_mapped_only_for_a_mutant_no_other_test_would_run(tmp
     assert mr.run_python(tmp_path, real, over, 1.0, 1.0) == {"outcome": "survived", "seconds": 0.0,
                                                              "note": over["note"]}
     assert path.read_text() == before       # nothing was written: no test to run
+
+
+C_TEXT = """\
+/* a comment with a brace { that opens nothing */
+static const double table[2] = {1.0, 2.0};
+INLINE void helper(double *x)
+{
+    *x += 1.0;   /* '}' in a comment */
+}
+void step(double *x)
+{
+    const char *brace = "}{";
+    helper(x);
+    if (*x > 3.0) {
+        *x = 3.0;
+    }
+}
+"""
+
+
+def test_a_c_line_is_placed_in_the_function_that_holds_it_whatever_braces_its_comments_and_strings_hold():
+    """Catches braces counted inside comments or strings (the block would end early or never), an
+    initializer taken for no block, or the block of another function."""
+    assert mm.c_function_lines(C_TEXT, 10) == range(8, 15)           # helper(x); in step's body
+    assert mm.c_function_lines(C_TEXT, 12) == range(8, 15)           # a nested block: still step's
+    assert mm.c_function_lines(C_TEXT, 5) == range(4, 7)
+    assert mm.c_function_lines(C_TEXT, 2) == range(2, 3)             # the initializer's own braces
+    assert mm.c_function_lines(C_TEXT, 3) == range(0)                # a signature, outside any block
+    assert mm.c_function_lines(C_TEXT, 1) == range(0)
+
+
+def test_a_c_line_gcov_counts_for_no_test_runs_the_tests_of_its_function_and_only_then():
+    """Catches a call of an always-inlined function (no gcov line of its own: seed 4001 [18]) recorded as
+    run by no test while its function's tests run it, and the fallback used where the line's own
+    tests exist or where no test runs the function either."""
+    tests = [f"{FAR}::test_step", f"{NEAR}::test_helper", f"{NEAR}::test_clip"]
+    record = {"tests": tests, "cost": [1.0, 2.0, 3.0], "slow": [False] * 3, "shared": {}, "shared_of": [[]] * 3,
+              "failed": [], "all_tests": {t: {"seconds": s, "shared": []} for t, s in zip(tests, [1.0, 2.0, 3.0])},
+              "lines": {"kernels/src/k.c": {"5": [1], "9": [0, 2], "11": [2], "12": [2]}}, "outside": {}}
+    call = mm.select(record, "kernels/src/k.c", 10, 10, 100.0, enclosing=mm.c_function_lines(C_TEXT, 10))
+    assert call["tests"] == [f"{FAR}::test_step", f"{NEAR}::test_clip"] and call["kind"] == "enclosing"
+    assert call["covering"] == 0
+    own = mm.select(record, "kernels/src/k.c", 12, 12, 100.0, enclosing=mm.c_function_lines(C_TEXT, 12))
+    assert own["tests"] == [f"{NEAR}::test_clip"] and own["kind"] == "coverage"
+    idle = {**record, "lines": {"kernels/src/k.c": {"5": [1]}}}
+    assert mm.select(idle, "kernels/src/k.c", 10, 10, 100.0, enclosing=mm.c_function_lines(C_TEXT, 10))["kind"] == \
+        "none"
