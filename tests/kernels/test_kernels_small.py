@@ -302,3 +302,41 @@ def test_a_polygon_buffer_shorter_than_its_header_is_refused_with_its_length(wor
     code, refusal, out = _sample(triangle().buf.copy(), 0.5, words)
     assert (code, refusal.index, refusal.value) == (fasttrajectory.BAD_LAYOUT, -1, float(words))
     assert not out.any()
+
+
+@pytest.mark.parametrize("words", [0, 1, fastderivator.V_RATE - 1])
+def test_a_derivator_buffer_shorter_than_its_header_is_refused_with_its_length(words):
+    """A buffer length that does not reach past the header (the sizes and flags before the data):
+    BAD_LAYOUT naming the length (index 2) with that length, before any word is read; nothing
+    written."""
+    buf = _started_buffer()
+    saved = buf.copy()
+    scratch = np.zeros(64 * 64)
+    context = derivators._Context(kernels.address(buf), kernels.address(scratch), words, scratch.size, math.inf)
+    out, refusal, q = np.zeros(4), kernels.Refusal(), np.array([0.1, 0.2])
+    code = derivators._STEP(context, kernels.address(q), math.inf, kernels.address(out), refusal)
+    assert (code, refusal.index, refusal.value) == (fastderivator.BAD_LAYOUT, 2, float(words))
+    np.testing.assert_array_equal(buf, saved)
+    assert not out.any()
+
+
+def test_the_io_function_refuses_a_one_channel_derivator_naming_its_channels():
+    """pc_derivator_io writes two channels' estimates (x = [q1, q2 | dq1, dq2, ddq1, ddq2]): a
+    buffer of one channel is refused as BAD_LAYOUT naming the channels word (index 1) and its
+    value 1, the buffer and x unchanged; a context without a buffer is refused naming the
+    length (index 2)."""
+    one = Derivator()
+    one.reset([0.3])
+    assert one.buf[fastderivator.V_CHANNELS] == 1.0
+    saved = one.buf.copy()
+    scratch = np.zeros(64)
+    x = np.array([0.25, -0.05, 7.0, 7.0, 7.0, 7.0])
+    refusal = kernels.Refusal()
+    context = _context(one.buf, scratch)
+    assert _IO(ctypes.addressof(context), kernels.address(x), 0.0, T, refusal) == fastderivator.BAD_LAYOUT
+    assert (refusal.index, refusal.value) == (1, 1.0)
+    np.testing.assert_array_equal(one.buf, saved)
+    assert x.tolist() == [0.25, -0.05, 7.0, 7.0, 7.0, 7.0]
+    empty = derivators._Context(None, kernels.address(scratch), 5, scratch.size, math.inf)
+    assert _IO(ctypes.addressof(empty), kernels.address(x), 0.0, T, refusal) == fastderivator.BAD_LAYOUT
+    assert (refusal.index, refusal.value) == (2, 5.0)
