@@ -340,3 +340,23 @@ def test_the_io_function_refuses_a_one_channel_derivator_naming_its_channels():
     empty = derivators._Context(None, kernels.address(scratch), 5, scratch.size, math.inf)
     assert _IO(ctypes.addressof(empty), kernels.address(x), 0.0, T, refusal) == fastderivator.BAD_LAYOUT
     assert (refusal.index, refusal.value) == (2, 5.0)
+
+
+@pytest.mark.parametrize("channel", [0, 1])
+def test_an_angle_at_the_limit_is_taken_and_one_double_beyond_is_refused_naming_its_channel(channel):
+    """The derivator's input check reads |q| <= limit (controller/derivators.py's message): an
+    angle of magnitude exactly the limit is taken, either sign, and the next double beyond it
+    is refused as BAD_INPUT naming that channel and its value, the buffer unchanged."""
+    limit = 0.75
+    for sign in (1.0, -1.0):
+        buf = _started_buffer()
+        out, refusal = np.zeros(4), kernels.Refusal()
+        q = np.array([0.1, -0.2])
+        q[channel] = sign * limit
+        code = derivators._STEP(_context(buf, np.zeros(64)), kernels.address(q), limit, kernels.address(out), refusal)
+        assert code == 0
+        q[channel] = sign * np.nextafter(limit, np.inf)
+        saved = buf.copy()
+        code = derivators._STEP(_context(buf, np.zeros(64)), kernels.address(q), limit, kernels.address(out), refusal)
+        assert (code, refusal.index, refusal.value) == (fastderivator.BAD_INPUT, channel, q[channel])
+        np.testing.assert_array_equal(buf, saved)
