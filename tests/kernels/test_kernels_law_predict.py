@@ -165,3 +165,29 @@ def test_predict_refuses_a_measurement_not_of_4_or_a_bias_not_of_2(measured, bia
     other length is refused before the kernel reads it."""
     with pytest.raises(ValueError, match=r"predict: measured \(\d\,\), bias \(\d\,\)"):
         law.predict(measured, np.zeros((2, 2)), bias, 1, 1, H)
+
+
+@pytest.mark.parametrize("a, b", [(3, 0), (2, 5), (0, 4)])
+def test_the_task_reference_is_carried_a_periods_ahead_along_its_own_derivatives(a, b):
+    """In task space the law acts on the reference at the commands' time, a periods (A = a h)
+    after the sample: (x_d + A dx_d + A^2 ddx_d / 2, dx_d + A ddx_d, ddx_d), y alike (the Taylor
+    series of a constant-acceleration reference, written here); the rates' delay b does not
+    move it, and a = 0 leaves it as given, bit for bit.  The acceleration is large (50 m/s^2)
+    so that its A^2 / 2 term (1e-4 m at a = 2) is far above the check's tolerance: at the
+    bench's small references it is the term a dropped or sign-flipped one hides in (training
+    4302 [0])."""
+    bench = get_preset("bench")
+    c = PositionController(bench, get_strategy("PDx"), model="exact", delay_compensation=(a, b))
+    angles = Kinematics(bench).inverse(0.01, 0.12)
+    reference = np.array([0.012, 0.118, 0.4, -0.3, 50.0, -30.0])
+    c.step_with_errors(0.0, angles[0], angles[2], 0.3, -0.2, 0.0, 0.0, *reference)
+    ahead = a * H
+    position, rate, acceleration = reference[:2], reference[2:4], reference[4:]
+    expected = np.concatenate([position + ahead * rate + 0.5 * ahead ** 2 * acceleration,
+                               rate + ahead * acceleration, acceleration])
+    rd = c._scratch[law.SCRATCH["rd"]]
+    if a == 0:
+        np.testing.assert_array_equal(rd, reference)
+    else:
+        np.testing.assert_allclose(rd, expected, rtol=1e-14, atol=1e-17)
+        assert np.max(np.abs(0.5 * ahead ** 2 * acceleration)) > 5e-5   # 1e4 times the tolerance

@@ -302,3 +302,61 @@ def test_a_polygon_buffer_shorter_than_its_header_is_refused_with_its_length(wor
     code, refusal, out = _sample(triangle().buf.copy(), 0.5, words)
     assert (code, refusal.index, refusal.value) == (fasttrajectory.BAD_LAYOUT, -1, float(words))
     assert not out.any()
+
+
+@pytest.mark.parametrize("words", [0, 1, fastderivator.V_RATE - 1])
+def test_a_derivator_buffer_shorter_than_its_header_is_refused_with_its_length(words):
+    """A buffer length that does not reach past the header (the sizes and flags before the data):
+    BAD_LAYOUT naming the length (index 2) with that length, before any word is read; nothing
+    written."""
+    buf = _started_buffer()
+    saved = buf.copy()
+    scratch = np.zeros(64 * 64)
+    context = derivators._Context(kernels.address(buf), kernels.address(scratch), words, scratch.size, math.inf)
+    out, refusal, q = np.zeros(4), kernels.Refusal(), np.array([0.1, 0.2])
+    code = derivators._STEP(context, kernels.address(q), math.inf, kernels.address(out), refusal)
+    assert (code, refusal.index, refusal.value) == (fastderivator.BAD_LAYOUT, 2, float(words))
+    np.testing.assert_array_equal(buf, saved)
+    assert not out.any()
+
+
+def test_the_io_function_refuses_a_one_channel_derivator_naming_its_channels():
+    """pc_derivator_io writes two channels' estimates (x = [q1, q2 | dq1, dq2, ddq1, ddq2]): a
+    buffer of one channel is refused as BAD_LAYOUT naming the channels word (index 1) and its
+    value 1, the buffer and x unchanged; a context without a buffer is refused naming the
+    length (index 2)."""
+    one = Derivator()
+    one.reset([0.3])
+    assert one.buf[fastderivator.V_CHANNELS] == 1.0
+    saved = one.buf.copy()
+    scratch = np.zeros(64)
+    x = np.array([0.25, -0.05, 7.0, 7.0, 7.0, 7.0])
+    refusal = kernels.Refusal()
+    context = _context(one.buf, scratch)
+    assert _IO(ctypes.addressof(context), kernels.address(x), 0.0, T, refusal) == fastderivator.BAD_LAYOUT
+    assert (refusal.index, refusal.value) == (1, 1.0)
+    np.testing.assert_array_equal(one.buf, saved)
+    assert x.tolist() == [0.25, -0.05, 7.0, 7.0, 7.0, 7.0]
+    empty = derivators._Context(None, kernels.address(scratch), 5, scratch.size, math.inf)
+    assert _IO(ctypes.addressof(empty), kernels.address(x), 0.0, T, refusal) == fastderivator.BAD_LAYOUT
+    assert (refusal.index, refusal.value) == (2, 5.0)
+
+
+@pytest.mark.parametrize("channel", [0, 1])
+def test_an_angle_at_the_limit_is_taken_and_one_double_beyond_is_refused_naming_its_channel(channel):
+    """The derivator's input check reads |q| <= limit (controller/derivators.py's message): an
+    angle of magnitude exactly the limit is taken, either sign, and the next double beyond it
+    is refused as BAD_INPUT naming that channel and its value, the buffer unchanged."""
+    limit = 0.75
+    for sign in (1.0, -1.0):
+        buf = _started_buffer()
+        out, refusal = np.zeros(4), kernels.Refusal()
+        q = np.array([0.1, -0.2])
+        q[channel] = sign * limit
+        code = derivators._STEP(_context(buf, np.zeros(64)), kernels.address(q), limit, kernels.address(out), refusal)
+        assert code == 0
+        q[channel] = sign * np.nextafter(limit, np.inf)
+        saved = buf.copy()
+        code = derivators._STEP(_context(buf, np.zeros(64)), kernels.address(q), limit, kernels.address(out), refusal)
+        assert (code, refusal.index, refusal.value) == (fastderivator.BAD_INPUT, channel, q[channel])
+        np.testing.assert_array_equal(buf, saved)

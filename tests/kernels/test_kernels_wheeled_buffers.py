@@ -92,3 +92,20 @@ def test_settings_are_built_by_name_each_at_its_word_and_a_missing_or_unknown_na
     with pytest.raises(ValueError) as caught:
         K.new_settings(**values, gain=2.0)
     assert str(caught.value) == f"the pendulum's settings are {listed}: missing [], unknown ['gain']"
+
+
+@pytest.mark.parametrize("index", [0, 1, 2])
+def test_a_torque_at_the_input_limit_is_taken_and_one_double_beyond_is_refused_naming_it(index):
+    """pc_wheeled_step_io checks |tau| <= limit (the settings' limit, 10 N m here): a torque of
+    magnitude exactly the limit is taken, either sign; the next double beyond is refused as
+    INPUT_LIMIT naming that input (tau_l, tau_r, tau_d) and its value, the state unchanged."""
+    for sign in (1.0, -1.0):
+        prm, y, s = pack(SEED), _state(), _settings()
+        x, refusal = np.zeros(N_X), kernels.Refusal()
+        x[index] = sign * 10.0
+        assert K.step_io(prm, y, s, x, 0.0, 1e-4, refusal) == K.OK
+        y, x = _state(), np.zeros(N_X)
+        x[index] = sign * np.nextafter(10.0, np.inf)
+        assert K.step_io(prm, y, s, x, 0.0, 1e-4, refusal) == K.INPUT_LIMIT
+        assert (refusal.index, refusal.value) == (index, x[index])
+        np.testing.assert_array_equal(y, _state())
