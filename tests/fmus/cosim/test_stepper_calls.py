@@ -117,3 +117,38 @@ def test_a_step_refused_in_a_later_sub_step_is_reported_at_that_sub_steps_time()
         _run(calls, [0.0], 1.0)
     assert steps == [(1.0, 0.1), (1.1, 0.1)]
     assert caught.value.time == 1.1 and caught.value.run_error == RunError(RunStatus.REFUSED, "own", "drive", 1.1)
+
+
+def test_an_instance_whose_class_offers_step_calls_is_given_its_own_calls_with_its_slots():
+    """The rule of :func:`member_calls`: a class with ``step_calls`` makes the member's calls,
+    given the instance and both slot lists as passed; a wrapper that only delegates the
+    attribute (not its class) gets the generic calls.  Catches the rule looked up on another
+    object (training seed 4322 [15]: on ``out_slots``, every in-process slave taken the slow way)."""
+    asked = []
+
+    class Own:
+        def step_calls(self, in_slots, out_slots):
+            asked.append((self, in_slots, out_slots))
+            return ("pull", "step", "read", "source", "out", self)
+
+    inst = Own()
+    assert tuple(member_calls(inst, (4, 0), (1, 2))) == ("pull", "step", "read", "source", "out", inst)
+    assert asked == [(inst, (4, 0), (1, 2))]
+
+    class Wrapper:
+        def __init__(self, inner):
+            self.inner = inner
+            self.step_calls = inner.step_calls       # on the instance, not its class
+
+        def set_inputs(self, values):
+            pass
+
+        def do_step(self, t, h):
+            return True
+
+        def get_outputs(self):
+            return [0.0]
+
+    wrapper = Wrapper(Own())
+    calls = member_calls(wrapper, (), (3,))
+    assert calls.step == wrapper.do_step and calls.instance is wrapper and asked == [(inst, (4, 0), (1, 2))]
