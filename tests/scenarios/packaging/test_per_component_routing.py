@@ -1,0 +1,85 @@
+"""What the per-component package's entry points hand on (scenarios/packaging/per_component.py
+``trial`` and ``export_per_component``): the scene, the system as exported (its observers
+folded in when asked), the FMUs' variables read from the given folder, the goal and the
+sub-steps, each to the step that uses it.  The runs and the files are replaced by recorders
+(the real ones are covered by test_per_component.py's slow-ish fixtures, which take the
+defaults); a quick check that non-default arguments arrive where they belong (training sample
+4341 [21]: the scene and the system swapped in ``trial``, no test called it)."""
+from __future__ import annotations
+
+import pytest
+
+from scenarios.packaging import per_component as pc
+from scenarios.scenes.catalogue import get_scene
+
+SCENE = "bench_circle_TCMDx"       # has two current observers to fold in
+
+
+@pytest.fixture
+def seen(monkeypatch):
+    calls = []
+    variables = {"made": "up"}
+
+    def fake_variables(system, fmu_dir=None):
+        calls.append(("variables", system, fmu_dir))
+        return ("named", system), {"model": "file.fmu"}, variables
+
+    monkeypatch.setattr(pc, "_variables", fake_variables)
+    monkeypatch.setattr(pc, "choose_substeps_by_trial", lambda scene, system, v, goal=pc.TRACKING_GOAL: calls.append(
+        ("trial", scene, system, v, goal)) or (6, {6: (1.0, 1.0)}, 0.0))
+    monkeypatch.setattr(pc, "check_tracking", lambda scene, system, v, n: calls.append(("check", scene, system, v, n)))
+    monkeypatch.setattr(pc, "per_component_system", lambda named, v, n: calls.append(("stepped", named, v, n))
+                        or (("stepped", n), "timing"))
+    monkeypatch.setattr("fmus.ssp.export.export_ssp", lambda stepped, path, fmu_dir, fmus=None: calls.append(
+        ("export", stepped, path, fmu_dir, fmus)) or path)
+    return calls, variables
+
+
+@pytest.mark.parametrize("internal", [False, True])
+def test_trial_runs_the_scene_against_the_exported_system_with_its_goal(seen, internal):
+    """``trial(scene, internal, goal, fmu_dir)`` is ``choose_substeps_by_trial(scene, system,
+    variables, goal)`` with system the scene's (observers folded in when ``internal``) and the
+    variables read from ``fmu_dir``.  Catches the scene and the system swapped, the goal or the
+    folder dropped, and the observers folded in when not asked (or not when asked)."""
+    calls, variables = seen
+    scene = get_scene(SCENE)
+    system = pc.with_internal_observers(scene.system) if internal else scene.system
+    assert (system == scene.system) is (not internal)
+    assert pc.trial(scene, internal_observer=internal, goal=0.025, fmu_dir="some/fmus") == (6, {6: (1.0, 1.0)}, 0.0)
+    assert calls == [("variables", system, "some/fmus"), ("trial", scene, system, variables, 0.025)]
+
+
+def test_export_without_substeps_takes_the_trials_n_with_the_goal(seen, tmp_path):
+    """A scene, no ``substeps``: the trial (with ``goal``) chooses n, the package is stepped at
+    that n and exported to the path with the FMU folder and the files the system names.
+    Catches the trial's n not used, the goal not passed, the tracking check run as well."""
+    calls, variables = seen
+    scene = get_scene(SCENE)
+    path = tmp_path / "p.ssp"
+    assert pc.export_per_component(scene, path, "fmu/dir", goal=0.03) == path
+    system = scene.system
+    assert calls == [("variables", system, "fmu/dir"), ("trial", scene, system, variables, 0.03),
+                     ("stepped", ("named", system), variables, 6),
+                     ("export", ("stepped", 6), path, "fmu/dir", {"model": "file.fmu"})]
+
+
+def test_export_with_substeps_checks_the_tracking_at_that_n_and_runs_no_trial(seen, tmp_path):
+    """A scene with ``substeps=3`` and internal observers: no trial; the tracking is checked at
+    n = 3 on the system with the observers folded in, and the package stepped at 3.
+    Catches the given n replaced by the trial's, the check skipped, the observers ignored."""
+    calls, variables = seen
+    scene = get_scene(SCENE)
+    folded = pc.with_internal_observers(scene.system)
+    pc.export_per_component(scene, tmp_path / "p.ssp", None, substeps=3, internal_observer=True)
+    assert calls[:3] == [("variables", folded, None), ("check", scene, folded, variables, 3),
+                         ("stepped", ("named", folded), variables, 3)]
+    assert [c[0] for c in calls] == ["variables", "check", "stepped", "export"]
+
+
+def test_a_system_is_exported_without_a_trial_or_a_check(seen, tmp_path):
+    """A System (no scene to compare with): neither the trial nor the tracking check runs; the
+    sub-steps go on as given (None: the fewest that hold the stages, chosen downstream)."""
+    calls, variables = seen
+    system = get_scene(SCENE).system
+    pc.export_per_component(system, tmp_path / "s.ssp", "d")
+    assert [c[0] for c in calls] == ["variables", "stepped", "export"] and calls[1][3] is None
