@@ -83,3 +83,27 @@ def test_a_system_is_exported_without_a_trial_or_a_check(seen, tmp_path):
     system = get_scene(SCENE).system
     pc.export_per_component(system, tmp_path / "s.ssp", "d")
     assert [c[0] for c in calls] == ["variables", "stepped", "export"] and calls[1][3] is None
+
+
+def test_reproducibility_is_the_largest_relative_move_of_either_metric_under_either_shift(monkeypatch):
+    """Runs replaced by made-up metrics keyed by the plant's start x0: nominal (2.0 mm, 0.5 N m),
+    x0 + shift (2.02, 0.5), x0 - shift (2.0, 0.497): the largest |ratio - 1| is 1 %.  The shift
+    is the one asked (3e-9 m, not the default) and moves only the plant's x0.  Catches a ratio
+    not over the nominal run's metric, one metric or one sign left out, the shift's size or
+    sign dropped, and another component shifted."""
+    scene = get_scene(SCENE)
+    plant = next(c for c in scene.system.components if "x0" in c.parameters)
+    x0, shift = plant.parameters["x0"], 3e-9
+    metrics = {x0: (2.0, 0.5), x0 + shift: (2.02, 0.5), x0 - shift: (2.0, 0.497)}
+    others = {c.name: c for c in scene.system.components if c.name != plant.name}
+
+    def tracking(scene_, system, every):
+        assert every == 1 and system is scene_.system
+        assert {c.name: c for c in system.components if c.name != plant.name} == others
+        return metrics[system.component(plant.name).parameters["x0"]]
+
+    monkeypatch.setattr("fmus.cosim.master.simulate", lambda system, mode=None: system)
+    monkeypatch.setattr(pc, "_tracking", tracking)
+    assert pc.reproducibility(scene, shift=shift) == pytest.approx(0.01, rel=1e-9)
+    metrics[x0 - shift] = (2.0, 0.47)                                 # τ_ef 6 % under: the largest now
+    assert pc.reproducibility(scene, shift=shift) == pytest.approx(0.06, rel=1e-9)
