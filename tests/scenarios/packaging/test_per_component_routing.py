@@ -107,3 +107,25 @@ def test_reproducibility_is_the_largest_relative_move_of_either_metric_under_eit
     assert pc.reproducibility(scene, shift=shift) == pytest.approx(0.01, rel=1e-9)
     metrics[x0 - shift] = (2.0, 0.47)                                 # τ_ef 6 % under: the largest now
     assert pc.reproducibility(scene, shift=shift) == pytest.approx(0.06, rel=1e-9)
+
+
+def test_jacobi_ratios_are_the_packages_metrics_over_ours_at_every_nth_row(monkeypatch):
+    """Runs replaced by recorders: the package stepped at n = 4 is run with the Jacobi coupling
+    and measured at every 4th row, ours (when not given) in process at every row; the ratios
+    are (2.2 / 2.0, 0.45 / 0.5).  Catches a ratio inverted or multiplied, the two metrics
+    crossed, the coupling or the row stride not passed."""
+    runs = []
+
+    def simulate(system, mode=None, coupling=None):
+        runs.append((system, mode, coupling))
+        return system
+
+    monkeypatch.setattr("fmus.cosim.master.simulate", simulate)
+    monkeypatch.setattr(pc, "per_component_system", lambda system, variables, n: (("stepped", system, n), None))
+    monkeypatch.setattr(pc, "_tracking", lambda scene, result, every: (2.2, 0.45) if every == 4 else (2.0, 0.5))
+    scene = get_scene(SCENE)
+    assert pc.jacobi_ratios(scene, "system", {}, 4, ours=(2.0, 0.5)) == pytest.approx((1.1, 0.9), rel=1e-12)
+    assert runs == [(("stepped", "system", 4), "inprocess", "jacobi")]
+    runs.clear()
+    assert pc.jacobi_ratios(scene, "system", {}, 4) == pytest.approx((1.1, 0.9), rel=1e-12)
+    assert runs == [(scene.system, "inprocess", None), (("stepped", "system", 4), "inprocess", "jacobi")]
