@@ -129,3 +129,31 @@ def test_jacobi_ratios_are_the_packages_metrics_over_ours_at_every_nth_row(monke
     runs.clear()
     assert pc.jacobi_ratios(scene, "system", {}, 4) == pytest.approx((1.1, 0.9), rel=1e-12)
     assert runs == [(scene.system, "inprocess", None), (("stepped", "system", 4), "inprocess", "jacobi")]
+
+
+def test_tracking_measures_the_scenes_six_columns_and_time_at_every_nth_row(monkeypatch):
+    """``_tracking(scene, result, 3)``: the metrics get the scene's x, y, x_d, y_d, tau1, tau2
+    columns (the signals the scene names) and the time, each every 3rd row, and the run's
+    completed flag; (e_ef, τ_ef) come back in that order.  Catches the stride on the wrong
+    axis, a column of another signal, the completed flag lost, the two metrics crossed."""
+    import numpy as np
+
+    scene = get_scene(SCENE)
+    t = np.arange(10) * 1e-3
+    signals = {signal: float(k) + t for k, signal in enumerate(scene.columns.values())}
+
+    class Result:
+        time, completed = t, False
+
+        def __getitem__(self, signal):
+            return signals[signal]
+
+    seen = {}
+    monkeypatch.setattr("scenarios.run.metrics.scene_metrics", lambda sc, columns, wall, completed: seen.update(
+        scene=sc, columns=columns, completed=completed) or {"e_ef_mm": 1.5, "tau_ef_Nm": 0.25})
+    assert pc._tracking(scene, Result(), 3) == (1.5, 0.25)
+    names = ("x", "y", "x_d", "y_d", "tau1", "tau2")
+    assert seen["scene"] is scene and seen["completed"] is False and set(seen["columns"]) == {*names, "t"}
+    for name in names:
+        assert np.array_equal(seen["columns"][name], signals[scene.columns[name]][::3]), name
+    assert np.array_equal(seen["columns"]["t"], t[::3])
