@@ -60,3 +60,27 @@ def test_the_default_solver_is_the_documents(calls):
     expected = (float(found.group(1)), float(found.group(2)), "DOP853")
     assert (ref.rtol, ref.atol, ref.method) == expected
     assert {(kw["rtol"], kw["atol"], kw["method"]) for _, kw in calls} == {expected}
+
+
+def test_a_failed_interval_is_refused_naming_the_plant_the_interval_and_the_solvers_message(monkeypatch):
+    """The third interval's solve reports failure: the run's error is, word for word, the master
+    loop's refusal of the plant's step at t, then the plant's instance name, the interval
+    [t, t + h] to 6 digits and solve_ivp's own message.  Catches the
+    interval's end or start of another time, the instance or the message left out."""
+    real, spans = reference.solve_ivp, []
+
+    def failing(fun, span, y0, **kwargs):
+        sol = real(fun, span, y0, **kwargs)
+        spans.append(tuple(span))
+        if len(spans) == 3:
+            sol.status, sol.message = -1, "made-up failure"
+        return sol
+
+    monkeypatch.setattr(reference, "solve_ivp", failing)
+    ref = reference.reference_run(_system())
+    t0, t1 = spans[2]
+    assert t0 == pytest.approx(0.002, abs=1e-15) and t1 == pytest.approx(0.003, abs=1e-15)
+    # The master's loop names the refusing instance and the step's start before the reference's text.
+    assert ref.error == (f"plant refused the step from t = {t0:g} s: "
+                         f"plant: solve_ivp failed over [{t0:.6g}, {t1:.6g}] s: made-up failure")
+    assert not ref.completed
