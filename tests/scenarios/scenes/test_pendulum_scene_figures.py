@@ -98,3 +98,22 @@ def test_the_run_line_states_the_peaks_and_whether_it_settled():
                                 "at 1.23 s), final position error 12.3 mm")
     assert pendulum_line({**m, "settling_time_s": float("nan")}).endswith(
         f"(not within {BALANCED_DEG:g} deg at the end), final position error 12.3 mm")
+
+
+def test_a_path_tall_in_y_sets_both_sides_from_its_height(kept, tmp_path, monkeypatch):
+    """A path 0.5 m tall and 30 mm wide: both limits are 0.55 x the height each side of their own
+    centres (the window stays square).  Catches the half-width taken from x alone and either
+    centre taken from the other axis.  (Files not drawn: the limits do not depend on them.)"""
+    from matplotlib.figure import Figure
+
+    monkeypatch.setattr(Figure, "savefig", lambda self, path, **kwargs: None)
+    c = _columns(False)
+    tall = dict(c, y=5.0 * c["t"] + 0.2, y_d=5.0 * c["t"] + 0.21)   # 0.2 m to 0.71 m
+    plot_pendulum(SimpleNamespace(name="pend"), tall, tmp_path)
+    ax = kept[-1].axes[0]
+    xs, ys = 1e3 * np.concatenate([tall["x"], tall["x_d"]]), 1e3 * np.concatenate([tall["y"], tall["y_d"]])
+    half = 0.55 * (ys.max() - ys.min())
+    cx, cy = 0.5 * (xs.min() + xs.max()), 0.5 * (ys.min() + ys.max())
+    assert half > 50.0 > 0.55 * (xs.max() - xs.min())
+    assert ax.get_xlim() == pytest.approx((cx - half, cx + half), abs=1e-9)
+    assert ax.get_ylim() == pytest.approx((cy - half, cy + half), abs=1e-9)
