@@ -306,3 +306,20 @@ def test_a_case_takes_one_to_five_steps_and_only_order_cases_call_out_of_order(t
         else:
             assert before_init == 0 and (not extra or kind == "lifecycle"), (kind, extra)
         assert set(guids) == ({"own", "wrong"} if kind == "lifecycle" else {"own"}), (kind, guids)
+
+
+def test_a_sets_case_raw_references_are_unsigned_32_bit_and_reach_both_ends_of_the_range(table):
+    """fmi2ValueReference is an ``unsigned int`` (FMI 2.0 section 2.1.2): each raw reference a
+    "sets" case writes fits 32 bits unsigned, both ends (0 and 2**32 - 1, the largest an FMU can
+    be handed) are drawn, and its type is one of the four FMI types.  Catches a reference one past
+    the range (ctypes would wrap it to 0 silently) or an end never drawn."""
+    _, rows = table
+    refs, types = Counter(), set()
+    for seed in range(300):
+        for op in make_case(MODEL, rows, seed, kind="sets")["ops"]:
+            if op[0] == "set_vr":
+                refs[op[2]] += 1
+                types.add(op[1])
+    assert all(isinstance(vr, int) and 0 <= vr <= 2 ** 32 - 1 for vr in refs), refs
+    assert refs[0] > 0 and refs[2 ** 32 - 1] > 0, refs
+    assert types == {"Real", "Integer", "Boolean", "String"}

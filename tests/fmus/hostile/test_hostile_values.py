@@ -115,3 +115,11 @@ def test_the_hostile_reals_are_distinct_and_come_with_both_signs():
     assert all((-sign, magnitude) in keys for sign, magnitude in keys
                if magnitude in (0.0, 1e-300, 5e-324, 1e300, sys.float_info.max, math.inf, 1.0))
     assert sum(math.isnan(x) for x in HOSTILE_REALS) == 1
+
+
+def test_the_hostile_integers_reach_both_ends_of_a_32_bit_fmi2_integer_and_stay_inside():
+    """fmi2Integer is a C ``int`` (32 bits on every FMI platform): the hostile integers hold its
+    minimum -2**31 and maximum 2**31 - 1 exactly and nothing outside (a value outside would be
+    refused by ctypes or wrapped, never reaching the FMU as drawn)."""
+    assert min(HOSTILE_INTEGERS) == -2 ** 31 and max(HOSTILE_INTEGERS) == 2 ** 31 - 1
+    assert all(isinstance(i, int) and -2 ** 31 <= i <= 2 ** 31 - 1 for i in HOSTILE_INTEGERS)
