@@ -39,6 +39,30 @@ def test_a_foreign_file_left_alone_by_build_fmu_is_warned_at_the_callers_line(tm
     assert "Trajectory.fmu was not built by parcosim: left alone" in str(caught[0].message)
 
 
+def test_the_skipped_parameters_warning_of_named_models_names_the_callers_line(tmp_path):
+    """``named_models`` given a foreign FMU without the component's parameters: the one warning
+    listing them is this file's, at the line of the call.  Catches a stacklevel off the caller."""
+    import zipfile
+
+    from fmus.cosim.foreign import named_models, replace_components
+
+    # A description only (never run): a CDrive with one parameter, so the others are skipped.
+    xml = ('<?xml version="1.0" encoding="UTF-8"?><fmiModelDescription fmiVersion="2.0" modelName="CDrive" '
+           'guid="{g}" numberOfEventIndicators="0"><CoSimulation modelIdentifier="CDrive"/><ModelVariables>'
+           '<ScalarVariable name="preset" valueReference="0" causality="parameter" variability="fixed">'
+           '<Real start="0"/></ScalarVariable></ModelVariables><ModelStructure/></fmiModelDescription>')
+    fmu = tmp_path / "a.fmu"
+    with zipfile.ZipFile(fmu, "w") as z:
+        z.writestr("modelDescription.xml", xml)
+    system = replace_components(get_scene("bench_circle_PDq").system, {"drive1": str(fmu)})
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        line = _line() + 1
+        named_models(system)
+    assert [(w.filename, w.lineno) for w in caught] == [(__file__, line)], [(w.filename, w.lineno) for w in caught]
+    assert str(caught[0].message).startswith("parameters the foreign FMUs do not have are skipped: drive1 (a.fmu): ")
+
+
 def _line() -> int:
     """The caller's line number."""
     import sys
