@@ -12,7 +12,8 @@ import sys
 import pytest
 
 from fmus.hostile import cases
-from fmus.hostile.cases import ASAN_EXIT, HOSTILE_INTEGERS, HOSTILE_REALS, HOSTILE_STRINGS, UBSAN_EXIT, _value
+from fmus.hostile.cases import (ASAN_EXIT, HOSTILE_INTEGERS, HOSTILE_REALS, HOSTILE_STRINGS, START_TIMES, STEP_SIZES,
+                                UBSAN_EXIT, _value)
 
 
 @pytest.mark.parametrize("start, spread", [(2.0, 0.5), (-4.0, 0.5), (10.0, 0.02)])
@@ -123,3 +124,22 @@ def test_the_hostile_integers_reach_both_ends_of_a_32_bit_fmi2_integer_and_stay_
     refused by ctypes or wrapped, never reaching the FMU as drawn)."""
     assert min(HOSTILE_INTEGERS) == -2 ** 31 and max(HOSTILE_INTEGERS) == 2 ** 31 - 1
     assert all(isinstance(i, int) and -2 ** 31 <= i <= 2 ** 31 - 1 for i in HOSTILE_INTEGERS)
+
+
+def test_the_hostile_reals_and_step_sizes_reach_the_ends_of_a_double():
+    """The smallest subnormal (``math.ulp(0.0)``) with both signs, the largest finite double with
+    both signs and both infinities are hostile reals; a step size is drawn as that subnormal, 0,
+    a negative, NaN and infinity too.  Catches an end of the double range moved inward."""
+    tiny, big = math.ulp(0.0), sys.float_info.max
+    assert {tiny, -tiny, big, -big, math.inf, -math.inf} <= set(HOSTILE_REALS)
+    assert {tiny, 0.0, math.inf} <= set(STEP_SIZES) and any(h < 0 for h in STEP_SIZES)
+    assert any(math.isnan(h) for h in STEP_SIZES)
+
+
+def test_the_start_times_hold_both_kinds_fmi2setupexperiment_must_refuse_and_sane_ones():
+    """START_TIMES' docstring: a start time not finite, or where t0 + 1e-6 == t0, must be refused.
+    Both kinds are there (each infinity, NaN, and a finite t0 that 1e-6 no longer moves), with
+    finite times that 1e-6 does move (0, a negative one)."""
+    finite = [t for t in START_TIMES if math.isfinite(t)]
+    assert math.inf in START_TIMES and -math.inf in START_TIMES and any(math.isnan(t) for t in START_TIMES)
+    assert any(t + 1e-6 == t for t in finite) and 0.0 in finite and any(t < 0 and t + 1e-6 != t for t in finite)
