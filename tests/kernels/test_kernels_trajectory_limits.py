@@ -79,3 +79,35 @@ def test_a_circle_that_does_not_stop_keeps_circling_after_its_duration():
     expected = (r * math.cos(phi), 0.17 + r * math.sin(phi), -r * w * math.sin(phi), r * w * math.cos(phi),
                 -r * w * w * math.cos(phi), -r * w * w * math.sin(phi))
     np.testing.assert_allclose(tuple(trajectory(t)), expected, rtol=1e-9, atol=1e-12)
+
+
+def _all_kinds():
+    from controller.trajectories import hold
+
+    return {"circle": thesis_circle().buf, "polygon": PolygonTrajectory(SQUARE, 0.25, 1).buf, "hold": hold().buf}
+
+
+@pytest.mark.parametrize("kind", ["circle", "polygon", "hold"])
+def test_time_zero_is_sampled_and_any_time_before_it_refused(kind):
+    """pc_trajectory_sample takes t >= 0: t = 0 is sampled; the largest negative double and NaN
+    are refused as BAD_TIME, index 0, with the time as value, the output left untouched."""
+    buf = _all_kinds()[kind]
+    assert _sample(buf, 0.0)[0] == F.OK
+    for t in (-5e-324, float("nan")):
+        code, refusal, out = _sample(buf, t)
+        assert (code, refusal.index) == (F.BAD_TIME, 0)
+        assert refusal.value == t or (math.isnan(t) and math.isnan(refusal.value))
+        assert not out.any()
+
+
+@pytest.mark.parametrize("kind, size", [("circle", F.T_STOPS + 1), ("polygon", F.T_POINTS), ("hold", F.T_HOLD_Y + 1)])
+def test_each_kind_needs_at_least_its_whole_struct(kind, size):
+    """A buffer of exactly the struct's words (trajectory.h; the polygon's without its points)
+    gets past the size check; one word fewer, or none, is refused as BAD_LAYOUT with index -1 and
+    the word count as value."""
+    buf = _all_kinds()[kind]
+    if kind != "polygon":      # a polygon's points come after its struct: checked above
+        assert buf.size == size and _sample(buf, 0.1, words=size)[0] == F.OK
+    for words in (size - 1, 0):
+        code, refusal, _ = _sample(buf, 0.1, words=words)
+        assert (code, refusal.index, refusal.value) == (F.BAD_LAYOUT, -1, float(words)), words
