@@ -33,3 +33,13 @@ def test_after_a_kernel_step_each_output_is_the_one_computed_from_the_state():
     values = [v for k, v in expected.items() if k != "residual"]
     assert all(not math.isclose(a, b, abs_tol=1e-9) for i, a in enumerate(values) for b in values[i + 1:])
     assert sim.output_values() == list(out.values())
+
+
+def test_the_pose_measures_from_the_kernel_report_are_the_python_ones_in_order():
+    """``_measures_of`` (the kernel's report, so that a projected state is judged with a step's
+    bits) gives sin theta12, sin theta22, sin(phi12 - phi22) as ``_pose_measures`` computes them
+    from the angles, all three, in that order: a pose where the three differ."""
+    sim = PlantSimulator(get_preset("bench"), 0.02, 0.17)
+    expected = list(sim._pose_measures(sim.y))
+    assert len({round(v, 6) for v in expected}) == 3
+    assert sim._measures_of(sim.y) == pytest.approx(expected, rel=1e-13, abs=1e-15)
