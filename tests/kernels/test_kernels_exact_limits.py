@@ -1,6 +1,6 @@
 """C kernels hit exactly at the limits they accept (kernels/src/wheeled.c, kinematics5r.c): the
 largest and smallest substep counts, an encoder count just above zero, a chain stretched
-exactly straight.  On the limit the kernel takes the documented branch; one past it, it refuses
+exactly straight, a joint reference with a proximal link along the tip's line.  On the limit the kernel takes the documented branch; one past it, it refuses
 by the documented code and index.  Values chosen exact in floating point (powers of two)."""
 from __future__ import annotations
 
@@ -89,3 +89,17 @@ def test_a_stretched_second_chain_is_singular_not_a_division_by_zero():
     assert code == k5r.SINGULAR
     assert (task.x, task.y) == (0.25, 0.0)
     assert list(task.jx) == [-0.25, 0.0, 0.25, 0.0] and task.det == 0.0
+
+
+@pytest.mark.parametrize("p11, p21, code", [(0.0, 0.5, k5r.SINGULAR), (0.5, 0.0, k5r.SINGULAR),
+                                            (0.0, 0.0, k5r.SINGULAR), (0.5, 0.5, k5r.OK)])
+def test_a_joint_reference_with_either_chain_along_its_proximal_link_is_singular(p11, p21, code):
+    """pc_5r_joint_reference divides by J_Theta's entries l_k1 ((x -+ l0) sin p_k1 - y cos p_k1):
+    the tip (1/2, 0) on the x axis with p_k1 = 0 makes chain k's entry exactly 0, so either chain
+    alone (or both) gives SINGULAR; both proximal angles at 0.5 rad give finite joint rates and
+    the angles passed back unchanged."""
+    g = k5r.Geometry(0.25, 0.25, 0.25, 0.25, 0.25)
+    joint = (ctypes.c_double * 6)()
+    assert k5r.joint_reference(ctypes.byref(g), 0.5, 0.0, 0.1, -0.2, 0.3, 0.4, p11, p21, joint) == code
+    if code == k5r.OK:
+        assert list(joint)[:2] == [p11, p21] and all(math.isfinite(v) for v in joint)
