@@ -1,7 +1,8 @@
 """C kernels hit exactly at the limits they accept (kernels/src/wheeled.c, kinematics5r.c): the
 largest and smallest substep counts, an encoder count just above zero, a chain stretched
-exactly straight, a joint reference with a proximal link along the tip's line.  On the limit the kernel takes the documented branch; one past it, it refuses
-by the documented code and index.  Values chosen exact in floating point (powers of two)."""
+exactly straight, a joint reference with a proximal link along the tip's line.  On the limit
+the kernel takes the documented branch; one past it, it refuses by the documented code and
+index.  Values chosen exact in floating point (powers of two)."""
 from __future__ import annotations
 
 import ctypes
