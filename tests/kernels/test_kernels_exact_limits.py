@@ -104,3 +104,33 @@ def test_a_joint_reference_with_either_chain_along_its_proximal_link_is_singular
     assert k5r.joint_reference(ctypes.byref(g), 0.5, 0.0, 0.1, -0.2, 0.3, 0.4, p11, p21, joint) == code
     if code == k5r.OK:
         assert list(joint)[:2] == [p11, p21] and all(math.isfinite(v) for v in joint)
+
+
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_the_pitch_fall_starts_exactly_at_ninety_degrees(sign):
+    """pc_wheeled_condition: |psi| >= pi/2 is FALLEN_PITCH (index 0, psi as value), one double
+    short of it is upright.  A body narrower than the wheels (D/2 < R) never touches the floor,
+    so only the pitch check decides."""
+    from plant.wheeled import SEED, pack
+
+    prm, y = pack(SEED.with_(D=0.05)), np.zeros(K.N_STATE)
+    assert 0.05 / 2 < SEED.R
+    y[K.PSI] = sign * math.nextafter(math.pi / 2, 0.0)
+    assert K.condition(prm, y, kernels.Refusal()) == K.OK
+    y[K.PSI] = sign * math.pi / 2
+    refusal = kernels.Refusal()
+    assert K.condition(prm, y, refusal) == K.FALLEN_PITCH
+    assert (refusal.index, refusal.value) == (0, sign * math.pi / 2)
+
+
+def test_a_non_finite_state_word_is_refused_naming_its_index():
+    """Each of the state's words, NaN or infinite, is refused as NONFINITE with its index."""
+    from plant.wheeled import SEED, pack
+
+    prm = pack(SEED)
+    for i in range(K.N_STATE):
+        for bad in (math.nan, -math.inf):
+            y = np.zeros(K.N_STATE)
+            y[i] = bad
+            refusal = kernels.Refusal()
+            assert K.condition(prm, y, refusal) == K.NONFINITE and refusal.index == i, (i, bad)
