@@ -76,3 +76,17 @@ def test_each_initial_state_parameter_is_its_outputs_value_at_initialisation():
     assert slave.error == ""
     assert {entry: getattr(slave, entry) for _, entry in INITIAL} == {entry: values[name] for name, entry in INITIAL}
     assert [entry for _, entry in INITIAL] == ["theta", "psi", "phi", "dtheta", "dpsi", "dphi", "x", "y"]
+
+
+@pytest.mark.parametrize("start_off, end_off, first, last", [
+    (0.5e-9, 0.0, 2, 5), (1.5e-9, 0.0, 3, 5),        # the start: within 1 ns of a step's start or not
+    (0.0, 0.5e-9, 2, 5), (0.0, 1.5e-9, 2, 6),        # the end: within 1 ns of a step's start or not
+])
+def test_the_push_window_ends_are_rounded_by_one_nanosecond_and_no_more(start_off, end_off, first, last):
+    """The window's ends are taken 1 ns early (the slave's comment: rounding of t), so a push
+    starting 0.5 ns after a step's start acts from that step, 1.5 ns after from the next; an end
+    0.5 ns after a step's start excludes that step, 1.5 ns includes it.  Catches the 1e-9 margin
+    changed (doubled: 1.5 ns taken as rounding) or dropped from either end."""
+    push = {"push_torque": 0.05, "push_start": 2 * H + start_off, "push_duration": 3 * H + end_off - start_off}
+    fed = _run({}, lambda k: 0.05 if first <= k < last else 0.0)
+    assert _run(push, lambda k: 0.0) == fed
