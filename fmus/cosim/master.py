@@ -493,7 +493,7 @@ def _step_in_python(run: RunContext, stepper: Stepper) -> Outcome:
             advance()
             record(k)
             done = k
-            if progress is not None and k % report_every == 0:
+            if progress is not None and (k % report_every == 0 or k == steps):
                 progress(k / steps)
     except CoSimulationError as exc:
         error = exc

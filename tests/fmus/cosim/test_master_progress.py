@@ -43,9 +43,6 @@ def test_progress_reports_every_hundredth_of_the_steps_exactly(mode, stop_time):
     assert fractions == pytest.approx([k / steps for k in range(stride, steps + 1, stride)], rel=0, abs=1e-12)
 
 
-@pytest.mark.xfail(strict=True, reason="product bug (session 43, hcosim2): master.py _step_in_python reports "
-                   "progress only on multiples of N // 100, so a run of 350 steps ends at 348/350, never 1 "
-                   "(compiled mode reports 1)")
 def test_an_in_process_run_whose_steps_are_no_multiple_of_the_stride_still_reports_one_at_the_end():
     """The module's promise: the last fraction is 1 for a run that reached its stop time, also
     when N (350) is no multiple of the stride (3)."""
