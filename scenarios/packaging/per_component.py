@@ -234,11 +234,17 @@ def choose_substeps_by_trial(scene: Scene, system: System, variables: dict, goal
     Raises
     ------
     ValueError
-        No n of :data:`SUBSTEP_CHOICES` reaches it (pass ``substeps``).
+        No n of :data:`SUBSTEP_CHOICES` reaches it, or our own run gives no finite, positive
+        e_ef and τ_ef to compare with (pass ``substeps``).
     """
+    import math
+
     from fmus.cosim.master import simulate
 
     ours = _tracking(scene, simulate(scene.system, mode="inprocess"), 1)
+    if not all(math.isfinite(m) and m > 0.0 for m in ours):   # no n can be measured against it: refuse now
+        raise ValueError(f"scene {scene.name}: our master's own run gives e_ef = {ours[0]!r}, tau_ef = {ours[1]!r}: "
+                         "no sub-step count can be chosen against it; pass substeps")
     tried = {}
     floor = 0.0
     n = component_timing(system, variables).substeps

@@ -157,3 +157,20 @@ def test_tracking_measures_the_scenes_six_columns_and_time_at_every_nth_row(monk
     for name in names:
         assert np.array_equal(seen["columns"][name], signals[scene.columns[name]][::3]), name
     assert np.array_equal(seen["columns"]["t"], t[::3])
+
+
+@pytest.mark.parametrize("ours", [(float("nan"), 0.5), (2.0, float("inf")), (0.0, 0.5), (2.0, -0.1)])
+def test_a_trial_against_a_run_of_ours_without_finite_positive_metrics_is_refused_before_any_n(monkeypatch, ours):
+    """Seed 4001 [12]: our own run's e_ef is NaN (its members never stepped) and the trial tried every n up to
+    1000 (minutes) before it refused; a ratio against 0, inf or NaN measures nothing, so it refuses at once,
+    naming the scene and both metrics."""
+    scene = get_scene(SCENE)
+    monkeypatch.setattr("fmus.cosim.master.simulate", lambda system, mode=None: system)
+    monkeypatch.setattr(pc, "_tracking", lambda scene, result, every: ours)
+    tried = []
+    monkeypatch.setattr(pc, "jacobi_ratios", lambda *args: tried.append(args) or (1.0, 1.0))
+    with pytest.raises(ValueError) as refused:
+        pc.choose_substeps_by_trial(scene, scene.system, {})
+    assert str(refused.value) == (f"scene {SCENE}: our master's own run gives e_ef = {ours[0]!r}, "
+                                  f"tau_ef = {ours[1]!r}: no sub-step count can be chosen against it; pass substeps")
+    assert tried == []
