@@ -9,18 +9,7 @@ import numpy as np
 import pytest
 
 from plant import PlantSimulator, get_preset
-
-
-def _rk4_fresh(kernel, z, u_star, baumgarte, dt, substeps):
-    """Classic RK4 of pc_fivebar_derivative (its trigonometry computed at every evaluation)."""
-    h, y = dt / substeps, z.copy()
-    for _ in range(substeps):
-        k1 = kernel.derivative(y, u_star, baumgarte)
-        k2 = kernel.derivative(y + 0.5 * h * k1, u_star, baumgarte)
-        k3 = kernel.derivative(y + 0.5 * h * k2, u_star, baumgarte)
-        k4 = kernel.derivative(y + h * k3, u_star, baumgarte)
-        y = y + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-    return y
+from tests.kernels.test_kernels_fivebar import _rk4_fresh
 
 
 @pytest.mark.parametrize("start, rate", [(0.5, -48.0), (-0.5, 48.0), (0.3, -29.0)])

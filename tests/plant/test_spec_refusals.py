@@ -7,25 +7,7 @@ from __future__ import annotations
 import pytest
 
 from plant import spec as plant_spec
-
-#: The smallest two-link chain; the line numbers below are counted on it.
-GOOD = """name = "t"
-gravity = [0.0, -9.81, 0.0]
-
-[[chains]]
-name = "c"
-
-[[chains.links]]
-name = "q1"
-actuated = true
-a = 0.1
-mass = 0.1
-
-[[chains.links]]
-name = "q2"
-a = 0.1
-mass = 0.2
-"""
+from tests.plant.test_spec import GOOD    # the smallest two-link chain; the line numbers below are counted on it
 
 TWO_LINKS = GOOD[GOOD.index("[[chains.links]]"):]
 UNKNOWN_TOP = "unknown key; valid: chains, description, gravity, name, platform"
