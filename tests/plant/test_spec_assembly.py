@@ -66,3 +66,21 @@ def test_a_start_out_of_reach_or_not_three_finite_numbers_is_refused_naming_it(s
     else:
         with pytest.raises(ValueError, match=re.escape(f"start = {tuple(start)!r} must be 3 finite numbers [m]")):
             SpecSimulator(spec, start)
+
+
+def test_the_working_mode_pose_and_assembly_do_not_move_when_base_and_attach_shift_together():
+    """Moving a chain's base and its attach point x_i by the same offset leaves its loop closure
+    (5.12, d_i = o_i - x_i) and so the platform's pose unchanged: the tips move by the offset,
+    tip - attach does not.  Catches a reference pose that places the platform at the chains'
+    tips without subtracting their attach points (bench_5r's are all zero, and delta3's sum to
+    zero: neither shows it)."""
+    import dataclasses
+
+    spec = plant_spec.load("bench_5r")
+    offsets = [(0.125, -0.0625, 0.0), (-0.03125, 0.25, 0.0)]        # unequal, exact in binary
+    shifted = dataclasses.replace(spec, chains=tuple(
+        dataclasses.replace(c, base=tuple(np.add(c.base, o)), attach=tuple(np.add(c.attach, o)))
+        for c, o in zip(spec.chains, offsets)))
+    assert shifted.mechanism.d == pytest.approx(spec.mechanism.d, abs=1e-16)      # o_i - x_i: the same loop
+    assert reference_pose(shifted) == pytest.approx(reference_pose(spec), abs=1e-15)
+    assert assemble(shifted, (0.07, 0.17, 0.0)) == pytest.approx(assemble(spec, (0.07, 0.17, 0.0)), abs=1e-12)
