@@ -191,3 +191,15 @@ def test_a_voltage_mode_drive_samples_its_reference_clipped_to_v_max(v_ref):
     drive = Drive(motor1, mode="voltage")
     for h in (1e-4, 1e-3):
         assert drive.sample_voltage(0.0, v_ref, 0.0, h) == max(-24.0, min(24.0, v_ref))
+
+
+@pytest.mark.parametrize("n", [1, 4])
+def test_the_sample_phase_is_one_of_the_periods_n_steps_and_the_n_th_is_refused_word_for_word(n):
+    """A period T of n steps h = T / n has steps 0 .. n - 1: sample_phase n - 1 (the last) steps,
+    n itself is refused naming phase, n, h and T (the boundary a "> n" would let through, the
+    controller then never sampling)."""
+    T = 1e-3
+    Drive(motor1, T=T, sample_phase=n - 1).step(0.0, 0.0, 0.0, 0.0, T / n)
+    with pytest.raises(ValueError) as caught:
+        Drive(motor1, T=T, sample_phase=n).step(0.0, 0.0, 0.0, 0.0, T / n)
+    assert str(caught.value) == f"sample_phase = {n} must be below T / h = {n} (h = {T / n!r}, T = 0.001)"
