@@ -129,3 +129,21 @@ def test_a_step_whose_error_is_exactly_the_tolerance_is_accepted_and_shrinks_the
     assert y[0] == pytest.approx(math.exp(-3.0 * h), rel=10 * tolerance)
     _, _, steps, evaluations = dopri5(decay, y0, h, 0.0, math.nextafter(tolerance, 0.0))
     assert steps > 1 and evaluations > 7
+
+
+@pytest.mark.parametrize("h_start", [0.0, 0.5, 1.0, 4.0, math.inf, math.nan])
+def test_a_warm_start_only_caps_the_first_trial_step(h_start):
+    """h_start caps the first trial step at min(dt, h_start): one not below dt (or 0, or one that
+    is no step at all, NaN: no cap either) gives exactly the run without it, a smaller one starts
+    smaller and still meets the tolerance at dt.  Catches a cap taken the other way round (NaN,
+    which compares false, would become the first step) or a warm start ignored."""
+    dt, rtol = 1.0, 1e-8
+    cold = dopri5(f, Y0, dt, rtol=rtol, atol=1e-11)
+    warm = dopri5(f, Y0, dt, rtol=rtol, atol=1e-11, h_start=h_start)
+    if h_start == 0.5:
+        first = dopri5(f, Y0, 0.5, rtol=1e3, atol=1e3, h_start=0.5)[0]   # the capped first step alone
+        assert np.array_equal(dopri5(f, Y0, dt, rtol=1e3, atol=1e3, h_start=0.5)[0],
+                              dopri5(f, first, 0.5, rtol=1e3, atol=1e3, h_start=0.5)[0])
+        assert np.max(np.abs(warm[0] - exact(dt))) < 50 * rtol
+    else:
+        assert np.array_equal(warm[0], cold[0]) and warm[1:] == cold[1:]
