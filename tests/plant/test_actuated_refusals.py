@@ -105,3 +105,17 @@ def test_an_rk4_step_exactly_at_the_armature_stability_limit_is_taken_and_one_pa
         else:
             a.step((0.0,), (0.0,), (0.0,), DT)
             assert sim.time == DT
+
+
+@pytest.mark.parametrize("joints", [[3], [0, 1], [1, 1], [2, 2], [1, 2, 1]])
+def test_a_drive_on_no_actuated_joint_or_a_joint_driven_twice_is_refused_naming_the_joints(joints):
+    """The 5R's actuated joints are 1 and 2, each driven at most once: a joint outside them (with
+    no joint repeated) and a repeated joint (each one valid) are each refused on their own, word
+    for word; 1, 2, both, and both the other way round are taken."""
+    sim = PlantSimulator(get_preset("bench"), *START)
+    with pytest.raises(ValueError) as caught:
+        ActuatedPlant(sim, [(j, Drive(get_motor_preset("motor1"))) for j in joints])
+    assert str(caught.value) == f"drive joints must be 1 and/or 2, each at most once, got {joints}"
+    for taken in ([1], [2], [1, 2], [2, 1]):
+        assert [j for j, _ in ActuatedPlant(sim, [(j, Drive(get_motor_preset("motor1"))) for j in taken]).drives] \
+            == taken
