@@ -101,3 +101,14 @@ def test_a_refused_or_impossible_build_says_so_returns_1_and_leaves_nothing(tmp_
     monkeypatch.setattr(build, "compiler", no_compiler)
     assert build.main(["--out", str(out)]) == 1
     assert capsys.readouterr().err == "error: no compiler here\n" and list(out.iterdir()) == []
+
+
+def test_the_library_kernels_loads_is_the_file_the_build_writes_by_default():
+    """docs/kernels.md: ``kernels/libparcosim_kernels.so``, next to the package's ``__init__``.
+    kernels.LIBRARY is what the FMU bundle checks for before building one (a folder there would
+    always exist: a missing library never built) and kernels.build.LIBRARY what a build writes;
+    catches either naming another file."""
+    from pathlib import Path
+
+    expected = Path(kernels.__file__).resolve().parent / "libparcosim_kernels.so"
+    assert kernels.LIBRARY == build.LIBRARY == expected
