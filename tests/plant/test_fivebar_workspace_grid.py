@@ -34,3 +34,18 @@ def test_every_grid_point_is_the_closed_form_at_that_point(preset, band):
             assert ws.status[iy, ix] == expected, (x, y)
             statuses.add(expected)
     assert statuses == {WorkspaceMap.OUTSIDE, WorkspaceMap.INSIDE, WorkspaceMap.NEAR_SINGULAR}
+
+
+@pytest.mark.parametrize("extent, nx, ny", [((0.0, 0.026, 0.1, 0.123), 4, 3), ((0.0, 0.023, 0.1, 0.126), 3, 4)])
+def test_a_grid_whose_extent_is_no_whole_number_of_steps_ends_at_the_point_nearest_each_end(extent, nx, ny):
+    """Extents of 2.3 and 2.6 steps: the grid starts at the extent's start, steps by ``step``
+    and ends at the grid point nearest the end (2 and 3 steps), so that no point of the extent
+    is more than half a step from the grid.  Catches a grid end cut short by another margin
+    than half a step, in x or in y."""
+    step = 0.01
+    ws = workspace_map(get_preset("bench"), step=step, extent=extent)
+    np.testing.assert_allclose(ws.x, extent[0] + step * np.arange(nx), rtol=0, atol=1e-15)
+    np.testing.assert_allclose(ws.y, extent[2] + step * np.arange(ny), rtol=0, atol=1e-15)
+    for grid, start, end in ((ws.x, extent[0], extent[1]), (ws.y, extent[2], extent[3])):
+        points = np.linspace(start, end, 101)
+        assert np.max(np.min(np.abs(points[:, None] - grid[None, :]), axis=1)) <= step / 2
