@@ -297,3 +297,17 @@ def test_the_sampler_cache_keeps_one_binding_per_live_trajectory_and_drops_it_wi
     del once
     gc.collect()
     assert key not in tr._SAMPLERS
+
+
+@pytest.mark.parametrize("others, name", [({"bogus": 1.0}, "bogus"), ({"frequency": 2.0, "radius": 0.1, "x": 0.0}, "radius")])
+def test_a_parameter_the_trajectory_has_not_is_refused_naming_it_and_listing_its_parameters(others, name):
+    """from_parameters with a name outside PARAMETERS (an FMU parameter misspelt in a scene):
+    refused naming the first unknown one, its parameters listed in PARAMETERS' order
+    (docs/contract.md: "refuses a name not in it by name")."""
+    from controller.trajectories import PARAMETERS
+
+    with pytest.raises(ValueError) as caught:
+        from_parameters("circle", PRESET_CYCLES, **others)
+    assert str(caught.value) == (f"parameter {name}: the Trajectory has no such parameter; its parameters: "
+                                 f"{', '.join(PARAMETERS)}")
+    assert {"side_time", "frequency", "x_hold", "y_hold"} <= set(PARAMETERS)     # the ones **others may name
