@@ -167,3 +167,16 @@ def test_parallel_measure_changes_sign_where_the_general_algorithms_determinant_
     np.testing.assert_array_equal(cross_measure, cross_general)
     q1 = math.acos((p.chain1.l2 - p.l0) / p.chain1.l1)   # the analytic crossing (see above)
     assert ys[cross_measure[0]] <= p.chain1.l1 * math.sin(q1) <= ys[cross_measure[0] + 1]
+
+
+def test_chain_2s_base_frame_is_the_half_turn_about_y_of_7_4():
+    """E_2 of (7.4) (plant.fivebar.MIRROR in the mechanism's E, (7.10)) is a rotation, the half
+    turn about y: x -> -x, y -> y, z -> -z; chain 1's is the identity.  A spec's rotation must be
+    orthonormal with det +1 too (plant/spec.py).  Catches any entry of E_2 changed (its z row
+    never meets a planar motion, so no dynamics shows it)."""
+    E = build_mechanism(get_preset("bench")).E
+    half_turn = np.array([[math.cos(math.pi), 0.0, math.sin(math.pi)], [0.0, 1.0, 0.0],
+                          [-math.sin(math.pi), 0.0, math.cos(math.pi)]])
+    assert np.array_equal(E[:3, :3], np.eye(3)) and not E[:3, 3:].any() and not E[3:, :3].any()
+    np.testing.assert_allclose(E[3:, 3:], half_turn, rtol=0, atol=1e-15)
+    assert np.allclose(E[3:, 3:] @ E[3:, 3:].T, np.eye(3), atol=1e-15) and np.linalg.det(E[3:, 3:]) == 1.0
