@@ -112,3 +112,17 @@ def test_the_library_kernels_loads_is_the_file_the_build_writes_by_default():
 
     expected = Path(kernels.__file__).resolve().parent / "libparcosim_kernels.so"
     assert kernels.LIBRARY == build.LIBRARY == expected
+
+
+def test_a_fresh_copy_of_the_library_is_the_same_file_under_a_new_folder_and_loads_as_it():
+    """The rebuilt library is loaded from a copy no process has mapped (dlopen would hand back the
+    stale one by its path): the copy keeps the file's name and bytes in a folder of its own, and
+    loads with the loaded library's hash.  Catches the copy's folder returned for the copy (a
+    folder does not load: every in-process rebuild would end in KernelsUnavailable)."""
+    from pathlib import Path
+
+    path = Path(kernels.library()._name)
+    copy = kernels._fresh_copy(path)
+    assert copy.is_file() and copy.name == path.name and copy.parent != path.parent
+    assert copy.read_bytes() == path.read_bytes()
+    assert kernels._load(copy).pc_sources_hash() == kernels.library().pc_sources_hash()
