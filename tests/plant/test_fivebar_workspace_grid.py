@@ -49,3 +49,17 @@ def test_a_grid_whose_extent_is_no_whole_number_of_steps_ends_at_the_point_neare
     for grid, start, end in ((ws.x, extent[0], extent[1]), (ws.y, extent[2], extent[3])):
         points = np.linspace(start, end, 101)
         assert np.max(np.min(np.abs(points[:, None] - grid[None, :]), axis=1)) <= step / 2
+
+
+def test_a_point_whose_margin_is_exactly_the_band_is_inside_and_one_below_it_near_singular():
+    """The band is "margin < band" (thesis fig. 11; :data:`plant.fivebar.NEAR_SINGULAR_MARGIN`): a
+    band set to a grid point's own margin leaves that point INSIDE, and the next double above it
+    makes it NEAR_SINGULAR.  Catches ``<=`` for ``<``."""
+    params, extent, step = get_preset("bench"), (-0.12, 0.12, 0.0, 0.3), 0.03
+    first = workspace_map(params, step=step, extent=extent)
+    iy, ix = np.argwhere(first.status != WorkspaceMap.OUTSIDE)[0]
+    band = float(first.margin[iy, ix])
+    at = workspace_map(params, step=step, band=band, extent=extent)
+    assert at.status[iy, ix] == WorkspaceMap.INSIDE
+    above = workspace_map(params, step=step, band=float(np.nextafter(band, np.inf)), extent=extent)
+    assert above.status[iy, ix] == WorkspaceMap.NEAR_SINGULAR
