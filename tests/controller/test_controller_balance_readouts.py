@@ -9,6 +9,7 @@ import math
 import numpy as np
 import pytest
 
+import kernels
 from controller.balance import BalanceController, BalanceSettings, design_balance, get_route
 from motor import get_motor_preset
 
@@ -35,3 +36,21 @@ def test_the_readouts_after_each_sample_are_that_samples_voltages_torques_and_es
         names = list(estimate)
         assert controller.x_hat.tolist() == pytest.approx([estimate[names[s]] for s in design.states], rel=1e-12)
         assert all(estimate[name] == 0.0 for s, name in enumerate(names) if s not in design.states)
+
+
+def test_the_io_arrays_input_indices_are_where_the_kernel_reads_each_reading():
+    """fastbalance.I_ENC_L, I_ENC_R, I_GYRO (the I/O array's published input words) name INPUTS
+    in order, and a kernel sample with the readings put there gives
+    the voltages BalanceController.sample gives for them.  Catches an index naming another
+    input (two readings in one word, one left at zero)."""
+    from controller import fastbalance
+
+    assert [fastbalance.INPUTS[i] for i in (fastbalance.I_ENC_L, fastbalance.I_ENC_R, fastbalance.I_GYRO)] == \
+        ["enc_l", "enc_r", "gyro"]
+    design = design_balance(BalanceSettings(yaw=True))
+    controller = BalanceController(design, get_route("forward_turn"))
+    buf, x = controller.buf.copy(), np.zeros(fastbalance.IO_SIZE)
+    enc_l, enc_r, gyro = READINGS[1]
+    x[fastbalance.I_ENC_L], x[fastbalance.I_ENC_R], x[fastbalance.I_GYRO] = enc_l, enc_r, gyro
+    assert fastbalance.sample(buf, x, 0.0, math.inf, kernels.Refusal()) == fastbalance.OK
+    assert tuple(x[fastbalance.O_V:fastbalance.O_V + 2]) == controller.sample(0.0, enc_l, enc_r, gyro)
