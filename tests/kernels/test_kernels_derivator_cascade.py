@@ -78,17 +78,19 @@ def test_the_cascade_is_the_chain_state_space_word_for_word():
         assert state[-1].tolist() == sample.tolist()
 
 
-def test_channels_side_by_side_are_each_channel_alone():
-    """Three channels (the third paired with itself): each channel's estimates are, bit for
-    bit, those of a one-channel derivator fed that channel alone.  Catches the lanes of a
-    channel pair mixed up, the odd channel's words written twice with different values, a
-    channel reading another's state."""
+@pytest.mark.parametrize("channels", [3, 4])
+def test_channels_side_by_side_are_each_channel_alone(channels):
+    """Three channels (the third paired with itself) and four (two pairs side by side, the
+    second at words 2 and 3): each channel's estimates are, bit for bit, those of a one-channel
+    derivator fed that channel alone.  Catches the lanes of a channel pair mixed up, the odd
+    channel's words written twice with different values, a channel reading another's state, a
+    second pair read at the first pair's words."""
     rng = np.random.default_rng(3)
-    q = np.cumsum(rng.normal(0.0, 0.02, (200, 3)), axis=0)
+    q = np.cumsum(rng.normal(0.0, 0.02, (200, channels)), axis=0)
     together = Derivator()
     together.reset(q[0])
     joint = [together.step(sample) for sample in q]
-    for ch in range(3):
+    for ch in range(channels):
         alone = Derivator()
         alone.reset(q[0, ch:ch + 1])
         single = [alone.step(sample[ch:ch + 1]) for sample in q]
