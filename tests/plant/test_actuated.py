@@ -402,3 +402,21 @@ def test_a_bad_motor_override_is_refused_by_its_fmu_name(parameters, name, value
     with pytest.raises(BadValue) as refusal:
         build_drive(slave, name[-1], mode="current", T=1e-3)
     assert (refusal.value.name, refusal.value.value, str(refusal.value)) == (name, value, words)
+
+
+def test_the_fast_plants_derivative_is_the_general_one_and_omega_held_at_the_rates_changes_nothing():
+    """ActuatedPlant.derivative through its C kernel (the fast plant, no held speed) is the
+    general algorithm's with the motors' equations (the general plant), and the general path
+    with the joints' own rates as ``omega_held`` is that too.  Catches the fast path handed
+    another array than the voltages (the held speeds: None there)."""
+    fast, general = _actuated("fast"), _actuated("general")
+    rng = np.random.default_rng(11)
+    for _ in range(5):
+        z, v = _random_state(fast, rng), rng.normal(scale=10.0, size=2)
+        external = rng.normal(scale=0.05, size=2)
+        expected = general.derivative(z, v, external)
+        scale = np.max(np.abs(expected))
+        np.testing.assert_allclose(fast.derivative(z, v, external), expected, rtol=1e-12, atol=1e-12 * scale)
+        held = fivebar.world_rates(z[7:14])
+        np.testing.assert_allclose(fast.derivative(z, v, external, omega_held=held), expected, rtol=1e-12,
+                                   atol=1e-12 * scale)
