@@ -249,3 +249,18 @@ def test_exact_model_law_holds_the_robot_against_gravity(kernel, name):
             for d in ((h, 0.0), (0.0, h))]
     assert abs(grad[0]) > 0.05 and abs(grad[1]) > 0.05            # gravity loads both joints
     assert np.allclose(tau, grad, rtol=1e-6, atol=1e-9)
+
+
+@pytest.mark.parametrize("y", [1e-6, 0.0, -0.0, -1e-6])
+def test_a_joint_space_reference_on_the_base_line_is_the_plants_inverse_kinematics_of_it(y):
+    """At the reference point (0, y) on (or beside) the bases' line, at rest at the angles
+    plant.fivebar.inverse_kinematics gives for it, a PD law in joint space has no error and no
+    torque: its joint reference is that closed form's, in its branch too (chain 1's angle takes
+    the branch of atan2's y sign bit: y = -0.0 is a full turn from +0.0).  Catches the
+    reference changed before its inverse kinematics when no delay is predicted (0 * rate added:
+    -0.0 becomes +0.0, a 2 pi error)."""
+    params = get_preset("bench")
+    q1, _, q2, _ = fivebar.inverse_kinematics(params, 0.0, y)
+    ctrl = PositionController(params, get_strategy("PDq"))
+    tau1, tau2, _, _, e1, e2 = ctrl.step_with_errors(0.0, q1, q2, 0.0, 0.0, 0.0, 0.0, 0.0, y, 0.0, 0.0, 0.0, 0.0)
+    assert (e1, e2) == (0.0, 0.0) and (tau1, tau2) == (0.0, 0.0)
