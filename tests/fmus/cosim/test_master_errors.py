@@ -20,7 +20,9 @@ def test_an_initialisation_that_raises_has_no_rows(mode):
     """A parameter the instance cannot even be given (a word for a Real) stops the run in the
     initialisation itself, before the row of t = 0 (a model's own refusal of its parameters is
     reported by the first step, after that row).  Catches such a run returned with a row (of
-    uninitialised values, seed 3601's survivor [96]) or without its instance and time."""
+    uninitialised values, seed 3601's survivor [96]) or without its instance and time, and a
+    stepping time reported for a run that took no step (training sample 4252's [29], the
+    outcome's default wall time 0.0 -> 1.0)."""
     system = get_scene("bench_circle_PDq").system
     components = tuple(replace(c, parameters={**c.parameters, "T": "fast"}) if c.name == "drive1" else c
                        for c in system.components)
@@ -28,6 +30,7 @@ def test_an_initialisation_that_raises_has_no_rows(mode):
     assert (result.error.kind, result.error.instance, result.error.time) == (RunStatus.REFUSED, "drive1", 0.0)
     assert "'fast'" in result.error.message
     assert len(result.time) == 0 and all(len(result[s]) == 0 for s in system.record)
+    assert result.wall_s == 0.0
 
 
 def test_a_components_record_becomes_the_runs_with_the_masters_message():

@@ -323,3 +323,38 @@ def test_a_sets_case_raw_references_are_unsigned_32_bit_and_reach_both_ends_of_t
     assert all(isinstance(vr, int) and 0 <= vr <= 2 ** 32 - 1 for vr in refs), refs
     assert refs[0] > 0 and refs[2 ** 32 - 1] > 0, refs
     assert types == {"Real", "Integer", "Boolean", "String"}
+
+
+def _ends(rows, kind, what, seeds=300):
+    """Counter of where the ops ``what(op)`` picks land in the ops of ``kind`` cases: "first"
+    (before anything, inputs included), "last" (after the last get), "inside"."""
+    where = Counter()
+    for seed in range(seeds):
+        ops = make_case(MODEL, rows, seed, kind=kind, wrapper=True, models=(MODEL, "Derivator"))["ops"]
+        for k, op in enumerate(ops):
+            if what(op):
+                where["first" if k == 0 else "last" if k == len(ops) - 1 else "inside"] += 1
+    return where
+
+
+def test_the_extra_calls_of_a_case_land_anywhere_in_its_calls_the_very_first_and_the_very_last_included(table):
+    """Seed 4101's survivor [146] (cases.py:204, a parameter's write inserted from index 1:
+    never before the inputs' first sets).  A "sets" case's writes of an output, of a parameter
+    and of a raw reference, and a "lifecycle" case's out-of-order calls, are each put at a
+    position drawn over all the case's calls: each is drawn first (right after initialisation,
+    before any input is set or step taken), last (after the final get) and in between.  A
+    state case's bytes come after the first call and
+    may come last.  Catches a lower or upper end of a draw off by one (the FMU then never
+    meets that write at that point of its life)."""
+    _, rows = table
+    causality = {row[0]: row[2] for row in rows}
+    for what, kind, picks in (
+            ("output", "sets", lambda op: op[0] == "set" and causality[op[1]] == "output"),
+            ("parameter", "sets", lambda op: op[0] == "set" and causality[op[1]] == "parameter"),
+            ("raw reference", "sets", lambda op: op[0] == "set_vr"),
+            ("lifecycle call", "lifecycle", lambda op: op[0] in ("exit_init_again", "enter_init_again",
+                                                                  "setup_again"))):
+        where = _ends(rows, kind, picks)
+        assert set(where) == {"first", "last", "inside"}, (what, where)
+    state = _ends(rows, "state", lambda op: op[0] == "state_bytes")
+    assert set(state) == {"last", "inside"} and sum(state.values()) == 300, state

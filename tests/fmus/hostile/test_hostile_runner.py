@@ -244,3 +244,21 @@ def test_a_refusal_message_names_something_by_a_variable_an_assignment_or_a_time
         record = RunError(RunStatus.REFUSED, message, instance="inst", time=0.251).to_json()
         problems = _run(monkeypatch, ops, fmu=_refusing(message, record)).problems
         assert problems == ([] if named else [f"the refused {label} left error = {message!r}, naming nothing"]), message
+
+
+def test_the_judge_and_the_fmus_own_rule_split_the_start_times_at_the_same_double(monkeypatch):
+    """Seed 4101's survivor [209] (worker.py:168, the time resolution 1e-6 -> 2e-6 passed: no
+    start time between the two edges was tried).  A start time is unusable when t0 + 1 us ==
+    t0 (docs/extremes.md; :data:`fmus.slave.base.TIME_RESOLUTION`): below 2**34 s a double's
+    half ulp is at most 2**-20 s < 1 us, so 1 us still counts; from 2**34 s the half ulp is
+    2**-19 s > 1 us and it is lost.  The judge must find fault with an FMU that accepts 2**34
+    and with none that accepts the double under it, the same split as the FMUs' own check."""
+    from fmus.slave.base import FmiError, check_experiment_times
+
+    edge = 2.0 ** 34
+    below = math.nextafter(edge, 0.0)
+    check_experiment_times(below)
+    with pytest.raises(FmiError):
+        check_experiment_times(edge)
+    assert _run(monkeypatch, [], start_time=below).problems == []
+    assert _run(monkeypatch, [], start_time=edge).problems == [f"setupExperiment({edge!r}) returned OK, not fmi2Error"]

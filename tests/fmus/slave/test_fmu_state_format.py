@@ -335,3 +335,19 @@ def test_a_decoded_tree_is_written_back_to_the_same_bytes():
     expected = (b"d" + struct.pack("<I", 4) + _bytes_of("r") + array + _bytes_of("l") + _bytes_of(read["l"])
                 + _bytes_of("again") + _bytes_of(sf.Ref(2)) + _bytes_of("rr") + _bytes_of(sf.Ref(1)))
     assert data == _framed(expected)
+
+
+def test_the_smallest_frame_passes_the_frame_checks_and_one_byte_less_is_no_state():
+    """Magic (8 bytes), version (4), length (8) and the sha256 checksum (32): 52 bytes, a frame
+    with an empty body, whose every check passes; it is then refused for the model identifier
+    the header needs at offset 20.  51 bytes cannot be a state at all.  Training sample 4252's
+    [31] (the frame's least length taken as ``<=``: the 52-byte frame refused as no state)."""
+
+    least = 8 + 4 + 8 + 32
+    body = sf.MAGIC + struct.pack("<IQ", sf.FORMAT_VERSION, least)
+    frame = body + hashlib.sha256(body).digest()
+    assert len(frame) == least
+    with pytest.raises(sf.StateFormatError, match="^model identifier: 2 bytes wanted, 0 left at offset 20$"):
+        sf.decode(frame)
+    with pytest.raises(sf.StateFormatError, match=r"^not a serialised parcosim FMU state \(51 bytes starting "):
+        sf.decode(frame[:-1])

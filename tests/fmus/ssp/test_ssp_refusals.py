@@ -41,8 +41,16 @@ CASES = [
     (dict(a={"count": 1.5}), {}, "parameter a.count = 1.5 (float) is no Integer value"),
     (dict(a={"count": False}), {}, "parameter a.count = False (bool) is no Integer value"),
     (dict(a={"flag": 2}), {}, "parameter a.flag = 2 (int) is no Boolean value"),
+    (dict(a={"flag": -1}), {}, "parameter a.flag = -1 (int) is no Boolean value"),
+    (dict(a={"flag": 0.0}), {}, "parameter a.flag = 0.0 (float) is no Boolean value"),
+    (dict(a={"flag": "true"}), {}, "parameter a.flag = 'true' (str) is no Boolean value"),
+    (dict(a={"count": np.float64(2.5)}), {}, "parameter a.count = np.float64(2.5) (float64) is no Integer value"),
+    (dict(b={"gain": math.nan}), {}, "parameter b.gain = nan is not finite"),
+    (dict(b={"gain": -math.inf}), {}, "parameter b.gain = -inf is not finite"),
     (dict(a={"label": 3}), {}, "parameter a.label = 3 (int) is no String value"),
     (dict(a={"label": "a\x01b"}), {}, "parameter a.label = 'a\\x01b' holds control characters XML cannot carry"),
+    (dict(a={"label": "\x1f"}), {}, "parameter a.label = '\\x1f' holds control characters XML cannot carry"),
+    (dict(a={"label": "\x00"}), {}, "parameter a.label = '\\x00' holds control characters XML cannot carry"),
     ({}, dict(instance_fmus={"a": "Alpha"}, bake=False),
      "instance_fmus: an instance's own FMU goes into the package only with bake=True"),
     ({}, dict(instance_fmus={"zz": "Alpha", "a": "Alpha"}), "instance_fmus: no instance zz in the system"),
@@ -86,3 +94,25 @@ def test_values_of_another_python_type_are_written_as_the_variables_type(fmus, t
                 "b.flag": False}
     assert got == expected
     assert {name: type(value) for name, value in got.items()} == {name: type(value) for name, value in expected.items()}
+
+
+def test_the_edges_of_each_types_accepted_values_are_written_and_read_back_exactly(fmus, tmp_path):
+    """Seed 4101's survivor [76] (fmus/ssp/export.py:277, the Boolean ints ``(0, 1)`` -> ``(1, 1)``
+    passed: only 1 was ever given).  FMI's Boolean is 0 or 1 (fmi2Boolean is an int), so both
+    ints, as Python or numpy scalars, are accepted and read back as False and True; the only
+    control characters XML 1.0 carries (tab, newline, carriage return) and the first printable
+    ones (space, and DEL, which XML allows) are kept; a float or numpy float that is an integer
+    is an Integer.  The refusals just past these edges are in :data:`CASES`."""
+    a = {"flag": 0, "label": " \t\n\r\x7f", "count": np.float64(-4.0), "limit": np.int32(-2 ** 31),
+         "gain": -0.0}
+    b = {"flag": np.int64(1), "label": "", "count": np.uint8(255), "gain": np.float64(5e-324)}
+    path = export_ssp(_system(a=a, b=b), tmp_path / "sys.ssp", fmus=fmus)
+    got = read_ssp_parameters(path)
+    expected = {"a.flag": False, "a.label": " \t\n\r\x7f", "a.count": -4, "a.limit": -2 ** 31, "a.gain": -0.0,
+                "b.flag": True, "b.label": "", "b.count": 255, "b.gain": 5e-324}
+    assert got == expected
+    assert {name: type(value) for name, value in got.items()} == {name: type(value) for name, value in expected.items()}
+    assert math.copysign(1.0, got["a.gain"]) == -1.0   # the sign of zero survives the text
+    a_flag = np.int64(0)
+    path = export_ssp(_system(a={"flag": a_flag}), tmp_path / "sys2.ssp", fmus=fmus)
+    assert read_ssp_parameters(path) == {"a.flag": False}
