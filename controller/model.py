@@ -149,11 +149,15 @@ class ExactModel:
         return np.concatenate([[M[0, 0], M[0, 1], M[1, 1]], vx, vy, vxy - vx - vy, g])
 
 
-def _grid(extent, step):
+def _grid_size(extent, step):
+    """(nx, ny): the grid lines of ``extent`` at ``step``."""
     x0, x1, y0, y1 = extent
-    nx = int(round((x1 - x0) / step)) + 1
-    ny = int(round((y1 - y0) / step)) + 1
-    return x0 + step * np.arange(nx), y0 + step * np.arange(ny)
+    return int(round((x1 - x0) / step)) + 1, int(round((y1 - y0) / step)) + 1
+
+
+def _grid(extent, step):
+    nx, ny = _grid_size(extent, step)
+    return extent[0] + step * np.arange(nx), extent[2] + step * np.arange(ny)
 
 
 def workspace_extent(params: FiveBarParams):
@@ -285,6 +289,10 @@ class TabulatedModel:
         extent = tuple(float(e) for e in extent)
         if not (extent[1] > extent[0] and extent[3] > extent[2]):
             raise ValueError(f"extent = {extent!r} is empty")
+        nx, ny = _grid_size(extent, step)
+        if nx < 2 or ny < 2:    # a cell needs 2 lines a side (a 1-line table would be cached, then refused on load)
+            raise ValueError(f"grid step = {step!r} m over extent = {extent!r} gives {nx} x {ny} grid points: the "
+                             "table interpolates in cells of 2 x 2 points")
         self.params, self.step, self.extent = params, float(step), extent
         self.build_seconds = 0.0
         key = _cache_key(params, step, extent, band)
