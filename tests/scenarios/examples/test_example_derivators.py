@@ -84,3 +84,40 @@ def test_the_bode_plot_spans_the_published_decades_and_marks_5_and_11_hz(tmp_pat
         assert magnitude.get_title().startswith(f"Derivators at T = {derivator.T * 1e3:g} ms")
     finally:
         plt.close(figure)
+
+
+class _Scripted:
+    """A derivator answering scripted estimates (the transient's ends known) and recording what
+    it was fed."""
+
+    T = 1e-3
+
+    def __init__(self):
+        self.fed, self.started = [], None
+
+    def reset(self, values):
+        self.started = list(values)
+
+    def step(self, values):
+        n = len(self.fed)
+        self.fed.append(list(values))
+        tolerance = figures.TRANSIENT_TOLERANCE
+        velocity = 2.7 + (1.0 if n < 7 else 0.0)
+        # The ramp's acceleration is exactly the tolerance (not more: no miss) from sample 4 to 9.
+        ramp_acceleration = 1.0 if n < 4 else (tolerance * 2.7 if n < 10 else 0.0)
+        parabola_acceleration = 7.3 * (1.0 + 2 * tolerance) if n < 12 else 7.3
+        return np.array([velocity, 0.0]), np.array([ramp_acceleration, parabola_acceleration])
+
+
+def test_the_transient_lasts_until_the_last_sample_missing_by_more_than_the_tolerance():
+    """transient_samples feeds the ramp 1.3 + 2.7 t and the parabola 0.4 + 7.3 t²/2 at t = n T
+    from a reset at their first values, and counts the samples up to the last one whose ramp
+    velocity, ramp acceleration (against the slope) or parabola acceleration misses by more than
+    1e-9 relative: a miss of exactly the tolerance is none, one of twice it is.  Seed 4101 [204]'s
+    sibling (the mutant itself is equivalent: |v - 2.7| near 2.7e-9 is a whole number of 2^-51,
+    which 2.7e-9 is not, so the velocity can never tie; the acceleration can)."""
+    derivator = _Scripted()
+    assert figures.transient_samples(derivator, horizon=50) == (7, 4, 12)
+    assert derivator.started == [1.3, 0.4] and len(derivator.fed) == 50
+    t = np.arange(50) * 1e-3
+    assert np.allclose(derivator.fed, np.column_stack([1.3 + 2.7 * t, 0.4 + 3.65 * t ** 2]), rtol=1e-15, atol=1e-15)

@@ -74,3 +74,22 @@ def test_the_demo_steps_the_plant_with_its_documented_torques_from_the_start_of_
         sim.step(0.03 * math.sin(4 * math.pi * t), -0.03 * math.sin(6 * math.pi * t), 1e-3)
     out = sim.outputs()
     assert rows[-1, 1:5] == pytest.approx([out["x"], out["y"], out["q1"], out["q2"]], rel=1e-12, abs=1e-15)
+
+
+def test_the_demo_steps_the_plant_once_per_interval_and_never_past_its_last_row(monkeypatch):
+    """0.05 s at 1 ms: 51 rows, 50 steps, each from the time of the row before; no step after
+    the last row (its state would be thrown away, and a step failing there would fail a demo whose
+    rows were all made).  Training sample 4203 [15]: a 51st step went unseen."""
+    from plant import PlantSimulator
+
+    times = []
+
+    class Counted(PlantSimulator):
+        def step(self, *args):
+            times.append(self.time)
+            return super().step(*args)
+
+    monkeypatch.setattr(plant_demo, "PlantSimulator", Counted)
+    rows = plant_demo.simulate(t_end=0.05)
+    assert len(rows) == 51 and len(times) == 50
+    assert times == pytest.approx(list(rows[:-1, 0]), abs=1e-15)

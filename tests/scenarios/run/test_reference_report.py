@@ -157,3 +157,101 @@ def test_the_windows_split_at_a_tenth_of_a_second_and_where_the_reference_stops(
     assert reference._windows(0.3, ends) == [(0.0, 0.1), (0.1, 0.2), (0.2, 0.3)]
     assert reference._windows(0.2, ends) == [(0.0, 0.1), (0.1, 0.2)]
     assert reference._windows(0.3, ends.system) == [(0.0, 0.1), (0.1, 0.3)]
+
+
+def _recorded_report(monkeypatch, capsys, argv):
+    """``reference.main(argv)`` with the runs replaced by records of what they were asked (the
+    system, the keyword arguments): {label: (result compared, reference compared)} per printed
+    line, and every reference run.  ``deviation`` answers the number of its call as the rms, which
+    tells which two runs each line compared."""
+    import types
+
+    import fmus.cosim.master
+
+    runs, compared = [], []
+
+    def reference_run(system, **kwargs):
+        plant = next(c.name for c in system.components if c.model == "FiveBarPlant")
+        run = types.SimpleNamespace(system=system, kwargs=kwargs, method="DOP853", rtol=kwargs["rtol"],
+                                    atol=kwargs["atol"], wall_s=0.0, nfev=0, completed=True, error="",
+                                    extra={"mean_steps_per_interval": 1.0, "plant": plant})
+        runs.append(run)
+        return run
+
+    def simulate(system):
+        return types.SimpleNamespace(system=system, kwargs=None, wall_s=0.0, completed=True, error=None)
+
+    def deviation(result, ref, a=None, b=None):
+        compared.append((result, ref))
+        return {"rms": float(len(compared) - 1), "max": 0.0, "t_max": 0.0}
+
+    monkeypatch.setattr(reference, "reference_run", reference_run)
+    monkeypatch.setattr(reference, "deviation", deviation)
+    monkeypatch.setattr(fmus.cosim.master, "simulate", simulate)
+    assert reference.main(argv) == 0
+    lines = [line for line in capsys.readouterr().out.splitlines() if "all: rms" in line]
+    return {line.split(" | ")[0].rstrip(): compared[int(_rms(line, ""))] for line in lines}, runs
+
+
+def _params(run, name):
+    return run.system.component(name).parameters
+
+
+def test_each_variant_line_compares_the_runs_its_label_names(monkeypatch, capsys):
+    """``--variants`` on the twin's LuGre scene (drives, encoders): each line's two runs are those
+    its label names, read back from the systems and arguments they got: the three couplings, the
+    plant's RK4 substeps = 4 as a parameter and as the master's Component substeps, the encoder
+    at exactly 2^30 counts on both sides, mu = 0 on every drive (LuGre ones turned to tanh, which
+    needs no mu), both at once; every reference at the tolerances given.  Seed 4101 [101] (the
+    encoder's counts 2 * 30 went unseen: its line still differs from 0) and its siblings: a
+    coupling, a substep count, a drive or a variant's side left unchanged."""
+    from dataclasses import replace
+
+    from scenarios.scenes.catalogue import get_scene
+
+    scene = get_scene("bench_real_circle_TCMDx")
+    lines, runs = _recorded_report(monkeypatch, capsys, [scene.name, "--stop-time", "0.02", "--rtol", "3e-9",
+                                                         "--variants"])
+    base = scene.system
+    assert all(r.kwargs["rtol"] == 3e-9 and r.kwargs["atol"] == reference.ATOL for r in runs)
+    assert all(r.system.stop_time == 0.02 for r in runs)
+    master, ref = lines["master - reference"]
+    assert master.kwargs is None and ref.kwargs == {"rtol": 3e-9, "atol": reference.ATOL}
+    assert master.system == ref.system == replace(base, stop_time=0.02)
+    couplings = {label: tuple(r.kwargs and r.kwargs.get("coupling") for r in pair) for label, pair in lines.items()}
+    assert couplings["reference(cosim coupling) - reference"] == ("cosim", None)
+    assert couplings["  master - reference(cosim): plant RK4"] == (None, "cosim")
+    assert couplings["  ref(cosim) - ref(held_speed): torque held"] == ("cosim", "held_speed")
+    assert couplings["  ref(held_speed) - reference: speed held"] == ("held_speed", None)
+    assert couplings["reference(mean torque) - reference"] == ("mean", None)
+
+    rk4, ref = lines["master, plant RK4 substeps=4 - reference"]
+    assert _params(rk4, "plant") == {**_params(ref, "plant"), "substeps": 4}
+    assert rk4.system.component("plant").substeps == ref.system.component("plant").substeps == 1
+    multi, ref = lines["master, plant Component substeps=4 - ref."]
+    assert multi.system.component("plant").substeps == 4 and _params(multi, "plant") == _params(ref, "plant")
+
+    drives = ("drive1", "drive2")
+    for label, encoder, friction in (("encoder 2^30 counts", True, False), ("mu = 0", False, True),
+                                     ("mu = 0 and encoder 2^30", True, True)):
+        pair = lines[f"{label}: master - reference"]
+        assert pair[0].kwargs is None and pair[1].kwargs == {"rtol": 3e-9, "atol": reference.ATOL}
+        assert pair[0].system == pair[1].system, label   # the same change on both sides
+        plant = _params(pair[0], "plant")
+        assert plant.get("encoder_counts") == (2 ** 30 if encoder else None), label
+        for d in drives:
+            expected = {**base.component(d).parameters, "mu": 0.0, "friction": "tanh"} if friction \
+                else base.component(d).parameters
+            assert _params(pair[0], d) == expected, (label, d)
+        others = [c for c in pair[0].system.components if c.name not in drives + ("plant",)]
+        assert others == [c for c in base.components if c.name not in drives + ("plant",)]
+
+
+def test_a_scene_without_drives_or_encoders_has_no_coupling_or_variant_lines(monkeypatch, capsys):
+    """The thesis' ideal-actuator scene: no drives (no coupling lines, no mu = 0), no encoder (no
+    2^30 line): only the master against the reference and the two substep lines remain, at the
+    default tolerances.  Catches a variant offered where it changes nothing."""
+    lines, runs = _recorded_report(monkeypatch, capsys, ["thesis_sim_circle", "--stop-time", "0.02", "--variants"])
+    assert list(lines) == ["master - reference", "master, plant RK4 substeps=4 - reference",
+                           "master, plant Component substeps=4 - ref."]
+    assert [r.kwargs for r in runs] == [{"rtol": reference.RTOL, "atol": reference.ATOL}]

@@ -76,3 +76,38 @@ def test_the_signal_figures_plot_each_quantity_against_time_with_the_metric_wind
         assert all(edge.get_linestyle() == ":" for edge in edges)
     assert (top.get_xlabel(), bottom.get_xlabel()) == ("", "t [s]")
     assert top.get_title() == f"{SCENE.name} (dotted: metric window)" and bottom.get_title() == ""
+
+
+def test_the_figures_keep_their_drawn_style_size_and_resolution(figures, tmp_path):
+    """The path: the reference dashed black under the end effector solid in the first colour, both
+    at the same thin width 1 (the dash and the colour tell them apart, not the weight), a legend
+    naming both, equal axes (a circle stays round); the signal panels: each signal at width 0.8
+    on a light grid, the window's edges grey (0.6) at width 0.6, thinner than the signal.  Each
+    file 120 dpi, the path 5 x 5 in, the signal figures 7 x 5 in, sharing the time axis.  Seed
+    4101 [133] (the reference drawn at width 2 went unseen) and its siblings: any width, colour,
+    line style, size or resolution changed."""
+    from matplotlib.colors import to_rgba
+    from PIL import Image
+
+    files = plot_run(SCENE, _columns(), tmp_path)
+    (ax,) = figures[0].axes
+    reference, effector = ax.lines
+    assert (reference.get_linestyle(), to_rgba(reference.get_color())) == ("--", to_rgba("k"))
+    assert (effector.get_linestyle(), to_rgba(effector.get_color())) == ("-", to_rgba("C0"))
+    assert reference.get_linewidth() == effector.get_linewidth() == 1.0
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == ["reference", "end effector"]
+    assert ax.get_aspect() == 1.0
+    assert tuple(figures[0].get_size_inches()) == (5.0, 5.0)
+    for fig in figures[1:]:
+        assert tuple(fig.get_size_inches()) == (7.0, 5.0)
+        top, bottom = fig.axes
+        assert top.get_shared_x_axes().joined(top, bottom)
+        for panel in (top, bottom):
+            signal, *edges = panel.lines
+            assert signal.get_linewidth() == 0.8 and signal.get_linestyle() == "-"
+            assert all(e.get_linewidth() == 0.6 and to_rgba(e.get_color()) == to_rgba("0.6") for e in edges)
+            assert all(line.get_visible() for line in panel.get_xgridlines() + panel.get_ygridlines())
+            assert panel.get_xgridlines()[0].get_alpha() == 0.3
+    for f in files:   # PNG stores whole pixels per metre: 120 dpi is 4724 px/m, read back as 119.99 dpi
+        with Image.open(f) as image:
+            assert image.info["dpi"] == pytest.approx((120, 120), abs=0.0254), f.name

@@ -158,3 +158,41 @@ def test_each_fidelity_effect_reaches_the_components_it_names():
     full = bench("TCq", "triangle").system
     assert full.component("drive1").parameters["method"] == "exact" and "delay_steps" not in full.component("ctrl").parameters
     assert "fidelity" not in bench("TCq", "triangle").description
+
+
+def test_the_remaining_fidelity_effects_reach_their_components_and_rewire_the_speeds():
+    """bench(..., Fidelity(...)) for the effects the test above leaves at their defaults: quasi-static
+    electrics, no Coulomb friction (mu = 0, b kept), a current offset and extra drive parameters
+    on both drives, LuGre friction; the plant's three gravity components, reaching the
+    controller's model (x and y only) only with ``model_gravity``; the plant starting at the
+    trajectory's start point; without the derivator, the controller and the observers read the
+    plant's exact speeds (no accelerations), with it the derivator's.  Seed 4101 [68]'s
+    neighbours (a field read from the wrong effect, an index or a source swapped)."""
+    from scenarios.scenes.thesis import Fidelity, bench
+
+    f = Fidelity(electrics="quasi_static", coulomb=False, current_offset=0.03, drive_parameters=(("mu_s", 0.06),),
+                 gravity=(0.1, -0.2, 9.81), derivator=False)
+    system = bench("PDq", "triangle", fidelity=f).system
+    for j in ("1", "2"):
+        drive = system.component(f"drive{j}").parameters
+        assert (drive["method"], drive["mu"], drive["current_offset"], drive["mu_s"]) == ("quasi_static", 0.0, 0.03, 0.06)
+        assert "b" not in drive and "friction" not in drive and "noise_instance" not in drive
+    plant, ctrl = system.component("plant").parameters, system.component("ctrl").parameters
+    assert (plant["gravity_x"], plant["gravity_y"], plant["gravity_z"]) == (0.1, -0.2, 9.81)
+    assert (plant["x0"], plant["y0"]) == from_parameters("triangle").start_point
+    assert not any(k.startswith("gravity") for k in ctrl)
+    sources = {c.target: c.source for c in system.connections}
+    for j in ("1", "2"):
+        assert (sources[f"ctrl.q{j}"], sources[f"ctrl.dq{j}"], sources[f"obs{j}.omega"]) == \
+            (f"plant.q{j}_enc", f"plant.dq{j}", f"plant.dq{j}")
+        assert f"ctrl.ddq{j}" not in sources
+    assert "deriv" not in {c.name for c in system.components}
+
+    modelled = bench("PDq", fidelity=Fidelity(gravity=(0.1, -0.2, 9.81), model_gravity=True, friction="lugre")).system
+    assert {k: v for k, v in modelled.component("ctrl").parameters.items() if k.startswith("gravity")} == \
+        {"gravity_x": 0.1, "gravity_y": -0.2}
+    sources = {c.target: c.source for c in modelled.connections}
+    for j in ("1", "2"):
+        assert modelled.component(f"drive{j}").parameters["friction"] == "lugre"
+        assert (sources[f"ctrl.dq{j}"], sources[f"ctrl.ddq{j}"], sources[f"obs{j}.omega"], sources[f"deriv.q{j}"]) == \
+            (f"deriv.dq{j}", f"deriv.ddq{j}", f"deriv.dq{j}", f"plant.q{j}_enc")

@@ -164,7 +164,7 @@ def test_the_fit_reads_only_the_circle_and_finds_the_global_minimum(monkeypatch,
     off) and the true minimum at friction_scale 3.5: a descent from the start alone stays in
     the dip, the screened starts find the minimum; the best point is written.  Every run of the
     screen and the descents is on the seeds given to the fit (training 4244 [3]: the point passed
-    as the seeds)."""
+    as the seeds).  The record names the screen's 2 best losses, those the descents began from."""
     monkeypatch.setattr(twin_fit, "THESIS_BENCH", {"circle": THESIS_BENCH["circle"]})
     monkeypatch.setattr(twin_fit, "THESIS_MD_CHANGE", {"circle": THESIS_MD_CHANGE["circle"]})
     kinds, seeds_run = [], set()
@@ -193,6 +193,13 @@ def test_the_fit_reads_only_the_circle_and_finds_the_global_minimum(monkeypatch,
     # the record: the seeds given, and the fit's wall time within the call's (rounded to 0.1 s; seed 4001 [277])
     info = read_fit(tmp_path / "fit.toml")
     assert info["seeds"] == [7, 8] and 0.0 <= info["wall_s"] <= took + 0.05
+    # the screen's record: the losses of the 2 starts the descents began from, best first, none
+    # better than the screen's start point (screened too) and none better than the fit's end
+    # (seed 4101 [295]: all 16 screened points recorded as the starts' went unseen)
+    best_screened = info["screen_best"]
+    assert len(best_screened) == 2 and best_screened == sorted(best_screened)
+    assert best_screened[0] <= round(info["start_loss"], 5) and info["loss"] <= best_screened[0] + 1e-5
+    assert "16 scrambled Sobol points" in info["optimizer"] and info["optimizer"].endswith("from the 2 best")
 
 
 def test_the_shipped_calibration_gives_the_reported_circle():
