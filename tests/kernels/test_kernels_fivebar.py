@@ -155,16 +155,21 @@ def test_stages_far_from_the_start_near_stretched_elbows_are_computed_afresh(sta
     2^-5 rad the turning series holds for.  Catches a turn-or-fresh choice that looks at a
     stage's angle instead of its distance from the start (it would turn these stages by the
     series and lose 1e-8): the trial equals RK4 of fresh derivatives to 1e-14."""
+    z, trial, fresh = _swept_step([4, 6], start, rate)
+    assert np.all(np.abs(trial - fresh) <= 1e-14 * np.maximum(np.abs(fresh), 1.0))
+    assert np.abs(trial[[4, 6]] - z[[4, 6]]).min() > 0.25      # the stages did move that far
+
+
+def _swept_step(angles, start, rate, dt=2e-2):
+    """(z, trial, fresh): the bench's state with the ``angles`` (state indices) at ``start`` and their
+    rates at ``rate``, the kernel's step of ``dt`` from it and RK4 of fresh derivatives over the same."""
     sim = PlantSimulator(get_preset("bench"), 0.0, 0.15)
     kernel = sim._fast
     baumgarte, substeps = kernel.s[0], int(kernel.s[1])
     z = sim.y.copy()
-    z[[4, 6]], z[[11, 13]] = start, rate
-    dt = 2e-2
+    z[angles], z[[k + 7 for k in angles]] = start, rate
     trial = kernel.advance(z, 0.0, 0.0, baumgarte, dt, substeps)
-    fresh = _rk4_fresh(kernel, z, (0.0, 0.0), baumgarte, dt, substeps)
-    assert np.all(np.abs(trial - fresh) <= 1e-14 * np.maximum(np.abs(fresh), 1.0))
-    assert np.abs(trial[[4, 6]] - z[[4, 6]]).min() > 0.25      # the stages did move that far
+    return z, trial, _rk4_fresh(kernel, z, (0.0, 0.0), baumgarte, dt, substeps)
 
 
 @pytest.mark.parametrize("index", [0, 1])

@@ -8,8 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from plant import PlantSimulator, get_preset
-from tests.kernels.test_kernels_fivebar import _rk4_fresh
+from tests.kernels.test_kernels_fivebar import _swept_step
 
 
 @pytest.mark.parametrize("start, rate", [(0.5, -48.0), (-0.5, 48.0), (0.3, -29.0)])
@@ -19,14 +18,7 @@ def test_stages_far_from_the_start_near_zero_proximal_angles_are_computed_afresh
     the turning series.  Catches a turn-or-fresh choice that looks at a proximal angle instead
     of its distance from the start (the series at 0.5 rad is off by about 1e-8): the trial
     equals RK4 of fresh derivatives to 1e-14 of max(1, |entry|)."""
-    sim = PlantSimulator(get_preset("bench"), 0.0, 0.15)
-    kernel = sim._fast
-    baumgarte, substeps = kernel.s[0], int(kernel.s[1])
-    z = sim.y.copy()
-    z[[3, 5]], z[[10, 12]] = start, rate
-    dt = 2e-2
-    trial = kernel.advance(z, 0.0, 0.0, baumgarte, dt, substeps)
-    fresh = _rk4_fresh(kernel, z, (0.0, 0.0), baumgarte, dt, substeps)
+    z, trial, fresh = _swept_step([3, 5], start, rate)
     assert np.all(np.isfinite(fresh))
     assert np.all(np.abs(trial - fresh) <= 1e-14 * np.maximum(np.abs(fresh), 1.0))
     assert np.abs(trial[[3, 5]] - z[[3, 5]]).min() > 0.25      # the stages did move that far
