@@ -134,3 +134,18 @@ def test_a_non_finite_state_word_is_refused_naming_its_index():
             y[i] = bad
             refusal = kernels.Refusal()
             assert K.condition(prm, y, refusal) == K.NONFINITE and refusal.index == i, (i, bad)
+
+
+@pytest.mark.parametrize("dt, code", [(2.0 ** -1074, K.OK), (0.0, K.BAD_STEP), (-0.0, K.BAD_STEP),
+                                      (-2.0 ** -1074, K.BAD_STEP), (math.nan, K.BAD_STEP)])
+def test_the_plain_step_takes_any_finite_positive_step_length(dt, code):
+    """pc_wheeled_step's step length must be > 0 and finite (seed 4101 [286]: ``>=`` took a step of
+    0): the smallest positive double is accepted, zero of either sign, the largest negative and NaN
+    refused by BAD_STEP with index 0 and the length, the state kept."""
+    sim = WheeledPendulum(initial=dict(psi=0.05))
+    start, calls = sim.y.copy(), K.calls(sim)
+    assert calls.step(0.0, 0.0, 0.0, dt, 1) == code
+    if code != K.OK:
+        value = calls.refusal.value
+        assert calls.refusal.index == 0 and (value == dt or math.isnan(dt) and math.isnan(value))
+        np.testing.assert_array_equal(sim.y, start)
