@@ -43,21 +43,23 @@ def test_distal_circles_that_touch_assemble_at_the_touching_point(l12, l22, tip,
         assert (code, distance) == (k5r.NO_ASSEMBLY, 0.5), (n12, n22)
 
 
+@pytest.mark.parametrize("py", [0.0, -0.0])
 @pytest.mark.parametrize("elbow", [1.0, -1.0])
 @pytest.mark.parametrize("px, stretched", [(0.375, True), (0.125, False)])
-def test_a_chain_reaches_a_point_exactly_stretched_or_folded(px, stretched, elbow):
+def test_a_chain_reaches_a_point_exactly_stretched_or_folded(px, stretched, elbow, py):
     """Catches an inverse kinematics that refuses cos(beta) = +1 or -1 (a chain of 1/4 and
     1/8 m reaching a point 3/8 or 1/8 m from its base): the angles are the point's direction
     and the distal link along it (stretched) or back (folded); a point nudged further out
     (or in) is refused with its distance.  Either elbow: phi1 = atan2(py, px) - atan2(b, a) = 0
-    exactly (b = -0 for elbow -1: no full turn added to an angle of 0), phi2 = elbow * beta."""
+    exactly (b = -0 for elbow -1: no full turn added to an angle of 0), phi2 = elbow * beta.  A point
+    at y = -0.0 gives phi1 = -0.0, still no full turn (seed 4101 [283]: ``p1 >= 0.0`` took one off)."""
     phi1, phi2 = ctypes.c_double(), ctypes.c_double()
-    code = chain_ik(0.25, 0.125, px, 0.0, elbow, ctypes.byref(phi1), ctypes.byref(phi2), None)
+    code = chain_ik(0.25, 0.125, px, py, elbow, ctypes.byref(phi1), ctypes.byref(phi2), None)
     assert code == k5r.OK and phi1.value == 0.0
     assert phi2.value == pytest.approx(0.0 if stretched else elbow * 3.141592653589793, abs=1e-7)
     beyond = px + NUDGE if stretched else px - NUDGE
     distance = ctypes.c_double()
-    assert chain_ik(0.25, 0.125, beyond, 0.0, elbow, ctypes.byref(phi1), ctypes.byref(phi2),
+    assert chain_ik(0.25, 0.125, beyond, py, elbow, ctypes.byref(phi1), ctypes.byref(phi2),
                         ctypes.byref(distance)) == k5r.OUT_OF_REACH
     assert distance.value == beyond
 
