@@ -187,15 +187,16 @@ class Stepper:
             plan.append(Entry(name, inst, tuple(v.name for v in in_vars), tuple(self._slot(c.source) for c in feeds[name]),
                               tuple(v.name for v in out_vars), tuple(self.slots[s] for s in produced[name]),
                               system.component(name).substeps))
-        fed_by = {c.target: c.source for c in system.connections}   # a connected input reads its source's slot
-        unrecordable = [s for s in system.record if s not in self.slots and s not in fed_by]
+        fed_by = {c.target: c.source for c in system.connections}   # a connected input records its source's slot
+        recorded = [s if s in self.slots else fed_by.get(s) for s in system.record]
+        unrecordable = [s for s, slot in zip(system.record, recorded) if slot is None]
         if unrecordable:
             raise ValueError(f"recorded signals must be outputs or connected inputs: {unrecordable}")
         #: The entries in stepping order (:class:`Entry`).
         self.plan = tuple(plan)
         #: The plan's multi-rate groups (:class:`Group`).
         self.groups = tuple(rate_groups(self.plan))
-        self.record_slots = [self.slots[s] if s in self.slots else self.slots[fed_by[s]] for s in system.record]
+        self.record_slots = [self.slots[s] for s in recorded]
         self._record = _gatherer(self.record_slots)
         self._calls = {}     # instance name -> its MemberCalls, made once
         if kernels is not None and not jacobi:     # the segments' C call reads and writes the slots in place

@@ -53,6 +53,7 @@ checked by a run (:func:`check_tracking`, a :class:`TrackingWarning` by name out
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -237,8 +238,6 @@ def choose_substeps_by_trial(scene: Scene, system: System, variables: dict, goal
         No n of :data:`SUBSTEP_CHOICES` reaches it, or our own run gives no finite, positive
         e_ef and τ_ef to compare with (pass ``substeps``).
     """
-    import math
-
     from fmus.cosim.master import simulate
 
     ours = _tracking(scene, simulate(scene.system, mode="inprocess"), 1)
