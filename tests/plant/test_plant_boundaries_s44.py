@@ -3,12 +3,14 @@ sample 4421's lesson: a strict and a loose comparison differ only at the bound i
 
 A counter-mass exactly 10 chain lengths behind its joint (plant/presets.py: refused only
 *beyond* COUNTER_REACH), an exact speed measurement exactly 1e-10 off the model's
-(plant/correction.py: taken only *beyond* EXACT_TOLERANCE)."""
+(plant/correction.py: taken only *beyond* EXACT_TOLERANCE), an inertia eigenvalue of exactly
+-1e-15 kg m^2 (plant/spec.py: refused only *below* that round-off)."""
 from __future__ import annotations
 
 import math
 from dataclasses import replace
 
+import numpy as np
 import pytest
 
 from plant import PlantSimulator, fivebar, get_preset
@@ -57,3 +59,22 @@ def test_an_exact_speed_exactly_1e_10_off_the_models_changes_nothing_and_the_nex
     assert z is not None
     rates = dict(zip(("dq1", "dq2"), fivebar.world_rates(z[7:])))
     assert rates[name] == pytest.approx(beyond, rel=1e-9)
+
+
+def test_an_inertia_eigenvalue_of_minus_1e_15_is_taken_as_round_off_and_the_next_number_below_refused():
+    """plant/spec.py accepts an inertia as positive semi-definite up to a round-off of 1e-15 kg m^2
+    in its smallest eigenvalue: principal moments (2e-4, 1e-4, -1e-15) load (the diagonal as
+    written), one ulp below -1e-15 is refused naming the key."""
+    from plant import spec as plant_spec
+    from tests.plant.test_spec import GOOD
+
+    def spec_with(smallest):
+        return GOOD.replace("mass = 0.2", f"mass = 0.2\ninertia = [2e-4, 1e-4, {smallest!r}]", 1)
+
+    spec = plant_spec.loads(spec_with(-1e-15), source="t.toml")
+    inertia = spec.chains[0].chain.links[1].inertia
+    assert np.array_equal(np.asarray(inertia), np.diag([2e-4, 1e-4, -1e-15]))
+    below = math.nextafter(-1e-15, -1.0)
+    with pytest.raises(plant_spec.SpecError, match=r"chains\[0\]\.links\[1\]\.inertia = .*: must be symmetric "
+                                                   r"positive semi-definite \[kg m2\]$"):
+        plant_spec.loads(spec_with(below), source="t.toml")
