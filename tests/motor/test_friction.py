@@ -207,3 +207,24 @@ def test_the_stribeck_curve_is_3_read_from_the_friction_array():
     assert fr.stribeck(f, 0.125) == pytest.approx(model.Fc + (model.Fs - model.Fc) / math.e, rel=1e-14)
     assert fr.stribeck(f, -0.4) == fr.stribeck(f, 0.4)
     assert f[fr.F_Z] == 7e-4                                   # G reads the array, never writes it
+
+
+@pytest.mark.parametrize("field", ["sigma1", "sigma2"])
+def test_a_damping_of_exactly_zero_is_accepted_and_the_next_number_below_it_refused(field):
+    """σ1, σ2 >= 0 (the docstring): 0 itself is a LuGre model without that damping.  Catches the
+    bound made strict (0 refused) or loose the other way (the smallest negative accepted)."""
+    assert getattr(fr.LuGre(**{**PAPER, field: 0.0}), field) == 0.0
+    below = -math.ulp(0.0)
+    with pytest.raises(ValueError, match=f"{field}.* = {below!r} must be >= 0$"):
+        fr.LuGre(**{**PAPER, field: below})
+
+
+def test_a_break_away_torque_of_zero_is_refused_as_below_the_coulomb_torque_and_equal_to_it_accepted():
+    """Fs >= Fc is the only bound on Fs: Fs = 0 is refused for being below Fc (not as a negative
+    number), Fs = Fc (no Stribeck dip) is accepted, the next number below Fc refused."""
+    with pytest.raises(ValueError, match=r"^LuGre friction: the break-away torque Fs \(mu_s\) = 0.0 must be >= "
+                                         r"the Coulomb torque Fc \(mu\) = 1.0$"):
+        fr.LuGre(**{**PAPER, "Fs": 0.0})
+    assert fr.LuGre(**{**PAPER, "Fs": PAPER["Fc"]}).Fs == PAPER["Fc"]
+    with pytest.raises(ValueError, match="must be >= the Coulomb torque"):
+        fr.LuGre(**{**PAPER, "Fs": math.nextafter(PAPER["Fc"], 0.0)})
