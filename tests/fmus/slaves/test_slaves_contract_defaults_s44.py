@@ -31,6 +31,10 @@ ROWS = [
     ("`delay_compensation` (a) and `velocity_delay_compensation` (b), 0-8, default 0", "PositionController",
      {"delay_compensation": 0, "velocity_delay_compensation": 0}),
     ("`frequency` (circle: turns per second, default 1", "Trajectory", {"frequency": 1.0}),
+    ("`substeps` (RK4 per step, 2), `encoder_counts` (4096)", "WheeledPendulum",
+     {"substeps": 2, "encoder_counts": 4096}),
+    ("`BalanceController` (sampled, T = 1 ms)", "BalanceController", {"T": 1e-3}),
+    ("`v_battery` (8 V, an assumption)", "BalanceController", {"v_battery": 8.0}),
 ] + [("Integer parameter `sample_phase` (causality parameter, variability fixed, default 0)", model,
       {"sample_phase": 0}) for model in SAMPLED]
 
