@@ -9,8 +9,9 @@ from types import SimpleNamespace
 
 import pytest
 
+from fmus.cosim.system import Component, Connection, System
 from scenarios.packaging import per_component
-from scenarios.packaging.per_component import TRACKING_BOUND, TrackingWarning, check_tracking
+from scenarios.packaging.per_component import PHASE, TRACKING_BOUND, TrackingWarning, check_tracking, component_timing
 
 SCENE = SimpleNamespace(name="bench_circle_PDx")
 SYSTEM = SimpleNamespace(step=1e-3, components=(SimpleNamespace(parameters={"x0": 0.0}),
@@ -47,3 +48,31 @@ def test_the_default_bound_is_issue_26s_five_percent_and_the_warning_names_what_
     assert text.startswith("scene bench_circle_PDx (strategy PDx): its per-component package at 4 sub-step(s) "
                            "per period (h = 0.00025 s) does not track in a Jacobi master: e_ef x1.060, "
                            "tau_ef x0.970 of parcosim run's (bound x1.05)")
+
+
+def _var(causality, variability="continuous"):
+    return SimpleNamespace(causality=causality, variability=variability)
+
+
+def test_a_sampled_components_period_exactly_1e_12_relative_off_the_scenes_is_its_period():
+    """The period check refuses a T off the scene's step by *more than* 1e-12 relative.  At the
+    step 5e15 * 2^-62 s (about 1.08 ms) 1e-12 of it is 5000 units of its last place, so
+    T = step (1 +- 1e-12) are exact floats on the boundary: accepted (the same phases as at
+    T = step); one float farther is refused naming the component.  Catches ``>=`` for ``>``."""
+    step = 5e15 * 2.0 ** -62
+    assert 1e-12 * step == 5000 * math.ulp(step)                   # the boundary is a float difference
+
+    def system(T):
+        comps = (Component("a", "A", {"T": T}), Component("p", "P", {}))
+        return System(comps, (Connection("p.y", "a.u"), Connection("a.y", "p.u")), ("p.y",), 1.0, step)
+
+    variables = {"a": {"u": _var("input"), "y": _var("output", "discrete"), PHASE: _var("parameter", "fixed")},
+                 "p": {"u": _var("input"), "y": _var("output")}}
+    nominal = component_timing(system(step), variables)
+    for T in (step + 1e-12 * step, step - 1e-12 * step):
+        assert abs(T - step) == 1e-12 * step
+        assert component_timing(system(T), variables) == nominal, T
+    for T in (math.nextafter(step + 1e-12 * step, 1.0), math.nextafter(step - 1e-12 * step, 0.0)):
+        with pytest.raises(ValueError, match=rf"a\.T = {T!r} s: the per-component package samples every component "
+                                             rf"at the scene's period {step!r} s"):
+            component_timing(system(T), variables)
