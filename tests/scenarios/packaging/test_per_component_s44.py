@@ -76,3 +76,38 @@ def test_a_sampled_components_period_exactly_1e_12_relative_off_the_scenes_is_it
         with pytest.raises(ValueError, match=rf"a\.T = {T!r} s: the per-component package samples every component "
                                              rf"at the scene's period {step!r} s"):
             component_timing(system(T), variables)
+
+
+def test_a_one_stage_chain_samples_on_the_second_sub_step_from_two_sub_steps_on():
+    """The module: a one-stage chain (the sampled component reads the plant directly) samples on
+    the period's second sub-step -- when the period has one (n >= 2): phase 1 at n = 2 and 4,
+    0 at n = 1.  Catches the shift applied from n = 3 only (``>`` for ``>=``)."""
+    step = 1e-3
+    system = System((Component("a", "A", {}), Component("p", "P", {})),
+                    (Connection("p.y", "a.u"), Connection("a.y", "p.u")), ("p.y",), 1.0, step)
+    variables = {"a": {"u": _var("input"), "y": _var("output", "discrete"), PHASE: _var("parameter", "fixed")},
+                 "p": {"u": _var("input"), "y": _var("output")}}
+    assert component_timing(system, variables, 1).phases == {"a": 0}
+    assert component_timing(system, variables, 2).phases == {"a": 1}
+    assert component_timing(system, variables, 4).phases == {"a": 1}
+
+
+def test_the_trial_measures_the_scenes_floor_only_when_the_first_n_misses_the_goal_by_more_than_it(monkeypatch):
+    """A first try whose deviation is exactly the goal (2^-7, so 1 - 2^-7 is exact) is within it:
+    taken without measuring the scene's own floor (0.0 returned); a float more measures it
+    (then within goal + floor: taken at once with that floor).  Catches ``>=`` for ``>``."""
+    goal = 2.0 ** -7
+    floors = []
+    ratios = {}
+    monkeypatch.setattr(per_component, "_tracking", lambda scene, result, every: (1.0, 1.0))
+    monkeypatch.setattr("fmus.cosim.master.simulate", lambda *a, **kw: None)
+    monkeypatch.setattr(per_component, "component_timing", lambda system, variables: SimpleNamespace(substeps=4))
+    monkeypatch.setattr(per_component, "jacobi_ratios", lambda scene, system, variables, n, ours: ratios[n])
+    monkeypatch.setattr(per_component, "reproducibility", lambda scene: floors.append(scene) or 0.25)
+    scene = SimpleNamespace(name="made_up", system=None)
+    ratios[4] = (1.0, 1.0 - goal)
+    assert per_component.choose_substeps_by_trial(scene, None, {}, goal=goal) == (4, {4: ratios[4]}, 0.0)
+    assert floors == []
+    ratios[4] = (math.nextafter(1.0 + goal, 2.0), 1.0)
+    assert per_component.choose_substeps_by_trial(scene, None, {}, goal=goal) == (4, {4: ratios[4]}, 0.25)
+    assert floors == [scene]
