@@ -1,0 +1,39 @@
+"""scenarios/run/runner.py ``run_scene``'s files for a run with a single row (issue 31, session 44:
+the plots' row-count boundary hit exactly): a refused initialisation records t = 0 only; its
+out dir holds result.csv and metrics.json read back exactly, and no figure (a path needs two
+points)."""
+from __future__ import annotations
+
+import csv
+import json
+
+from fmus.cosim.system import Component, System
+from scenarios.run.runner import run_scene
+from scenarios.scenes.scene import Scene
+
+
+def _refused_at_start() -> Scene:
+    """The bench plant started far off its workspace (x0 = 5 m): its initialisation refuses."""
+    components = (Component("traj", "Trajectory", {"kind": "hold"}),
+                  Component("ctrl", "PositionController", {"strategy": "PDx"}),
+                  Component("plant", "FiveBarPlant", {"preset": "bench", "x0": 5.0, "y0": 0.108}))
+    record = ("plant.x", "plant.y", "traj.x_d", "traj.y_d", "ctrl.tau1", "ctrl.tau2")
+    system = System(components, (), record, stop_time=0.01)
+    columns = dict(zip(("x", "y", "x_d", "y_d", "tau1", "tau2"), record))
+    return Scene("refused_start", "refused at its start", system, columns, (0.0, 0.01), 0.01, "none")
+
+
+def test_a_run_of_one_row_writes_its_csv_and_metrics_but_no_figure(tmp_path):
+    """Plots asked for (the default), one row recorded: the files are the csv and the metrics
+    only, the csv's one row at t = 0 and the metrics' outcome the refused initialisation.
+    Catches the figures drawn from one row (``>=`` for ``>`` on the row count)."""
+    outcome = run_scene(_refused_at_start(), out_dir=tmp_path)
+    assert len(outcome.columns["t"]) == 1 and not outcome.result.interrupted
+    assert [f.name for f in outcome.files] == ["result.csv", "metrics.json"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["metrics.json", "result.csv"]
+    with open(tmp_path / "result.csv", newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    assert len(rows) == 1 and float(rows[0]["t"]) == 0.0
+    metrics = json.loads((tmp_path / "metrics.json").read_text())
+    assert metrics["error"]["instance"] == "plant" and metrics["error"]["time"] == 0.0
+    assert metrics["simulated_s"] == 0.0 and metrics["completed"] is False
