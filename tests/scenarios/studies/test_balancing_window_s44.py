@@ -57,13 +57,14 @@ def test_the_window_ends_themselves_are_in_the_window(monkeypatch):
 
 
 def test_the_saturation_share_counts_the_samples_at_the_supply_voltage(monkeypatch):
-    """Samples at exactly the supply's v_max are saturated, those a part in 10^6 below are not
-    (the share's bound is v_max up to rounding); the window has 501 + 3 samples here."""
+    """Samples at exactly the supply's v_max are saturated, and so is one at the bound's rounding
+    slack exactly, v_max (1 - 1e-9); one a part in 10^6 below is not (the share's bound is v_max
+    up to rounding); the window has 501 + 4 samples here.  Catches ``>`` for ``>=``."""
     v_max = get_motor_preset("motor1").v_max
     row = _row(monkeypatch, {START + 0.001: ("v1", v_max), START + 0.003: ("v2", -v_max),
-                             START + 0.005: ("v1", v_max * (1 - 1e-6))})
-    n = 501 + 3
-    assert row["saturated_pct"] == pytest.approx(100.0 * 2 / n, rel=1e-12)
+                             START + 0.005: ("v1", v_max * (1 - 1e-6)), START + 0.007: ("v2", v_max * (1 - 1e-9))})
+    n = 501 + 4
+    assert row["saturated_pct"] == pytest.approx(100.0 * 3 / n, rel=1e-12)
     assert row["v_peak_V"] == v_max
 
 
