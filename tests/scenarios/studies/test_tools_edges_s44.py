@@ -42,3 +42,12 @@ def test_a_scene_has_drives_when_it_has_both_drive_instances_even_alone():
 
     assert tools._has_drives(named("drive1", "drive2")) and tools._has_drives(named("plant", "drive2", "drive1"))
     assert not tools._has_drives(named("drive1", "plant")) and tools._has_drives(SCENE)
+
+
+def test_a_run_whose_last_row_is_exactly_1e_6_s_before_the_stop_reached_it():
+    """``completed`` needs the tool's last row at the stop time up to 1e-6 s, inclusive: a last row
+    at exactly stop - 1e-6 completed, one a float earlier did not.  Catches ``>`` for ``>=``."""
+    stop = SCENE.system.stop_time
+    edge = stop - 1e-6
+    assert _metrics([0.0, PERIOD, edge], [0.0, 0.0, 0.0])["completed"] is True
+    assert _metrics([0.0, PERIOD, math.nextafter(edge, 0.0)], [0.0, 0.0, 0.0])["completed"] is False
