@@ -23,3 +23,19 @@ def test_a_slice_inside_the_workspace_assembles_its_first_and_last_rows_and_colu
     assert np.allclose(ws.x, closed.x, atol=1e-12) and np.allclose(ws.y, closed.y, atol=1e-12)
     assert np.all(ws.status == ws.INSIDE), ws.status
     assert not np.any(np.isnan(serial)) and not np.any(np.isnan(parallel))
+
+
+def test_a_grid_point_whose_margin_is_exactly_the_band_is_inside_not_near_singular(monkeypatch):
+    """The band as the controller takes it (margin < band is near-singular): with the band set to
+    one grid point's own margin, that point is INSIDE and exactly the points of smaller margin
+    are NEAR_SINGULAR.  Catches ``<=`` for ``<``."""
+    spec = plant_spec.load("bench_5r")
+    x0, y0 = float(spec.start[0]), float(spec.start[1])
+    extent = (x0 - 0.01, x0 + 0.01, y0 - 0.01, y0 + 0.01)
+    monkeypatch.setattr(ws_spec, "SPEC_GRID", 5)
+    first, _, _ = ws_spec.slice_map(spec, 0.0, extent=extent)
+    band = float(np.median(first.margin))
+    ws, _, _ = ws_spec.slice_map(spec, band, extent=extent)
+    at = ws.margin == band
+    assert np.any(at) and np.all(ws.status[at] == ws.INSIDE)
+    assert np.array_equal(ws.status == ws.NEAR_SINGULAR, ws.margin < band)
