@@ -37,3 +37,15 @@ def test_a_run_of_one_row_writes_its_csv_and_metrics_but_no_figure(tmp_path):
     metrics = json.loads((tmp_path / "metrics.json").read_text())
     assert metrics["error"]["instance"] == "plant" and metrics["error"]["time"] == 0.0
     assert metrics["simulated_s"] == 0.0 and metrics["completed"] is False
+
+
+def test_the_error_message_is_the_records_message_the_old_text_itself_or_empty():
+    """``error_message``: "" for a completed run (no ``error``, or null), the record's message,
+    a metrics.json of before the record (its ``error`` the text) gives that text."""
+    from scenarios.run.runner import error_message
+
+    assert error_message({}) == "" and error_message({"error": None}) == ""
+    assert error_message({"error": {"kind": "refused", "message": "plant: singular at t = 0.2 s"}}) == \
+        "plant: singular at t = 0.2 s"
+    assert error_message({"error": "drive1: refused"}) == "drive1: refused"
+    assert error_message({"error": {"kind": "refused"}}) == ""
