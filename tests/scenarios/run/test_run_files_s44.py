@@ -49,3 +49,18 @@ def test_the_error_message_is_the_records_message_the_old_text_itself_or_empty()
         "plant: singular at t = 0.2 s"
     assert error_message({"error": "drive1: refused"}) == "drive1: refused"
     assert error_message({"error": {"kind": "refused"}}) == ""
+
+
+def test_a_completed_run_of_two_rows_or_more_writes_its_three_figures(tmp_path):
+    """The other side of the row-count edge: bench_circle_PDq cut to 5 ms (6 rows), plots by
+    default, completed: csv, metrics and the path, errors and torques figures.  Catches the
+    figures' condition inverted on the interruption."""
+    from dataclasses import replace
+
+    from scenarios.scenes.catalogue import get_scene
+
+    scene = get_scene("bench_circle_PDq")
+    scene = replace(scene, system=replace(scene.system, stop_time=0.005))
+    outcome = run_scene(scene, out_dir=tmp_path)
+    assert outcome.result.completed and len(outcome.columns["t"]) == 6
+    assert [f.name for f in outcome.files] == ["result.csv", "metrics.json", "path.png", "errors.png", "torques.png"]
