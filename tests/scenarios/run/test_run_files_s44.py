@@ -64,3 +64,26 @@ def test_a_completed_run_of_two_rows_or_more_writes_its_three_figures(tmp_path):
     outcome = run_scene(scene, out_dir=tmp_path)
     assert outcome.result.completed and len(outcome.columns["t"]) == 6
     assert [f.name for f in outcome.files] == ["result.csv", "metrics.json", "path.png", "errors.png", "torques.png"]
+
+
+def test_a_write_error_keeps_the_errors_errno_and_is_eio_without_one(tmp_path):
+    """check_writable under a file: the OS's ENOTDIR, not a generic one; atomic_write's OSError
+    without an errno: EIO, its text the reason.  Catches the errno replaced by EIO (``and`` for ``or``)."""
+    import errno
+
+    import pytest
+
+    from scenarios.run import runner
+
+    path = tmp_path / "f"
+    path.write_text("x")
+    with pytest.raises(runner.WriteError) as failure:
+        runner.check_writable(path / "out")
+    assert failure.value.errno == errno.ENOTDIR
+
+    def broken(f):
+        raise OSError("no errno here")
+
+    with pytest.raises(runner.WriteError) as failure:
+        runner.atomic_write(tmp_path / "m.json", broken)
+    assert failure.value.errno == errno.EIO and failure.value.strerror == f"cannot write {tmp_path / 'm.json'}: no errno here"
