@@ -132,3 +132,21 @@ def test_write_and_sensitivity_options_take_effect_and_print_what_they_computed(
     monkeypatch.setattr(regression, "sensitivity", lambda: 3.25e-7)
     assert regression.main(["--sensitivity"]) == 0
     assert capsys.readouterr().out == "largest relative change: 3.25e-07\n"
+
+
+def test_a_metric_off_by_exactly_the_tolerance_passes_and_the_next_float_beyond_is_named(monkeypatch, made_up):
+    """"More than the tolerance" (``compare``'s docstring), hit exactly: with the tolerance a
+    power of two (2^-20, set here) the boundary values b (1 +- 2^-20) are exact floats, so a
+    metric exactly that far off, above or below, passes and one a float farther is named.
+    Catches ``>=`` for ``>`` (training seed 4431's boundary sibling of [15])."""
+    monkeypatch.setattr(regression, "RELATIVE_TOLERANCE", 0.5 ** 20)
+    b = STORED["scene_b"]
+    edge = {"e_ef_mm": b["e_ef_mm"] * (1 + 0.5 ** 20), "tau_ef_Nm": b["tau_ef_Nm"] * (1 - 0.5 ** 20)}
+    assert all(abs(edge[k] - b[k]) == 0.5 ** 20 * abs(b[k]) for k in edge)      # the boundary, exactly
+    beyond = {"e_ef_mm": math.nextafter(edge["e_ef_mm"], math.inf),
+              "tau_ef_Nm": math.nextafter(edge["tau_ef_Nm"], -math.inf)}
+    monkeypatch.setattr(regression, "measure", lambda name: {**STORED[name], **(edge if name == "scene_b" else {})})
+    assert regression.compare() == []
+    monkeypatch.setattr(regression, "measure", lambda name: {**STORED[name], **(beyond if name == "scene_b" else {})})
+    assert regression.compare() == [f"scene_b e_ef_mm: {beyond['e_ef_mm']!r}, stored 4.0",
+                                    f"scene_b tau_ef_Nm: {beyond['tau_ef_Nm']!r}, stored 8.0"]
