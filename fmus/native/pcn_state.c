@@ -18,7 +18,7 @@
 #include "pcn_native.h"
 
 #define MAGIC "PCNSTATE"
-#define VERSION 2u   /* 2: the flag step_refused (8 flags) */
+#define VERSION 3u   /* 2: the flag step_refused (8 flags); 3: the standard FNV-1a offset basis */
 #define FLAGS 8
 
 typedef struct {
@@ -59,7 +59,7 @@ static void put_str16(writer *w, const char *s) { put_u16(w, (unsigned)strlen(s)
 
 static uint64_t fnv1a(const unsigned char *bytes, size_t n)
 {
-    uint64_t h = 1469598103934665603ull;
+    uint64_t h = 14695981039346656037ull;   /* FNV-1a 64 offset basis, 0xcbf29ce484222325 */
     for (size_t k = 0; k < n; ++k) h = (h ^ bytes[k]) * 1099511628211ull;
     return h;
 }

@@ -13,7 +13,7 @@ FLAGS = 8
 
 def fnv1a(data: bytes) -> int:
     """The state's checksum: 64-bit FNV-1a."""
-    h = 1469598103934665603
+    h = 0xCBF29CE484222325   # the FNV-1a 64 offset basis
     for b in data:
         h = ((h ^ b) * 1099511628211) & 0xFFFFFFFFFFFFFFFF
     return h

@@ -118,10 +118,9 @@ def test_altered_forged_and_truncated_copies_of_the_own_state(monkeypatch, seed)
 
 
 def _fnv1a_64(data: bytes) -> int:
-    """fmus/native/pcn_state.c's checksum, written here: 64-bit FNV-1a started at
-    1469598103934665603 (a digit short of FNV's offset basis, docs/extremes.md), prime
-    1099511628211."""
-    h = 1469598103934665603
+    """fmus/native/pcn_state.c's checksum, written here: 64-bit FNV-1a, offset basis
+    14695981039346656037, prime 1099511628211."""
+    h = 14695981039346656037
     for byte in data:
         h = ((h ^ byte) * 0x100000001B3) % 2 ** 64
     return h

@@ -2,8 +2,8 @@
 layout table ("FMU state"), with counts of every kind non-zero and of different sizes, so each
 field's offset is read back exactly: identifier, GUID, counts, data words, the model data's
 offset and every length field's offset and format; ``data_words`` and ``with_data_word`` (the
-checksum remade over every byte before it).  The checksum is pcn_state.c's 64-bit FNV-1a with
-its offset basis a digit short (docs/extremes.md), computed here on its own.  No FMU is built."""
+checksum remade over every byte before it).  The checksum is pcn_state.c's 64-bit FNV-1a, computed
+here on its own and held against FNV's published test vectors.  No FMU is built."""
 from __future__ import annotations
 
 import struct
@@ -13,7 +13,7 @@ import pytest
 
 from fmus.native.state_bytes import MAGIC, data_words, fnv1a, layout, with_data_word
 
-BASIS, PRIME = 1469598103934665603, 1099511628211   # pcn_state.c's; FNV's prime 2**40 + 2**8 + 0xb3
+BASIS, PRIME = 14695981039346656037, 1099511628211   # FNV-1a 64's offset basis; its prime 2**40 + 2**8 + 0xb3
 
 
 def _fnv(data: bytes) -> int:
@@ -27,7 +27,7 @@ def _fnv(data: bytes) -> int:
 def _state(identifier="Drive", guid="{g-1}", reals=(1.5, -2.0, 3.25), integers=(7, -9), booleans=(1, 0, 1, 1),
            strings=("", "refusal text"), data=(0.5, 1e-300, -4.0)):
     """A state laid out as the table says (host byte order), and where its parts are."""
-    out = bytearray(MAGIC) + struct.pack("=I", 2) + struct.pack("=Q", 0)
+    out = bytearray(MAGIC) + struct.pack("=I", 3) + struct.pack("=Q", 0)
     where = {}
     for name, text in (("identifier", identifier), ("guid", guid)):
         where[name] = len(out)
@@ -50,13 +50,15 @@ def _state(identifier="Drive", guid="{g-1}", reals=(1.5, -2.0, 3.25), integers=(
     return bytes(out), where
 
 
-def test_the_checksum_is_fnv1a_over_every_byte_with_pcn_states_basis():
-    """Catches the xor and the multiply swapped (FNV-1 for FNV-1a), another prime or basis, and
-    no 64-bit wrap."""
+def test_the_checksum_is_fnv1a_over_every_byte_with_fnvs_published_basis():
+    """Catches the xor and the multiply swapped (FNV-1 for FNV-1a), another prime or basis (format
+    version 2 started a digit short of the basis), and no 64-bit wrap.  The three vectors are FNV's
+    published FNV-1a 64 test values, so an outside tool checking a state with a stock FNV-1a agrees."""
     for data in (b"", b"a", b"foobar", bytes(range(256)) * 3):
         assert fnv1a(data) == _fnv(data)
     assert fnv1a(b"") == BASIS and fnv1a(b"a") == ((BASIS ^ 0x61) * PRIME) % 2 ** 64
     assert fnv1a(b"ab") != fnv1a(b"ba")
+    assert (fnv1a(b""), fnv1a(b"a"), fnv1a(b"foobar")) == (0xCBF29CE484222325, 0xAF63DC4C8601EC8C, 0x85944171F73967E8)
 
 
 def test_the_layout_reads_each_field_at_its_place():
