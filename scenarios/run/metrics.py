@@ -138,6 +138,14 @@ def _steady_state(t, ex, ey, scene: Scene) -> dict:
             "e_ss_1s_mm": 1e3 * rms_norm(ex[at_1s], ey[at_1s]) if end >= stop + E_SS_1S - eps else float("nan")}
 
 
+def in_window(t: np.ndarray, window: tuple) -> np.ndarray:
+    """The samples of times ``t`` in the metric window ``(start, end)``, both ends included with
+    a nanosecond of slack for a sample time's rounding: ``start - 1e-9 <= t <= end + 1e-9``.
+    e_ef, tau_ef and every study's peaks and RMS values are taken over the same samples."""
+    start, end = window
+    return (t >= start - 1e-9) & (t <= end + 1e-9)
+
+
 def scene_metrics(scene: Scene, columns: dict, wall_s: float, completed: bool, init_s: float = 0.0) -> dict:
     """The contract's metrics (``e_ef_mm``, ``tau_ef_Nm``, ``e_ss_mm``, ``wall_s``,
     ``realtime_factor`` = simulated time / stepping wall time) and a few more (``init_s``:
@@ -150,7 +158,7 @@ def scene_metrics(scene: Scene, columns: dict, wall_s: float, completed: bool, i
     ex, ey = columns["x_d"] - columns["x"], columns["y_d"] - columns["y"]
     start, end = scene.window
     eps = 1e-9
-    window = (t >= start - eps) & (t <= end + eps)
+    window = in_window(t, scene.window)
     reached_window = len(t) and t[-1] >= end - eps
     simulated = float(t[-1]) if len(t) else 0.0
     extra = {}

@@ -27,6 +27,7 @@ import numpy as np
 
 from motor import get_motor_preset
 
+from scenarios.run.metrics import in_window
 from scenarios.run.runner import run_scene
 from controller.strategies import ALL_STRATEGY_NAMES
 
@@ -44,8 +45,7 @@ def measure(strategy: str, frequency: float, balanced: bool):
     """One run: (row of :data:`COLUMNS`, the run's columns)."""
     outcome = run_scene(vertical_circle(strategy, balanced, frequency=frequency))
     c, m = outcome.columns, outcome.metrics
-    start, end = outcome.scene.window
-    w = (c["t"] > start - 1e-9) & (c["t"] < end + 1e-9)
+    w = in_window(c["t"], outcome.scene.window)
     v_max = get_motor_preset("motor1").v_max
     volts = np.maximum(np.abs(c["v1"][w]), np.abs(c["v2"][w]))
     row = {

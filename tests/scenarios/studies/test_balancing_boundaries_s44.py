@@ -1,9 +1,10 @@
 """scenarios/studies/balancing.py ``measure`` at the edges of its window and of its saturation
-test (issue 31, training sweep s44: compare mutants at balancing.py:48 and :58).
+test (issue 31, training sweep s44: compare mutants at balancing.py:48 and :58; the window is
+scenarios.run.metrics.in_window since session 44).
 
-The window is the scene's [start, end] widened by 1e-9 s for the rounding of the time grid:
-a sample less than 1e-9 s outside an end is in it, one exactly 1e-9 s outside is not (the
-open interval (start - 1e-9, end + 1e-9)).  A drive is saturated at a sample when its |v| is at
+The window is the scene's [start, end] widened by 1e-9 s for the rounding of the time grid,
+as scene_metrics' (scenarios.run.metrics.in_window): a sample up to 1e-9 s outside an end is
+in it, one 2e-9 s outside is not (the closed interval [start - 1e-9, end + 1e-9]).  A drive is saturated at a sample when its |v| is at
 least v_max (1 - 1e-9): the limit itself less a relative 1e-9 for the rounding of the clamp.
 The run is given here (run_scene replaced), as in test_balancing_rows.py.
 """
@@ -24,7 +25,7 @@ def _run(monkeypatch):
     """Samples at both sides of each widened end; each one's torque tells whether it was taken."""
     v_max = get_motor_preset("motor1").v_max
     saturated = v_max * (1 - 1e-9)
-    t = np.array([0.5, START - 1e-9, START - 0.5e-9, 1.5, 2.0, 2.5, END + 0.5e-9, END + 1e-9, 3.5])
+    t = np.array([0.5, START - 2e-9, START - 1e-9, 1.5, 2.0, 2.5, END + 1e-9, END + 2e-9, 3.5])
     columns = {"t": t,
                "tau1": np.array([0.0, 9.0, 2.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0]),
                "tau2": np.array([0.0, 1.0, 1.0, 1.0, 1.0, 1.0, 3.0, 8.0, 0.0]),
@@ -37,9 +38,9 @@ def _run(monkeypatch):
     return balancing.measure("TCMDx", 1.0, False)[0]
 
 
-def test_a_sample_exactly_1e9_s_outside_an_end_is_out_of_the_window_and_one_closer_is_in(monkeypatch):
-    """The torque peaks are those of the five samples in the window: 2 N m at 0.5 ns before the
-    start (taken), not 9 N m at 1 ns before it; 3 N m at 0.5 ns after the end, not 8 at 1 ns."""
+def test_a_sample_exactly_1e9_s_outside_an_end_is_in_the_window_and_one_further_is_out(monkeypatch):
+    """The torque peaks are those of the five samples in the window: 2 N m at 1 ns before the
+    start (taken), not 9 N m at 2 ns before it; 3 N m at 1 ns after the end, not 8 at 2 ns."""
     row = _run(monkeypatch)
     assert row["tau1_peak_Nm"] == 2.0
     assert row["tau2_peak_Nm"] == 3.0

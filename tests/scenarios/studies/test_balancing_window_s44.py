@@ -68,16 +68,12 @@ def test_the_saturation_share_counts_the_samples_at_the_supply_voltage(monkeypat
     assert row["v_peak_V"] == v_max
 
 
-@pytest.mark.xfail(strict=True, reason="balancing.measure's window is open, (start - 1e-9, end + 1e-9): a sample "
-                                       "exactly 1 ns before the start is in scene_metrics' window but not in the row's")
 def test_a_sample_exactly_the_slack_before_the_start_is_in_the_window_as_in_scene_metrics(monkeypatch):
     """The metric window is closed: ``t >= start - 1e-9`` (scenarios/run/metrics.py)."""
     row = _row(monkeypatch, {START - EPS: ("tau1", 2.0)})
     assert row["tau1_peak_Nm"] == 2.0
 
 
-@pytest.mark.xfail(strict=True, reason="balancing.measure's window is open, (start - 1e-9, end + 1e-9): a sample "
-                                       "exactly 1 ns after the end is in scene_metrics' window but not in the row's")
 def test_a_sample_exactly_the_slack_after_the_end_is_in_the_window_as_in_scene_metrics(monkeypatch):
     """The metric window is closed: ``t <= end + 1e-9`` (scenarios/run/metrics.py)."""
     row = _row(monkeypatch, {END + EPS: ("tau2", 3.0)})
