@@ -326,3 +326,20 @@ def test_zoh_model_is_exact_when_a_coupling_entry_underflows_to_zero(coupling, T
     kappa = condition_numbers(zoh_values, entries)
     assert den[0] == 1.0
     assert_within(("n1", "n0", "d1", "d0"), [*num, *den[1:]], exact, rounding_tolerance(exact, kappa))
+
+
+@pytest.mark.parametrize("b", [100.0, 300.0, 3000.0])
+def test_zoh_model_is_exact_when_the_mechanical_mode_decays_within_the_step(b):
+    """A heavily damped rotor (b T / J from 680 to 2e4, outside the drawn motors' range, the
+    mechanical mode decayed to e^-680 .. e^-2e4 within one step) beside a slow armature
+    (R T / L = 1.65): the ZOH model is still the exact one within one rounding.  design.c
+    computes Ad as e^c exp(M - c I) with c the rightmost eigenvalue's real part; a c off by
+    half the damping leaves exp(M - c I) a mode of e^+1000 (inf, a NaN model): caught here, not by
+    the drawn motors (b T / J below 20).  Training sample 4561's survivor."""
+    p, T = replace(MOTOR_PRESETS["motor1"], b=b), 1e-3
+    entries = augmented_entries(p, T)
+    num, den = c_zoh(p, T)
+    exact = np.array([float(v) for v in zoh_values(entries)])
+    kappa = condition_numbers(zoh_values, entries)
+    assert den[0] == 1.0
+    assert_within(("n1", "n0", "d1", "d0"), [*num, *den[1:]], exact, rounding_tolerance(exact, kappa))
