@@ -282,3 +282,17 @@ def test_a_cache_file_that_is_not_a_table_is_rebuilt_with_a_warning_naming_it(ca
                                          "rebuilding the table"):
         again = TabulatedModel(BENCH, 0.01, region)
     assert again.build_seconds > 0.0 and np.array_equal(again.table, built.table, equal_nan=True)
+
+
+@pytest.mark.parametrize("kernel", ["fast", "general"])
+def test_the_exact_models_terms_and_its_table_row_give_the_same_inertia_exactly(kernel):
+    """terms() and row() of one ExactModel read H = (H00, H01, H11) off the same reduced mass
+    matrix at the same configuration (H does not depend on the velocity), so at each point they
+    agree to the bit.  The matrix C^T M C is symmetric only to round-off (its (0, 1) and (1, 0)
+    entries differ in the last bits at most points), so this catches terms() reading the other
+    off-diagonal entry, which a tolerance would not (seed 4201 [44])."""
+    exact = ExactModel(BENCH, kernel=kernel)
+    rng = np.random.default_rng(44)
+    for x, y in zip(rng.uniform(-0.02, 0.02, 12), rng.uniform(0.14, 0.18, 12)):
+        H = exact.terms(x, y, 0.4, -0.3)[:3]
+        assert H == tuple(exact.row(x, y)[:3]), (x, y)

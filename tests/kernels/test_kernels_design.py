@@ -306,3 +306,40 @@ def test_design_refuses_what_design_current_controller_refuses():
     for name in ("motor1", "motor2"):
         code, c, _ = c_design(MOTOR_PRESETS[name], cc.THESIS_T)
         assert code == 0 and np.isfinite(c).all()
+
+
+@pytest.mark.parametrize("coupling", ["ke", "kt"])
+@pytest.mark.parametrize("T", [1e-4, 1e-2, 0.1])
+def test_zoh_model_is_exact_when_a_coupling_entry_underflows_to_zero(coupling, T):
+    """A motor whose back-EMF entry ke T / L (or torque entry kt T / J) underflows to 0 in double
+    (ke or kt the smallest positive double: a valid motor) while the other coupling is below,
+    near or far above 1: its ZOH model is still the exact one within one rounding.  design.c
+    balances the two couplings by a scale 2^p of the speed only when both are non-zero:
+    ilogb(0) is FP_ILOGB0, and a scale taken from it sends the other coupling to 0 or to inf
+    (a NaN model)."""
+    p = replace(MOTOR_PRESETS["motor1"], **{coupling: 5e-324})
+    couplings = (p.ke * T / p.L, p.kt * T / p.J_rotor)   # in double, as design.c's
+    assert (couplings[0] == 0.0) == (coupling == "ke") and (couplings[1] == 0.0) == (coupling == "kt")
+    entries = augmented_entries(p, T)
+    num, den = c_zoh(p, T)
+    exact = np.array([float(v) for v in zoh_values(entries)])
+    kappa = condition_numbers(zoh_values, entries)
+    assert den[0] == 1.0
+    assert_within(("n1", "n0", "d1", "d0"), [*num, *den[1:]], exact, rounding_tolerance(exact, kappa))
+
+
+@pytest.mark.parametrize("b", [100.0, 300.0, 3000.0])
+def test_zoh_model_is_exact_when_the_mechanical_mode_decays_within_the_step(b):
+    """A heavily damped rotor (b T / J from 680 to 2e4, outside the drawn motors' range, the
+    mechanical mode decayed to e^-680 .. e^-2e4 within one step) beside a slow armature
+    (R T / L = 1.65): the ZOH model is still the exact one within one rounding.  design.c
+    computes Ad as e^c exp(M - c I) with c the rightmost eigenvalue's real part; a c off by
+    half the damping leaves exp(M - c I) a mode of e^+1000 (inf, a NaN model): caught here, not by
+    the drawn motors (b T / J below 20).  Training sample 4561's survivor."""
+    p, T = replace(MOTOR_PRESETS["motor1"], b=b), 1e-3
+    entries = augmented_entries(p, T)
+    num, den = c_zoh(p, T)
+    exact = np.array([float(v) for v in zoh_values(entries)])
+    kappa = condition_numbers(zoh_values, entries)
+    assert den[0] == 1.0
+    assert_within(("n1", "n0", "d1", "d0"), [*num, *den[1:]], exact, rounding_tolerance(exact, kappa))
