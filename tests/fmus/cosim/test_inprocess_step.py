@@ -71,6 +71,21 @@ def test_derivator_refuses_estimates_that_are_not_finite(estimates):
     assert (slave.dq1, slave.dq2, slave.ddq1, slave.ddq2) == (0.0, 0.0, 0.0, 0.0)   # the last good ones
 
 
+@pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf], ids=["nan", "inf", "-inf"])
+@pytest.mark.parametrize("position", range(4), ids=["dq1", "dq2", "ddq1", "ddq2"])
+def test_derivator_refuses_any_one_estimate_that_is_not_finite_the_others_being(position, bad):
+    """Each of the four outputs alone NaN or infinite (the other three finite) is refused and
+    nothing is published. Catches the quick check of the sum leaving out one estimate: the sum
+    of the other three is finite then, and the bad estimate would be published."""
+    estimates = [0.25, -1.5, 3.0, -4.0]
+    estimates[position] = bad
+    slave = _slave()
+    slave.derivator = _Fixed(estimates)
+    assert not slave.do_step(0.0, 1e-3)
+    assert f"the estimates (dq1, dq2, ddq1, ddq2) = {tuple(estimates)!r} at t = 0 s are not finite" in slave.error
+    assert (slave.dq1, slave.dq2, slave.ddq1, slave.ddq2) == (0.0, 0.0, 0.0, 0.0)
+
+
 def test_derivator_angles_in_any_form_numpy_takes_give_the_same_estimates():
     """Catches the derivator's fast path giving other estimates for angles given as strings, float32 or
     arrays, or accepting three angles."""

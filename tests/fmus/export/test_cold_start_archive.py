@@ -8,6 +8,7 @@ member is new or deflated; the spec FMU's refusals were never taken).  Fast."""
 from __future__ import annotations
 
 import os
+import re
 import stat
 import zipfile
 
@@ -84,6 +85,25 @@ def test_a_failed_copy_raises_leaves_the_target_alone_and_no_temporary_file(tmp_
         rewrite(tmp_path / "not.zip", target, {"a": b"b"})
     assert target.read_bytes() == b"old target"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["not.zip", "t.fmu"]
+
+
+def test_the_copy_is_a_hidden_temporary_beside_the_target_named_after_it_then_renamed(tmp_path, monkeypatch):
+    """The target appears whole or not at all: the copy is written to ``.<target name>.<random>.tmp``
+    in the target's folder (hidden, and a killed write's leftover names its target), then renamed
+    onto it. Catches the temporary written elsewhere (a rename across file systems fails) or
+    named otherwise."""
+    source = _source(tmp_path / "a.fmu")
+    moves, replace = [], os.replace
+
+    def spy(src, dst):
+        moves.append((os.fspath(src), os.fspath(dst)))
+        return replace(src, dst)
+
+    monkeypatch.setattr(archive.os, "replace", spy)
+    target = rewrite(source, tmp_path / "out" / "b.fmu", {"resources/added.txt": "x"})
+    [(temporary, renamed)] = moves
+    assert renamed == os.fspath(target) and os.path.dirname(temporary) == os.fspath(target.parent)
+    assert re.fullmatch(r"\.b\.fmu\.[A-Za-z0-9_]+\.tmp", os.path.basename(temporary)), temporary
 
 
 def test_without_proc_the_umask_is_read_by_setting_it_and_put_back(monkeypatch):

@@ -74,3 +74,20 @@ def test_results_are_read_line_by_line_whatever_the_pipe_delivers_and_a_fatal_on
         (0, "ok", [0, 0], ["p0"], 0.5), (1, "refused", [1, 0], ["p1"], 1.5), (2, "ok", [2, 0], ["p2"], 2.5)]
     results = _run_worker([{**CASE, "seed": k} for k in (0, 9, 2)], NOWHERE, 30.0)
     assert [(r.case["seed"], r.outcome) for r in results] == [(0, "ok"), (9, "fatal")]
+
+
+def test_a_worker_runs_this_trees_fmus_from_any_folder_before_an_inherited_python_path(monkeypatch, tmp_path):
+    """The worker imports the ``fmus`` of the tree the campaign runs from, whatever the current
+    folder and ``PYTHONPATH`` (a mutation run's worktree, a checkout beside an installed copy):
+    from a foreign folder, with ``PYTHONPATH`` naming a decoy ``fmus`` that exits with status 42,
+    the worker still fails as this tree's does on a missing FMU (status 1). Catches the tree's
+    root left out of the worker's ``PYTHONPATH`` (the decoy, or an installed copy, runs)."""
+    decoy = tmp_path / "decoy" / "fmus"
+    decoy.mkdir(parents=True)
+    (decoy / "__init__.py").write_text("import os\nos._exit(42)\n")
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)      # ``python -m`` looks in the current folder first
+    monkeypatch.setenv("PYTHONPATH", str(decoy.parent))
+    [result] = _run_worker([{**CASE, "seed": 0}], NOWHERE, 60.0)
+    assert (result.outcome, result.problems) == ("crash", ["worker exit status 1"])

@@ -60,3 +60,19 @@ def test_a_number_where_the_instance_holds_another_kind_of_number_past_its_items
     assert got["s"] == (2.0, True)
     with pytest.raises(fmustate.StateMismatch, match=r"^s\[0\]: the state holds the bool True, this instance "):
         fmustate.apply({"s": (1.0,)}, {"s": (True, 2.0)})
+
+
+@pytest.mark.parametrize("tree, named", [
+    ({"a": 3.0}, "missing b"),
+    ({"a": 3.0, "b": 4.0, "c": 5.0}, "unknown c"),
+    ({"a": 3.0, "c": 5.0}, "missing b; unknown c"),
+])
+def test_a_state_whose_attributes_are_not_the_instances_is_refused_naming_each_and_the_instance_is_kept(tree, named):
+    """An attribute missing, one unknown, or both: refused naming them, the instance's own
+    attributes left as they were. Catches a state with only missing or only unknown attributes
+    laid over the instance (attributes dropped or made up), the whole set taken for both."""
+    template = {"a": 1.0, "b": 2.0}
+    with pytest.raises(fmustate.StateMismatch) as info:
+        fmustate.apply(template, tree)
+    assert str(info.value) == f"the state's attributes differ from this instance's: {named}"
+    assert template == {"a": 1.0, "b": 2.0}

@@ -7,6 +7,7 @@ members (names, compression, file mode).  FMUs made of a model description only
 from __future__ import annotations
 
 import os
+import re
 import stat
 import xml.etree.ElementTree as ET
 import zipfile
@@ -14,6 +15,7 @@ import zipfile
 import pytest
 
 from fmus.cosim.system import Component, Connection, System
+from fmus.ssp import export as export_module
 from fmus.ssp.export import (LIBCOSIM_WORKER_THREADS, NS, OSP_ANNOTATION, OSP_NS, PARAMETER_SET, STEP_ANNOTATION,
                              export_ssp)
 from tests.fmus.export.test_oracles_export import fake_fmu
@@ -151,3 +153,24 @@ def test_an_output_connected_twice_and_recorded_is_one_output_connector(tmp_path
                                   for k in c.iter(f"{SSD}Connector")] for c in elements}
     assert connectors == {"first": [("y", "output", [f"{SSC}Real"])], "second": [("u", "input", [f"{SSC}Real"])],
                           "third": [("u", "input", [f"{SSC}Real"])]}
+
+
+def test_the_package_is_written_as_a_temporary_beside_it_named_after_it_then_renamed(tmp_path, monkeypatch):
+    """The package appears whole or not at all: written to ``<package name>.<random>.tmp`` in
+    its own folder, then renamed onto it (one rename, on one file system). The name starts with
+    the package's name and a dot, so a write killed midway leaves a file that reads as that
+    package's leftover (``Loop.ssp.*.tmp``), not as another package's (``Loop.ssp2...``).
+    Catches the temporary written elsewhere, or its name run into the package's."""
+    fmus = {model: fake_fmu(tmp_path / f"{model}.fmu", model) for model in ("Alpha", "Beta")}
+    moves, replace = [], os.replace
+
+    def spy(source, target):
+        moves.append((os.fspath(source), os.fspath(target)))
+        return replace(source, target)
+
+    monkeypatch.setattr(export_module.os, "replace", spy)
+    path = export_ssp(_system(), tmp_path / "out" / "Loop.ssp", fmus=fmus, bake=False)
+    [(source, target)] = [(s, t) for s, t in moves if t == os.fspath(path)]
+    assert os.path.dirname(source) == os.fspath(path.parent)
+    assert re.fullmatch(r"Loop\.ssp\.[A-Za-z0-9_]+\.tmp", os.path.basename(source)), source
+    assert sorted(p.name for p in path.parent.iterdir()) == ["Loop.ssp"]

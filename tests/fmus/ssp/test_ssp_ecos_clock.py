@@ -11,7 +11,7 @@ ecospy = pytest.importorskip("ecospy")
 
 from fmus.ssp import run as ssp_run  # noqa: E402
 from fmus.ssp.export import NS  # noqa: E402
-from fmus.status import RunStatus  # noqa: E402
+from fmus.status import RunError, RunStatus  # noqa: E402
 
 
 class Clock:
@@ -83,11 +83,18 @@ def test_wall_s_and_load_s_are_the_runs_and_the_loadings_time(stand_ins, tmp_pat
 
 
 def test_a_package_ecos_cannot_initialise_is_a_failed_run_naming_ecos_error(stand_ins, tmp_path):
+    """An initialisation refused: the run's error is an INITIALISATION record at t = 0 s naming
+    Ecos' error and no instance, no step is taken and Ecos' simulation is freed."""
     stand_ins["init"] = False
     path = package(tmp_path / "p.ssp")
     result = ssp_run.simulate_ssp_ecos(path, ["plant.x"], stop_time=4e-3, step_size=1e-3, serial=False)
     assert result.error.kind is RunStatus.INITIALISATION and result.error.instance is None
     assert str(result.error) == f"Ecos could not initialise {path}: the FMU said no"
+    # The whole record: the initialisation's time 0 s, and none of a model's fields (Ecos does
+    # not say whose FMU failed nor why). Catches the time and the refusal's text swapped.
+    assert result.error == RunError(RunStatus.INITIALISATION, f"Ecos could not initialise {path}: the FMU said no",
+                                    time=0.0)
+    assert result.error.record()["time"] == 0.0
     assert stand_ins["steps"] == 0 and stand_ins["freed"] == 1 and result.wall_s == 10.0
 
 
