@@ -120,14 +120,15 @@ def test_write_and_sensitivity_options_take_effect_and_print_what_they_computed(
     """``--write`` stores, prints one ``name metrics`` line per scene and returns 0 without
     comparing; ``--sensitivity`` prints the largest change in the documented format and
     returns 0.  Catches an option not reaching its branch (the comparison run instead), the
-    printed line's name and metrics swapped or another scene's, and a wrong exit status."""
-    monkeypatch.setattr(regression, "STORED", tmp_path / "metrics.json")
+    printed line's name and metrics swapped or another scene's, and a wrong exit status; the
+    stored file's missing folders made (sibling of seed 4201 [196])."""
+    monkeypatch.setattr(regression, "STORED", tmp_path / "new" / "stored" / "metrics.json")
     measured = {name: {**values, "e_ef_mm": 10.0 + k} for k, (name, values) in enumerate(STORED.items())}
     monkeypatch.setattr(regression, "measure", lambda name, dx=0.0: dict(measured[name]))
     monkeypatch.setattr(regression, "compare", lambda: pytest.fail("--write ran the comparison"))
     assert regression.main(["--write"]) == 0
     assert capsys.readouterr().out.splitlines() == [f"{name} {measured[name]}" for name in STORED]
-    assert json.loads((tmp_path / "metrics.json").read_text())["scenes"] == measured
+    assert json.loads((tmp_path / "new" / "stored" / "metrics.json").read_text())["scenes"] == measured
     monkeypatch.setattr(regression, "load", lambda: {"scenes": STORED})
     monkeypatch.setattr(regression, "sensitivity", lambda: 3.25e-7)
     assert regression.main(["--sensitivity"]) == 0

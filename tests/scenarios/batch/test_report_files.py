@@ -47,13 +47,15 @@ def test_write_report_writes_the_metrics_the_figure_and_the_rendered_report(tmp_
     """A stopped run among the 16: metrics.json holds each value read back exactly and null for
     its NaN; report.md is ``render`` of those metrics with the figure linked.  Catches a
     metric lost or changed on the way to the file, and the mode, progress, scheduler or
-    workers not passed on (or passed as another)."""
+    workers not passed on (or passed as another); the folder made without its missing parent
+    (sibling of seed 4201 [196])."""
     metrics = _made_up(stopped=("bench_triangle_PDx",))
     asked = []
     monkeypatch.setattr(report, "run_bench", lambda out, **kw: asked.append((out, kw)) or metrics)
-    path = report.write_report(tmp_path / "r", mode="compiled", progress=print, scheduler="tcp://s:1", workers=3)
-    assert asked == [(tmp_path / "r", {"mode": "compiled", "progress": print, "scheduler": "tcp://s:1", "workers": 3})]
-    back = json.loads((tmp_path / "r" / "metrics.json").read_text())
+    out = tmp_path / "new" / "r"
+    path = report.write_report(out, mode="compiled", progress=print, scheduler="tcp://s:1", workers=3)
+    assert asked == [(out, {"mode": "compiled", "progress": print, "scheduler": "tcp://s:1", "workers": 3})]
+    back = json.loads((tmp_path / "new" / "r" / "metrics.json").read_text())
     assert list(back) == bench_scene_names()
     for name, values in metrics.items():
         for key, value in values.items():
@@ -66,8 +68,8 @@ def test_write_report_writes_the_metrics_the_figure_and_the_rendered_report(tmp_
     from scenarios.run.runner import write_json
 
     same = write_json(tmp_path / "run_metrics.json", metrics)
-    assert (tmp_path / "r" / "metrics.json").read_text() == same.read_text()
-    assert (tmp_path / "r" / "report.png").stat().st_size > 0
+    assert (tmp_path / "new" / "r" / "metrics.json").read_text() == same.read_text()
+    assert (tmp_path / "new" / "r" / "report.png").stat().st_size > 0
 
 
 def test_run_bench_runs_each_scene_as_a_task_into_its_own_folder(tmp_path, monkeypatch):

@@ -32,12 +32,13 @@ def test_the_quantisation_noise_is_that_of_one_count_rounding():
 def test_the_bode_plot_shows_each_estimate_over_the_ideal_derivative_on_rising_axes(tmp_path):
     """The magnitude panel's curves are 20 log10(|H| / ω^n) of the derivator's own frequency
     response, its limits rise (bottom below -40 dB) and hold the curves' pass band (0 dB at 1 Hz);
-    the file is written.  Catches an inverted magnitude axis."""
+    the file is written, its missing folders made.  Catches an inverted magnitude axis, and the
+    folder made without its parents (sibling of seed 4201 [196])."""
     import matplotlib.pyplot as plt
 
     before = set(plt.get_fignums())
     derivator = Derivator()
-    figures.plot_bode(derivator, tmp_path / "bode.png")
+    figures.plot_bode(derivator, tmp_path / "new" / "figures" / "bode.png")
     (number,) = set(plt.get_fignums()) - before
     figure = plt.figure(number)
     try:
@@ -51,7 +52,7 @@ def test_the_bode_plot_shows_each_estimate_over_the_ideal_derivative_on_rising_a
             assert np.allclose(line.get_ydata(), expected, rtol=0, atol=1e-9)
             at_1hz = np.interp(1.0, f, line.get_ydata())
             assert abs(at_1hz) < 0.1 and magnitude.get_ylim()[0] < at_1hz < magnitude.get_ylim()[1]
-        assert (tmp_path / "bode.png").stat().st_size > 0
+        assert (tmp_path / "new" / "figures" / "bode.png").stat().st_size > 0
     finally:
         plt.close(figure)
 

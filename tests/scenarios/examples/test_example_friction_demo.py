@@ -130,3 +130,18 @@ def test_the_break_away_is_the_first_sample_strictly_above_vs(monkeypatch, tmp_p
     dots = [line for line in lines if line.get_marker() == "." and line.get_color() == "k"]
     assert [(float(d.get_xdata()[0]), float(d.get_ydata()[0])) for d in dots] == [
         (pytest.approx(11.0), pytest.approx(rate * 12e-3)) for rate in (0.1, 1.0, 10.0)]
+
+
+def test_the_figure_makes_every_missing_folder_of_its_path(monkeypatch, tmp_path):
+    """``--out a/b/lugre.png`` where neither a nor b exists yet: the figure is written there (runs
+    made up here, ``push`` replaced, keep it fast).  Catches the parent made without its own
+    parents (a FileNotFoundError)."""
+    def push(kind, a, b, t_end, **_):
+        t = (np.arange(100) + 1) * 1e-3
+        rows = np.zeros((100, 3))
+        rows[50:, 1] = 2 * friction_demo.PAPER["omega_s"]
+        return rows, t
+
+    monkeypatch.setattr(friction_demo, "push", push)
+    out = tmp_path / "a" / "b" / "lugre.png"
+    assert friction_demo.plot(out) == out and out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

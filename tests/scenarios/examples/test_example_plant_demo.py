@@ -42,9 +42,10 @@ def test_the_figure_draws_the_path_and_marks_its_start(tmp_path, monkeypatch):
 def test_the_demo_prints_every_50_ms_and_writes_its_figure(tmp_path, capsys):
     """``parcosim demo``'s table: a header, then t, x, y, q1 [deg], q2 [deg], residual every 50 ms
     from 0 to 0.5 s (11 rows, the simulated rows' values), then the PNG's path.  Catches rows at
-    another stride, angles left in radians, columns swapped, the figure not written."""
-    path = plant_demo.run(tmp_path)
-    assert path == tmp_path / "plant_demo.png" and path.read_bytes()[:4] == b"\x89PNG"
+    another stride, angles left in radians, columns swapped, the figure not written, and the
+    output folder made without its missing parent (sibling of seed 4201 [196])."""
+    path = plant_demo.run(tmp_path / "new" / "out")
+    assert path == tmp_path / "new" / "out" / "plant_demo.png" and path.read_bytes()[:4] == b"\x89PNG"
     lines = capsys.readouterr().out.splitlines()
     assert lines[0].split() == ["t", "[s]", "x", "[m]", "y", "[m]", "q1", "[deg]", "q2", "[deg]", "residual", "[m]"]
     assert lines[-1] == f"wrote {path}" and len(lines) == 13

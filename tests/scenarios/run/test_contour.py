@@ -100,3 +100,20 @@ def test_the_side_table_reports_the_larger_side_and_the_count():
     contour["TCq"] = [0.9, 0.1, None]                                    # a run that stopped on side II
     text = "\n".join(side_section(contour))
     assert "hold here for 2 of 8 strategies" in text and "| TCq | 0.90 | 0.10 | — | I | I | no |" in text
+
+
+def test_every_round_of_a_polygon_travelled_twice_counts_and_the_hold_after_does_not():
+    """A square travelled twice (cycles = 2, 1 s a side): a sample pushed out while the reference
+    travels side III of the second round counts on side III (RMS over both rounds' samples of
+    that side: d / sqrt(2) with d off in one round of two), a far sample in the hold after the
+    last round counts nowhere.  Catches the sides' time taken as one round (``index < n``)
+    and the hold counted as a further round."""
+    square = PolygonTrajectory(vertices=((0.0, 0.0), (0.1, 0.0), (0.1, 0.1), (0.0, 0.1)), side_time=1.0, cycles=2)
+    t = np.arange(0.0, 10.0, 0.25)
+    x, y = _reference(square, t)
+    d = 0.002
+    y = np.where((t >= 6.0) & (t < 7.0), y + d, y)      # round 2, side III (the top): pushed out
+    x = np.where(t >= square.duration, x - 0.05, x)      # the hold at (0, 0): 5 cm off, not counted
+    errors = side_contour_errors(square, t, x, y)
+    assert max(errors[0], errors[1], errors[3]) < 1e-15
+    assert errors[2] == pytest.approx(d / math.sqrt(2.0), rel=1e-12)

@@ -120,9 +120,10 @@ def test_the_scenes_table_has_a_row_per_scene_with_its_numbers(made_up):
 
 def test_the_command_line_writes_the_csv_and_figures_and_prints_the_crossings(made_up, tmp_path, capsys):
     """Catches a row missing from the csv or a value not read back to six digits, a figure not
-    written where asked, and a crossing printed of another quantity."""
+    written where asked, and a crossing printed of another quantity; the output folder and its
+    missing parent made (sibling of seed 4201 [196])."""
     calls, _ = made_up
-    out = tmp_path / "out"
+    out = tmp_path / "new" / "out"
     assert balancing.main(["--strategies", "TCx", "--frequencies", "1", "2", "--out", str(out)]) == 0
     assert sorted(p.name for p in out.iterdir()) == ["balanced_circle.png", "balanced_speeds.csv", "balanced_speeds.png"]
     with open(out / "balanced_speeds.csv", newline="") as handle:

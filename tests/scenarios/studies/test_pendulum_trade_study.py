@@ -107,7 +107,9 @@ def test_the_quick_trade_writes_the_fidelity_table_as_csv_and_markdown(study, tm
     """``quick``: the fidelity table of 1 s runs only (no sweeps); trade.csv holds each row's
     values exactly (floats as repr), trade.md the title with --quick and the table.  Catches
     the csv written elsewhere or missing a row or column, quick running the sweeps or the
-    whole scene, and the title or a section lost."""
+    whole scene, and the title or a section lost; the folder made without its missing parent
+    (sibling of seed 4201 [196])."""
+    tmp_path = tmp_path / "new"
     said = []
     report = pendulum_trade.run_pendulum_trade("pendulum_drive", quick=True, out_dir=tmp_path / "t",
                                                progress=said.append)

@@ -160,3 +160,12 @@ def test_the_stored_runs_come_back_by_kind_then_scene_each_with_its_tools_in_the
     assert [t for t, *_ in everything[("per-component", "bench_triangle_TCMDx")]] == ["fmpy", "libcosim"]
     assert ("per-component", "thesis_sim_circle") in everything
     assert ("internal-observer", "no_master_run") not in everything
+
+
+def test_a_results_file_in_folders_not_made_yet_is_written_with_them(tmp_path):
+    """``_store`` into a/b/tools.json, neither folder existing: the run is stored and reads back.
+    Catches the folder made without its parents (a FileNotFoundError; sibling of seed 4201
+    [196])."""
+    results = tmp_path / "a" / "b" / "tools.json"
+    tools._store(results, tools._key("ours", "bench_circle_TCMDx", "parcosim"), {"e_ef_mm": 0.5})
+    assert tools.load_results(results)[tools._key("ours", "bench_circle_TCMDx", "parcosim")]["e_ef_mm"] == 0.5

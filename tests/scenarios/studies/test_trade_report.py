@@ -164,3 +164,29 @@ def test_each_label_sits_just_up_right_of_its_point_in_the_size_the_overlap_rule
         label = labels[r["setting"]]
         assert tuple(label.xy) == (r["wall_s"], r["rms_err_m"]) and label.get_fontsize() == 7
         assert tuple(label.xyann) == (4, 2) and label.anncoords == "offset points"
+
+
+def test_the_defaults_star_the_labels_and_the_legend_are_drawn_over_the_rows_markers(tmp_path, monkeypatch):
+    """A fidelity switch that changes nothing sits on the defaults' point: the star must stay
+    visible, and no marker may hide a label or the legend; the markers are over the lines and
+    the grid.  The drawing order is the axes' own
+    (its children sorted by zorder, stably: ties in the order added).  Catches a marker's zorder
+    raised above the star's, the labels' or the legend's (seed 4201 [254]: the crosses' 3 made
+    6 hid the star and the legend) the star's lowered, and the markers' lowered under the front's line or the grid."""
+    import matplotlib.pyplot as plt
+
+    kept = []
+    close = plt.close
+    monkeypatch.setattr(plt, "close", lambda fig=None: kept.append(fig) or close(fig))
+    rows = _rows()[:3] + [_row("same", "fidelity", 2.0, 1.0, 1e-4, 1.0, False)]
+    report.plot(Trade("bench_x", 1.5, rows, 12.3), tmp_path / "trade.png")
+    (ax,) = kept[0].axes
+    dots, crosses, star = ax.collections
+    order = sorted(ax.get_children(), key=lambda a: a.get_zorder())
+    at = {id(a): k for k, a in enumerate(order)}
+    assert ax.texts and ax.get_legend() is not None
+    for over in [star, ax.get_legend(), *ax.texts]:
+        assert at[id(over)] > max(at[id(dots)], at[id(crosses)]), over
+    assert at[id(ax.get_legend())] > at[id(star)]
+    for under in [*ax.lines, ax.xaxis, ax.yaxis]:    # the front's step, the 1e-5 m line, the grid
+        assert min(at[id(dots)], at[id(crosses)]) > at[id(under)], under

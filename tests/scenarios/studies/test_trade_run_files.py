@@ -35,7 +35,9 @@ def _read(path):
 def test_a_run_with_a_folder_writes_its_files_in_order_the_full_one_with_its_unquantised_sweep(tmp_path, made_up,
                                                                                               quick):
     """Catches noquant.csv left unwritten or unlisted in a full run, written in a quick one, written with the
-    sweep's rows, or the files listed in another order."""
+    sweep's rows, or the files listed in another order; the folder made without its missing parent
+    (sibling of seed 4201 [196])."""
+    tmp_path = tmp_path / "new" / "out"
     trade = study.run_trade("bench_circle_TCMDx", quick=quick, out_dir=tmp_path, stop_time=0.01, rounds=1)
     names = ["trade.csv"] + ([] if quick else ["noquant.csv"]) + ["trade.png", "trade.md"]
     assert trade.files == [tmp_path / name for name in names]

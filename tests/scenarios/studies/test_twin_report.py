@@ -160,7 +160,9 @@ def test_the_report_command_writes_the_runs_the_tables_and_the_figure(tmp_path, 
     reads back as every run's kept metrics keyed by seed (other keys dropped), twin.md is the
     rendered tables, the figure's link and the method's link, twin.png is written; the fit is not
     run.  Catches the runs' file written elsewhere or not at all, a kept metric dropped, another
-    key kept, the report or the figure missing from ``--out``."""
+    key kept, the report or the figure missing from ``--out``, and ``--out`` made without its
+    missing parent (sibling of seed 4201 [196])."""
+    tmp_path = tmp_path / "new" / "out"
     runs = _runs()
     for kind in runs:
         for s in twin_fit.ORDER:

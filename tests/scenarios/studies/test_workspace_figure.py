@@ -168,3 +168,12 @@ def test_a_trajectory_wholly_outside_the_workspace_is_written_as_strict_json_wit
     assert margins["circle (1, 1) r 0.01"] is None
     assert margins["circle (0, 0.2) r 0.03"] > 0.0
     assert "circle (1, 1) r 0.01: min singularity margin none (no sample inside)" in report.summary()
+
+
+def test_the_output_folder_is_made_with_its_missing_parents(tmp_path, monkeypatch):
+    """plot_workspace into a/b, neither existing, for a spec (its slice replaced here: only the
+    folder is looked at) finds the folder made.  Catches the folder made without its parents
+    (a FileNotFoundError; sibling of seed 4201 [196])."""
+    seen = []
+    monkeypatch.setattr(plot, "plot_spec_slice", lambda mechanism, out, band: seen.append(out.is_dir()) or out)
+    assert plot.plot_workspace("bench_5r", tmp_path / "a" / "b") == tmp_path / "a" / "b" and seen == [True]

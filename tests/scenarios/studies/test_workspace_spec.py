@@ -151,3 +151,24 @@ def test_each_trajectory_point_takes_the_status_and_margin_of_its_nearest_grid_p
     assert {k: v.tolist() for k, v in check.refused.items()} == expected
     assert expected[ws_spec.OUTSIDE] == [1, 3] and expected[ws_spec.BAND] == [0, 2, 5]      # by hand: the corners
     assert check.min_margin == min(margin[iy, ix] for iy, ix in near if not np.isnan(margin[iy, ix]))
+
+
+def test_the_figure_draws_each_locus_as_its_own_measure_at_the_level_its_label_states(tmp_path, monkeypatch):
+    """The loci are the zero contours of the fields handed to ``draw``: each field is its own
+    measure of the slice (parallel for the first, serial for the second, as the labels name
+    them) less the level the label states, NaN exactly where the slice did not assemble.
+    (On the default extent's coarse 11 x 11 grid the slice may assemble little more than the
+    start: enough to tell.)  Catches the fields swapped, a NaN field (the NaN/difference branches of ``np.where``
+    swapped: no locus drawn), and a level other than the label's."""
+    import re
+
+    monkeypatch.setattr(ws_spec, "SPEC_GRID", 11)
+    drawn = []
+    monkeypatch.setattr(ws_spec, "draw", lambda *args, **kw: drawn.append((args, kw)))
+    ws_spec.plot_spec_slice("bench_5r", tmp_path, BAND)
+    _, serial, parallel = ws_spec.slice_map(plant_spec.load("bench_5r"), BAND)
+    ((args, kw),) = drawn
+    for field, measure, label, name in zip(args[1:3], (parallel, serial), kw["labels"], ("parallel", "serial")):
+        level = float(re.fullmatch(name + r" measure = ([0-9.e-]+)", label).group(1))
+        assert np.array_equal(np.isnan(field), np.isnan(measure)) and not np.all(np.isnan(field))
+        np.testing.assert_allclose(field + level, measure, rtol=0, atol=1e-15)
