@@ -139,6 +139,7 @@ RULES = [
     ("test_layout.py", "repo"),
     ("test_docs_*.py", "repo"),
     ("test_tests_layout.py", "repo"),
+    ("test_lazy_names.py", "repo"),
 ]
 
 
