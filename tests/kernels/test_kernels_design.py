@@ -203,6 +203,17 @@ def test_zoh_model_is_python_controls_c2d(p, T):
     np.testing.assert_allclose(den, ref_den, rtol=0, atol=ZOH_RELATIVE)
 
 
+def _assert_the_exact_zoh_model(p, T):
+    """design.c's n1, n0, d1, d0 for motor ``p`` at period ``T`` each within
+    :func:`rounding_tolerance` of the model in 50 digits, and d2 = 1."""
+    num, den = c_zoh(p, T)
+    entries = augmented_entries(p, T)
+    exact = np.array([float(v) for v in zoh_values(entries)])
+    kappa = condition_numbers(zoh_values, entries)
+    assert den[0] == 1.0
+    assert_within(("n1", "n0", "d1", "d0"), [*num, *den[1:]], exact, rounding_tolerance(exact, kappa))
+
+
 @stiff_examples
 @settings(max_examples=40, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
 @given(motors, periods)
@@ -211,12 +222,7 @@ def test_zoh_model_is_the_exact_one_within_one_rounding(p, T):
     ulp: the condition numbers over the range stay below 1e5).  Catches, beside a wrong model, a
     model computed in double: scaling and squaring exp loses up to 5e5 eps times the condition
     number (:data:`STIFF`, each of which fails in double)."""
-    num, den = c_zoh(p, T)
-    entries = augmented_entries(p, T)
-    exact = np.array([float(v) for v in zoh_values(entries)])
-    kappa = condition_numbers(zoh_values, entries)
-    assert den[0] == 1.0
-    assert_within(("n1", "n0", "d1", "d0"), [*num, *den[1:]], exact, rounding_tolerance(exact, kappa))
+    _assert_the_exact_zoh_model(p, T)
 
 
 @stiff_examples
@@ -320,12 +326,7 @@ def test_zoh_model_is_exact_when_a_coupling_entry_underflows_to_zero(coupling, T
     p = replace(MOTOR_PRESETS["motor1"], **{coupling: 5e-324})
     couplings = (p.ke * T / p.L, p.kt * T / p.J_rotor)   # in double, as design.c's
     assert (couplings[0] == 0.0) == (coupling == "ke") and (couplings[1] == 0.0) == (coupling == "kt")
-    entries = augmented_entries(p, T)
-    num, den = c_zoh(p, T)
-    exact = np.array([float(v) for v in zoh_values(entries)])
-    kappa = condition_numbers(zoh_values, entries)
-    assert den[0] == 1.0
-    assert_within(("n1", "n0", "d1", "d0"), [*num, *den[1:]], exact, rounding_tolerance(exact, kappa))
+    _assert_the_exact_zoh_model(p, T)
 
 
 @pytest.mark.parametrize("b", [100.0, 300.0, 3000.0])
@@ -337,9 +338,4 @@ def test_zoh_model_is_exact_when_the_mechanical_mode_decays_within_the_step(b):
     half the damping leaves exp(M - c I) a mode of e^+1000 (inf, a NaN model): caught here, not by
     the drawn motors (b T / J below 20).  Training sample 4561's survivor."""
     p, T = replace(MOTOR_PRESETS["motor1"], b=b), 1e-3
-    entries = augmented_entries(p, T)
-    num, den = c_zoh(p, T)
-    exact = np.array([float(v) for v in zoh_values(entries)])
-    kappa = condition_numbers(zoh_values, entries)
-    assert den[0] == 1.0
-    assert_within(("n1", "n0", "d1", "d0"), [*num, *den[1:]], exact, rounding_tolerance(exact, kappa))
+    _assert_the_exact_zoh_model(p, T)
