@@ -45,6 +45,8 @@ SETTLE_BAND = 5.0e-5
 SETTLE_HOLD = 0.5
 #: The earlier steady-state error was measured this long after the stop [s] (``e_ss_1s_mm``).
 E_SS_1S = 1.0
+#: Slack on every window edge [s]: a sample time's rounding (k h is not k times h exactly).
+SLACK = 1e-9
 
 
 def rms_norm(a: np.ndarray, b: np.ndarray) -> float:
@@ -108,7 +110,7 @@ def settling(t: np.ndarray, ex: np.ndarray, ey: np.ndarray, stop: float, band: f
         settled); ``mask`` the samples e_ss is taken over (from the settling time on, or the
         last ``final_window`` s when the run did not settle).
     """
-    eps = 1e-9
+    eps = SLACK
     last = t >= t[-1] - final_window - eps
     after = t >= stop - eps
     fx, fy = float(np.mean(ex[last])), float(np.mean(ey[last]))
@@ -124,7 +126,7 @@ def settling(t: np.ndarray, ex: np.ndarray, ey: np.ndarray, stop: float, band: f
 
 def _steady_state(t, ex, ey, scene: Scene) -> dict:
     stop = scene.reference_end
-    eps = 1e-9
+    eps = SLACK
     none = {"e_ss_mm": float("nan"), "e_ss_x_mm": float("nan"), "e_ss_y_mm": float("nan"),
             "settled": False, "t_settle_s": float("nan"), "e_ss_1s_mm": float("nan")}
     end = scene.system.stop_time
@@ -140,10 +142,10 @@ def _steady_state(t, ex, ey, scene: Scene) -> dict:
 
 def in_window(t: np.ndarray, window: tuple) -> np.ndarray:
     """The samples of times ``t`` in the metric window ``(start, end)``, both ends included with
-    a nanosecond of slack for a sample time's rounding: ``start - 1e-9 <= t <= end + 1e-9``.
+    :data:`SLACK` (a nanosecond) for a sample time's rounding: ``start - SLACK <= t <= end + SLACK``.
     e_ef, tau_ef and every study's peaks and RMS values are taken over the same samples."""
     start, end = window
-    return (t >= start - 1e-9) & (t <= end + 1e-9)
+    return (t >= start - SLACK) & (t <= end + SLACK)
 
 
 def scene_metrics(scene: Scene, columns: dict, wall_s: float, completed: bool, init_s: float = 0.0) -> dict:
@@ -157,7 +159,7 @@ def scene_metrics(scene: Scene, columns: dict, wall_s: float, completed: bool, i
     t = columns["t"]
     ex, ey = columns["x_d"] - columns["x"], columns["y_d"] - columns["y"]
     start, end = scene.window
-    eps = 1e-9
+    eps = SLACK
     window = in_window(t, scene.window)
     reached_window = len(t) and t[-1] >= end - eps
     simulated = float(t[-1]) if len(t) else 0.0
